@@ -1,0 +1,30 @@
+# Two commands on a fresh machine with only Python and pip:
+#   make report   -> creates .venv, installs flexval, runs the main job
+#   make test     -> creates/refreshes .venv the same way, runs the test suite
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+
+.PHONY: report test venv bench clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --upgrade pip
+	$(BIN)/python -m pip install -e ".[test]"
+	touch $(STAMP)
+
+venv: $(STAMP)
+
+report: $(STAMP)
+	$(BIN)/flexval info open_chain
+	$(BIN)/flexval info closed_chain
+
+test: $(STAMP)
+	$(BIN)/python -m pytest
+
+bench: $(STAMP)
+	$(BIN)/python benchmarks/bench_reduced.py
+
+clean:
+	rm -rf $(VENV) .pytest_cache
