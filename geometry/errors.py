@@ -1,0 +1,23 @@
+"""The one error type for bad input: it names the file, the field and the value."""
+
+from __future__ import annotations
+
+
+class SceneError(ValueError):
+    """Invalid scene input.
+
+    Parameters
+    ----------
+    source : str
+        The scene file (or ``<name>`` of a built-in or in-memory scene).
+    field : str
+        Dotted path of the offending field, e.g. ``flexures.e12.radius``.
+    value : object
+        The offending value.
+    reason : str
+        What is wrong with it, in plain words.
+    """
+
+    def __init__(self, source: str, field: str, value: object, reason: str):
+        self.source, self.field, self.value, self.reason = source, field, value, reason
+        super().__init__(f"{source}: field '{field}' = {value!r}: {reason}")

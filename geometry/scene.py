@@ -1,0 +1,339 @@
+"""Scene files (TOML): a mechanism, its load cases and what is requested.
+
+A scene is the one input of every flexval command. ``load_scene`` accepts a
+built-in name (``open_chain``, ``closed_chain``) or a path. Every value is
+checked; a bad one raises :class:`SceneError` naming the file, the field and
+the value. Angles are degrees in the file and radians in memory; lengths mm,
+moduli MPa, forces N, moments N mm.
+
+The format (see README.md for a full example)::
+
+    name = "..."                      # optional, defaults to the file stem
+    [material]  youngs_modulus, poisson_ratio
+    [section]   depth (b), thickness (h)
+    [ground]    name, points = [[x, y], ...]
+    [target]    body, point = [x, y]
+    [[flexures]] name, bodies = [i, j], and either
+                 center, radius, axis_deg, width_deg         (arc)
+              or shape = "segment", start, end               (straight)
+                 optional: start_body, depth, thickness
+    [[bodies]]  name, points   (optional: known points of a link)
+    [[load_cases]] name, kind = "moment" | "force", value, body, point,
+                   angle_deg, levels; or loads = [{...}, ...] to combine
+    [request]   models = [...], outputs = [...]
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import SceneError
+from .loads import DEFAULT_LEVELS, Force, LoadCase, Moment
+from .mechanism import Material, Mechanism, Section, assemble
+from .shapes import Arc, Segment
+
+BUILTIN_SCENES = ("open_chain", "closed_chain")
+MODEL_FAMILIES = {"continuum", "beam", "prbm", "dcmm", "ee"}
+OUTPUTS = {"poses", "shape", "vtu", "png"}
+_MODEL_RE = re.compile(r"^(continuum|beam|prbm|dcmm|ee)(?::(\d+))?$")
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """A requested model: family and its resolution (``beam:20``, ``dcmm:3``, ``continuum:2``).
+
+    ``resolution`` is N elements per flexure for ``beam``, sub-arcs per arc
+    for ``dcmm``, mesh level for ``continuum`` (None: the default), unused
+    for ``prbm`` and ``ee``.
+    """
+
+    family: str
+    resolution: int | None = None
+
+    @property
+    def id(self) -> str:
+        """Canonical text form, e.g. ``beam:100``."""
+        return self.family if self.resolution is None else f"{self.family}:{self.resolution}"
+
+    def __str__(self) -> str:
+        return self.id
+
+
+def parse_model(text: str, source: str = "<command line>", field: str = "model") -> ModelSpec:
+    """Parse ``continuum[:LEVEL]``, ``beam:N``, ``prbm``, ``dcmm:N`` or ``ee``."""
+    m = _MODEL_RE.match(str(text).strip())
+    if not m:
+        raise SceneError(source, field, text,
+                         "expected continuum[:LEVEL], beam:N, prbm, dcmm:N or ee")
+    family, res = m.group(1), m.group(2)
+    n = int(res) if res is not None else None
+    if family in ("beam", "dcmm") and n is None:
+        n = {"beam": 20, "dcmm": 1}[family]
+    if family in ("prbm", "ee") and n is not None:
+        raise SceneError(source, field, text, f"'{family}' takes no resolution")
+    if family in ("beam", "dcmm") and not 1 <= n <= 100_000:
+        raise SceneError(source, field, text, "resolution must be between 1 and 100000")
+    if family == "continuum" and n is not None and n > 8:
+        raise SceneError(source, field, text, "continuum mesh level must be between 0 and 8")
+    return ModelSpec(family, n)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A mechanism with its load cases and the requested models and outputs."""
+
+    name: str
+    description: str
+    mechanism: Mechanism
+    load_cases: tuple[LoadCase, ...]
+    models: tuple[ModelSpec, ...]
+    outputs: frozenset[str]
+    source: str
+
+    def load_case(self, name: str) -> LoadCase:
+        """The load case called ``name``."""
+        for lc in self.load_cases:
+            if lc.name == name:
+                return lc
+        raise SceneError(self.source, "load_case", name,
+                         f"unknown load case; the scene has {[lc.name for lc in self.load_cases]}")
+
+
+class _Reader:
+    """Typed, checked access to a TOML table; every error names the field."""
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, field: str, value: Any, reason: str) -> None:
+        raise SceneError(self.source, field, value, reason)
+
+    def table(self, data: dict, key: str, where: str, required: bool = True) -> dict:
+        if key not in data:
+            if required:
+                self.fail(f"{where}{key}", None, "missing table")
+            return {}
+        if not isinstance(data[key], dict):
+            self.fail(f"{where}{key}", data[key], "must be a table")
+        return data[key]
+
+    def number(self, data: dict, key: str, where: str, *, default: float | None = None,
+               positive: bool = False, limit: float = 1e12) -> float:
+        field = f"{where}{key}"
+        if key not in data:
+            if default is None:
+                self.fail(field, None, "missing value")
+            return default
+        v = data[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            self.fail(field, v, "must be a number")
+        v = float(v)
+        if not math.isfinite(v):
+            self.fail(field, v, "must be finite")
+        if abs(v) > limit:
+            self.fail(field, v, f"absurd magnitude (|value| > {limit:g})")
+        if positive and v <= 0.0:
+            self.fail(field, v, "must be positive")
+        return v
+
+    def point(self, data: dict, key: str, where: str) -> np.ndarray:
+        field = f"{where}{key}"
+        if key not in data:
+            self.fail(field, None, "missing point [x, y]")
+        v = data[key]
+        if not (isinstance(v, list) and len(v) == 2):
+            self.fail(field, v, "must be a point [x, y] in mm")
+        return np.array([self.number({f"{key}[{i}]": c}, f"{key}[{i}]", where, limit=1e9)
+                         for i, c in enumerate(v)])
+
+    def name(self, data: dict, key: str, where: str) -> str:
+        field = f"{where}{key}"
+        if key not in data:
+            self.fail(field, None, "missing name")
+        v = data[key]
+        if isinstance(v, bool) or not isinstance(v, (str, int)) or str(v).strip() == "":
+            self.fail(field, v, "must be a non-empty name (string or integer)")
+        return str(v)
+
+    def known_keys(self, data: dict, allowed: set[str], where: str) -> None:
+        for k in data:
+            if k not in allowed:
+                self.fail(f"{where}{k}", data[k], f"unknown field; expected one of {sorted(allowed)}")
+
+
+def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> dict:
+    if not isinstance(f, dict):
+        rd.fail(f"flexures[{k}]", f, "must be a table")
+    name = rd.name(f, "name", f"flexures[{k}].")
+    where = f"flexures.{name}."
+    rd.known_keys(f, {"name", "bodies", "shape", "center", "radius", "axis_deg", "width_deg",
+                      "start", "end", "start_body", "depth", "thickness"}, where)
+    bodies = f.get("bodies")
+    if not (isinstance(bodies, list) and len(bodies) == 2):
+        rd.fail(f"{where}bodies", bodies, "must list the two bodies it joins, e.g. [1, 2]")
+    bodies = [rd.name({"b": b}, "b", f"{where}bodies.") for b in bodies]
+    if bodies[0] == bodies[1]:
+        rd.fail(f"{where}bodies", bodies, "a flexure must join two different bodies")
+    section = Section(
+        rd.number(f, "depth", where, default=default_section.depth, positive=True),
+        rd.number(f, "thickness", where, default=default_section.thickness, positive=True),
+    )
+    kind = f.get("shape", "arc")
+    if kind == "arc":
+        center = rd.point(f, "center", where)
+        radius = rd.number(f, "radius", where, positive=True)
+        axis = rd.number(f, "axis_deg", where)
+        width = rd.number(f, "width_deg", where)
+        if not 0.0 < width < 360.0:
+            rd.fail(f"{where}width_deg", width, "must be in (0, 360) degrees")
+        if section.thickness >= 2.0 * radius:
+            rd.fail(f"{where}thickness", section.thickness,
+                    f"thickness h must be smaller than 2 r = {2 * radius:g} mm")
+        shape = Arc((float(center[0]), float(center[1])), radius, math.radians(axis),
+                    math.radians(width))
+    elif kind == "segment":
+        a, b = rd.point(f, "start", where), rd.point(f, "end", where)
+        if np.hypot(*(b - a)) <= 0.0:
+            rd.fail(f"{where}end", list(b), "segment has zero length")
+        shape = Segment(tuple(map(float, a)), tuple(map(float, b)))
+    else:
+        rd.fail(f"{where}shape", kind, "must be 'arc' or 'segment'")
+    start_body = f.get("start_body")
+    if start_body is not None:
+        start_body = rd.name(f, "start_body", where)
+    return {"name": name, "shape": shape, "bodies": bodies, "section": section,
+            "start_body": start_body}
+
+
+def _load_component(rd: _Reader, c: dict, where: str, target_body: str,
+                    target_point: np.ndarray) -> Moment | Force:
+    rd.known_keys(c, {"name", "kind", "body", "point", "angle_deg", "value", "levels", "loads"},
+                  where)
+    kind = c.get("kind")
+    value = rd.number(c, "value", where, limit=1e9)
+    body = rd.name(c, "body", where) if "body" in c else target_body
+    if kind == "moment":
+        return Moment(body, value)
+    if kind == "force":
+        point = rd.point(c, "point", where) if "point" in c else target_point
+        return Force(body, point, math.radians(rd.number(c, "angle_deg", where)), value)
+    rd.fail(f"{where}kind", kind, "must be 'moment' or 'force'")
+
+
+def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
+    """Build and check a Scene from parsed TOML ``data`` read from ``source``."""
+    rd = _Reader(source)
+    rd.known_keys(data, {"name", "description", "material", "section", "ground", "target",
+                         "flexures", "bodies", "load_cases", "request"}, "")
+    name = str(data.get("name", default_name))
+    mat = rd.table(data, "material", "")
+    rd.known_keys(mat, {"youngs_modulus", "poisson_ratio"}, "material.")
+    E = rd.number(mat, "youngs_modulus", "material.", positive=True)
+    nu = rd.number(mat, "poisson_ratio", "material.", default=0.3)
+    if not -1.0 < nu < 0.5:
+        rd.fail("material.poisson_ratio", nu, "must be in (-1, 0.5)")
+    sec = rd.table(data, "section", "")
+    rd.known_keys(sec, {"depth", "thickness"}, "section.")
+    section = Section(rd.number(sec, "depth", "section.", positive=True),
+                      rd.number(sec, "thickness", "section.", positive=True))
+    ground_t = rd.table(data, "ground", "")
+    rd.known_keys(ground_t, {"name", "points"}, "ground.")
+    ground = rd.name(ground_t, "name", "ground.")
+    gpts = ground_t.get("points")
+    if not (isinstance(gpts, list) and gpts):
+        rd.fail("ground.points", gpts, "must list at least one point [x, y] where the ground holds a flexure")
+    ground_points = np.array([rd.point({"p": p}, "p", "ground.points.") for p in gpts])
+    target_t = rd.table(data, "target", "")
+    rd.known_keys(target_t, {"body", "point"}, "target.")
+    target_body = rd.name(target_t, "body", "target.")
+    target_point = rd.point(target_t, "point", "target.")
+
+    flex = data.get("flexures")
+    if not (isinstance(flex, list) and flex):
+        rd.fail("flexures", flex, "must be a non-empty array of tables [[flexures]]")
+    specs = [_flexure_spec(rd, f, k, section) for k, f in enumerate(flex)]
+    body_points = {}
+    for k, b in enumerate(data.get("bodies", [])):
+        bname = rd.name(b, "name", f"bodies[{k}].")
+        rd.known_keys(b, {"name", "points"}, f"bodies.{bname}.")
+        body_points[bname] = np.array([rd.point({"p": p}, "p", f"bodies.{bname}.points.")
+                                       for p in b.get("points", [])])
+    mech = assemble(specs, ground, ground_points, Material(E, nu), target_body, target_point,
+                    source=source, body_points=body_points)
+
+    cases = []
+    raw_cases = data.get("load_cases", [])
+    if not isinstance(raw_cases, list) or not raw_cases:
+        rd.fail("load_cases", raw_cases, "must be a non-empty array of tables [[load_cases]]")
+    for k, c in enumerate(raw_cases):
+        lname = rd.name(c, "name", f"load_cases[{k}].")
+        where = f"load_cases.{lname}."
+        levels = c.get("levels", DEFAULT_LEVELS)
+        if isinstance(levels, bool) or not isinstance(levels, int) or not 2 <= levels <= 100_000:
+            rd.fail(f"{where}levels", levels, "must be an integer from 2 to 100000")
+        if "loads" in c:
+            rd.known_keys(c, {"name", "levels", "loads"}, where)
+            comps = tuple(_load_component(rd, x, f"{where}loads[{i}].", target_body, target_point)
+                          for i, x in enumerate(c["loads"]))
+            if not comps:
+                rd.fail(f"{where}loads", [], "must contain at least one load")
+        else:
+            comps = (_load_component(rd, c, where, target_body, target_point),)
+        for comp in comps:
+            if comp.body not in mech.bodies:
+                rd.fail(f"{where}body", comp.body, f"unknown body; bodies are {list(mech.bodies)}")
+            if comp.body == mech.ground:
+                rd.fail(f"{where}body", comp.body, "a load on the ground does nothing")
+        if any(lc.name == lname for lc in cases):
+            rd.fail("load_cases.name", lname, "duplicate load case name")
+        cases.append(LoadCase(lname, comps, levels))
+
+    loaded = {c.body for lc in cases for c in lc.components} | {target_body}
+    for b in mech.moving_bodies:
+        n = sum(b in f.bodies for f in mech.flexures)
+        if n == 1 and b not in loaded:
+            rd.fail("flexures", b, f"body {b!r} is dangling: held by one flexure, not loaded "
+                    "and not the target")
+
+    req = rd.table(data, "request", "", required=False)
+    rd.known_keys(req, {"models", "outputs"}, "request.")
+    models = tuple(parse_model(m, source, "request.models") for m in req.get("models", []))
+    outputs = req.get("outputs", [])
+    for o in outputs:
+        if o not in OUTPUTS:
+            rd.fail("request.outputs", o, f"unknown output; expected some of {sorted(OUTPUTS)}")
+    return Scene(name, str(data.get("description", "")), mech, tuple(cases), models,
+                 frozenset(outputs), source)
+
+
+def load_scene(name_or_path: str | Path) -> Scene:
+    """Load a built-in scene by name, or a scene file by path.
+
+    Raises
+    ------
+    SceneError
+        If the file is missing, is not valid TOML, or has a bad field.
+    """
+    text_id = str(name_or_path)
+    if text_id in BUILTIN_SCENES:
+        res = resources.files("geometry").joinpath("scenes", f"{text_id}.toml")
+        source, text, stem = f"<builtin {text_id}>", res.read_text(encoding="utf-8"), text_id
+    else:
+        path = Path(text_id)
+        if not path.is_file():
+            raise SceneError(text_id, "scene", text_id,
+                             f"no such file, and not a built-in scene {list(BUILTIN_SCENES)}")
+        source, text, stem = str(path), path.read_text(encoding="utf-8"), path.stem
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(source, "toml", None, f"malformed TOML: {exc}") from None
+    return parse_scene(data, source, default_name=stem)

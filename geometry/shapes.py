@@ -1,0 +1,231 @@
+"""Flexure centre-line shapes: uniform circular arcs and straight segments.
+
+A shape is parametrised by arc length ``s`` in mm, from its *start* point to
+its *end* point. For an arc the start is at polar angle ``axis - width/2``
+around the centre and the curve runs counterclockwise (paper, Sect. 2.3,
+Fig. 3). Each shape also gives its ellipse of elasticity (paper Eqs. 1-4),
+the linear bending compliance data used by the DCMM and EE models.
+
+All lengths are mm and all angles are radians.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, Union
+
+import numpy as np
+
+
+def rotation(angle: float) -> np.ndarray:
+    """Planar rotation matrix R(angle), angle in rad (counterclockwise)."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s], [s, c]])
+
+
+@dataclass(frozen=True)
+class Ellipse:
+    """Ellipse of elasticity of a flexure (paper Eqs. 1-5).
+
+    Attributes
+    ----------
+    weight : float
+        Elastic weight w = L / EI in 1/(N mm): the rotational compliance.
+    center : ndarray, shape (2,)
+        Centre of elasticity C in mm.
+    a, b : float
+        Semi-axes in mm. ``a`` lies along ``axes[:, 0]`` (e1), ``b`` along
+        ``axes[:, 1]`` (e2). For an arc, e2 is the arc's symmetry axis and
+        a**2 is the variance of the centre line across it.
+    axes : ndarray, shape (2, 2)
+        Columns are the unit vectors e1, e2 (a right-handed frame).
+
+    Notes
+    -----
+    The compliance matrix in the frame {C, e1, e2} is
+    ``diag(w b**2, w a**2, w)`` (Eq. 5): a force along e1 is resisted by
+    bending with lever arms spread along e2 (variance b**2), and vice versa.
+    """
+
+    weight: float
+    center: np.ndarray
+    a: float
+    b: float
+    axes: np.ndarray
+
+    def compliance(self) -> np.ndarray:
+        """Diagonal compliance diag(w b^2, w a^2, w) in {C, e1, e2} (mm/N, 1/(N mm))."""
+        w = self.weight
+        return np.diag([w * self.b**2, w * self.a**2, w])
+
+
+class Shape(Protocol):
+    """What every flexure centre line provides (lengths in mm, angles in rad)."""
+
+    @property
+    def length(self) -> float: ...
+
+    def point(self, s: np.ndarray | float) -> np.ndarray: ...
+
+    def tangent_angle(self, s: np.ndarray | float) -> np.ndarray: ...
+
+    def split(self, n: int) -> list["Shape"]: ...
+
+    def ellipse(self, bending_stiffness: float) -> Ellipse: ...
+
+
+@dataclass(frozen=True)
+class Arc:
+    """Uniform circular arc given as in the paper (Sect. 2.3, Fig. 3).
+
+    Parameters
+    ----------
+    center : (float, float)
+        Centre O of the circle, mm.
+    radius : float
+        Radius r, mm (> 0).
+    axis : float
+        Direction of the arc's symmetry axis from O, rad.
+    width : float
+        Angular amplitude 2*gamma, rad, in (0, 2*pi).
+    """
+
+    center: tuple[float, float]
+    radius: float
+    axis: float
+    width: float
+
+    @property
+    def start_angle(self) -> float:
+        """Polar angle of the start point around the centre, rad."""
+        return self.axis - 0.5 * self.width
+
+    @property
+    def end_angle(self) -> float:
+        """Polar angle of the end point around the centre, rad."""
+        return self.axis + 0.5 * self.width
+
+    @property
+    def length(self) -> float:
+        """Centre-line length r * width, mm."""
+        return self.radius * self.width
+
+    @property
+    def curvature(self) -> float:
+        """Signed initial curvature 1/r, 1/mm (counterclockwise positive)."""
+        return 1.0 / self.radius
+
+    def _polar(self, s: np.ndarray | float) -> np.ndarray:
+        return self.start_angle + np.asarray(s, dtype=float) / self.radius
+
+    def point(self, s: np.ndarray | float) -> np.ndarray:
+        """Point(s) at arc length s (mm) from the start, shape (..., 2), mm."""
+        phi = self._polar(s)
+        c = np.asarray(self.center, dtype=float)
+        return c + self.radius * np.stack([np.cos(phi), np.sin(phi)], axis=-1)
+
+    def tangent_angle(self, s: np.ndarray | float) -> np.ndarray:
+        """Direction of the unit tangent (increasing s) at s, rad."""
+        return self._polar(s) + 0.5 * np.pi
+
+    def tangent(self, s: np.ndarray | float) -> np.ndarray:
+        """Unit tangent(s) at arc length s, shape (..., 2)."""
+        t = self.tangent_angle(s)
+        return np.stack([np.cos(t), np.sin(t)], axis=-1)
+
+    @property
+    def end_points(self) -> np.ndarray:
+        """Start and end points, shape (2, 2), mm."""
+        return self.point(np.array([0.0, self.length]))
+
+    def split(self, n: int) -> list["Arc"]:
+        """The arc cut into n equal sub-arcs, from start to end."""
+        dw = self.width / n
+        return [
+            Arc(self.center, self.radius, self.start_angle + (k + 0.5) * dw, dw)
+            for k in range(n)
+        ]
+
+    def ellipse(self, bending_stiffness: float) -> Ellipse:
+        """Ellipse of elasticity for bending stiffness EI (N mm^2), Eqs. 1-4."""
+        r, gamma = self.radius, 0.5 * self.width
+        oc = r * np.sin(gamma) / gamma
+        a2 = 0.5 * r**2 * (1.0 - np.sin(2.0 * gamma) / (2.0 * gamma))
+        b2 = r**2 - (oc**2 + a2)
+        e2 = np.array([np.cos(self.axis), np.sin(self.axis)])
+        e1 = np.array([e2[1], -e2[0]])
+        return Ellipse(
+            weight=r * 2.0 * gamma / bending_stiffness,
+            center=np.asarray(self.center, dtype=float) + oc * e2,
+            a=float(np.sqrt(max(a2, 0.0))),
+            b=float(np.sqrt(max(b2, 0.0))),
+            axes=np.column_stack([e1, e2]),
+        )
+
+
+@dataclass(frozen=True)
+class Segment:
+    """Straight flexure from ``start`` to ``end`` (the zero-curvature limit), mm."""
+
+    start: tuple[float, float]
+    end: tuple[float, float]
+
+    @property
+    def _vector(self) -> np.ndarray:
+        return np.asarray(self.end, dtype=float) - np.asarray(self.start, dtype=float)
+
+    @property
+    def length(self) -> float:
+        """Length, mm."""
+        return float(np.hypot(*self._vector))
+
+    @property
+    def curvature(self) -> float:
+        """Initial curvature, 0 (1/mm)."""
+        return 0.0
+
+    def point(self, s: np.ndarray | float) -> np.ndarray:
+        """Point(s) at arc length s (mm) from the start, shape (..., 2), mm."""
+        s = np.asarray(s, dtype=float)
+        u = self._vector / self.length
+        return np.asarray(self.start, dtype=float) + s[..., None] * u
+
+    def tangent_angle(self, s: np.ndarray | float) -> np.ndarray:
+        """Direction of the tangent, rad (constant)."""
+        v = self._vector
+        return np.full(np.shape(s), np.arctan2(v[1], v[0]))
+
+    def tangent(self, s: np.ndarray | float) -> np.ndarray:
+        """Unit tangent(s), shape (..., 2)."""
+        t = self.tangent_angle(s)
+        return np.stack([np.cos(t), np.sin(t)], axis=-1)
+
+    @property
+    def end_points(self) -> np.ndarray:
+        """Start and end points, shape (2, 2), mm."""
+        return np.array([self.start, self.end], dtype=float)
+
+    def split(self, n: int) -> list["Segment"]:
+        """The segment cut into n equal parts, from start to end."""
+        p = self.point(np.linspace(0.0, self.length, n + 1))
+        return [Segment(tuple(p[k]), tuple(p[k + 1])) for k in range(n)]
+
+    def ellipse(self, bending_stiffness: float) -> Ellipse:
+        """Ellipse of elasticity (degenerate: b = 0), EI in N mm^2.
+
+        The straight limit of Eqs. 1-4: w = L/EI, C at the midpoint,
+        a^2 = L^2/12 along the segment and b = 0 across it.
+        """
+        L = self.length
+        e1 = self._vector / L
+        e2 = np.array([-e1[1], e1[0]])
+        return Ellipse(
+            weight=L / bending_stiffness,
+            center=np.asarray(self.point(0.5 * L)),
+            a=L / np.sqrt(12.0),
+            b=0.0,
+            axes=np.column_stack([e1, e2]),
+        )
+
+
+FlexureShape = Union[Arc, Segment]
