@@ -1,0 +1,100 @@
+"""LoadPath: the one result type of every model on one load case.
+
+For each requested load level it holds the target point's displacement
+(dx, dy) in mm and the target body's rotation in rad (counterclockwise
+positive), optionally every body's pose and the deformed flexure shapes, and
+the solver's statistics. It round-trips through JSON without loss (floats
+are written with ``repr`` precision by the json module).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+
+@dataclass
+class LoadPath:
+    """Result of one model on one load case.
+
+    Attributes
+    ----------
+    model : str
+        Model id, e.g. ``beam:100``.
+    load_case : str
+    load : list of float
+        Load value at each level (N for a force case, N mm for a moment case).
+    dx, dy : list of float
+        Target point displacement at each level, mm.
+    rotation : list of float
+        Target body rotation at each level, rad, counterclockwise positive.
+    seconds : float
+        Wall-clock time of the whole load path, s.
+    converged : bool
+        False if the path stopped early (then the lists end at the last
+        converged level and ``stats['failure']`` says why).
+    stats : dict
+        Solver statistics: ``newton_iterations``, ``step_cuts``, ``substeps``,
+        ``unknowns``, per-level ``iterations``, and ``failure`` if any.
+    settings : dict
+        Model settings that determine the result.
+    scene : str
+    load_unit : str
+        ``N`` or ``N mm``.
+    poses : dict of body -> list of [x, y, theta], optional
+        Every body's pose at each level (mm, rad).
+    shapes : dict of flexure -> list of [[x, y], ...], optional
+        Deformed centre lines (or boundary) at each level, mm.
+    reactions : list of [Fx, Fy, M], optional
+        Total force (N) and moment about the origin (N mm) the ground exerts.
+    """
+
+    model: str
+    load_case: str
+    load: list[float]
+    dx: list[float]
+    dy: list[float]
+    rotation: list[float]
+    seconds: float
+    converged: bool = True
+    stats: dict = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
+    scene: str = ""
+    load_unit: str = "N"
+    poses: dict | None = None
+    shapes: dict | None = None
+    reactions: list | None = None
+
+    @property
+    def displacement(self) -> np.ndarray:
+        """Magnitude of the target point displacement at each level, mm."""
+        return np.hypot(np.asarray(self.dx), np.asarray(self.dy))
+
+    def to_dict(self) -> dict:
+        """Plain JSON-ready dict (None fields omitted)."""
+        return {k: v for k, v in asdict(self).items() if v is not None}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "LoadPath":
+        """Inverse of :meth:`to_dict`."""
+        return cls(**data)
+
+    def to_json(self) -> str:
+        """JSON text (lossless for floats)."""
+        return json.dumps(self.to_dict())
+
+    @classmethod
+    def from_json(cls, text: str) -> "LoadPath":
+        """Inverse of :meth:`to_json`."""
+        return cls.from_dict(json.loads(text))
+
+
+def write_results(path: str | Path, scene: str, paths: list[LoadPath]) -> None:
+    """Write ``{"scene": ..., "results": [...]}`` JSON (the ``flexval run --json`` format)."""
+    Path(path).write_text(
+        json.dumps({"scene": scene, "results": [p.to_dict() for p in paths]}, indent=1),
+        encoding="utf-8",
+    )
