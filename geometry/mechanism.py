@@ -152,9 +152,13 @@ class Mechanism:
         return [n for n in self.bodies if n != self.ground]
 
     def size(self) -> float:
-        """Diameter of the mechanism's bounding box, mm (a length scale)."""
+        """Largest distance between flexure end points and the target, mm.
+
+        A length scale that does not change when the mechanism is moved rigidly.
+        """
         pts = np.vstack([f.shape.end_points for f in self.flexures] + [self.target_point[None]])
-        return float(np.hypot(*(pts.max(axis=0) - pts.min(axis=0))))
+        d = pts[:, None, :] - pts[None, :, :]
+        return float(np.sqrt((d**2).sum(axis=-1)).max())
 
     def transformed(self, angle: float, shift: np.ndarray) -> "Mechanism":
         """The same mechanism rotated by ``angle`` (rad) about the origin, then shifted (mm)."""

@@ -90,6 +90,7 @@ class SolverSettings:
     step_tol: float = 1e-10
     max_iterations: int = 25
     max_cuts: int = 40
+    max_substeps: int = 20000
     max_rotation_step: float = 0.1
     max_translation_step: float = 0.02
     fast_iterations: int = 5
@@ -370,6 +371,8 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
             prev = (q, lam)
             q, lam = q_new, trial
             stats["substeps"] += 1
+            if stats["substeps"] > s.max_substeps:
+                raise fail(f"more than {s.max_substeps} load sub-steps", lam)
             if iters <= s.fast_iterations:
                 step = min(2.0 * step, spacing)
         record(q, target, level_iters)

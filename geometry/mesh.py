@@ -1,0 +1,341 @@
+"""Gmsh meshes of one flexure as a 2D solid (second-order structured quadrilaterals).
+
+An arc flexure is the annular band between radii r - h/2 and r + h/2 over
+the arc's polar angles (start at ``axis - width/2``); a straight
+:class:`~geometry.shapes.Segment` is a rectangle of thickness h around it.
+The band is meshed with Gmsh's transfinite algorithm into biquadratic
+9-node quadrilaterals (quad9): ``n_t`` elements across the thickness and
+``n_l`` along the length.
+
+Mesh levels: level 0 has one element across the thickness and elements
+``ASPECT_RATIO * h`` long on the centre line; each level halves the element
+size in both directions (``n_t = 2**level``, ``n_l = n_l(0) * 2**level``).
+
+Why quad9 and this aspect ratio: bilinear elements lock in bending of thin
+(and, worse, curved) strips, whereas a biquadratic element reproduces the
+pure-bending field of a plane-stress strip exactly, so a single element
+across the thickness already carries a linear bending strain. Its residual
+parasitic shear and membrane stiffness grows with the element's
+length-to-thickness ratio; at 2:1 the level-0 tip compliance of a thin arc
+cantilever is within about 0.1 % of the converged value while the
+aspect ratio 4 already costs several times more (measured in
+``tests/test_continuum.py`` and the continuum package's notes). Each level
+keeps the ratio (2 h/n_t : h/n_t), so refinement is shape-regular.
+
+Node positions are put exactly on the polar map of the band (Gmsh places
+the mid-edge nodes of interior edges on straight chords; they are moved onto
+their circles), so the only geometric error is none.
+
+End faces: the *start* face is the radial segment at the shape's start
+point, the *end* face the one at its end point. They are tagged as Gmsh
+physical groups ``start`` and ``end``, and the nodes on them are taken from
+those groups and checked geometrically (a node is on a face if it lies on
+the face's segment within a tolerance); conversion to any FE library is
+done from the plain arrays here, not through a mesh file's tags.
+
+Meshes are cached on disk (``$FLEXVAL_CACHE/meshes`` or
+``~/.cache/flexval/meshes``) under a hash of everything that defines them.
+Nothing here knows about a solver. Units: mm, rad.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import tempfile
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+from .shapes import Arc, FlexureShape, Segment
+
+MESH_VERSION = 1
+"""Bumped whenever the meshing code changes what it produces (invalidates the cache)."""
+
+ELEMENT_ORDER = 2
+"""Polynomial order of the elements (quad9)."""
+
+ASPECT_RATIO = 2.0
+"""Element length along the centre line over element size across the thickness."""
+
+MAX_LEVEL = 8
+
+# quad9 node order (Gmsh and meshio): corners 0-3 counterclockwise, then
+# mid-edge nodes of edges 0-1, 1-2, 2-3, 3-0, then the centre.  Natural
+# coordinates (xi, eta) of each node in [0, 1]^2:
+_QUAD9_NATURAL = np.array([[0, 0], [1, 0], [1, 1], [0, 1],
+                           [0.5, 0], [1, 0.5], [0.5, 1], [0, 0.5], [0.5, 0.5]])
+_QUAD9_REVERSED = np.array([0, 3, 2, 1, 7, 6, 5, 4, 8])
+
+
+@dataclass(frozen=True)
+class FlexureMesh:
+    """A quad9 mesh of one flexure.
+
+    Attributes
+    ----------
+    nodes : ndarray (n_nodes, 2)
+        Node coordinates, mm.
+    elements : ndarray (n_elements, 9)
+        Node indices per element in quad9 order, counterclockwise.
+    start_face, end_face : ndarray (2 n_t + 1,)
+        Nodes on the start and end faces, ordered from the inner (r - h/2,
+        or the right-hand side of a segment) to the outer edge.
+    centre_line : ndarray (2 n_l + 1,)
+        Nodes on the centre line, from start to end.
+    level, n_t, n_l : int
+        Mesh level and elements across the thickness and along the length.
+    """
+
+    nodes: np.ndarray
+    elements: np.ndarray
+    start_face: np.ndarray
+    end_face: np.ndarray
+    centre_line: np.ndarray
+    level: int
+    n_t: int
+    n_l: int
+
+
+def divisions(shape: FlexureShape, thickness: float, level: int) -> tuple[int, int]:
+    """Elements (across the thickness, along the length) of a mesh level.
+
+    Parameters
+    ----------
+    shape : Arc or Segment
+    thickness : float
+        In-plane thickness h, mm.
+    level : int
+        Mesh level (0 = coarsest).
+    """
+    if not 0 <= level <= MAX_LEVEL:
+        raise ValueError(f"mesh level must be between 0 and {MAX_LEVEL}, got {level}")
+    if not thickness > 0.0:
+        raise ValueError(f"thickness must be positive, got {thickness}")
+    n_l0 = max(1, math.ceil(shape.length / (ASPECT_RATIO * thickness) - 1e-9))
+    return 2**level, n_l0 * 2**level
+
+
+def _key(shape: FlexureShape, thickness: float, level: int) -> str:
+    if isinstance(shape, Arc):
+        desc = {"kind": "arc", "center": list(map(float.hex, map(float, shape.center))),
+                "radius": float(shape.radius).hex(), "axis": float(shape.axis).hex(),
+                "width": float(shape.width).hex()}
+    else:
+        desc = {"kind": "segment", "start": list(map(float.hex, map(float, shape.start))),
+                "end": list(map(float.hex, map(float, shape.end)))}
+    desc.update(h=float(thickness).hex(), level=level, order=ELEMENT_ORDER,
+                aspect=ASPECT_RATIO, version=MESH_VERSION)
+    return hashlib.sha256(json.dumps(desc, sort_keys=True).encode()).hexdigest()[:24]
+
+
+def cache_dir() -> Path:
+    """Directory of cached meshes: ``$FLEXVAL_CACHE/meshes`` or ``~/.cache/flexval/meshes``."""
+    root = os.environ.get("FLEXVAL_CACHE")
+    base = Path(root) if root else Path.home() / ".cache" / "flexval"
+    return base / "meshes"
+
+
+def mesh_flexure(shape: FlexureShape, thickness: float, level: int,
+                 use_cache: bool = True) -> FlexureMesh:
+    """Structured quad9 mesh of one flexure (cached on disk).
+
+    Parameters
+    ----------
+    shape : Arc or Segment
+        Centre line of the flexure.
+    thickness : float
+        In-plane thickness h, mm (for an arc, h < 2 r).
+    level : int
+        Mesh level, 0 .. MAX_LEVEL.
+    use_cache : bool
+        Read and write the on-disk cache.
+    """
+    n_t, n_l = divisions(shape, thickness, level)
+    if isinstance(shape, Arc) and thickness >= 2.0 * shape.radius:
+        raise ValueError(f"thickness {thickness} must be smaller than the diameter "
+                         f"{2.0 * shape.radius}")
+    path = cache_dir() / f"{_key(shape, thickness, level)}.npz"
+    if use_cache and path.is_file():
+        with np.load(path) as z:
+            return FlexureMesh(z["nodes"], z["elements"], z["start_face"], z["end_face"],
+                               z["centre_line"], level, n_t, n_l)
+    nodes, elements, faces = _gmsh_band(shape, thickness, n_t, n_l)
+    if isinstance(shape, Arc):
+        nodes = _snap_polar(nodes, elements, shape)
+    elements = _counterclockwise(nodes, elements)
+    start, end = (_face_nodes(nodes, faces[k], _face_segment(shape, thickness, k), thickness)
+                  for k in (0, 1))
+    centre = _centre_line(nodes, shape, thickness, 2 * n_l + 1)
+    mesh = FlexureMesh(nodes, elements, start, end, centre, level, n_t, n_l)
+    if use_cache:
+        _save(path, mesh)
+    return mesh
+
+
+def _save(path: Path, mesh: FlexureMesh) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
+    with os.fdopen(fd, "wb") as fh:
+        np.savez(fh, nodes=mesh.nodes, elements=mesh.elements, start_face=mesh.start_face,
+                 end_face=mesh.end_face, centre_line=mesh.centre_line)
+    os.replace(tmp, path)
+
+
+@contextmanager
+def _gmsh_session() -> Iterator[object]:
+    """A quiet Gmsh model; initialises/finalises Gmsh only if nobody else has."""
+    import gmsh
+
+    owner = not gmsh.isInitialized()
+    if owner:
+        gmsh.initialize(readConfigFiles=False, interruptible=False)
+    gmsh.option.setNumber("General.Terminal", 0)
+    name = "flexval_flexure"
+    gmsh.model.add(name)
+    try:
+        yield gmsh
+    finally:
+        gmsh.model.setCurrent(name)
+        gmsh.model.remove()
+        if owner:
+            gmsh.finalize()
+
+
+def _gmsh_band(shape: FlexureShape, h: float, n_t: int, n_l: int
+               ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """Gmsh quad9 mesh of the band; returns nodes, elements and the two faces' nodes."""
+    with _gmsh_session() as gmsh:
+        occ = gmsh.model.occ
+        if isinstance(shape, Arc):
+            cx, cy = map(float, shape.center)
+            r_in, r_out = shape.radius - 0.5 * h, shape.radius + 0.5 * h
+            a0, a1 = shape.start_angle, shape.end_angle
+            corners = [(cx + r * math.cos(a), cy + r * math.sin(a))
+                       for r, a in ((r_in, a0), (r_out, a0), (r_out, a1), (r_in, a1))]
+            p = [occ.addPoint(x, y, 0.0) for x, y in corners]
+            c = occ.addPoint(cx, cy, 0.0)
+            start = occ.addLine(p[0], p[1])
+            outer = occ.addCircleArc(p[1], c, p[2])
+            end = occ.addLine(p[2], p[3])
+            inner = occ.addCircleArc(p[3], c, p[0])
+        else:
+            s0, s1 = np.asarray(shape.start, float), np.asarray(shape.end, float)
+            t = (s1 - s0) / np.hypot(*(s1 - s0))
+            n = np.array([-t[1], t[0]]) * 0.5 * h
+            corners = [s0 - n, s0 + n, s1 + n, s1 - n]
+            p = [occ.addPoint(float(x), float(y), 0.0) for x, y in corners]
+            start, outer = occ.addLine(p[0], p[1]), occ.addLine(p[1], p[2])
+            end, inner = occ.addLine(p[2], p[3]), occ.addLine(p[3], p[0])
+        loop = occ.addCurveLoop([start, outer, end, inner])
+        surf = occ.addPlaneSurface([loop])
+        if isinstance(shape, Arc):
+            occ.remove([(0, c)])
+        occ.synchronize()
+        mesh = gmsh.model.mesh
+        for curve, n in ((start, n_t), (end, n_t), (outer, n_l), (inner, n_l)):
+            mesh.setTransfiniteCurve(curve, n + 1)
+        mesh.setTransfiniteSurface(surf, cornerTags=p)
+        mesh.setRecombine(2, surf)
+        gmsh.model.addPhysicalGroup(1, [start], name="start")
+        gmsh.model.addPhysicalGroup(1, [end], name="end")
+        gmsh.model.addPhysicalGroup(2, [surf], name="flexure")
+        gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
+        mesh.generate(2)
+        mesh.setOrder(ELEMENT_ORDER)
+        tags, coords, _ = mesh.getNodes()
+        index = np.full(int(tags.max()) + 1, -1)
+        index[tags.astype(int)] = np.arange(tags.size)
+        nodes = coords.reshape(-1, 3)[:, :2].copy()
+        etypes, _, enodes = mesh.getElements(2, surf)
+        quad9 = gmsh.model.mesh.getElementType("Quadrangle", ELEMENT_ORDER)
+        if list(etypes) != [quad9]:
+            raise RuntimeError(f"gmsh produced element types {list(etypes)}, expected quad9")
+        elements = index[enodes[0].astype(int)].reshape(-1, 9)
+        faces = tuple(index[gmsh.model.mesh.getNodesForPhysicalGroup(1, g)[0].astype(int)]
+                      for g in (1, 2))
+    return nodes, elements, faces
+
+
+def _polar(points: np.ndarray, arc: Arc) -> tuple[np.ndarray, np.ndarray]:
+    """Radius (mm) and polar angle from the arc's start (rad, in [-gap/2, width + gap/2))."""
+    d = points - np.asarray(arc.center, float)
+    rho = np.hypot(d[..., 0], d[..., 1])
+    phi = np.mod(np.arctan2(d[..., 1], d[..., 0]) - arc.start_angle, 2.0 * np.pi)
+    gap = 2.0 * np.pi - arc.width
+    return rho, np.where(phi > arc.width + 0.5 * gap, phi - 2.0 * np.pi, phi)
+
+
+def _snap_polar(nodes: np.ndarray, elements: np.ndarray, arc: Arc) -> np.ndarray:
+    """Move every node to the exact polar image of its element's (rho, phi) rectangle."""
+    rho, phi = _polar(nodes[elements[:, :4]], arc)          # (n_el, 4) corners
+    xi, eta = _QUAD9_NATURAL[:, 0], _QUAD9_NATURAL[:, 1]
+    w = np.stack([(1 - xi) * (1 - eta), xi * (1 - eta), xi * eta, (1 - xi) * eta])  # (4, 9)
+    r9, p9 = rho @ w, arc.start_angle + phi @ w             # (n_el, 9)
+    out = nodes.copy()
+    out[elements, 0] = arc.center[0] + r9 * np.cos(p9)
+    out[elements, 1] = arc.center[1] + r9 * np.sin(p9)
+    return out
+
+
+def _counterclockwise(nodes: np.ndarray, elements: np.ndarray) -> np.ndarray:
+    """Elements reordered so that all are counterclockwise (positive area)."""
+    x = nodes[elements[:, :4]]
+    area2 = np.sum(x[:, :, 0] * np.roll(x[:, :, 1], -1, axis=1)
+                   - np.roll(x[:, :, 0], -1, axis=1) * x[:, :, 1], axis=1)
+    if np.any(area2 == 0.0):
+        raise RuntimeError("degenerate element in flexure mesh")
+    return np.where((area2 < 0.0)[:, None], elements[:, _QUAD9_REVERSED], elements)
+
+
+def _face_segment(shape: FlexureShape, h: float, which: int) -> np.ndarray:
+    """End face ``which`` (0: start, 1: end) as a segment [inner, outer], mm.
+
+    Inner is r - h/2 for an arc, the right-hand side (seen along the segment)
+    for a segment.
+    """
+    if isinstance(shape, Arc):
+        a = shape.start_angle if which == 0 else shape.end_angle
+        u = np.array([math.cos(a), math.sin(a)])
+        c = np.asarray(shape.center, float)
+        return np.array([c + (shape.radius - 0.5 * h) * u, c + (shape.radius + 0.5 * h) * u])
+    p = shape.end_points[which]
+    t = shape.tangent(0.0)
+    n = np.array([-t[1], t[0]])
+    return np.array([p - 0.5 * h * n, p + 0.5 * h * n])
+
+
+def _face_nodes(nodes: np.ndarray, tagged: np.ndarray, seg: np.ndarray, h: float) -> np.ndarray:
+    """Nodes on segment ``seg`` ordered along it; checked against the Gmsh tag."""
+    d = seg[1] - seg[0]
+    rel = nodes - seg[0]
+    s = rel @ d / (d @ d)
+    off = np.abs(rel[:, 0] * d[1] - rel[:, 1] * d[0]) / np.hypot(*d)
+    tol = 1e-6 * h
+    on = np.flatnonzero((off <= tol) & (s >= -tol / h) & (s <= 1 + tol / h))
+    if set(on.tolist()) != set(np.asarray(tagged).tolist()):
+        raise RuntimeError("end-face nodes found geometrically differ from the Gmsh tag")
+    return on[np.argsort(s[on])]
+
+
+def _centre_line(nodes: np.ndarray, shape: FlexureShape, h: float, count: int) -> np.ndarray:
+    """Nodes on the centre line, ordered from start to end."""
+    tol = 1e-6 * h
+    if isinstance(shape, Arc):
+        rho, phi = _polar(nodes, shape)
+        on = np.flatnonzero(np.abs(rho - shape.radius) <= tol)
+        order = phi[on]
+    else:
+        p0 = np.asarray(shape.start, float)
+        t = (np.asarray(shape.end, float) - p0) / shape.length
+        rel = nodes - p0
+        on = np.flatnonzero(np.abs(rel[:, 0] * t[1] - rel[:, 1] * t[0]) <= tol)
+        order = rel[on] @ t
+    if on.size != count:
+        raise RuntimeError(f"found {on.size} centre-line nodes, expected {count}")
+    return on[np.argsort(order)]

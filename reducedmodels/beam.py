@@ -1,0 +1,310 @@
+"""Geometrically exact 2D beam FEM (``beam:N``): corotational two-node elements.
+
+Each flexure's centre line is cut into N straight two-node elements whose
+nodes lie exactly on the centre line, at arc lengths s_k = k L / N. A node
+carries (x, y, theta): its position (mm) and its rotation increment (rad)
+from the initial configuration. The two end nodes are rigidly attached to
+the bodies the flexure joins; the N - 1 interior nodes are the connector's
+internal coordinates.
+
+Every element follows the corotational formulation of Crisfield (1991,
+Ch. 7) and Battini & Pacoste (2002) for planar Euler-Bernoulli beams: the
+rigid motion of the element is carried by its chord, and what is left is
+small and linear in a frame that rotates with the chord,
+
+    u  = l - l0                        (axial stretch, mm)
+    a1 = wrap(theta_1 - alpha)         (local end rotations, rad)
+    a2 = wrap(theta_2 - alpha)
+
+where l0 and l are the initial and current chord lengths and alpha is the
+chord's rotation from the initial configuration. Because theta_i and alpha
+are both increments, the initial local rotations of a curved centre line
+(tangent angle minus chord angle) cancel: the unloaded arc is stress free.
+The local energy is
+
+    E = 1/2 [EA/l0 u^2 + a^T k_b a],   k_b = EI/l0 [[4, 2], [2, 4]],
+
+or, with ``shear=True``, the Timoshenko beam's condensed bending stiffness
+k_b = EI / (l0 (1 + phi)) [[4 + phi, 2 - phi], [2 - phi, 4 + phi]] with
+phi = 12 EI / (kappa G A l0^2), kappa = 5/6. Gradient and tangent are
+exact (material plus geometric parts), all elements are evaluated at once
+with numpy, and the Hessian is returned as a sparse COO matrix.
+
+Units: mm, N, MPa, N mm, rad.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.sparse as sp
+
+from geometry import Flexure, Mechanism
+
+SHEAR_CORRECTION = 5.0 / 6.0
+"""Timoshenko shear coefficient kappa of a rectangular section."""
+
+def _tangent_pattern() -> np.ndarray:
+    """Constant map (7, 36) from an element's independent tangent entries to its 6x6 tangent.
+
+    In element coordinates [x1, y1, theta1, x2, y2, theta2] the tangent is
+    [[A, w, -A, w], [w^T, k11, -w^T, k12], [-A, -w, A, -w], [w^T, k12, -w^T, k11]]
+    (blocks by node and dof kind) with A symmetric 2x2; the independent entries
+    are ordered [Axx, Axy, Ayy, wx, wy, k11, k12].
+    """
+    P = np.zeros((7, 6, 6))
+    for (i, j), sign in {(0, 0): 1, (0, 3): -1, (3, 3): 1}.items():
+        P[0, i, j] = P[0, j, i] = sign
+        P[1, i, j + 1] = P[1, i + 1, j] = P[1, j, i + 1] = P[1, j + 1, i] = sign
+        P[2, i + 1, j + 1] = P[2, j + 1, i + 1] = sign
+    for i, sign in ((0, 1), (3, -1)):
+        for j in (2, 5):
+            P[3, i, j] = P[3, j, i] = sign
+            P[4, i + 1, j] = P[4, j, i + 1] = sign
+    P[5, 2, 2] = P[5, 5, 5] = 1.0
+    P[6, 2, 5] = P[6, 5, 2] = 1.0
+    return P.reshape(7, 36)
+
+
+_PATTERN = _tangent_pattern()
+
+
+def wrap_angle(angle: np.ndarray) -> np.ndarray:
+    """Angles (rad) brought into (-pi, pi], so that full turns carry no strain."""
+    return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
+
+
+def bending_stiffness_terms(EI: float, l0: np.ndarray, shear_stiffness: float | None
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """Diagonal and off-diagonal entries of the local bending stiffness k_b, N mm.
+
+    Parameters
+    ----------
+    EI : float
+        Bending stiffness, N mm^2.
+    l0 : array (n,)
+        Initial chord lengths, mm.
+    shear_stiffness : float or None
+        kappa G A in N for a Timoshenko beam, None for Euler-Bernoulli.
+    """
+    phi = 0.0 if shear_stiffness is None else 12.0 * EI / (shear_stiffness * l0**2)
+    scale = EI / (l0 * (1.0 + phi))
+    return scale * (4.0 + phi), scale * (2.0 - phi)
+
+
+def corotational_elements(x: np.ndarray, theta: np.ndarray, chord0: np.ndarray, l0: np.ndarray,
+                          k_axial: np.ndarray, k11: np.ndarray, k12: np.ndarray
+                          ) -> tuple[float, np.ndarray, np.ndarray]:
+    """Energy, gradients and tangents of a chain of corotational beam elements.
+
+    Element e joins nodes e and e + 1; its coordinates are
+    [x_e, y_e, theta_e, x_{e+1}, y_{e+1}, theta_{e+1}].
+
+    Parameters
+    ----------
+    x : array (n + 1, 2)
+        Current node positions, mm.
+    theta : array (n + 1,)
+        Node rotation increments from the initial configuration, rad.
+    chord0 : array (n, 2)
+        Initial unit chord vectors.
+    l0 : array (n,)
+        Initial chord lengths, mm.
+    k_axial, k11, k12 : array (n,)
+        EA / l0 (N/mm) and the entries of k_b (N mm).
+
+    Returns
+    -------
+    energy : float
+        Total strain energy, N mm.
+    grad : array (n, 6)
+        Element internal forces (N, N, N mm per node).
+    hess : array (n, 36)
+        Element consistent tangents, row-major 6x6 each: Crisfield's
+        B^T D B + N z z^T / l + (M1 + M2) (r z^T + z r^T) / l^2 with
+        r = dl/dq, z = l dalpha/dq, written out entry by entry.
+
+    Notes
+    -----
+    With e = (c, s) the current chord direction and n = (-s, c) its normal,
+    node 1 carries the force f = -N e + V n with the shear V = (M1 + M2)/l,
+    node 2 carries -f, and the translational tangent block is
+    A = EA/l0 e e^T + (2 (k11 + k12)/l^2 + N/l) n n^T + (M1 + M2)/l^2 (e n^T + n e^T).
+    """
+    d = x[1:] - x[:-1]
+    length = np.hypot(d[:, 0], d[:, 1])
+    c, s = d[:, 0] / length, d[:, 1] / length
+    # chord rotation from the initial chord, robust for any magnitude: (-pi, pi]
+    alpha = np.arctan2(chord0[:, 0] * d[:, 1] - chord0[:, 1] * d[:, 0],
+                       chord0[:, 0] * d[:, 0] + chord0[:, 1] * d[:, 1])
+    a1 = wrap_angle(theta[:-1] - alpha)
+    a2 = wrap_angle(theta[1:] - alpha)
+    u = length - l0
+    axial = k_axial * u
+    m1 = k11 * a1 + k12 * a2
+    m2 = k12 * a1 + k11 * a2
+    energy = 0.5 * float(np.sum(axial * u + m1 * a1 + m2 * a2))
+
+    shear = (m1 + m2) / length
+    fx, fy = -axial * c - shear * s, -axial * s + shear * c
+    grad = np.column_stack([fx, fy, m1, -fx, -fy, m2])
+
+    # A in double-angle form: cos 2b = c^2 - s^2, sin 2b = 2 c s
+    k_normal = 2.0 * (k11 + k12) / length**2 + axial / length
+    k_cross = shear / length
+    k_rot = (k11 + k12) / length
+    cos2, sin2 = c * c - s * s, 2.0 * c * s
+    mean, half = 0.5 * (k_axial + k_normal), 0.5 * (k_axial - k_normal)
+    diagonal = half * cos2 - k_cross * sin2
+    entries = np.column_stack([mean + diagonal, half * sin2 + k_cross * cos2, mean - diagonal,
+                               -k_rot * s, k_rot * c, k11, k12])
+    return energy, grad, entries @ _PATTERN
+
+
+def body_point(pose: np.ndarray, rel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position x = p + R(theta) rel of a body's material point and dx/dtheta, both mm.
+
+    ``rel`` is the point's initial offset from the body's reference point, mm;
+    d^2x/dtheta^2 = -R(theta) rel follows as minus the rotated offset.
+    """
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    rotated = np.array([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]])
+    return pose[:2] + rotated, np.array([-rotated[1], rotated[0]])
+
+
+def attach_to_body(grad: np.ndarray, hess: np.ndarray, slot: int, pose: np.ndarray,
+                   rel: np.ndarray) -> None:
+    """Transport one element's end-node force and tangent to a rigid body's pose, in place.
+
+    The node is the body's material point at initial offset ``rel`` (mm)
+    from its reference point and turns with it: x = p + R(theta) rel,
+    theta_node = theta. With T = d node / d pose (identity except
+    dx/dtheta = t) the chain rule gives g <- T^T g and
+    K <- T^T K T + (g_xy . d^2x/dtheta^2) e_theta e_theta^T, where
+    d^2x/dtheta^2 = -R(theta) rel.
+
+    Parameters
+    ----------
+    grad : array (6,)
+        Element gradient; the node's rotation entry is updated.
+    hess : array (6, 6)
+        Element tangent; the node's rotation row and column are updated.
+    slot : int
+        First entry of the node in the element vector (0 or 3).
+    pose : array (3,)
+        Body pose (mm, mm, rad).
+    rel : array (2,)
+        Node offset from the body's reference point in the initial configuration, mm.
+    """
+    _, t = body_point(pose, rel)
+    x, y, th = slot, slot + 1, slot + 2
+    geometric = -(grad[x] * t[1] - grad[y] * t[0])      # g_xy . (-R rel), with R rel = -J t
+    grad[th] += t[0] * grad[x] + t[1] * grad[y]
+    hess[th, :] += t[0] * hess[x, :] + t[1] * hess[y, :]
+    hess[:, th] += t[0] * hess[:, x] + t[1] * hess[:, y]
+    hess[th, th] += geometric
+
+
+class BeamConnector:
+    """Corotational beam model of one flexure with N elements (connector for :mod:`.core`).
+
+    Parameters
+    ----------
+    flexure : Flexure
+        The flexure; its centre line gives the node positions.
+    mechanism : Mechanism
+        Supplies the material and the bodies' reference points.
+    n_elements : int
+        N >= 1, the number of elements.
+    shear : bool
+        Use the Timoshenko (shear-flexible) local bending stiffness.
+
+    Notes
+    -----
+    Local coordinates are [pose_a, pose_b, internal] with (a, b) = bodies;
+    internal is the interior nodes' (x, y, theta), ordered from the
+    flexure's start to its end.
+    """
+
+    def __init__(self, flexure: Flexure, mechanism: Mechanism, n_elements: int,
+                 shear: bool = False):
+        if n_elements < 1:
+            raise ValueError(f"beam: number of elements must be >= 1, got {n_elements}")
+        self.name = flexure.name
+        self.bodies = tuple(flexure.bodies)
+        self.n_internal = 3 * (n_elements - 1)
+        self._n_nodes = n_elements + 1
+        self._nodes0 = flexure.shape.point(np.linspace(0.0, flexure.shape.length, n_elements + 1))
+        chord = np.diff(self._nodes0, axis=0)
+        l0 = np.hypot(chord[:, 0], chord[:, 1])
+        self._l0 = l0
+        self._chord0 = chord / l0[:, None]
+        material = mechanism.material
+        self._k_axial = flexure.axial_stiffness(material) / l0
+        shear_stiffness = (SHEAR_CORRECTION * material.shear_modulus * flexure.section.area
+                           if shear else None)
+        self._k11, self._k12 = bending_stiffness_terms(flexure.bending_stiffness(material), l0,
+                                                       shear_stiffness)
+        # which pose (0: pose_a, 1: pose_b) carries the start node and the end node
+        self._end_pose = (self.bodies.index(flexure.start_body),
+                          self.bodies.index(flexure.end_body))
+        self._end_rel = np.array([
+            self._nodes0[0] - mechanism.bodies[flexure.start_body].reference,
+            self._nodes0[-1] - mechanism.bodies[flexure.end_body].reference])
+        self._rows, self._cols = self._sparsity(n_elements)
+
+    def _sparsity(self, n_elements: int) -> tuple[np.ndarray, np.ndarray]:
+        """Row and column of every entry of the stacked element tangents (n, 6, 6)."""
+        node_dofs = np.empty((n_elements + 1, 3), dtype=np.int32)
+        node_dofs[0] = 3 * self._end_pose[0] + np.arange(3)
+        node_dofs[-1] = 3 * self._end_pose[1] + np.arange(3)
+        node_dofs[1:-1] = 6 + np.arange(self.n_internal).reshape(-1, 3)
+        self._element_dofs = np.hstack([node_dofs[:-1], node_dofs[1:]])
+        rows = np.repeat(self._element_dofs, 6, axis=1).ravel()
+        cols = np.tile(self._element_dofs, (1, 6)).ravel()
+        return rows, cols
+
+    def initial_internal(self) -> np.ndarray:
+        """Interior nodes at rest: (x, y, 0) each, mm and rad."""
+        inner = self._nodes0[1:-1]
+        return np.column_stack([inner, np.zeros(len(inner))]).ravel()
+
+    def internal_is_rotation(self) -> np.ndarray:
+        """Every third internal coordinate (the nodal rotation) is an angle."""
+        return np.tile([False, False, True], self.n_internal // 3)
+
+    def _nodes(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+        """Current node positions (N + 1, 2), rotations (N + 1,) and the end bodies' poses."""
+        poses = (np.asarray(pose_a, float), np.asarray(pose_b, float))
+        start, end = poses[self._end_pose[0]], poses[self._end_pose[1]]
+        x = np.empty((self._n_nodes, 2))
+        theta = np.empty(self._n_nodes)
+        inner = np.asarray(internal, float).reshape(-1, 3)
+        x[1:-1], theta[1:-1] = inner[:, :2], inner[:, 2]
+        x[0], theta[0] = body_point(start, self._end_rel[0])[0], start[2]
+        x[-1], theta[-1] = body_point(end, self._end_rel[1])[0], end[2]
+        return x, theta, (start, end)
+
+    def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+                 ) -> tuple[float, np.ndarray, sp.coo_matrix]:
+        """Strain energy (N mm), gradient (6 + n_internal) and sparse Hessian.
+
+        The gradient holds the internal forces conjugate to
+        [pose_a, pose_b, internal] (N on translations, N mm on rotations);
+        the Hessian (COO, duplicate entries summed) is the consistent tangent.
+        """
+        x, theta, (start, end) = self._nodes(pose_a, pose_b, internal)
+        energy, grad, hess = corotational_elements(x, theta, self._chord0, self._l0,
+                                                   self._k_axial, self._k11, self._k12)
+        attach_to_body(grad[0], hess[0].reshape(6, 6), 0, start, self._end_rel[0])
+        attach_to_body(grad[-1], hess[-1].reshape(6, 6), 3, end, self._end_rel[1])
+        n = 6 + self.n_internal
+        gradient = np.bincount(self._element_dofs.ravel(), weights=grad.ravel(), minlength=n)
+        hessian = sp.coo_matrix((hess.ravel(), (self._rows, self._cols)), shape=(n, n))
+        return energy, gradient, hessian
+
+    def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
+        """Deformed node positions (N + 1, 2), mm, from the flexure's start to its end."""
+        return self._nodes(pose_a, pose_b, internal)[0]

@@ -1,0 +1,57 @@
+"""The flexval command line: info, plot and run, JSON output and exit codes."""
+
+import json
+
+import numpy as np
+import pytest
+
+from reducedmodels import LoadPath
+from validation.cli import main
+
+
+@pytest.mark.parametrize("scene", ["open_chain", "closed_chain"])
+def test_info_text_and_json(scene, tmp_path, capsys):
+    out = tmp_path / "info.json"
+    assert main(["info", scene, "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "e12" in text and "target" in text
+    info = json.loads(out.read_text())
+    assert info["scene"] == scene
+    for f in info["flexures"]:
+        assert {"w_per_Nmm", "C_mm", "a_mm", "b_mm"} <= set(f["ellipse"])
+        assert f["length_mm"] > 0 and f["EI_Nmm2"] > 0
+
+
+def test_plot_writes_png(tmp_path):
+    out = tmp_path / "m.png"
+    assert main(["plot", "closed_chain", "-o", str(out)]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_run_json_contract(tmp_path, capsys):
+    out = tmp_path / "r.json"
+    code = main(["run", "open_chain", "--model", "ee", "--model", "dcmm:1",
+                 "--load-case", "f+", "--levels", "5", "--json", str(out)])
+    assert code == 0
+    data = json.loads(out.read_text())
+    assert data["scene"] == "open_chain"
+    assert [r["model"] for r in data["results"]] == ["ee", "dcmm:1"]
+    for r in data["results"]:
+        assert r["load_case"] == "f+" and r["converged"] is True
+        assert len(r["load"]) == len(r["dx"]) == len(r["dy"]) == len(r["rotation"]) == 5
+        np.testing.assert_allclose(r["load"], np.linspace(0, 3e-3, 5))
+        assert r["seconds"] > 0 and isinstance(r["stats"], dict)
+        lp = LoadPath.from_dict(r)
+        assert LoadPath.from_json(lp.to_json()) == lp
+
+
+def test_run_solver_failure_exit_3(monkeypatch, capsys):
+    # a sub-step budget of 3 cannot follow the soft stretch of f-
+    import reducedmodels.models as models
+    from reducedmodels.core import SolverSettings
+
+    monkeypatch.setattr(models, "SolverSettings", lambda: SolverSettings(max_substeps=3))
+    code = main(["run", "open_chain", "--model", "dcmm:1", "--load-case", "f-"])
+    assert code == 3
+    err = capsys.readouterr().err
+    assert "last converged load" in err and "f-" in err and "sub-steps" in err

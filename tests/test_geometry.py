@@ -1,0 +1,129 @@
+"""Geometry of the built-in scenes against hand derivation, and the ellipse of
+elasticity (paper Eqs. 1-4) against an independent quadrature of the elastic
+weight's moments along the arc."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from geometry import Arc, Segment, load_scene
+
+
+def test_open_chain_links_match_hand_derivation():
+    # e12: centre (0, 3), r = 3, spans 30..270 deg -> (3 cos30, 3 + 3 sin30) and (0, 0)
+    mech = load_scene("open_chain").mechanism
+    e12 = next(f for f in mech.flexures if f.name == "e12")
+    np.testing.assert_allclose(e12.end_point_of("1"), [0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(e12.end_point_of("2"), [3 * math.cos(math.radians(30)), 4.5],
+                               atol=1e-12)
+    np.testing.assert_allclose(e12.end_point_of("2"), [2.598, 4.500], atol=5e-4)
+    # link 2 joins e12's end to e23's start at polar -150 deg around (9.09, 8.25), r = 3.5
+    link2 = mech.bodies["2"].points
+    np.testing.assert_allclose(link2[1], [9.09 - 3.5 * math.cos(math.radians(30)), 8.25 - 1.75],
+                               atol=1e-12)
+    np.testing.assert_allclose(link2, [[2.598, 4.500], [6.059, 6.500]], atol=5e-4)
+    # link 3 joins e23's end (12.59, 8.25) to e34's end at polar 265 deg
+    np.testing.assert_allclose(mech.bodies["3"].points[0], [12.59, 8.25], atol=1e-12)
+    p = [12.59 + 2.5 * math.cos(math.radians(265)), 15.75 + 2.5 * math.sin(math.radians(265))]
+    np.testing.assert_allclose(mech.bodies["3"].points[1], p, atol=1e-12)
+    assert mech.target_body == "4" and mech.ground == "1"
+
+
+def test_closed_chain_is_grounded_at_both_anchors():
+    mech = load_scene("closed_chain").mechanism
+    ground = mech.bodies["1"].points
+    # arc ends lie within 0.01 mm of the paper's anchors (its 2-decimal data)
+    np.testing.assert_allclose(ground, [[0.0, 0.0], [100.0, 0.0]], atol=0.01)
+    assert sorted(mech.bodies) == ["1", "2", "3", "4"]
+    assert {f.name: f.start_body for f in mech.flexures} == {
+        "e12": "2", "e24": "4", "e13": "1", "e34": "3"}
+    # body 4 holds e24 and e34: a loop
+    assert len(mech.bodies["4"].points) == 2
+
+
+def _moments_by_quadrature(arc: Arc):
+    """Zeroth, first and second moments of the centre line (uniform elastic weight)."""
+    L = arc.length
+    m0 = L
+    m1 = np.array([quad(lambda s, k=k: arc.point(s)[k], 0, L)[0] for k in range(2)])
+    c = m1 / m0
+    S = np.array([[quad(lambda s, i=i, j=j: (arc.point(s)[i] - c[i]) * (arc.point(s)[j] - c[j]),
+                        0, L)[0] for j in range(2)] for i in range(2)])
+    return m0, c, S / m0
+
+
+@pytest.mark.parametrize("width_deg", [10.0, 90.0, 150.0, 240.0, 270.0, 350.0])
+@pytest.mark.parametrize("axis_deg", [-75.0, 0.0, 130.0])
+def test_ellipse_of_elasticity_matches_quadrature(width_deg, axis_deg):
+    arc = Arc((1.3, -2.0), 3.5, math.radians(axis_deg), math.radians(width_deg))
+    EI = 0.175
+    ell = arc.ellipse(EI)
+    m0, c, S = _moments_by_quadrature(arc)
+    assert ell.weight == pytest.approx(m0 / EI, rel=1e-12)
+    np.testing.assert_allclose(ell.center, c, atol=1e-10)
+    # S = a^2 e1 e1^T + b^2 e2 e2^T (principal second moments per unit weight)
+    e1, e2 = ell.axes[:, 0], ell.axes[:, 1]
+    S_ell = ell.a**2 * np.outer(e1, e1) + ell.b**2 * np.outer(e2, e2)
+    np.testing.assert_allclose(S_ell, S, atol=1e-9 * arc.radius**2)
+    assert e1[0] * e2[1] - e1[1] * e2[0] == pytest.approx(1.0)
+
+
+def _cross(u, v):
+    return u[0] * v[1] - u[1] * v[0]
+
+
+def test_ellipse_compliance_is_the_castigliano_compliance_at_the_centre():
+    """A unit force along e1 at C displaces C by w b^2 along e1 (bending only)."""
+    arc = Arc((0.0, 0.0), 2.0, 0.3, math.radians(200))
+    EI = 2.0
+    ell = arc.ellipse(EI)
+    for k, expected in enumerate([ell.weight * ell.b**2, ell.weight * ell.a**2]):
+        F = ell.axes[:, k]
+        # M(s) = (p(s) - C) x F ; delta.F = int M^2 / EI ds
+        m2 = quad(lambda s: _cross(arc.point(s) - ell.center, F) ** 2, 0, arc.length)[0]
+        assert m2 / EI == pytest.approx(expected, rel=1e-10)
+
+
+def test_straight_segment_is_the_zero_curvature_limit():
+    L, EI = 10.0, 3.0
+    seg = Segment((0.0, 0.0), (L, 0.0))
+    ell = seg.ellipse(EI)
+    assert ell.weight == pytest.approx(L / EI)
+    np.testing.assert_allclose(ell.center, [L / 2, 0.0])
+    assert ell.a == pytest.approx(L / math.sqrt(12)) and ell.b == 0.0
+    # a very flat arc with the same chord tends to the segment
+    for width in [1e-2, 1e-3]:
+        r = L / (2 * math.sin(width / 2))
+        arc = Arc((L / 2, -r * math.cos(width / 2)), r, math.pi / 2, width)
+        ea = arc.ellipse(EI)
+        np.testing.assert_allclose(arc.end_points, [[L, 0.0], [0.0, 0.0]], atol=1e-9)
+        assert ea.weight == pytest.approx(L / EI, rel=width**2)
+        assert ea.a == pytest.approx(ell.a, rel=width**2)
+        assert ea.b < 0.1 * width * L
+        np.testing.assert_allclose(ea.center, ell.center, atol=width * L)
+
+
+def test_arc_parametrisation():
+    arc = Arc((1.0, 2.0), 2.0, 0.5, 2.0)
+    s = np.linspace(0, arc.length, 7)
+    p = arc.point(s)
+    np.testing.assert_allclose(np.hypot(*(p - [1.0, 2.0]).T), 2.0)
+    # tangent is the derivative of the position
+    h = 1e-6
+    t = (arc.point(s + h) - arc.point(s - h)) / (2 * h)
+    np.testing.assert_allclose(t, arc.tangent(s), atol=1e-8)
+    parts = arc.split(4)
+    np.testing.assert_allclose(parts[0].end_points[0], arc.end_points[0], atol=1e-12)
+    np.testing.assert_allclose(parts[-1].end_points[1], arc.end_points[1], atol=1e-12)
+    assert sum(q.length for q in parts) == pytest.approx(arc.length)
+
+
+def test_rigid_transform_keeps_connectivity():
+    mech = load_scene("closed_chain").mechanism
+    moved = mech.transformed(0.7, np.array([5.0, -3.0]))
+    for f, g in zip(mech.flexures, moved.flexures):
+        assert f.start_body == g.start_body
+        assert g.shape.length == pytest.approx(f.shape.length)
+    assert moved.size() == pytest.approx(mech.size())

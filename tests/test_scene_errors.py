@@ -1,0 +1,214 @@
+"""Every kind of bad scene input gives a SceneError naming the file, the field
+and the value; the CLI turns it into exit code 2 with no traceback."""
+
+import copy
+import tomllib
+from importlib import resources
+
+import pytest
+
+from geometry import SceneError, load_scene, parse_model
+from validation.cli import main
+
+
+def _base() -> dict:
+    text = resources.files("geometry").joinpath("scenes", "open_chain.toml").read_text()
+    return tomllib.loads(text)
+
+
+def _dump(data: dict) -> str:
+    """Minimal TOML writer for the scene layout (tables, arrays of tables, scalars)."""
+
+    def val(v):
+        if isinstance(v, str):
+            return '"' + v + '"'
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, float):
+            if v != v:
+                return "nan"
+            if v in (float("inf"), float("-inf")):
+                return "inf" if v > 0 else "-inf"
+            return repr(v)
+        if isinstance(v, list):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{" + ", ".join(f'"{k}" = {val(x)}' for k, x in v.items()) + "}"
+        return repr(v)
+
+    out = [f'"{k}" = {val(v)}' for k, v in data.items()
+           if not isinstance(v, (dict, list)) or (isinstance(v, list) and not
+                                                  (v and isinstance(v[0], dict)))]
+    for k, v in data.items():
+        if isinstance(v, dict):
+            out.append(f"[{k}]")
+            out += [f'"{kk}" = {val(x)}' for kk, x in v.items()]
+        elif isinstance(v, list) and v and isinstance(v[0], dict):
+            for item in v:
+                out.append(f"[[{k}]]")
+                out += [f'"{kk}" = {val(x)}' for kk, x in item.items()]
+    return "\n".join(out) + "\n"
+
+
+def _expect(tmp_path, data, field, value_text=None):
+    path = tmp_path / "bad.toml"
+    path.write_text(_dump(data))
+    with pytest.raises(SceneError) as info:
+        load_scene(path)
+    msg = str(info.value)
+    assert str(path) in msg
+    assert f"'{field}'" in msg, msg
+    if value_text is not None:
+        assert value_text in msg, msg
+    return msg
+
+
+def test_writer_round_trips_the_builtin_scene(tmp_path):
+    path = tmp_path / "ok.toml"
+    path.write_text(_dump(_base()))
+    assert len(load_scene(path).mechanism.flexures) == 3
+
+
+def _flex(data, name):
+    return next(f for f in data["flexures"] if f["name"] == name)
+
+
+@pytest.mark.parametrize("field,value", [("radius", 0.0), ("radius", -1.0)])
+def test_non_positive_radius(tmp_path, field, value):
+    d = _base()
+    _flex(d, "e23")[field] = value
+    _expect(tmp_path, d, f"flexures.e23.{field}", repr(value))
+
+
+def test_non_positive_thickness(tmp_path):
+    d = _base()
+    d["section"]["thickness"] = 0.0
+    _expect(tmp_path, d, "section.thickness", "0.0")
+
+
+def test_non_positive_modulus(tmp_path):
+    d = _base()
+    d["material"]["youngs_modulus"] = -2100.0
+    _expect(tmp_path, d, "material.youngs_modulus", "-2100.0")
+
+
+def test_thickness_not_below_diameter(tmp_path):
+    d = _base()
+    _flex(d, "e34")["thickness"] = 5.0   # r = 2.5
+    _expect(tmp_path, d, "flexures.e34.thickness", "5.0")
+
+
+@pytest.mark.parametrize("width", [0.0, 360.0, -10.0, 400.0])
+def test_width_outside_open_interval(tmp_path, width):
+    d = _base()
+    _flex(d, "e12")["width_deg"] = width
+    _expect(tmp_path, d, "flexures.e12.width_deg", repr(width))
+
+
+@pytest.mark.parametrize("nu", [-1.0, 0.5, 0.7])
+def test_poisson_outside_range(tmp_path, nu):
+    d = _base()
+    d["material"]["poisson_ratio"] = nu
+    _expect(tmp_path, d, "material.poisson_ratio", repr(nu))
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), 1e300])
+def test_nan_inf_absurd(tmp_path, bad):
+    d = _base()
+    _flex(d, "e12")["center"] = [0.0, bad]
+    _expect(tmp_path, d, "flexures.e12.center[1]")
+    d = _base()
+    d["load_cases"][0]["value"] = bad
+    _expect(tmp_path, d, "load_cases.m+.value")
+
+
+def test_dangling_body(tmp_path):
+    d = _base()
+    d["flexures"].append({"name": "e45", "bodies": ["4", "5"], "center": [22.0, 18.0],
+                          "radius": 1.0, "axis_deg": 0.0, "width_deg": 90.0})
+    _expect(tmp_path, d, "flexures", "'5'")
+
+
+def test_unconnected_body(tmp_path):
+    d = _base()
+    # e23 now joins 5 and 3: bodies 3, 4, 5 are no longer reachable from the ground
+    _flex(d, "e23")["bodies"] = ["5", "3"]
+    _expect(tmp_path, d, "flexures")
+
+
+def test_flexure_end_meets_no_ground_point(tmp_path):
+    d = _base()
+    d["ground"]["points"] = [[1.0, 1.0]]
+    _expect(tmp_path, d, "flexures.e12", "e12")
+
+
+def test_no_ground(tmp_path):
+    d = _base()
+    del d["ground"]
+    _expect(tmp_path, d, "ground")
+    d = _base()
+    d["ground"]["name"] = "0"
+    _expect(tmp_path, d, "ground", "'0'")
+
+
+def test_target_on_unknown_body(tmp_path):
+    d = _base()
+    d["target"]["body"] = "9"
+    _expect(tmp_path, d, "target.body", "'9'")
+
+
+def test_load_on_unknown_body(tmp_path):
+    d = _base()
+    d["load_cases"][0]["body"] = "7"
+    _expect(tmp_path, d, "load_cases.m+.body", "'7'")
+
+
+def test_duplicate_names(tmp_path):
+    d = _base()
+    _flex(d, "e23")["name"] = "e12"
+    _expect(tmp_path, d, "flexures.name", "'e12'")
+    d = _base()
+    d["load_cases"][1]["name"] = "m+"
+    _expect(tmp_path, d, "load_cases.name", "'m+'")
+
+
+def test_unknown_field_and_wrong_type(tmp_path):
+    d = _base()
+    _flex(d, "e12")["radiu"] = 3.0
+    _expect(tmp_path, d, "flexures.e12.radiu")
+    d = _base()
+    _flex(d, "e12")["radius"] = "three"
+    _expect(tmp_path, d, "flexures.e12.radius", "'three'")
+
+
+def test_malformed_toml_and_missing_file(tmp_path):
+    path = tmp_path / "broken.toml"
+    path.write_text("name = \n[[flexures]\n")
+    with pytest.raises(SceneError, match="toml"):
+        load_scene(path)
+    with pytest.raises(SceneError, match="no such file"):
+        load_scene(tmp_path / "nothing.toml")
+
+
+@pytest.mark.parametrize("text", ["beam", "beam:0", "dcmm:x", "prbm:3", "fem", "continuum:99"])
+def test_bad_model_names(text):
+    if text == "beam":
+        assert parse_model(text).id == "beam:20"
+        return
+    with pytest.raises(SceneError, match="model"):
+        parse_model(text)
+
+
+def test_cli_exit_code_2_without_traceback(tmp_path, capsys):
+    d = _base()
+    d["material"]["youngs_modulus"] = 0.0
+    path = tmp_path / "bad.toml"
+    path.write_text(_dump(d))
+    out_json = tmp_path / "out.json"
+    assert main(["run", str(path), "--model", "dcmm:1", "--json", str(out_json)]) == 2
+    err = capsys.readouterr().err
+    assert "material.youngs_modulus" in err and "Traceback" not in err
+    assert not out_json.exists()
+    assert main(["info", str(tmp_path / "missing.toml")]) == 2
+    assert main(["run", "open_chain", "--model", "beam:-3"]) == 2
+    assert main(["run", "open_chain", "--model", "ee", "--load-case", "nope"]) == 2

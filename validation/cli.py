@@ -1,0 +1,127 @@
+"""The ``flexval`` command line.
+
+Exit codes: 0 success, 2 bad input (message on stderr, no traceback),
+3 solver failure (message with the last converged load level).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+from geometry import SceneError, load_scene, parse_model
+
+EXIT_OK, EXIT_INPUT, EXIT_SOLVER = 0, 2, 3
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    from .info import format_info, scene_info
+
+    info = scene_info(load_scene(args.scene))
+    print(format_info(info))
+    if args.json:
+        Path(args.json).write_text(json.dumps(info, indent=1), encoding="utf-8")
+    return EXIT_OK
+
+
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from .drawing import plot_mechanism
+
+    scene = load_scene(args.scene)
+    plot_mechanism(scene, args.output)
+    print(f"wrote {args.output}")
+    return EXIT_OK
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from reducedmodels import SolverError, write_results
+
+    from .run import run_model
+
+    scene = load_scene(args.scene)
+    specs = [parse_model(m, "<command line>", "--model") for m in (args.model or [])]
+    if not specs:
+        specs = list(scene.models)
+    if not specs:
+        raise SceneError(scene.source, "--model", None,
+                         "no model requested (give --model or request.models in the scene)")
+    cases = [scene.load_case(n) for n in args.load_case] if args.load_case else scene.load_cases
+    if args.levels is not None and not 2 <= args.levels <= 100_000:
+        raise SceneError("<command line>", "--levels", args.levels, "must be from 2 to 100000")
+    results, status = [], EXIT_OK
+    print(f"{'model':<14} {'case':<6} {'load':>11} {'dx mm':>10} {'dy mm':>10} {'|d| mm':>10} "
+          f"{'rot deg':>9} {'iters':>6} {'seconds':>9}")
+    for spec in specs:
+        for case in cases:
+            try:
+                lp = run_model(scene, spec, case, args.levels,
+                               record_poses="poses" in scene.outputs,
+                               record_shapes="shape" in scene.outputs)
+            except SolverError as exc:
+                print(f"flexval: solver failure: {exc}", file=sys.stderr)
+                if exc.path is not None:
+                    results.append(exc.path)
+                status = EXIT_SOLVER
+                continue
+            results.append(lp)
+            print(f"{lp.model:<14} {lp.load_case:<6} {lp.load[-1]:>9.4g} {lp.load_unit:<2}"
+                  f"{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} {lp.displacement[-1]:>10.4f} "
+                  f"{math.degrees(lp.rotation[-1]):>9.3f} "
+                  f"{lp.stats.get('newton_iterations', 0):>6} {lp.seconds:>9.4f}")
+    if args.json:
+        write_results(args.json, scene.name, results)
+    return status
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argparse parser of ``flexval`` (all sub-commands)."""
+    p = argparse.ArgumentParser(
+        prog="flexval",
+        description="Validate flexibility models of planar compliant mechanisms "
+                    "(units: mm, N, N mm; angles in degrees on the command line and in files).")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    scene_help = "built-in scene name (open_chain, closed_chain) or path to a scene TOML file"
+
+    q = sub.add_parser("info", help="describe a scene: bodies, flexures, ellipse data, loads")
+    q.add_argument("scene", help=scene_help)
+    q.add_argument("--json", metavar="PATH", help="also write the description as JSON")
+    q.set_defaults(func=_cmd_info)
+
+    q = sub.add_parser("plot", help="draw the undeformed mechanism to a PNG")
+    q.add_argument("scene", help=scene_help)
+    q.add_argument("-o", "--output", required=True, metavar="FILE.png", help="output PNG")
+    q.set_defaults(func=_cmd_plot)
+
+    q = sub.add_parser("run", help="trace load paths with one or more models")
+    q.add_argument("scene", help=scene_help)
+    q.add_argument("--model", action="append", metavar="MODEL",
+                   help="continuum[:LEVEL], beam:N, prbm, dcmm:N or ee (repeatable; default: "
+                        "the scene's request.models)")
+    q.add_argument("--load-case", action="append", metavar="NAME",
+                   help="load case name (repeatable; default: all)")
+    q.add_argument("--levels", type=int, metavar="N",
+                   help="number of equally spaced load levels from 0 (default: the scene's, 11)")
+    q.add_argument("--json", metavar="PATH", help="write all LoadPaths as JSON")
+    q.set_defaults(func=_cmd_run)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``flexval`` console script; returns the exit code."""
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except SceneError as exc:
+        print(f"flexval: bad input: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except ModuleNotFoundError as exc:
+        print(f"flexval: this model is not available in this installation: {exc}",
+              file=sys.stderr)
+        return EXIT_INPUT
+
+
+if __name__ == "__main__":
+    sys.exit(main())
