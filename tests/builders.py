@@ -1,0 +1,57 @@
+"""Small mechanisms for tests: one flexure between the ground and a tip body."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from geometry import Force, LoadCase, Material, Moment, Section
+from geometry.mechanism import assemble
+
+
+def cantilever(shape, E: float = 2100.0, b: float = 1.0, h: float = 0.1, nu: float = 0.3,
+               clamped_end: int = 0, target_offset=(0.0, 0.0)):
+    """A flexure clamped to ground "g" at one end; the other end is body "t".
+
+    The target point is the free end plus ``target_offset`` (mm).
+    """
+    ends = shape.end_points
+    free = ends[1 - clamped_end]
+    spec = {"name": "f", "shape": shape, "bodies": ["g", "t"], "section": Section(b, h),
+            "start_body": "g" if clamped_end == 0 else "t"}
+    return assemble([spec], "g", ends[clamped_end][None], Material(E, nu), "t",
+                    free + np.asarray(target_offset, float))
+
+
+def tip_force(mech, fx: float, fy: float, levels: int = 11, name: str = "F") -> LoadCase:
+    """Dead force (fx, fy) in N at the target point."""
+    mag = float(np.hypot(fx, fy))
+    return LoadCase(name, (Force("t", mech.target_point, float(np.arctan2(fy, fx)), mag),), levels)
+
+
+def tip_moment(value: float, levels: int = 11, name: str = "M") -> LoadCase:
+    """Moment (N mm) on the tip body."""
+    return LoadCase(name, (Moment("t", value),), levels)
+
+
+def fd_check(connector, pose_a, pose_b, internal, h: float = 1e-6):
+    """Largest relative errors of gradient vs energy and Hessian vs gradient (central differences)."""
+    q = np.concatenate([pose_a, pose_b, internal])
+    n = q.size
+
+    def split(v):
+        return v[:3], v[3:6], v[6:]
+
+    e0, g0, H0 = connector.evaluate(*split(q))
+    H0 = H0.toarray() if hasattr(H0, "toarray") else np.asarray(H0)
+    g_fd = np.zeros(n)
+    H_fd = np.zeros((n, n))
+    for k in range(n):
+        dq = np.zeros(n)
+        dq[k] = h
+        ep, gp, _ = connector.evaluate(*split(q + dq))
+        em, gm, _ = connector.evaluate(*split(q - dq))
+        g_fd[k] = (ep - em) / (2 * h)
+        H_fd[:, k] = (gp - gm) / (2 * h)
+    eg = np.abs(g_fd - g0).max() / max(np.abs(g0).max(), 1e-300)
+    eh = np.abs(H_fd - H0).max() / max(np.abs(H0).max(), 1e-300)
+    return eg, eh, np.abs(H0 - H0.T).max() / np.abs(H0).max()

@@ -1,0 +1,134 @@
+"""DCMM_n and EE against independent references: finite-difference tangents,
+Castigliano compliance of an arc, the exact pure-moment rotation, the
+small-load limit, invariance, closed-chain equilibrium, path independence."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from builders import cantilever, fd_check, tip_force, tip_moment
+from geometry import Arc, Segment, load_scene, parse_model
+from reducedmodels import build_system, run_reduced
+from reducedmodels.dcmm import DcmmConnector
+
+
+@pytest.mark.parametrize("n", [1, 3])
+def test_dcmm_tangent_matches_finite_differences(n):
+    mech = cantilever(Arc((0.0, 0.0), 3.0, 0.4, math.radians(240)))
+    conn = DcmmConnector(mech.flexures[0], mech, n)
+    rng = np.random.default_rng(1)
+    ref_a, ref_b = mech.bodies["g"].reference, mech.bodies["t"].reference
+    pose_a = np.array([*ref_a + rng.normal(0, 0.3, 2), 0.7])
+    pose_b = np.array([*ref_b + rng.normal(0, 0.5, 2), -1.9])
+    internal = conn.initial_internal() + rng.normal(0, 0.3, conn.n_internal)
+    eg, eh, asym = fd_check(conn, pose_a, pose_b, internal)
+    # central differences with h = 1e-6: truncation ~ h^2 * q''' and round-off ~ eps/h
+    assert eg < 1e-7 and eh < 1e-6 and asym < 1e-12
+
+
+def _castigliano_tip_compliance(shape, EI, point):
+    """3x3 compliance at ``point`` (rigidly attached to the free end) of a clamped
+    flexure, bending only: C_ij = int m_i m_j / EI ds, m = moment of unit loads."""
+
+    def m(s):
+        # moment at the section s of unit (Fx, Fy, M) at the load point P:
+        # M(s) = (P - p) x F  ->  (p - P)_y, -(p - P)_x, 1
+        d = shape.point(s) - point
+        return np.array([d[1], -d[0], 1.0])
+
+    C = np.zeros((3, 3))
+    for i in range(3):
+        for j in range(3):
+            C[i, j] = quad(lambda s: m(s)[i] * m(s)[j], 0.0, shape.length, limit=200)[0] / EI
+    return C
+
+
+@pytest.mark.parametrize("width_deg", [60.0, 180.0, 270.0])
+def test_ee_equals_castigliano_compliance_of_an_arc(width_deg):
+    arc = Arc((1.0, 2.0), 3.0, math.radians(35.0), math.radians(width_deg))
+    mech = cantilever(arc, target_offset=(1.5, -0.7))
+    EI = mech.flexures[0].bending_stiffness(mech.material)
+    C = _castigliano_tip_compliance(arc, EI, mech.target_point)
+    spec = parse_model("ee")
+    got = []
+    for k, case in enumerate([tip_force(mech, 1e-3, 0.0), tip_force(mech, 0.0, 1e-3),
+                              tip_moment(1e-3)]):
+        lp = run_reduced(mech, spec, case)
+        got.append([lp.dx[-1], lp.dy[-1], lp.rotation[-1]])
+    # exact up to round-off: both are the same linear bending compliance
+    np.testing.assert_allclose(np.array(got).T / 1e-3, C, rtol=1e-7, atol=1e-9 * np.abs(C).max())
+
+
+def test_dcmm1_pure_moment_rotation_is_exact_at_large_rotation():
+    # a pure moment bends an arc into another circle: end rotation M L / EI exactly
+    arc = Arc((0.0, 0.0), 2.5, 1.0, math.radians(270))
+    mech = cantilever(arc)
+    EI = mech.flexures[0].bending_stiffness(mech.material)
+    M = 1.2 * EI / arc.length           # 1.2 rad of end rotation
+    for n in (1, 2):
+        lp = run_reduced(mech, parse_model(f"dcmm:{n}"), tip_moment(M))
+        assert lp.rotation[-1] == pytest.approx(M * arc.length / EI, rel=1e-10)
+
+
+def test_small_load_limit_dcmm_tends_to_ee():
+    mech = load_scene("open_chain").mechanism
+    case = load_scene("open_chain").load_case("f+")
+    ee = run_reduced(mech, parse_model("ee"), case)
+    errs = []
+    for scale in (1e-2, 1e-3):
+        small = case.__class__(case.name, tuple(
+            c.__class__(**{**c.__dict__, "value": c.value * scale}) for c in case.components), 3)
+        lp = run_reduced(mech, parse_model("dcmm:1"), small)
+        errs.append(abs(lp.displacement[-1] / scale - ee.displacement[-1]) / ee.displacement[-1])
+    # geometric nonlinearity enters at first order in the load: error ~ load
+    assert errs[1] < 0.02 * 0.1 + 1e-9 and errs[1] < 0.2 * errs[0]
+
+
+@pytest.mark.parametrize("model", ["dcmm:2", "ee"])
+def test_rigid_motion_of_the_scene_changes_nothing_but_the_frame(model):
+    scene = load_scene("closed_chain")
+    case = scene.load_case("f+")
+    base = run_reduced(scene.mechanism, parse_model(model), case)
+    angle, shift = 2.1, np.array([-40.0, 17.0])
+    moved = run_reduced(scene.mechanism.transformed(angle, shift), parse_model(model),
+                        case.transformed(angle, shift))
+    R = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+    d0 = R @ np.array([base.dx, base.dy])
+    np.testing.assert_allclose(np.array([moved.dx, moved.dy]), d0, atol=1e-8 * 50)
+    np.testing.assert_allclose(moved.rotation, base.rotation, atol=1e-10)
+
+
+def test_closed_chain_reactions_balance_the_load():
+    scene = load_scene("closed_chain")
+    for name in ("f+", "f-"):
+        case = scene.load_case(name)
+        lp = run_reduced(scene.mechanism, parse_model("dcmm:3"), case, record_poses=True)
+        F = case.components[0].vector
+        for k, lam in enumerate(np.linspace(0, 1, len(lp.load))):
+            R = np.array(lp.reactions[k])
+            # moment of the load about the ground reference, at the displaced point
+            ref = scene.mechanism.bodies["1"].reference
+            p = scene.mechanism.target_point + [lp.dx[k], lp.dy[k]] - ref
+            moment = p[0] * lam * F[1] - p[1] * lam * F[0]
+            np.testing.assert_allclose(R[:2] + lam * F, 0.0, atol=1e-8 * abs(F).max())
+            assert R[2] + moment == pytest.approx(0.0, abs=1e-8 * abs(F).max() * 100)
+
+
+def test_path_independence_of_the_end_state():
+    scene = load_scene("open_chain")
+    case = scene.load_case("f+")
+    ends = [run_reduced(scene.mechanism, parse_model("dcmm:2"), case, levels=n)
+            for n in (2, 11, 41)]
+    for lp in ends[1:]:
+        assert lp.dx[-1] == pytest.approx(ends[0].dx[-1], rel=1e-8)
+        assert lp.rotation[-1] == pytest.approx(ends[0].rotation[-1], rel=1e-8)
+
+
+def test_straight_segment_dcmm_uses_axial_compliance():
+    seg = Segment((0.0, 0.0), (10.0, 0.0))
+    mech = cantilever(seg, h=0.5)
+    EA = mech.flexures[0].axial_stiffness(mech.material)
+    lp = run_reduced(mech, parse_model("dcmm:1"), tip_force(mech, 1e-2, 0.0))
+    assert lp.dx[-1] == pytest.approx(1e-2 * 10.0 / EA, rel=1e-9)
