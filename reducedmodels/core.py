@@ -29,6 +29,9 @@ from .loadpath import LoadPath
 from .rigid import rigid_points
 
 
+DENSE_LIMIT = 240
+
+
 class Connector(Protocol):
     """A flexure model between two bodies.
 
@@ -80,19 +83,21 @@ class SolverSettings:
     """Newton and load-stepping parameters (dimensionless unless stated).
 
     ``force_tol`` is relative to the full-load magnitude, ``step_tol`` is the
-    scaled correction (translations / mechanism size, rotations in rad).
+    scaled correction (translations / mechanism size, rotations in rad): since
+    Newton converges quadratically, the error left after a correction of
+    1e-8 is of order 1e-16.
     ``max_rotation_step`` (rad) and ``max_translation_step`` (fraction of the
     mechanism size) bound how far any body may move in one sub-step, so the
     stepping follows soft stretches of the path instead of leaping over them.
     """
 
     force_tol: float = 1e-10
-    step_tol: float = 1e-10
+    step_tol: float = 1e-8
     max_iterations: int = 25
     max_cuts: int = 40
     max_substeps: int = 20000
-    max_rotation_step: float = 0.1
-    max_translation_step: float = 0.02
+    max_rotation_step: float = 0.25
+    max_translation_step: float = 0.05
     fast_iterations: int = 5
 
 
@@ -182,6 +187,11 @@ class System:
 
     # --- assembly --------------------------------------------------------
     def _pattern(self, k: int, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Scatter pattern of connector k's dense local Hessian (computed once).
+
+        Returns global rows, global cols and the mask of local entries kept
+        (entries of ground dofs are dropped).
+        """
         if k not in self._dense_pattern:
             idx = self._local_to_global[k]
             rows, cols = np.repeat(idx, n), np.tile(idx, n)
@@ -190,17 +200,27 @@ class System:
         return self._dense_pattern[k]
 
     def assemble(self, q: np.ndarray, loads: _Loads, factor: float,
-                 ) -> tuple[float, np.ndarray, sp.csc_matrix]:
-        """Total potential (N mm), its gradient and Hessian at state q and load factor."""
+                 ) -> tuple[float, np.ndarray, np.ndarray | sp.csc_matrix]:
+        """Total potential (N mm), its gradient and Hessian at state q and load factor.
+
+        The Hessian is a dense array for small systems (at most ``DENSE_LIMIT``
+        unknowns, where LAPACK beats sparse overheads) and CSC otherwise.
+        """
+        dense = self.n_dofs <= DENSE_LIMIT
         energy = 0.0
         grad = np.zeros(self.n_dofs)
+        K = np.zeros((self.n_dofs, self.n_dofs)) if dense else None
         rows, cols, vals = [], [], []
         for k, (c, idx) in enumerate(zip(self.connectors, self._local_to_global)):
             e, g, h = c.evaluate(*self._local(q, c, idx))
             energy += e
             keep = idx >= 0
-            np.add.at(grad, idx[keep], g[keep])
-            if sp.issparse(h):
+            grad[idx[keep]] += g[keep]          # a connector's dofs are distinct
+            if dense:
+                h = h.toarray() if sp.issparse(h) else np.asarray(h)
+                r, cc, m = self._pattern(k, idx.size)
+                K[r, cc] += h.ravel()[m]
+            elif sp.issparse(h):
                 h = h.tocoo()
                 r, cc = idx[h.row], idx[h.col]
                 m = (r >= 0) & (cc >= 0)
@@ -215,13 +235,17 @@ class System:
             x, jac, d2 = rigid_points(q[dofs], rel[None])
             energy -= factor * f @ x[0]
             grad[dofs] -= factor * jac[0].T @ f
-            rows.append([dofs[2]]), cols.append([dofs[2]]), vals.append([-factor * f @ d2[0]])
+            if dense:
+                K[dofs[2], dofs[2]] -= factor * f @ d2[0]
+            else:
+                rows.append([dofs[2]]), cols.append([dofs[2]]), vals.append([-factor * f @ d2[0]])
         for dof, m in zip(loads.moment_dofs, loads.moments):
             if dof >= 0:
                 energy -= factor * m * q[dof]
                 grad[dof] -= factor * m
-        K = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                          shape=(self.n_dofs, self.n_dofs)).tocsc()
+        if not dense:
+            K = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                              shape=(self.n_dofs, self.n_dofs)).tocsc()
         return energy, grad, K
 
     def reaction(self, q: np.ndarray) -> np.ndarray:
@@ -270,8 +294,8 @@ def _newton(system: System, q: np.ndarray, loads: _Loads, factor: float,
         if it == settings.max_iterations:
             break
         try:
-            du = spla.spsolve(K, -g)
-        except RuntimeError as exc:  # singular factor
+            du = np.linalg.solve(K, -g) if isinstance(K, np.ndarray) else spla.spsolve(K, -g)
+        except (RuntimeError, np.linalg.LinAlgError) as exc:  # singular factor
             return None, it, f"singular tangent ({exc})"
         if not np.all(np.isfinite(du)):
             return None, it, "singular tangent"
@@ -291,7 +315,8 @@ def _moved_too_far(system: System, q0: np.ndarray, q1: np.ndarray, s: SolverSett
 
 def solve_path(system: System, case: LoadCase, levels: int | None = None,
                model: str = "", settings: dict | None = None, scene: str = "",
-               record_poses: bool = False, record_shapes: bool = False) -> LoadPath:
+               record_poses: bool = False, record_shapes: bool = False,
+               record_reactions: bool = False) -> LoadPath:
     """Trace the load path of ``case`` through its requested levels.
 
     Between two requested levels the load factor advances in sub-steps
@@ -314,7 +339,7 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
                   seconds=0.0, settings=settings or {}, scene=scene, load_unit=case.unit,
                   poses={b: [] for b in system.mechanism.bodies} if record_poses else None,
                   shapes={c.name: [] for c in system.connectors} if record_shapes else None,
-                  reactions=[])
+                  reactions=[] if record_reactions else None)
     stats = {"unknowns": system.n_dofs, "newton_iterations": 0, "step_cuts": 0, "substeps": 0,
              "iterations": []}
 
@@ -322,7 +347,8 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
         dx, dy, rot = system.target(qk)
         lp.load.append(lam * case.magnitude)
         lp.dx.append(dx), lp.dy.append(dy), lp.rotation.append(rot)
-        lp.reactions.append(system.reaction(qk).tolist())
+        if lp.reactions is not None:
+            lp.reactions.append(system.reaction(qk).tolist())
         stats["iterations"].append(iters)
         if lp.poses is not None:
             for b in system.mechanism.bodies:

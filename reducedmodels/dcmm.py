@@ -21,12 +21,11 @@ Units: mm, N, N mm, rad.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from geometry import Flexure, Mechanism
-
-_J = np.array([[0.0, -1.0], [1.0, 0.0]])
-
 
 def _rot(a: float) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
@@ -48,37 +47,56 @@ def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f:
         Ellipse axes e1, e2 as columns (initial configuration).
     stiffness : array (3,)
         Inverse of the diagonal compliance, (N/mm, N/mm, N mm).
+
+    Notes
+    -----
+    With A = R(-theta_L), phi = theta_F - theta_L and d = x_F - x_L, the
+    relative displacement in the leader frame is v = A d + R(phi) r_F - r_L and
+    u = (Q^T v, phi). Written with scalars: the 2x2 algebra is far cheaper in
+    plain floats than in small numpy arrays, and this is the innermost loop.
     """
-    A = _rot(-pose_l[2])
-    Rphi = _rot(pose_f[2] - pose_l[2])
-    d = pose_f[:2] - pose_l[:2]
-    Rr = Rphi @ r_f
-    v = A @ d + Rr - r_l                       # relative displacement, leader frame
-    u = np.array([*(axes.T @ v), pose_f[2] - pose_l[2]])
-    ku = stiffness * u
-    energy = 0.5 * float(u @ ku)
-    # dv/dq, q = [xL, yL, thL, xF, yF, thF]
-    dv = np.zeros((2, 6))
-    AJd = A @ _J @ d
-    RJr = Rphi @ _J @ r_f
-    dv[:, 0:2] = -A
-    dv[:, 2] = -AJd - RJr
-    dv[:, 3:5] = A
-    dv[:, 5] = RJr
-    du = np.zeros((3, 6))
+    xl, yl, tl = pose_l
+    xf, yf, tf = pose_f
+    ca, sa = math.cos(tl), math.sin(tl)          # A = R(-tl) = [[ca, sa], [-sa, ca]]
+    phi = tf - tl
+    cp, sp_ = math.cos(phi), math.sin(phi)
+    dx, dy = xf - xl, yf - yl
+    adx, ady = ca * dx + sa * dy, -sa * dx + ca * dy          # A d
+    rfx, rfy = r_f
+    rrx, rry = cp * rfx - sp_ * rfy, sp_ * rfx + cp * rfy      # R(phi) r_F
+    vx, vy = adx + rrx - r_l[0], ady + rry - r_l[1]
+    (q11, q12), (q21, q22) = axes                             # rows of Q
+    u1, u2 = q11 * vx + q21 * vy, q12 * vx + q22 * vy          # Q^T v
+    k1, k2, k3 = stiffness
+    f1, f2, m = k1 * u1, k2 * u2, k3 * phi
+    energy = 0.5 * (f1 * u1 + f2 * u2 + m * phi)
+    # derivatives of v: A J d = (-ady, adx); R(phi) J r_F = (-rry, rrx)
+    dv = np.array([
+        [-ca, -sa, ady + rry, ca, sa, -rry],
+        [sa, -ca, -adx - rrx, -sa, ca, rrx],
+    ])
+    du = np.empty((3, 6))
     du[:2] = axes.T @ dv
-    du[2, 2], du[2, 5] = -1.0, 1.0
+    du[2] = (0.0, 0.0, -1.0, 0.0, 0.0, 1.0)
+    ku = np.array([f1, f2, m])
     grad = du.T @ ku
     hess = du.T @ (stiffness[:, None] * du)
-    lam = axes @ ku[:2]                        # force on the follower, leader frame
-    AJ = A @ _J
-    h = np.zeros((6, 6))
-    h[2, 2] = lam @ (-(A @ d) - Rr)
-    h[2, 5] = h[5, 2] = lam @ Rr
-    h[5, 5] = -(lam @ Rr)
-    h[2, 3:5] = h[3:5, 2] = -(lam @ AJ)
-    h[2, 0:2] = h[0:2, 2] = lam @ AJ
-    return energy, grad, hess + h
+    lx, ly = q11 * f1 + q12 * f2, q21 * f1 + q22 * f2         # Q K u (translation part)
+    lam_rr = lx * rrx + ly * rry
+    lam_aj_x, lam_aj_y = lx * sa + ly * ca, -lx * ca + ly * sa     # lam^T A J, A J = [[sa, -ca], [ca, sa]]
+    hess[2, 2] += -(lx * adx + ly * ady) - lam_rr
+    hess[2, 5] += lam_rr
+    hess[5, 2] += lam_rr
+    hess[5, 5] -= lam_rr
+    hess[2, 3] -= lam_aj_x
+    hess[3, 2] -= lam_aj_x
+    hess[2, 4] -= lam_aj_y
+    hess[4, 2] -= lam_aj_y
+    hess[2, 0] += lam_aj_x
+    hess[0, 2] += lam_aj_x
+    hess[2, 1] += lam_aj_y
+    hess[1, 2] += lam_aj_y
+    return energy, grad, hess
 
 
 class DcmmConnector:
@@ -113,6 +131,10 @@ class DcmmConnector:
                 c[0] = part.length / EA
             self._elements.append((ell.center - refs[k], ell.center - refs[k + 1], ell.axes,
                                    1.0 / c))
+        # local slots of the chain bodies: a -> 0..2, cut k -> 6 + 3k, b -> 3..5
+        slots = ([np.arange(0, 3)] + [np.arange(6 + 3 * k, 9 + 3 * k) for k in range(n - 1)]
+                 + [np.arange(3, 6)])
+        self._element_dofs = [np.concatenate([slots[k], slots[k + 1]]) for k in range(n)]
         self._ends = np.array([flexure.end_point_of(self.bodies[0]),
                                flexure.end_point_of(self.bodies[1])])
         self._ref_ends = np.array([refs[0], refs[-1]])
@@ -130,15 +152,14 @@ class DcmmConnector:
 
     def evaluate(self, pose_a, pose_b, internal):
         """Energy (N mm), gradient and dense Hessian over [pose_a, pose_b, internal]."""
+        if len(self._elements) == 1:
+            return sub_arc_energy(pose_a, pose_b, *self._elements[0])
         chain = self._chain(pose_a, pose_b, internal)
         n = 6 + self.n_internal
-        # local slot of each chain body: a -> 0..2, b -> 3..5, cut k -> 6 + 3k
-        slots = [np.arange(0, 3)] + [np.arange(6 + 3 * k, 9 + 3 * k)
-                                     for k in range(len(self._cuts))] + [np.arange(3, 6)]
         energy, grad, hess = 0.0, np.zeros(n), np.zeros((n, n))
-        for k, (r_l, r_f, axes, kdiag) in enumerate(self._elements):
-            e, g, h = sub_arc_energy(chain[k], chain[k + 1], r_l, r_f, axes, kdiag)
-            idx = np.concatenate([slots[k], slots[k + 1]])
+        for k, element in enumerate(self._elements):
+            e, g, h = sub_arc_energy(chain[k], chain[k + 1], *element)
+            idx = self._element_dofs[k]
             energy += e
             grad[idx] += g
             hess[np.ix_(idx, idx)] += h

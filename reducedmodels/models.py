@@ -9,6 +9,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import scipy.sparse.linalg as spla
 
 from geometry import LoadCase, Mechanism, ModelSpec
 
@@ -61,9 +62,7 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
     _, g_unit, K = system.assemble(q0, loads, 1.0)   # g = grad E(q0) - f = -f at rest
     _, g_zero, K0 = system.assemble(q0, loads, 0.0)
     f = g_zero - g_unit
-    import scipy.sparse.linalg as spla
-
-    dq = spla.spsolve(K0, f)
+    dq = np.linalg.solve(K0, f) if isinstance(K0, np.ndarray) else spla.spsolve(K0, f)
     mech = system.mechanism
     tdofs = system.pose_dofs(mech.target_body)
     rel = mech.target_point - system.reference[mech.target_body]
@@ -81,7 +80,7 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
 
 def run_reduced(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int | None = None,
                 scene: str = "", record_poses: bool = False, record_shapes: bool = False,
-                **options) -> LoadPath:
+                record_reactions: bool = False, **options) -> LoadPath:
     """Build the model ``spec`` and trace ``case`` (wall time includes the build).
 
     Raises
@@ -95,6 +94,7 @@ def run_reduced(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: i
         lp = solve_linear(system, case, levels, model=spec.id, scene=scene)
     else:
         lp = solve_path(system, case, levels, model=spec.id, settings=dict(options), scene=scene,
-                        record_poses=record_poses, record_shapes=record_shapes)
+                        record_poses=record_poses, record_shapes=record_shapes,
+                        record_reactions=record_reactions)
     lp.seconds = time.perf_counter() - t0
     return lp

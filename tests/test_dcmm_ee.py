@@ -104,7 +104,7 @@ def test_closed_chain_reactions_balance_the_load():
     scene = load_scene("closed_chain")
     for name in ("f+", "f-"):
         case = scene.load_case(name)
-        lp = run_reduced(scene.mechanism, parse_model("dcmm:3"), case, record_poses=True)
+        lp = run_reduced(scene.mechanism, parse_model("dcmm:3"), case, record_reactions=True)
         F = case.components[0].vector
         for k, lam in enumerate(np.linspace(0, 1, len(lp.load))):
             R = np.array(lp.reactions[k])

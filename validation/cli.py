@@ -76,6 +76,58 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return status
 
 
+def _parse_levels(text: str, family: str) -> list[int]:
+    """``0:4`` -> [0, 1, 2, 3, 4] (continuum levels) or ``20:320`` -> [20, 40, ..., 320]
+    (doubling N); a comma list is taken as is."""
+    try:
+        if ":" in text:
+            lo, hi = (int(x) for x in text.split(":"))
+            if family == "continuum":
+                vals = list(range(lo, hi + 1))
+            else:
+                vals = [lo]
+                while vals[-1] * 2 <= hi:
+                    vals.append(vals[-1] * 2)
+        else:
+            vals = [int(x) for x in text.split(",")]
+    except ValueError:
+        raise SceneError("<command line>", "--levels", text,
+                         "expected LO:HI or a comma-separated list of integers") from None
+    if not vals or min(vals) < 0 or vals != sorted(vals) or (family != "continuum" and min(vals) < 1):
+        raise SceneError("<command line>", "--levels", text, "resolutions must increase, "
+                         ">= 0 for continuum levels and >= 1 for beam:N or dcmm:N")
+    return vals
+
+
+def _cmd_converge(args: argparse.Namespace) -> int:
+    from reducedmodels import SolverError
+
+    from .convergence import format_study, study
+
+    scene = load_scene(args.scene)
+    family = args.model
+    if family not in ("continuum", "beam", "dcmm"):
+        raise SceneError("<command line>", "--model", family,
+                         "convergence studies need a refinable model: continuum, beam or dcmm")
+    default = {"continuum": "0:3", "beam": "5:320", "dcmm": "1:8"}[family]
+    resolutions = _parse_levels(args.levels or default, family)
+    cases = [scene.load_case(n) for n in args.load_case] if args.load_case else scene.load_cases
+    out = []
+    for case in cases:
+        try:
+            st = study(scene, family, resolutions, case)
+        except SolverError as exc:
+            print(f"flexval: solver failure: {exc}", file=sys.stderr)
+            return EXIT_SOLVER
+        print(format_study(st) + "\n")
+        out.append({"family": st.family, "load_case": st.load_case, "ratio": st.ratio,
+                    "rows": st.rows, "summary": st.summary})
+    if args.json:
+        Path(args.json).write_text(json.dumps({"scene": scene.name, "studies": out}, indent=1),
+                                   encoding="utf-8")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argparse parser of ``flexval`` (all sub-commands)."""
     p = argparse.ArgumentParser(
@@ -106,6 +158,18 @@ def build_parser() -> argparse.ArgumentParser:
                    help="number of equally spaced load levels from 0 (default: the scene's, 11)")
     q.add_argument("--json", metavar="PATH", help="write all LoadPaths as JSON")
     q.set_defaults(func=_cmd_run)
+
+    q = sub.add_parser("converge", help="resolution study: order, Richardson value, GCI")
+    q.add_argument("scene", help=scene_help)
+    q.add_argument("--model", default="continuum", choices=["continuum", "beam", "dcmm"],
+                   help="model family to refine (default: continuum)")
+    q.add_argument("--levels", metavar="LO:HI",
+                   help="continuum: mesh levels LO..HI; beam/dcmm: N from LO doubling up to "
+                        "HI; or a comma list (defaults 0:3, 5:320, 1:8)")
+    q.add_argument("--load-case", action="append", metavar="NAME",
+                   help="load case name (repeatable; default: all)")
+    q.add_argument("--json", metavar="PATH", help="write the studies as JSON")
+    q.set_defaults(func=_cmd_converge)
     return p
 
 

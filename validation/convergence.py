@@ -1,0 +1,95 @@
+"""Resolution convergence studies: observed order, Richardson extrapolation, GCI.
+
+For a model family refined by a constant ratio r (continuum mesh levels halve
+the element size: r = 2; ``beam:N`` and ``dcmm:N`` with N doubling: r = 2),
+the end-of-ramp target displacement magnitude (mm) and rotation (rad) of
+the three finest resolutions f1 (coarse), f2, f3 (fine) give
+
+* the observed order p = ln(|f2 - f1| / |f3 - f2|) / ln r,
+* the Richardson-extrapolated value f_ext = f3 + (f3 - f2) / (r^p - 1),
+* Roache's grid-convergence index GCI = 1.25 |(f3 - f2) / f3| / (r^p - 1)
+  (percent), an error band on the finest value.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from geometry import LoadCase, ModelSpec, Scene
+
+from .run import run_model
+
+
+@dataclass
+class ConvergenceStudy:
+    """Results of one refinement study of one model family on one load case."""
+
+    family: str
+    load_case: str
+    ratio: float
+    rows: list[dict] = field(default_factory=list)
+    summary: dict = field(default_factory=dict)
+
+
+def richardson(f1: float, f2: float, f3: float, ratio: float) -> dict:
+    """Observed order, extrapolated value and GCI (percent) from three resolutions.
+
+    Returns NaN-free results: when the differences do not shrink monotonically
+    (oscillating or converged to round-off) ``order`` is None and the
+    extrapolated value is the finest one.
+    """
+    e21, e32 = f2 - f1, f3 - f2
+    if e32 == 0.0 or e21 == 0.0 or e21 * e32 < 0 or abs(e32) >= abs(e21):
+        return {"order": None, "extrapolated": f3, "gci_percent": None}
+    p = math.log(abs(e21) / abs(e32)) / math.log(ratio)
+    ext = f3 + e32 / (ratio**p - 1.0)
+    gci = 100.0 * 1.25 * abs(e32 / f3) / (ratio**p - 1.0) if f3 != 0 else None
+    return {"order": p, "extrapolated": ext, "gci_percent": gci}
+
+
+def study(scene: Scene, family: str, resolutions: list[int], case: LoadCase,
+          levels: int | None = None, progress=None) -> ConvergenceStudy:
+    """Run ``family`` at each resolution (increasing) on ``case`` and analyse convergence."""
+    if len(resolutions) >= 2:
+        ratios = {resolutions[k + 1] / resolutions[k] for k in range(len(resolutions) - 1)
+                  } if family != "continuum" else {2.0}
+        ratio = ratios.pop() if len(ratios) == 1 else float("nan")
+    else:
+        ratio = float("nan")
+    st = ConvergenceStudy(family, case.name, ratio)
+    for res in resolutions:
+        spec = ModelSpec(family, res)
+        lp = run_model(scene, spec, case, levels)
+        st.rows.append({"model": spec.id, "resolution": res,
+                        "unknowns": lp.stats.get("unknowns"), "seconds": lp.seconds,
+                        "dx": lp.dx[-1], "dy": lp.dy[-1],
+                        "displacement": float(lp.displacement[-1]),
+                        "rotation": lp.rotation[-1]})
+        if progress:
+            progress(spec.id)
+    if len(st.rows) >= 3 and math.isfinite(ratio):
+        f = st.rows[-3:]
+        st.summary = {key: richardson(f[0][key], f[1][key], f[2][key], ratio)
+                      for key in ("displacement", "rotation")}
+    return st
+
+
+def format_study(st: ConvergenceStudy) -> str:
+    """Plain-text table of a study (mm, deg, s)."""
+    lines = [f"{st.family} convergence on load case {st.load_case} (refinement ratio "
+             f"{st.ratio:g})",
+             f"{'model':<14} {'unknowns':>9} {'seconds':>9} {'|d| mm':>12} {'rot deg':>12}"]
+    for r in st.rows:
+        lines.append(f"{r['model']:<14} {r['unknowns']:>9} {r['seconds']:>9.3f} "
+                     f"{r['displacement']:>12.6f} {math.degrees(r['rotation']):>12.6f}")
+    for key, unit, conv in (("displacement", "mm", 1.0), ("rotation", "deg",
+                                                           math.degrees(1.0))):
+        s = st.summary.get(key)
+        if not s:
+            continue
+        order = "n/a" if s["order"] is None else f"{s['order']:.2f}"
+        gci = "n/a" if s["gci_percent"] is None else f"{s['gci_percent']:.3g} %"
+        lines.append(f"{key}: observed order {order}, extrapolated "
+                     f"{s['extrapolated'] * conv:.6f} {unit}, GCI {gci}")
+    return "\n".join(lines)
