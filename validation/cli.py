@@ -128,6 +128,45 @@ def _cmd_converge(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_report(args: argparse.Namespace) -> int:
+    from .report import DEFAULT_MODELS, build_report
+
+    scenes = args.scene or ["open_chain", "closed_chain"]
+    for name in scenes:
+        load_scene(name)        # bad input fails before any work
+    models = args.model or list(DEFAULT_MODELS)
+    for m in models:
+        parse_model(m, "<command line>", "--model")
+    path = build_report(scenes, Path(args.out), models, repeats=args.repeats,
+                        use_cache=not args.no_cache, progress=not args.quiet,
+                        bench=not args.no_bench, converge=not args.no_converge)
+    print(f"wrote {path}")
+    return EXIT_OK
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from geometry import ModelSpec
+
+    from .bench import runtime_vs_error, sweep_specs, write_bench
+    from .cache import ResultCache
+
+    scene = load_scene(args.scene)
+    ref = parse_model(args.reference, "<command line>", "--reference")
+    if ref.family == "continuum" and ref.resolution is None:
+        from .continuum import DEFAULT_LEVEL
+
+        ref = ModelSpec("continuum", DEFAULT_LEVEL)
+    levels = tuple(range(0, ref.resolution)) if ref.family == "continuum" else ()
+    rows, failures = runtime_vs_error(scene, ref, sweep_specs(levels), args.repeats,
+                                      ResultCache(enabled=not args.no_cache), not args.quiet)
+    for msg in failures:
+        print(f"flexval: solver failure: {msg}", file=sys.stderr)
+    out = Path(args.out)
+    write_bench(scene, rows, ref.id, out)
+    print((out / f"bench_{scene.name}.md").read_text(encoding="utf-8"))
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argparse parser of ``flexval`` (all sub-commands)."""
     p = argparse.ArgumentParser(
@@ -170,6 +209,30 @@ def build_parser() -> argparse.ArgumentParser:
                    help="load case name (repeatable; default: all)")
     q.add_argument("--json", metavar="PATH", help="write the studies as JSON")
     q.set_defaults(func=_cmd_converge)
+
+    q = sub.add_parser("report", help="build the validation report (Markdown, PNG, JSON)")
+    q.add_argument("scene", nargs="*", help=f"{scene_help} (default: both built-in scenes)")
+    q.add_argument("--out", default="reports/paper", metavar="DIR",
+                   help="output folder (default: reports/paper)")
+    q.add_argument("--model", action="append", metavar="MODEL",
+                   help="models to compare (repeatable; default: continuum, beam:100, beam:20, "
+                        "prbm, dcmm:1, dcmm:2, dcmm:3, ee)")
+    q.add_argument("--repeats", type=int, default=3, help="timing repeats (median; default 3)")
+    q.add_argument("--no-cache", action="store_true", help="recompute everything")
+    q.add_argument("--no-bench", action="store_true", help="skip the runtime-vs-error study")
+    q.add_argument("--no-converge", action="store_true", help="skip the mesh convergence study")
+    q.add_argument("--quiet", action="store_true", help="no progress bar")
+    q.set_defaults(func=_cmd_report)
+
+    q = sub.add_parser("bench", help="runtime-versus-error study of every model on a scene")
+    q.add_argument("scene", help=scene_help)
+    q.add_argument("--reference", default="continuum", metavar="MODEL",
+                   help="reference model (default: continuum at its default level)")
+    q.add_argument("--out", default="reports/bench", metavar="DIR", help="output folder")
+    q.add_argument("--repeats", type=int, default=3, help="timing repeats (median; default 3)")
+    q.add_argument("--no-cache", action="store_true", help="recompute everything")
+    q.add_argument("--quiet", action="store_true", help="no progress bar")
+    q.set_defaults(func=_cmd_bench)
     return p
 
 

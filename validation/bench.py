@@ -1,0 +1,81 @@
+"""Runtime versus error: every model at several resolutions against one reference.
+
+For each model the error is the largest, over the scene's load cases, of the
+path displacement error (``path_disp`` of :mod:`validation.compare`: largest
+vector error along the path / largest reference displacement, percent), and
+the time is the mean over load cases of the median wall time per load path.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from geometry import ModelSpec, Scene
+
+from .cache import ResultCache
+from .campaign import Progress, run_campaign
+from .compare import errors
+
+BEAM_N = (5, 10, 20, 40, 100, 200, 400)
+DCMM_N = tuple(range(1, 9))
+
+
+def sweep_specs(continuum_levels: tuple[int, ...] = ()) -> list[ModelSpec]:
+    """The models of the runtime-versus-error study."""
+    specs = [ModelSpec("beam", n) for n in BEAM_N] + [ModelSpec("dcmm", n) for n in DCMM_N]
+    specs += [ModelSpec("prbm"), ModelSpec("ee")]
+    specs += [ModelSpec("continuum", lv) for lv in continuum_levels]
+    return specs
+
+
+def runtime_vs_error(scene: Scene, reference: ModelSpec, specs: list[ModelSpec],
+                     repeats: int = 3, cache: ResultCache | None = None,
+                     progress: bool = True) -> tuple[list[dict], list[str]]:
+    """Rows {model, seconds, error, per_case} of the study, and failure messages."""
+    cases = list(scene.load_cases)
+    all_specs = [reference] + [s for s in specs if s.id != reference.id]
+    bar = Progress(len(all_specs) * len(cases), enabled=progress)
+    res, failures = run_campaign(
+        scene, all_specs, cases, repeats, cache, bar,
+        repeats_for=lambda s: 1 if s.family == "continuum" else repeats)
+    rows = []
+    for spec in all_specs:
+        if spec.id == reference.id:
+            continue
+        per_case, secs, ok = {}, [], True
+        for case in cases:
+            lp, ref = res.get((spec.id, case.name)), res.get((reference.id, case.name))
+            if lp is None or ref is None or not lp.converged or not ref.converged:
+                ok = False
+                break
+            per_case[case.name] = errors(lp, ref)
+            secs.append(lp.seconds)
+        if ok:
+            rows.append({"model": spec.id, "seconds": sum(secs) / len(secs),
+                         "error": max(e["path_disp"] for e in per_case.values()),
+                         "per_case": per_case})
+    return rows, failures
+
+
+def write_bench(scene: Scene, rows: list[dict], reference: str, out: Path) -> None:
+    """Table (Markdown), plot (PNG) and JSON of a runtime-versus-error study in ``out``."""
+    from .figures import pareto_front, runtime_vs_error as plot
+
+    out.mkdir(parents=True, exist_ok=True)
+    front = set(pareto_front([(r["seconds"], r["error"]) for r in rows]))
+    lines = [f"# Runtime versus error: {scene.name}", "",
+             f"Reference: `{reference}`. Error: largest over load cases of the path "
+             "displacement error (percent); time: mean over load cases of the median wall "
+             "time per load path (s).", "",
+             "| model | seconds | error (%) | Pareto |", "|---|---:|---:|:---:|"]
+    for k, r in enumerate(rows):
+        lines.append(f"| {r['model']} | {r['seconds']:.4f} | {r['error']:.3g} | "
+                     f"{'yes' if k in front else ''} |")
+    plot(rows, f"{scene.name}: runtime vs error (reference {reference})",
+         out / f"bench_{scene.name}.png")
+    lines += ["", f"![runtime vs error](bench_{scene.name}.png)", ""]
+    (out / f"bench_{scene.name}.md").write_text("\n".join(lines), encoding="utf-8")
+    (out / f"bench_{scene.name}.json").write_text(
+        json.dumps({"scene": scene.name, "reference": reference, "rows": rows}, indent=1),
+        encoding="utf-8")

@@ -1,0 +1,167 @@
+"""Report figures (Matplotlib, Agg): load paths, deformed shapes, link rotations,
+runtime versus error, mesh convergence. Axes carry units: mm, deg, N or N mm, s."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from geometry import Scene  # noqa: E402
+from reducedmodels import LoadPath  # noqa: E402
+
+from .drawing import draw_mechanism  # noqa: E402
+
+#: fixed style per model family so models stay distinguishable across figures
+_STYLE = {
+    "continuum": dict(color="black", lw=2.4, ls="-", marker=None),
+    "beam:100": dict(color="tab:blue", lw=1.8, ls="-", marker="o", ms=4),
+    "beam:20": dict(color="tab:cyan", lw=1.4, ls="--", marker="s", ms=4),
+    "prbm": dict(color="tab:green", lw=1.4, ls="-.", marker="^", ms=5),
+    "dcmm:1": dict(color="tab:red", lw=1.4, ls=":", marker="v", ms=5),
+    "dcmm:2": dict(color="tab:orange", lw=1.4, ls=":", marker="D", ms=4),
+    "dcmm:3": dict(color="tab:purple", lw=1.4, ls=":", marker="P", ms=5),
+    "ee": dict(color="0.5", lw=1.2, ls="--", marker=None),
+}
+
+
+def style(model: str) -> dict:
+    """Line style of a model id (continuum levels share the continuum style)."""
+    return _STYLE.get(model, _STYLE.get(model.split(":")[0], dict(color="tab:brown", lw=1.2)))
+
+
+def _save(fig, path: Path) -> str:
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path.name
+
+
+def load_paths(scene: Scene, case_name: str, paths: dict[str, LoadPath], path: Path) -> str:
+    """Target displacement magnitude and target-body rotation versus load, all models."""
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    unit = None
+    for model, lp in paths.items():
+        load = np.abs(lp.load)
+        unit = lp.load_unit
+        st = style(model)
+        a1.plot(load, lp.displacement, label=model, **st)
+        a2.plot(load, np.degrees(lp.rotation), label=model, **st)
+    a1.set_xlabel(f"|load| ({unit})")
+    a1.set_ylabel("target point displacement |d| (mm)")
+    a2.set_xlabel(f"|load| ({unit})")
+    a2.set_ylabel(f"rotation of body {scene.mechanism.target_body} (deg)")
+    for a in (a1, a2):
+        a.grid(alpha=0.3)
+    a1.legend(fontsize=8)
+    fig.suptitle(f"{scene.name}, load case {case_name}")
+    return _save(fig, path)
+
+
+def deformed(scene: Scene, case_name: str, lp: LoadPath, path: Path) -> str:
+    """Deformed configurations at every other level and the tracing-point path."""
+    fig, ax = plt.subplots(figsize=(7, 7))
+    draw_mechanism(scene, ax, load_case=case_name)
+    mech = scene.mechanism
+    n = len(lp.load)
+    cmap = plt.get_cmap("viridis")
+    for k in range(0, n, max(1, n // 5)) if n > 1 else [0]:
+        col = cmap(k / max(n - 1, 1))
+        for pts in lp.shapes.values():
+            p = np.asarray(pts[k])
+            ax.plot(p[:, 0], p[:, 1], color=col, lw=1.2, alpha=0.9)
+        for body, poses in lp.poses.items():
+            b = mech.bodies[body]
+            if b.is_ground:
+                continue
+            x, y, t = poses[k]
+            R = np.array([[math.cos(t), -math.sin(t)], [math.sin(t), math.cos(t)]])
+            pts = b.points if body != mech.target_body else np.vstack([b.points,
+                                                                       mech.target_point])
+            q = (pts - b.reference) @ R.T + [x, y]
+            ax.plot(q[:, 0], q[:, 1], color=col, lw=3, alpha=0.6)
+    trace = mech.target_point + np.column_stack([lp.dx, lp.dy])
+    ax.plot(trace[:, 0], trace[:, 1], "k.-", lw=1, ms=4, label="tracing point path")
+    ax.legend(fontsize=8, loc="best")
+    ax.set_title(f"{scene.name} {case_name}: deformed ({lp.model}), levels coloured 0 -> full")
+    return _save(fig, path)
+
+
+def relative_rotations(scene: Scene, case_name: str, lp: LoadPath, path: Path) -> str:
+    """Relative rotation of the two bodies joined by each flexure versus load (paper Fig. 15)."""
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    for f in scene.mechanism.flexures:
+        ta = np.array(lp.poses[f.bodies[0]])[:, 2]
+        tb = np.array(lp.poses[f.bodies[1]])[:, 2]
+        ax.plot(np.abs(lp.load), np.degrees(tb - ta), marker="o", ms=3,
+                label=f"{f.name}: body {f.bodies[1]} - body {f.bodies[0]}")
+    ax.set_xlabel(f"|load| ({lp.load_unit})")
+    ax.set_ylabel("relative rotation (deg)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(f"{scene.name} {case_name}: relative rotations of the links ({lp.model})")
+    return _save(fig, path)
+
+
+def pareto_front(points: list[tuple[float, float]]) -> list[int]:
+    """Indices of the (seconds, error) points not dominated by a cheaper, more accurate one."""
+    order = sorted(range(len(points)), key=lambda k: (points[k][0], points[k][1]))
+    front, best = [], math.inf
+    for k in order:
+        if points[k][1] < best:
+            front.append(k)
+            best = points[k][1]
+    return front
+
+
+def runtime_vs_error(rows: list[dict], title: str, path: Path) -> str:
+    """Log-log scatter of seconds versus error (percent) with the Pareto front marked."""
+    fig, ax = plt.subplots(figsize=(7.5, 5))
+    families: dict[str, list[dict]] = {}
+    for r in rows:
+        families.setdefault(r["model"].split(":")[0], []).append(r)
+    floor = 1e-4
+    for fam, rs in families.items():
+        st = style(fam if fam != "beam" else "beam:100")
+        x = [r["seconds"] for r in rs]
+        y = [max(r["error"], floor) for r in rs]
+        ax.plot(x, y, marker=st.get("marker") or "o", color=st["color"], ls="-", lw=0.8,
+                label=fam)
+        for r, xi, yi in zip(rs, x, y):
+            ax.annotate(r["model"].split(":")[-1] if ":" in r["model"] else r["model"],
+                        (xi, yi), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    pts = [(r["seconds"], max(r["error"], floor)) for r in rows]
+    front = pareto_front(pts)
+    fx, fy = zip(*[pts[k] for k in front])
+    ax.step(fx, fy, where="post", color="red", lw=2, alpha=0.4, label="Pareto front")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall time per load path (s, median)")
+    ax.set_ylabel("error (%)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    return _save(fig, path)
+
+
+def convergence(rows: list[dict], extrapolated: dict, title: str, path: Path) -> str:
+    """Relative difference from the Richardson value versus unknowns (log-log)."""
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    n = [r["unknowns"] for r in rows]
+    for key, label in (("displacement", "|d|"), ("rotation", "rotation")):
+        ext = extrapolated.get(key)
+        if ext is None or ext == 0:
+            continue
+        err = [max(abs(r[key] - ext) / abs(ext) * 100, 1e-6) for r in rows]
+        ax.loglog(n, err, marker="o", label=label)
+    ax.set_xlabel("unknowns")
+    ax.set_ylabel("difference from extrapolated value (%)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    return _save(fig, path)
