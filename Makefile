@@ -1,5 +1,5 @@
 # Two commands on a fresh machine with only Python and pip:
-#   make report   -> creates .venv, installs flexval, runs the main job
+#   make report   -> creates .venv, installs flexval, builds reports/paper/
 #   make test     -> creates/refreshes .venv the same way, runs the test suite
 PYTHON ?= python3
 VENV   ?= .venv
@@ -19,12 +19,15 @@ venv: $(STAMP)
 report: $(STAMP)
 	$(BIN)/flexval info open_chain
 	$(BIN)/flexval info closed_chain
+	$(BIN)/flexval report --out reports/paper
 
 test: $(STAMP)
 	$(BIN)/python -m pytest
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_reduced.py
+	$(BIN)/python benchmarks/bench_beam_scaling.py
+	$(BIN)/python benchmarks/bench_continuum.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache

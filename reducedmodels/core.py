@@ -29,7 +29,7 @@ from .loadpath import LoadPath
 from .rigid import rigid_points
 
 
-DENSE_LIMIT = 240
+DENSE_LIMIT = 96  # above ~100, multithreaded LAPACK stalls on a loaded 2-core machine (measured)
 
 
 class Connector(Protocol):
