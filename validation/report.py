@@ -5,8 +5,9 @@
 paper's own percentages beside ours) and against the continuum reference,
 tabulates run times beside the paper's, draws the figures, runs the
 runtime-versus-error and mesh-convergence studies, and writes
-``report.md``, its PNG figures and ``results.json`` (every LoadPath) to the
-output folder. Every number in the tables is computed from the LoadPaths in
+``report.md``, its PNG figures, ``results.json`` (every LoadPath) and
+``gates.json`` (every error figure, the baseline of the CI accuracy gates) to
+the output folder. Every number in the tables is computed from the LoadPaths in
 ``results.json``.
 """
 
@@ -309,4 +310,7 @@ def build_report(scene_names: list[str], out: Path, models: list[str] | None = N
                        "failures": r.failures, "bench": r.bench_rows}
         for r in results}}
     (out / "results.json").write_text(json.dumps(dump, indent=1), encoding="utf-8")
+    refs = [PAPER_REFERENCE] + ([continuum_id] if continuum_id else [])
+    gates = {r.scene.name: {ref: r.error_table(ref) for ref in refs} for r in results}
+    (out / "gates.json").write_text(json.dumps(gates, indent=1), encoding="utf-8")
     return out / "report.md"
