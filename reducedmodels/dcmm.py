@@ -21,6 +21,7 @@ Units: mm, N, N mm, rad.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -104,11 +105,22 @@ class DcmmConnector:
 
     Internal coordinates are the poses of the n - 1 intermediate bodies,
     whose reference points are the cut points on the centre line.
+
+    ``frame`` chooses the body whose displaced frame measures each element's
+    relative displacement: ``"leader"`` (body i of e_ij, as the paper's Sect. 3
+    states; the default) or ``"follower"`` (body j). The two agree for small
+    relative rotations and as n grows, but DCMM_1 on the closed chain
+    depends strongly on the choice (see the report's sensitivity table); the
+    paper's closed-chain DCMM_1 figures are closer to ``"follower"``.
     """
 
-    def __init__(self, flexure: Flexure, mechanism: Mechanism, n: int):
+    def __init__(self, flexure: Flexure, mechanism: Mechanism, n: int, frame: str = "leader"):
         if n < 1:
             raise ValueError(f"dcmm: number of sub-arcs must be >= 1, got {n}")
+        if frame not in ("leader", "follower"):
+            raise ValueError(f"dcmm: frame must be 'leader' or 'follower', got {frame!r}")
+        if frame == "follower":      # measure in the displaced frame of body j of e_ij
+            flexure = dataclasses.replace(flexure, bodies=flexure.bodies[::-1])
         self.name = flexure.name
         self.bodies = tuple(flexure.bodies)
         self.n_internal = 3 * (n - 1)

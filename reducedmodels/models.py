@@ -24,16 +24,18 @@ def build_system(mechanism: Mechanism, spec: ModelSpec,
                  settings: SolverSettings | None = None, **options) -> System:
     """The multibody System of ``mechanism`` with every flexure modelled as ``spec``.
 
-    ``options`` are passed to the connector (e.g. ``shear=True`` for beams).
+    ``options`` are passed to the connector (e.g. ``shear=True`` for beams,
+    ``frame="follower"`` for DCMM).
     """
     if spec.family == "dcmm":
         from .dcmm import DcmmConnector
 
-        conns = [DcmmConnector(f, mechanism, spec.resolution) for f in mechanism.flexures]
+        conns = [DcmmConnector(f, mechanism, spec.resolution, **options)
+                 for f in mechanism.flexures]
     elif spec.family == "ee":
         from .dcmm import DcmmConnector
 
-        conns = [DcmmConnector(f, mechanism, 1) for f in mechanism.flexures]
+        conns = [DcmmConnector(f, mechanism, 1, **options) for f in mechanism.flexures]
     elif spec.family == "beam":
         from .beam import BeamConnector
 
