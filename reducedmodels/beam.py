@@ -7,8 +7,9 @@ from the initial configuration. The two end nodes are rigidly attached to
 the bodies the flexure joins; the N - 1 interior nodes are the connector's
 internal coordinates.
 
-Every element follows the corotational formulation of Crisfield (1991,
-Ch. 7) and Battini & Pacoste (2002) for planar Euler-Bernoulli beams: the
+Every element follows the corotational formulation for planar beams of
+Crisfield (1991, Non-linear finite element analysis of solids and
+structures, vol. 1) in the form of Battini (2002, PhD thesis, KTH): the
 rigid motion of the element is carried by its chord, and what is left is
 small and linear in a frame that rotates with the chord,
 
@@ -17,9 +18,12 @@ small and linear in a frame that rotates with the chord,
     a2 = wrap(theta_2 - alpha)
 
 where l0 and l are the initial and current chord lengths and alpha is the
-chord's rotation from the initial configuration. Because theta_i and alpha
-are both increments, the initial local rotations of a curved centre line
-(tangent angle minus chord angle) cancel: the unloaded arc is stress free.
+chord's rotation from the initial configuration, taken with atan2 of the
+initial and current chords. Because theta_i and alpha are both increments,
+the initial local rotations of a curved centre line (tangent angle minus
+chord angle) cancel: the unloaded arc is stress free. Wrapping the local
+rotations to (-pi, pi] keeps them right when nodes and chords have turned by
+more than pi (the chord angle is only known modulo 2 pi).
 The local energy is
 
     E = 1/2 [EA/l0 u^2 + a^T k_b a],   k_b = EI/l0 [[4, 2], [2, 4]],
@@ -29,6 +33,11 @@ k_b = EI / (l0 (1 + phi)) [[4 + phi, 2 - phi], [2 - phi, 4 + phi]] with
 phi = 12 EI / (kappa G A l0^2), kappa = 5/6. Gradient and tangent are
 exact (material plus geometric parts), all elements are evaluated at once
 with numpy, and the Hessian is returned as a sparse COO matrix.
+
+Accuracy: the elements bend over their chords, so an arc's bending length
+is the chord polygon's, shorter than the arc by ~(width/N)^2 / 24; end
+rotations and positions converge at O(1/N^2) (exact rotation under a pure
+end moment only for a straight flexure).
 
 Units: mm, N, MPa, N mm, rad.
 """
@@ -45,29 +54,32 @@ from geometry import Flexure, Mechanism
 SHEAR_CORRECTION = 5.0 / 6.0
 """Timoshenko shear coefficient kappa of a rectangular section."""
 
-def _tangent_pattern() -> np.ndarray:
-    """Constant map (7, 36) from an element's independent tangent entries to its 6x6 tangent.
 
-    In element coordinates [x1, y1, theta1, x2, y2, theta2] the tangent is
-    [[A, w, -A, w], [w^T, k11, -w^T, k12], [-A, -w, A, -w], [w^T, k12, -w^T, k11]]
-    (blocks by node and dof kind) with A symmetric 2x2; the independent entries
-    are ordered [Axx, Axy, Ayy, wx, wy, k11, k12].
+def _tangent_layout() -> tuple[np.ndarray, np.ndarray]:
+    """Where each entry of a row-major 6x6 element tangent comes from: (source, sign), (36,) each.
+
+    In element coordinates [x1, y1, theta1, x2, y2, theta2] the tangent is,
+    by node and dof kind, [[A, w, -A, w], [w^T, k11, -w^T, k12],
+    [-A, -w, A, -w], [w^T, k12, -w^T, k11]] with A symmetric 2x2, so every
+    entry is +- one of the independent entries [Axx, Axy, Ayy, wx, wy, k11, k12].
+    (A gather, not a matrix product: small BLAS calls thrash under load.)
     """
-    P = np.zeros((7, 6, 6))
-    for (i, j), sign in {(0, 0): 1, (0, 3): -1, (3, 3): 1}.items():
-        P[0, i, j] = P[0, j, i] = sign
-        P[1, i, j + 1] = P[1, i + 1, j] = P[1, j, i + 1] = P[1, j + 1, i] = sign
-        P[2, i + 1, j + 1] = P[2, j + 1, i + 1] = sign
-    for i, sign in ((0, 1), (3, -1)):
-        for j in (2, 5):
-            P[3, i, j] = P[3, j, i] = sign
-            P[4, i + 1, j] = P[4, j, i + 1] = sign
-    P[5, 2, 2] = P[5, 5, 5] = 1.0
-    P[6, 2, 5] = P[6, 5, 2] = 1.0
-    return P.reshape(7, 36)
+    source = np.empty((6, 6), dtype=np.intp)
+    sign = np.ones((6, 6))
+    translations, rotations = ([0, 1], [3, 4]), (2, 5)
+    for i, ti in enumerate(translations):
+        for j, tj in enumerate(translations):
+            source[np.ix_(ti, tj)] = [[0, 1], [1, 2]]
+            sign[np.ix_(ti, tj)] = 1.0 if i == j else -1.0
+        for r in rotations:
+            source[ti, r] = source[r, ti] = [3, 4]
+            sign[ti, r] = sign[r, ti] = 1.0 if i == 0 else -1.0
+    source[2, 2] = source[5, 5] = 5
+    source[2, 5] = source[5, 2] = 6
+    return source.ravel(), sign.ravel()
 
 
-_PATTERN = _tangent_pattern()
+_SOURCE, _SIGN = _tangent_layout()
 
 
 def wrap_angle(angle: np.ndarray) -> np.ndarray:
@@ -159,7 +171,7 @@ def corotational_elements(x: np.ndarray, theta: np.ndarray, chord0: np.ndarray, 
     diagonal = half * cos2 - k_cross * sin2
     entries = np.column_stack([mean + diagonal, half * sin2 + k_cross * cos2, mean - diagonal,
                                -k_rot * s, k_rot * c, k11, k12])
-    return energy, grad, entries @ _PATTERN
+    return energy, grad, entries[:, _SOURCE] * _SIGN
 
 
 def body_point(pose: np.ndarray, rel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -252,18 +264,21 @@ class BeamConnector:
         self._end_rel = np.array([
             self._nodes0[0] - mechanism.bodies[flexure.start_body].reference,
             self._nodes0[-1] - mechanism.bodies[flexure.end_body].reference])
-        self._rows, self._cols = self._sparsity(n_elements)
+        self._element_dofs = self._element_dof_table()
+        self._rows = np.repeat(self._element_dofs, 6, axis=1).ravel()
+        self._cols = np.tile(self._element_dofs, (1, 6)).ravel()
 
-    def _sparsity(self, n_elements: int) -> tuple[np.ndarray, np.ndarray]:
-        """Row and column of every entry of the stacked element tangents (n, 6, 6)."""
-        node_dofs = np.empty((n_elements + 1, 3), dtype=np.int32)
+    def _element_dof_table(self) -> np.ndarray:
+        """Local coordinate number of each element's six dofs, (N, 6).
+
+        The end nodes take their body's pose slots (0..2 for pose_a, 3..5 for
+        pose_b) and are transported there by :func:`attach_to_body`.
+        """
+        node_dofs = np.empty((self._n_nodes, 3), dtype=np.int32)
         node_dofs[0] = 3 * self._end_pose[0] + np.arange(3)
         node_dofs[-1] = 3 * self._end_pose[1] + np.arange(3)
         node_dofs[1:-1] = 6 + np.arange(self.n_internal).reshape(-1, 3)
-        self._element_dofs = np.hstack([node_dofs[:-1], node_dofs[1:]])
-        rows = np.repeat(self._element_dofs, 6, axis=1).ravel()
-        cols = np.tile(self._element_dofs, (1, 6)).ravel()
-        return rows, cols
+        return np.hstack([node_dofs[:-1], node_dofs[1:]])
 
     def initial_internal(self) -> np.ndarray:
         """Interior nodes at rest: (x, y, 0) each, mm and rad."""
