@@ -138,6 +138,7 @@ class System:
         self.n_dofs = n
         self.is_rotation = np.concatenate(rot_mask)
         self._dense_pattern = {}
+        self._csc_structure = None
 
     def pose_dofs(self, body: str) -> np.ndarray:
         """Global dof numbers of a body's pose (all -1 for the ground)."""
@@ -244,9 +245,28 @@ class System:
                 energy -= factor * m * q[dof]
                 grad[dof] -= factor * m
         if not dense:
-            K = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                              shape=(self.n_dofs, self.n_dofs)).tocsc()
+            K = self._csc(np.concatenate(rows), np.concatenate(cols), np.concatenate(vals))
         return energy, grad, K
+
+    def _csc(self, rows: np.ndarray, cols: np.ndarray, vals: np.ndarray) -> sp.csc_matrix:
+        """Sum COO triplets into CSC, reusing the structure while the pattern is unchanged.
+
+        Connectors return the same sparsity pattern at every call, so the
+        sorting and duplicate summation of a COO -> CSC conversion is done once;
+        afterwards one ``bincount`` scatters the values (checked: a changed
+        pattern rebuilds the structure).
+        """
+        cached = self._csc_structure
+        if cached is None or cached[0].shape != rows.shape or not (
+                np.array_equal(cached[0], rows) and np.array_equal(cached[1], cols)):
+            n = self.n_dofs
+            uniq, inverse = np.unique(cols.astype(np.int64) * n + rows, return_inverse=True)
+            indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
+            cached = (rows, cols, inverse.ravel(), (uniq % n).astype(np.int32), indptr)
+            self._csc_structure = cached
+        _, _, inverse, indices, indptr = cached
+        data = np.bincount(inverse, weights=vals, minlength=indices.size)
+        return sp.csc_matrix((data, indices, indptr), shape=(self.n_dofs, self.n_dofs))
 
     def reaction(self, q: np.ndarray) -> np.ndarray:
         """Force (N) and moment (N mm, about the ground's reference point) the ground exerts."""
