@@ -1,0 +1,356 @@
+"""3R pseudo-rigid-body model ``prbm`` of uniform arcs and straight beams (paper Sect. 2.2).
+
+Each flexure joining bodies a and b becomes the serial chain
+
+    a --R_a-- link h --R_2-- link l --R_b-- b
+
+of two rigid links and three revolute joints with torsion springs
+k_a = k_b = k1 and k2 (the paper's R1, R2, R3 with k1 = k3 != k2). The two
+end pieces (flexure end -> R_a, R_b -> flexure end) belong rigidly to the end
+bodies. The chain is symmetric about the arc's symmetry axis e2: in the
+frame {C, e1, e2} of the arc's ellipse of elasticity (centre C, e1 across
+the axis, pointing to the start end), in units of the arc length L,
+
+    R_start = (+x1, y1),   R_2 = (0, y2),   R_end = (-x1, y1),
+    k1 = kappa1 EI / L,    k2 = kappa2 EI / L.
+
+Parameters: one fitted number per arc angle
+-------------------------------------------
+Three joints with rotational compliances c_i = 1/k_i are, in the linear
+limit, three concentrated elastic weights, so the chain's small-load
+compliance is that of the weights c_i at the points R_i (the ellipse of
+elasticity of a weight distribution, paper Eqs. 1-5). It equals the
+arc's *exactly* when total weight, centroid and second moments agree:
+2 c1 + c2 = w, centroid at C, 2 c1 x1^2 = w a^2, 2 c1 y1^2 + c2 y2^2 = w b^2
+(w = L/EI; a, b the semi-axes, Eqs. 3-4). These four conditions leave a
+one-parameter family, indexed by the share rho = 2 c1 / w in (0, 1) of
+the compliance lumped in the two outer joints:
+
+    x1 = a / sqrt(rho),  y1 = -b sqrt((1 - rho) / rho),  y2 = b sqrt(rho / (1 - rho)),
+    kappa1 = 2 / rho,    kappa2 = 1 / (1 - rho)
+
+(outer joints towards the chord, the middle one beyond the centre of
+elasticity towards the arc's apex). So the PRBM reproduces the linear (EE)
+compliance of every arc and straight beam by construction, and rho is
+fitted per arc angle to the large-deflection response of a nonlinear beam
+(:mod:`reducedmodels.prbm_fit`). The fitted rho(2 gamma) ships in
+``data/prbm_table.json`` (0 to 330 deg every 15 deg) and is interpolated
+by a cubic spline in the arc angle; since only rho is interpolated, the
+linear exactness holds at every angle, tabulated or not. For a straight
+segment (b = 0) all joints lie on the segment.
+
+Formulation: link rotations and an exact closure multiplier
+------------------------------------------------------------
+The connector's internal coordinates are the rotations phi_h, phi_l of
+the two links from the initial configuration (rad) and a closure
+multiplier mu (2, mm). The joint rotations are then *linear*,
+
+    t_a = phi_h - theta_a,   t_2 = phi_l - phi_h,   t_b = theta_b - phi_l,
+
+so rotations of any size (several turns) need no angle wrapping, and
+the chain must close at R_b:
+
+    g = x_a + R(theta_a) r_a + R(phi_h) v_h + R(phi_l) v_l - x_b - R(theta_b) r_b = 0
+
+(r_a, r_b: joint offsets from the body reference points, v_h, v_l: the
+link vectors, all initial). The connector returns the Lagrangian
+
+    E = 1/2 (k1 t_a^2 + k2 t_2^2 + k1 t_b^2) + c mu . g,   c = EI / L^3 (N/mm),
+
+whose stationarity is equilibrium plus exact closure (no penalty). Its
+gradient and Hessian are exact; the tangent is symmetric but indefinite
+(a saddle point in mu), which the core's LU solves (dense or sparse, with
+pivoting) handle; c makes
+c mu a force (N) and mu a length comparable to the deflections, so the
+closure residual is measured as a force like every other residual. At
+convergence E is the spring energy and c mu the force that link l
+transmits to body b.
+
+Why not eliminate the closure by inverse kinematics (R_2 as the
+intersection of two circles, no internal coordinates)? Because the joint
+angles are then singular functions of the body poses where the chain is
+stretched straight (|R_a R_b| -> |v_h| + |v_l|): the straight-beam chain
+sits *exactly* at that toggle when unloaded, and a flat arc pulled by its
+ends approaches it. With the multiplier the chain simply becomes an
+inextensible tie there, the Newton iterates may violate closure on the way
+to a converged state, and there is no configuration in which the chain
+"cannot close": a pull beyond full stretch is carried by the multiplier.
+
+Units: mm, N, N mm, rad.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
+from typing import Mapping
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from geometry import Arc, Flexure, Mechanism, Segment
+
+_J = np.array([[0.0, -1.0], [1.0, 0.0]])
+TABLE_RESOURCE = "data/prbm_table.json"
+
+
+def _rot(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s], [s, c]])
+
+
+_K = np.arange(2, 18)
+_FACT = np.array([math.factorial(n) for n in range(2 * _K[-1] + 3)], float)
+_A2_SERIES = -((-1.0) ** _K) * 4.0 ** (_K - 1) / (2.0 * _FACT[2 * _K + 1])
+_B2_SERIES = (-1.0) ** _K * 4.0 ** (_K - 1) * (_K - 1) / _FACT[2 * _K + 2]
+
+
+def ellipse_semi_axes(width: float) -> tuple[float, float]:
+    """Semi-axes a, b of a uniform arc's ellipse of elasticity in units of its length L.
+
+    Paper Eqs. 3-4 with r = L / width. The closed forms lose digits to
+    cancellation as the arc flattens (b -> 0 like width / sqrt(720)), so up
+    to gamma = 1 rad their Taylor series in gamma are summed instead,
+
+        a^2 / L^2 = sum_{k>=1} (-1)^(k+1) 4^(k-1) gamma^(2k-2) / (2 (2k+1)!),
+        b^2 / L^2 = sum_{k>=2} (-1)^k 4^(k-1) (k-1) gamma^(2k-2) / (2k+2)!,
+
+    (16 terms: converged to rounding for gamma <= 1).
+
+    Parameters
+    ----------
+    width : float
+        Arc angle 2 gamma, rad (0 for a straight beam).
+
+    Returns
+    -------
+    a, b : float
+        Semi-axes across (a) and along (b) the symmetry axis divided by L.
+    """
+    g = 0.5 * width
+    if g <= 1.0:                      # the k = 1 term of a^2 is 1/12
+        a2 = 1.0 / 12.0 + float(_A2_SERIES @ g ** (2 * _K - 2))
+        b2 = float(_B2_SERIES @ g ** (2 * _K - 2))
+    else:
+        a2 = (1.0 - np.sin(2.0 * g) / (2.0 * g)) / (8.0 * g**2)
+        b2 = (0.5 + np.sin(2.0 * g) / (4.0 * g) - (np.sin(g) / g) ** 2) / (4.0 * g**2)
+    return float(np.sqrt(a2)), float(np.sqrt(max(b2, 0.0)))
+
+
+@dataclass(frozen=True)
+class PrbmParameters:
+    """Dimensionless geometry and stiffness of the symmetric 3R chain.
+
+    Attributes
+    ----------
+    x1, y1 : float
+        Outer joint on the start side at (x1, y1) in the ellipse frame
+        {C, e1, e2}, in units of the arc length L (the end-side joint is its
+        mirror image (-x1, y1)).
+    y2 : float
+        Middle joint at (0, y2), units of L.
+    kappa1, kappa2 : float
+        Torsion stiffnesses of the outer and middle joints in units of EI / L.
+    """
+
+    x1: float
+    y1: float
+    y2: float
+    kappa1: float
+    kappa2: float
+
+    def __post_init__(self) -> None:
+        vals = np.array([self.x1, self.y1, self.y2, self.kappa1, self.kappa2])
+        if not np.all(np.isfinite(vals)):
+            raise ValueError(f"prbm: parameters must be finite, got {self}")
+        if self.kappa1 <= 0.0 or self.kappa2 <= 0.0:
+            raise ValueError(f"prbm: joint stiffnesses must be > 0, got kappa1={self.kappa1}, "
+                             f"kappa2={self.kappa2}")
+        if self.x1 <= 0.0:
+            raise ValueError(f"prbm: outer joints must be apart (x1 > 0), got x1={self.x1}")
+
+    @classmethod
+    def from_rho(cls, width: float, rho: float) -> "PrbmParameters":
+        """The chain with the arc's exact linear compliance and outer-joint compliance share rho.
+
+        Parameters
+        ----------
+        width : float
+            Arc angle 2 gamma, rad.
+        rho : float
+            2 c1 / (c_total) in (0, 1): fraction of the rotational compliance
+            L/EI lumped in the two outer joints.
+        """
+        if not 0.0 < rho < 1.0:
+            raise ValueError(f"prbm: rho must lie in (0, 1), got {rho}")
+        a, b = ellipse_semi_axes(width)
+        return cls(x1=a / np.sqrt(rho), y1=-b * np.sqrt((1.0 - rho) / rho),
+                   y2=b * np.sqrt(rho / (1.0 - rho)), kappa1=2.0 / rho, kappa2=1.0 / (1.0 - rho))
+
+
+@lru_cache(maxsize=1)
+def load_table() -> dict:
+    """The shipped fit (``reducedmodels/data/prbm_table.json``) as a dict."""
+    text = resources.files("reducedmodels").joinpath(TABLE_RESOURCE).read_text(encoding="utf-8")
+    return json.loads(text)
+
+
+@lru_cache(maxsize=1)
+def _rho_spline() -> tuple[CubicSpline, float]:
+    rows = load_table()["table"]
+    widths = np.radians([row["width_deg"] for row in rows])
+    return CubicSpline(widths, [row["rho"] for row in rows]), float(widths[-1])
+
+
+def table_parameters(width: float) -> PrbmParameters:
+    """Fitted chain for an arc angle ``width`` (rad), by cubic-spline interpolation of rho.
+
+    Raises
+    ------
+    ValueError
+        If ``width`` lies outside the tabulated range.
+    """
+    spline, top = _rho_spline()
+    if not 0.0 <= width <= top + 1e-12:
+        raise ValueError(f"prbm: arc angle {np.degrees(width):.6g} deg is outside the fitted "
+                         f"range 0 .. {np.degrees(top):.6g} deg of {TABLE_RESOURCE}")
+    return PrbmParameters.from_rho(width, float(spline(width)))
+
+
+def shape_frame(shape: Arc | Segment) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float]:
+    """Centre of elasticity C (mm), axes e1, e2, length L (mm) and arc angle (rad) of a shape.
+
+    e2 is the symmetry axis (towards the arc's apex) and e1 = R(-90 deg) e2
+    points to the start end, as in :meth:`geometry.Arc.ellipse`; a segment
+    takes e1 from its end to its start and e2 = R(90 deg) e1.
+    """
+    if isinstance(shape, Arc):
+        g = 0.5 * shape.width
+        e2 = np.array([np.cos(shape.axis), np.sin(shape.axis)])
+        e1 = np.array([e2[1], -e2[0]])
+        center = np.asarray(shape.center, float) + shape.radius * np.sin(g) / g * e2
+        return center, e1, e2, shape.length, shape.width
+    if isinstance(shape, Segment):
+        start, end = shape.end_points
+        e1 = (start - end) / shape.length
+        return 0.5 * (start + end), e1, _J @ e1, shape.length, 0.0
+    raise TypeError(f"prbm: unsupported flexure shape {type(shape).__name__}")
+
+
+def joint_positions(shape: Arc | Segment, params: PrbmParameters) -> np.ndarray:
+    """Initial joints [R_start, R_2, R_end] of the chain for ``shape``, shape (3, 2), mm."""
+    center, e1, e2, length, _ = shape_frame(shape)
+    local = np.array([[params.x1, params.y1], [0.0, params.y2], [-params.x1, params.y1]])
+    return center + length * local @ np.column_stack([e1, e2]).T
+
+
+class PrbmConnector:
+    """Symmetric 3R PRBM of one flexure (a connector for :mod:`reducedmodels.core`).
+
+    Internal coordinates: [phi_h, phi_l, mu_x, mu_y], the rotations (rad) of
+    link h (at body a) and link l (at body b) from the initial configuration
+    and the closure multiplier (mm); see the module docstring.
+
+    Parameters
+    ----------
+    flexure : Flexure
+    mechanism : Mechanism
+        For the material and the bodies' reference points.
+    params : PrbmParameters or mapping, optional
+        Chain parameters. A mapping is either ``{"rho": value}`` (the
+        exact-linear family at this flexure's angle with that rho, e.g. for
+        sensitivity studies; JSON-friendly, so it can travel through
+        ``run_reduced(..., params=...)``) or the five fields of
+        :class:`PrbmParameters`. Default: the fitted table at the flexure's
+        arc angle.
+    """
+
+    def __init__(self, flexure: Flexure, mechanism: Mechanism,
+                 params: PrbmParameters | Mapping[str, float] | None = None):
+        self.name = flexure.name
+        self.bodies = tuple(flexure.bodies)
+        self.n_internal = 4
+        shape = flexure.shape
+        _, _, _, length, width = shape_frame(shape)
+        if params is None:
+            params = table_parameters(width)
+        elif not isinstance(params, PrbmParameters):
+            params = (PrbmParameters.from_rho(width, float(params["rho"])) if set(params) == {"rho"}
+                      else PrbmParameters(**params))
+        self.params = params
+        EI = flexure.bending_stiffness(mechanism.material)
+        self.stiffness = np.array([params.kappa1, params.kappa2, params.kappa1]) * EI / length
+        self.closure_scale = EI / length**3
+        joints = joint_positions(shape, params)
+        if flexure.start_body != self.bodies[0]:
+            joints = joints[::-1]
+        self.joints = joints                      # [R_a, R_2, R_b], chain order a -> b
+        ref_a = mechanism.bodies[self.bodies[0]].reference
+        ref_b = mechanism.bodies[self.bodies[1]].reference
+        self._ref = np.array([ref_a, ref_b])
+        self._r_a, self._r_b = joints[0] - ref_a, joints[2] - ref_b
+        self._v_h, self._v_l = joints[1] - joints[0], joints[2] - joints[1]
+        self._ends = np.array([flexure.end_point_of(self.bodies[0]),
+                               flexure.end_point_of(self.bodies[1])])
+
+    def initial_internal(self) -> np.ndarray:
+        """Links at rest and no closure force: zeros (4,)."""
+        return np.zeros(4)
+
+    def internal_is_rotation(self) -> np.ndarray:
+        """[True, True, False, False]: two link rotations, then the multiplier (mm)."""
+        return np.array([True, True, False, False])
+
+    def joint_rotations(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+                        ) -> np.ndarray:
+        """Spring rotations [t_a, t_2, t_b] (rad) from the initial configuration."""
+        phi_h, phi_l = internal[0], internal[1]
+        return np.array([phi_h - pose_a[2], phi_l - phi_h, pose_b[2] - phi_l])
+
+    def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+                 ) -> tuple[float, np.ndarray, np.ndarray]:
+        """Lagrangian (N mm), gradient (10) and Hessian (10, 10) over [pose_a, pose_b, internal].
+
+        Local order: [x_a, y_a, theta_a, x_b, y_b, theta_b, phi_h, phi_l, mu_x, mu_y].
+        """
+        c = self.closure_scale
+        mu = internal[2:4]
+        # moving vectors and their theta-derivatives J R v
+        ra = _rot(pose_a[2]) @ self._r_a
+        rb = _rot(pose_b[2]) @ self._r_b
+        vh = _rot(internal[0]) @ self._v_h
+        vl = _rot(internal[1]) @ self._v_l
+        gap = pose_a[:2] + ra + vh + vl - pose_b[:2] - rb
+        G = np.zeros((2, 10))
+        G[:, 0:2] = np.eye(2)
+        G[:, 3:5] = -np.eye(2)
+        G[:, 2], G[:, 5], G[:, 6], G[:, 7] = _J @ ra, -(_J @ rb), _J @ vh, _J @ vl
+        # spring energy: t = B q over the angles (theta_a, theta_b, phi_h, phi_l)
+        B = np.zeros((3, 10))
+        B[0, 6], B[0, 2] = 1.0, -1.0
+        B[1, 7], B[1, 6] = 1.0, -1.0
+        B[2, 5], B[2, 7] = 1.0, -1.0
+        t = self.joint_rotations(pose_a, pose_b, internal)
+        kt = self.stiffness * t
+        energy = 0.5 * float(t @ kt) + c * float(mu @ gap)
+        grad = B.T @ kt + c * (G.T @ mu)
+        grad[8:10] = c * gap
+        hess = B.T @ (self.stiffness[:, None] * B)
+        # second derivatives of the gap: d2(R(a) v)/da2 = -R(a) v
+        hess[[2, 5, 6, 7], [2, 5, 6, 7]] += c * np.array([-mu @ ra, mu @ rb, -mu @ vh, -mu @ vl])
+        hess[8:10, :] += c * G
+        hess[:, 8:10] += c * G.T
+        return energy, grad, hess
+
+    def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
+        """Polyline end_a, R_a, R_2, R_b, end_b in the current configuration, (5, 2) mm."""
+        Ra, Rb = _rot(pose_a[2]), _rot(pose_b[2])
+        end_a = pose_a[:2] + Ra @ (self._ends[0] - self._ref[0])
+        ja = pose_a[:2] + Ra @ self._r_a
+        j2 = ja + _rot(internal[0]) @ self._v_h
+        jb = pose_b[:2] + Rb @ self._r_b
+        end_b = pose_b[:2] + Rb @ (self._ends[1] - self._ref[1])
+        return np.array([end_a, ja, j2, jb, end_b])
