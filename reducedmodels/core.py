@@ -15,6 +15,7 @@ Units: mm, N, N mm, rad.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Protocol, Sequence
@@ -302,7 +303,10 @@ def _newton(system: System, q: np.ndarray, loads: _Loads, factor: float,
     f_scale = np.where(system.is_rotation, 1.0 / system.size, 1.0)
     res0 = None
     for it in range(settings.max_iterations + 1):
-        _, g, K = system.assemble(q, loads, factor)
+        try:
+            _, g, K = system.assemble(q, loads, factor)
+        except (ValueError, FloatingPointError) as exc:   # a connector refused the state
+            return None, it, f"invalid state ({exc})"
         res = float(np.abs(g * f_scale).max(initial=0.0)) / loads.scale
         if not np.isfinite(res):
             return None, it, "non-finite residual"
@@ -325,12 +329,14 @@ def _newton(system: System, q: np.ndarray, loads: _Loads, factor: float,
     return None, settings.max_iterations, f"no convergence in {settings.max_iterations} iterations (residual {res:.3g})"
 
 
-def _moved_too_far(system: System, q0: np.ndarray, q1: np.ndarray, s: SolverSettings) -> bool:
+def _motion_ratio(system: System, q0: np.ndarray, q1: np.ndarray, s: SolverSettings) -> float:
+    """Largest body motion of a sub-step relative to its bound (> 1: too far)."""
     dq = np.abs(q1 - q0)[: 3 * len(system.body_index)].reshape(-1, 3)
     if dq.size == 0:
-        return False
-    return bool(dq[:, 2].max() > s.max_rotation_step
-                or np.hypot(dq[:, 0], dq[:, 1]).max() > s.max_translation_step * system.size)
+        return 0.0
+    return float(max(dq[:, 2].max() / s.max_rotation_step,
+                     np.hypot(dq[:, 0], dq[:, 1]).max()
+                     / (s.max_translation_step * system.size)))
 
 
 def solve_path(system: System, case: LoadCase, levels: int | None = None,
@@ -406,7 +412,8 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
                 iters += iters2
             stats["newton_iterations"] += iters
             level_iters += iters
-            if q_new is None or _moved_too_far(system, q, q_new, s):
+            ratio = _motion_ratio(system, q, q_new, s) if q_new is not None else math.inf
+            if ratio > 1.0:
                 if q_new is not None:
                     why = "step too large"
                 step *= 0.5
@@ -419,7 +426,7 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
             stats["substeps"] += 1
             if stats["substeps"] > s.max_substeps:
                 raise fail(f"more than {s.max_substeps} load sub-steps", lam)
-            if iters <= s.fast_iterations:
+            if iters <= s.fast_iterations and ratio < 0.5:
                 step = min(2.0 * step, spacing)
         record(q, target, level_iters)
     lp.seconds = time.perf_counter() - t0
