@@ -1,18 +1,20 @@
 """What a planar compliant mechanism is: bodies, flexures, section, material.
 
 A mechanism is a graph: rigid bodies (one of them the ground) joined by
-flexures. Each flexure end is attached to one of the two bodies it joins.
+flexures and, optionally, pins (revolute joints). Each flexure end is
+attached to one of the two bodies it joins.
 Which end belongs to which body is derived from the geometry (coincidence
 of end points with the points a body is known to have, else the end nearest
 to the body's points already placed), or given explicitly with
-``start_body``. Rigid links are then the sets of flexure end points on each
-body. Nothing here knows about any solver.
+``start_body``. Rigid links are then the sets of flexure end points and pin
+points on each body. Nothing here knows about any solver.
 
 Units: mm, MPa (N/mm^2), N, rad.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections import deque
 from dataclasses import dataclass, field
 
@@ -104,12 +106,31 @@ class Flexure:
 
 
 @dataclass(frozen=True)
+class Pin:
+    """A revolute joint: the material points of two bodies at ``point`` stay together.
+
+    Attributes
+    ----------
+    name : str
+    bodies : (str, str)
+        The two bodies it joins (either may be the ground).
+    point : ndarray, shape (2,)
+        The joint's position in the undeformed configuration, mm. The
+        relative rotation of the two bodies about it is free.
+    """
+
+    name: str
+    bodies: tuple[str, str]
+    point: np.ndarray
+
+
+@dataclass(frozen=True)
 class Body:
-    """A rigid body: its name and the points (mm) where flexures attach.
+    """A rigid body: its name and the points (mm) where flexures and pins attach.
 
     ``reference`` is the origin of the body frame (its pose (x, y, theta)
     is the position of that point and the body's rotation); it is the
-    first attachment point.
+    first attachment point (flexure ends come before pin points).
     """
 
     name: str
@@ -136,6 +157,8 @@ class Mechanism:
     target_body : str
     target_point : ndarray, shape (2,)
         The tracing point (mm), attached to ``target_body``.
+    pins : tuple[Pin, ...]
+        Revolute joints between bodies (none by default).
     """
 
     bodies: dict[str, Body]
@@ -145,6 +168,7 @@ class Mechanism:
     target_body: str
     target_point: np.ndarray
     source: str = field(default="<scene>", compare=False)
+    pins: tuple[Pin, ...] = ()
 
     @property
     def moving_bodies(self) -> list[str]:
@@ -152,19 +176,24 @@ class Mechanism:
         return [n for n in self.bodies if n != self.ground]
 
     def size(self) -> float:
-        """Largest distance between flexure end points and the target, mm.
+        """Largest distance between flexure end points, pin points and the target, mm.
 
         A length scale that does not change when the mechanism is moved rigidly.
         """
-        pts = np.vstack([f.shape.end_points for f in self.flexures] + [self.target_point[None]])
+        pts = np.vstack([f.shape.end_points for f in self.flexures]
+                        + [np.asarray(p.point, float)[None] for p in self.pins]
+                        + [self.target_point[None]])
         d = pts[:, None, :] - pts[None, :, :]
         return float(np.sqrt((d**2).sum(axis=-1)).max())
 
     def transformed(self, angle: float, shift: np.ndarray) -> "Mechanism":
         """The same mechanism rotated by ``angle`` (rad) about the origin, then shifted (mm)."""
-        from .transform import transform_mechanism
+        from .transform import transform_mechanism, transform_point
 
-        return transform_mechanism(self, angle, np.asarray(shift, dtype=float))
+        shift = np.asarray(shift, dtype=float)
+        pins = tuple(dataclasses.replace(p, point=transform_point(p.point, angle, shift))
+                     for p in self.pins)
+        return dataclasses.replace(transform_mechanism(self, angle, shift), pins=pins)
 
 
 def assemble(
@@ -177,6 +206,7 @@ def assemble(
     source: str = "<scene>",
     body_points: dict[str, np.ndarray] | None = None,
     tolerance: float | None = None,
+    pin_specs: list[dict] | None = None,
 ) -> Mechanism:
     """Build a Mechanism, attaching every flexure end to one of its bodies.
 
@@ -192,28 +222,37 @@ def assemble(
         coincidence like the ground's.
     tolerance : float, optional
         Coincidence tolerance, mm. Default: 1e-3 of the mechanism's size.
+    pin_specs : list of dict, optional
+        Revolute joints, each with keys ``name``, ``bodies`` (two different
+        names) and ``point`` (mm). A pin point is a known point of both its
+        bodies (flexure ends there attach to them) and a pin connects its
+        bodies like a flexure for the reachability check.
 
     Raises
     ------
     SceneError
         If a flexure end meets no body, a body is unreachable from the ground,
-        or the target body is unknown.
+        the target body is unknown, or a name is duplicated.
     """
+    pin_specs = list(pin_specs or [])
     known: dict[str, list[np.ndarray]] = {ground: [np.asarray(p, float) for p in ground_points]}
     for name, pts in (body_points or {}).items():
         known.setdefault(name, []).extend(np.asarray(p, float) for p in pts)
+    for pin in pin_specs:
+        for b in pin["bodies"]:
+            known.setdefault(b, []).append(np.asarray(pin["point"], float))
     all_ends = np.vstack([spec["shape"].end_points for spec in flexure_specs])
     scale = float(np.hypot(*(all_ends.max(axis=0) - all_ends.min(axis=0)))) or 1.0
     tol = tolerance if tolerance is not None else 1e-3 * scale
 
     names = [spec["name"] for spec in flexure_specs]
     body_names: list[str] = [ground]
-    for spec in flexure_specs:
+    for spec in [*flexure_specs, *pin_specs]:
         for b in spec["bodies"]:
             if b not in body_names:
                 body_names.append(b)
-    if ground not in {b for spec in flexure_specs for b in spec["bodies"]}:
-        raise SceneError(source, "ground", ground, "no flexure is attached to the ground")
+    if ground not in {b for spec in [*flexure_specs, *pin_specs] for b in spec["bodies"]}:
+        raise SceneError(source, "ground", ground, "no flexure or pin is attached to the ground")
 
     start_body: dict[str, str] = {}
     # explicit assignments and coincidences first
@@ -265,6 +304,12 @@ def assemble(
     visited = {ground}
     while queue:
         body = queue.popleft()
+        for pin in pin_specs:
+            if body in pin["bodies"]:
+                other = pin["bodies"][1] if body == pin["bodies"][0] else pin["bodies"][0]
+                if other not in visited:
+                    visited.add(other)
+                    queue.append(other)
         for spec in flexure_specs:
             if body not in spec["bodies"]:
                 continue
@@ -290,15 +335,23 @@ def assemble(
     if len(set(names)) != len(names):
         dup = next(n for n in names if names.count(n) > 1)
         raise SceneError(source, "flexures.name", dup, "duplicate flexure name")
+    pin_names = [pin["name"] for pin in pin_specs]
+    for k, name in enumerate(pin_names):
+        if name in names or name in pin_names[:k]:
+            raise SceneError(source, "pins.name", name,
+                             "duplicate name (pins and flexures share one namespace)")
 
     flexures = tuple(
         Flexure(spec["name"], spec["shape"], tuple(spec["bodies"]), start_body[spec["name"]],
                 spec["section"])
         for spec in flexure_specs
     )
+    pins = tuple(Pin(p["name"], tuple(p["bodies"]), np.asarray(p["point"], dtype=float))
+                 for p in pin_specs)
     bodies: dict[str, Body] = {}
     for name in body_names:
-        pts = [f.end_point_of(name) for f in flexures if name in f.bodies]
+        pts = ([f.end_point_of(name) for f in flexures if name in f.bodies]
+               + [p.point for p in pins if name in p.bodies])
         bodies[name] = Body(name, np.array(pts, dtype=float), is_ground=(name == ground))
     return Mechanism(
         bodies=bodies,
@@ -308,4 +361,5 @@ def assemble(
         target_body=target_body,
         target_point=np.asarray(target_point, dtype=float),
         source=source,
+        pins=pins,
     )

@@ -18,6 +18,8 @@ The format (see README.md for a full example)::
               or shape = "segment", start, end               (straight)
                  optional: start_body, depth, thickness
     [[bodies]]  name, points   (optional: known points of a link)
+    [[pins]]    name, bodies = [i, j], point = [x, y]
+                (optional revolute joints; either body may be the ground)
     [[load_cases]] name, kind = "moment" | "force", value, body, point,
                    angle_deg, levels; or loads = [{...}, ...] to combine
     [request]   models = [...], outputs = [...]
@@ -213,6 +215,22 @@ def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> dic
             "start_body": start_body}
 
 
+def _pin_spec(rd: _Reader, p: dict, k: int) -> dict:
+    """One ``[[pins]]`` table: a revolute joint between two different bodies at a point."""
+    if not isinstance(p, dict):
+        rd.fail(f"pins[{k}]", p, "must be a table")
+    name = rd.name(p, "name", f"pins[{k}].")
+    where = f"pins.{name}."
+    rd.known_keys(p, {"name", "bodies", "point"}, where)
+    bodies = p.get("bodies")
+    if not (isinstance(bodies, list) and len(bodies) == 2):
+        rd.fail(f"{where}bodies", bodies, "must list the two bodies it joins, e.g. [1, 2]")
+    bodies = [rd.name({"b": b}, "b", f"{where}bodies.") for b in bodies]
+    if bodies[0] == bodies[1]:
+        rd.fail(f"{where}bodies", bodies, "a pin must join two different bodies")
+    return {"name": name, "bodies": bodies, "point": rd.point(p, "point", where)}
+
+
 def _load_component(rd: _Reader, c: dict, where: str, target_body: str,
                     target_point: np.ndarray) -> Moment | Force:
     rd.known_keys(c, {"name", "kind", "body", "point", "angle_deg", "value", "levels", "loads"},
@@ -232,7 +250,7 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
     """Build and check a Scene from parsed TOML ``data`` read from ``source``."""
     rd = _Reader(source)
     rd.known_keys(data, {"name", "description", "material", "section", "ground", "target",
-                         "flexures", "bodies", "load_cases", "request"}, "")
+                         "flexures", "bodies", "pins", "load_cases", "request"}, "")
     name = str(data.get("name", default_name))
     mat = rd.table(data, "material", "")
     rd.known_keys(mat, {"youngs_modulus", "poisson_ratio"}, "material.")
@@ -266,8 +284,12 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
         rd.known_keys(b, {"name", "points"}, f"bodies.{bname}.")
         body_points[bname] = np.array([rd.point({"p": p}, "p", f"bodies.{bname}.points.")
                                        for p in b.get("points", [])])
+    raw_pins = data.get("pins", [])
+    if not isinstance(raw_pins, list):
+        rd.fail("pins", raw_pins, "must be an array of tables [[pins]]")
+    pins = [_pin_spec(rd, p, k) for k, p in enumerate(raw_pins)]
     mech = assemble(specs, ground, ground_points, Material(E, nu), target_body, target_point,
-                    source=source, body_points=body_points)
+                    source=source, body_points=body_points, pin_specs=pins)
 
     cases = []
     raw_cases = data.get("load_cases", [])
@@ -298,7 +320,12 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
 
     loaded = {c.body for lc in cases for c in lc.components} | {target_body}
     for b in mech.moving_bodies:
-        n = sum(b in f.bodies for f in mech.flexures)
+        n_pins = sum(b in p.bodies for p in mech.pins)
+        n = sum(b in f.bodies for f in mech.flexures) + n_pins
+        if n == 1 and n_pins == 1:
+            pin = next(p for p in mech.pins if b in p.bodies)
+            rd.fail(f"pins.{pin.name}.bodies", list(pin.bodies),
+                    f"body {b!r} is held by this pin only and would turn freely about it")
         if n == 1 and b not in loaded:
             rd.fail("flexures", b, f"body {b!r} is dangling: held by one flexure, not loaded "
                     "and not the target")

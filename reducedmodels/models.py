@@ -24,6 +24,9 @@ def build_system(mechanism: Mechanism, spec: ModelSpec,
                  settings: SolverSettings | None = None, **options) -> System:
     """The multibody System of ``mechanism`` with every flexure modelled as ``spec``.
 
+    Pins (``mechanism.pins``) are added as exact Lagrange-multiplier joints
+    (:class:`reducedmodels.joints.PinConnector`) whatever the model.
+
     ``options`` are passed to the connector (e.g. ``shear=True`` for beams,
     ``frame="follower"`` for DCMM).
     """
@@ -47,6 +50,10 @@ def build_system(mechanism: Mechanism, spec: ModelSpec,
         conns = [PrbmConnector(f, mechanism, **options) for f in mechanism.flexures]
     else:
         raise ValueError(f"'{spec.id}' is not a reduced model; expected one of {REDUCED_FAMILIES}")
+    if mechanism.pins:
+        from .joints import pin_connectors
+
+        conns += pin_connectors(mechanism)
     return System(mechanism, conns, settings or SolverSettings())
 
 

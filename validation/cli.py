@@ -167,6 +167,23 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_stress(args: argparse.Namespace) -> int:
+    from .stress import stress_report, write_stress
+
+    scene = load_scene(args.scene)
+    models = args.model or ["ee", "dcmm:1", "dcmm:2", "prbm", "beam:20"]
+    specs = [parse_model(m, "<command line>", "--model") for m in models]
+
+    def progress(line: str) -> None:
+        if not args.quiet:
+            print(line, file=sys.stderr, flush=True)
+
+    report = stress_report(scene, specs, quick=args.quick, progress=progress)
+    md, _ = write_stress(report, args.out)
+    print(md.read_text(encoding="utf-8"))
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argparse parser of ``flexval`` (all sub-commands)."""
     p = argparse.ArgumentParser(
@@ -233,6 +250,16 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--no-cache", action="store_true", help="recompute everything")
     q.add_argument("--quiet", action="store_true", help="no progress bar")
     q.set_defaults(func=_cmd_bench)
+
+    q = sub.add_parser("stress", help="stress tests: load amplification, step count, invariance")
+    q.add_argument("scene", help=scene_help)
+    q.add_argument("--model", action="append", metavar="MODEL",
+                   help="models to stress (repeatable; default: ee, dcmm:1, dcmm:2, prbm, beam:20)")
+    q.add_argument("--quick", action="store_true",
+                   help="small study: loads up to x100, beam:40 reference, no 1001-level run")
+    q.add_argument("--out", default="reports/stress", metavar="DIR", help="output folder")
+    q.add_argument("--quiet", action="store_true", help="no progress lines")
+    q.set_defaults(func=_cmd_stress)
     return p
 
 

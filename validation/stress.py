@@ -1,0 +1,392 @@
+"""Numerical stress tests of the models on one scene (``flexval stress``).
+
+Three studies per model and load case:
+
+(a) load amplification: the load case scaled by 1, 2, 5, 10, 20, ... until
+    the solver fails or the cap (1000, 100 in quick mode) is reached. For
+    each multiple reached: the solver's effort, and the error against the
+    reference model (``beam:100``; ``beam:40`` in quick mode) at the same
+    multiple, as long as the reference reaches it too. A failure records the
+    SolverError message (the mode and the last converged load) and, for the
+    nonlinear reduced models, whether arc-length continuation finds a limit
+    point (the largest load of the equilibrium path: load control cannot go
+    further, whatever the solver) and its load.
+(b) step count: the case traced with 2, 11, 101 (and 1001 in full mode)
+    load levels; path independence asks for the same end state.
+(c) invariance: the scene rotated by 2.1 rad about the origin and shifted by
+    (-40, 17) mm, and the scene written in metres (lengths x 1e-3, E x 1e6
+    so that N/mm^2 becomes N/m^2, forces unchanged, moments x 1e-3); the
+    target displacements, transformed back, and the rotations must not change.
+
+Displacements are compared as vectors: relative differences are the
+largest over the path of |d - d_base| / max |d_base| (rotations alike).
+Errors against the reference are the percentages of
+:func:`validation.compare.errors`.
+
+Units: mm, N, N mm, rad (the metre variant is internal to (c)).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import time
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from geometry import (Arc, Force, LoadCase, Material, Mechanism, ModelSpec, Scene, Section,
+                      Segment, parse_model, rotation)
+from reducedmodels import LoadPath, SolverError, SolverSettings, build_system
+from reducedmodels.continuation import limit_loads, solve_arclength
+
+from .compare import errors
+from .run import run_model
+
+AMPLIFICATIONS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
+"""Load multiples of study (a); quick mode stops at :data:`QUICK_CAP`."""
+QUICK_CAP = 100
+STEP_COUNTS = (2, 11, 101, 1001)
+"""Level counts of study (b); quick mode omits 1001."""
+RIGID_ANGLE = 2.1                      # rad
+RIGID_SHIFT = (-40.0, 17.0)            # mm
+METRE = 1e-3                           # length of 1 mm in the rescaled scene (m)
+REFERENCE, QUICK_REFERENCE = "beam:100", "beam:40"
+LIMIT_SETTINGS = SolverSettings(max_translation_step=0.01, max_rotation_step=0.05)
+"""Step bounds (1 % of the size, 0.05 rad) of the arc-length search for limit points: fine
+enough that the parabola through the peak's points gives the limit load to ~1e-5 (measured
+against the last load that load control converges on the closed chain)."""
+
+
+def scale_case(case: LoadCase, factor: float) -> LoadCase:
+    """``case`` with every component's value multiplied by ``factor`` (same name and levels)."""
+    return dataclasses.replace(case, components=tuple(
+        dataclasses.replace(c, value=c.value * factor) for c in case.components))
+
+
+def rescale_lengths(mechanism: Mechanism, case: LoadCase, length: float
+                    ) -> tuple[Mechanism, LoadCase]:
+    """The same problem with the unit of length changed so that 1 mm becomes ``length``.
+
+    Every length (shapes, sections, points) is multiplied by ``length``,
+    Young's modulus divided by ``length**2`` (force per area), forces are
+    unchanged and moments multiplied by ``length``. The answer is the same
+    problem: displacements scale by ``length``, rotations are unchanged.
+    """
+    def pt(p) -> np.ndarray:
+        return np.asarray(p, float) * length
+
+    def shape(s):
+        if isinstance(s, Arc):
+            return Arc(tuple(map(float, pt(s.center))), s.radius * length, s.axis, s.width)
+        if isinstance(s, Segment):
+            return Segment(tuple(map(float, pt(s.start))), tuple(map(float, pt(s.end))))
+        raise TypeError(f"unknown shape {type(s).__name__}")
+
+    flexures = tuple(dataclasses.replace(
+        f, shape=shape(f.shape),
+        section=Section(f.section.depth * length, f.section.thickness * length))
+        for f in mechanism.flexures)
+    mech = dataclasses.replace(
+        mechanism, flexures=flexures,
+        bodies={n: dataclasses.replace(b, points=pt(b.points))
+                for n, b in mechanism.bodies.items()},
+        material=Material(mechanism.material.youngs_modulus / length**2,
+                          mechanism.material.poisson_ratio),
+        target_point=pt(mechanism.target_point),
+        pins=tuple(dataclasses.replace(p, point=pt(p.point)) for p in mechanism.pins))
+    comps = tuple(dataclasses.replace(c, point=pt(c.point)) if isinstance(c, Force)
+                  else dataclasses.replace(c, value=c.value * length) for c in case.components)
+    return mech, dataclasses.replace(case, components=comps)
+
+
+def _finite(lp: LoadPath) -> bool:
+    """True if every load and target value of the path is finite."""
+    return bool(np.all(np.isfinite(np.concatenate([lp.load, lp.dx, lp.dy, lp.rotation]))))
+
+
+def _attempt(run: Callable[[], LoadPath]) -> tuple[LoadPath | None, dict | None]:
+    """Run a model; (path, None) on success, (partial path or None, failure record) otherwise.
+
+    A SolverError is the honest failure the core promises; any other
+    exception, or a non-finite result, is a defect and is recorded as such.
+    """
+    try:
+        lp = run()
+    except SolverError as exc:
+        return exc.path, {"kind": "solver", "message": str(exc), "load_factor": exc.load_factor}
+    except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
+        return None, {"kind": "error", "message": f"{type(exc).__name__}: {exc}",
+                      "load_factor": None}
+    if not _finite(lp):
+        return None, {"kind": "non-finite", "message": "non-finite values in a converged path",
+                      "load_factor": None}
+    return lp, None
+
+
+def _path_difference(a: LoadPath, b: LoadPath, turn: float = 0.0, length: float = 1.0
+                     ) -> dict[str, float]:
+    """Largest relative differences of path ``b`` from ``a`` (same levels).
+
+    ``b``'s displacements are turned back by ``-turn`` (rad) and divided by
+    ``length`` first, so a rigidly moved or rescaled copy compares equal.
+    """
+    back = rotation(-turn) @ np.array([b.dx, b.dy]) / length
+    da = np.array([a.dx, a.dy])
+    ra, rb = np.asarray(a.rotation), np.asarray(b.rotation)
+    tiny = np.finfo(float).tiny
+    return {"disp_rel": float(np.hypot(*(back - da)).max() / max(np.hypot(*da).max(), tiny)),
+            "rot_rel": float(np.abs(rb - ra).max() / max(np.abs(ra).max(), tiny))}
+
+
+class _Reference:
+    """The reference model's paths at each load multiple, computed once per scene.
+
+    After the reference fails at a multiple it is not run at larger ones.
+    """
+
+    def __init__(self, scene: Scene, spec: ModelSpec):
+        self.scene, self.spec = scene, spec
+        self.paths: dict[tuple[str, float], LoadPath] = {}
+        self.failed: dict[str, dict] = {}
+
+    def get(self, case: LoadCase, factor: float) -> tuple[LoadPath | None, dict | None]:
+        """(path, None) or (None, failure record) of the reference at ``factor`` x ``case``."""
+        failure = self.failed.get(case.name)
+        if failure is not None and failure["factor"] <= factor:
+            return None, failure
+        key = (case.name, factor)
+        if key not in self.paths:
+            lp, failure = _attempt(lambda: run_model(self.scene, self.spec,
+                                                     scale_case(case, factor)))
+            if failure is not None:
+                self.failed[case.name] = {**failure, "factor": factor}
+                return None, self.failed[case.name]
+            self.paths[key] = lp
+        return self.paths[key], None
+
+
+def _limit_load(scene: Scene, spec: ModelSpec, case: LoadCase) -> float | None:
+    """Load (N or N mm) at the first limit point of ``case``'s path below full load, or None.
+
+    Arc-length continuation from rest with the step bounds of
+    :data:`LIMIT_SETTINGS`, stopped just past the first local maximum of the
+    load magnitude; None for the linear EE and the continuum, or when the
+    path reaches full load (or fails) without one.
+    """
+    if spec.family not in ("beam", "dcmm", "prbm"):
+        return None
+    system = build_system(scene.mechanism, spec, LIMIT_SETTINGS)
+    try:
+        lp = solve_arclength(system, case, 1.0, 20, model=spec.id, max_steps=2000,
+                             stop=lambda p: bool(p.stats["limit_points"]))
+    except SolverError:
+        return None
+    loads = limit_loads(lp)
+    return loads[0] if loads else None
+
+
+def _amplification(scene: Scene, spec: ModelSpec, case: LoadCase, factors: Sequence[float],
+                   reference: _Reference, progress: Callable[[str], None] | None
+                   ) -> tuple[dict, LoadPath | None]:
+    """Study (a) of one model and case; also returns the path at multiple 1 (or None)."""
+    rows, failure, first = [], None, None
+    reached = 0.0
+    for k in factors:
+        if progress:
+            progress(f"stress {scene.name}: {spec.id} on {case.name} x{k:g}")
+        lp, failure = _attempt(lambda: run_model(scene, spec, scale_case(case, k)))
+        if failure is not None:
+            failure["factor"] = k
+            if failure["kind"] == "solver":
+                failure["limit_load"] = _limit_load(scene, spec, scale_case(case, k))
+            break
+        first = lp if first is None else first
+        reached = k
+        ref, ref_failure = reference.get(case, k)
+        row = {"factor": k, "load": k * case.magnitude, "seconds": lp.seconds,
+               "newton_iterations": lp.stats.get("newton_iterations", 0),
+               "step_cuts": lp.stats.get("step_cuts", 0),
+               "errors": errors(lp, ref) if ref is not None else None,
+               "reference_failure": ref_failure["message"] if ref_failure else None}
+        rows.append(row)
+    return {"largest_factor": reached, "largest_load": reached * case.magnitude,
+            "unit": case.unit, "failure": failure, "rows": rows}, first
+
+
+def _step_count(scene: Scene, spec: ModelSpec, case: LoadCase, counts: Sequence[int]) -> dict:
+    """Study (b): end states with each number of levels and their largest relative spread."""
+    ends, failures = [], []
+    for n in counts:
+        lp, failure = _attempt(lambda: run_model(scene, spec, case, levels=n))
+        if failure is not None:
+            failures.append({"levels": n, **failure})
+            continue
+        ends.append({"levels": n, "dx": lp.dx[-1], "dy": lp.dy[-1], "rotation": lp.rotation[-1],
+                     "newton_iterations": lp.stats.get("newton_iterations", 0),
+                     "seconds": lp.seconds})
+    out: dict = {"ends": ends, "failures": failures, "disp_rel": None, "rot_rel": None}
+    if len(ends) >= 2:
+        d = np.array([[e["dx"], e["dy"]] for e in ends])
+        r = np.array([e["rotation"] for e in ends])
+        tiny = np.finfo(float).tiny
+        spread = np.hypot(*(d[:, None, :] - d[None, :, :]).transpose(2, 0, 1)).max()
+        out["disp_rel"] = float(spread / max(np.hypot(*d.T).max(), tiny))
+        out["rot_rel"] = float(np.ptp(r) / max(np.abs(r).max(), tiny))
+    return out
+
+
+def _invariance(scene: Scene, spec: ModelSpec, case: LoadCase, base: LoadPath | None) -> dict:
+    """Study (c): path differences of the rigidly moved and of the metre copy from ``base``."""
+    if base is None:
+        return {"rigid_motion": None, "metres": None, "failure": "base case failed"}
+    shift = np.array(RIGID_SHIFT)
+    moved_scene = dataclasses.replace(
+        scene, mechanism=scene.mechanism.transformed(RIGID_ANGLE, shift))
+    moved, f1 = _attempt(lambda: run_model(moved_scene, spec,
+                                           case.transformed(RIGID_ANGLE, shift)))
+    mech_m, case_m = rescale_lengths(scene.mechanism, case, METRE)
+    metres, f2 = _attempt(lambda: run_model(dataclasses.replace(scene, mechanism=mech_m),
+                                            spec, case_m))
+    fails = [f["message"] for f in (f1, f2) if f is not None]
+    return {"rigid_motion": _path_difference(base, moved, turn=RIGID_ANGLE) if moved else None,
+            "metres": _path_difference(base, metres, length=METRE) if metres else None,
+            "failure": "; ".join(fails) or None}
+
+
+def stress_report(scene: Scene, models: Sequence[ModelSpec | str], quick: bool = False,
+                  progress: Callable[[str], None] | None = None) -> dict:
+    """Run the three stress studies of every model on every load case of ``scene``.
+
+    Parameters
+    ----------
+    scene : Scene
+    models : sequence of ModelSpec or str
+        Models to stress (``"dcmm:2"``, ``ModelSpec("prbm")``, ...).
+    quick : bool
+        Cap the amplification at 100, use ``beam:40`` as the reference and
+        skip the 1001-level run.
+    progress : callable, optional
+        Called with a short line before each run of a model on a load case.
+
+    Returns
+    -------
+    dict
+        JSON-ready: ``scene``, ``quick``, ``reference``, ``amplifications``,
+        ``step_counts``, ``seconds`` and ``models``: {model id: {load case:
+        {"amplification": {largest_factor, largest_load, unit, failure,
+        rows: [{factor, load, seconds, newton_iterations, step_cuts, errors,
+        reference_failure}]}, "step_count": {ends, failures, disp_rel,
+        rot_rel}, "invariance": {rigid_motion: {disp_rel, rot_rel}, metres:
+        {...}, failure}}}}. A failure is {kind: "solver" | "error" |
+        "non-finite", message, load_factor, factor} plus, for a solver failure,
+        ``limit_load``: the load at the path's first limit point or None.
+    """
+    t0 = time.perf_counter()
+    specs = [m if isinstance(m, ModelSpec) else parse_model(m, "<stress>", "models")
+             for m in models]
+    ref_spec = parse_model(QUICK_REFERENCE if quick else REFERENCE)
+    factors = [k for k in AMPLIFICATIONS if not quick or k <= QUICK_CAP]
+    counts = [n for n in STEP_COUNTS if not quick or n < 1001]
+    reference = _Reference(scene, ref_spec)
+
+    out_models: dict[str, dict] = {}
+    for spec in specs:
+        per_case = {}
+        for case in scene.load_cases:
+            amp, base = _amplification(scene, spec, case, factors, reference, progress)
+            if progress:
+                progress(f"stress {scene.name}: {spec.id} on {case.name}: step count, invariance")
+            per_case[case.name] = {"amplification": amp,
+                                   "step_count": _step_count(scene, spec, case, counts),
+                                   "invariance": _invariance(scene, spec, case, base)}
+        out_models[spec.id] = per_case
+    return {"scene": scene.name, "quick": quick, "reference": ref_spec.id,
+            "amplifications": factors, "step_counts": counts, "models": out_models,
+            "seconds": time.perf_counter() - t0}
+
+
+def _num(x: float | None, fmt: str = ".3g") -> str:
+    return "–" if x is None else format(x, fmt)
+
+
+def format_markdown(report: dict) -> str:
+    """The stress report as Markdown: one table per study."""
+    lines = [f"# Stress tests: {report['scene']}", "",
+             f"Reference: `{report['reference']}`; load multiples "
+             f"{', '.join(str(k) for k in report['amplifications'])}; "
+             f"{'quick' if report['quick'] else 'full'} mode; "
+             f"{report['seconds']:.1f} s.", "",
+             "## (a) Load amplification", "",
+             "Largest multiple of each load case reached, the failure that stopped the "
+             "next one, and the error against the reference at the largest multiple both "
+             "reached (`path_disp`, `path_rot`, percent).", "",
+             "| model | case | largest × | load | path_disp % | path_rot % | failure |",
+             "|---|---|---:|---:|---:|---:|---|"]
+    for model, cases in report["models"].items():
+        for case, r in cases.items():
+            amp = r["amplification"]
+            last = next((row for row in reversed(amp["rows"]) if row["errors"]), None)
+            fail = amp["failure"]
+            fail_text = (f"×{fail['factor']:g}: {fail['message']}" if fail
+                         else "none up to the cap")
+            if fail and fail.get("limit_load") is not None:
+                fail_text = (f"limit point at {fail['limit_load']:.4g} {amp['unit']} "
+                             f"(arc-length); {fail_text}")
+            lines.append(
+                f"| {model} | {case} | {amp['largest_factor']:g} | "
+                f"{amp['largest_load']:.4g} {amp['unit']} | "
+                f"{_num(last['errors']['path_disp'] if last else None)} "
+                f"{'(×' + format(last['factor'], 'g') + ')' if last else ''} | "
+                f"{_num(last['errors']['path_rot'] if last else None)} | "
+                f"{fail_text.replace('|', '/')} |")
+    lines += ["", "## (b) Step count", "",
+              "End state with " + ", ".join(str(n) for n in report["step_counts"])
+              + " load levels: largest relative spread of the end displacement vector and "
+                "rotation (path independence asks for round-off).", "",
+              "| model | case | disp spread | rot spread | iterations per run | failures |",
+              "|---|---|---:|---:|---|---|"]
+    for model, cases in report["models"].items():
+        for case, r in cases.items():
+            sc = r["step_count"]
+            its = ", ".join(f"{e['levels']}: {e['newton_iterations']}" for e in sc["ends"])
+            fails = "; ".join(f"{f['levels']} levels: {f['message']}" for f in sc["failures"])
+            lines.append(f"| {model} | {case} | {_num(sc['disp_rel'])} | {_num(sc['rot_rel'])} "
+                         f"| {its} | {fails.replace('|', '/') or 'none'} |")
+    lines += ["", "## (c) Invariance", "",
+              f"Largest relative path difference after a rigid motion ({RIGID_ANGLE} rad, "
+              f"{RIGID_SHIFT} mm) and after rewriting the scene in metres.", "",
+              "| model | case | rigid disp | rigid rot | metres disp | metres rot | failures |",
+              "|---|---|---:|---:|---:|---:|---|"]
+    for model, cases in report["models"].items():
+        for case, r in cases.items():
+            inv = r["invariance"]
+            rm, me = inv["rigid_motion"] or {}, inv["metres"] or {}
+            lines.append(f"| {model} | {case} | {_num(rm.get('disp_rel'))} | "
+                         f"{_num(rm.get('rot_rel'))} | {_num(me.get('disp_rel'))} | "
+                         f"{_num(me.get('rot_rel'))} | {(inv['failure'] or 'none')} |")
+    return "\n".join(lines) + "\n"
+
+
+def _json_safe(x):
+    """Non-finite floats become None (strict JSON has no NaN or Infinity)."""
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_json_safe(v) for v in x]
+    return x
+
+
+def write_stress(report: dict, out_dir: str | Path) -> tuple[Path, Path]:
+    """Write ``stress_<scene>.md`` and ``stress_<scene>.json`` into ``out_dir`` (created)."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    md = out / f"stress_{report['scene']}.md"
+    js = out / f"stress_{report['scene']}.json"
+    md.write_text(format_markdown(report), encoding="utf-8")
+    js.write_text(json.dumps(_json_safe(report), indent=1, allow_nan=False), encoding="utf-8")
+    return md, js
