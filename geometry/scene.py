@@ -165,6 +165,29 @@ class _Reader:
             self.fail(field, v, "must be a non-empty name (string or integer)")
         return str(v)
 
+    def array(self, data: dict, key: str, where: str, what: str) -> list:
+        """``data[key]`` if it is an array (missing: empty), else a SceneError."""
+        v = data.get(key, [])
+        if not isinstance(v, list):
+            self.fail(f"{where}{key}", v, f"must be an array of {what}")
+        return v
+
+    def item_table(self, item: Any, field: str) -> dict:
+        """An array element that must be a table."""
+        if not isinstance(item, dict):
+            self.fail(field, item, "must be a table")
+        return item
+
+    def body_pair(self, data: dict, where: str, what: str) -> list[str]:
+        """The two distinct body names of a flexure or pin."""
+        bodies = data.get("bodies")
+        if not (isinstance(bodies, list) and len(bodies) == 2):
+            self.fail(f"{where}bodies", bodies, "must list the two bodies it joins, e.g. [1, 2]")
+        bodies = [self.name({"b": b}, "b", f"{where}bodies.") for b in bodies]
+        if bodies[0] == bodies[1]:
+            self.fail(f"{where}bodies", bodies, f"a {what} must join two different bodies")
+        return bodies
+
     def known_keys(self, data: dict, allowed: set[str], where: str) -> None:
         for k in data:
             if k not in allowed:
@@ -178,12 +201,7 @@ def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> dic
     where = f"flexures.{name}."
     rd.known_keys(f, {"name", "bodies", "shape", "center", "radius", "axis_deg", "width_deg",
                       "start", "end", "start_body", "depth", "thickness"}, where)
-    bodies = f.get("bodies")
-    if not (isinstance(bodies, list) and len(bodies) == 2):
-        rd.fail(f"{where}bodies", bodies, "must list the two bodies it joins, e.g. [1, 2]")
-    bodies = [rd.name({"b": b}, "b", f"{where}bodies.") for b in bodies]
-    if bodies[0] == bodies[1]:
-        rd.fail(f"{where}bodies", bodies, "a flexure must join two different bodies")
+    bodies = rd.body_pair(f, where, "flexure")
     section = Section(
         rd.number(f, "depth", where, default=default_section.depth, positive=True),
         rd.number(f, "thickness", where, default=default_section.thickness, positive=True),
@@ -222,12 +240,7 @@ def _pin_spec(rd: _Reader, p: dict, k: int) -> dict:
     name = rd.name(p, "name", f"pins[{k}].")
     where = f"pins.{name}."
     rd.known_keys(p, {"name", "bodies", "point"}, where)
-    bodies = p.get("bodies")
-    if not (isinstance(bodies, list) and len(bodies) == 2):
-        rd.fail(f"{where}bodies", bodies, "must list the two bodies it joins, e.g. [1, 2]")
-    bodies = [rd.name({"b": b}, "b", f"{where}bodies.") for b in bodies]
-    if bodies[0] == bodies[1]:
-        rd.fail(f"{where}bodies", bodies, "a pin must join two different bodies")
+    bodies = rd.body_pair(p, where, "pin")
     return {"name": name, "bodies": bodies, "point": rd.point(p, "point", where)}
 
 
@@ -279,11 +292,13 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
         rd.fail("flexures", flex, "must be a non-empty array of tables [[flexures]]")
     specs = [_flexure_spec(rd, f, k, section) for k, f in enumerate(flex)]
     body_points = {}
-    for k, b in enumerate(data.get("bodies", [])):
+    for k, b in enumerate(rd.array(data, "bodies", "", "tables [[bodies]]")):
+        b = rd.item_table(b, f"bodies[{k}]")
         bname = rd.name(b, "name", f"bodies[{k}].")
         rd.known_keys(b, {"name", "points"}, f"bodies.{bname}.")
         body_points[bname] = np.array([rd.point({"p": p}, "p", f"bodies.{bname}.points.")
-                                       for p in b.get("points", [])])
+                                       for p in rd.array(b, "points", f"bodies.{bname}.",
+                                                         "points [x, y]")])
     raw_pins = data.get("pins", [])
     if not isinstance(raw_pins, list):
         rd.fail("pins", raw_pins, "must be an array of tables [[pins]]")
@@ -296,6 +311,7 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
     if not isinstance(raw_cases, list) or not raw_cases:
         rd.fail("load_cases", raw_cases, "must be a non-empty array of tables [[load_cases]]")
     for k, c in enumerate(raw_cases):
+        c = rd.item_table(c, f"load_cases[{k}]")
         lname = rd.name(c, "name", f"load_cases[{k}].")
         where = f"load_cases.{lname}."
         levels = c.get("levels", DEFAULT_LEVELS)
@@ -303,8 +319,9 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
             rd.fail(f"{where}levels", levels, "must be an integer from 2 to 100000")
         if "loads" in c:
             rd.known_keys(c, {"name", "levels", "loads"}, where)
-            comps = tuple(_load_component(rd, x, f"{where}loads[{i}].", target_body, target_point)
-                          for i, x in enumerate(c["loads"]))
+            comps = tuple(_load_component(rd, rd.item_table(x, f"{where}loads[{i}]"),
+                                          f"{where}loads[{i}].", target_body, target_point)
+                          for i, x in enumerate(rd.array(c, "loads", where, "load tables")))
             if not comps:
                 rd.fail(f"{where}loads", [], "must contain at least one load")
         else:
@@ -332,10 +349,11 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
 
     req = rd.table(data, "request", "", required=False)
     rd.known_keys(req, {"models", "outputs"}, "request.")
-    models = tuple(parse_model(m, source, "request.models") for m in req.get("models", []))
-    outputs = req.get("outputs", [])
+    models = tuple(parse_model(m, source, "request.models")
+                   for m in rd.array(req, "models", "request.", "model names"))
+    outputs = rd.array(req, "outputs", "request.", "output names")
     for o in outputs:
-        if o not in OUTPUTS:
+        if not isinstance(o, str) or o not in OUTPUTS:
             rd.fail("request.outputs", o, f"unknown output; expected some of {sorted(OUTPUTS)}")
     return Scene(name, str(data.get("description", "")), mech, tuple(cases), models,
                  frozenset(outputs), source)

@@ -173,23 +173,11 @@ def _paths(data, prefix=()):
         yield from _paths(v, prefix + (k,))
 
 
-KNOWN_CRASHES = {
-    # geometry/scene.py trusts the container type here (a TypeError, AttributeError or
-    # IndexError escapes instead of a SceneError); see test_known_crashes below
-    ("bodies",), ("bodies", "#"), ("bodies", "#", "points"),
-    ("load_cases",), ("load_cases", "#"), ("load_cases", "#", "loads"),
-    ("load_cases", "#", "loads", "#"), ("request", "models"), ("request", "outputs"),
-    ("request", "outputs", "#"),
-}
 JUNK = st.one_of(st.none(), st.booleans(), st.integers(-3, 2**70), st.text(max_size=3),
                  st.floats(allow_nan=True, allow_infinity=True),
                  st.lists(st.one_of(st.integers(-1, 3), st.floats(-5, 5), st.text(max_size=2)),
                           max_size=3),
                  st.dictionaries(st.text(max_size=2), st.integers(), max_size=2))
-
-
-def _pattern(path) -> tuple:
-    return tuple("#" if isinstance(k, int) else k for k in path)
 
 
 def _corrupt(data: dict, path: tuple, value) -> dict:
@@ -211,7 +199,7 @@ def _corrupt(data: dict, path: tuple, value) -> dict:
 @st.composite
 def corrupted(draw):
     data = draw(st.sampled_from(_scene_dicts()))
-    paths = [p for p in _paths(data) if p and _pattern(p) not in KNOWN_CRASHES]
+    paths = [p for p in _paths(data) if p]
     path = draw(st.sampled_from(paths))
     return _corrupt(data, path, draw(JUNK)), path
 
@@ -226,16 +214,13 @@ def test_corrupted_scenes_fail_with_a_scene_error_naming_a_field(example):
         assert exc.field and f"field '{exc.field}'" in str(exc) and "fuzz.toml" in str(exc)
 
 
-@pytest.mark.xfail(strict=True, raises=(TypeError, AttributeError, IndexError),
-                   reason="geometry/scene.py: container types not checked (to be fixed there)")
 @pytest.mark.parametrize("path,value", [
     (("bodies",), 0), (("bodies", 0), 0), (("bodies", 0, "points"), 0),
     (("load_cases",), [1]), (("load_cases", 0), 0), (("load_cases", 4, "loads"), "x"),
     (("load_cases", 4, "loads", 0), ""), (("load_cases", 4, "loads", 0), [1]),
     (("request", "models"), 0), (("request", "outputs"), 0), (("request", "outputs", 0), []),
 ])
-def test_known_crashes(path, value):
-    """Each KNOWN_CRASHES pattern, once: strict xfail, so a fix shows up as XPASS
-    (then drop the pattern from KNOWN_CRASHES so the fuzzing covers it)."""
+def test_wrong_container_types_give_a_scene_error(path, value):
+    """Containers of the wrong type (once crashes with TypeError/AttributeError)."""
     with pytest.raises(SceneError):
         parse_scene(_corrupt(_scene_dicts()[0], path, value), "fuzz.toml")
