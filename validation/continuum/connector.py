@@ -1,0 +1,152 @@
+"""ContinuumConnector: one meshed flexure as a connector of the multibody core.
+
+Its internal coordinates are the displacements (mm) of the mesh nodes that
+are not on an end face, two per node. The nodes of each end face follow
+their rigid body exactly: x = x_body + R(theta) (X - X_ref_body). The strain
+energy of the solid is then a function of [pose_a, pose_b, internal], and the
+chain rule gives its gradient and Hessian:
+
+    g = T^T f,    H = T^T K T + sum_face nodes f_node . d2x/dtheta2  (theta-theta entry),
+
+with T = dx/d(coordinates) (identity on free dofs, the rigid Jacobian on face
+dofs) and f, K the solid's nodal forces and tangent. T^T K T is computed on
+the COO level: every nodal dof expands into one (free) or two (face: body
+translation and rotation) coordinates, and each element-matrix entry into the
+products of its row and column expansions; the index arrays are fixed and
+built once, only the rotation coefficients change. Units: mm, N, N mm, rad.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from geometry import Flexure, Mechanism
+from geometry.mesh import FlexureMesh, mesh_flexure
+from reducedmodels.rigid import rigid_points
+
+from .material import make_law
+from .solid import Solid
+
+
+class ContinuumConnector:
+    """A flexure meshed as a 2D hyperelastic solid (a :class:`reducedmodels.Connector`).
+
+    Parameters
+    ----------
+    flexure : Flexure
+    mechanism : Mechanism
+        Gives the material and the bodies' reference points.
+    level : int
+        Mesh level (see :mod:`geometry.mesh`).
+    law : {'svk', 'neo-hookean'}
+    plane : {'stress', 'strain'}
+    mesh : FlexureMesh, optional
+        A ready mesh (default: :func:`geometry.mesh.mesh_flexure` of the flexure).
+    """
+
+    def __init__(self, flexure: Flexure, mechanism: Mechanism, level: int, law: str = "svk",
+                 plane: str = "stress", mesh: FlexureMesh | None = None):
+        self.name = flexure.name
+        self.bodies = tuple(flexure.bodies)
+        self.mesh = mesh_flexure(flexure.shape, flexure.section.thickness, level) \
+            if mesh is None else mesh
+        self.law, self.plane, self.material = law, plane, mechanism.material
+        self.solid = Solid(self.mesh.nodes, self.mesh.elements,
+                           make_law(law, plane, self.material.youngs_modulus,
+                                    self.material.poisson_ratio),
+                           flexure.section.depth)
+        faces = [self.mesh.start_face, self.mesh.end_face]
+        if flexure.start_body != self.bodies[0]:
+            faces.reverse()
+        self._face = faces                     # end-face nodes held by body a, by body b
+        role = np.full(self.mesh.nodes.shape[0], -1)
+        role[faces[0]], role[faces[1]] = 0, 1
+        self._rel = [self.mesh.nodes[faces[s]] - mechanism.bodies[self.bodies[s]].reference
+                     for s in (0, 1)]
+        self._free = np.flatnonzero(role < 0)
+        self.n_internal = 2 * self._free.size
+        self._n = 6 + self.n_internal
+        self._build_expansion(role)
+
+    # --- the fixed index structure of T ------------------------------------
+    def _build_expansion(self, role: np.ndarray) -> None:
+        """Index arrays of T: nodal dofs -> coordinates, element entries -> Hessian entries.
+
+        ``role`` is -1 for a free node, 0 or 1 for a node held by body a or b.
+        """
+        n_nodes = role.size
+        counts = np.where(role < 0, 1, 2).repeat(2)                     # per nodal dof
+        start = np.concatenate([[0], np.cumsum(counts)])
+        exp_dof = np.repeat(np.arange(2 * n_nodes), counts)
+        exp_z = np.empty(start[-1], np.int64)
+        free_dofs = (2 * self._free[:, None] + np.arange(2)).ravel()
+        exp_z[start[free_dofs]] = 6 + np.arange(free_dofs.size)
+        theta_pos = []
+        for s in (0, 1):
+            d = (2 * self._face[s][:, None] + np.arange(2)).ravel()    # (x, y) per face node
+            exp_z[start[d]] = 3 * s + np.tile([0, 1], self._face[s].size)
+            exp_z[start[d] + 1] = 3 * s + 2
+            theta_pos.append(start[d] + 1)
+        self._exp_dof, self._exp_z = exp_dof, exp_z
+        self._theta_pos = theta_pos            # positions of the rotation coefficients
+        # element-matrix entries -> pairs of expansions
+        r, c = self.solid.rows, self.solid.cols
+        nr, nc = counts[r], counts[c]
+        total = nr * nc
+        t = np.repeat(np.arange(r.size), total)
+        within = np.arange(total.sum()) - np.repeat(np.cumsum(total) - total, total)
+        p = start[r][t] + within // nc[t]
+        q = start[c][t] + within % nc[t]
+        plain = (counts[r][t] == 1) & (counts[c][t] == 1)
+        self._plain_src = t[plain]
+        self._mixed = (t[~plain], p[~plain], q[~plain])
+        rows = np.concatenate([exp_z[p[plain]], exp_z[p[~plain]], [2, 5]])
+        cols = np.concatenate([exp_z[q[plain]], exp_z[q[~plain]], [2, 5]])
+        self._rows, self._cols = rows, cols
+
+    @property
+    def free_nodes(self) -> np.ndarray:
+        """Mesh nodes whose displacements are the internal coordinates, in their order."""
+        return self._free
+
+    # --- Connector protocol --------------------------------------------------
+    def initial_internal(self) -> np.ndarray:
+        """Zero displacements of the free nodes, mm."""
+        return np.zeros(self.n_internal)
+
+    def internal_is_rotation(self) -> np.ndarray:
+        """No internal coordinate is an angle."""
+        return np.zeros(self.n_internal, bool)
+
+    def positions(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+                  ) -> np.ndarray:
+        """Current positions of all mesh nodes (n_nodes, 2), mm."""
+        x = self.mesh.nodes.copy()
+        x[self._free] += internal.reshape(-1, 2)
+        for s, pose in enumerate((pose_a, pose_b)):
+            x[self._face[s]] = rigid_points(np.asarray(pose, float), self._rel[s])[0]
+        return x
+
+    def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+                 ) -> tuple[float, np.ndarray, sp.coo_matrix]:
+        """Energy (N mm), gradient (6 + n) and sparse Hessian over [pose_a, pose_b, internal]."""
+        x = self.positions(pose_a, pose_b, internal)
+        energy, forces, Ke = self.solid.evaluate(x)
+        coef = np.ones(self._exp_z.size)
+        second = np.zeros(2)
+        for s, pose in enumerate((pose_a, pose_b)):
+            _, jac, d2 = rigid_points(np.asarray(pose, float), self._rel[s])
+            coef[self._theta_pos[s]] = jac[:, :, 2].ravel()
+            f = forces.reshape(-1, 2)[self._face[s]]
+            second[s] = np.sum(f * d2)
+        grad = np.bincount(self._exp_z, weights=forces[self._exp_dof] * coef, minlength=self._n)
+        ke = Ke.ravel()
+        t, p, q = self._mixed
+        data = np.concatenate([ke[self._plain_src], ke[t] * coef[p] * coef[q], second])
+        hess = sp.coo_matrix((data, (self._rows, self._cols)), shape=(self._n, self._n))
+        return energy, grad, hess
+
+    def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
+        """Deformed centre line (nodes at mid-thickness, start to end), mm."""
+        return self.positions(pose_a, pose_b, internal)[self.mesh.centre_line]
