@@ -43,6 +43,9 @@ class Connector(Protocol):
     name: str
     bodies: tuple[str, str]
     n_internal: int
+    #: how many internal coordinates are Lagrange multipliers (optional, default 0);
+    #: each makes the tangent one negative eigenvalue indefinite at a stable state
+    n_multipliers: int
 
     def initial_internal(self) -> np.ndarray:
         """Internal coordinates in the undeformed configuration."""
@@ -90,6 +93,8 @@ class SolverSettings:
     ``max_rotation_step`` (rad) and ``max_translation_step`` (fraction of the
     mechanism size) bound how far any body may move in one sub-step, so the
     stepping follows soft stretches of the path instead of leaping over them.
+    ``check_stability`` rejects a sub-step whose equilibrium is unstable
+    (load control cannot pass a limit point; use arc-length continuation).
     """
 
     force_tol: float = 1e-10
@@ -100,6 +105,7 @@ class SolverSettings:
     max_rotation_step: float = 0.25
     max_translation_step: float = 0.05
     fast_iterations: int = 5
+    check_stability: bool = True
 
 
 @dataclass
@@ -140,6 +146,7 @@ class System:
         self.is_rotation = np.concatenate(rot_mask)
         self._dense_pattern = {}
         self._csc_structure = None
+        self.n_multipliers = sum(getattr(c, "n_multipliers", 0) for c in self.connectors)
 
     def pose_dofs(self, body: str) -> np.ndarray:
         """Global dof numbers of a body's pose (all -1 for the ground)."""
@@ -329,6 +336,40 @@ def _newton(system: System, q: np.ndarray, loads: _Loads, factor: float,
     return None, settings.max_iterations, f"no convergence in {settings.max_iterations} iterations (residual {res:.3g})"
 
 
+def negative_pivots(K: np.ndarray | sp.csc_matrix) -> int | None:
+    """Number of negative eigenvalues of the symmetric tangent K (Sylvester's inertia).
+
+    Dense: from the eigenvalues. Sparse: the signs of the pivots of a
+    symmetric-mode LU with diagonal pivoting (an LDL^T under a symmetric
+    permutation). Returns None when that factorisation breaks down (a zero
+    pivot), in which case stability is not judged. Values below 1e-12 of the
+    largest in magnitude count as round-off, not as negative.
+    """
+    if isinstance(K, np.ndarray):
+        ev = np.linalg.eigvalsh(K)
+        return int(np.sum(ev < -1e-12 * np.abs(ev).max(initial=0.0)))
+    try:
+        lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options={"SymmetricMode": True})
+    except RuntimeError:
+        return None
+    d = lu.U.diagonal()
+    return int(np.sum(d < -1e-12 * np.abs(d).max(initial=0.0)))
+
+
+def _unstable(system: System, q: np.ndarray, loads: _Loads, factor: float) -> bool:
+    """True if the equilibrium q has more negative tangent eigenvalues than multipliers.
+
+    Large saddle-point systems (sparse, with multipliers) are not judged: a
+    diagonal-pivot LDL^T breaks down on the multipliers' zero diagonal.
+    """
+    _, _, K = system.assemble(q, loads, factor)
+    if not isinstance(K, np.ndarray) and system.n_multipliers:
+        return False
+    neg = negative_pivots(K)
+    return neg is not None and neg > system.n_multipliers
+
+
 def _motion_ratio(system: System, q0: np.ndarray, q1: np.ndarray, s: SolverSettings) -> float:
     """Largest body motion of a sub-step relative to its bound (> 1: too far)."""
     dq = np.abs(q1 - q0)[: 3 * len(system.body_index)].reshape(-1, 3)
@@ -413,6 +454,9 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
             stats["newton_iterations"] += iters
             level_iters += iters
             ratio = _motion_ratio(system, q, q_new, s) if q_new is not None else math.inf
+            if ratio <= 1.0 and s.check_stability and _unstable(system, q_new, loads, trial):
+                q_new, ratio, why = None, math.inf, ("converged to an unstable equilibrium "
+                                                     "(past a limit point?)")
             if ratio > 1.0:
                 if q_new is not None:
                     why = "step too large"

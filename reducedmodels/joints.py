@@ -70,6 +70,7 @@ class PinConnector:
     """
 
     n_internal = 2
+    n_multipliers = 2
 
     def __init__(self, name: str, body_a: str, body_b: str, point: np.ndarray,
                  mechanism: Mechanism, stiffness: float | None = None):

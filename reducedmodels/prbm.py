@@ -273,6 +273,7 @@ class PrbmConnector:
         self.name = flexure.name
         self.bodies = tuple(flexure.bodies)
         self.n_internal = 4
+        self.n_multipliers = 2       # the closure multiplier mu
         shape = flexure.shape
         _, _, _, length, width = shape_frame(shape)
         if params is None:

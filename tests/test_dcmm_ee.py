@@ -146,3 +146,30 @@ def test_measuring_frame_matters_less_as_n_grows():
         diffs.append(abs(a.displacement[-1] - b.displacement[-1]) / a.displacement[-1])
     assert diffs[0] > 0.05                  # DCMM_1: the choice matters (paper discrepancy)
     assert diffs[-1] < 0.01 and diffs[3] < diffs[2] < diffs[1]
+
+
+def test_one_big_step_does_not_land_on_an_unstable_branch():
+    """Open chain f-: a single load step from rest used to converge to an unstable
+    equilibrium (103 % off); the stability check cuts it and the end state is the
+    one the 11-level path reaches."""
+    scene = load_scene("open_chain")
+    case = scene.load_case("f-")
+    one = run_reduced(scene.mechanism, parse_model("dcmm:1"), case, levels=2)
+    ref = run_reduced(scene.mechanism, parse_model("dcmm:1"), case)
+    assert one.dx[-1] == pytest.approx(ref.dx[-1], rel=1e-8)
+    assert one.rotation[-1] == pytest.approx(ref.rotation[-1], rel=1e-8)
+
+
+def test_negative_pivots_counts_the_inertia():
+    import scipy.sparse as sp
+
+    from reducedmodels.core import negative_pivots
+
+    rng = np.random.default_rng(0)
+    Q, _ = np.linalg.qr(rng.normal(size=(120, 120)))
+    ev = np.concatenate([-np.logspace(-3, 2, 3), np.logspace(-2, 3, 117)])
+    A = (Q * ev) @ Q.T
+    A = 0.5 * (A + A.T)
+    assert negative_pivots(A) == 3
+    assert negative_pivots(sp.csc_matrix(A)) == 3
+    assert negative_pivots(np.diag(ev[3:])) == 0

@@ -78,9 +78,12 @@ class ContinuumSystem(System):
 
 def build_system(mechanism: Mechanism, level: int, law: str = "svk", plane: str = "stress",
                  settings: SolverSettings | None = None) -> ContinuumSystem:
-    """The multibody System with every flexure meshed at ``level``."""
+    """The multibody System with every flexure meshed at ``level`` (pins as exact joints)."""
+    from reducedmodels.joints import pin_connectors
+
     conns = [ContinuumConnector(f, mechanism, level, law=law, plane=plane)
              for f in mechanism.flexures]
+    conns += pin_connectors(mechanism)
     return ContinuumSystem(mechanism, conns, settings or SolverSettings())
 
 
