@@ -18,6 +18,19 @@ DA_DEPPO_SCHMIDT = 8.97
 crown point load (Da Deppo & Schmidt 1975, inextensible elastica)."""
 
 
+def _arch_halves(R: float, h: float, opening_deg: float, far_body: str):
+    """Two arc flexures of a symmetric arch centred at the origin, crown at (0, R):
+    ground -> crown body "c" -> ``far_body``. Returns (right, left, crown, specs)."""
+    half = math.radians(opening_deg / 2)
+    right = Arc((0.0, 0.0), R, math.pi / 2 - half / 2, half)
+    left = Arc((0.0, 0.0), R, math.pi / 2 + half / 2, half)
+    specs = [{"name": "right", "shape": right, "bodies": ["g", "c"], "section": Section(1.0, h),
+              "start_body": "g"},
+             {"name": "left", "shape": left, "bodies": ["c", far_body],
+              "section": Section(1.0, h), "start_body": "c"}]
+    return right, left, np.array([0.0, R]), specs
+
+
 def deep_arch(n: int, R: float = 100.0, h: float = 1.0, E: float = 1000.0):
     """Da Deppo & Schmidt's arch, radius R (mm), opening 215 deg, crown at (0, R).
 
@@ -27,14 +40,7 @@ def deep_arch(n: int, R: float = 100.0, h: float = 1.0, E: float = 1000.0):
     12 (R / h)^2 = 1.2e5: practically inextensible. Load: unit EI / R^2,
     downward at the crown, so the load factor is P R^2 / EI.
     """
-    half = math.radians(107.5)
-    right = Arc((0.0, 0.0), R, math.pi / 2 - half / 2, half)
-    left = Arc((0.0, 0.0), R, math.pi / 2 + half / 2, half)
-    crown = np.array([0.0, R])
-    specs = [{"name": "right", "shape": right, "bodies": ["g", "c"], "section": Section(1.0, h),
-              "start_body": "g"},
-             {"name": "left", "shape": left, "bodies": ["c", "h"], "section": Section(1.0, h),
-              "start_body": "c"}]
+    right, left, crown, specs = _arch_halves(R, h, 215.0, "h")
     pins = [{"name": "hinge", "bodies": ["h", "g"], "point": left.end_points[1]}]
     mech = assemble(specs, "g", right.end_points[0][None], Material(E, 0.3), "c", crown,
                     pin_specs=pins)
@@ -115,14 +121,7 @@ def test_von_mises_truss_snaps_through_on_the_exact_path():
 def _shallow_arch():
     """Clamped shallow arch: R = 100 mm, 20 deg opening (rise 1.52 mm), h = 0.1 mm, beam:16."""
     R, h, E = 100.0, 0.1, 1000.0
-    half = math.radians(10.0)
-    right = Arc((0.0, 0.0), R, math.pi / 2 - half / 2, half)
-    left = Arc((0.0, 0.0), R, math.pi / 2 + half / 2, half)
-    crown = np.array([0.0, R])
-    specs = [{"name": "right", "shape": right, "bodies": ["g", "c"], "section": Section(1.0, h),
-              "start_body": "g"},
-             {"name": "left", "shape": left, "bodies": ["c", "g"], "section": Section(1.0, h),
-              "start_body": "c"}]
+    right, left, crown, specs = _arch_halves(R, h, 20.0, "g")
     mech = assemble(specs, "g", np.array([right.end_points[0], left.end_points[1]]),
                     Material(E, 0.3), "c", crown)
     p0 = E * h**3 / 12.0 / R**2

@@ -184,6 +184,13 @@ def _cmd_stress(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _campaign_options(q: argparse.ArgumentParser) -> None:
+    """Options shared by the commands that run many models: timing, cache, progress."""
+    q.add_argument("--repeats", type=int, default=3, help="timing repeats (median; default 3)")
+    q.add_argument("--no-cache", action="store_true", help="recompute everything")
+    q.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argparse parser of ``flexval`` (all sub-commands)."""
     p = argparse.ArgumentParser(
@@ -234,11 +241,9 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--model", action="append", metavar="MODEL",
                    help="models to compare (repeatable; default: continuum, beam:100, beam:20, "
                         "prbm, dcmm:1, dcmm:2, dcmm:3, ee)")
-    q.add_argument("--repeats", type=int, default=3, help="timing repeats (median; default 3)")
-    q.add_argument("--no-cache", action="store_true", help="recompute everything")
+    _campaign_options(q)
     q.add_argument("--no-bench", action="store_true", help="skip the runtime-vs-error study")
     q.add_argument("--no-converge", action="store_true", help="skip the mesh convergence study")
-    q.add_argument("--quiet", action="store_true", help="no progress bar")
     q.set_defaults(func=_cmd_report)
 
     q = sub.add_parser("bench", help="runtime-versus-error study of every model on a scene")
@@ -246,9 +251,7 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--reference", default="continuum", metavar="MODEL",
                    help="reference model (default: continuum at its default level)")
     q.add_argument("--out", default="reports/bench", metavar="DIR", help="output folder")
-    q.add_argument("--repeats", type=int, default=3, help="timing repeats (median; default 3)")
-    q.add_argument("--no-cache", action="store_true", help="recompute everything")
-    q.add_argument("--quiet", action="store_true", help="no progress bar")
+    _campaign_options(q)
     q.set_defaults(func=_cmd_bench)
 
     q = sub.add_parser("stress", help="stress tests: load amplification, step count, invariance")

@@ -42,6 +42,17 @@ def _save(fig, path: Path) -> str:
     return path.name
 
 
+def _finish_loglog(fig, ax, xlabel: str, ylabel: str, title: str, path: Path) -> str:
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    return _save(fig, path)
+
+
 def load_paths(scene: Scene, case_name: str, paths: dict[str, LoadPath], path: Path) -> str:
     """Target displacement magnitude and target-body rotation versus load, all models."""
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
@@ -139,14 +150,8 @@ def runtime_vs_error(rows: list[dict], title: str, path: Path) -> str:
     front = pareto_front(pts)
     fx, fy = zip(*[pts[k] for k in front])
     ax.step(fx, fy, where="post", color="red", lw=2, alpha=0.4, label="Pareto front")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("wall time per load path (s, median)")
-    ax.set_ylabel("error (%)")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    ax.set_title(title)
-    return _save(fig, path)
+    return _finish_loglog(fig, ax, "wall time per load path (s, median)", "error (%)", title,
+                          path)
 
 
 def convergence(rows: list[dict], extrapolated: dict, title: str, path: Path) -> str:
@@ -158,10 +163,6 @@ def convergence(rows: list[dict], extrapolated: dict, title: str, path: Path) ->
         if ext is None or ext == 0:
             continue
         err = [max(abs(r[key] - ext) / abs(ext) * 100, 1e-6) for r in rows]
-        ax.loglog(n, err, marker="o", label=label)
-    ax.set_xlabel("unknowns")
-    ax.set_ylabel("difference from extrapolated value (%)")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    ax.set_title(title)
-    return _save(fig, path)
+        ax.plot(n, err, marker="o", label=label)
+    return _finish_loglog(fig, ax, "unknowns", "difference from extrapolated value (%)", title,
+                          path)
