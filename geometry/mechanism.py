@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import SceneError
+from .overlap import check_overlaps
 from .shapes import FlexureShape
 
 
@@ -346,6 +347,7 @@ def assemble(
                 spec["section"])
         for spec in flexure_specs
     )
+    check_overlaps(flexures, source, tol)
     pins = tuple(Pin(p["name"], tuple(p["bodies"]), np.asarray(p["point"], dtype=float))
                  for p in pin_specs)
     bodies: dict[str, Body] = {}

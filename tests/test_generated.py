@@ -92,8 +92,14 @@ def chains(draw, closed: bool):
             pins.append({"name": "pin", "bodies": [bodies[-1], "p1"], "point": tip})
         specs += more
     target = draw(link(end))
-    mech = assemble(specs, "g", np.array(ground_points), Material(2000.0, 0.3), bodies[-1],
-                    target, pin_specs=pins)
+    try:
+        mech = assemble(specs, "g", np.array(ground_points), Material(2000.0, 0.3), bodies[-1],
+                        target, pin_specs=pins)
+    except SceneError as exc:
+        # random arcs often cross: such a mechanism must be refused by name
+        assert "intersects itself" in str(exc) or "closes on itself" in str(exc), str(exc)
+        event("self-intersecting: refused with a SceneError")
+        return None
     if draw(st.booleans()):
         case = LoadCase("F", (Force(bodies[-1], target, draw(st.floats(-math.pi, math.pi)),
                                     1.0),), LEVELS)
@@ -136,6 +142,8 @@ def _check_every_model(mech, case) -> None:
 @FAST
 @given(chains(closed=False))
 def test_random_open_chains_converge_or_fail_honestly(example):
+    if example is None:
+        return
     mech, case, disp, rot = example
     _check_every_model(mech, _moderate(mech, case, disp, rot))
 
@@ -143,6 +151,8 @@ def test_random_open_chains_converge_or_fail_honestly(example):
 @FAST
 @given(chains(closed=True))
 def test_random_closed_chains_converge_or_fail_honestly(example):
+    if example is None:
+        return
     mech, case, disp, rot = example
     _check_every_model(mech, _moderate(mech, case, disp, rot))
 

@@ -212,3 +212,31 @@ def test_cli_exit_code_2_without_traceback(tmp_path, capsys):
     assert main(["info", str(tmp_path / "missing.toml")]) == 2
     assert main(["run", "open_chain", "--model", "beam:-3"]) == 2
     assert main(["run", "open_chain", "--model", "ee", "--load-case", "nope"]) == 2
+
+
+def test_crossing_flexures_are_impossible_geometry(tmp_path):
+    d = _base()
+    # a half circle ending on link 2 at (2.598, 4.5) that swings left through e12's top
+    d["flexures"].append({"name": "ex", "bodies": ["2", "5"], "center": [2.598, 6.5],
+                          "radius": 2.0, "axis_deg": 180.0, "width_deg": 180.0,
+                          "start_body": "5"})
+    d["load_cases"].append({"name": "m5", "kind": "moment", "body": "5", "value": 1e-3})
+    _expect(tmp_path, d, "flexures.ex", "crosses flexure")
+
+
+def test_arc_closing_on_itself(tmp_path):
+    d = _base()
+    _flex(d, "e34")["width_deg"] = 358.0       # ends 0.087 mm apart < h = 0.1 mm
+    _expect(tmp_path, d, "flexures.e34.width_deg", "closes on itself")
+
+
+def test_crossings_finds_a_proper_crossing_only():
+    import numpy as np
+
+    from geometry.overlap import crossings
+
+    p = np.array([[0.0, 0.0], [2.0, 2.0]])
+    q = np.array([[0.0, 2.0], [2.0, 0.0]])
+    np.testing.assert_allclose(crossings(p, q), [[1.0, 1.0]])
+    assert len(crossings(p, q + [5.0, 0.0])) == 0      # disjoint
+    assert len(crossings(p, p + [0.0, 1.0])) == 0      # parallel

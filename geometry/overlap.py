@@ -1,0 +1,59 @@
+"""Impossible geometry: flexures that cross each other or whose band closes on itself.
+
+Centre lines are sampled as polylines (``SAMPLES`` segments per flexure) and
+tested pairwise for proper segment crossings, vectorised over all segment
+pairs. Crossings within ``tol`` of a point where both flexures meet the same
+body (a shared attachment) are allowed. An arc whose two ends come closer
+than its thickness h would have overlapping end faces as a solid. Lengths mm.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import SceneError
+from .shapes import Arc
+
+SAMPLES = 256
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+def crossings(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Intersection points (k, 2) of polylines p (m+1, 2) and q (n+1, 2), proper crossings only."""
+    a, b = p[:-1, None, :], p[1:, None, :]
+    c, d = q[None, :-1, :], q[None, 1:, :]
+    r, s = b - a, d - c
+    den = _cross(r, s)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = _cross(c - a, s) / den
+        u = _cross(c - a, r) / den
+    hit = (den != 0) & (t > 0) & (t < 1) & (u > 0) & (u < 1)
+    return (a + t[..., None] * r)[hit]
+
+
+def check_overlaps(flexures, source: str, tol: float) -> None:
+    """Raise SceneError if two flexures cross or an arc's ends nearly touch."""
+    lines = {f.name: f.shape.point(np.linspace(0.0, f.shape.length, SAMPLES + 1))
+             for f in flexures}
+    for f in flexures:
+        if isinstance(f.shape, Arc):
+            gap = float(np.hypot(*(f.shape.end_points[0] - f.shape.end_points[1])))
+            if gap <= f.section.thickness:
+                raise SceneError(source, f"flexures.{f.name}.width_deg", f.shape.width * 180 / np.pi,
+                                 f"the arc's ends are {gap:.3g} mm apart, less than its "
+                                 f"thickness {f.section.thickness:g} mm: the solid closes on itself")
+    for i, f in enumerate(flexures):
+        for g in flexures[i + 1:]:
+            pts = crossings(lines[f.name], lines[g.name])
+            if not len(pts):
+                continue
+            shared = [f.end_point_of(b) for b in f.bodies if b in g.bodies] + \
+                     [g.end_point_of(b) for b in g.bodies if b in f.bodies]
+            for x in pts:
+                if not any(np.hypot(*(x - s)) <= tol for s in shared):
+                    raise SceneError(source, f"flexures.{g.name}", g.name,
+                                     f"crosses flexure {f.name!r} at ({x[0]:.3g}, {x[1]:.3g}) mm: "
+                                     "the mechanism intersects itself")
