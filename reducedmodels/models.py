@@ -11,13 +11,31 @@ import time
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from geometry import LoadCase, Mechanism, ModelSpec
+from geometry import LoadCase, Mechanism, ModelSpec, SceneError
 
 from .core import SolverSettings, System, solve_path
 from .loadpath import LoadPath
 from .rigid import rigid_points
 
 REDUCED_FAMILIES = ("beam", "prbm", "dcmm", "ee")
+
+
+def _connector(mechanism: Mechanism, flexure, spec: ModelSpec, options: dict):
+    """One flexure's connector for model ``spec`` (only the requested model is imported)."""
+    if spec.family in ("dcmm", "ee"):
+        from .dcmm import DcmmConnector
+
+        n = spec.resolution if spec.family == "dcmm" else 1
+        return DcmmConnector(flexure, mechanism, n, **options)
+    if spec.family == "beam":
+        from .beam import BeamConnector
+
+        return BeamConnector(flexure, mechanism, spec.resolution, **options)
+    if spec.family == "prbm":
+        from .prbm import PrbmConnector
+
+        return PrbmConnector(flexure, mechanism, **options)
+    raise ValueError(f"'{spec.id}' is not a reduced model; expected one of {REDUCED_FAMILIES}")
 
 
 def build_system(mechanism: Mechanism, spec: ModelSpec,
@@ -29,27 +47,19 @@ def build_system(mechanism: Mechanism, spec: ModelSpec,
 
     ``options`` are passed to the connector (e.g. ``shear=True`` for beams,
     ``frame="follower"`` for DCMM).
+
+    Raises
+    ------
+    SceneError
+        If the model cannot represent a flexure (e.g. a PRBM arc angle outside
+        its fitted table); the field names the flexure.
     """
-    if spec.family == "dcmm":
-        from .dcmm import DcmmConnector
-
-        conns = [DcmmConnector(f, mechanism, spec.resolution, **options)
-                 for f in mechanism.flexures]
-    elif spec.family == "ee":
-        from .dcmm import DcmmConnector
-
-        conns = [DcmmConnector(f, mechanism, 1, **options) for f in mechanism.flexures]
-    elif spec.family == "beam":
-        from .beam import BeamConnector
-
-        conns = [BeamConnector(f, mechanism, spec.resolution, **options)
-                 for f in mechanism.flexures]
-    elif spec.family == "prbm":
-        from .prbm import PrbmConnector
-
-        conns = [PrbmConnector(f, mechanism, **options) for f in mechanism.flexures]
-    else:
-        raise ValueError(f"'{spec.id}' is not a reduced model; expected one of {REDUCED_FAMILIES}")
+    conns = []
+    for f in mechanism.flexures:
+        try:
+            conns.append(_connector(mechanism, f, spec, options))
+        except ValueError as exc:      # the model cannot represent this flexure
+            raise SceneError(mechanism.source, f"flexures.{f.name}", spec.id, str(exc)) from None
     if mechanism.pins:
         from .joints import pin_connectors
 

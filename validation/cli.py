@@ -181,6 +181,15 @@ def _cmd_stress(args: argparse.Namespace) -> int:
     report = stress_report(scene, specs, quick=args.quick, progress=progress)
     md, _ = write_stress(report, args.out)
     print(md.read_text(encoding="utf-8"))
+    if args.sweeps:
+        from .sweeps import ARC_ANGLES, SLENDERNESS, format_sweep, sweep
+
+        text = "\n".join(format_sweep(sweep(pts, models, progress=progress), title) for pts, title
+                         in ((SLENDERNESS, "Slenderness h/r (120 deg arc, vs continuum:0)"),
+                             (ARC_ANGLES, "Arc angle (h/r = 1/30, vs continuum:0)")))
+        path = Path(args.out) / "sweeps.md"
+        path.write_text("# Geometry sweeps of a cantilever flexure\n\n" + text, encoding="utf-8")
+        print(text)
     return EXIT_OK
 
 
@@ -260,6 +269,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="models to stress (repeatable; default: ee, dcmm:1, dcmm:2, prbm, beam:20)")
     q.add_argument("--quick", action="store_true",
                    help="small study: loads up to x100, beam:40 reference, no 1001-level run")
+    q.add_argument("--sweeps", action="store_true",
+                   help="also sweep slenderness h/r (1/3 .. 1/1000) and arc angle (0 .. 350 deg) "
+                        "of a cantilever against the continuum")
     q.add_argument("--out", default="reports/stress", metavar="DIR", help="output folder")
     q.add_argument("--quiet", action="store_true", help="no progress lines")
     q.set_defaults(func=_cmd_stress)
