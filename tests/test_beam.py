@@ -77,7 +77,7 @@ def parallel_pair(shape, bodies: tuple[str, str]):
     terms) are exercised. ``bodies`` sets the order in which "f" names them.
     """
     start, end = shape.end_points
-    side = Segment(tuple(start + [-6.0, 4.0]), tuple(end + [5.0, 3.0]))
+    side = Segment(tuple(start + [-6.0, -4.0]), tuple(end + [5.0, -3.0]))   # not crossing "f"
     specs = [{"name": "s", "shape": side, "bodies": ("g", "t"), "section": Section(1.0, 0.5)},
              {"name": "f", "shape": shape, "bodies": bodies, "section": Section(1.0, 0.5)}]
     mech = assemble(specs, "g", np.array([side.start, start]), MATERIAL, "t", end)
