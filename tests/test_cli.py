@@ -55,3 +55,17 @@ def test_run_solver_failure_exit_3(monkeypatch, capsys):
     assert code == 3
     err = capsys.readouterr().err
     assert "last converged load" in err and "f-" in err and "sub-steps" in err
+
+
+def test_run_writes_requested_continuum_fields(tmp_path):
+    from importlib import resources
+
+    text = resources.files("geometry").joinpath("scenes", "closed_chain.toml").read_text()
+    scene = tmp_path / "s.toml"
+    scene.write_text(text.replace('models = ["beam:100"', 'outputs = ["vtu", "png"]\nmodels = ["beam:100"'))
+    out = tmp_path / "fields"
+    assert main(["run", str(scene), "--model", "continuum:0", "--load-case", "f+",
+                 "--levels", "3", "--out-dir", str(out)]) == 0
+    assert list(out.glob("*.vtu")) and list(out.glob("*.png"))
+    # a beam model has no stress field to write: a named input error
+    assert main(["run", str(scene), "--model", "beam:10", "--out-dir", str(out)]) == 2

@@ -51,15 +51,26 @@ def _cmd_run(args: argparse.Namespace) -> int:
     cases = [scene.load_case(n) for n in args.load_case] if args.load_case else scene.load_cases
     if args.levels is not None and not 2 <= args.levels <= 100_000:
         raise SceneError("<command line>", "--levels", args.levels, "must be from 2 to 100000")
+    fields = scene.outputs & {"vtu", "png"}
+    if fields and not any(sp.family == "continuum" for sp in specs):
+        raise SceneError(scene.source, "request.outputs", sorted(fields),
+                         "VTU and PNG stress fields come from the continuum model only")
     results, status = [], EXIT_OK
     print(f"{'model':<14} {'case':<6} {'load':>11} {'dx mm':>10} {'dy mm':>10} {'|d| mm':>10} "
           f"{'rot deg':>9} {'iters':>6} {'seconds':>9}")
     for spec in specs:
         for case in cases:
+            extra = {}
+            if spec.family == "continuum" and fields:
+                out_dir = Path(args.out_dir)
+                out_dir.mkdir(parents=True, exist_ok=True)
+                extra["vtu_dir"] = out_dir
+                if "png" in fields:
+                    extra["png"] = out_dir / f"{scene.name}_{case.name}_{spec.id.replace(':', '')}.png"
             try:
                 lp = run_model(scene, spec, case, args.levels,
                                record_poses="poses" in scene.outputs,
-                               record_shapes="shape" in scene.outputs)
+                               record_shapes="shape" in scene.outputs, **extra)
             except SolverError as exc:
                 print(f"flexval: solver failure: {exc}", file=sys.stderr)
                 if exc.path is not None:
@@ -229,6 +240,9 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--levels", type=int, metavar="N",
                    help="number of equally spaced load levels from 0 (default: the scene's, 11)")
     q.add_argument("--json", metavar="PATH", help="write all LoadPaths as JSON")
+    q.add_argument("--out-dir", default="flexval_out", metavar="DIR",
+                   help="folder for the continuum's VTU/PNG outputs when the scene requests "
+                        "them (request.outputs = [\"vtu\", \"png\"]; default flexval_out)")
     q.set_defaults(func=_cmd_run)
 
     q = sub.add_parser("converge", help="resolution study: order, Richardson value, GCI")
