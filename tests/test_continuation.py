@@ -177,3 +177,24 @@ def test_a_free_mechanism_is_a_solver_error_not_a_crash():
                   lambda: solve_arclength(system, case, 1.0, 10, model="dcmm:1")):
         with pytest.raises(SolverError, match="singular"):
             solve()
+
+
+def test_arclength_drives_the_continuum_solver_too():
+    """The continuum is a connector on the same core, so arc-length continuation
+    traces it unchanged: on a monotone path it must reach the load-control end state
+    (both are exact equilibria of the same discrete system; gate 1e-6 relative)."""
+    from geometry import Segment
+    from validation.continuum.run import build_system as continuum_system
+
+    seg = Segment((0.0, 0.0), (20.0, 0.0))
+    spec = {"name": "s", "shape": seg, "bodies": ["g", "t"], "section": Section(1.0, 1.0),
+            "start_body": "g"}
+    mech = assemble([spec], "g", np.array([[0.0, 0.0]]), Material(2000.0, 0.3), "t",
+                    np.array([20.0, 0.0]))
+    EI = 2000.0 / 12.0
+    case = LoadCase("P", (Force("t", mech.target_point, math.pi / 2, 1.5 * EI / 400.0),), 5)
+    ref = solve_path(continuum_system(mech, 0), case)
+    arc = solve_arclength(continuum_system(mech, 0), case, 1.0, 6, model="continuum:0")
+    assert arc.load[-1] == pytest.approx(ref.load[-1], rel=1e-12)
+    assert arc.dy[-1] == pytest.approx(ref.dy[-1], rel=1e-6)
+    assert arc.rotation[-1] == pytest.approx(ref.rotation[-1], rel=1e-6)
