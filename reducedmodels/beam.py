@@ -32,7 +32,8 @@ or, with ``shear=True``, the Timoshenko beam's condensed bending stiffness
 k_b = EI / (l0 (1 + phi)) [[4 + phi, 2 - phi], [2 - phi, 4 + phi]] with
 phi = 12 EI / (kappa G A l0^2), kappa = 5/6. Gradient and tangent are
 exact (material plus geometric parts), all elements are evaluated at once
-with numpy, and the Hessian is returned as a sparse COO matrix.
+with numpy, and the Hessian is returned as the values of a fixed sparse
+pattern.
 
 Accuracy: the elements bend over their chords, so an arc's bending length
 is the chord polygon's, shorter than the arc by ~(width/N)^2 / 24; end
@@ -47,7 +48,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.sparse as sp
 
 from geometry import Flexure, Mechanism
 
@@ -302,23 +302,27 @@ class BeamConnector:
         x[-1], theta[-1] = body_point(end, self._end_rel[1])[0], end[2]
         return x, theta, (start, end)
 
+    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """Local (rows, cols) of the Hessian values :meth:`evaluate` returns (duplicates sum)."""
+        return self._rows, self._cols
+
     def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> tuple[float, np.ndarray, sp.coo_matrix]:
-        """Strain energy (N mm), gradient (6 + n_internal) and sparse Hessian.
+                 ) -> tuple[float, np.ndarray, np.ndarray]:
+        """Strain energy (N mm), gradient (6 + n_internal) and Hessian values.
 
         The gradient holds the internal forces conjugate to
         [pose_a, pose_b, internal] (N on translations, N mm on rotations);
-        the Hessian (COO, duplicate entries summed) is the consistent tangent.
+        the consistent tangent is returned as the values of the entries of
+        :meth:`hessian_pattern` (duplicates summed).
         """
         x, theta, (start, end) = self._nodes(pose_a, pose_b, internal)
         energy, grad, hess = corotational_elements(x, theta, self._chord0, self._l0,
                                                    self._k_axial, self._k11, self._k12)
         attach_to_body(grad[0], hess[0].reshape(6, 6), 0, start, self._end_rel[0])
         attach_to_body(grad[-1], hess[-1].reshape(6, 6), 3, end, self._end_rel[1])
-        n = 6 + self.n_internal
-        gradient = np.bincount(self._element_dofs.ravel(), weights=grad.ravel(), minlength=n)
-        hessian = sp.coo_matrix((hess.ravel(), (self._rows, self._cols)), shape=(n, n))
-        return energy, gradient, hessian
+        gradient = np.bincount(self._element_dofs.ravel(), weights=grad.ravel(),
+                               minlength=6 + self.n_internal)
+        return energy, gradient, hess.ravel()
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed node positions (N + 1, 2), mm, from the flexure's start to its end."""

@@ -37,8 +37,6 @@ import time
 from typing import Callable
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from geometry import LoadCase
 
@@ -64,16 +62,6 @@ def load_vector(system: System, q: np.ndarray, loads) -> np.ndarray:
         if dof >= 0:
             f[dof] += m
     return f
-
-
-def _solve(K: np.ndarray | sp.spmatrix, rhs: np.ndarray) -> np.ndarray:
-    """K x = rhs for one or more right-hand sides with one LU factorisation.
-
-    Raises ``np.linalg.LinAlgError`` or ``RuntimeError`` if K is singular.
-    """
-    if isinstance(K, np.ndarray):
-        return np.linalg.solve(K, rhs)
-    return spla.splu(sp.csc_matrix(K)).solve(rhs)
 
 
 class _Path:
@@ -131,9 +119,9 @@ class _Path:
                 break
             try:
                 if arc is None:
-                    d_r, d_f = _solve(K, -g), np.zeros_like(g)
+                    d_r, d_f = K.solve(-g), np.zeros_like(g)
                 else:
-                    sol = _solve(K, np.column_stack([-g, load_vector(self.system, q, self.loads)]))
+                    sol = K.solve(np.column_stack([-g, load_vector(self.system, q, self.loads)]))
                     d_r, d_f = sol[:, 0], sol[:, 1]
             except (RuntimeError, np.linalg.LinAlgError) as exc:
                 return None, lam, it, f"singular tangent ({exc})"
@@ -266,7 +254,7 @@ def solve_arclength(system: System, case: LoadCase, max_load_factor: float = 1.0
     # first predictor: the tangent at rest, sized so a linear path takes n_steps steps
     _, _, K = system.assemble(q, loads, 0.0)
     try:
-        tangent = _solve(K, load_vector(system, q, loads))
+        tangent = K.solve(load_vector(system, q, loads))
     except (RuntimeError, np.linalg.LinAlgError) as exc:
         raise fail(f"singular tangent at rest ({exc})", 0.0) from None
     if not np.all(np.isfinite(tangent)):

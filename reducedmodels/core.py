@@ -18,26 +18,27 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Protocol, Sequence
+from typing import NamedTuple, Protocol, Sequence
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from geometry import Force, LoadCase, Mechanism, Moment
 
 from .loadpath import LoadPath
 from .rigid import rigid_points
-
-
-DENSE_LIMIT = 96  # above ~100, multithreaded LAPACK stalls on a loaded 2-core machine (measured)
+from .tangent import Tangent, TangentLayout
 
 
 class Connector(Protocol):
     """A flexure model between two bodies.
 
     Its local coordinate vector is ``[pose_a (3), pose_b (3), internal
-    (n_internal)]`` with ``(a, b) = bodies``.
+    (n_internal)]`` with ``(a, b) = bodies``. A connector with a sparse
+    Hessian also defines ``hessian_pattern()``, returning the local
+    (rows, cols) of its entries, fixed for its lifetime; its ``evaluate``
+    then returns the Hessian as the values of those entries. Without it the
+    Hessian is a dense (6 + n_internal) square array.
     """
 
     name: str
@@ -56,13 +57,26 @@ class Connector(Protocol):
         ...
 
     def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> tuple[float, np.ndarray, np.ndarray | sp.spmatrix]:
-        """Energy (N mm), gradient (6 + n) and Hessian ((6 + n) square, dense or sparse)."""
+                 ) -> tuple[float, np.ndarray, np.ndarray]:
+        """Energy (N mm), gradient (6 + n) and Hessian (dense square, or pattern values)."""
         ...
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed centre line as points (m, 2), mm (for plots)."""
         ...
+
+
+def local_hessian(connector: Connector, hessian: np.ndarray) -> np.ndarray | sp.csc_matrix:
+    """The Hessian returned by ``connector.evaluate`` as a matrix over its local coordinates.
+
+    Dense connectors return it as is; for a connector with a
+    ``hessian_pattern`` the values become a CSC matrix (duplicates summed).
+    """
+    pattern = getattr(connector, "hessian_pattern", None)
+    if pattern is None:
+        return np.asarray(hessian)
+    n = 6 + connector.n_internal
+    return sp.csc_matrix((hessian, pattern()), shape=(n, n))
 
 
 class SolverError(RuntimeError):
@@ -89,22 +103,32 @@ class SolverSettings:
     ``force_tol`` is relative to the full-load magnitude, ``step_tol`` is the
     scaled correction (translations / mechanism size, rotations in rad): since
     Newton converges quadratically, the error left after a correction of
-    1e-8 is of order 1e-16.
+    1e-8 is of order 1e-16. ``error_tol`` bounds the error left after a
+    correction as estimated from the contraction of the last two (see
+    :func:`newton`); 1e-10 keeps equilibrium to ~1e-8 of the load even on
+    stiff (axial) modes.
     ``max_rotation_step`` (rad) and ``max_translation_step`` (fraction of the
     mechanism size) bound how far any body may move in one sub-step, so the
     stepping follows soft stretches of the path instead of leaping over them.
+    ``max_excursion`` abandons a Newton iteration whose iterates move a body
+    that many times the sub-step bounds (the step is cut instead);
+    ``max_stall`` abandons one whose residual has not improved on its best
+    value for that many iterations (wandering along a soft mode).
     ``check_stability`` rejects a sub-step whose equilibrium is unstable
     (load control cannot pass a limit point; use arc-length continuation).
     """
 
     force_tol: float = 1e-10
     step_tol: float = 1e-8
+    error_tol: float = 1e-10
     max_iterations: int = 25
     max_cuts: int = 40
     max_substeps: int = 20000
     max_rotation_step: float = 0.25
     max_translation_step: float = 0.05
     fast_iterations: int = 5
+    max_excursion: float = 4.0
+    max_stall: int = 5
     check_stability: bool = True
 
 
@@ -144,9 +168,44 @@ class System:
             n += c.n_internal
         self.n_dofs = n
         self.is_rotation = np.concatenate(rot_mask)
-        self._dense_pattern = {}
-        self._csc_structure = None
         self.n_multipliers = sum(getattr(c, "n_multipliers", 0) for c in self.connectors)
+        #: residual weights: forces as is, moments per unit of mechanism size (N)
+        self.force_scale = np.where(self.is_rotation, 1.0 / self.size, 1.0)
+        self._build_scatter()
+
+    def _build_scatter(self) -> None:
+        """Index maps of the assembly, computed once (the sparsity pattern never changes).
+
+        * ``_gather[k]``: positions of connector k's local coordinates in
+          ``[q, ground pose]`` (ground dofs read the fixed ground pose);
+        * ``_grad_dofs`` / ``_grad_keep``: global dof of every kept entry of the
+          concatenated local gradients (ground entries dropped);
+        * ``_hess_keep``: kept entries of the concatenated local Hessian values;
+          the tangent layout adds one diagonal slot per dof for the loads.
+        """
+        n = self.n_dofs
+        gathers, grad_idx, rows, cols, hess_keep = [], [], [], [], []
+        for c, idx in zip(self.connectors, self._local_to_global):
+            gathers.append(np.where(idx >= 0, idx, n + np.arange(idx.size) % 3))
+            grad_idx.append(idx)
+            pattern = getattr(c, "hessian_pattern", None)
+            if pattern is None:
+                r, cc = np.repeat(idx, idx.size), np.tile(idx, idx.size)
+            else:
+                lr, lc = pattern()
+                r, cc = idx[lr], idx[lc]
+            keep = (r >= 0) & (cc >= 0)
+            rows.append(r[keep]), cols.append(cc[keep]), hess_keep.append(keep)
+        ground = self.reference[self.mechanism.ground]
+        self._ground_pose = np.array([ground[0], ground[1], 0.0])
+        self._gather = gathers
+        all_grad = np.concatenate(grad_idx) if grad_idx else np.zeros(0, int)
+        self._grad_keep = all_grad >= 0
+        self._grad_dofs = all_grad[self._grad_keep]
+        self._hess_keep = np.concatenate(hess_keep) if hess_keep else np.zeros(0, bool)
+        diagonal = np.arange(n)
+        self.layout = TangentLayout(n, np.concatenate([*rows, diagonal]),
+                                    np.concatenate([*cols, diagonal]), self.n_multipliers)
 
     def pose_dofs(self, body: str) -> np.ndarray:
         """Global dof numbers of a body's pose (all -1 for the ground)."""
@@ -167,12 +226,18 @@ class System:
     def pose(self, q: np.ndarray, body: str) -> np.ndarray:
         """Pose (x, y, theta) of ``body`` in state q (ground: fixed)."""
         if body == self.mechanism.ground:
-            return np.array([*self.reference[body], 0.0])
+            return self._ground_pose.copy()
         k = self.body_index[body]
         return q[3 * k:3 * k + 3]
 
-    def _local(self, q: np.ndarray, c: Connector, idx: np.ndarray):
-        return self.pose(q, c.bodies[0]), self.pose(q, c.bodies[1]), q[idx[6:]]
+    def local_states(self, q: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """(pose_a, pose_b, internal) of every connector in state q."""
+        extended = np.concatenate([q, self._ground_pose])
+        out = []
+        for gather in self._gather:
+            local = extended[gather]
+            out.append((local[:3], local[3:6], local[6:]))
+        return out
 
     # --- loads -----------------------------------------------------------
     def loads(self, case: LoadCase) -> _Loads:
@@ -195,48 +260,25 @@ class System:
                       np.array(md, int), moments, scale)
 
     # --- assembly --------------------------------------------------------
-    def _pattern(self, k: int, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Scatter pattern of connector k's dense local Hessian (computed once).
+    def assemble(self, q: np.ndarray, loads: _Loads, factor: float
+                 ) -> tuple[float, np.ndarray, Tangent]:
+        """Total potential (N mm), its gradient and the tangent at state q and load factor.
 
-        Returns global rows, global cols and the mask of local entries kept
-        (entries of ground dofs are dropped).
+        Every connector is evaluated once; the gradients and Hessian values
+        are scattered with the index maps of :meth:`_build_scatter` into the
+        storage the :class:`~reducedmodels.tangent.TangentLayout` chose.
         """
-        if k not in self._dense_pattern:
-            idx = self._local_to_global[k]
-            rows, cols = np.repeat(idx, n), np.tile(idx, n)
-            keep = (rows >= 0) & (cols >= 0)
-            self._dense_pattern[k] = (rows[keep], cols[keep], keep)
-        return self._dense_pattern[k]
-
-    def assemble(self, q: np.ndarray, loads: _Loads, factor: float,
-                 ) -> tuple[float, np.ndarray, np.ndarray | sp.csc_matrix]:
-        """Total potential (N mm), its gradient and Hessian at state q and load factor.
-
-        The Hessian is a dense array for small systems (at most ``DENSE_LIMIT``
-        unknowns, where LAPACK beats sparse overheads) and CSC otherwise.
-        """
-        dense = self.n_dofs <= DENSE_LIMIT
         energy = 0.0
-        grad = np.zeros(self.n_dofs)
-        K = np.zeros((self.n_dofs, self.n_dofs)) if dense else None
-        rows, cols, vals = [], [], []
-        for k, (c, idx) in enumerate(zip(self.connectors, self._local_to_global)):
-            e, g, h = c.evaluate(*self._local(q, c, idx))
+        grads, hessians = [], []
+        for c, local in zip(self.connectors, self.local_states(q)):
+            e, g, h = c.evaluate(*local)
             energy += e
-            keep = idx >= 0
-            grad[idx[keep]] += g[keep]          # a connector's dofs are distinct
-            if dense:
-                h = h.toarray() if sp.issparse(h) else np.asarray(h)
-                r, cc, m = self._pattern(k, idx.size)
-                K[r, cc] += h.ravel()[m]
-            elif sp.issparse(h):
-                h = h.tocoo()
-                r, cc = idx[h.row], idx[h.col]
-                m = (r >= 0) & (cc >= 0)
-                rows.append(r[m]), cols.append(cc[m]), vals.append(h.data[m])
-            else:
-                r, cc, m = self._pattern(k, idx.size)
-                rows.append(r), cols.append(cc), vals.append(np.asarray(h).ravel()[m])
+            grads.append(g)
+            hessians.append(np.ravel(h))
+        n = self.n_dofs
+        grad = (np.bincount(self._grad_dofs, weights=np.concatenate(grads)[self._grad_keep],
+                            minlength=n) if grads else np.zeros(n))
+        diagonal = np.zeros(n)
         # dead forces at material points and moments: potential -factor * work
         for dofs, f, rel in zip(loads.dofs, loads.forces, loads.rels):
             if dofs[0] < 0:
@@ -244,46 +286,22 @@ class System:
             x, jac, d2 = rigid_points(q[dofs], rel[None])
             energy -= factor * f @ x[0]
             grad[dofs] -= factor * jac[0].T @ f
-            if dense:
-                K[dofs[2], dofs[2]] -= factor * f @ d2[0]
-            else:
-                rows.append([dofs[2]]), cols.append([dofs[2]]), vals.append([-factor * f @ d2[0]])
+            diagonal[dofs[2]] -= factor * f @ d2[0]
         for dof, m in zip(loads.moment_dofs, loads.moments):
             if dof >= 0:
                 energy -= factor * m * q[dof]
                 grad[dof] -= factor * m
-        if not dense:
-            K = self._csc(np.concatenate(rows), np.concatenate(cols), np.concatenate(vals))
-        return energy, grad, K
-
-    def _csc(self, rows: np.ndarray, cols: np.ndarray, vals: np.ndarray) -> sp.csc_matrix:
-        """Sum COO triplets into CSC, reusing the structure while the pattern is unchanged.
-
-        Connectors return the same sparsity pattern at every call, so the
-        sorting and duplicate summation of a COO -> CSC conversion is done once;
-        afterwards one ``bincount`` scatters the values (checked: a changed
-        pattern rebuilds the structure).
-        """
-        cached = self._csc_structure
-        if cached is None or cached[0].shape != rows.shape or not (
-                np.array_equal(cached[0], rows) and np.array_equal(cached[1], cols)):
-            n = self.n_dofs
-            uniq, inverse = np.unique(cols.astype(np.int64) * n + rows, return_inverse=True)
-            indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
-            cached = (rows, cols, inverse.ravel(), (uniq % n).astype(np.int32), indptr)
-            self._csc_structure = cached
-        _, _, inverse, indices, indptr = cached
-        data = np.bincount(inverse, weights=vals, minlength=indices.size)
-        return sp.csc_matrix((data, indices, indptr), shape=(self.n_dofs, self.n_dofs))
+        values = np.concatenate([*hessians, np.zeros(0)])[self._hess_keep]
+        return energy, grad, self.layout.build(np.concatenate([values, diagonal]))
 
     def reaction(self, q: np.ndarray) -> np.ndarray:
         """Force (N) and moment (N mm, about the ground's reference point) the ground exerts."""
         total = np.zeros(3)
         g_name = self.mechanism.ground
-        for c, idx in zip(self.connectors, self._local_to_global):
+        for c, local in zip(self.connectors, self.local_states(q)):
             if g_name not in c.bodies:
                 continue
-            _, g, _ = c.evaluate(*self._local(q, c, idx))
+            _, g, _ = c.evaluate(*local)
             for k, b in enumerate(c.bodies):
                 if b == g_name:
                     total += g[3 * k:3 * k + 3]
@@ -299,75 +317,95 @@ class System:
         d = x[0] - mech.target_point
         return float(d[0]), float(d[1]), float(pose[2])
 
+    def residual(self, grad: np.ndarray, loads: _Loads) -> float:
+        """Largest out-of-balance force (moments per unit size) relative to the load scale."""
+        return float(np.abs(grad * self.force_scale).max(initial=0.0)) / loads.scale
+
     def scaled(self, v: np.ndarray) -> np.ndarray:
         """Dimensionless version of a coordinate vector (lengths / size, angles as is)."""
         return np.where(self.is_rotation, v, v / self.size)
 
 
-def _newton(system: System, q: np.ndarray, loads: _Loads, factor: float,
-            settings: SolverSettings) -> tuple[np.ndarray | None, int, str]:
-    """Newton-Raphson at a fixed load factor; returns (state or None, iterations, reason)."""
-    f_scale = np.where(system.is_rotation, 1.0 / system.size, 1.0)
-    res0 = None
+CONTRACTION_EVIDENCE = 1e-3
+"""Residual drop (relative to the first iterate) that shows Newton is contracting."""
+
+
+class NewtonResult(NamedTuple):
+    """Outcome of :func:`newton` at one load factor.
+
+    ``state`` is None on failure, with ``reason`` saying why. ``tangent`` is
+    the tangent at the last assembled iterate: at the converged state when
+    the residual test ended the iteration, else one correction before it
+    (close enough to judge stability: its eigenvalues differ by O(|du|)).
+    """
+
+    state: np.ndarray | None
+    iterations: int
+    reason: str
+    tangent: Tangent | None
+
+
+def newton(system: System, q: np.ndarray, loads: _Loads, factor: float,
+           settings: SolverSettings, origin: np.ndarray | None = None) -> NewtonResult:
+    """Newton-Raphson with the exact tangent at a fixed load factor.
+
+    Converged when the residual is below ``force_tol`` (relative to the load
+    scale), when the last correction du_k is below ``step_tol`` (scaled
+    coordinates), or when the error it leaves, estimated from the
+    contraction of the last two corrections as |du_k| min(1, |du_k| /
+    |du_(k-1)|) (an over-estimate under quadratic convergence), is below
+    ``error_tol``. The estimate is trusted only once the iteration is seen to
+    contract (the residual has fallen below ``CONTRACTION_EVIDENCE`` of its
+    first value): a stiff membrane mode can carry a large force on a tiny
+    correction before Newton has found its basin. So the iteration stops as
+    soon as the answer is known, instead of spending one more assembly and
+    solve to prove it.
+
+    Newton that has lost its way is abandoned early, since cutting the load
+    step is cheaper than letting it wander to ``max_iterations``: when the
+    residual has not improved on its best value for ``max_stall``
+    iterations, or, with ``origin`` (the state where the sub-step started),
+    when an iterate moves a body more than ``max_excursion`` times the
+    sub-step bounds away from it.
+    """
+    res0, best, stalled, last_step = None, math.inf, 0, None
     for it in range(settings.max_iterations + 1):
         try:
             _, g, K = system.assemble(q, loads, factor)
         except (ValueError, FloatingPointError) as exc:   # a connector refused the state
-            return None, it, f"invalid state ({exc})"
-        res = float(np.abs(g * f_scale).max(initial=0.0)) / loads.scale
+            return NewtonResult(None, it, f"invalid state ({exc})", None)
+        res = system.residual(g, loads)
         if not np.isfinite(res):
-            return None, it, "non-finite residual"
+            return NewtonResult(None, it, "non-finite residual", None)
         if res <= settings.force_tol:
-            return q, it, ""
+            return NewtonResult(q, it, "", K)
         res0 = res if res0 is None else res0
         if res > 1e8 * max(res0, 1.0):
-            return None, it, f"diverging residual {res:.3g}"
+            return NewtonResult(None, it, f"diverging residual {res:.3g}", None)
+        best, stalled = (res, 0) if res < best else (best, stalled + 1)
+        if stalled >= settings.max_stall:
+            return NewtonResult(None, it, f"stalled (no lower residual in {stalled} iterations, "
+                                f"best {best:.3g})", None)
         if it == settings.max_iterations:
             break
         try:
-            du = np.linalg.solve(K, -g) if isinstance(K, np.ndarray) else spla.spsolve(K, -g)
+            du = K.solve(-g)
         except (RuntimeError, np.linalg.LinAlgError) as exc:  # singular factor
-            return None, it, f"singular tangent ({exc})"
+            return NewtonResult(None, it, f"singular tangent ({exc})", None)
         if not np.all(np.isfinite(du)):
-            return None, it, "singular tangent"
+            return NewtonResult(None, it, "singular tangent", None)
         q = q + du
-        if float(np.abs(system.scaled(du)).max(initial=0.0)) <= settings.step_tol:
-            return q, it + 1, ""
-    return None, settings.max_iterations, f"no convergence in {settings.max_iterations} iterations (residual {res:.3g})"
-
-
-def negative_pivots(K: np.ndarray | sp.csc_matrix) -> int | None:
-    """Number of negative eigenvalues of the symmetric tangent K (Sylvester's inertia).
-
-    Dense: from the eigenvalues. Sparse: the signs of the pivots of a
-    symmetric-mode LU with diagonal pivoting (an LDL^T under a symmetric
-    permutation). Returns None when that factorisation breaks down (a zero
-    pivot), in which case stability is not judged. Values below 1e-12 of the
-    largest in magnitude count as round-off, not as negative.
-    """
-    if isinstance(K, np.ndarray):
-        ev = np.linalg.eigvalsh(K)
-        return int(np.sum(ev < -1e-12 * np.abs(ev).max(initial=0.0)))
-    try:
-        lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                       options={"SymmetricMode": True})
-    except RuntimeError:
-        return None
-    d = lu.U.diagonal()
-    return int(np.sum(d < -1e-12 * np.abs(d).max(initial=0.0)))
-
-
-def _unstable(system: System, q: np.ndarray, loads: _Loads, factor: float) -> bool:
-    """True if the equilibrium q has more negative tangent eigenvalues than multipliers.
-
-    Large saddle-point systems (sparse, with multipliers) are not judged: a
-    diagonal-pivot LDL^T breaks down on the multipliers' zero diagonal.
-    """
-    _, _, K = system.assemble(q, loads, factor)
-    if not isinstance(K, np.ndarray) and system.n_multipliers:
-        return False
-    neg = negative_pivots(K)
-    return neg is not None and neg > system.n_multipliers
+        step = float(np.abs(system.scaled(du)).max(initial=0.0))
+        contracting = last_step is not None and res <= CONTRACTION_EVIDENCE * res0
+        if step <= settings.step_tol or (contracting and step * min(1.0, step / last_step)
+                                         <= settings.error_tol):
+            return NewtonResult(q, it + 1, "", K)
+        last_step = step
+        if origin is not None and _motion_ratio(system, origin, q, settings) > settings.max_excursion:
+            return NewtonResult(None, it + 1, "iterates left the sub-step's bounds", None)
+    return NewtonResult(None, settings.max_iterations,
+                        f"no convergence in {settings.max_iterations} iterations "
+                        f"(residual {res:.3g})", None)
 
 
 def _motion_ratio(system: System, q0: np.ndarray, q1: np.ndarray, s: SolverSettings) -> float:
@@ -378,6 +416,35 @@ def _motion_ratio(system: System, q0: np.ndarray, q1: np.ndarray, s: SolverSetti
     return float(max(dq[:, 2].max() / s.max_rotation_step,
                      np.hypot(dq[:, 0], dq[:, 1]).max()
                      / (s.max_translation_step * system.size)))
+
+
+def _unstable(system: System, tangent: Tangent) -> bool:
+    """True if the tangent has more negative eigenvalues than the system has multipliers.
+
+    Each Lagrange multiplier makes a stable saddle-point tangent one
+    eigenvalue indefinite; an inertia that cannot be judged counts as stable.
+    """
+    negative = tangent.negative_eigenvalues()
+    return negative is not None and negative > system.n_multipliers
+
+
+def extrapolate(history: Sequence[tuple[np.ndarray, float]], factor: float) -> np.ndarray:
+    """Predicted state at ``factor``: the Lagrange polynomial through the converged states.
+
+    ``history`` holds up to three (state, load factor) pairs; a quadratic
+    predictor leaves an O(h^3) error where the secant's is O(h^2), which
+    matters for nearly inextensible flexures: a predictor error e stretches
+    them by O(e) and Newton then needs extra iterations to pull the
+    stretch back out.
+    """
+    guess = np.zeros_like(history[-1][0])
+    for i, (qi, li) in enumerate(history):
+        weight = 1.0
+        for j, (_, lj) in enumerate(history):
+            if j != i:
+                weight *= (factor - lj) / (li - lj)
+        guess += weight * qi
+    return guess
 
 
 def solve_path(system: System, case: LoadCase, levels: int | None = None,
@@ -421,8 +488,8 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
             for b in system.mechanism.bodies:
                 lp.poses[b].append(system.pose(qk, b).tolist())
         if lp.shapes is not None:
-            for c, idx in zip(system.connectors, system._local_to_global):
-                lp.shapes[c.name].append(c.shape(*system._local(qk, c, idx)).tolist())
+            for c, local in zip(system.connectors, system.local_states(qk)):
+                lp.shapes[c.name].append(c.shape(*local).tolist())
 
     def fail(msg: str, lam: float) -> SolverError:
         stats["failure"] = msg
@@ -432,12 +499,13 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
                            f"load {lam * case.magnitude:.6g} {case.unit} "
                            f"({100 * lam:.2f} % of full load)", lam, lp)
 
-    q_new, iters, why = _newton(system, q, loads, factors[0], s)
-    if q_new is None:
-        raise fail(why, 0.0)
-    q, lam, prev = q_new, factors[0], None
-    stats["newton_iterations"] += iters
-    record(q, lam, iters)
+    first = newton(system, q, loads, factors[0], s)
+    if first.state is None:
+        raise fail(first.reason, 0.0)
+    q, lam = first.state, factors[0]
+    history = [(q, lam)]               # converged (state, factor) pairs for the predictor
+    stats["newton_iterations"] += first.iterations
+    record(q, lam, first.iterations)
     spacing = factors[1] - factors[0] if len(factors) > 1 else 1.0
     step = spacing
     min_step = spacing * 0.5 ** s.max_cuts
@@ -445,16 +513,16 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
         level_iters = 0
         while lam < target - 1e-14 * spacing:
             trial = min(lam + step, target)
-            # secant predictor from the previous converged sub-step
-            guess = q if prev is None else q + (trial - lam) / (lam - prev[1]) * (q - prev[0])
-            q_new, iters, why = _newton(system, guess, loads, trial, s)
-            if q_new is None and prev is not None:
-                q_new, iters2, why = _newton(system, q, loads, trial, s)
-                iters += iters2
+            result = newton(system, extrapolate(history, trial), loads, trial, s, origin=q)
+            iters = result.iterations
+            if result.state is None and len(history) > 1:   # the predictor misled: start at q
+                result = newton(system, q, loads, trial, s, origin=q)
+                iters += result.iterations
             stats["newton_iterations"] += iters
             level_iters += iters
+            q_new, why = result.state, result.reason
             ratio = _motion_ratio(system, q, q_new, s) if q_new is not None else math.inf
-            if ratio <= 1.0 and s.check_stability and _unstable(system, q_new, loads, trial):
+            if ratio <= 1.0 and s.check_stability and _unstable(system, result.tangent):
                 q_new, ratio, why = None, math.inf, ("converged to an unstable equilibrium "
                                                      "(past a limit point?)")
             if ratio > 1.0:
@@ -465,8 +533,8 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
                 if step < min_step:
                     raise fail(f"step cutting failed ({why})", lam)
                 continue
-            prev = (q, lam)
             q, lam = q_new, trial
+            history = [*history[-2:], (q, lam)]
             stats["substeps"] += 1
             if stats["substeps"] > s.max_substeps:
                 raise fail(f"more than {s.max_substeps} load sub-steps", lam)

@@ -6,6 +6,7 @@ import numpy as np
 
 from geometry import Force, LoadCase, Material, Moment, Section
 from geometry.mechanism import assemble
+from reducedmodels.core import local_hessian
 
 
 def cantilever(shape, E: float = 2100.0, b: float = 1.0, h: float = 0.1, nu: float = 0.3,
@@ -42,7 +43,8 @@ def fd_check(connector, pose_a, pose_b, internal, h: float = 1e-6):
         return v[:3], v[3:6], v[6:]
 
     e0, g0, H0 = connector.evaluate(*split(q))
-    H0 = H0.toarray() if hasattr(H0, "toarray") else np.asarray(H0)
+    H0 = local_hessian(connector, H0)
+    H0 = H0.toarray() if hasattr(H0, "toarray") else H0
     g_fd = np.zeros(n)
     H_fd = np.zeros((n, n))
     for k in range(n):

@@ -160,16 +160,21 @@ def test_one_big_step_does_not_land_on_an_unstable_branch():
     assert one.rotation[-1] == pytest.approx(ref.rotation[-1], rel=1e-8)
 
 
-def test_negative_pivots_counts_the_inertia():
+def test_every_tangent_storage_counts_the_inertia():
     import scipy.sparse as sp
 
-    from reducedmodels.core import negative_pivots
+    from reducedmodels.tangent import BandedTangent, DenseTangent, SparseTangent
 
     rng = np.random.default_rng(0)
     Q, _ = np.linalg.qr(rng.normal(size=(120, 120)))
     ev = np.concatenate([-np.logspace(-3, 2, 3), np.logspace(-2, 3, 117)])
     A = (Q * ev) @ Q.T
     A = 0.5 * (A + A.T)
-    assert negative_pivots(A) == 3
-    assert negative_pivots(sp.csc_matrix(A)) == 3
-    assert negative_pivots(np.diag(ev[3:])) == 0
+    full = np.zeros((2 * 119 + 1, 120))              # full band storage, identity permutation
+    for k in range(-119, 120):
+        j = np.arange(max(0, -k), min(120, 120 - k))
+        full[119 + k, j] = A[j + k, j]
+    assert DenseTangent(A).negative_eigenvalues() == 3
+    assert BandedTangent(full, np.arange(120), 119).negative_eigenvalues() == 3
+    assert SparseTangent(sp.csc_matrix(A), 0).negative_eigenvalues() == 3
+    assert DenseTangent(np.diag(ev[3:])).negative_eigenvalues() == 0

@@ -19,7 +19,6 @@ built once, only the rotation coefficients change. Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from geometry import Flexure, Mechanism
 from geometry.mesh import FlexureMesh, mesh_flexure
@@ -128,9 +127,16 @@ class ContinuumConnector:
             x[self._face[s]] = rigid_points(np.asarray(pose, float), self._rel[s])[0]
         return x
 
+    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """Local (rows, cols) of the Hessian values :meth:`evaluate` returns (duplicates sum)."""
+        return self._rows, self._cols
+
     def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> tuple[float, np.ndarray, sp.coo_matrix]:
-        """Energy (N mm), gradient (6 + n) and sparse Hessian over [pose_a, pose_b, internal]."""
+                 ) -> tuple[float, np.ndarray, np.ndarray]:
+        """Energy (N mm), gradient (6 + n) and Hessian values over [pose_a, pose_b, internal].
+
+        The Hessian values belong to the entries of :meth:`hessian_pattern`.
+        """
         x = self.positions(pose_a, pose_b, internal)
         energy, forces, Ke = self.solid.evaluate(x)
         coef = np.ones(self._exp_z.size)
@@ -143,8 +149,7 @@ class ContinuumConnector:
         grad = np.bincount(self._exp_z, weights=forces[self._exp_dof] * coef, minlength=self._n)
         ke = Ke.ravel()
         t, p, q = self._mixed
-        data = np.concatenate([ke[self._plain_src], ke[t] * coef[p] * coef[q], second])
-        hess = sp.coo_matrix((data, (self._rows, self._cols)), shape=(self._n, self._n))
+        hess = np.concatenate([ke[self._plain_src], ke[t] * coef[p] * coef[q], second])
         return energy, grad, hess
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:

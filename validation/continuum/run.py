@@ -71,10 +71,6 @@ class ContinuumSystem(System):
         self.last_state = q.copy()
         return super().target(q)
 
-    def connector_states(self, q: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-        """(pose_a, pose_b, internal) of every connector in state q."""
-        return [self._local(q, c, idx) for c, idx in zip(self.connectors, self._local_to_global)]
-
 
 def build_system(mechanism: Mechanism, level: int, law: str = "svk", plane: str = "stress",
                  settings: SolverSettings | None = None) -> ContinuumSystem:
@@ -135,7 +131,7 @@ def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None
         name = f"{scene + '_' if scene else ''}{case.name}_continuum{level}.vtu"
         folder = Path(vtu_dir) if vtu_dir is not None else Path(png).parent
         vtu = write_vtu(folder / name, system.connectors,
-                        system.connector_states(system.last_state))
+                        system.local_states(system.last_state))
         if png is not None:
             render_png(vtu, png, f"{scene} {case.name} {model}")
     return lp

@@ -1,0 +1,190 @@
+"""Storage, solution and inertia of the assembled tangent stiffness.
+
+A System's tangent has the same sparsity pattern at every Newton iteration,
+so where each connector's Hessian entry lands is worked out once
+(:class:`TangentLayout`); each assembly is then a single ``bincount`` of
+the entry values into the chosen storage:
+
+* ``dense``  -- small systems (at most ``DENSE_LIMIT`` unknowns), LAPACK;
+* ``banded`` -- chains of beams and bodies: after a reverse Cuthill-McKee
+  ordering their bandwidth is small whatever the number of elements, so a
+  banded LU (``solve_banded``) costs O(n b^2) and the inertia follows from
+  banded bisection (``eigvals_banded``), saddle points included;
+* ``sparse`` -- wide bands (2D continuum meshes): SuperLU.
+
+Every :class:`Tangent` solves K x = b and counts its negative eigenvalues
+(Sylvester's inertia, the stability check of the load stepping).
+
+Units: the tangent is in N/mm, N and N mm like the coordinates it pairs.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+DENSE_LIMIT = 96     # above ~100 unknowns, multithreaded LAPACK stalls on a loaded 2-core machine
+BAND_LIMIT = 60      # banded LU beats SuperLU up to about this half-bandwidth (measured)
+ROUND_OFF = 1e-12    # eigenvalues above -ROUND_OFF * |K| count as zero, not as negative
+
+
+class Tangent(Protocol):
+    """An assembled symmetric tangent of n unknowns."""
+
+    n: int
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """K x = rhs for one (n,) or several (n, k) right-hand sides.
+
+        Raises ``np.linalg.LinAlgError`` or ``RuntimeError`` when K is singular.
+        """
+        ...
+
+    def negative_eigenvalues(self) -> int | None:
+        """Number of eigenvalues below -ROUND_OFF |K| (None: could not be judged)."""
+        ...
+
+    def toarray(self) -> np.ndarray:
+        """The matrix as a dense (n, n) array (for tests and small-system inspection)."""
+        ...
+
+
+class DenseTangent:
+    """A tangent held as a dense array."""
+
+    def __init__(self, matrix: np.ndarray):
+        self.matrix, self.n = matrix, matrix.shape[0]
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        return np.linalg.solve(self.matrix, rhs)
+
+    def negative_eigenvalues(self) -> int | None:
+        ev = np.linalg.eigvalsh(self.matrix)
+        return int(np.sum(ev < -ROUND_OFF * np.abs(ev).max(initial=0.0)))
+
+    def toarray(self) -> np.ndarray:
+        return self.matrix
+
+
+class BandedTangent:
+    """A tangent held in LAPACK band storage under a bandwidth-reducing permutation.
+
+    ``bands[b + i - j, j] = K[perm[i], perm[j]]`` for |i - j| <= b.
+    """
+
+    def __init__(self, bands: np.ndarray, perm: np.ndarray, half_bandwidth: int):
+        self.bands, self.perm, self.b = bands, perm, half_bandwidth
+        self.n = bands.shape[1]
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        x = np.empty_like(rhs, dtype=float)
+        x[self.perm] = sla.solve_banded((self.b, self.b), self.bands, rhs[self.perm],
+                                        check_finite=False)
+        return x
+
+    def negative_eigenvalues(self) -> int | None:
+        """Zero when a banded Cholesky succeeds (the usual, stable case, O(n b^2)).
+
+        Otherwise the count comes from banded bisection (``eigvals_banded``),
+        exact but some 30 times slower; saddle-point systems always take it.
+        """
+        if not np.all(np.isfinite(self.bands)):
+            return None
+        upper = self.bands[: self.b + 1]         # the upper band form LAPACK expects
+        try:
+            sla.cholesky_banded(upper, check_finite=False)
+            return 0
+        except np.linalg.LinAlgError:
+            pass
+        scale = np.abs(self.bands).max(initial=0.0) * (2 * self.b + 1)   # >= spectral radius
+        negative = sla.eigvals_banded(upper, select="v", select_range=(-np.inf, -ROUND_OFF * scale),
+                                      check_finite=False)
+        return int(negative.size)
+
+    def toarray(self) -> np.ndarray:
+        dense = np.zeros((self.n, self.n))
+        for k in range(-self.b, self.b + 1):
+            row = self.bands[self.b + k]
+            j = np.arange(max(0, -k), min(self.n, self.n - k))
+            dense[self.perm[j + k], self.perm[j]] = row[j]
+        return dense
+
+
+class SparseTangent:
+    """A tangent held as a CSC matrix (SuperLU)."""
+
+    def __init__(self, matrix: sp.csc_matrix, n_multipliers: int):
+        self.matrix, self.n, self.n_multipliers = matrix, matrix.shape[0], n_multipliers
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        return spla.splu(self.matrix).solve(rhs)
+
+    def negative_eigenvalues(self) -> int | None:
+        """Signs of the pivots of a symmetric-mode LU with diagonal pivoting (an LDL^T).
+
+        Not judged (None) for saddle-point systems, whose zero diagonal breaks
+        a diagonal-pivot LDL^T, or when the factorisation meets a zero pivot.
+        """
+        if self.n_multipliers:
+            return None
+        try:
+            lu = spla.splu(self.matrix, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                           options={"SymmetricMode": True})
+        except RuntimeError:
+            return None
+        d = lu.U.diagonal()
+        return int(np.sum(d < -ROUND_OFF * np.abs(d).max(initial=0.0)))
+
+    def toarray(self) -> np.ndarray:
+        return self.matrix.toarray()
+
+
+class TangentLayout:
+    """Where each value slot of the assembled tangent goes, for a fixed sparsity pattern.
+
+    Parameters
+    ----------
+    n : int
+        Number of unknowns.
+    rows, cols : array (k,)
+        Global row and column of every value slot (duplicates are summed).
+    n_multipliers : int
+        Lagrange multipliers among the unknowns (they make K a saddle point).
+    """
+
+    def __init__(self, n: int, rows: np.ndarray, cols: np.ndarray, n_multipliers: int = 0):
+        self.n, self.n_multipliers = n, n_multipliers
+        rows, cols = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
+        if n <= DENSE_LIMIT:
+            self.kind, self._slot, self._size = "dense", rows * n + cols, n * n
+            return
+        graph = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
+        perm = reverse_cuthill_mckee(graph, symmetric_mode=True).astype(np.int64)
+        position = np.empty(n, np.int64)
+        position[perm] = np.arange(n)
+        i, j = position[rows], position[cols]
+        b = int(np.abs(i - j).max(initial=0))
+        if b <= BAND_LIMIT:
+            self.kind, self.perm, self.b = "banded", perm, b
+            self._slot, self._size = (b + i - j) * n + j, (2 * b + 1) * n
+            return
+        self.kind = "sparse"
+        uniq, inverse = np.unique(cols * n + rows, return_inverse=True)
+        self._slot, self._size = inverse.ravel(), uniq.size
+        self._indices = (uniq % n).astype(np.int32)
+        self._indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
+
+    def build(self, values: np.ndarray) -> Tangent:
+        """The tangent whose value slots hold ``values`` (same order as rows, cols)."""
+        data = np.bincount(self._slot, weights=values, minlength=self._size)
+        if self.kind == "dense":
+            return DenseTangent(data.reshape(self.n, self.n))
+        if self.kind == "banded":
+            return BandedTangent(data.reshape(2 * self.b + 1, self.n), self.perm, self.b)
+        matrix = sp.csc_matrix((data, self._indices, self._indptr), shape=(self.n, self.n))
+        return SparseTangent(matrix, self.n_multipliers)
