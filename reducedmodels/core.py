@@ -202,7 +202,7 @@ class System:
         all_grad = np.concatenate(grad_idx) if grad_idx else np.zeros(0, int)
         self._grad_keep = all_grad >= 0
         self._grad_dofs = all_grad[self._grad_keep]
-        self._hess_keep = np.concatenate(hess_keep) if hess_keep else np.zeros(0, bool)
+        self._hess_keep = np.concatenate([*hess_keep, np.ones(n, bool)])
         diagonal = np.arange(n)
         self.layout = TangentLayout(n, np.concatenate([*rows, diagonal]),
                                     np.concatenate([*cols, diagonal]), self.n_multipliers)
@@ -274,25 +274,29 @@ class System:
             e, g, h = c.evaluate(*local)
             energy += e
             grads.append(g)
-            hessians.append(np.ravel(h))
+            hessians.append(h.ravel())
         n = self.n_dofs
         grad = (np.bincount(self._grad_dofs, weights=np.concatenate(grads)[self._grad_keep],
                             minlength=n) if grads else np.zeros(n))
         diagonal = np.zeros(n)
-        # dead forces at material points and moments: potential -factor * work
-        for dofs, f, rel in zip(loads.dofs, loads.forces, loads.rels):
-            if dofs[0] < 0:
+        # dead forces at material points, x = p + R(theta) rel: potential -factor f.x
+        for (ix, iy, it), (fx, fy), (rx, ry) in zip(loads.dofs.tolist(), loads.forces.tolist(),
+                                                    loads.rels.tolist()):
+            if ix < 0:
                 continue
-            x, jac, d2 = rigid_points(q[dofs], rel[None])
-            energy -= factor * f @ x[0]
-            grad[dofs] -= factor * jac[0].T @ f
-            diagonal[dofs[2]] -= factor * f @ d2[0]
-        for dof, m in zip(loads.moment_dofs, loads.moments):
+            c, s = math.cos(q[it]), math.sin(q[it])
+            rrx, rry = c * rx - s * ry, s * rx + c * ry              # R(theta) rel
+            energy -= factor * (fx * (q[ix] + rrx) + fy * (q[iy] + rry))
+            grad[ix] -= factor * fx
+            grad[iy] -= factor * fy
+            grad[it] -= factor * (fy * rrx - fx * rry)              # f . dx/dtheta
+            diagonal[it] += factor * (fx * rrx + fy * rry)          # -f . d2x/dtheta2
+        for dof, m in zip(loads.moment_dofs.tolist(), loads.moments.tolist()):
             if dof >= 0:
                 energy -= factor * m * q[dof]
                 grad[dof] -= factor * m
-        values = np.concatenate([*hessians, np.zeros(0)])[self._hess_keep]
-        return energy, grad, self.layout.build(np.concatenate([values, diagonal]))
+        values = np.concatenate([*hessians, diagonal])
+        return energy, grad, self.layout.build(values[self._hess_keep])
 
     def reaction(self, q: np.ndarray) -> np.ndarray:
         """Force (N) and moment (N mm, about the ground's reference point) the ground exerts."""
@@ -328,6 +332,12 @@ class System:
 
 CONTRACTION_EVIDENCE = 1e-3
 """Residual drop (relative to the first iterate) that shows Newton is contracting."""
+
+
+EXCURSION_CHECK = 1e-3
+"""Scaled correction below which an iterate cannot newly leave the sub-step's bounds
+(they are 0.25 rad and 0.05 of the size; a smaller correction only matters
+right at the edge, where the next large one is caught)."""
 
 
 class NewtonResult(NamedTuple):
@@ -392,16 +402,17 @@ def newton(system: System, q: np.ndarray, loads: _Loads, factor: float,
             du = K.solve(-g)
         except (RuntimeError, np.linalg.LinAlgError) as exc:  # singular factor
             return NewtonResult(None, it, f"singular tangent ({exc})", None)
-        if not np.all(np.isfinite(du)):
+        step = float(np.abs(system.scaled(du)).max(initial=0.0))
+        if not math.isfinite(step):
             return NewtonResult(None, it, "singular tangent", None)
         q = q + du
-        step = float(np.abs(system.scaled(du)).max(initial=0.0))
         contracting = last_step is not None and res <= CONTRACTION_EVIDENCE * res0
         if step <= settings.step_tol or (contracting and step * min(1.0, step / last_step)
                                          <= settings.error_tol):
             return NewtonResult(q, it + 1, "", K)
         last_step = step
-        if origin is not None and _motion_ratio(system, origin, q, settings) > settings.max_excursion:
+        if (origin is not None and step > EXCURSION_CHECK
+                and _motion_ratio(system, origin, q, settings) > settings.max_excursion):
             return NewtonResult(None, it + 1, "iterates left the sub-step's bounds", None)
     return NewtonResult(None, settings.max_iterations,
                         f"no convergence in {settings.max_iterations} iterations "

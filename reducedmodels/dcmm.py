@@ -33,31 +33,55 @@ def _rot(a: float) -> np.ndarray:
     return np.array([[c, -s], [s, c]])
 
 
+def _expansion() -> tuple[np.ndarray, np.ndarray]:
+    """Where each entry of a row-major 6x6 element Hessian comes from: (source, sign), (36,) each.
+
+    Every derivative of the element's measures u = (u1, u2, phi) with respect
+    to [x_L, y_L, theta_L, x_F, y_F, theta_F] has the form (a, b, c, -a, -b, d):
+    the followers' translations enter with the opposite sign of the
+    leader's. So the gradient and the Hessian are expansions of a 4-vector
+    and of a symmetric 4x4 matrix M over (x, y, theta_L, theta_F); ``source``
+    indexes M's upper triangle [M00, M01, M02, M03, M11, M12, M13, M22, M23, M33].
+    """
+    component = [0, 1, 2, 0, 1, 3]
+    sign = np.array([1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
+    index = {pair: k for k, pair in enumerate((i, j) for i in range(4) for j in range(i, 4))}
+    source = np.array([index[tuple(sorted((component[r], component[c])))]
+                       for r in range(6) for c in range(6)])
+    return source, np.outer(sign, sign).ravel()
+
+
+_SOURCE, _SIGN = _expansion()
+
+
 def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f: np.ndarray,
                    axes: np.ndarray, stiffness: np.ndarray
                    ) -> tuple[float, np.ndarray, np.ndarray]:
-    """Energy, gradient (6) and Hessian (6, 6) of one displaced compliance element.
+    """Energy, gradient (6) and row-major Hessian (36) of one displaced compliance element.
 
     Parameters
     ----------
     pose_l, pose_f : array (3,)
         Poses of the leading and following bodies (mm, mm, rad).
-    r_l, r_f : array (2,)
+    r_l, r_f : pair of float
         Initial offsets of the centre of elasticity from each body's reference point, mm.
-    axes : array (2, 2)
+    axes : 2 x 2 nested sequence of float
         Ellipse axes e1, e2 as columns (initial configuration).
-    stiffness : array (3,)
+    stiffness : triple of float
         Inverse of the diagonal compliance, (N/mm, N/mm, N mm).
 
     Notes
     -----
     With A = R(-theta_L), phi = theta_F - theta_L and d = x_F - x_L, the
     relative displacement in the leader frame is v = A d + R(phi) r_F - r_L and
-    u = (Q^T v, phi). Written with scalars: the 2x2 algebra is far cheaper in
-    plain floats than in small numpy arrays, and this is the innermost loop.
+    u = (Q^T v, phi). Each derivative du_i/d(coordinates) is (a, b, c, -a, -b, d)
+    (see :func:`_expansion`), so the Hessian is the expansion of the 4x4
+    M = sum_i k_i w_i w_i^T + (geometric part), w_i = (a, b, c, d). It is
+    written with scalars: this is the innermost loop of DCMM, and plain
+    float algebra beats small numpy arrays several times over.
     """
-    xl, yl, tl = pose_l
-    xf, yf, tf = pose_f
+    xl, yl, tl = pose_l.tolist()          # python floats: far faster scalar arithmetic
+    xf, yf, tf = pose_f.tolist()
     ca, sa = math.cos(tl), math.sin(tl)          # A = R(-tl) = [[ca, sa], [-sa, ca]]
     phi = tf - tl
     cp, sp_ = math.cos(phi), math.sin(phi)
@@ -65,39 +89,37 @@ def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f:
     adx, ady = ca * dx + sa * dy, -sa * dx + ca * dy          # A d
     rfx, rfy = r_f
     rrx, rry = cp * rfx - sp_ * rfy, sp_ * rfx + cp * rfy      # R(phi) r_F
-    vx, vy = adx + rrx - r_l[0], ady + rry - r_l[1]
+    rlx, rly = r_l
+    vx, vy = adx + rrx - rlx, ady + rry - rly
     (q11, q12), (q21, q22) = axes                             # rows of Q
     u1, u2 = q11 * vx + q21 * vy, q12 * vx + q22 * vy          # Q^T v
     k1, k2, k3 = stiffness
     f1, f2, m = k1 * u1, k2 * u2, k3 * phi
     energy = 0.5 * (f1 * u1 + f2 * u2 + m * phi)
-    # derivatives of v: A J d = (-ady, adx); R(phi) J r_F = (-rry, rrx)
-    dv = np.array([
-        [-ca, -sa, ady + rry, ca, sa, -rry],
-        [sa, -ca, -adx - rrx, -sa, ca, rrx],
-    ])
-    du = np.empty((3, 6))
-    du[:2] = axes.T @ dv
-    du[2] = (0.0, 0.0, -1.0, 0.0, 0.0, 1.0)
-    ku = np.array([f1, f2, m])
-    grad = du.T @ ku
-    hess = du.T @ (stiffness[:, None] * du)
-    lx, ly = q11 * f1 + q12 * f2, q21 * f1 + q22 * f2         # Q K u (translation part)
+    # dv/d(x_L, y_L, theta_L, theta_F); dv/d(x_F, y_F) = -dv/d(x_L, y_L)
+    # dv_x = (-ca, -sa, ady + rry, -rry), dv_y = (sa, -ca, -adx - rrx, rrx)
+    ex, ey, et, ef = -ca, -sa, ady + rry, -rry
+    nx, ny, nt, nf = sa, -ca, -adx - rrx, rrx
+    a1, b1, c1, d1 = (q11 * ex + q21 * nx, q11 * ey + q21 * ny, q11 * et + q21 * nt,
+                      q11 * ef + q21 * nf)
+    a2, b2, c2, d2 = (q12 * ex + q22 * nx, q12 * ey + q22 * ny, q12 * et + q22 * nt,
+                      q12 * ef + q22 * nf)
+    g = (f1 * a1 + f2 * a2, f1 * b1 + f2 * b2, f1 * c1 + f2 * c2 - m, f1 * d1 + f2 * d2 + m)
+    # geometric part: lambda = Q K u (translation force in the leader frame)
+    lx, ly = q11 * f1 + q12 * f2, q21 * f1 + q22 * f2
     lam_rr = lx * rrx + ly * rry
-    lam_aj_x, lam_aj_y = lx * sa + ly * ca, -lx * ca + ly * sa     # lam^T A J, A J = [[sa, -ca], [ca, sa]]
-    hess[2, 2] += -(lx * adx + ly * ady) - lam_rr
-    hess[2, 5] += lam_rr
-    hess[5, 2] += lam_rr
-    hess[5, 5] -= lam_rr
-    hess[2, 3] -= lam_aj_x
-    hess[3, 2] -= lam_aj_x
-    hess[2, 4] -= lam_aj_y
-    hess[4, 2] -= lam_aj_y
-    hess[2, 0] += lam_aj_x
-    hess[0, 2] += lam_aj_x
-    hess[2, 1] += lam_aj_y
-    hess[1, 2] += lam_aj_y
-    return energy, grad, hess
+    lam_x, lam_y = lx * sa + ly * ca, -lx * ca + ly * sa
+    ka1, kb1, kc1, kd1 = k1 * a1, k1 * b1, k1 * c1, k1 * d1
+    ka2, kb2, kc2, kd2 = k2 * a2, k2 * b2, k2 * c2, k2 * d2
+    upper = np.array([
+        ka1 * a1 + ka2 * a2, ka1 * b1 + ka2 * b2, ka1 * c1 + ka2 * c2 + lam_x,
+        ka1 * d1 + ka2 * d2,
+        kb1 * b1 + kb2 * b2, kb1 * c1 + kb2 * c2 + lam_y, kb1 * d1 + kb2 * d2,
+        kc1 * c1 + kc2 * c2 + k3 - (lx * adx + ly * ady) - lam_rr, kc1 * d1 + kc2 * d2 - k3 + lam_rr,
+        kd1 * d1 + kd2 * d2 + k3 - lam_rr,
+    ])
+    grad = np.array([g[0], g[1], g[2], -g[0], -g[1], g[3]])
+    return energy, grad, upper[_SOURCE] * _SIGN
 
 
 class DcmmConnector:
@@ -141,12 +163,16 @@ class DcmmConnector:
             c = ell.compliance().diagonal().copy()
             if ell.b == 0.0:
                 c[0] = part.length / EA
-            self._elements.append((ell.center - refs[k], ell.center - refs[k + 1], ell.axes,
-                                   1.0 / c))
+            self._elements.append((tuple((ell.center - refs[k]).tolist()),
+                                   tuple((ell.center - refs[k + 1]).tolist()),
+                                   tuple(map(tuple, ell.axes.tolist())), tuple((1.0 / c).tolist())))
         # local slots of the chain bodies: a -> 0..2, cut k -> 6 + 3k, b -> 3..5
         slots = ([np.arange(0, 3)] + [np.arange(6 + 3 * k, 9 + 3 * k) for k in range(n - 1)]
                  + [np.arange(3, 6)])
-        self._element_dofs = [np.concatenate([slots[k], slots[k + 1]]) for k in range(n)]
+        self._element_dofs = np.array([np.concatenate([slots[k], slots[k + 1]])
+                                       for k in range(n)])
+        self._rows = np.repeat(self._element_dofs, 6, axis=1).ravel()
+        self._cols = np.tile(self._element_dofs, (1, 6)).ravel()
         self._ends = np.array([flexure.end_point_of(self.bodies[0]),
                                flexure.end_point_of(self.bodies[1])])
         self._ref_ends = np.array([refs[0], refs[-1]])
@@ -162,20 +188,23 @@ class DcmmConnector:
     def _chain(self, pose_a, pose_b, internal) -> list[np.ndarray]:
         return [pose_a, *internal.reshape(-1, 3), pose_b]
 
+    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """Local (rows, cols) of the Hessian values :meth:`evaluate` returns: 36 per sub-arc."""
+        return self._rows, self._cols
+
     def evaluate(self, pose_a, pose_b, internal):
-        """Energy (N mm), gradient and dense Hessian over [pose_a, pose_b, internal]."""
+        """Energy (N mm), gradient over [pose_a, pose_b, internal] and the Hessian values."""
         if len(self._elements) == 1:
             return sub_arc_energy(pose_a, pose_b, *self._elements[0])
         chain = self._chain(pose_a, pose_b, internal)
-        n = 6 + self.n_internal
-        energy, grad, hess = 0.0, np.zeros(n), np.zeros((n, n))
+        energy, grads, hessians = 0.0, [], []
         for k, element in enumerate(self._elements):
             e, g, h = sub_arc_energy(chain[k], chain[k + 1], *element)
-            idx = self._element_dofs[k]
             energy += e
-            grad[idx] += g
-            hess[np.ix_(idx, idx)] += h
-        return energy, grad, hess
+            grads.append(g), hessians.append(h)
+        gradient = np.bincount(self._element_dofs.ravel(), weights=np.concatenate(grads),
+                               minlength=6 + self.n_internal)
+        return energy, gradient, np.concatenate(hessians)
 
     def shape(self, pose_a, pose_b, internal) -> np.ndarray:
         """Polyline through the flexure ends and the cut points, mm."""

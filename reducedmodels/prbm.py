@@ -247,6 +247,30 @@ def joint_positions(shape: Arc | Segment, params: PrbmParameters) -> np.ndarray:
     return center + length * local @ np.column_stack([e1, e2]).T
 
 
+def _rotated(angle: float, v: tuple[float, float]) -> tuple[float, float]:
+    """R(angle) v for a plane vector given as two floats (mm)."""
+    c, s = math.cos(angle), math.sin(angle)
+    return c * v[0] - s * v[1], s * v[0] + c * v[1]
+
+
+def _hessian_pattern() -> tuple[np.ndarray, np.ndarray]:
+    """Local (rows, cols) of the PRBM Hessian entries, in the order :meth:`PrbmConnector.evaluate` fills them.
+
+    Springs and gap curvature on the angles (theta_a 2, theta_b 5, phi_h 6,
+    phi_l 7): the chain theta_a - phi_h - phi_l - theta_b is tridiagonal.
+    Then c G in the mu rows (8, 9) and c G^T in the mu columns: +-c on the
+    translations, the four angle columns of G.
+    """
+    springs = [(2, 2), (2, 6), (6, 2), (6, 6), (6, 7), (7, 6), (7, 7), (7, 5), (5, 7), (5, 5)]
+    translation = [(8, 0), (8, 3), (9, 1), (9, 4)]
+    angles = [(8, 2), (8, 5), (8, 6), (8, 7), (9, 2), (9, 5), (9, 6), (9, 7)]
+    pairs = springs + translation + angles + [(j, i) for i, j in translation + angles]
+    return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+
+
+_HESSIAN_ROWS, _HESSIAN_COLS = _hessian_pattern()
+
+
 class PrbmConnector:
     """Symmetric 3R PRBM of one flexure (a connector for :mod:`reducedmodels.core`).
 
@@ -284,6 +308,7 @@ class PrbmConnector:
         self.params = params
         EI = flexure.bending_stiffness(mechanism.material)
         self.stiffness = np.array([params.kappa1, params.kappa2, params.kappa1]) * EI / length
+        self._k = tuple(self.stiffness.tolist())
         self.closure_scale = EI / length**3
         joints = joint_positions(shape, params)
         if flexure.start_body != self.bodies[0]:
@@ -292,8 +317,10 @@ class PrbmConnector:
         ref_a = mechanism.bodies[self.bodies[0]].reference
         ref_b = mechanism.bodies[self.bodies[1]].reference
         self._ref = np.array([ref_a, ref_b])
-        self._r_a, self._r_b = joints[0] - ref_a, joints[2] - ref_b
-        self._v_h, self._v_l = joints[1] - joints[0], joints[2] - joints[1]
+        # joint offsets from the body references and link vectors, as float pairs (mm)
+        self._r_a, self._r_b, self._v_h, self._v_l = (
+            tuple(v.tolist()) for v in (joints[0] - ref_a, joints[2] - ref_b,
+                                         joints[1] - joints[0], joints[2] - joints[1]))
         self._ends = np.array([flexure.end_point_of(self.bodies[0]),
                                flexure.end_point_of(self.bodies[1])])
 
@@ -311,40 +338,50 @@ class PrbmConnector:
         phi_h, phi_l = internal[0], internal[1]
         return np.array([phi_h - pose_a[2], phi_l - phi_h, pose_b[2] - phi_l])
 
+    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """Local (rows, cols) of the Hessian values :meth:`evaluate` returns (see _HESSIAN_PATTERN)."""
+        return _HESSIAN_ROWS, _HESSIAN_COLS
+
     def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
                  ) -> tuple[float, np.ndarray, np.ndarray]:
-        """Lagrangian (N mm), gradient (10) and Hessian (10, 10) over [pose_a, pose_b, internal].
+        """Lagrangian (N mm), gradient (10) and Hessian values over [pose_a, pose_b, internal].
 
         Local order: [x_a, y_a, theta_a, x_b, y_b, theta_b, phi_h, phi_l, mu_x, mu_y].
+        With the gap g and its Jacobian G (identity on x_a, minus identity on
+        x_b, J R(.) v on the four angles), the springs t = B q and the scale
+        c: gradient B^T K t + c G^T mu (and c g on mu), Hessian B^T K B plus
+        the curvature of the gap, c mu . d2(R v)/dangle2 = -c mu . R v, on the
+        four angle diagonals, plus c G and c G^T in the mu rows and columns.
+        Written with scalars (the innermost loop; small numpy arrays cost
+        more than the algebra).
         """
         c = self.closure_scale
-        mu = internal[2:4]
-        # moving vectors and their theta-derivatives J R v
-        ra = _rot(pose_a[2]) @ self._r_a
-        rb = _rot(pose_b[2]) @ self._r_b
-        vh = _rot(internal[0]) @ self._v_h
-        vl = _rot(internal[1]) @ self._v_l
-        gap = pose_a[:2] + ra + vh + vl - pose_b[:2] - rb
-        G = np.zeros((2, 10))
-        G[:, 0:2] = np.eye(2)
-        G[:, 3:5] = -np.eye(2)
-        G[:, 2], G[:, 5], G[:, 6], G[:, 7] = _J @ ra, -(_J @ rb), _J @ vh, _J @ vl
-        # spring energy: t = B q over the angles (theta_a, theta_b, phi_h, phi_l)
-        B = np.zeros((3, 10))
-        B[0, 6], B[0, 2] = 1.0, -1.0
-        B[1, 7], B[1, 6] = 1.0, -1.0
-        B[2, 5], B[2, 7] = 1.0, -1.0
-        t = self.joint_rotations(pose_a, pose_b, internal)
-        kt = self.stiffness * t
-        energy = 0.5 * float(t @ kt) + c * float(mu @ gap)
-        grad = B.T @ kt + c * (G.T @ mu)
-        grad[8:10] = c * gap
-        hess = B.T @ (self.stiffness[:, None] * B)
-        # second derivatives of the gap: d2(R(a) v)/da2 = -R(a) v
-        hess[[2, 5, 6, 7], [2, 5, 6, 7]] += c * np.array([-mu @ ra, mu @ rb, -mu @ vh, -mu @ vl])
-        hess[8:10, :] += c * G
-        hess[:, 8:10] += c * G.T
-        return energy, grad, hess
+        _, _, ta = pose_a.tolist()
+        _, _, tb = pose_b.tolist()
+        ph, pl, mx, my = internal.tolist()
+        (rax, ray), (rbx, rby) = _rotated(ta, self._r_a), _rotated(tb, self._r_b)
+        (vhx, vhy), (vlx, vly) = _rotated(ph, self._v_h), _rotated(pl, self._v_l)
+        gx = pose_a[0] + rax + vhx + vlx - pose_b[0] - rbx
+        gy = pose_a[1] + ray + vhy + vly - pose_b[1] - rby
+        # gap Jacobian columns on the angles: J R v = (-y, x)
+        ga, gb, gh, gl = (-ray, rax), (rby, -rbx), (-vhy, vhx), (-vly, vlx)
+        k1, k2, k3 = self._k
+        t1, t2, t3 = ph - ta, pl - ph, tb - pl
+        f1, f2, f3 = k1 * t1, k2 * t2, k3 * t3
+        cmx, cmy = c * mx, c * my
+        energy = 0.5 * (f1 * t1 + f2 * t2 + f3 * t3) + cmx * gx + cmy * gy
+        grad = np.array([
+            cmx, cmy, -f1 + cmx * ga[0] + cmy * ga[1],
+            -cmx, -cmy, f3 + cmx * gb[0] + cmy * gb[1],
+            f1 - f2 + cmx * gh[0] + cmy * gh[1], f2 - f3 + cmx * gl[0] + cmy * gl[1],
+            c * gx, c * gy])
+        mixed = [c * ga[0], c * gb[0], c * gh[0], c * gl[0],
+                 c * ga[1], c * gb[1], c * gh[1], c * gl[1]]
+        values = [k1 - cmx * rax - cmy * ray, -k1, -k1, k1 + k2 - cmx * vhx - cmy * vhy,
+                  -k2, -k2, k2 + k3 - cmx * vlx - cmy * vly, -k3, -k3,
+                  k3 + cmx * rbx + cmy * rby,
+                  c, -c, c, -c, *mixed, c, -c, c, -c, *mixed]
+        return energy, grad, np.array(values)
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Polyline end_a, R_a, R_2, R_b, end_b in the current configuration, (5, 2) mm."""
