@@ -29,7 +29,8 @@ import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 DENSE_LIMIT = 96     # above ~100 unknowns, multithreaded LAPACK stalls on a loaded 2-core machine
-BAND_LIMIT = 60      # banded LU beats SuperLU up to about this half-bandwidth (measured)
+BAND_LIMIT = 60      # banded LU beats SuperLU up to about this half-bandwidth: measured on the
+                     # continuum meshes, b = 29 is 2x faster, b = 61 even, b = 117 2x slower
 ROUND_OFF = 1e-12    # eigenvalues above -ROUND_OFF * |K| count as zero, not as negative
 
 
@@ -155,12 +156,19 @@ class TangentLayout:
         Global row and column of every value slot (duplicates are summed).
     n_multipliers : int
         Lagrange multipliers among the unknowns (they make K a saddle point).
+    kind : {'dense', 'banded', 'sparse'}, optional
+        Force a storage (benchmarks, tests); by default dense up to
+        ``DENSE_LIMIT`` unknowns, else banded if the reordered half-bandwidth
+        is at most ``BAND_LIMIT``, else sparse.
     """
 
-    def __init__(self, n: int, rows: np.ndarray, cols: np.ndarray, n_multipliers: int = 0):
+    def __init__(self, n: int, rows: np.ndarray, cols: np.ndarray, n_multipliers: int = 0,
+                 kind: str | None = None):
+        if kind not in (None, "dense", "banded", "sparse"):
+            raise ValueError(f"tangent storage must be dense, banded or sparse, got {kind!r}")
         self.n, self.n_multipliers = n, n_multipliers
         rows, cols = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
-        if n <= DENSE_LIMIT:
+        if kind == "dense" or (kind is None and n <= DENSE_LIMIT):
             self.kind, self._slot, self._size = "dense", rows * n + cols, n * n
             return
         graph = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
@@ -169,7 +177,7 @@ class TangentLayout:
         position[perm] = np.arange(n)
         i, j = position[rows], position[cols]
         b = int(np.abs(i - j).max(initial=0))
-        if b <= BAND_LIMIT:
+        if kind == "banded" or (kind is None and b <= BAND_LIMIT):
             self.kind, self.perm, self.b = "banded", perm, b
             self._slot, self._size = (b + i - j) * n + j, (2 * b + 1) * n
             return
