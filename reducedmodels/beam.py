@@ -324,6 +324,73 @@ class BeamConnector:
                                minlength=6 + self.n_internal)
         return energy, gradient, hess.ravel()
 
+    def predict_internal(self, states: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
+                         weights: list[float], pose_a: np.ndarray, pose_b: np.ndarray
+                         ) -> np.ndarray:
+        """Interior nodes extrapolated in chord lengths and angles (for the load stepping).
+
+        Each element's chord length and direction and each node's rotation
+        are extrapolated with ``weights`` over the converged ``states``; the
+        chain is then rebuilt from the start body's end node (at its pose
+        in ``pose_a``/``pose_b``) and the mismatch with the end body's node
+        is spread along it in proportion to arc length. Extrapolating node
+        positions instead would shorten every chord that turns, and the
+        axial stiffness turns that O(h^2) error into forces far larger than
+        the load (tens of Newton iterations on slender flexures).
+        """
+        last = self._nodes(*states[-1])[0]
+        d_last = np.diff(last, axis=0)
+        angle_last = np.arctan2(d_last[:, 1], d_last[:, 0])
+        length = np.zeros(len(self._l0))
+        turn = np.zeros(len(self._l0))
+        theta = np.zeros(self._n_nodes)
+        for w, state in zip(weights, states):
+            x, th, _ = self._nodes(*state)
+            d = np.diff(x, axis=0)
+            length += w * np.hypot(d[:, 0], d[:, 1])
+            turn += w * wrap_angle(np.arctan2(d[:, 1], d[:, 0]) - angle_last)
+            theta += w * th
+        start, end = self._nodes(pose_a, pose_b, states[-1][2])[0][[0, -1]]
+        return self._closed_chain(length, angle_last + turn, start, end, theta)
+
+    def update_internal(self, old: tuple[np.ndarray, np.ndarray, np.ndarray],
+                        new: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+        """Interior nodes after a Newton correction, with chords turned instead of sheared.
+
+        ``new`` is the linearly corrected state. Each chord's change is split
+        into its stretch (along the old chord) and its turn (across it,
+        divided by the length), and the chord is rebuilt with that length
+        and direction exactly; the chain is then closed between the end
+        bodies' nodes as in :meth:`predict_internal`. This agrees with the
+        linear update to first order, so Newton keeps its quadratic
+        convergence, but a turning chord no longer comes out stretched by
+        (turn)^2 / 2, which EA would turn into spurious forces.
+        """
+        x_old = self._nodes(*old)[0]
+        x_new, theta, _ = self._nodes(*new)
+        d_old, d_new = np.diff(x_old, axis=0), np.diff(x_new, axis=0)
+        length = np.hypot(d_old[:, 0], d_old[:, 1])
+        tangent = d_old / length[:, None]
+        change = d_new - d_old
+        stretch = np.einsum("ij,ij->i", tangent, change)
+        turn = (tangent[:, 0] * change[:, 1] - tangent[:, 1] * change[:, 0]) / length
+        angle = np.arctan2(tangent[:, 1], tangent[:, 0]) + turn
+        return self._closed_chain(length + stretch, angle, x_new[0], x_new[-1], theta)
+
+    def _closed_chain(self, length: np.ndarray, angle: np.ndarray, start: np.ndarray,
+                      end: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Interior nodes of the chain of chords (length, angle) from ``start``, closed at ``end``.
+
+        The mismatch between the last node and ``end`` is spread along the
+        chain in proportion to arc length (a uniform stretch, the cheapest
+        in axial energy). Returns the internal coordinates (x, y, theta).
+        """
+        chords = length[:, None] * np.column_stack([np.cos(angle), np.sin(angle)])
+        x = start + np.vstack([np.zeros(2), np.cumsum(chords, axis=0)])
+        share = np.concatenate([[0.0], np.cumsum(length)]) / length.sum()
+        x += share[:, None] * (end - x[-1])
+        return np.column_stack([x[1:-1], theta[1:-1]]).ravel()
+
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed node positions (N + 1, 2), mm, from the flexure's start to its end."""
         return self._nodes(pose_a, pose_b, internal)[0]

@@ -171,6 +171,11 @@ class System:
         self.n_multipliers = sum(getattr(c, "n_multipliers", 0) for c in self.connectors)
         #: residual weights: forces as is, moments per unit of mechanism size (N)
         self.force_scale = np.where(self.is_rotation, 1.0 / self.size, 1.0)
+        # connectors that predict or update their internal coordinates themselves
+        self._predictors = [(k, c.predict_internal) for k, c in enumerate(self.connectors)
+                            if c.n_internal and hasattr(c, "predict_internal")]
+        self._updaters = [(k, c.update_internal) for k, c in enumerate(self.connectors)
+                          if c.n_internal and hasattr(c, "update_internal")]
         self._build_scatter()
 
     def _build_scatter(self) -> None:
@@ -321,6 +326,20 @@ class System:
         d = x[0] - mech.target_point
         return float(d[0]), float(d[1]), float(pose[2])
 
+    def update(self, q: np.ndarray, du: np.ndarray) -> np.ndarray:
+        """State after the Newton correction du: q + du, or a connector's own update.
+
+        A connector may map its internal coordinates nonlinearly
+        (``update_internal(old_local, new_local)``), provided the map equals
+        q + du to first order so that Newton stays quadratic.
+        """
+        new = q + du
+        if self._updaters:
+            before, after = self.local_states(q), self.local_states(new)
+            for k, update in self._updaters:
+                new[self._local_to_global[k][6:]] = update(before[k], after[k])
+        return new
+
     def residual(self, grad: np.ndarray, loads: _Loads) -> float:
         """Largest out-of-balance force (moments per unit size) relative to the load scale."""
         return float(np.abs(grad * self.force_scale).max(initial=0.0)) / loads.scale
@@ -338,6 +357,12 @@ EXCURSION_CHECK = 1e-3
 """Scaled correction below which an iterate cannot newly leave the sub-step's bounds
 (they are 0.25 rad and 0.05 of the size; a smaller correction only matters
 right at the edge, where the next large one is caught)."""
+
+
+NONLINEAR_UPDATE = 1e-3
+"""Scaled correction above which connectors apply their own nonlinear update.
+Below it the second-order stretch a linear update leaves in a turning chord,
+(correction)^2 / 2 < 5e-7, no longer costs iterations, and q + du is cheaper."""
 
 
 class NewtonResult(NamedTuple):
@@ -405,7 +430,7 @@ def newton(system: System, q: np.ndarray, loads: _Loads, factor: float,
         step = float(np.abs(system.scaled(du)).max(initial=0.0))
         if not math.isfinite(step):
             return NewtonResult(None, it, "singular tangent", None)
-        q = q + du
+        q = system.update(q, du) if step > NONLINEAR_UPDATE else q + du
         contracting = last_step is not None and res <= CONTRACTION_EVIDENCE * res0
         if step <= settings.step_tol or (contracting and step * min(1.0, step / last_step)
                                          <= settings.error_tol):
@@ -439,22 +464,39 @@ def _unstable(system: System, tangent: Tangent) -> bool:
     return negative is not None and negative > system.n_multipliers
 
 
-def extrapolate(history: Sequence[tuple[np.ndarray, float]], factor: float) -> np.ndarray:
-    """Predicted state at ``factor``: the Lagrange polynomial through the converged states.
-
-    ``history`` holds up to three (state, load factor) pairs; a quadratic
-    predictor leaves an O(h^3) error where the secant's is O(h^2), which
-    matters for nearly inextensible flexures: a predictor error e stretches
-    them by O(e) and Newton then needs extra iterations to pull the
-    stretch back out.
-    """
-    guess = np.zeros_like(history[-1][0])
-    for i, (qi, li) in enumerate(history):
-        weight = 1.0
-        for j, (_, lj) in enumerate(history):
+def lagrange_weights(factors: Sequence[float], factor: float) -> list[float]:
+    """Weights of the Lagrange polynomial through ``factors`` evaluated at ``factor`` (sum 1)."""
+    weights = []
+    for i, li in enumerate(factors):
+        w = 1.0
+        for j, lj in enumerate(factors):
             if j != i:
-                weight *= (factor - lj) / (li - lj)
-        guess += weight * qi
+                w *= (factor - lj) / (li - lj)
+        weights.append(w)
+    return weights
+
+
+def extrapolate(system: System, history: Sequence[tuple[np.ndarray, float]], factor: float
+                ) -> np.ndarray:
+    """Predicted state at ``factor`` from up to three converged (state, factor) pairs.
+
+    Coordinates are extrapolated by the Lagrange polynomial through the
+    history (quadratic from three states: an O(h^3) error where the secant's
+    is O(h^2)). A connector may predict its own internal coordinates
+    instead (``predict_internal(states, weights, pose_a, pose_b)``, with its
+    local states along the history, the weights and its bodies' predicted
+    poses): nearly inextensible flexures extrapolated node by node in
+    Cartesian coordinates come out stretched, and Newton then spends
+    iterations pulling the stretch back out.
+    """
+    weights = lagrange_weights([lam for _, lam in history], factor)
+    guess = sum(w * q for w, (q, _) in zip(weights, history))
+    if system._predictors:
+        past = [system.local_states(q) for q, _ in history]
+        now = system.local_states(guess)
+        for k, predict in system._predictors:
+            guess[system._local_to_global[k][6:]] = predict([p[k] for p in past], weights,
+                                                            now[k][0], now[k][1])
     return guess
 
 
@@ -524,11 +566,8 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
         level_iters = 0
         while lam < target - 1e-14 * spacing:
             trial = min(lam + step, target)
-            result = newton(system, extrapolate(history, trial), loads, trial, s, origin=q)
+            result = newton(system, extrapolate(system, history, trial), loads, trial, s, origin=q)
             iters = result.iterations
-            if result.state is None and len(history) > 1:   # the predictor misled: start at q
-                result = newton(system, q, loads, trial, s, origin=q)
-                iters += result.iterations
             stats["newton_iterations"] += iters
             level_iters += iters
             q_new, why = result.state, result.reason

@@ -8,8 +8,9 @@ the entry values into the chosen storage:
 * ``dense``  -- small systems (at most ``DENSE_LIMIT`` unknowns), LAPACK;
 * ``banded`` -- chains of beams and bodies: after a reverse Cuthill-McKee
   ordering their bandwidth is small whatever the number of elements, so a
-  banded LU (``solve_banded``) costs O(n b^2) and the inertia follows from
-  banded bisection (``eigvals_banded``), saddle points included;
+  banded LU (LAPACK ``dgbtrf``) costs O(n b^2), and so does the inertia
+  (a banded Cholesky, or banded bisection when that fails, saddle points
+  included);
 * ``sparse`` -- wide bands (2D continuum meshes): SuperLU.
 
 Every :class:`Tangent` solves K x = b and counts its negative eigenvalues
@@ -24,6 +25,7 @@ from typing import Protocol
 
 import numpy as np
 import scipy.linalg as sla
+from scipy.linalg import lapack
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
@@ -73,19 +75,31 @@ class DenseTangent:
 
 
 class BandedTangent:
-    """A tangent held in LAPACK band storage under a bandwidth-reducing permutation.
+    """A tangent held in LAPACK general-band storage under a bandwidth-reducing permutation.
 
-    ``bands[b + i - j, j] = K[perm[i], perm[j]]`` for |i - j| <= b.
+    ``storage`` is Fortran-ordered (3b + 1, n) with
+    ``storage[2b + i - j, j] = K[perm[i], perm[j]]`` for |i - j| <= b; the
+    top b rows are the room ``dgbtrf`` needs for its row interchanges. LAPACK
+    is called directly: the wrappers' copies and checks cost more than the
+    factorisation of a narrow band.
     """
 
-    def __init__(self, bands: np.ndarray, perm: np.ndarray, half_bandwidth: int):
-        self.bands, self.perm, self.b = bands, perm, half_bandwidth
-        self.n = bands.shape[1]
+    def __init__(self, storage: np.ndarray, perm: np.ndarray, half_bandwidth: int):
+        self.storage, self.perm, self.b = storage, perm, half_bandwidth
+        self.n = storage.shape[1]
+        self._factors = None
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
-        x = np.empty_like(rhs, dtype=float)
-        x[self.perm] = sla.solve_banded((self.b, self.b), self.bands, rhs[self.perm],
-                                        check_finite=False)
+        b = self.b
+        if self._factors is None:
+            lu, piv, info = lapack.dgbtrf(self.storage, b, b)
+            if info > 0:
+                raise np.linalg.LinAlgError(f"singular tangent (zero pivot {info})")
+            self._factors = (lu, piv)
+        lu, piv = self._factors
+        x_perm, info = lapack.dgbtrs(lu, b, b, rhs[self.perm], piv)
+        x = np.empty_like(x_perm)
+        x[self.perm] = x_perm
         return x
 
     def negative_eigenvalues(self) -> int | None:
@@ -94,25 +108,23 @@ class BandedTangent:
         Otherwise the count comes from banded bisection (``eigvals_banded``),
         exact but some 30 times slower; saddle-point systems always take it.
         """
-        if not np.all(np.isfinite(self.bands)):
+        b = self.b
+        upper = self.storage[b:]                 # rows b..3b: the upper band form (diagonal last)
+        if not np.all(np.isfinite(upper)):
             return None
-        upper = self.bands[: self.b + 1]         # the upper band form LAPACK expects
-        try:
-            sla.cholesky_banded(upper, check_finite=False)
+        if lapack.dpbtrf(upper[: b + 1], lower=0)[1] == 0:
             return 0
-        except np.linalg.LinAlgError:
-            pass
-        scale = np.abs(self.bands).max(initial=0.0) * (2 * self.b + 1)   # >= spectral radius
+        upper = upper[: b + 1]
+        scale = np.abs(upper).max(initial=0.0) * (2 * b + 1)        # >= spectral radius
         negative = sla.eigvals_banded(upper, select="v", select_range=(-np.inf, -ROUND_OFF * scale),
                                       check_finite=False)
         return int(negative.size)
 
     def toarray(self) -> np.ndarray:
         dense = np.zeros((self.n, self.n))
-        for k in range(-self.b, self.b + 1):
-            row = self.bands[self.b + k]
+        for k in range(-self.b, self.b + 1):           # k = i - j
             j = np.arange(max(0, -k), min(self.n, self.n - k))
-            dense[self.perm[j + k], self.perm[j]] = row[j]
+            dense[self.perm[j + k], self.perm[j]] = self.storage[2 * self.b + k, j]
         return dense
 
 
@@ -179,7 +191,7 @@ class TangentLayout:
         b = int(np.abs(i - j).max(initial=0))
         if kind == "banded" or (kind is None and b <= BAND_LIMIT):
             self.kind, self.perm, self.b = "banded", perm, b
-            self._slot, self._size = (b + i - j) * n + j, (2 * b + 1) * n
+            self._slot, self._size = j * (3 * b + 1) + (2 * b + i - j), (3 * b + 1) * n
             return
         self.kind = "sparse"
         uniq, inverse = np.unique(cols * n + rows, return_inverse=True)
@@ -192,7 +204,7 @@ class TangentLayout:
         data = np.bincount(self._slot, weights=values, minlength=self._size)
         if self.kind == "dense":
             return DenseTangent(data.reshape(self.n, self.n))
-        if self.kind == "banded":
-            return BandedTangent(data.reshape(2 * self.b + 1, self.n), self.perm, self.b)
+        if self.kind == "banded":     # column j contiguous: Fortran order, as LAPACK wants it
+            return BandedTangent(data.reshape(self.n, 3 * self.b + 1).T, self.perm, self.b)
         matrix = sp.csc_matrix((data, self._indices, self._indptr), shape=(self.n, self.n))
         return SparseTangent(matrix, self.n_multipliers)
