@@ -10,7 +10,7 @@ from scipy.integrate import quad
 
 from builders import cantilever, fd_check, tip_force, tip_moment
 from geometry import Arc, Segment, load_scene, parse_model
-from reducedmodels import build_system, run_reduced
+from reducedmodels import run_reduced
 from reducedmodels.dcmm import DcmmConnector
 
 

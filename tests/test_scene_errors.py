@@ -1,7 +1,6 @@
 """Every kind of bad scene input gives a SceneError naming the file, the field
 and the value; the CLI turns it into exit code 2 with no traceback."""
 
-import copy
 import tomllib
 from importlib import resources
 

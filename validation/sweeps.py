@@ -16,8 +16,6 @@ from __future__ import annotations
 import math
 from typing import Callable, Sequence
 
-import numpy as np
-
 from geometry import Arc, Force, LoadCase, Material, SceneError, Section, Segment, parse_model
 from geometry.mechanism import assemble
 from reducedmodels import SolverError, run_reduced
