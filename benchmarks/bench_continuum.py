@@ -4,8 +4,9 @@ For one load case of each scene (11 load levels, default mesh level) it
 reports the unknowns, Newton iterations, wall seconds, seconds per Newton
 iteration and where the time goes: set-up (Gmsh mesh or cache, scikit-fem
 basis), element kernels and chain rule (ContinuumConnector.evaluate), the
-core's global assembly (System.assemble minus the connectors) and the sparse
-LU factorisation and solve (scipy spsolve). The breakdown comes from
+core's global assembly (System.assemble minus the connectors) and the LU
+factorisation and solve of the tangent (``reducedmodels.tangent``: banded
+LAPACK for the default level, SuperLU for wide bands). The breakdown comes from
 cProfile over the same run (its overhead is below 2 %: few, heavy calls).
 
 Usage: ``python benchmarks/bench_continuum.py [--level N] [--json out.json]``
@@ -44,7 +45,7 @@ def bench(scene_name: str, case_name: str, level: int) -> dict:
     st = pstats.Stats(prof)
     connectors = _cumulative(st, "continuum/connector.py", "evaluate")
     assemble = _cumulative(st, "reducedmodels/core.py", "assemble")
-    solve = _cumulative(st, "scipy/sparse/linalg", "spsolve")
+    solve = _cumulative(st, "reducedmodels/tangent.py", "solve")
     setup = _cumulative(st, "continuum/run.py", "build_system")
     its = lp.stats["newton_iterations"]
     return {"scene": scene_name, "load_case": case_name, "model": lp.model,

@@ -12,8 +12,8 @@ dE/dpose = +-s J^T mu (the constraint forces). Stationarity of the total
 potential is then exactly the Lagrange (KKT) system; no penalty, so the
 pin is rigid whatever the loads. The Hessian is exact, including the
 theta-theta terms s mu . d2x/dtheta2 that rigid rotation brings in. It is
-indefinite (zero mu-mu block), which the core's LU solves
-(``np.linalg.solve`` and ``spsolve``, both pivoting) handle.
+indefinite (zero mu-mu block), which the core's LU solves (dense, banded
+and sparse, all pivoting; see :mod:`reducedmodels.tangent`) handle.
 
 Why the scale s (N/mm): the core measures every non-angle coordinate as a
 length and its residual as a force. With ``lambda = s mu`` the multiplier
