@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .shapes import rotation
+from .kinematics import rotation
 
 DEFAULT_LEVELS = 11
 

@@ -17,12 +17,6 @@ from typing import Protocol, Union
 import numpy as np
 
 
-def rotation(angle: float) -> np.ndarray:
-    """Planar rotation matrix R(angle), angle in rad (counterclockwise)."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, -s], [s, c]])
-
-
 @dataclass(frozen=True)
 class Ellipse:
     """Ellipse of elasticity of a flexure (paper Eqs. 1-5).

@@ -6,7 +6,8 @@ import dataclasses
 
 import numpy as np
 
-from .shapes import Arc, Segment, rotation
+from .kinematics import rotation
+from .shapes import Arc, Segment
 
 
 def transform_point(p: np.ndarray, angle: float, shift: np.ndarray) -> np.ndarray:

@@ -45,11 +45,14 @@ Units: mm, N, MPa, N mm, rad.
 
 from __future__ import annotations
 
-import math
+from typing import Sequence
 
 import numpy as np
 
 from geometry import Flexure, Mechanism
+from geometry.kinematics import body_point
+
+from .connector import Connector, LocalState
 
 SHEAR_CORRECTION = 5.0 / 6.0
 """Timoshenko shear coefficient kappa of a rectangular section."""
@@ -174,17 +177,6 @@ def corotational_elements(x: np.ndarray, theta: np.ndarray, chord0: np.ndarray, 
     return energy, grad, entries[:, _SOURCE] * _SIGN
 
 
-def body_point(pose: np.ndarray, rel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Position x = p + R(theta) rel of a body's material point and dx/dtheta, both mm.
-
-    ``rel`` is the point's initial offset from the body's reference point, mm;
-    d^2x/dtheta^2 = -R(theta) rel follows as minus the rotated offset.
-    """
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    rotated = np.array([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]])
-    return pose[:2] + rotated, np.array([-rotated[1], rotated[0]])
-
-
 def attach_to_body(grad: np.ndarray, hess: np.ndarray, slot: int, pose: np.ndarray,
                    rel: np.ndarray) -> None:
     """Transport one element's end-node force and tangent to a rigid body's pose, in place.
@@ -218,8 +210,8 @@ def attach_to_body(grad: np.ndarray, hess: np.ndarray, slot: int, pose: np.ndarr
     hess[th, th] += geometric
 
 
-class BeamConnector:
-    """Corotational beam model of one flexure with N elements (connector for :mod:`.core`).
+class BeamConnector(Connector):
+    """Corotational beam model of one flexure with N elements (a :class:`~reducedmodels.connector.Connector`).
 
     Parameters
     ----------
@@ -324,9 +316,8 @@ class BeamConnector:
                                minlength=6 + self.n_internal)
         return energy, gradient, hess.ravel()
 
-    def predict_internal(self, states: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
-                         weights: list[float], pose_a: np.ndarray, pose_b: np.ndarray
-                         ) -> np.ndarray:
+    def predict_internal(self, states: Sequence[LocalState], weights: Sequence[float],
+                         pose_a: np.ndarray, pose_b: np.ndarray) -> np.ndarray:
         """Interior nodes extrapolated in chord lengths and angles (for the load stepping).
 
         Each element's chord length and direction and each node's rotation
@@ -353,8 +344,7 @@ class BeamConnector:
         start, end = self._nodes(pose_a, pose_b, states[-1][2])[0][[0, -1]]
         return self._closed_chain(length, angle_last + turn, start, end, theta)
 
-    def update_internal(self, old: tuple[np.ndarray, np.ndarray, np.ndarray],
-                        new: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+    def update_internal(self, old: LocalState, new: LocalState) -> np.ndarray:
         """Interior nodes after a Newton correction, with chords turned instead of sheared.
 
         ``new`` is the linearly corrected state. Each chord's change is split

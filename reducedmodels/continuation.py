@@ -27,127 +27,184 @@ corrector that converged back onto the path already traced) and
 grown by 1.5 after easy steps (at most ``fast_iterations`` Newton iterations,
 no cut), up to ``max_growth`` times its initial value.
 
+The corrector is the core's one Newton iteration
+(:func:`reducedmodels.newton.solve_step`, with all its safeguards) on the
+bordered problem :class:`ArcLengthStep`; the stepping is the strategy
+:class:`ArcLength` of the one path tracer (:func:`reducedmodels.tracer.trace`).
+
 Units: mm, N, N mm, rad; load factors are dimensionless.
 """
 
 from __future__ import annotations
 
 import math
-import time
 from typing import Callable
 
 import numpy as np
 
 from geometry import LoadCase
 
-from .core import SolverError, System
+from .core import System
 from .loadpath import LoadPath
-from .rigid import rigid_points
+from .loads import Loads
+from .newton import FixedLoad, NewtonResult, StepProblem, StepRefused
+from .recorder import PathRecorder
+from .tangent import Tangent
+from .tracer import PathPoint, Solve, Stepping, Verdict, trace
 
 
-def load_vector(system: System, q: np.ndarray, loads) -> np.ndarray:
-    """External generalised force at unit load factor in state q (N, N mm).
+def arc_dot(system: System, u: np.ndarray, v: np.ndarray) -> float:
+    """<u, v>: mean product of the scaled coordinates (dimensionless, see System.scaled)."""
+    return float(np.mean(system.scaled(u) * system.scaled(v)))
 
-    Minus the derivative of the total-potential gradient with respect to the
-    load factor: dead forces at material points (J^T F, J the point's
-    Jacobian in the current pose) and moments on rotations.
+
+class ArcLengthStep(StepProblem):
+    """Equilibrium bordered by the arc-length constraint: lambda is an unknown.
+
+    Every iterate (q, lambda) from the predictor on satisfies
+    <q - q0, q - q0> + psi^2 (lambda - lambda0)^2 = arc^2 about the last
+    converged point (q0, lambda0).
     """
-    f = np.zeros(system.n_dofs)
-    for dofs, force, rel in zip(loads.dofs, loads.forces, loads.rels):
-        if dofs[0] < 0:
-            continue
-        _, jac, _ = rigid_points(q[dofs], rel[None])
-        f[dofs] += jac[0].T @ force
-    for dof, m in zip(loads.moment_dofs, loads.moments):
-        if dof >= 0:
-            f[dof] += m
-    return f
+
+    def __init__(self, system: System, loads: Loads, factor: float, origin: np.ndarray,
+                 origin_factor: float, arc: float, psi: float):
+        super().__init__(system, loads, factor)
+        self.q0, self.lam0, self.arc, self.psi = origin, origin_factor, arc, psi
+
+    def correction(self, q: np.ndarray, g: np.ndarray, K: Tangent) -> tuple[np.ndarray, float]:
+        """Crisfield's correction: K [dq_R, dq_F] = [-g, f], dlambda from the constraint."""
+        system, psi2 = self.system, self.psi**2
+        sol = K.solve(np.column_stack([-g, self.loads.vector(q)]))
+        d_r, d_f = sol[:, 0], sol[:, 1]
+        dq, dlam = q - self.q0, self.factor - self.lam0
+        base = dq + d_r
+        a = arc_dot(system, d_f, d_f) + psi2
+        b = 2.0 * (arc_dot(system, base, d_f) + psi2 * dlam)
+        c = arc_dot(system, base, base) + psi2 * dlam**2 - self.arc**2
+        disc = b * b - 4.0 * a * c
+        if disc < 0.0:
+            raise StepRefused("arc-length constraint has no real root")
+        root = math.sqrt(disc)
+        # the root that keeps the increment closest to the previous one
+        roots = ((-b + root) / (2.0 * a), (-b - root) / (2.0 * a))
+        dl = max(roots, key=lambda r: (arc_dot(system, base + r * d_f, dq)
+                                       + psi2 * (dlam + r) * dlam))
+        return d_r + dl * d_f, dl
 
 
-class _Path:
-    """The arc-length inner product and the per-step safeguards of one System."""
+class ArcLength(Stepping):
+    """Arc-length continuation as a stepping strategy of :func:`reducedmodels.tracer.trace`.
 
-    def __init__(self, system: System, loads, psi: float):
-        self.system, self.loads, self.psi = system, loads, psi
-        self.settings = system.settings
-        self.f_scale = np.where(system.is_rotation, 1.0 / system.size, 1.0)
-        self.n_bodies = len(system.body_index)
+    Parameters
+    ----------
+    max_load_factor : float
+        The path ends when the load factor first reaches this value; the
+        last point is then solved at exactly this factor.
+    n_steps : int
+        Sets the initial arc length: the tangent at rest would reach
+        ``max_load_factor`` in ``n_steps`` steps.
+    psi : float
+        Load-factor weight of the constraint (0: cylindrical arc length).
+    max_steps : int
+        Most converged steps.
+    max_growth : float
+        Largest arc length as a multiple of the initial one.
 
-    def dot(self, u: np.ndarray, v: np.ndarray) -> float:
-        """<u, v>: mean product of the scaled coordinates (dimensionless)."""
-        return float(np.mean(self.system.scaled(u) * self.system.scaled(v)))
+    Every converged step is reported.
+    """
 
-    def residual(self, g: np.ndarray) -> float:
-        """Largest out-of-balance force relative to the full-load scale (as in the core)."""
-        return float(np.abs(g * self.f_scale).max(initial=0.0)) / self.loads.scale
+    cut_name = "arc-length"
+    first_factor = 0.0
 
-    def moved_too_far(self, dq: np.ndarray) -> bool:
-        """True if a body turns or travels more than the SolverSettings bounds in one step."""
-        d = np.abs(dq[:3 * self.n_bodies]).reshape(-1, 3)
-        if d.size == 0:
-            return False
-        s = self.settings
-        return bool(d[:, 2].max() > s.max_rotation_step
-                    or np.hypot(d[:, 0], d[:, 1]).max() > s.max_translation_step * self.system.size)
+    def __init__(self, max_load_factor: float, n_steps: int, psi: float, max_steps: int,
+                 max_growth: float):
+        self.max_load_factor, self.n_steps, self.psi = max_load_factor, n_steps, psi
+        self.max_steps, self.max_growth = max_steps, max_growth
 
-    def correct(self, q0: np.ndarray, lam0: float, dq: np.ndarray, dlam: float, arc: float | None
-                ) -> tuple[np.ndarray | None, float, int, str]:
-        """Newton corrector from the predictor (q0 + dq, lam0 + dlam).
+    def begin(self, system: System, loads: Loads, point: PathPoint) -> None:
+        """Size the first step from the tangent at rest."""
+        self.system, self.loads, self.settings = system, loads, system.settings
+        self.q, self.factor, self.peak = point.state, point.factor, point.factor
+        try:
+            tangent = point.tangent.solve(loads.vector(self.q))
+        except (RuntimeError, np.linalg.LinAlgError) as exc:
+            raise StepRefused(f"singular tangent at rest ({exc})") from None
+        if not np.all(np.isfinite(tangent)):
+            raise StepRefused("singular tangent at rest")
+        dlam0 = self.max_load_factor / self.n_steps
+        arc0 = dlam0 * math.sqrt(arc_dot(system, tangent, tangent) + self.psi**2)
+        if not arc0 > 0.0:
+            raise StepRefused("the load does not move the mechanism")
+        self.arc, self.arc_max = arc0, self.max_growth * arc0
+        self.arc_min = arc0 * 0.5**self.settings.max_cuts
+        self.direction = (tangent, 1.0)     # unscaled (dq, dlambda) of the last converged step
+        self.was_cut = self.landed = False
 
-        With ``arc`` given, lambda is an unknown and every iterate satisfies
-        the arc-length constraint of radius ``arc``; with ``arc=None`` the
-        load factor stays fixed (plain Newton). Returns (state or None,
-        load factor, iterations, reason for failure).
-        """
-        s, psi2 = self.settings, self.psi**2
-        res0, res = None, math.inf
-        for it in range(s.max_iterations + 1):
-            q, lam = q0 + dq, lam0 + dlam
-            try:
-                _, g, K = self.system.assemble(q, self.loads, lam)
-            except (ValueError, FloatingPointError) as exc:   # a connector refused the state
-                return None, lam, it, f"invalid state ({exc})"
-            res = self.residual(g)
-            if not math.isfinite(res):
-                return None, lam, it, "non-finite residual"
-            if res <= s.force_tol:
-                return q, lam, it, ""
-            res0 = res if res0 is None else res0
-            if res > 1e8 * max(res0, 1.0):
-                return None, lam, it, f"diverging residual {res:.3g}"
-            if it == s.max_iterations:
-                break
-            try:
-                if arc is None:
-                    d_r, d_f = K.solve(-g), np.zeros_like(g)
-                else:
-                    sol = K.solve(np.column_stack([-g, load_vector(self.system, q, self.loads)]))
-                    d_r, d_f = sol[:, 0], sol[:, 1]
-            except (RuntimeError, np.linalg.LinAlgError) as exc:
-                return None, lam, it, f"singular tangent ({exc})"
-            if not (np.all(np.isfinite(d_r)) and np.all(np.isfinite(d_f))):
-                return None, lam, it, "singular tangent"
-            dl = 0.0
-            if arc is not None:
-                base = dq + d_r
-                a = self.dot(d_f, d_f) + psi2
-                b = 2.0 * (self.dot(base, d_f) + psi2 * dlam)
-                c = self.dot(base, base) + psi2 * dlam**2 - arc**2
-                disc = b * b - 4.0 * a * c
-                if disc < 0.0:
-                    return None, lam, it, "arc-length constraint has no real root"
-                root = math.sqrt(disc)
-                # the root that keeps the increment closest to the previous one
-                roots = ((-b + root) / (2.0 * a), (-b - root) / (2.0 * a))
-                dl = max(roots, key=lambda r: (self.dot(base + r * d_f, dq)
-                                               + psi2 * (dlam + r) * dlam))
-            step = d_r + dl * d_f
-            dq, dlam = dq + step, dlam + dl
-            if max(float(np.abs(self.system.scaled(step)).max(initial=0.0)), abs(dl)) <= s.step_tol:
-                q, lam = q0 + dq, lam0 + dlam
-                return q, lam, it + 1, ""
-        return None, lam0 + dlam, s.max_iterations, (
-            f"no convergence in {s.max_iterations} iterations (residual {res:.3g})")
+    def finished(self) -> bool:
+        """True once the path has landed on ``max_load_factor``."""
+        return self.landed
+
+    def attempt(self) -> tuple[StepProblem, np.ndarray, np.ndarray]:
+        """The secant (first: tangent) predictor of length ``arc`` and its bordered corrector."""
+        dq_dir, dlam_dir = self.direction
+        norm = math.sqrt(arc_dot(self.system, dq_dir, dq_dir) + self.psi**2 * dlam_dir**2)
+        dq, dlam = dq_dir * (self.arc / norm), dlam_dir * (self.arc / norm)
+        problem = ArcLengthStep(self.system, self.loads, self.factor + dlam, self.q, self.factor,
+                                self.arc, self.psi)
+        return problem, self.q + dq, self.q
+
+    def review(self, result: NewtonResult, solve: Solve) -> Verdict:
+        """Refuse a step beyond the bounds or back along the path; land on the end factor."""
+        q_new, lam_new, why = result.state, result.factor, result.reason
+        q, lam = self.q, self.factor
+        dq_dir, dlam_dir = self.direction
+        if q_new is not None and self.system.motion_ratio(q, q_new) > 1.0:
+            q_new, why = None, "step too large"
+        elif q_new is not None and (arc_dot(self.system, q_new - q, dq_dir)
+                                    + self.psi**2 * (lam_new - lam) * dlam_dir) <= 0.0:
+            q_new, why = None, "the corrector turned back along the path"
+        if q_new is None:
+            return Verdict(None, lam, why, None, False)
+        fast = result.iterations <= self.settings.fast_iterations
+        self.step_taken = (q_new - q, lam_new - lam)
+        if lam_new >= self.max_load_factor > lam:
+            # crossed the end: solve at exactly max_load_factor from the interpolated state
+            t = (self.max_load_factor - lam) / (lam_new - lam)
+            landing = solve(FixedLoad(self.system, self.loads, self.max_load_factor),
+                            q + t * (q_new - q), q)
+            if landing.state is None:
+                return Verdict(None, lam, landing.reason, None, False)
+            self.landed = True
+            return Verdict(landing.state, self.max_load_factor, "", landing.tangent, fast)
+        return Verdict(q_new, lam_new, "", result.tangent, fast)
+
+    def cut(self) -> bool:
+        """Halve the arc length."""
+        self.arc *= 0.5
+        self.was_cut = True
+        return self.arc >= self.arc_min
+
+    def advance(self, verdict: Verdict) -> float | None:
+        """Take the step; grow the arc length after an easy, uncut one. Every step is reported."""
+        self.direction = self.step_taken
+        self.q, self.factor = verdict.state, verdict.factor
+        self.peak = max(self.peak, self.factor)
+        self.taken_arc = self.arc
+        if not self.landed and verdict.fast and not self.was_cut:
+            self.arc = min(1.5 * self.arc, self.arc_max)
+        self.was_cut = False
+        return self.factor
+
+    def step_size(self) -> float:
+        """Arc length of the step last accepted (dimensionless)."""
+        return self.taken_arc
+
+    def exhausted(self, counters) -> str | None:
+        """More than ``max_steps`` converged steps without reaching the end."""
+        if self.landed or counters.substeps < self.max_steps:
+            return None
+        return (f"load factor {self.max_load_factor:g} not reached in {self.max_steps} steps "
+                f"(largest load factor on the path {self.peak:.6g})")
 
 
 def solve_arclength(system: System, case: LoadCase, max_load_factor: float = 1.0,
@@ -189,7 +246,8 @@ def solve_arclength(system: System, case: LoadCase, max_load_factor: float = 1.0
     LoadPath
         Every converged point in the order traced, from rest (load may rise
         and fall). ``stats`` holds ``newton_iterations``, ``step_cuts``,
-        ``substeps`` (converged steps), per-point ``iterations``,
+        ``substeps`` (converged steps), per-point ``iterations`` (Newton
+        iterations since the previous point, failed attempts included),
         ``limit_points`` (indices of local extrema of the load) and the final
         ``arc_length``.
 
@@ -205,113 +263,14 @@ def solve_arclength(system: System, case: LoadCase, max_load_factor: float = 1.0
         raise ValueError(f"max_load_factor must be positive and finite, got {max_load_factor}")
     if n_steps < 1:
         raise ValueError(f"n_steps must be >= 1, got {n_steps}")
-    t0 = time.perf_counter()
-    s = system.settings
-    loads = system.loads(case)
-    walker = _Path(system, loads, psi)
     max_steps = 100 * n_steps if max_steps is None else max_steps
-    name = f"{model or 'model'}:arclength"
-    lp = LoadPath(model=name, load_case=case.name, load=[], dx=[], dy=[], rotation=[],
-                  seconds=0.0, scene=scene, load_unit=case.unit,
-                  settings={"max_load_factor": max_load_factor, "n_steps": n_steps, "psi": psi},
-                  poses={b: [] for b in system.mechanism.bodies} if record_poses else None)
-    stats = {"unknowns": system.n_dofs, "newton_iterations": 0, "step_cuts": 0, "substeps": 0,
-             "iterations": [], "limit_points": []}
-    lp.stats = stats
-    lams: list[float] = []
-
-    def record(qk: np.ndarray, lam: float, iters: int) -> None:
-        dx, dy, rot = system.target(qk)
-        lp.load.append(lam * case.magnitude)
-        lp.dx.append(dx), lp.dy.append(dy), lp.rotation.append(rot)
-        stats["iterations"].append(iters)
-        lams.append(lam)
-        if len(lams) >= 3 and (lams[-2] - lams[-3]) * (lams[-1] - lams[-2]) < 0.0:
-            stats["limit_points"].append(len(lams) - 2)
-        if lp.poses is not None:
-            for b in system.mechanism.bodies:
-                lp.poses[b].append(system.pose(qk, b).tolist())
-
-    def finish(converged: bool) -> LoadPath:
-        lp.converged = converged
-        lp.seconds = time.perf_counter() - t0
-        return lp
-
-    def fail(msg: str, lam: float) -> SolverError:
-        stats["failure"] = msg
-        finish(False)
-        return SolverError(f"{name} on load case '{case.name}': {msg}; last converged load "
-                           f"{lam * case.magnitude:.6g} {case.unit} (load factor {lam:.6g})",
-                           lam, lp)
-
-    q, lam, iters, why = walker.correct(system.initial_state(), 0.0, np.zeros(system.n_dofs),
-                                        0.0, None)
-    if q is None:
-        raise fail(why, 0.0)
-    stats["newton_iterations"] += iters
-    record(q, 0.0, iters)
-
-    # first predictor: the tangent at rest, sized so a linear path takes n_steps steps
-    _, _, K = system.assemble(q, loads, 0.0)
-    try:
-        tangent = K.solve(load_vector(system, q, loads))
-    except (RuntimeError, np.linalg.LinAlgError) as exc:
-        raise fail(f"singular tangent at rest ({exc})", 0.0) from None
-    if not np.all(np.isfinite(tangent)):
-        raise fail("singular tangent at rest", 0.0)
-    dlam0 = max_load_factor / n_steps
-    arc0 = dlam0 * math.sqrt(walker.dot(tangent, tangent) + psi**2)
-    if not arc0 > 0.0:
-        raise fail("the load does not move the mechanism", 0.0)
-    arc, arc_max, arc_min = arc0, max_growth * arc0, arc0 * 0.5**s.max_cuts
-    direction = (tangent, 1.0)        # unscaled (dq, dlambda) of the last converged step
-    steps, cut = 0, False
-    while True:
-        dq_dir, dlam_dir = direction
-        norm = math.sqrt(walker.dot(dq_dir, dq_dir) + psi**2 * dlam_dir**2)
-        dq, dlam = dq_dir * (arc / norm), dlam_dir * (arc / norm)
-        q_new, lam_new, iters, why = walker.correct(q, lam, dq, dlam, arc)
-        stats["newton_iterations"] += iters
-        if q_new is not None and walker.moved_too_far(q_new - q):
-            q_new, why = None, "step too large"
-        elif q_new is not None and (walker.dot(q_new - q, dq_dir)
-                                    + psi**2 * (lam_new - lam) * dlam_dir) <= 0.0:
-            q_new, why = None, "the corrector turned back along the path"
-        landing, iters2 = None, 0
-        if q_new is not None and lam_new >= max_load_factor > lam:
-            # crossed the end: solve at exactly max_load_factor from the interpolated state
-            t = (max_load_factor - lam) / (lam_new - lam)
-            landing, _, iters2, why = walker.correct(q, max_load_factor, t * (q_new - q), 0.0,
-                                                     None)
-            stats["newton_iterations"] += iters2
-            if landing is None:
-                q_new = None
-        if q_new is None:
-            arc *= 0.5
-            cut = True
-            stats["step_cuts"] += 1
-            if arc < arc_min:
-                raise fail(f"arc-length cutting failed ({why})", lam)
-            continue
-        steps += 1
-        stats["substeps"] = steps
-        if landing is not None:
-            record(landing, max_load_factor, iters + iters2)
-            stats["arc_length"] = arc
-            return finish(True)
-        direction = (q_new - q, lam_new - lam)
-        q, lam = q_new, lam_new
-        record(q, lam, iters)
-        stats["arc_length"] = arc
-        if stop is not None and stop(lp):
-            return finish(True)
-        if steps >= max_steps:
-            peak = max(lams)
-            raise fail(f"load factor {max_load_factor:g} not reached in {max_steps} steps "
-                       f"(largest load on the path {peak * case.magnitude:.6g} {case.unit})", lam)
-        if iters <= s.fast_iterations and not cut:
-            arc = min(1.5 * arc, arc_max)
-        cut = False
+    recorder = PathRecorder(system, case, f"{model or 'model'}:arclength", scene,
+                            {"max_load_factor": max_load_factor, "n_steps": n_steps, "psi": psi},
+                            record_poses=record_poses, limit_points=True)
+    stepping = ArcLength(max_load_factor, n_steps, psi, max_steps, max_growth)
+    path, last = recorder.run(trace(system, system.loads(case), stepping), stop)
+    path.stats["arc_length"] = last.step
+    return path
 
 
 def limit_loads(path: LoadPath) -> list[float]:

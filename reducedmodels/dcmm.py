@@ -27,10 +27,9 @@ import math
 import numpy as np
 
 from geometry import Flexure, Mechanism
+from geometry.kinematics import place_points, rotate_xy
 
-def _rot(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, -s], [s, c]])
+from .connector import Connector
 
 
 def _expansion() -> tuple[np.ndarray, np.ndarray]:
@@ -84,11 +83,9 @@ def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f:
     xf, yf, tf = pose_f.tolist()
     ca, sa = math.cos(tl), math.sin(tl)          # A = R(-tl) = [[ca, sa], [-sa, ca]]
     phi = tf - tl
-    cp, sp_ = math.cos(phi), math.sin(phi)
     dx, dy = xf - xl, yf - yl
     adx, ady = ca * dx + sa * dy, -sa * dx + ca * dy          # A d
-    rfx, rfy = r_f
-    rrx, rry = cp * rfx - sp_ * rfy, sp_ * rfx + cp * rfy      # R(phi) r_F
+    rrx, rry = rotate_xy(phi, *r_f)                           # R(phi) r_F
     rlx, rly = r_l
     vx, vy = adx + rrx - rlx, ady + rry - rly
     (q11, q12), (q21, q22) = axes                             # rows of Q
@@ -122,8 +119,8 @@ def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f:
     return energy, grad, upper[_SOURCE] * _SIGN
 
 
-class DcmmConnector:
-    """DCMM_n model of one flexure (a connector for :mod:`reducedmodels.core`).
+class DcmmConnector(Connector):
+    """DCMM_n model of one flexure (a :class:`~reducedmodels.connector.Connector`).
 
     Internal coordinates are the poses of the n - 1 intermediate bodies,
     whose reference points are the cut points on the centre line.
@@ -214,7 +211,7 @@ class DcmmConnector:
             if k == 0 or k == len(chain) - 1:
                 end = self._ends[0 if k == 0 else 1]
                 ref = self._ref_ends[0 if k == 0 else 1]
-                pts.append(pose[:2] + _rot(pose[2]) @ (end - ref))
+                pts.append(place_points(pose, (end - ref)[None])[0])
             else:
                 pts.append(pose[:2])
         return np.array(pts)

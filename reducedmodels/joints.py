@@ -36,8 +36,9 @@ import math
 import numpy as np
 
 from geometry import Mechanism
+from geometry.kinematics import rigid_points
 
-from .rigid import rigid_points
+from .connector import Connector
 
 
 def characteristic_stiffness(mechanism: Mechanism) -> float:
@@ -47,8 +48,8 @@ def characteristic_stiffness(mechanism: Mechanism) -> float:
     return math.exp(sum(logs) / len(logs))
 
 
-class PinConnector:
-    """A pin between ``body_a`` and ``body_b`` at ``point`` (connector for :mod:`.core`).
+class PinConnector(Connector):
+    """A pin between ``body_a`` and ``body_b`` at ``point`` (a :class:`~reducedmodels.connector.Connector`).
 
     Parameters
     ----------
@@ -85,14 +86,6 @@ class PinConnector:
         if not (math.isfinite(self.stiffness) and self.stiffness > 0.0):
             raise ValueError(f"pin {name!r}: scale must be positive and finite, "
                              f"got {self.stiffness!r} N/mm")
-
-    def initial_internal(self) -> np.ndarray:
-        """Multipliers at rest: no constraint force."""
-        return np.zeros(2)
-
-    def internal_is_rotation(self) -> np.ndarray:
-        """The multipliers are lengths (mm), not angles."""
-        return np.zeros(2, dtype=bool)
 
     def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
                  ) -> tuple[float, np.ndarray, np.ndarray]:

@@ -50,6 +50,13 @@ class LoadPath:
         Deformed centre lines (or boundary) at each level, mm.
     reactions : list of [Fx, Fy, M], optional
         Total force (N) and moment about the origin (N mm) the ground exerts.
+    valid : list of bool, optional
+        The validity monitor at each level: True when every connector's state
+        is inside its model's range of meaning (chord stretch, rotation per
+        element, element inversion: see each connector's ``validity``).
+    validity : list of (str or None), optional
+        Why a level is not valid (the connectors' reasons, ``"; "``-joined),
+        None where it is. The run is never stopped by it.
     """
 
     model: str
@@ -67,6 +74,8 @@ class LoadPath:
     poses: dict | None = None
     shapes: dict | None = None
     reactions: list | None = None
+    valid: list | None = None
+    validity: list | None = None
 
     @property
     def displacement(self) -> np.ndarray:

@@ -11,10 +11,11 @@ import time
 import numpy as np
 
 from geometry import LoadCase, Mechanism, ModelSpec, SceneError
+from geometry.kinematics import rigid_points
 
-from .core import SolverSettings, System, solve_path
+from .core import SolverSettings, System
 from .loadpath import LoadPath
-from .rigid import rigid_points
+from .recorder import solve_path
 
 REDUCED_FAMILIES = ("beam", "prbm", "dcmm", "ee")
 

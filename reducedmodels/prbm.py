@@ -92,14 +92,12 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from geometry import Arc, Flexure, Mechanism, Segment
+from geometry.kinematics import place_points, rotate, rotate_xy
+
+from .connector import Connector
 
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])
 TABLE_RESOURCE = "data/prbm_table.json"
-
-
-def _rot(angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, -s], [s, c]])
 
 
 _K = np.arange(2, 18)
@@ -247,12 +245,6 @@ def joint_positions(shape: Arc | Segment, params: PrbmParameters) -> np.ndarray:
     return center + length * local @ np.column_stack([e1, e2]).T
 
 
-def _rotated(angle: float, v: tuple[float, float]) -> tuple[float, float]:
-    """R(angle) v for a plane vector given as two floats (mm)."""
-    c, s = math.cos(angle), math.sin(angle)
-    return c * v[0] - s * v[1], s * v[0] + c * v[1]
-
-
 def _hessian_pattern() -> tuple[np.ndarray, np.ndarray]:
     """Local (rows, cols) of the PRBM Hessian entries, in the order :meth:`PrbmConnector.evaluate` fills them.
 
@@ -271,8 +263,8 @@ def _hessian_pattern() -> tuple[np.ndarray, np.ndarray]:
 _HESSIAN_ROWS, _HESSIAN_COLS = _hessian_pattern()
 
 
-class PrbmConnector:
-    """Symmetric 3R PRBM of one flexure (a connector for :mod:`reducedmodels.core`).
+class PrbmConnector(Connector):
+    """Symmetric 3R PRBM of one flexure (a :class:`~reducedmodels.connector.Connector`).
 
     Internal coordinates: [phi_h, phi_l, mu_x, mu_y], the rotations (rad) of
     link h (at body a) and link l (at body b) from the initial configuration
@@ -324,19 +316,9 @@ class PrbmConnector:
         self._ends = np.array([flexure.end_point_of(self.bodies[0]),
                                flexure.end_point_of(self.bodies[1])])
 
-    def initial_internal(self) -> np.ndarray:
-        """Links at rest and no closure force: zeros (4,)."""
-        return np.zeros(4)
-
     def internal_is_rotation(self) -> np.ndarray:
         """[True, True, False, False]: two link rotations, then the multiplier (mm)."""
         return np.array([True, True, False, False])
-
-    def joint_rotations(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                        ) -> np.ndarray:
-        """Spring rotations [t_a, t_2, t_b] (rad) from the initial configuration."""
-        phi_h, phi_l = internal[0], internal[1]
-        return np.array([phi_h - pose_a[2], phi_l - phi_h, pose_b[2] - phi_l])
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         """Local (rows, cols) of the Hessian values :meth:`evaluate` returns (see _HESSIAN_PATTERN)."""
@@ -359,8 +341,8 @@ class PrbmConnector:
         _, _, ta = pose_a.tolist()
         _, _, tb = pose_b.tolist()
         ph, pl, mx, my = internal.tolist()
-        (rax, ray), (rbx, rby) = _rotated(ta, self._r_a), _rotated(tb, self._r_b)
-        (vhx, vhy), (vlx, vly) = _rotated(ph, self._v_h), _rotated(pl, self._v_l)
+        (rax, ray), (rbx, rby) = rotate_xy(ta, *self._r_a), rotate_xy(tb, *self._r_b)
+        (vhx, vhy), (vlx, vly) = rotate_xy(ph, *self._v_h), rotate_xy(pl, *self._v_l)
         gx = pose_a[0] + rax + vhx + vlx - pose_b[0] - rbx
         gy = pose_a[1] + ray + vhy + vly - pose_b[1] - rby
         # gap Jacobian columns on the angles: J R v = (-y, x)
@@ -385,10 +367,7 @@ class PrbmConnector:
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Polyline end_a, R_a, R_2, R_b, end_b in the current configuration, (5, 2) mm."""
-        Ra, Rb = _rot(pose_a[2]), _rot(pose_b[2])
-        end_a = pose_a[:2] + Ra @ (self._ends[0] - self._ref[0])
-        ja = pose_a[:2] + Ra @ self._r_a
-        j2 = ja + _rot(internal[0]) @ self._v_h
-        jb = pose_b[:2] + Rb @ self._r_b
-        end_b = pose_b[:2] + Rb @ (self._ends[1] - self._ref[1])
+        end_a, ja = place_points(pose_a, np.array([self._ends[0] - self._ref[0], self._r_a]))
+        j2 = ja + rotate(internal[0], self._v_h)
+        jb, end_b = place_points(pose_b, np.array([self._r_b, self._ends[1] - self._ref[1]]))
         return np.array([end_a, ja, j2, jb, end_b])

@@ -10,7 +10,7 @@ import pytest
 from geometry import Arc, Force, LoadCase, Material, Section, load_scene, parse_model
 from geometry.mechanism import assemble
 from reducedmodels import SolverError, SolverSettings, build_system, solve_path
-from reducedmodels.continuation import limit_loads, load_vector, solve_arclength
+from reducedmodels.continuation import limit_loads, solve_arclength
 from test_joints import von_mises_truss
 
 DA_DEPPO_SCHMIDT = 8.97
@@ -81,7 +81,7 @@ def test_load_vector_is_the_load_derivative_of_the_gradient():
         _, g0, _ = system.assemble(q, loads, 0.0)
         _, g1, _ = system.assemble(q, loads, 1.0)
         # the gradient is affine in the load factor: exact up to the round-off of g
-        np.testing.assert_allclose(load_vector(system, q, loads), g0 - g1, rtol=0,
+        np.testing.assert_allclose(loads.vector(q), g0 - g1, rtol=0,
                                    atol=1e-12 * np.abs(g0).max())
 
 

@@ -21,7 +21,9 @@ from scipy.optimize import brentq
 from geometry import Arc, Force, LoadCase, Material, Moment, Section, Segment
 from geometry.mechanism import assemble
 from geometry.mesh import cache_dir, mesh_flexure
-from reducedmodels.core import local_hessian, newton, solve_path
+from reducedmodels import solve_path
+from reducedmodels.core import local_hessian
+from reducedmodels.newton import FixedLoad, solve_step
 from validation.continuum import ContinuumConnector
 from validation.continuum.material import make_law
 from validation.continuum.run import build_system
@@ -108,8 +110,8 @@ def test_strip_in_tension_has_the_plane_law(law, b_over_h, plane):
     system = build_system(mech, 1, law=law, plane=plane)
     force = eps * E_MOD * b_over_h * h * h          # plane-stress axial strain eps
     case = LoadCase("pull", (Force("2", np.array([length, 0.0]), 0.0, force),))
-    q, _, why, _ = newton(system, system.initial_state(), system.loads(case), 1.0,
-                          system.settings)
+    q, _, _, why, _ = solve_step(FixedLoad(system, system.loads(case), 1.0),
+                                 system.initial_state(), system.settings)
     assert q is not None, why
     conn = system.connectors[0]
     x = conn.positions(*system.local_states(q)[0])
@@ -271,7 +273,8 @@ def test_small_loads_give_the_thin_curved_beam_compliance(r_over_h):
     for k, load in enumerate(unit_loads):
         scale = 1e-7 / ref[k, k]                   # displacement ~1e-7 of the size: linear
         loads = system.loads(LoadCase("u", (load(scale),)))
-        q, _, why, _ = newton(system, system.initial_state(), loads, 1.0, system.settings)
+        q, _, _, why, _ = solve_step(FixedLoad(system, loads, 1.0), system.initial_state(),
+                                     system.settings)
         assert q is not None, why
         dx, dy, rot = system.target(q)
         measured[:, k] = np.array([dx, dy, rot]) / scale

@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from geometry import Scene  # noqa: E402
+from geometry.kinematics import place_points  # noqa: E402
 from reducedmodels import LoadPath  # noqa: E402
 
 from .drawing import draw_mechanism  # noqa: E402
@@ -90,11 +91,9 @@ def deformed(scene: Scene, case_name: str, lp: LoadPath, path: Path) -> str:
             b = mech.bodies[body]
             if b.is_ground:
                 continue
-            x, y, t = poses[k]
-            R = np.array([[math.cos(t), -math.sin(t)], [math.sin(t), math.cos(t)]])
             pts = b.points if body != mech.target_body else np.vstack([b.points,
                                                                        mech.target_point])
-            q = (pts - b.reference) @ R.T + [x, y]
+            q = place_points(np.asarray(poses[k]), pts - b.reference)
             ax.plot(q[:, 0], q[:, 1], color=col, lw=3, alpha=0.6)
     trace = mech.target_point + np.column_stack([lp.dx, lp.dy])
     ax.plot(trace[:, 0], trace[:, 1], "k.-", lw=1, ms=4, label="tracing point path")

@@ -21,14 +21,15 @@ from __future__ import annotations
 import numpy as np
 
 from geometry import Flexure, Mechanism
+from geometry.kinematics import rigid_points
 from geometry.mesh import FlexureMesh, mesh_flexure
-from reducedmodels.rigid import rigid_points
+from reducedmodels.connector import Connector
 
 from .material import make_law
 from .solid import Solid
 
 
-class ContinuumConnector:
+class ContinuumConnector(Connector):
     """A flexure meshed as a 2D hyperelastic solid (a :class:`reducedmodels.Connector`).
 
     Parameters
@@ -110,14 +111,6 @@ class ContinuumConnector:
         return self._free
 
     # --- Connector protocol --------------------------------------------------
-    def initial_internal(self) -> np.ndarray:
-        """Zero displacements of the free nodes, mm."""
-        return np.zeros(self.n_internal)
-
-    def internal_is_rotation(self) -> np.ndarray:
-        """No internal coordinate is an angle."""
-        return np.zeros(self.n_internal, bool)
-
     def positions(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
                   ) -> np.ndarray:
         """Current positions of all mesh nodes (n_nodes, 2), mm."""

@@ -1,10 +1,12 @@
 """Run the continuum reference on a mechanism: one ContinuumConnector per flexure.
 
 The rigid bodies and all meshed flexures are solved together by the
-multibody core (:func:`reducedmodels.core.solve_path`, Newton with the exact
-tangent and adaptive load stepping), so open and closed chains need no
-special code and the result is the same :class:`reducedmodels.LoadPath` as
-for the reduced models (model id ``continuum:LEVEL``).
+multibody core (the path tracer :func:`reducedmodels.trace` with load
+control, Newton with the exact tangent and adaptive load stepping), so open
+and closed chains need no special code and the result is the same
+:class:`reducedmodels.LoadPath` as for the reduced models (model id
+``continuum:LEVEL``). The VTU and PNG outputs come from the last state the
+tracer yields (full load).
 
 Convergence: the residual of a meshed flexure cannot fall below the
 round-off of its nodal positions (stiffness x |u| x 1e-16, e.g. 2e-7 of the
@@ -18,12 +20,9 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-import numpy as np
-
 from geometry import LoadCase, Mechanism
 from geometry.mesh import ASPECT_RATIO, ELEMENT_ORDER, MESH_VERSION
-from reducedmodels import LoadPath
-from reducedmodels.core import SolverSettings, System, solve_path
+from reducedmodels import LoadControl, LoadPath, PathRecorder, SolverSettings, System, trace
 
 from .connector import ContinuumConnector
 
@@ -56,31 +55,15 @@ from .connector import ContinuumConnector
 DEFAULT_LEVEL = 1
 
 
-class ContinuumSystem(System):
-    """A System that keeps the last recorded state (for the VTU/PNG outputs).
-
-    :func:`reducedmodels.core.solve_path` calls :meth:`target` once for
-    every recorded load level with the converged state, so after a
-    successful path ``last_state`` is the state at full load.
-    """
-
-    last_state: np.ndarray | None = None
-
-    def target(self, q: np.ndarray) -> tuple[float, float, float]:
-        """Target displacement and rotation (see System.target); remembers q."""
-        self.last_state = q.copy()
-        return super().target(q)
-
-
 def build_system(mechanism: Mechanism, level: int, law: str = "svk", plane: str = "stress",
-                 settings: SolverSettings | None = None) -> ContinuumSystem:
+                 settings: SolverSettings | None = None) -> System:
     """The multibody System with every flexure meshed at ``level`` (pins as exact joints)."""
     from reducedmodels.joints import pin_connectors
 
     conns = [ContinuumConnector(f, mechanism, level, law=law, plane=plane)
              for f in mechanism.flexures]
     conns += pin_connectors(mechanism)
-    return ContinuumSystem(mechanism, conns, settings or SolverSettings())
+    return System(mechanism, conns, settings or SolverSettings())
 
 
 def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None,
@@ -122,16 +105,16 @@ def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None
     model = f"continuum:{level}"
     settings = {"level": level, "law": law, "plane": plane, "element_order": ELEMENT_ORDER,
                 "aspect_ratio": ASPECT_RATIO, "mesh_version": MESH_VERSION}
-    lp = solve_path(system, case, levels, model=model, settings=settings, scene=scene,
-                    record_shapes=record_shapes)
+    recorder = PathRecorder(system, case, model, scene, settings, record_shapes=record_shapes)
+    lp, full_load = recorder.run(trace(system, system.loads(case),
+                                       LoadControl(case.factors(levels))))
     lp.seconds = time.perf_counter() - t0
     if vtu_dir is not None or png is not None:
         from .output import render_png, write_vtu
 
         name = f"{scene + '_' if scene else ''}{case.name}_continuum{level}.vtu"
         folder = Path(vtu_dir) if vtu_dir is not None else Path(png).parent
-        vtu = write_vtu(folder / name, system.connectors,
-                        system.local_states(system.last_state))
+        vtu = write_vtu(folder / name, system.connectors, system.local_states(full_load.state))
         if png is not None:
             render_png(vtu, png, f"{scene} {case.name} {model}")
     return lp

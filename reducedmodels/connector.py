@@ -1,0 +1,146 @@
+"""The connector contract: what a flexure (or joint) model gives the multibody core.
+
+A connector joins two bodies ``bodies = (a, b)``. Its local coordinate vector
+is ``[pose_a (3), pose_b (3), internal (n_internal)]``: the poses (x, y,
+theta) of the two bodies (mm, mm, rad) and the connector's private internal
+coordinates (beam nodes, continuum nodes, DCMM intermediate bodies, PRBM link
+angles, Lagrange multipliers ...). It is conservative: :meth:`Connector.evaluate`
+returns its energy, gradient and Hessian over those coordinates, and the core
+assembles them. Every hook the core calls is declared here; the optional ones
+have a documented default, so a minimal connector implements only
+:meth:`~Connector.evaluate` and :meth:`~Connector.shape` (and sets ``name``,
+``bodies`` and, if it has any, ``n_internal``).
+
+Units: mm, N, N mm, rad.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Sequence
+
+import numpy as np
+
+LocalState = tuple[np.ndarray, np.ndarray, np.ndarray]
+"""(pose_a, pose_b, internal) of one connector: (3,), (3,), (n_internal,)."""
+
+
+class Connector(ABC):
+    """Base class of every connector of :class:`reducedmodels.core.System`.
+
+    Attributes
+    ----------
+    name : str
+        Unique name (the flexure's or the pin's), used in outputs and messages.
+    bodies : tuple of str
+        The two bodies joined, (a, b); either may be the ground.
+    n_internal : int
+        Number of internal coordinates (default 0: a connector acting
+        directly between the two poses).
+    n_multipliers : int
+        How many internal coordinates are Lagrange multipliers (default 0);
+        each makes the tangent one negative eigenvalue indefinite at a stable
+        state, which the core's stability test accounts for.
+    """
+
+    name: str
+    bodies: tuple[str, str]
+    n_internal: int = 0
+    n_multipliers: int = 0
+
+    # --- required --------------------------------------------------------
+    @abstractmethod
+    def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+                 ) -> tuple[float, np.ndarray, np.ndarray]:
+        """Energy (N mm), gradient (6 + n_internal) and Hessian.
+
+        The gradient holds the generalised forces conjugate to the local
+        coordinates (N on lengths, N mm on angles). The Hessian is a dense
+        (6 + n_internal) square array, or, if :meth:`hessian_pattern` returns
+        a pattern, the values of its entries (duplicates summed).
+
+        Raises
+        ------
+        ValueError
+            If the state is outside the model's domain (e.g. an inverted
+            element); the core then treats the Newton iterate as refused and
+            cuts the step.
+        """
+
+    @abstractmethod
+    def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
+        """Deformed centre line (or representative polyline) as points (m, 2), mm."""
+
+    # --- optional, with defaults ----------------------------------------
+    def initial_internal(self) -> np.ndarray:
+        """Internal coordinates in the undeformed configuration (default: zeros)."""
+        return np.zeros(self.n_internal)
+
+    def internal_is_rotation(self) -> np.ndarray:
+        """Boolean mask (n_internal,): True where an internal coordinate is an angle (rad).
+
+        Default: none is. The core scales angles as they are and lengths by
+        the mechanism size in its step bounds and norms.
+        """
+        return np.zeros(self.n_internal, dtype=bool)
+
+    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Local (rows, cols) of the Hessian values :meth:`evaluate` returns, fixed for life.
+
+        Default None: the Hessian is dense. A sparse connector returns the
+        pattern once; its entries may repeat (values are summed).
+        """
+        return None
+
+    def predict_internal(self, states: Sequence[LocalState], weights: Sequence[float],
+                         pose_a: np.ndarray, pose_b: np.ndarray) -> np.ndarray:
+        """Internal coordinates predicted for the next load step (predictor of the stepping).
+
+        Parameters
+        ----------
+        states : sequence of (pose_a, pose_b, internal)
+            The connector's converged local states, oldest first.
+        weights : sequence of float
+            Lagrange extrapolation weights of those states at the new load
+            factor (they sum to 1).
+        pose_a, pose_b : array (3,)
+            The bodies' predicted poses.
+
+        Default: the same Lagrange extrapolation the core applies to every
+        coordinate, ``sum(w_k internal_k)``. Override it when extrapolating
+        coordinates one by one is poor (e.g. nearly inextensible chords that
+        turn come out stretched).
+        """
+        return sum(w * state[2] for w, state in zip(weights, states))
+
+    def update_internal(self, old: LocalState, new: LocalState) -> np.ndarray:
+        """Internal coordinates after a Newton correction (from the old and the linear update).
+
+        Default: the linear update, ``new[2]`` (= q + du). An override must
+        agree with it to first order in the correction, so that Newton stays
+        quadratic.
+        """
+        return new[2]
+
+    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+                 ) -> list[str]:
+        """Reasons why this state lies outside the model's range of meaning (empty: valid).
+
+        Evaluated at every converged load level without stopping the run
+        (the validity monitor). Default: no concerns. Each reason states the
+        measured value and the threshold, e.g. ``"element 3 chord stretch
+        12.5 % > 2 %"``.
+        """
+        return []
+
+
+def overrides(connector: Connector, hook: str) -> bool:
+    """True if ``connector``'s class replaces the base class's default ``hook``.
+
+    The core calls :meth:`Connector.predict_internal` and
+    :meth:`Connector.update_internal` only on connectors that override them:
+    the defaults compute exactly what the core already does for every
+    coordinate, so skipping them gives the same numbers without gathering
+    the local states.
+    """
+    return getattr(type(connector), hook) is not getattr(Connector, hook)

@@ -1,0 +1,123 @@
+"""Dead loads of one load case in the core's dof numbering: potential, gradient, load vector.
+
+A dead force F acts at a material point x = p + R(theta) rel of a body,
+a dead moment M on a body's rotation. At load factor lambda their
+potential is
+
+    V = -lambda (sum F . x + sum M theta),
+
+so they add -lambda J^T F (and -lambda M) to the gradient of the total
+potential and -lambda F . d2x/dtheta2 = lambda F . R(theta) rel to its
+theta-theta tangent entry. The load vector f = -d(grad V)/d(lambda) = J^T F
+(+ M) is what arc-length continuation borders the tangent with. Both come
+from :meth:`Loads.point_terms`, the one place the loads' kinematics is
+written.
+
+Units: mm, N, N mm, rad.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Iterator, Mapping
+
+import numpy as np
+
+from geometry import Force, LoadCase, Moment
+from geometry.kinematics import rotate_xy
+
+
+@dataclass
+class Loads:
+    """Dead loads of one load case at full value (load factor 1).
+
+    Attributes
+    ----------
+    dofs : array (k, 3) of int
+        Global dofs (x, y, theta) of the body each force acts on (-1: ground).
+    forces : array (k, 2)
+        Force vectors, N.
+    rels : array (k, 2)
+        Initial offsets of the loaded points from their body's reference point, mm.
+    moment_dofs : array (j,) of int
+        Global theta dof of the body each moment acts on (-1: ground).
+    moments : array (j,)
+        Moments, N mm.
+    scale : float
+        Force scale for relative tolerances, N: the largest force component
+        or moment / mechanism size.
+    """
+
+    dofs: np.ndarray
+    forces: np.ndarray
+    rels: np.ndarray
+    moment_dofs: np.ndarray
+    moments: np.ndarray
+    scale: float
+
+    @classmethod
+    def of_case(cls, case: LoadCase, pose_dofs: Callable[[str], np.ndarray],
+                reference: Mapping[str, np.ndarray], size: float) -> "Loads":
+        """The loads of ``case`` in ``pose_dofs(body)`` numbering; bodies' reference points in mm.
+
+        ``size`` (mm) turns moments into forces for :attr:`scale`.
+        """
+        fd, ff, fr, md, mv = [], [], [], [], []
+        for comp in case.components:
+            dofs = pose_dofs(comp.body)
+            if isinstance(comp, Force):
+                fd.append(dofs)
+                ff.append(comp.vector)
+                fr.append(np.asarray(comp.point, float) - reference[comp.body])
+            elif isinstance(comp, Moment):
+                md.append(dofs[2])
+                mv.append(comp.value)
+        forces = np.array(ff).reshape(-1, 2)
+        moments = np.array(mv, float)
+        scale = max([float(np.abs(forces).max(initial=0.0)),
+                     float(np.abs(moments).max(initial=0.0)) / size, 1e-300])
+        return cls(np.array(fd, int).reshape(-1, 3), forces, np.array(fr).reshape(-1, 2),
+                   np.array(md, int), moments, scale)
+
+    def point_terms(self, q: np.ndarray) -> Iterator[tuple[int, int, int, float, float, float,
+                                                           float]]:
+        """Per force on a moving body: its dofs (ix, iy, it), F (N) and R(theta) rel (mm)."""
+        for (ix, iy, it), (fx, fy), (rx, ry) in zip(self.dofs.tolist(), self.forces.tolist(),
+                                                    self.rels.tolist()):
+            if ix >= 0:
+                yield (ix, iy, it, fx, fy, *rotate_xy(q[it], rx, ry))
+
+    def add_to(self, q: np.ndarray, factor: float, grad: np.ndarray, diagonal: np.ndarray
+               ) -> float:
+        """Add the loads at ``factor`` to ``grad`` and the tangent ``diagonal`` (in place).
+
+        Returns their potential, N mm.
+        """
+        energy = 0.0
+        for ix, iy, it, fx, fy, rrx, rry in self.point_terms(q):
+            energy -= factor * (fx * (q[ix] + rrx) + fy * (q[iy] + rry))
+            grad[ix] -= factor * fx
+            grad[iy] -= factor * fy
+            grad[it] -= factor * (fy * rrx - fx * rry)              # F . dx/dtheta
+            diagonal[it] += factor * (fx * rrx + fy * rry)          # -F . d2x/dtheta2
+        for dof, m in zip(self.moment_dofs.tolist(), self.moments.tolist()):
+            if dof >= 0:
+                energy -= factor * m * q[dof]
+                grad[dof] -= factor * m
+        return energy
+
+    def vector(self, q: np.ndarray) -> np.ndarray:
+        """Generalised load at unit factor in state q, J^T F and M (N, N mm), (n_dofs = q.size).
+
+        Minus the derivative of the total-potential gradient with respect to
+        the load factor.
+        """
+        f = np.zeros(q.size)
+        for ix, iy, it, fx, fy, rrx, rry in self.point_terms(q):
+            f[ix] += fx
+            f[iy] += fy
+            f[it] += fy * rrx - fx * rry
+        for dof, m in zip(self.moment_dofs.tolist(), self.moments.tolist()):
+            if dof >= 0:
+                f[dof] += m
+        return f

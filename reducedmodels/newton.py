@@ -1,0 +1,191 @@
+"""The one Newton iteration of the core, with all its safeguards, on a "step problem".
+
+A step problem says what one step solves: its residual and tangent at an
+iterate and the correction they give. :class:`FixedLoad` is equilibrium at
+a fixed load factor (load control, and the first and last points of arc
+length); :class:`reducedmodels.continuation.ArcLengthStep` borders it with
+the arc-length constraint and makes the load factor an unknown. An
+implicit time step is a third: its residual adds inertia and its tangent
+the mass matrix over the time step squared, and :func:`solve_step` needs no
+change.
+
+Units: mm, N, N mm, rad; load factors are dimensionless.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+
+from .loads import Loads
+from .tangent import Tangent
+
+if TYPE_CHECKING:
+    from .core import SolverSettings, System
+
+
+CONTRACTION_EVIDENCE = 1e-3
+"""Residual drop (relative to the first iterate) that shows Newton is contracting."""
+
+
+EXCURSION_CHECK = 1e-3
+"""Scaled correction below which an iterate cannot newly leave the sub-step's bounds
+(they are 0.25 rad and 0.05 of the size; a smaller correction only matters
+right at the edge, where the next large one is caught)."""
+
+
+NONLINEAR_UPDATE = 1e-3
+"""Scaled correction above which connectors apply their own nonlinear update.
+Below it the second-order stretch a linear update leaves in a turning chord,
+(correction)^2 / 2 < 5e-7, no longer costs iterations, and q + du is cheaper."""
+
+
+DIVERGENCE = 1e8
+"""Growth of the residual over max(first residual, 1) taken as divergence."""
+
+
+class StepRefused(Exception):
+    """A step problem cannot give a correction at this iterate (the message says why)."""
+
+
+class StepProblem(ABC):
+    """What one Newton solve is about: residual, tangent and correction at an iterate.
+
+    Attributes
+    ----------
+    system : System
+    loads : Loads
+    factor : float
+        The load factor of the current iterate (dimensionless); a problem
+        whose correction moves it (arc length) updates it through the second
+        value :meth:`correction` returns.
+    """
+
+    def __init__(self, system: "System", loads: Loads, factor: float):
+        self.system, self.loads, self.factor = system, loads, factor
+
+    def assemble(self, q: np.ndarray) -> tuple[np.ndarray, Tangent]:
+        """Out-of-balance force (gradient of the total potential, N and N mm) and tangent at q.
+
+        Raises ValueError or FloatingPointError if a connector refuses the state.
+        """
+        _, g, K = self.system.assemble(q, self.loads, self.factor)
+        return g, K
+
+    def residual(self, g: np.ndarray) -> float:
+        """Size of the out-of-balance force relative to the load scale (dimensionless)."""
+        return self.system.residual(g, self.loads)
+
+    @abstractmethod
+    def correction(self, q: np.ndarray, g: np.ndarray, K: Tangent) -> tuple[np.ndarray, float]:
+        """Newton correction (du, dfactor) at iterate q with gradient g and tangent K.
+
+        Raises
+        ------
+        StepRefused
+            When no correction exists (e.g. no real root of a constraint).
+        RuntimeError, numpy.linalg.LinAlgError
+            When the tangent is singular.
+        """
+
+
+class FixedLoad(StepProblem):
+    """Equilibrium at a fixed load factor: du = -K^-1 g."""
+
+    def correction(self, q: np.ndarray, g: np.ndarray, K: Tangent) -> tuple[np.ndarray, float]:
+        """The plain Newton correction; the load factor stays."""
+        return K.solve(-g), 0.0
+
+
+class NewtonResult(NamedTuple):
+    """Outcome of :func:`solve_step`.
+
+    ``state`` is None on failure, with ``reason`` saying why; ``factor`` is
+    the load factor of the last iterate. ``tangent`` is the tangent at the
+    last assembled iterate: at the converged state when the residual test
+    ended the iteration, else one correction before it (close enough to
+    judge stability: its eigenvalues differ by O(|du|)).
+    """
+
+    state: np.ndarray | None
+    factor: float
+    iterations: int
+    reason: str
+    tangent: Tangent | None
+
+
+def solve_step(problem: StepProblem, q: np.ndarray, settings: "SolverSettings",
+               origin: np.ndarray | None = None) -> NewtonResult:
+    """Newton-Raphson with the exact tangent on ``problem`` from the iterate q.
+
+    Converged when the residual is below ``force_tol`` (relative to the load
+    scale), when the last correction (scaled coordinates, and the load
+    factor's change) is below ``step_tol``, or when the error it leaves,
+    estimated from the contraction of the last two corrections as |du_k|
+    min(1, |du_k| / |du_(k-1)|) (an over-estimate under quadratic
+    convergence), is below ``error_tol``. The estimate is trusted only once
+    the iteration is seen to contract (the residual has fallen below
+    ``CONTRACTION_EVIDENCE`` of its first value): a stiff membrane mode can
+    carry a large force on a tiny correction before Newton has found its
+    basin. So the iteration stops as soon as the answer is known, instead of
+    spending one more assembly and solve to prove it.
+
+    Newton that has lost its way is abandoned early, since cutting the step
+    is cheaper than letting it wander to ``max_iterations``: when a connector
+    refuses an iterate (invalid state), when the residual is not finite or
+    grows ``DIVERGENCE`` times, when it has not improved on its best value
+    for ``max_stall`` iterations, or, with ``origin`` (the state where the
+    step started), when an iterate moves a body more than ``max_excursion``
+    times the step bounds away from it.
+
+    Corrections larger than ``NONLINEAR_UPDATE`` go through
+    :meth:`System.update` (the connectors' own nonlinear updates).
+    """
+    system = problem.system
+    res0, best, stalled, last_step, res = None, math.inf, 0, None, math.inf
+    for it in range(settings.max_iterations + 1):
+        try:
+            g, K = problem.assemble(q)
+        except (ValueError, FloatingPointError) as exc:   # a connector refused the state
+            return NewtonResult(None, problem.factor, it, f"invalid state ({exc})", None)
+        res = problem.residual(g)
+        if not np.isfinite(res):
+            return NewtonResult(None, problem.factor, it, "non-finite residual", None)
+        if res <= settings.force_tol:
+            return NewtonResult(q, problem.factor, it, "", K)
+        res0 = res if res0 is None else res0
+        if res > DIVERGENCE * max(res0, 1.0):
+            return NewtonResult(None, problem.factor, it, f"diverging residual {res:.3g}", None)
+        best, stalled = (res, 0) if res < best else (best, stalled + 1)
+        if stalled >= settings.max_stall:
+            return NewtonResult(None, problem.factor, it, f"stalled (no lower residual in "
+                                f"{stalled} iterations, best {best:.3g})", None)
+        if it == settings.max_iterations:
+            break
+        try:
+            du, dfactor = problem.correction(q, g, K)
+        except (RuntimeError, np.linalg.LinAlgError) as exc:  # singular factor
+            return NewtonResult(None, problem.factor, it, f"singular tangent ({exc})", None)
+        except StepRefused as exc:
+            return NewtonResult(None, problem.factor, it, str(exc), None)
+        step = float(np.abs(system.scaled(du)).max(initial=0.0))
+        if not (math.isfinite(step) and math.isfinite(dfactor)):
+            return NewtonResult(None, problem.factor, it, "singular tangent", None)
+        step = max(step, abs(dfactor))
+        q = system.update(q, du) if step > NONLINEAR_UPDATE else q + du
+        problem.factor += dfactor
+        contracting = last_step is not None and res <= CONTRACTION_EVIDENCE * res0
+        if step <= settings.step_tol or (contracting and step * min(1.0, step / last_step)
+                                         <= settings.error_tol):
+            return NewtonResult(q, problem.factor, it + 1, "", K)
+        last_step = step
+        if (origin is not None and step > EXCURSION_CHECK
+                and system.motion_ratio(origin, q) > settings.max_excursion):
+            return NewtonResult(None, problem.factor, it + 1,
+                                "iterates left the sub-step's bounds", None)
+    return NewtonResult(None, problem.factor, settings.max_iterations,
+                        f"no convergence in {settings.max_iterations} iterations "
+                        f"(residual {res:.3g})", None)

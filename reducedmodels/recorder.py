@@ -1,0 +1,154 @@
+"""Recording a traced path as a LoadPath, and load control through the requested levels.
+
+:class:`PathRecorder` turns the points :func:`reducedmodels.tracer.trace`
+yields into a :class:`~reducedmodels.loadpath.LoadPath` (target motion,
+optional poses, shapes and reactions, the validity monitor, solver
+statistics) and a tracer failure into a :class:`~reducedmodels.core.SolverError`
+that carries the path so far. :func:`solve_path` (load control) and
+:func:`reducedmodels.continuation.solve_arclength` are thin uses of it.
+
+Units: mm, N, N mm, rad.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Callable, Iterator
+
+from geometry import LoadCase
+
+from .core import SolverError, System
+from .loadpath import LoadPath
+from .tracer import LoadControl, PathPoint, TraceFailure, trace
+
+
+class PathRecorder:
+    """Builds the LoadPath of ``system`` on ``case`` from the points of a trace.
+
+    Parameters
+    ----------
+    system : System
+    case : LoadCase
+    model : str
+        Model id recorded in the result (and named in failures).
+    scene : str
+    settings : dict
+        Model settings recorded in the result.
+    record_poses, record_shapes, record_reactions : bool
+        Also record every body's pose, every connector's shape and the
+        ground reaction at each point.
+    limit_points : bool
+        Record the indices of the local extrema of the load
+        (``stats['limit_points']``), for paths whose load rises and falls.
+
+    Every point is checked by the validity monitor (:meth:`System.validity`):
+    ``LoadPath.valid`` and ``LoadPath.validity`` say, per point, whether the
+    state is inside every model's range of meaning and if not why; the run
+    goes on either way.
+    """
+
+    def __init__(self, system: System, case: LoadCase, model: str = "", scene: str = "",
+                 settings: dict | None = None, record_poses: bool = False,
+                 record_shapes: bool = False, record_reactions: bool = False,
+                 limit_points: bool = False):
+        self.t0 = time.perf_counter()
+        self.system, self.case, self.model = system, case, model
+        self.path = LoadPath(
+            model=model, load_case=case.name, load=[], dx=[], dy=[], rotation=[], seconds=0.0,
+            settings=settings or {}, scene=scene, load_unit=case.unit,
+            poses={b: [] for b in system.mechanism.bodies} if record_poses else None,
+            shapes={c.name: [] for c in system.connectors} if record_shapes else None,
+            reactions=[] if record_reactions else None, valid=[], validity=[])
+        self.stats = {"unknowns": system.n_dofs, "newton_iterations": 0, "step_cuts": 0,
+                      "substeps": 0, "iterations": []}
+        if limit_points:
+            self.stats["limit_points"] = []
+        self.path.stats = self.stats
+        self.factors: list[float] = []
+
+    def record(self, point: PathPoint) -> None:
+        """Append one converged point."""
+        system, lp, q = self.system, self.path, point.state
+        dx, dy, rot = system.target(q)
+        lp.load.append(point.factor * self.case.magnitude)
+        lp.dx.append(dx), lp.dy.append(dy), lp.rotation.append(rot)
+        reasons = system.validity(q)
+        lp.valid.append(not reasons)
+        lp.validity.append("; ".join(reasons) if reasons else None)
+        if lp.reactions is not None:
+            lp.reactions.append(system.reaction(q).tolist())
+        if lp.poses is not None:
+            for b in system.mechanism.bodies:
+                lp.poses[b].append(system.pose(q, b).tolist())
+        if lp.shapes is not None:
+            for c, local in zip(system.connectors, system.local_states(q)):
+                lp.shapes[c.name].append(c.shape(*local).tolist())
+        self.stats["iterations"].append(point.iterations)
+        self._count(point.counters)
+        self.factors.append(point.factor)
+        f = self.factors
+        if "limit_points" in self.stats and len(f) >= 3 and (f[-2] - f[-3]) * (f[-1] - f[-2]) < 0:
+            self.stats["limit_points"].append(len(f) - 2)
+
+    def _count(self, counters) -> None:
+        self.stats.update(newton_iterations=counters.newton_iterations,
+                          step_cuts=counters.step_cuts, substeps=counters.substeps)
+
+    def finish(self) -> LoadPath:
+        """The path of a successful trace (wall time from the recorder's creation)."""
+        self.path.converged = True
+        self.path.seconds = time.perf_counter() - self.t0
+        return self.path
+
+    def failure(self, exc: TraceFailure) -> SolverError:
+        """The SolverError for a failed trace, carrying the path so far."""
+        self._count(exc.counters)
+        self.stats["failure"] = exc.reason
+        self.path.converged = False
+        self.path.seconds = time.perf_counter() - self.t0
+        lam, case = exc.factor, self.case
+        return SolverError(f"{self.model or 'model'} on load case '{case.name}': {exc.reason}; "
+                           f"last converged load {lam * case.magnitude:.6g} {case.unit} "
+                           f"({100 * lam:.2f} % of full load)", lam, self.path)
+
+    def run(self, points: Iterator[PathPoint],
+            stop: Callable[[LoadPath], bool] | None = None) -> tuple[LoadPath, PathPoint]:
+        """Record the points (until ``stop(path)`` is True); return the path and the last point.
+
+        Raises
+        ------
+        SolverError
+            If the trace fails; carries the last converged load factor and the path so far.
+        """
+        last = None
+        try:
+            for last in points:
+                self.record(last)
+                if stop is not None and stop(self.path):
+                    break
+        except TraceFailure as exc:
+            raise self.failure(exc) from None
+        return self.finish(), last
+
+
+def solve_path(system: System, case: LoadCase, levels: int | None = None,
+               model: str = "", settings: dict | None = None, scene: str = "",
+               record_poses: bool = False, record_shapes: bool = False,
+               record_reactions: bool = False) -> LoadPath:
+    """Trace the load path of ``case`` through its requested levels by load control.
+
+    Between two requested levels the load factor advances in sub-steps
+    (:class:`~reducedmodels.tracer.LoadControl`); the reported levels are
+    exactly the requested ones (``levels`` equal steps, default the load
+    case's).
+
+    Raises
+    ------
+    SolverError
+        When step cutting cannot save a step; carries the last converged load
+        factor and the partial LoadPath.
+    """
+    recorder = PathRecorder(system, case, model, scene, settings, record_poses, record_shapes,
+                            record_reactions)
+    points = trace(system, system.loads(case), LoadControl(case.factors(levels)))
+    return recorder.run(points)[0]

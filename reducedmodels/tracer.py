@@ -1,0 +1,287 @@
+"""The one path tracer: a generator of converged states along a load path.
+
+:func:`trace` solves the first point at a fixed load factor from rest and
+then asks a *stepping strategy* for one step after the other: the strategy
+proposes a step problem and a predictor, the one Newton iteration
+(:func:`reducedmodels.newton.solve_step`) corrects it, the strategy reviews
+the result (step bounds, stability, ...), and the tracer either cuts the
+step or accepts it and, when the strategy says the point is one to report,
+yields it as a :class:`PathPoint`. The caller records what it needs (the
+way scikit-fem's ``natural_jfnk`` yields ``(mu, sol)``): see
+:class:`reducedmodels.recorder.PathRecorder`. Two strategies exist:
+:class:`LoadControl` (requested load levels, adaptive sub-steps) and
+:class:`reducedmodels.continuation.ArcLength` (Riks/Crisfield continuation).
+
+Counts of Newton iterations, step cuts and accepted sub-steps are kept here,
+once, and travel with every point and every failure.
+
+Units: mm, N, N mm, rad; load factors are dimensionless.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from abc import ABC, abstractmethod
+from typing import TYPE_CHECKING, Callable, Iterator, NamedTuple, Sequence
+
+import numpy as np
+
+from .loads import Loads
+from .newton import FixedLoad, NewtonResult, StepProblem, StepRefused, solve_step
+from .tangent import Tangent
+
+if TYPE_CHECKING:
+    from .core import System
+
+Solve = Callable[[StepProblem, np.ndarray, "np.ndarray | None"], NewtonResult]
+"""solve(problem, guess, origin): the tracer's counted call of the one Newton iteration."""
+
+
+@dataclasses.dataclass
+class Counters:
+    """Work done so far along a path (all counts)."""
+
+    newton_iterations: int = 0
+    step_cuts: int = 0
+    substeps: int = 0
+
+
+@dataclasses.dataclass(frozen=True)
+class PathPoint:
+    """One converged state the tracer yields.
+
+    Attributes
+    ----------
+    state : array (n_dofs,)
+        The system's coordinates (mm, rad; see :class:`reducedmodels.core.System`).
+    factor : float
+        Load factor (dimensionless; 1 is the load case's full value).
+    iterations : int
+        Newton iterations spent since the previous point (failed attempts included).
+    tangent : Tangent or None
+        Tangent at (or one correction before) the state, for stability
+        (:meth:`System.unstable`) or a further solve.
+    step : float
+        Size of the step that reached the point (load-factor increment, or
+        arc length; 0 for the first point).
+    counters : Counters
+        Totals along the path up to this point.
+    """
+
+    state: np.ndarray
+    factor: float
+    iterations: int
+    tangent: Tangent | None
+    step: float
+    counters: Counters
+
+
+class TraceFailure(Exception):
+    """The tracer cannot continue; carries the reason, the last converged factor and the counts."""
+
+    def __init__(self, reason: str, factor: float, counters: Counters):
+        super().__init__(reason)
+        self.reason, self.factor, self.counters = reason, factor, counters
+
+
+class Verdict(NamedTuple):
+    """A stepping strategy's review of one Newton solve.
+
+    ``state`` None means the step is refused (``reason`` says why) and will
+    be cut; ``fast`` says the step was easy enough to grow the next one.
+    """
+
+    state: np.ndarray | None
+    factor: float
+    reason: str
+    tangent: Tangent | None
+    fast: bool
+
+
+class Stepping(ABC):
+    """A stepping strategy of :func:`trace`: how steps are proposed, judged, cut and grown.
+
+    Attributes
+    ----------
+    first_factor : float
+        Load factor of the first point, solved from rest at fixed load.
+    cut_name : str
+        What is cut, for messages (``"step"``, ``"arc-length"``).
+    factor : float
+        Load factor of the last accepted state (set by :meth:`begin`).
+    """
+
+    first_factor: float
+    cut_name: str
+    factor: float
+
+    @abstractmethod
+    def begin(self, system: "System", loads: Loads, point: PathPoint) -> None:
+        """Start from the first converged point (raise StepRefused if the path cannot start)."""
+
+    @abstractmethod
+    def finished(self) -> bool:
+        """True once the path has reached its end."""
+
+    @abstractmethod
+    def attempt(self) -> tuple[StepProblem, np.ndarray, np.ndarray]:
+        """The next step: (problem, predicted state, origin for the excursion check)."""
+
+    @abstractmethod
+    def review(self, result: NewtonResult, solve: Solve) -> Verdict:
+        """Accept or refuse a Newton result (``solve`` for any further counted solve)."""
+
+    @abstractmethod
+    def cut(self) -> bool:
+        """Shrink the step after a refusal; False when it cannot shrink further."""
+
+    @abstractmethod
+    def advance(self, verdict: Verdict) -> float | None:
+        """Accept the reviewed state; the load factor to report it at, or None (not reported)."""
+
+    @abstractmethod
+    def step_size(self) -> float:
+        """Size of the step last accepted (load factor or arc length)."""
+
+    def exhausted(self, counters: Counters) -> str | None:
+        """Why the path must stop now although unfinished (a step budget), or None."""
+        return None
+
+
+def trace(system: "System", loads: Loads, stepping: Stepping) -> Iterator[PathPoint]:
+    """Yield the converged points of the path ``stepping`` follows under ``loads``.
+
+    Raises
+    ------
+    TraceFailure
+        When the first point does not converge, when step cutting cannot
+        save a step, or when the strategy's budget is exhausted; carries the
+        last converged load factor and the counts.
+    """
+    settings = system.settings
+    counters = Counters()
+
+    def solve(problem: StepProblem, guess: np.ndarray, origin: np.ndarray | None = None
+              ) -> NewtonResult:
+        result = solve_step(problem, guess, settings, origin)
+        counters.newton_iterations += result.iterations
+        return result
+
+    first = solve(FixedLoad(system, loads, stepping.first_factor), system.initial_state())
+    if first.state is None:
+        raise TraceFailure(first.reason, 0.0, counters)
+    point = PathPoint(first.state, first.factor, first.iterations, first.tangent, 0.0,
+                      dataclasses.replace(counters))
+    try:
+        stepping.begin(system, loads, point)
+    except StepRefused as exc:
+        raise TraceFailure(str(exc), point.factor, counters) from None
+    yield point
+    spent = 0
+    while not stepping.finished():
+        problem, guess, origin = stepping.attempt()
+        before = counters.newton_iterations
+        verdict = stepping.review(solve(problem, guess, origin), solve)
+        spent += counters.newton_iterations - before
+        if verdict.state is None:
+            counters.step_cuts += 1
+            if not stepping.cut():
+                raise TraceFailure(f"{stepping.cut_name} cutting failed ({verdict.reason})",
+                                   stepping.factor, counters)
+            continue
+        counters.substeps += 1
+        reported = stepping.advance(verdict)
+        if reported is not None:
+            yield PathPoint(verdict.state, reported, spent, verdict.tangent, stepping.step_size(),
+                            dataclasses.replace(counters))
+            spent = 0
+        why = stepping.exhausted(counters)
+        if why is not None:
+            raise TraceFailure(why, stepping.factor, counters)
+
+
+class LoadControl(Stepping):
+    """Load control through requested load factors with adaptive sub-steps.
+
+    Between two requested factors the load factor advances in sub-steps
+    that are halved when Newton fails, a body moves more than the bounds of
+    :class:`~reducedmodels.core.SolverSettings` or (with ``check_stability``)
+    the equilibrium reached is unstable, and doubled (up to the spacing of
+    the requested factors) after easy steps. Each sub-step starts from the
+    quadratic extrapolation of the last three converged states
+    (:meth:`System.predict`). Only the requested factors are reported.
+
+    Parameters
+    ----------
+    factors : sequence of float
+        Increasing load factors to report, the first solved from rest.
+    """
+
+    cut_name = "step"
+
+    def __init__(self, factors: Sequence[float]):
+        self.factors = [float(f) for f in factors]
+        self.first_factor = self.factors[0]
+
+    def begin(self, system: "System", loads: Loads, point: PathPoint) -> None:
+        """Start at the first requested factor."""
+        self.system, self.loads, self.settings = system, loads, system.settings
+        self.q, self.factor = point.state, point.factor
+        self.history = [(self.q, self.factor)]   # converged (state, factor) for the predictor
+        f = self.factors
+        self.spacing = f[1] - f[0] if len(f) > 1 else 1.0
+        self.step = self.last_step = self.spacing
+        self.min_step = self.spacing * 0.5 ** self.settings.max_cuts
+        self.targets = iter(f[1:])
+        self.target = next(self.targets, None)
+
+    def finished(self) -> bool:
+        """True after the last requested factor."""
+        return self.target is None
+
+    def attempt(self) -> tuple[StepProblem, np.ndarray, np.ndarray]:
+        """Fixed load at the next sub-step (never past the next requested factor)."""
+        trial = min(self.factor + self.step, self.target)
+        self.last_step = trial - self.factor
+        return (FixedLoad(self.system, self.loads, trial), self.system.predict(self.history, trial),
+                self.q)
+
+    def review(self, result: NewtonResult, solve: Solve) -> Verdict:
+        """Refuse non-convergence, a step beyond the bounds and (optionally) instability."""
+        q_new, why = result.state, result.reason
+        ratio = self.system.motion_ratio(self.q, q_new) if q_new is not None else math.inf
+        if (ratio <= 1.0 and self.settings.check_stability
+                and self.system.unstable(result.tangent)):
+            q_new, ratio, why = None, math.inf, ("converged to an unstable equilibrium "
+                                                 "(past a limit point?)")
+        if ratio > 1.0:
+            return Verdict(None, result.factor, why if q_new is None else "step too large",
+                           None, False)
+        return Verdict(q_new, result.factor, "", result.tangent,
+                       result.iterations <= self.settings.fast_iterations and ratio < 0.5)
+
+    def cut(self) -> bool:
+        """Halve the sub-step."""
+        self.step *= 0.5
+        return self.step >= self.min_step
+
+    def advance(self, verdict: Verdict) -> float | None:
+        """Take the state; report it at the requested factor once that is reached."""
+        self.q, self.factor = verdict.state, verdict.factor
+        self.history = [*self.history[-2:], (self.q, self.factor)]
+        if verdict.fast:
+            self.step = min(2.0 * self.step, self.spacing)
+        if self.factor < self.target - 1e-14 * self.spacing:
+            return None
+        reached, self.target = self.target, next(self.targets, None)
+        return reached
+
+    def step_size(self) -> float:
+        """Load-factor increment of the last accepted sub-step."""
+        return self.last_step
+
+    def exhausted(self, counters: Counters) -> str | None:
+        """More sub-steps than ``max_substeps``."""
+        limit = self.settings.max_substeps
+        return f"more than {limit} load sub-steps" if counters.substeps > limit else None
