@@ -82,7 +82,6 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
@@ -93,49 +92,12 @@ from scipy.interpolate import CubicSpline
 
 from geometry import Arc, Flexure, Mechanism, Segment
 from geometry.kinematics import place_points, rotate, rotate_xy
+from geometry.shapes import arc_semi_axes
 
 from .connector import Connector
 
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])
 TABLE_RESOURCE = "data/prbm_table.json"
-
-
-_K = np.arange(2, 18)
-_FACT = np.array([math.factorial(n) for n in range(2 * _K[-1] + 3)], float)
-_A2_SERIES = -((-1.0) ** _K) * 4.0 ** (_K - 1) / (2.0 * _FACT[2 * _K + 1])
-_B2_SERIES = (-1.0) ** _K * 4.0 ** (_K - 1) * (_K - 1) / _FACT[2 * _K + 2]
-
-
-def ellipse_semi_axes(width: float) -> tuple[float, float]:
-    """Semi-axes a, b of a uniform arc's ellipse of elasticity in units of its length L.
-
-    Paper Eqs. 3-4 with r = L / width. The closed forms lose digits to
-    cancellation as the arc flattens (b -> 0 like width / sqrt(720)), so up
-    to gamma = 1 rad their Taylor series in gamma are summed instead,
-
-        a^2 / L^2 = sum_{k>=1} (-1)^(k+1) 4^(k-1) gamma^(2k-2) / (2 (2k+1)!),
-        b^2 / L^2 = sum_{k>=2} (-1)^k 4^(k-1) (k-1) gamma^(2k-2) / (2k+2)!,
-
-    (16 terms: converged to rounding for gamma <= 1).
-
-    Parameters
-    ----------
-    width : float
-        Arc angle 2 gamma, rad (0 for a straight beam).
-
-    Returns
-    -------
-    a, b : float
-        Semi-axes across (a) and along (b) the symmetry axis divided by L.
-    """
-    g = 0.5 * width
-    if g <= 1.0:                      # the k = 1 term of a^2 is 1/12
-        a2 = 1.0 / 12.0 + float(_A2_SERIES @ g ** (2 * _K - 2))
-        b2 = float(_B2_SERIES @ g ** (2 * _K - 2))
-    else:
-        a2 = (1.0 - np.sin(2.0 * g) / (2.0 * g)) / (8.0 * g**2)
-        b2 = (0.5 + np.sin(2.0 * g) / (4.0 * g) - (np.sin(g) / g) ** 2) / (4.0 * g**2)
-    return float(np.sqrt(a2)), float(np.sqrt(max(b2, 0.0)))
 
 
 @dataclass(frozen=True)
@@ -184,7 +146,7 @@ class PrbmParameters:
         """
         if not 0.0 < rho < 1.0:
             raise ValueError(f"prbm: rho must lie in (0, 1), got {rho}")
-        a, b = ellipse_semi_axes(width)
+        a, b = arc_semi_axes(width)
         return cls(x1=a / np.sqrt(rho), y1=-b * np.sqrt((1.0 - rho) / rho),
                    y2=b * np.sqrt(rho / (1.0 - rho)), kappa1=2.0 / rho, kappa2=1.0 / (1.0 - rho))
 

@@ -14,9 +14,10 @@ from builders import cantilever, fd_check, tip_moment
 from elastica import arc_tip_compliance, cantilever_tip_force, circle_under_end_moment
 
 from geometry import Arc, Force, LoadCase, Moment, Segment, load_scene, parse_model
+from geometry.shapes import arc_semi_axes
 from reducedmodels.core import local_hessian
 from reducedmodels import build_system, run_reduced, solve_path
-from reducedmodels.prbm import (PrbmConnector, PrbmParameters, ellipse_semi_axes, load_table,
+from reducedmodels.prbm import (PrbmConnector, PrbmParameters, load_table,
                                 shape_frame, table_parameters)
 from reducedmodels.prbm_fit import (FitSettings, chain_cantilever, elastica, reference_paths,
                                     relative_errors, su2009_comparison)
@@ -275,8 +276,8 @@ def test_ellipse_semi_axes_agree_with_quadrature():
         phi = g * x
         a2 = 0.5 * wq @ (r * np.sin(phi)) ** 2
         b2 = 0.5 * wq @ (r * (np.cos(phi) - np.sin(g) / g)) ** 2
-        np.testing.assert_allclose(ellipse_semi_axes(2.0 * g), np.sqrt([a2, b2]), rtol=1e-9)
-    assert ellipse_semi_axes(0.0) == pytest.approx((np.sqrt(1 / 12), 0.0))
+        np.testing.assert_allclose(arc_semi_axes(2.0 * g), np.sqrt([a2, b2]), rtol=1e-9)
+    assert arc_semi_axes(0.0) == pytest.approx((np.sqrt(1 / 12), 0.0))
 
 
 def test_su2009_comparison_numbers():
