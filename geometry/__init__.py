@@ -6,12 +6,12 @@ Units everywhere: mm, N, MPa, N mm, rad (degrees only in scene files).
 from .errors import SceneError
 from .kinematics import rotation
 from .loads import Force, LoadCase, Moment
-from .mechanism import Body, Flexure, Material, Mechanism, Section
+from .mechanism import Body, Flexure, FlexureSpec, Material, Mechanism, PinSpec, Section
 from .scene import BUILTIN_SCENES, ModelSpec, Scene, load_scene, parse_model
 from .shapes import Arc, Ellipse, Segment
 
 __all__ = [
-    "Arc", "Body", "BUILTIN_SCENES", "Ellipse", "Flexure", "Force", "LoadCase", "Material",
-    "Mechanism", "ModelSpec", "Moment", "Scene", "SceneError", "Section", "Segment",
+    "Arc", "Body", "BUILTIN_SCENES", "Ellipse", "Flexure", "FlexureSpec", "Force", "LoadCase", "Material",
+    "Mechanism", "ModelSpec", "Moment", "PinSpec", "Scene", "SceneError", "Section", "Segment",
     "load_scene", "parse_model", "rotation",
 ]

@@ -17,10 +17,14 @@ from __future__ import annotations
 import dataclasses
 from collections import deque
 from dataclasses import dataclass, field
+from typing import Sequence
 
 import numpy as np
+from scipy.spatial.distance import pdist
 
 from .errors import SceneError
+from .magnitudes import check_magnitudes
+from .mobility import check_structure
 from .overlap import check_overlaps
 from .shapes import FlexureShape
 
@@ -184,8 +188,7 @@ class Mechanism:
         pts = np.vstack([f.shape.end_points for f in self.flexures]
                         + [np.asarray(p.point, float)[None] for p in self.pins]
                         + [self.target_point[None]])
-        d = pts[:, None, :] - pts[None, :, :]
-        return float(np.sqrt((d**2).sum(axis=-1)).max())
+        return float(pdist(pts).max()) if len(pts) > 1 else 0.0
 
     def transformed(self, angle: float, shift: np.ndarray) -> "Mechanism":
         """The same mechanism rotated by ``angle`` (rad) about the origin, then shifted (mm)."""
@@ -197,8 +200,45 @@ class Mechanism:
         return dataclasses.replace(transform_mechanism(self, angle, shift), pins=pins)
 
 
+@dataclass(frozen=True)
+class FlexureSpec:
+    """A flexure as written in a scene, before its ends are attached to bodies.
+
+    Attributes
+    ----------
+    name : str
+    shape : Arc or Segment
+        Centre line (lengths mm, angles rad).
+    bodies : (str, str)
+        The two bodies it joins.
+    section : Section
+    start_body : str, optional
+        Which of ``bodies`` holds the shape's start point; None: inferred
+        from the geometry by :func:`assemble`.
+    """
+
+    name: str
+    shape: FlexureShape
+    bodies: tuple[str, str]
+    section: Section
+    start_body: str | None = None
+
+    def other(self, body: str) -> str:
+        """The body at the other end from ``body``."""
+        return self.bodies[1] if body == self.bodies[0] else self.bodies[0]
+
+
+@dataclass(frozen=True)
+class PinSpec:
+    """A revolute joint as written in a scene: ``name``, two ``bodies``, ``point`` (mm)."""
+
+    name: str
+    bodies: tuple[str, str]
+    point: tuple[float, float]
+
+
 def assemble(
-    flexure_specs: list[dict],
+    flexure_specs: Sequence[FlexureSpec],
     ground: str,
     ground_points: np.ndarray,
     material: Material,
@@ -207,155 +247,67 @@ def assemble(
     source: str = "<scene>",
     body_points: dict[str, np.ndarray] | None = None,
     tolerance: float | None = None,
-    pin_specs: list[dict] | None = None,
+    pin_specs: Sequence[PinSpec] = (),
 ) -> Mechanism:
     """Build a Mechanism, attaching every flexure end to one of its bodies.
 
+    Four passes: check the names and the graph (every body reached from the
+    ground), infer which end of each flexure belongs to which body, check
+    that every given point is used, then build the bodies. The result is
+    refused if it intersects itself, if a derived quantity (EI, EA,
+    compliances, size) is degenerate, or if it is not a structure (mobile,
+    or with redundant pins).
+
     Parameters
     ----------
-    flexure_specs : list of dict
-        Each with keys ``name``, ``shape``, ``bodies`` (two names),
-        ``section`` and optionally ``start_body``.
+    flexure_specs : sequence of FlexureSpec
     ground, ground_points
         Name of the ground and the points (mm) where it holds flexures.
+    material : Material
+    target_body, target_point
+        The body and point (mm) whose motion is traced.
+    source : str
+        The scene file, for error messages.
     body_points : dict, optional
         Known points of other bodies (mm); flexure ends are matched to them by
         coincidence like the ground's.
     tolerance : float, optional
-        Coincidence tolerance, mm. Default: 1e-3 of the mechanism's size.
-    pin_specs : list of dict, optional
-        Revolute joints, each with keys ``name``, ``bodies`` (two different
-        names) and ``point`` (mm). A pin point is a known point of both its
-        bodies (flexure ends there attach to them) and a pin connects its
-        bodies like a flexure for the reachability check.
+        Coincidence tolerance, mm. Default: 1e-3 of the extent of the
+        flexure end points.
+    pin_specs : sequence of PinSpec, optional
+        Revolute joints. A pin point is a known point of both its bodies
+        (flexure ends there attach to them).
 
     Raises
     ------
     SceneError
-        If a flexure end meets no body, a body is unreachable from the ground,
-        the target body is unknown, or a name is duplicated.
+        If a name is duplicated, a flexure end or a given point meets
+        nothing, a body is unreachable from the ground, the target body is
+        unknown, or the mechanism is impossible (see above).
     """
-    pin_specs = list(pin_specs or [])
-    known: dict[str, list[np.ndarray]] = {ground: [np.asarray(p, float) for p in ground_points]}
-    for name, pts in (body_points or {}).items():
-        known.setdefault(name, []).extend(np.asarray(p, float) for p in pts)
-    for pin in pin_specs:
-        for b in pin["bodies"]:
-            known.setdefault(b, []).append(np.asarray(pin["point"], float))
-    all_ends = np.vstack([spec["shape"].end_points for spec in flexure_specs])
+    specs, pins = tuple(flexure_specs), tuple(pin_specs)
+    all_ends = np.vstack([spec.shape.end_points for spec in specs])
     scale = float(np.hypot(*(all_ends.max(axis=0) - all_ends.min(axis=0)))) or 1.0
     tol = tolerance if tolerance is not None else 1e-3 * scale
+    body_points = {name: np.asarray(pts, float).reshape(-1, 2)
+                   for name, pts in (body_points or {}).items()}
+    ground_points = np.asarray(ground_points, float).reshape(-1, 2)
 
-    names = [spec["name"] for spec in flexure_specs]
-    body_names: list[str] = [ground]
-    for spec in [*flexure_specs, *pin_specs]:
-        for b in spec["bodies"]:
-            if b not in body_names:
-                body_names.append(b)
-    if ground not in {b for spec in [*flexure_specs, *pin_specs] for b in spec["bodies"]}:
-        raise SceneError(source, "ground", ground, "no flexure or pin is attached to the ground")
-
-    start_body: dict[str, str] = {}
-    # explicit assignments and coincidences first
-    for spec in flexure_specs:
-        ends = spec["shape"].end_points
-        if spec.get("start_body") is not None:
-            sb = spec["start_body"]
-            if sb not in spec["bodies"]:
-                raise SceneError(
-                    source, f"flexures.{spec['name']}.start_body", sb,
-                    f"must be one of the flexure's bodies {list(spec['bodies'])}",
-                )
-            start_body[spec["name"]] = sb
-            continue
-        for b in spec["bodies"]:
-            pts = known.get(b)
-            if not pts:
-                continue
-            d = [min(np.hypot(*(e - p)) for p in pts) for e in ends]
-            if min(d) <= tol:
-                k = int(np.argmin(d))
-                other = spec["bodies"][1] if b == spec["bodies"][0] else spec["bodies"][0]
-                start_body[spec["name"]] = b if k == 0 else other
-                break
-        else:
-            if ground in spec["bodies"]:
-                d = min(np.hypot(*(e - p)) for e in ends for p in known[ground])
-                raise SceneError(
-                    source, f"flexures.{spec['name']}", spec["name"],
-                    f"no end point meets a ground point within {tol:.3g} mm "
-                    f"(nearest is {d:.3g} mm away)",
-                )
-
-    # propagate from the ground along the flexure graph: an end goes to the
-    # body whose already placed points are nearest (the shortest rigid link)
-    placed: dict[str, list[np.ndarray]] = {b: list(p) for b, p in known.items()}
-
-    def place(spec: dict) -> None:
-        sb = start_body[spec["name"]]
-        other = spec["bodies"][1] if sb == spec["bodies"][0] else spec["bodies"][0]
-        ends = spec["shape"].end_points
-        placed.setdefault(sb, []).append(ends[0])
-        placed.setdefault(other, []).append(ends[1])
-
-    for spec in flexure_specs:
-        if spec["name"] in start_body:
-            place(spec)
-    queue = deque([ground])
-    visited = {ground}
-    while queue:
-        body = queue.popleft()
-        for pin in pin_specs:
-            if body in pin["bodies"]:
-                other = pin["bodies"][1] if body == pin["bodies"][0] else pin["bodies"][0]
-                if other not in visited:
-                    visited.add(other)
-                    queue.append(other)
-        for spec in flexure_specs:
-            if body not in spec["bodies"]:
-                continue
-            other = spec["bodies"][1] if body == spec["bodies"][0] else spec["bodies"][0]
-            if spec["name"] not in start_body:
-                ends = spec["shape"].end_points
-                d = [min(np.hypot(*(e - p)) for p in placed[body]) for e in ends]
-                start_body[spec["name"]] = body if d[0] <= d[1] else other
-                place(spec)
-            if other not in visited:
-                visited.add(other)
-                queue.append(other)
-
-    unreached = [b for b in body_names if b not in visited]
-    if unreached:
-        raise SceneError(source, "flexures", unreached[0],
-                         f"body {unreached[0]!r} is not connected to the ground")
-    if target_body not in body_names:
-        raise SceneError(source, "target.body", target_body,
-                         f"unknown body; bodies are {body_names}")
-    if target_body == ground:
-        raise SceneError(source, "target.body", target_body, "the target cannot be the ground")
-    if len(set(names)) != len(names):
-        dup = next(n for n in names if names.count(n) > 1)
-        raise SceneError(source, "flexures.name", dup, "duplicate flexure name")
-    pin_names = [pin["name"] for pin in pin_specs]
-    for k, name in enumerate(pin_names):
-        if name in names or name in pin_names[:k]:
-            raise SceneError(source, "pins.name", name,
-                             "duplicate name (pins and flexures share one namespace)")
-
-    flexures = tuple(
-        Flexure(spec["name"], spec["shape"], tuple(spec["bodies"]), start_body[spec["name"]],
-                spec["section"])
-        for spec in flexure_specs
-    )
+    body_names = _check_names_and_graph(specs, pins, ground, target_body, body_points, source)
+    known = _known_points(ground, ground_points, body_points, pins)
+    start_body = _attach_ends(specs, pins, ground, known, tol, source)
+    flexures = tuple(Flexure(s.name, s.shape, tuple(s.bodies), start_body[s.name], s.section)
+                     for s in specs)
+    pins_built = tuple(Pin(p.name, tuple(p.bodies), np.asarray(p.point, dtype=float))
+                       for p in pins)
+    _check_points_used(flexures, pins_built, ground, ground_points, body_points, tol, source)
     check_overlaps(flexures, source, tol)
-    pins = tuple(Pin(p["name"], tuple(p["bodies"]), np.asarray(p["point"], dtype=float))
-                 for p in pin_specs)
     bodies: dict[str, Body] = {}
     for name in body_names:
         pts = ([f.end_point_of(name) for f in flexures if name in f.bodies]
-               + [p.point for p in pins if name in p.bodies])
+               + [p.point for p in pins_built if name in p.bodies])
         bodies[name] = Body(name, np.array(pts, dtype=float), is_ground=(name == ground))
-    return Mechanism(
+    mechanism = Mechanism(
         bodies=bodies,
         flexures=flexures,
         ground=ground,
@@ -363,5 +315,177 @@ def assemble(
         target_body=target_body,
         target_point=np.asarray(target_point, dtype=float),
         source=source,
-        pins=pins,
+        pins=pins_built,
     )
+    check_magnitudes(mechanism)
+    check_structure(mechanism)
+    return mechanism
+
+
+def _check_names_and_graph(specs: tuple[FlexureSpec, ...], pins: tuple[PinSpec, ...],
+                           ground: str, target_body: str, body_points: dict[str, np.ndarray],
+                           source: str) -> list[str]:
+    """The body names (ground first, then in order of appearance), after checking the graph.
+
+    Names must be unique (pins and flexures share one namespace), the ground
+    must hold something, every body must be reachable from the ground and
+    the target must be a moving body.
+    """
+    names = [spec.name for spec in specs]
+    if len(set(names)) != len(names):
+        dup = next(n for n in names if names.count(n) > 1)
+        raise SceneError(source, "flexures.name", dup, "duplicate flexure name")
+    seen = set(names)
+    for pin in pins:
+        if pin.name in seen:
+            raise SceneError(source, "pins.name", pin.name,
+                             "duplicate name (pins and flexures share one namespace)")
+        seen.add(pin.name)
+    links = [*specs, *pins]
+    body_names: list[str] = [ground]
+    neighbours: dict[str, list[str]] = {ground: []}
+    for link in links:
+        a, b = link.bodies
+        for name in (a, b):
+            if name not in neighbours:
+                body_names.append(name)
+                neighbours[name] = []
+        neighbours[a].append(b)
+        neighbours[b].append(a)
+    if not neighbours[ground]:
+        raise SceneError(source, "ground", ground, "no flexure or pin is attached to the ground")
+    visited, queue = {ground}, deque([ground])
+    while queue:
+        for other in neighbours[queue.popleft()]:
+            if other not in visited:
+                visited.add(other)
+                queue.append(other)
+    unreached = [b for b in body_names if b not in visited]
+    if unreached:
+        raise SceneError(source, "flexures", unreached[0],
+                         f"body {unreached[0]!r} is not connected to the ground")
+    if target_body not in neighbours:
+        raise SceneError(source, "target.body", target_body,
+                         f"unknown body; bodies are {body_names}")
+    if target_body == ground:
+        raise SceneError(source, "target.body", target_body, "the target cannot be the ground")
+    for name in body_points:
+        if name not in neighbours:
+            raise SceneError(source, f"bodies.{name}", name,
+                             f"no flexure or pin joins this body; bodies are {body_names}")
+    return body_names
+
+
+def _known_points(ground: str, ground_points: np.ndarray, body_points: dict[str, np.ndarray],
+                  pins: tuple[PinSpec, ...]) -> dict[str, list[np.ndarray]]:
+    """Points (mm) known to lie on each body before any flexure is attached."""
+    known: dict[str, list[np.ndarray]] = {ground: list(ground_points)}
+    for name, pts in body_points.items():
+        known.setdefault(name, []).extend(pts)
+    for pin in pins:
+        for b in pin.bodies:
+            known.setdefault(b, []).append(np.asarray(pin.point, float))
+    return known
+
+
+def _attach_ends(specs: tuple[FlexureSpec, ...], pins: tuple[PinSpec, ...], ground: str,
+                 known: dict[str, list[np.ndarray]], tol: float, source: str) -> dict[str, str]:
+    """The body holding each flexure's start point, by flexure name.
+
+    Explicit ``start_body`` first, then coincidence of an end with a known
+    point of one of its bodies; the rest by a walk from the ground along the
+    body graph, where an end goes to the body whose points already placed are
+    nearest (the shortest rigid link). A flexure on the ground must have its
+    ground end on a known ground point.
+    """
+    start_body: dict[str, str] = {}
+    for spec in specs:
+        if spec.start_body is not None:
+            if spec.start_body not in spec.bodies:
+                raise SceneError(source, f"flexures.{spec.name}.start_body", spec.start_body,
+                                 f"must be one of the flexure's bodies {list(spec.bodies)}")
+            start_body[spec.name] = spec.start_body
+            continue
+        ends = spec.shape.end_points
+        for b in spec.bodies:
+            pts = known.get(b)
+            if not pts:
+                continue
+            d = [min(np.hypot(*(e - p)) for p in pts) for e in ends]
+            if min(d) <= tol:
+                start_body[spec.name] = b if int(np.argmin(d)) == 0 else spec.other(b)
+                break
+    for spec in specs:
+        if ground in spec.bodies:
+            _check_ground_end(spec, start_body.get(spec.name), ground, known[ground], tol, source)
+
+    placed: dict[str, list[np.ndarray]] = {b: list(p) for b, p in known.items()}
+
+    def place(spec: FlexureSpec) -> None:
+        sb = start_body[spec.name]
+        ends = spec.shape.end_points
+        placed.setdefault(sb, []).append(ends[0])
+        placed.setdefault(spec.other(sb), []).append(ends[1])
+
+    for spec in specs:
+        if spec.name in start_body:
+            place(spec)
+    flexures_of: dict[str, list[FlexureSpec]] = {}
+    pin_neighbours: dict[str, list[str]] = {}
+    for spec in specs:
+        for b in spec.bodies:
+            flexures_of.setdefault(b, []).append(spec)
+    for pin in pins:
+        a, b = pin.bodies
+        pin_neighbours.setdefault(a, []).append(b)
+        pin_neighbours.setdefault(b, []).append(a)
+    queue, visited = deque([ground]), {ground}
+    while queue:
+        body = queue.popleft()
+        for other in pin_neighbours.get(body, []):
+            if other not in visited:
+                visited.add(other)
+                queue.append(other)
+        for spec in flexures_of.get(body, []):
+            other = spec.other(body)
+            if spec.name not in start_body:
+                ends = spec.shape.end_points
+                d = [min(np.hypot(*(e - p)) for p in placed[body]) for e in ends]
+                start_body[spec.name] = body if d[0] <= d[1] else other
+                place(spec)
+            if other not in visited:
+                visited.add(other)
+                queue.append(other)
+    return start_body
+
+
+def _check_ground_end(spec: FlexureSpec, start_body: str | None, ground: str,
+                      ground_points: list[np.ndarray], tol: float, source: str) -> None:
+    """Refuse a ground flexure whose ground end (or, if not yet known, either end) meets no ground point."""
+    ends = spec.shape.end_points
+    candidates = ends if start_body is None else [ends[0] if start_body == ground else ends[1]]
+    gaps = [min(np.hypot(*(e - p)) for p in ground_points) for e in candidates]
+    if min(gaps) <= tol:
+        return
+    if start_body is None:
+        raise SceneError(source, f"flexures.{spec.name}", spec.name,
+                         f"no end point meets a ground point within {tol:.3g} mm "
+                         f"(nearest is {min(gaps):.3g} mm away)")
+    raise SceneError(source, f"flexures.{spec.name}.start_body", start_body,
+                     f"puts the flexure's ground end {gaps[0]:.3g} mm away from every ground "
+                     f"point (tolerance {tol:.3g} mm): the ground holds nothing there")
+
+
+def _check_points_used(flexures: tuple[Flexure, ...], pins: tuple[Pin, ...], ground: str,
+                       ground_points: np.ndarray, body_points: dict[str, np.ndarray],
+                       tol: float, source: str) -> None:
+    """Refuse a given ground or body point that no flexure end or pin of that body meets."""
+    given = [(ground, "ground.points", p) for p in ground_points] + \
+        [(name, f"bodies.{name}.points", p) for name, pts in body_points.items() for p in pts]
+    for body, field_name, p in given:
+        attached = [f.end_point_of(body) for f in flexures if body in f.bodies] + \
+            [pin.point for pin in pins if body in pin.bodies]
+        if not any(np.hypot(*(p - q)) <= tol for q in attached):
+            raise SceneError(source, field_name, [float(p[0]), float(p[1])],
+                             f"no flexure end or pin of body {body!r} meets this point "
+                             f"within {tol:.3g} mm: it would be ignored")

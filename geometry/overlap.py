@@ -1,8 +1,9 @@
 """Impossible geometry: flexures that cross each other or whose band closes on itself.
 
-Centre lines are sampled as polylines (``SAMPLES`` segments per flexure) and
-tested pairwise for proper segment crossings, vectorised over all segment
-pairs. Crossings within ``tol`` of a point where both flexures meet the same
+Centre lines are sampled as polylines (``SAMPLES`` segments per flexure);
+pairs whose bounding boxes overlap (found by a sweep, so the check scales
+about linearly with the number of flexures) are tested for proper segment
+crossings, vectorised over all segment pairs. Crossings within ``tol`` of a point where both flexures meet the same
 body (a shared attachment) are allowed. An arc whose two ends come closer
 than its thickness h would have overlapping end faces as a solid. Lengths mm.
 """
@@ -34,10 +35,31 @@ def crossings(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     return (a + t[..., None] * r)[hit]
 
 
+def candidate_pairs(lines: list[np.ndarray]) -> list[tuple[int, int]]:
+    """Index pairs (i < j) of polylines whose bounding boxes overlap, sorted.
+
+    Sweep and prune: boxes sorted by their lower x; each is compared only with
+    the boxes that start before it ends in x, then filtered in y. Two
+    polylines can cross only if their boxes overlap, so this prunes nothing
+    that matters, and for mechanisms whose flexures are spread in the plane
+    (chains, lattices) it costs about n log n instead of n^2.
+    """
+    lo = np.array([line.min(axis=0) for line in lines]).reshape(-1, 2)
+    hi = np.array([line.max(axis=0) for line in lines]).reshape(-1, 2)
+    order = np.argsort(lo[:, 0], kind="stable")
+    lo, hi = lo[order], hi[order]
+    pairs = []
+    for k in range(len(order)):
+        end = int(np.searchsorted(lo[:, 0], hi[k, 0], side="right"))
+        others = np.arange(k + 1, end)
+        others = others[(lo[others, 1] <= hi[k, 1]) & (hi[others, 1] >= lo[k, 1])]
+        pairs += [tuple(sorted((int(order[k]), int(order[c])))) for c in others]
+    return sorted(pairs)
+
+
 def check_overlaps(flexures, source: str, tol: float) -> None:
     """Raise SceneError if two flexures cross or an arc's ends nearly touch."""
-    lines = {f.name: f.shape.point(np.linspace(0.0, f.shape.length, SAMPLES + 1))
-             for f in flexures}
+    lines = [f.shape.point(np.linspace(0.0, f.shape.length, SAMPLES + 1)) for f in flexures]
     for f in flexures:
         if isinstance(f.shape, Arc):
             gap = float(np.hypot(*(f.shape.end_points[0] - f.shape.end_points[1])))
@@ -45,15 +67,15 @@ def check_overlaps(flexures, source: str, tol: float) -> None:
                 raise SceneError(source, f"flexures.{f.name}.width_deg", f.shape.width * 180 / np.pi,
                                  f"the arc's ends are {gap:.3g} mm apart, less than its "
                                  f"thickness {f.section.thickness:g} mm: the solid closes on itself")
-    for i, f in enumerate(flexures):
-        for g in flexures[i + 1:]:
-            pts = crossings(lines[f.name], lines[g.name])
-            if not len(pts):
-                continue
-            shared = [f.end_point_of(b) for b in f.bodies if b in g.bodies] + \
-                     [g.end_point_of(b) for b in g.bodies if b in f.bodies]
-            for x in pts:
-                if not any(np.hypot(*(x - s)) <= tol for s in shared):
-                    raise SceneError(source, f"flexures.{g.name}", g.name,
-                                     f"crosses flexure {f.name!r} at ({x[0]:.3g}, {x[1]:.3g}) mm: "
-                                     "the mechanism intersects itself")
+    for i, j in candidate_pairs(lines):
+        f, g = flexures[i], flexures[j]
+        pts = crossings(lines[i], lines[j])
+        if not len(pts):
+            continue
+        shared = [f.end_point_of(b) for b in f.bodies if b in g.bodies] + \
+                 [g.end_point_of(b) for b in g.bodies if b in f.bodies]
+        for x in pts:
+            if not any(np.hypot(*(x - s)) <= tol for s in shared):
+                raise SceneError(source, f"flexures.{g.name}", g.name,
+                                 f"crosses flexure {f.name!r} at ({x[0]:.3g}, {x[1]:.3g}) mm: "
+                                 "the mechanism intersects itself")

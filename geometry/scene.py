@@ -29,6 +29,8 @@ from __future__ import annotations
 
 import math
 import re
+import unicodedata
+from collections import Counter
 import tomllib
 from dataclasses import dataclass
 from importlib import resources
@@ -39,7 +41,8 @@ import numpy as np
 
 from .errors import SceneError
 from .loads import DEFAULT_LEVELS, Force, LoadCase, Moment
-from .mechanism import Material, Mechanism, Section, assemble
+from .magnitudes import SMALLEST_NORMAL
+from .mechanism import FlexureSpec, Material, Mechanism, PinSpec, Section, assemble
 from .shapes import Arc, Segment
 
 BUILTIN_SCENES = ("open_chain", "closed_chain")
@@ -144,6 +147,9 @@ class _Reader:
             self.fail(field, v, f"absurd magnitude (|value| > {limit:g})")
         if positive and v <= 0.0:
             self.fail(field, v, "must be positive")
+        if v != 0.0 and abs(v) < SMALLEST_NORMAL:
+            self.fail(field, v, f"is subnormal (|value| < {SMALLEST_NORMAL:.3g}): too small to "
+                      "compute with")
         return v
 
     def point(self, data: dict, key: str, where: str) -> np.ndarray:
@@ -194,7 +200,7 @@ class _Reader:
                 self.fail(f"{where}{k}", data[k], f"unknown field; expected one of {sorted(allowed)}")
 
 
-def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> dict:
+def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> FlexureSpec:
     if not isinstance(f, dict):
         rd.fail(f"flexures[{k}]", f, "must be a table")
     name = rd.name(f, "name", f"flexures[{k}].")
@@ -229,11 +235,10 @@ def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> dic
     start_body = f.get("start_body")
     if start_body is not None:
         start_body = rd.name(f, "start_body", where)
-    return {"name": name, "shape": shape, "bodies": bodies, "section": section,
-            "start_body": start_body}
+    return FlexureSpec(name, shape, tuple(bodies), section, start_body)
 
 
-def _pin_spec(rd: _Reader, p: dict, k: int) -> dict:
+def _pin_spec(rd: _Reader, p: dict, k: int) -> PinSpec:
     """One ``[[pins]]`` table: a revolute joint between two different bodies at a point."""
     if not isinstance(p, dict):
         rd.fail(f"pins[{k}]", p, "must be a table")
@@ -241,13 +246,17 @@ def _pin_spec(rd: _Reader, p: dict, k: int) -> dict:
     where = f"pins.{name}."
     rd.known_keys(p, {"name", "bodies", "point"}, where)
     bodies = rd.body_pair(p, where, "pin")
-    return {"name": name, "bodies": bodies, "point": rd.point(p, "point", where)}
+    point = rd.point(p, "point", where)
+    return PinSpec(name, tuple(bodies), (float(point[0]), float(point[1])))
+
+
+_COMPONENT_KEYS = {"kind", "body", "point", "angle_deg", "value"}
+"""Fields of one load; a load case adds ``name`` and ``levels`` (or ``loads`` to combine)."""
 
 
 def _load_component(rd: _Reader, c: dict, where: str, target_body: str,
-                    target_point: np.ndarray) -> Moment | Force:
-    rd.known_keys(c, {"name", "kind", "body", "point", "angle_deg", "value", "levels", "loads"},
-                  where)
+                    target_point: np.ndarray, allowed: set[str]) -> Moment | Force:
+    rd.known_keys(c, allowed, where)
     kind = c.get("kind")
     value = rd.number(c, "value", where, limit=1e9)
     body = rd.name(c, "body", where) if "body" in c else target_body
@@ -259,12 +268,34 @@ def _load_component(rd: _Reader, c: dict, where: str, target_body: str,
     rd.fail(f"{where}kind", kind, "must be 'moment' or 'force'")
 
 
+_UNSAFE_NAME_CHARACTERS = set('/\\<>:"|?*')
+"""Characters that are path separators or not allowed in file names on common systems."""
+MAX_NAME_LENGTH = 200
+"""Longest scene name (characters): it must fit a file name (255 bytes) with a suffix."""
+
+
+def _scene_name(rd: _Reader, value: Any) -> str:
+    """The scene's name, which other commands use as a file-name stem: it must be safe as one."""
+    if not isinstance(value, str) or not value.strip():
+        rd.fail("name", value, "must be a non-empty string")
+    bad = sorted({ch for ch in value if ch in _UNSAFE_NAME_CHARACTERS
+                  or unicodedata.category(ch) in ("Cc", "Cf", "Zl", "Zp")})
+    if bad:
+        rd.fail("name", value, f"must be usable as a file name: it contains {bad} (path "
+                "separators, characters file systems forbid, or control characters)")
+    if value.strip(" .") == "":
+        rd.fail("name", value, "must be usable as a file name, not a path like '.' or '..'")
+    if len(value) > MAX_NAME_LENGTH:
+        rd.fail("name", value, f"is longer than {MAX_NAME_LENGTH} characters")
+    return value
+
+
 def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
     """Build and check a Scene from parsed TOML ``data`` read from ``source``."""
     rd = _Reader(source)
     rd.known_keys(data, {"name", "description", "material", "section", "ground", "target",
                          "flexures", "bodies", "pins", "load_cases", "request"}, "")
-    name = str(data.get("name", default_name))
+    name = _scene_name(rd, data.get("name", default_name))
     mat = rd.table(data, "material", "")
     rd.known_keys(mat, {"youngs_modulus", "poisson_ratio"}, "material.")
     E = rd.number(mat, "youngs_modulus", "material.", positive=True)
@@ -296,6 +327,8 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
         b = rd.item_table(b, f"bodies[{k}]")
         bname = rd.name(b, "name", f"bodies[{k}].")
         rd.known_keys(b, {"name", "points"}, f"bodies.{bname}.")
+        if bname in body_points:
+            rd.fail("bodies.name", bname, "duplicate [[bodies]] entry: list a body's points once")
         body_points[bname] = np.array([rd.point({"p": p}, "p", f"bodies.{bname}.points.")
                                        for p in rd.array(b, "points", f"bodies.{bname}.",
                                                          "points [x, y]")])
@@ -320,12 +353,14 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
         if "loads" in c:
             rd.known_keys(c, {"name", "levels", "loads"}, where)
             comps = tuple(_load_component(rd, rd.item_table(x, f"{where}loads[{i}]"),
-                                          f"{where}loads[{i}].", target_body, target_point)
+                                          f"{where}loads[{i}].", target_body, target_point,
+                                          _COMPONENT_KEYS)
                           for i, x in enumerate(rd.array(c, "loads", where, "load tables")))
             if not comps:
                 rd.fail(f"{where}loads", [], "must contain at least one load")
         else:
-            comps = (_load_component(rd, c, where, target_body, target_point),)
+            comps = (_load_component(rd, c, where, target_body, target_point,
+                                     _COMPONENT_KEYS | {"name", "levels"}),)
         for comp in comps:
             if comp.body not in mech.bodies:
                 rd.fail(f"{where}body", comp.body, f"unknown body; bodies are {list(mech.bodies)}")
@@ -336,14 +371,9 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
         cases.append(LoadCase(lname, comps, levels))
 
     loaded = {c.body for lc in cases for c in lc.components} | {target_body}
+    links = Counter(b for link in (*mech.flexures, *mech.pins) for b in link.bodies)
     for b in mech.moving_bodies:
-        n_pins = sum(b in p.bodies for p in mech.pins)
-        n = sum(b in f.bodies for f in mech.flexures) + n_pins
-        if n == 1 and n_pins == 1:
-            pin = next(p for p in mech.pins if b in p.bodies)
-            rd.fail(f"pins.{pin.name}.bodies", list(pin.bodies),
-                    f"body {b!r} is held by this pin only and would turn freely about it")
-        if n == 1 and b not in loaded:
+        if links[b] == 1 and b not in loaded:
             rd.fail("flexures", b, f"body {b!r} is dangling: held by one flexure, not loaded "
                     "and not the target")
 
@@ -376,9 +406,33 @@ def load_scene(name_or_path: str | Path) -> Scene:
         if not path.is_file():
             raise SceneError(text_id, "scene", text_id,
                              f"no such file, and not a built-in scene {list(BUILTIN_SCENES)}")
-        source, text, stem = str(path), path.read_text(encoding="utf-8"), path.stem
+        source, text, stem = str(path), _read_text(path), path.stem
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(source, "toml", None, f"malformed TOML: {exc}") from None
+    except RecursionError:
+        raise SceneError(source, "toml", None, "arrays or tables nested too deeply to read "
+                         "(a scene needs at most 3 levels)") from None
     return parse_scene(data, source, default_name=stem)
+
+
+_BYTE_ORDER_MARKS = {b"\xff\xfe": "UTF-16", b"\xfe\xff": "UTF-16",
+                     b"\xff\xfe\x00\x00": "UTF-32", b"\x00\x00\xfe\xff": "UTF-32"}
+
+
+def _read_text(path: Path) -> str:
+    """The file's text: UTF-8 as TOML requires (a leading UTF-8 byte-order mark is skipped)."""
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise SceneError(str(path), "scene", str(path), f"cannot be read: {exc.strerror}") from None
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        found = next((enc for bom, enc in sorted(_BYTE_ORDER_MARKS.items(), reverse=True)
+                      if raw.startswith(bom)), None)
+        what = f"it looks like {found}" if found else \
+            f"byte 0x{raw[exc.start]:02x} at offset {exc.start} is not UTF-8 (Latin-1?)"
+        raise SceneError(str(path), "encoding", None, f"a scene file must be UTF-8 text: {what}; "
+                         "save it as UTF-8") from None

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from geometry import Force, LoadCase, Material, Moment, Section
-from geometry.mechanism import assemble
+from geometry.mechanism import FlexureSpec, assemble
 from reducedmodels.core import local_hessian
 
 
@@ -17,8 +17,8 @@ def cantilever(shape, E: float = 2100.0, b: float = 1.0, h: float = 0.1, nu: flo
     """
     ends = shape.end_points
     free = ends[1 - clamped_end]
-    spec = {"name": "f", "shape": shape, "bodies": ["g", "t"], "section": Section(b, h),
-            "start_body": "g" if clamped_end == 0 else "t"}
+    spec = FlexureSpec("f", shape, ("g", "t"), Section(b, h),
+                       start_body="g" if clamped_end == 0 else "t")
     return assemble([spec], "g", ends[clamped_end][None], Material(E, nu), "t",
                     free + np.asarray(target_offset, float))
 

@@ -16,7 +16,7 @@ from scipy.optimize import brentq
 
 from geometry import (Arc, Force, LoadCase, Material, Moment, Section, Segment, load_scene,
                       parse_model)
-from geometry.mechanism import assemble
+from geometry.mechanism import FlexureSpec, assemble
 from reducedmodels import run_reduced
 from reducedmodels.beam import BeamConnector
 from reducedmodels.core import local_hessian
@@ -29,7 +29,7 @@ SEGMENT = Segment((1.0, 2.0), (30.0, 10.0))                  # L = 30.1 mm, incl
 def cantilever(shape, section: Section):
     """A flexure clamped to the ground "g" at its start, carrying body "t" at its end."""
     start, end = shape.end_points
-    spec = {"name": "f", "shape": shape, "bodies": ("g", "t"), "section": section}
+    spec = FlexureSpec("f", shape, ("g", "t"), section)
     return assemble([spec], "g", start[None], MATERIAL, "t", end)
 
 
@@ -79,8 +79,8 @@ def parallel_pair(shape, bodies: tuple[str, str]):
     """
     start, end = shape.end_points
     side = Segment(tuple(start + [-6.0, -4.0]), tuple(end + [5.0, -3.0]))   # not crossing "f"
-    specs = [{"name": "s", "shape": side, "bodies": ("g", "t"), "section": Section(1.0, 0.5)},
-             {"name": "f", "shape": shape, "bodies": bodies, "section": Section(1.0, 0.5)}]
+    specs = [FlexureSpec("s", side, ("g", "t"), Section(1.0, 0.5)),
+             FlexureSpec("f", shape, tuple(bodies), Section(1.0, 0.5))]
     mech = assemble(specs, "g", np.array([side.start, start]), MATERIAL, "t", end)
     return mech, mech.flexures[1]
 

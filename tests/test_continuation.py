@@ -2,13 +2,14 @@
 benchmark (Da Deppo & Schmidt's deep arch), an exact snap-through (the von
 Mises truss), a shallow-arch snap-through, and honest failures."""
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
 from geometry import Arc, Force, LoadCase, Material, Section, load_scene, parse_model
-from geometry.mechanism import assemble
+from geometry.mechanism import Body, FlexureSpec, Pin, PinSpec, assemble
 from reducedmodels import SolverError, SolverSettings, build_system, solve_path
 from reducedmodels.continuation import limit_loads, solve_arclength
 from test_joints import von_mises_truss
@@ -24,10 +25,8 @@ def _arch_halves(R: float, h: float, opening_deg: float, far_body: str):
     half = math.radians(opening_deg / 2)
     right = Arc((0.0, 0.0), R, math.pi / 2 - half / 2, half)
     left = Arc((0.0, 0.0), R, math.pi / 2 + half / 2, half)
-    specs = [{"name": "right", "shape": right, "bodies": ["g", "c"], "section": Section(1.0, h),
-              "start_body": "g"},
-             {"name": "left", "shape": left, "bodies": ["c", far_body],
-              "section": Section(1.0, h), "start_body": "c"}]
+    specs = [FlexureSpec("right", right, ("g", "c"), Section(1.0, h), start_body="g"),
+             FlexureSpec("left", left, ("c", far_body), Section(1.0, h), start_body="c")]
     return right, left, np.array([0.0, R]), specs
 
 
@@ -41,7 +40,7 @@ def deep_arch(n: int, R: float = 100.0, h: float = 1.0, E: float = 1000.0):
     downward at the crown, so the load factor is P R^2 / EI.
     """
     right, left, crown, specs = _arch_halves(R, h, 215.0, "h")
-    pins = [{"name": "hinge", "bodies": ["h", "g"], "point": left.end_points[1]}]
+    pins = [PinSpec("hinge", ("h", "g"), tuple(left.end_points[1]))]
     mech = assemble(specs, "g", right.end_points[0][None], Material(E, 0.3), "c", crown,
                     pin_specs=pins)
     EI = E * h**3 / 12.0
@@ -163,14 +162,16 @@ def test_arclength_failures_are_solver_errors_with_the_load_reached():
 
 
 def test_a_free_mechanism_is_a_solver_error_not_a_crash():
-    # body "x" hangs from body "t" by one pin and may turn freely: singular tangent
+    # body "x" hangs from body "t" by one pin and may turn freely: singular tangent.
+    # assemble refuses such a mechanism (tests/test_scene_errors.py); built past it, the
+    # solvers must still report the singular tangent rather than crash
     arc = Arc((0.0, 0.0), 5.0, 0.0, math.radians(90))
     end = arc.end_points[1]
-    spec = {"name": "f", "shape": arc, "bodies": ["g", "t"], "section": Section(1.0, 0.2),
-            "start_body": "g"}
-    mech = assemble([spec], "g", arc.end_points[0][None], Material(2000.0, 0.3), "x",
-                    end + [3.0, 0.0],
-                    pin_specs=[{"name": "p", "bodies": ["t", "x"], "point": end}])
+    spec = FlexureSpec("f", arc, ("g", "t"), Section(1.0, 0.2), start_body="g")
+    held = assemble([spec], "g", arc.end_points[0][None], Material(2000.0, 0.3), "t", end)
+    mech = dataclasses.replace(held, bodies={**held.bodies, "x": Body("x", end[None])},
+                               pins=(Pin("p", ("t", "x"), end),), target_body="x",
+                               target_point=end + [3.0, 0.0])
     case = LoadCase("F", (Force("t", end, 0.0, 1e-3),))
     system = build_system(mech, parse_model("dcmm:1"))
     for solve in (lambda: solve_path(system, case),
@@ -187,8 +188,7 @@ def test_arclength_drives_the_continuum_solver_too():
     from validation.continuum.run import build_system as continuum_system
 
     seg = Segment((0.0, 0.0), (20.0, 0.0))
-    spec = {"name": "s", "shape": seg, "bodies": ["g", "t"], "section": Section(1.0, 1.0),
-            "start_body": "g"}
+    spec = FlexureSpec("s", seg, ("g", "t"), Section(1.0, 1.0), start_body="g")
     mech = assemble([spec], "g", np.array([[0.0, 0.0]]), Material(2000.0, 0.3), "t",
                     np.array([20.0, 0.0]))
     EI = 2000.0 / 12.0

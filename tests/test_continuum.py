@@ -19,7 +19,7 @@ import scipy.sparse.linalg as spla
 from scipy.optimize import brentq
 
 from geometry import Arc, Force, LoadCase, Material, Moment, Section, Segment
-from geometry.mechanism import assemble
+from geometry.mechanism import FlexureSpec, assemble
 from geometry.mesh import cache_dir, mesh_flexure
 from reducedmodels import solve_path
 from reducedmodels.core import local_hessian
@@ -43,7 +43,7 @@ def _private_mesh_cache(tmp_path_factory):
 
 def cantilever(shape, h: float, b: float = 1.0, nu: float = NU, start_on_ground: bool = True):
     """One flexure from the ground (body 1) to body 2, the shape's start on the ground or not."""
-    spec = {"name": "e", "shape": shape, "bodies": ["1", "2"], "section": Section(b, h)}
+    spec = FlexureSpec("e", shape, ("1", "2"), Section(b, h))
     ground, tip = (0, 1) if start_on_ground else (1, 0)
     return assemble([spec], "1", shape.end_points[ground:ground + 1], Material(E_MOD, nu), "2",
                     shape.end_points[tip])

@@ -19,7 +19,7 @@ from hypothesis import HealthCheck, Phase, event, given, settings
 from hypothesis import strategies as st
 
 from geometry import Arc, Force, LoadCase, Material, Moment, SceneError, Section, parse_model
-from geometry.mechanism import assemble
+from geometry.mechanism import FlexureSpec, PinSpec, assemble
 from geometry.scene import parse_scene
 from reducedmodels import SolverError, run_reduced
 
@@ -60,15 +60,14 @@ def link(draw, point: np.ndarray) -> np.ndarray:
 
 @st.composite
 def branch(draw, start: np.ndarray, bodies: list[str], prefix: str
-           ) -> tuple[list[dict], np.ndarray]:
+           ) -> tuple[list[FlexureSpec], np.ndarray]:
     """Arcs in series from ``start`` on bodies[0] through rigid links to bodies[-1]."""
     specs, point = [], start
     for k in range(len(bodies) - 1):
         arc, forward, far = draw(arc_from(point))
         h = arc.radius * draw(st.floats(0.01, 0.08))
-        specs.append({"name": f"{prefix}{k}", "shape": arc, "bodies": [bodies[k], bodies[k + 1]],
-                      "section": Section(1.0, h),
-                      "start_body": bodies[k] if forward else bodies[k + 1]})
+        specs.append(FlexureSpec(f"{prefix}{k}", arc, (bodies[k], bodies[k + 1]), Section(1.0, h),
+                                 start_body=bodies[k] if forward else bodies[k + 1]))
         point = draw(link(far)) if k < len(bodies) - 2 else far
     return specs, point
 
@@ -89,7 +88,7 @@ def chains(draw, closed: bool):
             more, _ = draw(branch(start, ["g", *via, bodies[-1]], "c"))
         else:                        # ... or on its own body, pinned to the last body
             more, tip = draw(branch(start, ["g", "p1"], "c"))
-            pins.append({"name": "pin", "bodies": [bodies[-1], "p1"], "point": tip})
+            pins.append(PinSpec("pin", (bodies[-1], "p1"), (float(tip[0]), float(tip[1]))))
         specs += more
     target = draw(link(end))
     try:
@@ -167,7 +166,7 @@ def _scene_dicts() -> list[dict]:
         text = resources.files("geometry").joinpath("scenes", f"{name}.toml").read_text()
         out.append(tomllib.loads(text))
     d = out[0]
-    d["bodies"] = [{"name": "4", "points": [[20.0, 15.8]]}]
+    d["bodies"] = [{"name": "4", "points": [[15.0805, 15.5321]]}]     # where e34 meets body 4
     d["load_cases"].append({"name": "both", "levels": 3, "loads": [
         {"kind": "moment", "value": 1e-3}, {"kind": "force", "value": 1e-3, "angle_deg": 0.0}]})
     d["request"]["outputs"] = ["poses"]

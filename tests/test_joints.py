@@ -12,7 +12,7 @@ import pytest
 from builders import fd_check
 from geometry import (Force, LoadCase, Material, SceneError, Section, Segment, load_scene,
                       parse_model)
-from geometry.mechanism import assemble
+from geometry.mechanism import FlexureSpec, PinSpec, assemble
 from geometry.scene import parse_scene
 from reducedmodels import build_system, run_reduced, solve_path
 from reducedmodels.joints import PinConnector
@@ -77,13 +77,11 @@ def von_mises_truss(a: float = 100.0, h0: float = 20.0, E: float = 1000.0, t: fl
     Returns the mechanism and the exact load P(w) (N, downward) at apex
     deflection w (mm): P = 2 EA h (1/L - 1/L0), h = h0 - w, L = sqrt(a^2 + h^2).
     """
-    specs = [{"name": "b1", "shape": Segment((-a, 0.0), (0.0, h0)), "bodies": ["l", "c"],
-              "section": Section(1.0, t)},
-             {"name": "b2", "shape": Segment((0.0, h0), (a, 0.0)), "bodies": ["d", "r"],
-              "section": Section(1.0, t)}]
-    pins = [{"name": "pl", "bodies": ["g", "l"], "point": (-a, 0.0)},
-            {"name": "apex", "bodies": ["c", "d"], "point": (0.0, h0)},
-            {"name": "pr", "bodies": ["r", "g"], "point": (a, 0.0)}]
+    specs = [FlexureSpec("b1", Segment((-a, 0.0), (0.0, h0)), ("l", "c"), Section(1.0, t)),
+             FlexureSpec("b2", Segment((0.0, h0), (a, 0.0)), ("d", "r"), Section(1.0, t))]
+    pins = [PinSpec("pl", ("g", "l"), (-a, 0.0)),
+            PinSpec("apex", ("c", "d"), (0.0, h0)),
+            PinSpec("pr", ("r", "g"), (a, 0.0))]
     mech = assemble(specs, "g", np.array([[-a, 0.0], [a, 0.0]]), Material(E, 0.3), "c",
                     np.array([0.0, h0]), pin_specs=pins)
     EA, L0 = E * t, math.hypot(a, h0)
@@ -275,9 +273,16 @@ def test_pins_count_as_connections():
     def drop_pb_and_moment(d):
         del d["pins"][1], d["load_cases"][1]
 
-    # without pin pb, body b hangs from the coupler only: dangling, not loaded, not the target
+    def drop_pb_its_ground_point_and_moment(d):
+        drop_pb_and_moment(d)
+        del d["ground"]["points"][1]
+
+    # without pin pb, a and b (welded by the coupler) turn freely about pin pa
+    err = _bad(drop_pb_its_ground_point_and_moment)
+    assert err.field == "pins" and "['a', 'b'] can move" in str(err)
+    # ... and the ground point (100, 0) that held pb now holds nothing
     err = _bad(drop_pb_and_moment)
-    assert err.field == "flexures" and "'b'" in str(err)
+    assert err.field == "ground.points" and "[100.0, 0.0]" in str(err)
     # without both pins nothing reaches a and b from the ground
     err = _bad(lambda d: d.pop("pins"))
     assert err.field == "ground"

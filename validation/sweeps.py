@@ -17,7 +17,7 @@ import math
 from typing import Callable, Sequence
 
 from geometry import Arc, Force, LoadCase, Material, SceneError, Section, Segment, parse_model
-from geometry.mechanism import assemble
+from geometry.mechanism import FlexureSpec, assemble
 from reducedmodels import SolverError, run_reduced
 
 from .compare import errors
@@ -33,8 +33,7 @@ def cantilever(width_deg: float, h: float, radius: float = R):
         shape = Segment((0.0, 0.0), (length, 0.0))
     else:
         shape = Arc((0.0, 0.0), radius, math.pi / 2, math.radians(width_deg))
-    spec = {"name": "f", "shape": shape, "bodies": ["g", "t"], "section": Section(1.0, h),
-            "start_body": "g"}
+    spec = FlexureSpec("f", shape, ("g", "t"), Section(1.0, h), start_body="g")
     ends = shape.end_points
     mech = assemble([spec], "g", ends[0][None], Material(2000.0, 0.3), "t", ends[1])
     chord = ends[1] - ends[0]
