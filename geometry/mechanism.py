@@ -26,7 +26,7 @@ from .errors import SceneError
 from .magnitudes import check_magnitudes
 from .mobility import check_structure
 from .overlap import check_overlaps
-from .shapes import FlexureShape
+from .shapes import Shape
 
 
 @dataclass(frozen=True)
@@ -86,7 +86,7 @@ class Flexure:
     """
 
     name: str
-    shape: FlexureShape
+    shape: Shape
     bodies: tuple[str, str]
     start_body: str
     section: Section
@@ -218,7 +218,7 @@ class FlexureSpec:
     """
 
     name: str
-    shape: FlexureShape
+    shape: Shape
     bodies: tuple[str, str]
     section: Section
     start_body: str | None = None

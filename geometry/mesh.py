@@ -160,9 +160,9 @@ def mesh_flexure(shape: FlexureShape, thickness: float, level: int,
         Read and write the on-disk cache.
     """
     n_t, n_l = divisions(shape, thickness, level)
-    if isinstance(shape, Arc) and thickness >= 2.0 * shape.radius:
+    if thickness >= shape.max_thickness:
         raise ValueError(f"thickness {thickness} must be smaller than the diameter "
-                         f"{2.0 * shape.radius}")
+                         f"{shape.max_thickness}")
     path = cache_dir() / f"{_key(shape, thickness, level)}.npz"
     if use_cache and path.is_file():
         with np.load(path) as z:

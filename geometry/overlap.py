@@ -13,7 +13,6 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import SceneError
-from .shapes import Arc
 
 SAMPLES = 256
 
@@ -61,12 +60,11 @@ def check_overlaps(flexures, source: str, tol: float) -> None:
     """Raise SceneError if two flexures cross or an arc's ends nearly touch."""
     lines = [f.shape.point(np.linspace(0.0, f.shape.length, SAMPLES + 1)) for f in flexures]
     for f in flexures:
-        if isinstance(f.shape, Arc):
+        if f.shape.closes_on_itself(f.section.thickness):
             gap = float(np.hypot(*(f.shape.end_points[0] - f.shape.end_points[1])))
-            if gap <= f.section.thickness:
-                raise SceneError(source, f"flexures.{f.name}.width_deg", f.shape.width * 180 / np.pi,
-                                 f"the arc's ends are {gap:.3g} mm apart, less than its "
-                                 f"thickness {f.section.thickness:g} mm: the solid closes on itself")
+            raise SceneError(source, f"flexures.{f.name}.width_deg", f.shape.width * 180 / np.pi,
+                             f"the arc's ends are {gap:.3g} mm apart, less than its "
+                             f"thickness {f.section.thickness:g} mm: the solid closes on itself")
     for i, j in candidate_pairs(lines):
         f, g = flexures[i], flexures[j]
         pts = crossings(lines[i], lines[j])

@@ -13,9 +13,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol, Union
+from typing import ClassVar, Protocol, Union
 
 import numpy as np
+
+from .kinematics import rotate
 
 
 _SERIES_TOP = 1.0
@@ -106,18 +108,47 @@ class Ellipse:
 
 
 class Shape(Protocol):
-    """What every flexure centre line provides (lengths in mm, angles in rad)."""
+    """What every flexure centre line provides (lengths in mm, angles in rad).
+
+    Callers use these members instead of testing for Arc or Segment.
+    """
+
+    kind: ClassVar[str]
 
     @property
     def length(self) -> float: ...
+
+    @property
+    def curvature(self) -> float: ...
+
+    @property
+    def width(self) -> float: ...
+
+    @property
+    def end_points(self) -> np.ndarray: ...
+
+    @property
+    def max_thickness(self) -> float: ...
 
     def point(self, s: np.ndarray | float) -> np.ndarray: ...
 
     def tangent_angle(self, s: np.ndarray | float) -> np.ndarray: ...
 
+    def tangent(self, s: np.ndarray | float) -> np.ndarray: ...
+
     def split(self, n: int) -> list["Shape"]: ...
 
     def ellipse(self, bending_stiffness: float) -> Ellipse: ...
+
+    def symmetry_frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+
+    def closes_on_itself(self, thickness: float) -> bool: ...
+
+    def moved(self, angle: float, shift: np.ndarray) -> "Shape": ...
+
+    def scaled(self, factor: float) -> "Shape": ...
+
+    def parameters(self) -> dict: ...
 
 
 @dataclass(frozen=True)
@@ -140,6 +171,8 @@ class Arc:
     radius: float
     axis: float
     width: float
+
+    kind: ClassVar[str] = "arc"
 
     @property
     def start_angle(self) -> float:
@@ -192,24 +225,58 @@ class Arc:
             for k in range(n)
         ]
 
+    @property
+    def max_thickness(self) -> float:
+        """The diameter 2 r, mm: a band at least this thick has no inner edge."""
+        return 2.0 * self.radius
+
+    def symmetry_frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Centre of elasticity C (mm) and the unit axes e1, e2 of the arc.
+
+        e2 is the symmetry axis (from the centre towards the apex), e1 =
+        R(-90 deg) e2 points to the start end; C lies on e2 at
+        r sin(gamma) / gamma from the centre (paper Eqs. 1-2).
+        """
+        gamma = 0.5 * self.width
+        e2 = np.array([np.cos(self.axis), np.sin(self.axis)])
+        e1 = np.array([e2[1], -e2[0]])
+        oc = self.radius * np.sin(gamma) / gamma
+        return np.asarray(self.center, dtype=float) + oc * e2, e1, e2
+
     def ellipse(self, bending_stiffness: float) -> Ellipse:
         """Ellipse of elasticity for bending stiffness EI (N mm^2), Eqs. 1-4.
 
         The semi-axes come from :func:`arc_semi_axes`, accurate to rounding
         down to vanishing arc angles.
         """
-        gamma = 0.5 * self.width
-        oc = self.radius * np.sin(gamma) / gamma
+        center, e1, e2 = self.symmetry_frame()
         a, b = arc_semi_axes(self.width)
-        e2 = np.array([np.cos(self.axis), np.sin(self.axis)])
-        e1 = np.array([e2[1], -e2[0]])
         return Ellipse(
             weight=self.length / bending_stiffness,
-            center=np.asarray(self.center, dtype=float) + oc * e2,
+            center=center,
             a=self.length * a,
             b=self.length * b,
             axes=np.column_stack([e1, e2]),
         )
+
+    def closes_on_itself(self, thickness: float) -> bool:
+        """True if the ends are at most ``thickness`` (mm) apart: the solid band would close."""
+        return float(np.hypot(*(self.end_points[0] - self.end_points[1]))) <= thickness
+
+    def moved(self, angle: float, shift: np.ndarray) -> "Arc":
+        """The arc rotated by ``angle`` (rad) about the origin, then shifted by ``shift`` (mm)."""
+        c = rotate(angle, np.asarray(self.center)) + shift
+        return Arc((float(c[0]), float(c[1])), self.radius, self.axis + angle, self.width)
+
+    def scaled(self, factor: float) -> "Arc":
+        """The arc with every length (centre, radius) multiplied by ``factor``; angles kept."""
+        c = np.asarray(self.center, float) * factor
+        return Arc(tuple(map(float, c)), self.radius * factor, self.axis, self.width)
+
+    def parameters(self) -> dict:
+        """The scene-file parameters: centre and radius (mm), axis and width (deg)."""
+        return {"center": list(self.center), "radius_mm": self.radius,
+                "axis_deg": math.degrees(self.axis), "width_deg": math.degrees(self.width)}
 
 
 @dataclass(frozen=True)
@@ -218,6 +285,12 @@ class Segment:
 
     start: tuple[float, float]
     end: tuple[float, float]
+
+    kind: ClassVar[str] = "segment"
+    width: ClassVar[float] = 0.0
+    """Arc angle, rad: 0, the straight limit of an arc."""
+    max_thickness: ClassVar[float] = math.inf
+    """Any thickness fits a straight band, mm."""
 
     @property
     def _vector(self) -> np.ndarray:
@@ -275,6 +348,34 @@ class Segment:
             b=0.0,
             axes=np.column_stack([e1, e2]),
         )
+
+    def symmetry_frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Midpoint C (mm) and unit axes: e1 from the end to the start, e2 = R(90 deg) e1.
+
+        The straight limit of :meth:`Arc.symmetry_frame` (e1 to the start end).
+        """
+        start, end = self.end_points
+        e1 = (start - end) / self.length
+        return 0.5 * (start + end), e1, np.array([-e1[1], e1[0]])
+
+    def closes_on_itself(self, thickness: float) -> bool:
+        """Never: a straight band cannot close on itself."""
+        return False
+
+    def moved(self, angle: float, shift: np.ndarray) -> "Segment":
+        """The segment rotated by ``angle`` (rad) about the origin, then shifted by ``shift`` (mm)."""
+        a = rotate(angle, np.asarray(self.start)) + shift
+        b = rotate(angle, np.asarray(self.end)) + shift
+        return Segment(tuple(map(float, a)), tuple(map(float, b)))
+
+    def scaled(self, factor: float) -> "Segment":
+        """The segment with its end points multiplied by ``factor``."""
+        return Segment(tuple(map(float, np.asarray(self.start, float) * factor)),
+                       tuple(map(float, np.asarray(self.end, float) * factor)))
+
+    def parameters(self) -> dict:
+        """The scene-file parameters: start and end points, mm."""
+        return {"start": list(map(float, self.start)), "end": list(map(float, self.end))}
 
 
 FlexureShape = Union[Arc, Segment]

@@ -90,13 +90,12 @@ from typing import Mapping
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from geometry import Arc, Flexure, Mechanism, Segment
+from geometry import Flexure, Mechanism
 from geometry.kinematics import place_points, rotate, rotate_xy
-from geometry.shapes import arc_semi_axes
+from geometry.shapes import Shape, arc_semi_axes
 
 from .connector import Connector
 
-_J = np.array([[0.0, -1.0], [1.0, 0.0]])
 TABLE_RESOURCE = "data/prbm_table.json"
 
 
@@ -180,27 +179,18 @@ def table_parameters(width: float) -> PrbmParameters:
     return PrbmParameters.from_rho(width, float(spline(width)))
 
 
-def shape_frame(shape: Arc | Segment) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float]:
+def shape_frame(shape: Shape) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float]:
     """Centre of elasticity C (mm), axes e1, e2, length L (mm) and arc angle (rad) of a shape.
 
     e2 is the symmetry axis (towards the arc's apex) and e1 = R(-90 deg) e2
-    points to the start end, as in :meth:`geometry.Arc.ellipse`; a segment
+    points to the start end (:meth:`geometry.Arc.symmetry_frame`); a segment
     takes e1 from its end to its start and e2 = R(90 deg) e1.
     """
-    if isinstance(shape, Arc):
-        g = 0.5 * shape.width
-        e2 = np.array([np.cos(shape.axis), np.sin(shape.axis)])
-        e1 = np.array([e2[1], -e2[0]])
-        center = np.asarray(shape.center, float) + shape.radius * np.sin(g) / g * e2
-        return center, e1, e2, shape.length, shape.width
-    if isinstance(shape, Segment):
-        start, end = shape.end_points
-        e1 = (start - end) / shape.length
-        return 0.5 * (start + end), e1, _J @ e1, shape.length, 0.0
-    raise TypeError(f"prbm: unsupported flexure shape {type(shape).__name__}")
+    center, e1, e2 = shape.symmetry_frame()
+    return center, e1, e2, shape.length, shape.width
 
 
-def joint_positions(shape: Arc | Segment, params: PrbmParameters) -> np.ndarray:
+def joint_positions(shape: Shape, params: PrbmParameters) -> np.ndarray:
     """Initial joints [R_start, R_2, R_end] of the chain for ``shape``, shape (3, 2), mm."""
     center, e1, e2, length, _ = shape_frame(shape)
     local = np.array([[params.x1, params.y1], [0.0, params.y2], [-params.x1, params.y1]])

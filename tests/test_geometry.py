@@ -173,3 +173,49 @@ def test_ellipse_semi_axes_follow_the_flat_arc_limit(width_deg):
     a, b = arc_semi_axes(2.0 * g)
     assert a == pytest.approx(math.sqrt(1.0 / 12.0 - g * g / 60.0), rel=1e-15)
     assert b == pytest.approx(g * math.sqrt(1.0 / 180.0 - g * g / 1260.0), rel=1e-15)
+
+
+SHAPES = [Arc((1.3, -2.0), 3.5, 0.4, math.radians(250.0)), Arc((0.0, 0.0), 2.0, -2.0, 0.01),
+          Segment((1.0, 2.0), (-4.0, 7.5))]
+
+
+@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("angle,shift", [(0.7, (3.0, -1.0)), (-2.5, (0.0, 0.0)), (math.pi, (-8.0, 2.0))])
+def test_moved_shapes_move_every_point_rigidly(shape, angle, shift):
+    moved = shape.moved(angle, np.array(shift))
+    s = np.linspace(0.0, shape.length, 9)
+    c, si = math.cos(angle), math.sin(angle)
+    expected = shape.point(s) @ np.array([[c, -si], [si, c]]).T + shift
+    np.testing.assert_allclose(moved.point(s), expected, atol=1e-12 * (1 + np.abs(expected).max()))
+    assert moved.length == pytest.approx(shape.length, rel=1e-14)
+    assert moved.kind == shape.kind
+
+
+@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("factor", [1e-3, 0.5, 25.0])
+def test_scaled_shapes_scale_every_point(shape, factor):
+    scaled = shape.scaled(factor)
+    s = np.linspace(0.0, shape.length, 9)
+    np.testing.assert_allclose(scaled.point(s * factor), shape.point(s) * factor,
+                               atol=1e-12 * factor * (1 + np.abs(shape.point(s)).max()))
+    assert scaled.width == shape.width
+
+
+@pytest.mark.parametrize("shape", SHAPES)
+def test_symmetry_frame_is_the_ellipse_centre_and_a_right_handed_frame_to_the_start(shape):
+    center, e1, e2 = shape.symmetry_frame()
+    ell = shape.ellipse(1.0)
+    np.testing.assert_allclose(center, ell.center, atol=1e-14 * (1 + np.abs(center).max()))
+    assert e1[0] * e2[1] - e1[1] * e2[0] == pytest.approx(1.0)
+    # e1 points from the end side to the start side (the arc is symmetric about e2)
+    start, end = shape.end_points
+    assert (start - end) @ e1 > 0.0 and abs((start - end) @ e2) < 1e-9 * shape.length
+
+
+@pytest.mark.parametrize("width_deg,h,closes", [(358.0, 0.1, True), (350.0, 0.1, False),
+                                                (300.0, 2.6, True), (300.0, 2.4, False)])
+def test_arc_closes_on_itself_when_its_ends_are_within_the_thickness(width_deg, h, closes):
+    arc = Arc((0.0, 0.0), 2.5, 0.3, math.radians(width_deg))
+    gap = float(np.hypot(*(arc.end_points[0] - arc.end_points[1])))
+    assert arc.closes_on_itself(h) is closes and (gap <= h) is closes
+    assert not Segment((0.0, 0.0), (0.01, 0.0)).closes_on_itself(h)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 
-from geometry import Arc, Force, Moment, Scene
+from geometry import Force, Moment, Scene
 
 
 def scene_info(scene: Scene) -> dict:
@@ -20,7 +20,7 @@ def scene_info(scene: Scene) -> dict:
         entry = {
             "name": f.name,
             "bodies": list(f.bodies),
-            "shape": "arc" if isinstance(f.shape, Arc) else "segment",
+            "shape": f.shape.kind,
             "start": f.shape.end_points[0].tolist(),
             "end": f.shape.end_points[1].tolist(),
             "start_body": f.start_body,
@@ -39,10 +39,7 @@ def scene_info(scene: Scene) -> dict:
                 "e2": ell.axes[:, 1].tolist(),
             },
         }
-        if isinstance(f.shape, Arc):
-            entry.update(center=list(f.shape.center), radius_mm=f.shape.radius,
-                         axis_deg=math.degrees(f.shape.axis),
-                         width_deg=math.degrees(f.shape.width))
+        entry.update(f.shape.parameters())
         flexures.append(entry)
     cases = []
     for lc in scene.load_cases:

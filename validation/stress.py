@@ -37,8 +37,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from geometry import (Arc, Force, LoadCase, Material, Mechanism, ModelSpec, Scene, Section,
-                      Segment, parse_model, rotation)
+from geometry import (Force, LoadCase, Material, Mechanism, ModelSpec, Scene, Section, parse_model,
+                      rotation)
 from reducedmodels import LoadPath, SolverError, SolverSettings, build_system
 from reducedmodels.continuation import limit_loads, solve_arclength
 
@@ -78,15 +78,8 @@ def rescale_lengths(mechanism: Mechanism, case: LoadCase, length: float
     def pt(p) -> np.ndarray:
         return np.asarray(p, float) * length
 
-    def shape(s):
-        if isinstance(s, Arc):
-            return Arc(tuple(map(float, pt(s.center))), s.radius * length, s.axis, s.width)
-        if isinstance(s, Segment):
-            return Segment(tuple(map(float, pt(s.start))), tuple(map(float, pt(s.end))))
-        raise TypeError(f"unknown shape {type(s).__name__}")
-
     flexures = tuple(dataclasses.replace(
-        f, shape=shape(f.shape),
+        f, shape=f.shape.scaled(length),
         section=Section(f.section.depth * length, f.section.thickness * length))
         for f in mechanism.flexures)
     mech = dataclasses.replace(
