@@ -19,7 +19,8 @@ from __future__ import annotations
 import argparse
 import statistics
 
-from geometry import load_scene, parse_model
+from geometry import load_scene
+from reducedmodels.catalogue import parse_model
 from reducedmodels import run_reduced
 
 SIZES = (20, 50, 100, 200, 500, 1000, 2000)

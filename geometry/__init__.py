@@ -7,11 +7,11 @@ from .errors import SceneError
 from .kinematics import rotation
 from .loads import Force, LoadCase, Moment
 from .mechanism import Body, Flexure, FlexureSpec, Material, Mechanism, PinSpec, Section
-from .scene import BUILTIN_SCENES, ModelSpec, Scene, load_scene, parse_model
+from .scene import BUILTIN_SCENES, Scene, load_scene
 from .shapes import Arc, Ellipse, Segment
 
 __all__ = [
-    "Arc", "Body", "BUILTIN_SCENES", "Ellipse", "Flexure", "FlexureSpec", "Force", "LoadCase", "Material",
-    "Mechanism", "ModelSpec", "Moment", "PinSpec", "Scene", "SceneError", "Section", "Segment",
-    "load_scene", "parse_model", "rotation",
+    "Arc", "Body", "BUILTIN_SCENES", "Ellipse", "Flexure", "FlexureSpec", "Force", "LoadCase",
+    "Material", "Mechanism", "Moment", "PinSpec", "Scene", "SceneError", "Section", "Segment",
+    "load_scene", "rotation",
 ]

@@ -28,7 +28,6 @@ The format (see README.md for a full example)::
 from __future__ import annotations
 
 import math
-import re
 import unicodedata
 from collections import Counter
 import tomllib
@@ -46,60 +45,23 @@ from .mechanism import FlexureSpec, Material, Mechanism, PinSpec, Section, assem
 from .shapes import Arc, Segment
 
 BUILTIN_SCENES = ("open_chain", "closed_chain")
-MODEL_FAMILIES = {"continuum", "beam", "prbm", "dcmm", "ee"}
 OUTPUTS = {"poses", "shape", "vtu", "png"}
-_MODEL_RE = re.compile(r"^(continuum|beam|prbm|dcmm|ee)(?::(\d+))?$")
-
-
-@dataclass(frozen=True)
-class ModelSpec:
-    """A requested model: family and its resolution (``beam:20``, ``dcmm:3``, ``continuum:2``).
-
-    ``resolution`` is N elements per flexure for ``beam``, sub-arcs per arc
-    for ``dcmm``, mesh level for ``continuum`` (None: the default), unused
-    for ``prbm`` and ``ee``.
-    """
-
-    family: str
-    resolution: int | None = None
-
-    @property
-    def id(self) -> str:
-        """Canonical text form, e.g. ``beam:100``."""
-        return self.family if self.resolution is None else f"{self.family}:{self.resolution}"
-
-    def __str__(self) -> str:
-        return self.id
-
-
-def parse_model(text: str, source: str = "<command line>", field: str = "model") -> ModelSpec:
-    """Parse ``continuum[:LEVEL]``, ``beam:N``, ``prbm``, ``dcmm:N`` or ``ee``."""
-    m = _MODEL_RE.match(str(text).strip())
-    if not m:
-        raise SceneError(source, field, text,
-                         "expected continuum[:LEVEL], beam:N, prbm, dcmm:N or ee")
-    family, res = m.group(1), m.group(2)
-    n = int(res) if res is not None else None
-    if family in ("beam", "dcmm") and n is None:
-        n = {"beam": 20, "dcmm": 1}[family]
-    if family in ("prbm", "ee") and n is not None:
-        raise SceneError(source, field, text, f"'{family}' takes no resolution")
-    if family in ("beam", "dcmm") and not 1 <= n <= 100_000:
-        raise SceneError(source, field, text, "resolution must be between 1 and 100000")
-    if family == "continuum" and n is not None and n > 8:
-        raise SceneError(source, field, text, "continuum mesh level must be between 0 and 8")
-    return ModelSpec(family, n)
 
 
 @dataclass(frozen=True)
 class Scene:
-    """A mechanism with its load cases and the requested models and outputs."""
+    """A mechanism with its load cases and the requested models and outputs.
+
+    ``models`` are the model ids of ``request.models`` as written: geometry
+    knows no model; :func:`reducedmodels.catalogue.parse_model` reads them
+    (with source ``source`` and field ``request.models``) when they are used.
+    """
 
     name: str
     description: str
     mechanism: Mechanism
     load_cases: tuple[LoadCase, ...]
-    models: tuple[ModelSpec, ...]
+    models: tuple[str, ...]
     outputs: frozenset[str]
     source: str
 
@@ -379,8 +341,10 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
 
     req = rd.table(data, "request", "", required=False)
     rd.known_keys(req, {"models", "outputs"}, "request.")
-    models = tuple(parse_model(m, source, "request.models")
-                   for m in rd.array(req, "models", "request.", "model names"))
+    models = tuple(rd.array(req, "models", "request.", "model names"))
+    for m in models:
+        if not isinstance(m, str):
+            rd.fail("request.models", m, "expected a model id string such as \"beam:20\"")
     outputs = rd.array(req, "outputs", "request.", "output names")
     for o in outputs:
         if not isinstance(o, str) or o not in OUTPUTS:

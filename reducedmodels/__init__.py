@@ -3,14 +3,17 @@
 Units: mm, N, N mm, rad.
 """
 
+from . import families as _families  # noqa: F401  (registers beam, prbm, dcmm, ee)
+from .catalogue import Family, ModelSpec, Option, Resolution, family, parse_model, register
 from .connector import Connector
 from .core import SolverError, SolverSettings, System
 from .loadpath import LoadPath, write_results
 from .loads import Loads
-from .models import REDUCED_FAMILIES, build_system, run_reduced
+from .models import build_system, run_reduced
 from .recorder import PathRecorder, solve_path
 from .tracer import LoadControl, PathPoint, trace
 
-__all__ = ["Connector", "LoadControl", "LoadPath", "Loads", "PathPoint", "PathRecorder",
-           "REDUCED_FAMILIES", "SolverError", "SolverSettings", "System", "build_system",
-           "run_reduced", "solve_path", "trace", "write_results"]
+__all__ = ["Connector", "Family", "LoadControl", "LoadPath", "Loads", "ModelSpec", "Option",
+           "PathPoint", "PathRecorder", "Resolution", "SolverError", "SolverSettings", "System",
+           "build_system", "family", "parse_model", "register", "run_reduced", "solve_path",
+           "trace", "write_results"]

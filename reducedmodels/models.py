@@ -1,63 +1,48 @@
-"""Build and run the reduced models by name: ``beam:N``, ``prbm``, ``dcmm:N``, ``ee``.
+"""Build and run the reduced models of a :class:`reducedmodels.catalogue.ModelSpec`.
 
-Only the requested model is built (lazy imports keep ``flexval info`` and a
-DCMM run free of the beam and PRBM code paths).
+The family-independent pieces: a System with one connector per flexure (and
+exact joints for the pins), load-control tracing of a nonlinear model and
+the linear response of the EE. Which connector a family uses, and which of
+these runners, is registered in :mod:`reducedmodels.families`.
 """
 
 from __future__ import annotations
 
 import time
+from typing import Any, Callable
 
 import numpy as np
 
-from geometry import LoadCase, Mechanism, ModelSpec, SceneError
+from geometry import LoadCase, Mechanism, SceneError
 from geometry.kinematics import rigid_points
 
+from .catalogue import ModelSpec
 from .core import SolverSettings, System
 from .loadpath import LoadPath
 from .recorder import solve_path
 
-REDUCED_FAMILIES = ("beam", "prbm", "dcmm", "ee")
+#: ``make(flexure, mechanism, spec, **options) -> Connector`` of one flexure
+ConnectorFactory = Callable[..., Any]
 
 
-def _connector(mechanism: Mechanism, flexure, spec: ModelSpec, options: dict):
-    """One flexure's connector for model ``spec`` (only the requested model is imported)."""
-    if spec.family in ("dcmm", "ee"):
-        from .dcmm import DcmmConnector
-
-        n = spec.resolution if spec.family == "dcmm" else 1
-        return DcmmConnector(flexure, mechanism, n, **options)
-    if spec.family == "beam":
-        from .beam import BeamConnector
-
-        return BeamConnector(flexure, mechanism, spec.resolution, **options)
-    if spec.family == "prbm":
-        from .prbm import PrbmConnector
-
-        return PrbmConnector(flexure, mechanism, **options)
-    raise ValueError(f"'{spec.id}' is not a reduced model; expected one of {REDUCED_FAMILIES}")
-
-
-def build_system(mechanism: Mechanism, spec: ModelSpec,
-                 settings: SolverSettings | None = None, **options) -> System:
-    """The multibody System of ``mechanism`` with every flexure modelled as ``spec``.
+def connector_system(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFactory,
+                     settings: SolverSettings | None, options: dict) -> System:
+    """The System of ``mechanism`` with every flexure a ``make(...)`` connector.
 
     Pins (``mechanism.pins``) are added as exact Lagrange-multiplier joints
     (:class:`reducedmodels.joints.PinConnector`) whatever the model.
 
-    ``options`` are passed to the connector (e.g. ``shear=True`` for beams,
-    ``frame="follower"`` for DCMM).
-
     Raises
     ------
     SceneError
-        If the model cannot represent a flexure (e.g. a PRBM arc angle outside
-        its fitted table); the field names the flexure.
+        If the model cannot represent a flexure (``make`` raises ValueError,
+        e.g. a PRBM arc angle outside its fitted table); the field names the
+        flexure.
     """
     conns = []
     for f in mechanism.flexures:
         try:
-            conns.append(_connector(mechanism, f, spec, options))
+            conns.append(make(f, mechanism, spec, **options))
         except ValueError as exc:      # the model cannot represent this flexure
             raise SceneError(mechanism.source, f"flexures.{f.name}", spec.id, str(exc)) from None
     if mechanism.pins:
@@ -65,6 +50,64 @@ def build_system(mechanism: Mechanism, spec: ModelSpec,
 
         conns += pin_connectors(mechanism)
     return System(mechanism, conns, settings or SolverSettings())
+
+
+def build_system(mechanism: Mechanism, spec: ModelSpec,
+                 settings: SolverSettings | None = None, **options) -> System:
+    """The multibody System of ``mechanism`` with every flexure modelled as ``spec``.
+
+    ``options`` are Python keyword arguments of the connector that override
+    the spec's own options (e.g. ``shear=True`` for beams, ``frame="follower"``
+    for DCMM).
+
+    Raises
+    ------
+    ValueError
+        If ``spec``'s family builds no System (e.g. it is not a reduced model).
+    SceneError
+        If the model cannot represent a flexure.
+    """
+    fam = spec.model_family
+    if fam.system is None:
+        raise ValueError(f"'{spec.id}' builds no multibody System")
+    return fam.system(mechanism, spec, settings, **{**spec.kwargs, **options})
+
+
+def trace_nonlinear(mechanism: Mechanism, spec: ModelSpec, case: LoadCase,
+                    levels: int | None = None, scene: str = "", record_poses: bool = False,
+                    record_shapes: bool = False, record_reactions: bool = False,
+                    **options) -> LoadPath:
+    """Build the model ``spec`` and trace ``case`` by load control (wall time includes the build).
+
+    Raises
+    ------
+    core.SolverError
+        If the path cannot be followed to full load.
+    """
+    t0 = time.perf_counter()
+    options = {**spec.kwargs, **options}
+    system = build_system(mechanism, spec, **options)
+    lp = solve_path(system, case, levels, model=spec.id, settings=options, scene=scene,
+                    record_poses=record_poses, record_shapes=record_shapes,
+                    record_reactions=record_reactions)
+    lp.seconds = time.perf_counter() - t0
+    return lp
+
+
+def trace_linear(mechanism: Mechanism, spec: ModelSpec, case: LoadCase,
+                 levels: int | None = None, scene: str = "", record_poses: bool = False,
+                 record_shapes: bool = False, record_reactions: bool = False,
+                 **options) -> LoadPath:
+    """Build the model ``spec`` and return its linear response (wall time includes the build).
+
+    The ``record_*`` flags are accepted for a uniform runner signature and
+    ignored: a linear response has no deformed configuration to record.
+    """
+    t0 = time.perf_counter()
+    system = build_system(mechanism, spec, **options)
+    lp = solve_linear(system, case, levels, model=spec.id, scene=scene)
+    lp.seconds = time.perf_counter() - t0
+    return lp
 
 
 def solve_linear(system: System, case: LoadCase, levels: int | None = None, model: str = "ee",
@@ -99,20 +142,17 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
 def run_reduced(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int | None = None,
                 scene: str = "", record_poses: bool = False, record_shapes: bool = False,
                 record_reactions: bool = False, **options) -> LoadPath:
-    """Build the model ``spec`` and trace ``case`` (wall time includes the build).
+    """Trace ``case`` with the model ``spec`` (its family's runner; wall time includes the build).
+
+    ``options`` override the spec's options (Python keyword arguments of the
+    connector).
 
     Raises
     ------
     core.SolverError
         If the path cannot be followed to full load.
     """
-    t0 = time.perf_counter()
-    system = build_system(mechanism, spec, **options)
-    if spec.family == "ee":
-        lp = solve_linear(system, case, levels, model=spec.id, scene=scene)
-    else:
-        lp = solve_path(system, case, levels, model=spec.id, settings=dict(options), scene=scene,
-                        record_poses=record_poses, record_shapes=record_shapes,
-                        record_reactions=record_reactions)
-    lp.seconds = time.perf_counter() - t0
-    return lp
+    return spec.model_family.run(mechanism, spec, case, levels=levels, scene=scene,
+                                 record_poses=record_poses, record_shapes=record_shapes,
+                                 record_reactions=record_reactions, **options)
+

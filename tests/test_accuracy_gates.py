@@ -18,7 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from geometry import load_scene, parse_model
+from geometry import load_scene
+from reducedmodels.catalogue import parse_model
 from validation.compare import errors
 from validation.run import run_model
 

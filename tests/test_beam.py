@@ -14,9 +14,9 @@ from elastica import (arc_tip_compliance, cantilever_tip_force, circle_under_end
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from geometry import (Arc, Force, LoadCase, Material, Moment, Section, Segment, load_scene,
-                      parse_model)
+from geometry import Arc, Force, LoadCase, Material, Moment, Section, Segment, load_scene
 from geometry.mechanism import FlexureSpec, assemble
+from reducedmodels.catalogue import parse_model
 from reducedmodels import run_reduced
 from reducedmodels.beam import BeamConnector
 from reducedmodels.core import local_hessian

@@ -8,8 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from geometry import Arc, Force, LoadCase, Material, Section, load_scene, parse_model
+from geometry import Arc, Force, LoadCase, Material, Section, load_scene
 from geometry.mechanism import Body, FlexureSpec, Pin, PinSpec, assemble
+from reducedmodels.catalogue import parse_model
 from reducedmodels import SolverError, SolverSettings, build_system, solve_path
 from reducedmodels.continuation import limit_loads, solve_arclength
 from test_joints import von_mises_truss

@@ -9,7 +9,8 @@ import pytest
 from scipy.integrate import quad
 
 from builders import cantilever, fd_check, tip_force, tip_moment
-from geometry import Arc, Segment, load_scene, parse_model
+from geometry import Arc, Segment, load_scene
+from reducedmodels.catalogue import parse_model
 from reducedmodels import run_reduced
 from reducedmodels.dcmm import DcmmConnector
 

@@ -18,8 +18,9 @@ import pytest
 from hypothesis import HealthCheck, Phase, event, given, settings
 from hypothesis import strategies as st
 
-from geometry import Arc, Force, LoadCase, Material, Moment, SceneError, Section, parse_model
+from geometry import Arc, Force, LoadCase, Material, Moment, SceneError, Section
 from geometry.mechanism import FlexureSpec, PinSpec, assemble
+from reducedmodels.catalogue import parse_model
 from geometry.scene import parse_scene
 from reducedmodels import SolverError, run_reduced
 

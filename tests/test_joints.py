@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from builders import fd_check
-from geometry import (Force, LoadCase, Material, SceneError, Section, Segment, load_scene,
-                      parse_model)
+from geometry import Force, LoadCase, Material, SceneError, Section, Segment, load_scene
 from geometry.mechanism import FlexureSpec, PinSpec, assemble
+from reducedmodels.catalogue import parse_model
 from geometry.scene import parse_scene
 from reducedmodels import build_system, run_reduced, solve_path
 from reducedmodels.joints import PinConnector

@@ -28,7 +28,8 @@ from pathlib import Path
 
 import pytest
 
-from geometry import load_scene, parse_model
+from geometry import load_scene
+from reducedmodels.catalogue import parse_model
 from validation.campaign import run_campaign
 from validation.report import SceneResults, _paper_table
 

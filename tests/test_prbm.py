@@ -13,8 +13,9 @@ import pytest
 from builders import cantilever, fd_check, tip_moment
 from elastica import arc_tip_compliance, cantilever_tip_force, circle_under_end_moment
 
-from geometry import Arc, Force, LoadCase, Moment, Segment, load_scene, parse_model
+from geometry import Arc, Force, LoadCase, Moment, Segment, load_scene
 from geometry.shapes import arc_semi_axes
+from reducedmodels.catalogue import parse_model
 from reducedmodels.core import local_hessian
 from reducedmodels import build_system, run_reduced, solve_path
 from reducedmodels.prbm import (PrbmConnector, PrbmParameters, load_table,

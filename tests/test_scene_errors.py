@@ -6,7 +6,8 @@ from importlib import resources
 
 import pytest
 
-from geometry import SceneError, load_scene, parse_model
+from geometry import SceneError, load_scene
+from reducedmodels.catalogue import parse_model
 from validation.cli import main
 
 

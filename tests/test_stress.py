@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from builders import cantilever, tip_force, tip_moment
-from geometry import Arc, Scene, load_scene, parse_model
+from geometry import Arc, Scene, load_scene
+from reducedmodels.catalogue import parse_model
 from reducedmodels import run_reduced
 from test_joints import fourbar_scene
 from validation.stress import (format_markdown, rescale_lengths, scale_case, stress_report,

@@ -11,21 +11,30 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from geometry import ModelSpec, Scene
+from geometry import Scene
+from reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
 
 from .cache import ResultCache
 from .campaign import Progress, run_campaign
 from .compare import errors
 
-BEAM_N = (5, 10, 20, 40, 100, 200, 400)
-DCMM_N = tuple(range(1, 9))
+#: the reduced models of the study, every resolution of the paper's range and beyond
+SWEEP_MODELS = (*(f"beam:{n}" for n in (5, 10, 20, 40, 100, 200, 400)),
+                *(f"dcmm:{n}" for n in range(1, 9)), "prbm", "ee")
 
 
-def sweep_specs(continuum_levels: tuple[int, ...] = ()) -> list[ModelSpec]:
-    """The models of the runtime-versus-error study."""
-    specs = [ModelSpec("beam", n) for n in BEAM_N] + [ModelSpec("dcmm", n) for n in DCMM_N]
-    specs += [ModelSpec("prbm"), ModelSpec("ee")]
-    specs += [ModelSpec("continuum", lv) for lv in continuum_levels]
+def sweep_specs(reference: ModelSpec | None = None) -> list[ModelSpec]:
+    """The models of the runtime-versus-error study.
+
+    :data:`SWEEP_MODELS`, and when ``reference`` is a reference model
+    (capability ``reference``, e.g. the continuum) its resolutions below the
+    reference's own (e.g. coarser meshes).
+    """
+    specs = [parse_model(m, "<bench>", "models") for m in SWEEP_MODELS]
+    fam = reference.model_family if reference is not None else None
+    if fam is not None and fam.has(REFERENCE) and fam.resolution is not None:
+        specs += [reference.with_resolution(n)
+                  for n in range(fam.resolution.low, reference.resolution)]
     return specs
 
 
@@ -38,7 +47,7 @@ def runtime_vs_error(scene: Scene, reference: ModelSpec, specs: list[ModelSpec],
     bar = Progress(len(all_specs) * len(cases), enabled=progress)
     res, failures = run_campaign(
         scene, all_specs, cases, repeats, cache, bar,
-        repeats_for=lambda s: 1 if s.family == "continuum" else repeats)
+        repeats_for=lambda s: 1 if s.model_family.has(REFERENCE) else repeats)
     rows = []
     for spec in all_specs:
         if spec.id == reference.id:

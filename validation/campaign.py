@@ -13,8 +13,8 @@ import sys
 import time
 from typing import Callable
 
-from geometry import LoadCase, ModelSpec, Scene
-from reducedmodels import LoadPath, SolverError
+from geometry import LoadCase, Scene
+from reducedmodels import LoadPath, ModelSpec, SolverError
 
 from .cache import ResultCache, result_key
 from .run import run_model

@@ -12,9 +12,16 @@ import math
 import sys
 from pathlib import Path
 
-from geometry import SceneError, load_scene, parse_model
+from geometry import SceneError, load_scene
 
 EXIT_OK, EXIT_INPUT, EXIT_SOLVER = 0, 2, 3
+
+
+def _parse_models(texts, source: str, field: str) -> list:
+    """Model ids -> checked ModelSpecs of the catalogue (SceneError naming source and field)."""
+    from reducedmodels.catalogue import parse_model
+
+    return [parse_model(m, source, field) for m in texts]
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
@@ -42,9 +49,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .run import run_model
 
     scene = load_scene(args.scene)
-    specs = [parse_model(m, "<command line>", "--model") for m in (args.model or [])]
+    from reducedmodels.catalogue import FIELDS, families
+
+    specs = _parse_models(args.model or [], "<command line>", "--model")
     if not specs:
-        specs = list(scene.models)
+        specs = _parse_models(scene.models, scene.source, "request.models")
     if not specs:
         raise SceneError(scene.source, "--model", None,
                          "no model requested (give --model or request.models in the scene)")
@@ -52,16 +61,18 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.levels is not None and not 2 <= args.levels <= 100_000:
         raise SceneError("<command line>", "--levels", args.levels, "must be from 2 to 100000")
     fields = scene.outputs & {"vtu", "png"}
-    if fields and not any(sp.family == "continuum" for sp in specs):
+    if fields and not any(sp.model_family.has(FIELDS) for sp in specs):
+        with_fields = [f.name for f in families() if f.has(FIELDS)]
         raise SceneError(scene.source, "request.outputs", sorted(fields),
-                         "VTU and PNG stress fields come from the continuum model only")
+                         f"VTU and PNG stress fields come from these models only: {with_fields}")
     results, status = [], EXIT_OK
-    print(f"{'model':<14} {'case':<6} {'load':>11} {'dx mm':>10} {'dy mm':>10} {'|d| mm':>10} "
+    w = max(14, *(len(sp.id) for sp in specs))
+    print(f"{'model':<{w}} {'case':<6} {'load':>11} {'dx mm':>10} {'dy mm':>10} {'|d| mm':>10} "
           f"{'rot deg':>9} {'iters':>6} {'seconds':>9}")
     for spec in specs:
         for case in cases:
             extra = {}
-            if spec.family == "continuum" and fields:
+            if spec.model_family.has(FIELDS) and fields:
                 out_dir = Path(args.out_dir)
                 out_dir.mkdir(parents=True, exist_ok=True)
                 extra["vtu_dir"] = out_dir
@@ -78,7 +89,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
                 status = EXIT_SOLVER
                 continue
             results.append(lp)
-            print(f"{lp.model:<14} {lp.load_case:<6} {lp.load[-1]:>9.4g} {lp.load_unit:<2}"
+            print(f"{lp.model:<{w}} {lp.load_case:<6} {lp.load[-1]:>9.4g} {lp.load_unit:<2}"
                   f"{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} {lp.displacement[-1]:>10.4f} "
                   f"{math.degrees(lp.rotation[-1]):>9.3f} "
                   f"{lp.stats.get('newton_iterations', 0):>6} {lp.seconds:>9.4f}")
@@ -87,26 +98,24 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return status
 
 
-def _parse_levels(text: str, family: str) -> list[int]:
-    """``0:4`` -> [0, 1, 2, 3, 4] (continuum levels) or ``20:320`` -> [20, 40, ..., 320]
-    (doubling N); a comma list is taken as is."""
+def _parse_levels(text: str, spec) -> list[int]:
+    """The resolutions of a study of ``spec``'s family: ``LO:HI`` is the family's series
+    (``0:4`` -> 0, 1, 2, 3, 4 for mesh levels; ``20:320`` -> 20, 40, ..., 320 for doubling
+    N); a comma list is taken as is."""
+    res = spec.model_family.resolution
     try:
         if ":" in text:
             lo, hi = (int(x) for x in text.split(":"))
-            if family == "continuum":
-                vals = list(range(lo, hi + 1))
-            else:
-                vals = [lo]
-                while vals[-1] * 2 <= hi:
-                    vals.append(vals[-1] * 2)
+            vals = res.series(lo, hi)
         else:
             vals = [int(x) for x in text.split(",")]
     except ValueError:
         raise SceneError("<command line>", "--levels", text,
                          "expected LO:HI or a comma-separated list of integers") from None
-    if not vals or min(vals) < 0 or vals != sorted(vals) or (family != "continuum" and min(vals) < 1):
-        raise SceneError("<command line>", "--levels", text, "resolutions must increase, "
-                         ">= 0 for continuum levels and >= 1 for beam:N or dcmm:N")
+    if not vals or vals != sorted(set(vals)) or not res.low <= min(vals) <= max(vals) <= res.high:
+        raise SceneError("<command line>", "--levels", text,
+                         f"resolutions must increase, within {res.low}..{res.high} for the "
+                         f"{res.name} of '{spec.family}' ({res.meaning})")
     return vals
 
 
@@ -116,17 +125,20 @@ def _cmd_converge(args: argparse.Namespace) -> int:
     from .convergence import format_study, study
 
     scene = load_scene(args.scene)
-    family = args.model
-    if family not in ("continuum", "beam", "dcmm"):
-        raise SceneError("<command line>", "--model", family,
-                         "convergence studies need a refinable model: continuum, beam or dcmm")
-    default = {"continuum": "0:3", "beam": "5:320", "dcmm": "1:8"}[family]
-    resolutions = _parse_levels(args.levels or default, family)
+    from reducedmodels.catalogue import families
+
+    spec, = _parse_models([args.model], "<command line>", "--model")
+    res = spec.model_family.resolution
+    if res is None:
+        refinable = [f.name for f in families() if f.resolution is not None]
+        raise SceneError("<command line>", "--model", args.model,
+                         f"convergence studies need a model with a resolution: {refinable}")
+    resolutions = _parse_levels(args.levels or "{}:{}".format(*res.study), spec)
     cases = [scene.load_case(n) for n in args.load_case] if args.load_case else scene.load_cases
     out = []
     for case in cases:
         try:
-            st = study(scene, family, resolutions, case)
+            st = study(scene, spec, resolutions, case)
         except SolverError as exc:
             print(f"flexval: solver failure: {exc}", file=sys.stderr)
             return EXIT_SOLVER
@@ -146,8 +158,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
     for name in scenes:
         load_scene(name)        # bad input fails before any work
     models = args.model or list(DEFAULT_MODELS)
-    for m in models:
-        parse_model(m, "<command line>", "--model")
+    _parse_models(models, "<command line>", "--model")
     path = build_report(scenes, Path(args.out), models, repeats=args.repeats,
                         use_cache=not args.no_cache, progress=not args.quiet,
                         bench=not args.no_bench, converge=not args.no_converge)
@@ -156,19 +167,12 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from geometry import ModelSpec
-
     from .bench import runtime_vs_error, sweep_specs, write_bench
     from .cache import ResultCache
 
     scene = load_scene(args.scene)
-    ref = parse_model(args.reference, "<command line>", "--reference")
-    if ref.family == "continuum" and ref.resolution is None:
-        from .continuum import DEFAULT_LEVEL
-
-        ref = ModelSpec("continuum", DEFAULT_LEVEL)
-    levels = tuple(range(0, ref.resolution)) if ref.family == "continuum" else ()
-    rows, failures = runtime_vs_error(scene, ref, sweep_specs(levels), args.repeats,
+    ref, = _parse_models([args.reference], "<command line>", "--reference")
+    rows, failures = runtime_vs_error(scene, ref, sweep_specs(ref), args.repeats,
                                       ResultCache(enabled=not args.no_cache), not args.quiet)
     for msg in failures:
         print(f"flexval: solver failure: {msg}", file=sys.stderr)
@@ -183,7 +187,7 @@ def _cmd_stress(args: argparse.Namespace) -> int:
 
     scene = load_scene(args.scene)
     models = args.model or ["ee", "dcmm:1", "dcmm:2", "prbm", "beam:20"]
-    specs = [parse_model(m, "<command line>", "--model") for m in models]
+    specs = _parse_models(models, "<command line>", "--model")
 
     def progress(line: str) -> None:
         if not args.quiet:
@@ -218,6 +222,13 @@ def build_parser() -> argparse.ArgumentParser:
         description="Validate flexibility models of planar compliant mechanisms "
                     "(units: mm, N, N mm; angles in degrees on the command line and in files).")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    from reducedmodels.catalogue import expected_ids, families
+
+    ids = expected_ids()
+    refine = ", ".join(f"{f.name}:{f.resolution.name} ({f.resolution.meaning})"
+                       for f in families() if f.resolution)
+    defaults = ", ".join("{} {}:{}".format(f.name, *f.resolution.study)
+                         for f in families() if f.resolution)
     scene_help = "built-in scene name (open_chain, closed_chain) or path to a scene TOML file"
 
     q = sub.add_parser("info", help="describe a scene: bodies, flexures, ellipse data, loads")
@@ -233,8 +244,9 @@ def build_parser() -> argparse.ArgumentParser:
     q = sub.add_parser("run", help="trace load paths with one or more models")
     q.add_argument("scene", help=scene_help)
     q.add_argument("--model", action="append", metavar="MODEL",
-                   help="continuum[:LEVEL], beam:N, prbm, dcmm:N or ee (repeatable; default: "
-                        "the scene's request.models)")
+                   help=f"model id: {ids}; options in brackets, e.g. beam:100[shear], "
+                        "dcmm:2[frame=follower] (repeatable; default: the scene's "
+                        "request.models)")
     q.add_argument("--load-case", action="append", metavar="NAME",
                    help="load case name (repeatable; default: all)")
     q.add_argument("--levels", type=int, metavar="N",
@@ -247,11 +259,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     q = sub.add_parser("converge", help="resolution study: order, Richardson value, GCI")
     q.add_argument("scene", help=scene_help)
-    q.add_argument("--model", default="continuum", choices=["continuum", "beam", "dcmm"],
-                   help="model family to refine (default: continuum)")
+    q.add_argument("--model", default="continuum", metavar="MODEL",
+                   help="model to refine, a family with a resolution and any options, e.g. "
+                        f"beam[shear] ({refine}; default: continuum)")
     q.add_argument("--levels", metavar="LO:HI",
-                   help="continuum: mesh levels LO..HI; beam/dcmm: N from LO doubling up to "
-                        "HI; or a comma list (defaults 0:3, 5:320, 1:8)")
+                   help="mesh levels LO..HI, or N from LO doubling up to HI; or a comma list "
+                        f"(defaults: {defaults})")
     q.add_argument("--load-case", action="append", metavar="NAME",
                    help="load case name (repeatable; default: all)")
     q.add_argument("--json", metavar="PATH", help="write the studies as JSON")
@@ -299,10 +312,6 @@ def main(argv: list[str] | None = None) -> int:
         return args.func(args)
     except SceneError as exc:
         print(f"flexval: bad input: {exc}", file=sys.stderr)
-        return EXIT_INPUT
-    except ModuleNotFoundError as exc:
-        print(f"flexval: this model is not available in this installation: {exc}",
-              file=sys.stderr)
         return EXIT_INPUT
 
 

@@ -1,7 +1,8 @@
 """Resolution convergence studies: observed order, Richardson extrapolation, GCI.
 
 For a model family refined by a constant ratio r (continuum mesh levels halve
-the element size: r = 2; ``beam:N`` and ``dcmm:N`` with N doubling: r = 2),
+the element size: r = 2; ``beam:N`` and ``dcmm:N`` with N doubling: r = 2; the
+family's :class:`reducedmodels.catalogue.Resolution` gives the ratio),
 the end-of-ramp target displacement magnitude (mm) and rotation (rad) of
 the three finest resolutions f1 (coarse), f2, f3 (fine) give
 
@@ -16,7 +17,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from geometry import LoadCase, ModelSpec, Scene
+from geometry import LoadCase, Scene
+from reducedmodels.catalogue import ModelSpec
 
 from .run import run_model
 
@@ -48,18 +50,16 @@ def richardson(f1: float, f2: float, f3: float, ratio: float) -> dict:
     return {"order": p, "extrapolated": ext, "gci_percent": gci}
 
 
-def study(scene: Scene, family: str, resolutions: list[int], case: LoadCase,
+def study(scene: Scene, model: ModelSpec, resolutions: list[int], case: LoadCase,
           levels: int | None = None, progress=None) -> ConvergenceStudy:
-    """Run ``family`` at each resolution (increasing) on ``case`` and analyse convergence."""
-    if len(resolutions) >= 2:
-        ratios = {resolutions[k + 1] / resolutions[k] for k in range(len(resolutions) - 1)
-                  } if family != "continuum" else {2.0}
-        ratio = ratios.pop() if len(ratios) == 1 else float("nan")
-    else:
-        ratio = float("nan")
-    st = ConvergenceStudy(family, case.name, ratio)
+    """Run ``model`` (its options kept) at each resolution (increasing) on ``case`` and
+    analyse convergence."""
+    refine = model.model_family.resolution
+    ratios = {refine.ratio(a, b) for a, b in zip(resolutions, resolutions[1:])}
+    ratio = ratios.pop() if len(ratios) == 1 else float("nan")
+    st = ConvergenceStudy(model.family, case.name, ratio)
     for res in resolutions:
-        spec = ModelSpec(family, res)
+        spec = model.with_resolution(res)
         lp = run_model(scene, spec, case, levels)
         st.rows.append({"model": spec.id, "resolution": res,
                         "unknowns": lp.stats.get("unknowns"), "seconds": lp.seconds,

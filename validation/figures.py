@@ -32,8 +32,12 @@ _STYLE = {
 
 
 def style(model: str) -> dict:
-    """Line style of a model id (continuum levels share the continuum style)."""
-    return _STYLE.get(model, _STYLE.get(model.split(":")[0], dict(color="tab:brown", lw=1.2)))
+    """Line style of a model id or family name: its own, else the first of its family's
+    (continuum levels share the continuum style), else a neutral one."""
+    family = model.split(":")[0].split("[")[0]
+    return _STYLE.get(model) or next((s for k, s in _STYLE.items()
+                                      if k.split(":")[0] == family),
+                                     dict(color="tab:brown", lw=1.2))
 
 
 def _save(fig, path: Path) -> str:
@@ -134,10 +138,10 @@ def runtime_vs_error(rows: list[dict], title: str, path: Path) -> str:
     fig, ax = plt.subplots(figsize=(7.5, 5))
     families: dict[str, list[dict]] = {}
     for r in rows:
-        families.setdefault(r["model"].split(":")[0], []).append(r)
+        families.setdefault(r["model"].split(":")[0].split("[")[0], []).append(r)
     floor = 1e-4
     for fam, rs in families.items():
-        st = style(fam if fam != "beam" else "beam:100")
+        st = style(fam)
         x = [r["seconds"] for r in rs]
         y = [max(r["error"], floor) for r in rs]
         ax.plot(x, y, marker=st.get("marker") or "o", color=st["color"], ls="-", lw=0.8,

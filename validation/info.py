@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 from geometry import Force, Moment, Scene
+from reducedmodels.catalogue import parse_model
 
 
 def scene_info(scene: Scene) -> dict:
@@ -62,7 +63,7 @@ def scene_info(scene: Scene) -> dict:
         "flexures": flexures,
         "target": {"body": mech.target_body, "point": mech.target_point.tolist()},
         "load_cases": cases,
-        "models": [m.id for m in scene.models],
+        "models": [parse_model(m, scene.source, "request.models").id for m in scene.models],
     }
 
 

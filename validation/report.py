@@ -20,8 +20,9 @@ from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
 
-from geometry import ModelSpec, Scene, load_scene, parse_model
+from geometry import Scene, load_scene
 from reducedmodels import LoadPath
+from reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
 
 from . import figures
 from .bench import runtime_vs_error, sweep_specs, write_bench
@@ -29,9 +30,12 @@ from .cache import ResultCache, code_version
 from .campaign import Progress, run_campaign
 from .compare import errors, paper_percent, paper_seconds
 from .convergence import study
+from .run import run_model
 
 DEFAULT_MODELS = ("continuum", "beam:100", "beam:20", "prbm", "dcmm:1", "dcmm:2", "dcmm:3", "ee")
 PAPER_REFERENCE = "beam:100"
+#: reference of the runtime-versus-error study when no reference model is requested
+BENCH_REFERENCE = "beam:400"
 
 
 DISCUSSION = [
@@ -117,7 +121,7 @@ def _paper_table(res: SceneResults) -> list[str]:
     head = "| model | " + " | ".join(f"{c} disp | {c} rot" for c in res.cases) + " |"
     lines = [head, "|---|" + "---:|" * (2 * len(res.cases))]
     for m, per_case in ours.items():
-        if m.startswith("continuum"):
+        if parse_model(m, "<report>", "models").model_family.has(REFERENCE):
             continue
         cells = []
         for c in res.cases:
@@ -181,23 +185,26 @@ def _frame_sensitivity(res: SceneResults) -> list[str]:
     here, not typed in: both choices, so a reader sees how much of a DCMM_1
     figure is an implementation choice.
     """
-    from reducedmodels import run_reduced
-
     lines = ["| model | frame | " + " | ".join(f"{c} disp | {c} rot" for c in res.cases) + " |",
              "|---|---|" + "---:|" * (2 * len(res.cases))]
-    for n in (1, 2, 3):
-        spec = parse_model(f"dcmm:{n}")
-        for frame in ("leader", "follower"):
+    for spec in _frame_models(res):
+        for frame in spec.model_family.option("frame").allowed:
             cells = []
             for case in res.scene.load_cases:
                 ref = res.paths.get((PAPER_REFERENCE, case.name))
                 if ref is None:
                     cells += ["–", "–"]
                     continue
-                e = errors(run_reduced(res.scene.mechanism, spec, case, frame=frame), ref)
+                e = errors(run_model(res.scene, spec.with_options(frame=frame), case), ref)
                 cells += [f"{e['end_disp_vec']:.1f}", f"{e['end_rot']:.1f}"]
             lines.append(f"| {spec.id} | {frame} | " + " | ".join(cells) + " |")
     return lines
+
+
+def _frame_models(res: SceneResults) -> list[ModelSpec]:
+    """The report's models whose family has a measuring-frame option, at its default."""
+    specs = [parse_model(m, "<report>", "models") for m in res.models]
+    return [s for s in specs if s.model_family.option("frame") and "frame" not in dict(s.options)]
 
 
 def _findings(res: SceneResults, reference: str) -> list[str]:
@@ -247,7 +254,7 @@ def _scene_section(res: SceneResults, out: Path, continuum_id: str | None) -> li
           "Table 2/5 value in parentheses.", ""]
     L += _paper_table(res) + [""]
     L += ["All metrics against `beam:100`:", ""] + _metrics_table(res, PAPER_REFERENCE) + [""]
-    if any(m.startswith("dcmm") for m in res.models):
+    if _frame_models(res):
         L += ["DCMM_n with each element's relative displacement measured in the displaced "
               "frame of its leading body (body i of e_ij, the paper's text and our default) or "
               "of the following body j (end-of-ramp errors against `beam:100`, percent):", ""]
@@ -316,13 +323,8 @@ def build_report(scene_names: list[str], out: Path, models: list[str] | None = N
     out.mkdir(parents=True, exist_ok=True)
     specs = [parse_model(m, "<report>", "models") for m in (models or DEFAULT_MODELS)]
     cache = ResultCache(enabled=use_cache)
-    continuum_id = next((s.id for s in specs if s.family == "continuum"), None)
-    if continuum_id == "continuum":
-        from .continuum import DEFAULT_LEVEL
-
-        specs = [ModelSpec("continuum", DEFAULT_LEVEL) if s.family == "continuum" else s
-                 for s in specs]
-        continuum_id = f"continuum:{DEFAULT_LEVEL}"
+    reference = next((s for s in specs if s.model_family.has(REFERENCE)), None)
+    continuum_id = reference.id if reference else None
     scenes = [load_scene(n) for n in scene_names]
     total = sum(len(specs) * len(s.load_cases) for s in scenes)
     bar = Progress(total, enabled=progress)
@@ -331,19 +333,17 @@ def build_report(scene_names: list[str], out: Path, models: list[str] | None = N
         record = tuple(m for m in (PAPER_REFERENCE, continuum_id) if m)
         paths, failures = run_campaign(
             sc, specs, list(sc.load_cases), repeats, cache, bar, record_models=record,
-            repeats_for=lambda s: 1 if s.family == "continuum" else repeats)
+            repeats_for=lambda s: 1 if s.model_family.has(REFERENCE) else repeats)
         res = SceneResults(sc, paths, failures, [s.id for s in specs])
         if bench:
-            ref = ModelSpec("continuum", DEFAULT_LEVEL) if continuum_id else ModelSpec("beam", 400)
-            levels = tuple(range(0, ref.resolution)) if continuum_id else ()
-            res.bench_rows, fails = runtime_vs_error(sc, ref, sweep_specs(levels), repeats,
+            ref = reference or parse_model(BENCH_REFERENCE)
+            res.bench_rows, fails = runtime_vs_error(sc, ref, sweep_specs(ref), repeats,
                                                      cache, progress)
             res.bench_reference = ref.id
             res.failures += fails
-        if converge and continuum_id:
-            first = sc.load_cases[0]
-            res.convergence.append(study(sc, "continuum", list(range(0, DEFAULT_LEVEL + 2)),
-                                         first))
+        if converge and reference:
+            levels = list(range(reference.model_family.resolution.low, reference.resolution + 2))
+            res.convergence.append(study(sc, reference, levels, sc.load_cases[0]))
         results.append(res)
     lines = ["# flexval validation report", "",
              "Flexibility models of planar compliant mechanisms with curved flexures: "

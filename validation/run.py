@@ -1,18 +1,19 @@
 """Run any requested model on a scene: the one dispatcher behind ``flexval run``.
 
-Reduced models come from :mod:`reducedmodels`, the continuum reference from
-:mod:`validation.continuum`; both return a :class:`reducedmodels.LoadPath`.
+The model's family in the catalogue (:mod:`reducedmodels.catalogue`) runs it:
+reduced models from :mod:`reducedmodels`, the continuum reference from
+:mod:`validation.continuum`; every one returns a :class:`reducedmodels.LoadPath`.
 Only what is requested is built.
 """
 
 from __future__ import annotations
 
-from geometry import LoadCase, ModelSpec, Scene
-from reducedmodels import LoadPath, run_reduced
+from geometry import LoadCase, Scene
+from reducedmodels import LoadPath, ModelSpec
 
 
 def run_model(scene: Scene, spec: ModelSpec, case: LoadCase, levels: int | None = None,
-              record_poses: bool = False, record_shapes: bool = False, **options) -> LoadPath:
+              record_poses: bool = False, record_shapes: bool = False, **extra) -> LoadPath:
     """Trace ``case`` of ``scene`` with model ``spec``.
 
     Parameters
@@ -20,17 +21,16 @@ def run_model(scene: Scene, spec: ModelSpec, case: LoadCase, levels: int | None 
     levels : int, optional
         Number of equally spaced load levels (default: the load case's).
     record_poses, record_shapes : bool
-        Also record every body's pose / the deformed flexures at each level.
+        Also record every body's pose / the deformed flexures at each level
+        (where the model has them).
+    extra
+        Output keywords of the family's capabilities (``vtu_dir``, ``png``)
+        or Python options overriding the spec's.
 
     Raises
     ------
     reducedmodels.SolverError
         If the solver cannot reach the full load (carries the load reached).
     """
-    if spec.family == "continuum":
-        from .continuum import run_continuum
-
-        return run_continuum(scene.mechanism, case, level=spec.resolution, levels=levels,
-                             scene=scene.name, record_shapes=record_shapes, **options)
-    return run_reduced(scene.mechanism, spec, case, levels, scene=scene.name,
-                       record_poses=record_poses, record_shapes=record_shapes, **options)
+    return spec.model_family.run(scene.mechanism, spec, case, levels=levels, scene=scene.name,
+                                 record_poses=record_poses, record_shapes=record_shapes, **extra)

@@ -37,9 +37,10 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from geometry import (Force, LoadCase, Material, Mechanism, ModelSpec, Scene, Section, parse_model,
+from geometry import (Force, LoadCase, Material, Mechanism, Scene, Section,
                       rotation)
 from reducedmodels import LoadPath, SolverError, SolverSettings, build_system
+from reducedmodels.catalogue import ARCLENGTH, ModelSpec, parse_model
 from reducedmodels.continuation import limit_loads, solve_arclength
 
 from .compare import errors
@@ -169,7 +170,7 @@ def _limit_load(scene: Scene, spec: ModelSpec, case: LoadCase) -> float | None:
     load magnitude; None for the linear EE and the continuum, or when the
     path reaches full load (or fails) without one.
     """
-    if spec.family not in ("beam", "dcmm", "prbm"):
+    if not spec.model_family.has(ARCLENGTH):
         return None
     system = build_system(scene.mechanism, spec, LIMIT_SETTINGS)
     try:
@@ -257,7 +258,7 @@ def stress_report(scene: Scene, models: Sequence[ModelSpec | str], quick: bool =
     ----------
     scene : Scene
     models : sequence of ModelSpec or str
-        Models to stress (``"dcmm:2"``, ``ModelSpec("prbm")``, ...).
+        Models to stress (``"dcmm:2"``, ``parse_model("prbm")``, ...).
     quick : bool
         Cap the amplification at 100, use ``beam:40`` as the reference and
         skip the 1001-level run.

@@ -16,8 +16,9 @@ from __future__ import annotations
 import math
 from typing import Callable, Sequence
 
-from geometry import Arc, Force, LoadCase, Material, SceneError, Section, Segment, parse_model
+from geometry import Arc, Force, LoadCase, Material, SceneError, Section, Segment
 from geometry.mechanism import FlexureSpec, assemble
+from reducedmodels.catalogue import parse_model
 from reducedmodels import SolverError, run_reduced
 
 from .compare import errors

@@ -1,0 +1,351 @@
+"""The model catalogue: every model family registers here once, and every command asks it.
+
+A model id names a family, optionally its resolution and options::
+
+    FAMILY[:RESOLUTION][[OPTION,OPTION=VALUE,...]]
+
+e.g. ``beam:100``, ``beam:100[shear]``, ``dcmm:2[frame=follower]``,
+``continuum:1[law=neo-hookean,plane=strain]``, ``prbm``. A family without a
+resolution takes none; a family with one uses its default when none is given
+(``beam`` is ``beam:20``). An option given by its bare name takes its "bare"
+value (``shear`` is ``shear=true``). The *canonical* id lists the options that
+differ from their defaults, sorted by name, so ids without options read
+exactly as before options existed, and the canonical id is what every output
+(JSON ``model``, tables, cache keys) carries.
+
+A :class:`Family` holds everything the commands need to know about a model:
+its id syntax (:class:`Resolution`), its :class:`Option` set, a runner that
+traces a load case (imports its code lazily, so ``flexval info`` never loads
+a solver) and its capabilities (:data:`FIELDS`, :data:`ARCLENGTH`,
+:data:`LINEAR`, :data:`REFERENCE`). Adding a family is one module that calls
+:func:`register`; the reduced models register in :mod:`reducedmodels.families`,
+the continuum in :mod:`validation.continuum.family`.
+
+Bad ids raise :class:`geometry.SceneError` naming the source, the field and
+the text (the CLI turns it into exit code 2).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from geometry import SceneError
+
+#: capability: writes stress fields (VTU files, PNG renderings) of the deformed flexures
+FIELDS = "fields"
+#: capability: ``Family.system`` builds a System that arc-length continuation can trace
+ARCLENGTH = "arclength"
+#: capability: a linear model (its path is proportional to the load; no limit points)
+LINEAR = "linear"
+#: capability: a reference model: its default resolution is the reports' reference, its
+#: coarser resolutions join the runtime-versus-error study and it is timed once (seconds a run)
+REFERENCE = "reference"
+CAPABILITIES = frozenset({FIELDS, ARCLENGTH, LINEAR, REFERENCE})
+
+_ID_RE = re.compile(r"^(?P<family>[A-Za-z][\w-]*)(?::(?P<res>[^\[\]]*))?"
+                    r"(?:\[(?P<opts>[^\[\]]*)\])?$")
+
+
+@dataclass(frozen=True)
+class Resolution:
+    """The integer after the colon of a model id.
+
+    Parameters
+    ----------
+    name : str
+        Its name in the syntax, e.g. ``N`` or ``LEVEL``.
+    meaning : str
+        What it counts (with its unit), for help texts.
+    default, low, high : int
+        Default when omitted and the allowed range (inclusive).
+    doubling : bool
+        How a convergence study refines it: True when the element size is
+        inversely proportional to it (N doubles each step, refinement ratio
+        N2 / N1); False when each step of one halves the element size
+        (refinement ratio 2 per step).
+    study : tuple of int
+        Default (first, last) resolution of ``flexval converge``.
+    """
+
+    name: str
+    meaning: str
+    default: int
+    low: int
+    high: int
+    doubling: bool
+    study: tuple[int, int]
+
+    def ratio(self, coarse: int, fine: int) -> float:
+        """Refinement ratio (element size of ``coarse`` / of ``fine``)."""
+        return fine / coarse if self.doubling else 2.0 ** (fine - coarse)
+
+    def series(self, first: int, last: int) -> list[int]:
+        """The resolutions of a study from ``first`` up to at most ``last``."""
+        if not self.doubling:
+            return list(range(first, last + 1))
+        out = [first]
+        while out[-1] * 2 <= last:
+            out.append(out[-1] * 2)
+        return out
+
+
+@dataclass(frozen=True)
+class Option:
+    """One option of a family: ``name=value`` inside the id's brackets.
+
+    Parameters
+    ----------
+    name : str
+        Name in the id.
+    doc : str
+        What it does (for the README table and help texts).
+    values : tuple of (str, object)
+        Allowed text values and the Python value each passes to the runner.
+    default : str
+        Text value when the option is not given (never printed in an id).
+    bare : str, optional
+        Text value meant by the bare name (``shear`` for ``shear=true``).
+    keyword : str, optional
+        Keyword argument of the runner/connector (default: ``name``).
+    """
+
+    name: str
+    doc: str
+    values: tuple[tuple[str, Any], ...]
+    default: str
+    bare: str | None = None
+    keyword: str | None = None
+
+    @classmethod
+    def flag(cls, name: str, doc: str, keyword: str | None = None) -> Option:
+        """A boolean option, off by default, switched on by its bare name."""
+        return cls(name, doc, (("false", False), ("true", True)), "false", "true", keyword)
+
+    @classmethod
+    def choice(cls, name: str, doc: str, choices: tuple[str, ...], default: str,
+               keyword: str | None = None) -> Option:
+        """An option taking one of ``choices`` (passed on as the text itself)."""
+        return cls(name, doc, tuple((c, c) for c in choices), default, None, keyword)
+
+    @property
+    def allowed(self) -> tuple[str, ...]:
+        """The allowed text values."""
+        return tuple(text for text, _ in self.values)
+
+    def python(self, text: str) -> Any:
+        """The Python value of the text value ``text``."""
+        return dict(self.values)[text]
+
+    def canonical(self, text: str) -> str:
+        """How ``name=text`` is printed in a canonical id."""
+        return self.name if text == self.bare else f"{self.name}={text}"
+
+    def describe(self) -> str:
+        """``name=a|b (default a): doc``."""
+        bare = f"; bare '{self.name}' = {self.name}={self.bare}" if self.bare else ""
+        return f"{self.name}={'|'.join(self.allowed)} (default {self.default}{bare}): {self.doc}"
+
+
+@dataclass(frozen=True)
+class Family:
+    """A model family: id syntax, options, how to run it and what it can do.
+
+    Parameters
+    ----------
+    name : str
+        The id's family name.
+    summary : str
+        One line: what the model is.
+    run : callable
+        ``run(scene_name, mechanism, spec, case, levels, record_poses,
+        record_shapes, **extra) -> reducedmodels.LoadPath``: traces ``case``
+        (raises ``reducedmodels.SolverError`` when it cannot reach full load).
+        It imports the model's code when called. ``extra`` are the output
+        keywords of the capabilities (``vtu_dir``, ``png`` for
+        :data:`FIELDS`).
+    resolution : Resolution, optional
+        None for families that take no resolution.
+    options : tuple of Option
+    capabilities : frozenset of str
+        Some of :data:`CAPABILITIES`.
+    system : callable, optional
+        ``system(mechanism, spec, settings) -> reducedmodels.System`` (for
+        :data:`ARCLENGTH`).
+    """
+
+    name: str
+    summary: str
+    run: Callable[..., Any]
+    resolution: Resolution | None = None
+    options: tuple[Option, ...] = ()
+    capabilities: frozenset[str] = frozenset()
+    system: Callable[..., Any] | None = None
+
+    def __post_init__(self) -> None:
+        unknown = set(self.capabilities) - CAPABILITIES
+        if unknown:
+            raise ValueError(f"family {self.name!r}: unknown capabilities {sorted(unknown)}; "
+                             f"expected some of {sorted(CAPABILITIES)}")
+        if ARCLENGTH in self.capabilities and self.system is None:
+            raise ValueError(f"family {self.name!r}: capability {ARCLENGTH!r} needs `system`")
+
+    @property
+    def syntax(self) -> str:
+        """E.g. ``beam[:N][[options]]``."""
+        res = f"[:{self.resolution.name}]" if self.resolution else ""
+        return self.name + res + ("[[options]]" if self.options else "")
+
+    def has(self, capability: str) -> bool:
+        """Whether the family has ``capability``."""
+        return capability in self.capabilities
+
+    def option(self, name: str) -> Option | None:
+        """The option called ``name``, or None."""
+        return next((o for o in self.options if o.name == name), None)
+
+    def spec(self, resolution: int | None = None, **options: str) -> ModelSpec:
+        """A checked :class:`ModelSpec` of this family (options as text values)."""
+        text = self.name if resolution is None else f"{self.name}:{resolution}"
+        if options:
+            text += "[" + ",".join(f"{k}={v}" for k, v in options.items()) + "]"
+        return parse_model(text, "<python>", "model")
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """A requested model: family name, resolution and canonical options.
+
+    Build it with :func:`parse_model` (which checks it); ``options`` holds
+    (name, text value) pairs of the options that differ from their
+    defaults, sorted by name.
+    """
+
+    family: str
+    resolution: int | None = None
+    options: tuple[tuple[str, str], ...] = field(default=())
+
+    @property
+    def id(self) -> str:
+        """Canonical text form, e.g. ``beam:100`` or ``dcmm:2[frame=follower]``."""
+        text = self.family if self.resolution is None else f"{self.family}:{self.resolution}"
+        if self.options:
+            fam = family(self.family)
+            text += "[" + ",".join(fam.option(k).canonical(v) for k, v in self.options) + "]"
+        return text
+
+    def __str__(self) -> str:
+        return self.id
+
+    @property
+    def model_family(self) -> Family:
+        """The registered :class:`Family` of this spec."""
+        return family(self.family)
+
+    @property
+    def kwargs(self) -> dict[str, Any]:
+        """The options as Python keyword arguments of the runner/connector."""
+        fam = family(self.family)
+        out = {}
+        for name, text in self.options:
+            opt = fam.option(name)
+            out[opt.keyword or opt.name] = opt.python(text)
+        return out
+
+    def with_resolution(self, resolution: int) -> ModelSpec:
+        """The same model and options at another resolution (checked)."""
+        return family(self.family).spec(resolution, **dict(self.options))
+
+    def with_options(self, **options: str) -> ModelSpec:
+        """The same model with ``options`` (text values) set or replaced (checked)."""
+        return family(self.family).spec(self.resolution, **{**dict(self.options), **options})
+
+
+_FAMILIES: dict[str, Family] = {}
+
+
+def register(fam: Family) -> Family:
+    """Add ``fam`` to the catalogue (re-registering the same name replaces it)."""
+    _FAMILIES[fam.name] = fam
+    return fam
+
+
+def unregister(name: str) -> None:
+    """Remove the family ``name`` (e.g. a test's toy family)."""
+    _FAMILIES.pop(name, None)
+
+
+def families() -> tuple[Family, ...]:
+    """Every registered family, in registration order."""
+    return tuple(_FAMILIES.values())
+
+
+def family(name: str) -> Family:
+    """The registered family ``name`` (KeyError if there is none)."""
+    return _FAMILIES[name]
+
+
+def expected_ids() -> str:
+    """Human-readable list of the accepted id forms, e.g. for error messages and help."""
+    return ", ".join(f.syntax for f in _FAMILIES.values())
+
+
+def _parse_options(fam: Family, text: str, fail: Callable[[str], None]
+                   ) -> tuple[tuple[str, str], ...]:
+    given: dict[str, str] = {}
+    for item in (t.strip() for t in text.split(",")):
+        name, eq, value = (s.strip() for s in item.partition("="))
+        opt = fam.option(name)
+        if opt is None:
+            allowed = "; ".join(o.describe() for o in fam.options) or "none"
+            fail(f"unknown option {name!r} of '{fam.name}'; allowed: {allowed}")
+        if not eq:
+            if opt.bare is None:
+                fail(f"option {name!r} of '{fam.name}' needs a value, one of "
+                     f"{', '.join(opt.allowed)}")
+            value = opt.bare
+        if value not in opt.allowed:
+            fail(f"option {name!r} of '{fam.name}' must be one of {', '.join(opt.allowed)}, "
+                 f"got {value!r}")
+        if name in given:
+            fail(f"option {name!r} given twice")
+        given[name] = value
+    return tuple(sorted((k, v) for k, v in given.items() if v != fam.option(k).default))
+
+
+def parse_model(text: str, source: str = "<command line>", field: str = "model") -> ModelSpec:
+    """Parse a model id (see the module docstring) into a checked, canonical ModelSpec.
+
+    Raises
+    ------
+    SceneError
+        Naming ``source``, ``field`` and ``text``: unknown family, bad or
+        out-of-range resolution, unknown option or value.
+    """
+    def fail(reason: str) -> None:
+        raise SceneError(source, field, text, reason)
+
+    if not isinstance(text, str):
+        fail(f"expected a model id string: {expected_ids()}")
+    m = _ID_RE.match(text.strip())
+    if not m or m.group("family") not in _FAMILIES:
+        fail(f"expected {expected_ids()}")
+    fam = _FAMILIES[m.group("family")]
+    res_text, opts = m.group("res"), m.group("opts")
+    res = fam.resolution
+    if res is None:
+        if res_text is not None:
+            fail(f"'{fam.name}' takes no resolution")
+        n = None
+    elif res_text is None:
+        n = res.default
+    else:
+        if not re.fullmatch(r"\d+", res_text.strip()):
+            fail(f"the {res.name} of '{fam.name}' ({res.meaning}) must be an integer")
+        n = int(res_text)
+        if not res.low <= n <= res.high:
+            fail(f"the {res.name} of '{fam.name}' ({res.meaning}) must be between {res.low} "
+                 f"and {res.high}")
+    options = _parse_options(fam, opts, fail) if opts is not None and opts.strip() else ()
+    return ModelSpec(fam.name, n, options)

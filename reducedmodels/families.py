@@ -1,0 +1,78 @@
+"""The reduced model families of the paper, registered in the model catalogue.
+
+``beam:N``, ``dcmm:N``, ``prbm`` and ``ee`` (see :mod:`reducedmodels.catalogue`
+for the id syntax). Each connector module is imported only when a model of
+its family is built.
+"""
+
+from __future__ import annotations
+
+from geometry import Flexure, Mechanism
+
+from .catalogue import ARCLENGTH, LINEAR, Family, ModelSpec, Option, Resolution, register
+from .core import SolverSettings, System
+from .models import connector_system, trace_linear, trace_nonlinear
+
+#: largest N of ``beam:N`` and ``dcmm:N`` (a guard against typos, far beyond any use)
+MAX_ELEMENTS = 100_000
+
+FRAME = Option.choice(
+    "frame", "DCMM measuring frame: each element's relative displacement is measured in the "
+    "displaced frame of its leading body (the paper's text) or of the following one",
+    ("leader", "follower"), "leader")
+
+
+def _beam(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
+    from .beam import BeamConnector
+
+    return BeamConnector(flexure, mechanism, spec.resolution, **options)
+
+
+def _dcmm(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
+    from .dcmm import DcmmConnector
+
+    return DcmmConnector(flexure, mechanism, spec.resolution, **options)
+
+
+def _ee(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
+    from .dcmm import DcmmConnector
+
+    return DcmmConnector(flexure, mechanism, 1, **options)
+
+
+def _prbm(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
+    from .prbm import PrbmConnector
+
+    return PrbmConnector(flexure, mechanism, **options)
+
+
+def _system_of(make):
+    """``Family.system`` of a family whose flexures are ``make`` connectors."""
+    def system(mechanism: Mechanism, spec: ModelSpec, settings: SolverSettings | None = None,
+               **options) -> System:
+        return connector_system(mechanism, spec, make, settings, options)
+    return system
+
+
+BEAM = register(Family(
+    "beam", "geometrically exact corotational beam elements (Euler-Bernoulli, or Timoshenko "
+    "with the option shear); beam:100 and beam:20 are the paper's FEM100 and FEM20",
+    trace_nonlinear,
+    Resolution("N", "beam elements per flexure", 20, 1, MAX_ELEMENTS, True, (5, 320)),
+    (Option.flag("shear", "Timoshenko beams (shear deformation of the rectangular section)"),),
+    frozenset({ARCLENGTH}), _system_of(_beam)))
+
+PRBM = register(Family(
+    "prbm", "symmetric 3R pseudo-rigid-body chain per flexure, exact in the linear limit",
+    trace_nonlinear, None, (), frozenset({ARCLENGTH}), _system_of(_prbm)))
+
+DCMM = register(Family(
+    "dcmm", "Displaced Compliance Matrix Method: each arc cut into N sub-arcs, each a diagonal "
+    "compliance at its centre of elasticity",
+    trace_nonlinear,
+    Resolution("N", "sub-arcs per flexure", 1, 1, MAX_ELEMENTS, True, (1, 8)),
+    (FRAME,), frozenset({ARCLENGTH}), _system_of(_dcmm)))
+
+EE = register(Family(
+    "ee", "linear ellipse-of-elasticity prediction (the small-load limit of dcmm:1)",
+    trace_linear, None, (), frozenset({LINEAR}), _system_of(_ee)))
