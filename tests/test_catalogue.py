@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from geometry import Arc, SceneError, load_scene
-from reducedmodels import run_reduced
+from reducedmodels import Connector, run_reduced
 from reducedmodels.catalogue import (Family, Option, Resolution, families, family,
                                      parse_model, register, unregister)
 from reducedmodels.models import connector_system, trace_nonlinear
@@ -29,22 +29,15 @@ from validation.run import run_model
 from builders import cantilever, tip_moment
 
 
-class SpringConnector:
+class SpringConnector(Connector):
     """Linear springs between two bodies' poses: translation k_t and rotation k (N mm/rad)."""
 
     def __init__(self, flexure, mechanism, rotational: float, translational: float):
         self.name, self.bodies = flexure.name, tuple(flexure.bodies)
-        self.n_internal = 0
         ref = mechanism.bodies
         self.rest = ref[self.bodies[1]].reference - ref[self.bodies[0]].reference
         k = np.array([translational, translational, rotational])
         self.H = np.block([[np.diag(k), -np.diag(k)], [-np.diag(k), np.diag(k)]])
-
-    def initial_internal(self) -> np.ndarray:
-        return np.zeros(0)
-
-    def internal_is_rotation(self) -> np.ndarray:
-        return np.zeros(0, bool)
 
     def evaluate(self, pose_a, pose_b, internal):
         d = np.concatenate([pose_a, pose_b]) - np.concatenate([np.zeros(3), [*self.rest, 0.0]])
