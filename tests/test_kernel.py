@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from builders import cantilever, tip_force
-from geometry import Arc, Force, LoadCase, Moment, Segment, parse_model
+from geometry import Arc, Force, LoadCase, Moment, Segment
+from reducedmodels.catalogue import parse_model
 from reducedmodels import (Connector, LoadControl, SolverSettings, System, build_system,
                            solve_path, trace)
 from reducedmodels.continuation import ArcLength, arc_dot
