@@ -37,8 +37,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from geometry import (Force, LoadCase, Material, Mechanism, Scene, Section,
-                      rotation)
+from geometry import Force, LoadCase, Material, Mechanism, Scene, Section, rotation
 from reducedmodels import LoadPath, SolverError, SolverSettings, build_system
 from reducedmodels.catalogue import ARCLENGTH, ModelSpec, parse_model
 from reducedmodels.continuation import limit_loads, solve_arclength
