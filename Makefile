@@ -28,6 +28,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_reduced.py
 	$(BIN)/python benchmarks/bench_beam_scaling.py
 	$(BIN)/python benchmarks/bench_continuum.py
+	$(BIN)/python benchmarks/bench_concurrency.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache

@@ -30,6 +30,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
+from .threads import limit_threads
+
 DENSE_LIMIT = 96     # above ~100 unknowns, multithreaded LAPACK stalls on a loaded 2-core machine
 BAND_LIMIT = 60      # banded LU beats SuperLU up to about this half-bandwidth: measured on the
                      # continuum meshes, b = 29 is 2x faster, b = 61 even, b = 117 2x slower
@@ -178,6 +180,7 @@ class TangentLayout:
                  kind: str | None = None):
         if kind not in (None, "dense", "banded", "sparse"):
             raise ValueError(f"tangent storage must be dense, banded or sparse, got {kind!r}")
+        limit_threads()               # once per process: small banded systems want 1 BLAS thread
         self.n, self.n_multipliers = n, n_multipliers
         rows, cols = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
         if kind == "dense" or (kind is None and n <= DENSE_LIMIT):

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -221,6 +222,10 @@ def build_parser() -> argparse.ArgumentParser:
         prog="flexval",
         description="Validate flexibility models of planar compliant mechanisms "
                     "(units: mm, N, N mm; angles in degrees on the command line and in files).")
+    p.add_argument("--blas-threads", metavar="N",
+                   help="threads of the BLAS/LAPACK pools (default: $FLEXVAL_BLAS_THREADS, else 1, "
+                        "which suits flexval's small banded systems; 0: leave them as the "
+                        "libraries set them up)")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     from reducedmodels.catalogue import expected_ids, families
 
@@ -307,8 +312,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``flexval`` console script; returns the exit code."""
+    from reducedmodels.threads import ENV_VARIABLE, RULE, request_threads
+
     args = build_parser().parse_args(argv)
     try:
+        try:
+            request_threads(args.blas_threads)
+        except ValueError:
+            if args.blas_threads is not None:
+                raise SceneError("<command line>", "--blas-threads", args.blas_threads, RULE) from None
+            raise SceneError("<environment>", ENV_VARIABLE, os.environ[ENV_VARIABLE], RULE) from None
         return args.func(args)
     except SceneError as exc:
         print(f"flexval: bad input: {exc}", file=sys.stderr)
