@@ -1,13 +1,14 @@
 """How the cost of reading and checking a scene grows with the number of flexures.
 
-Builds a valid open chain of n arcs (radius 1 mm, 120 deg, 3 mm apart, each
-pair joined by a rigid link) as parsed TOML data and times
+Builds a valid open chain of n arcs (radius 1 mm, 120 deg, apex up), each
+starting where the previous one ends (the body between them holds both ends
+at one point), as parsed TOML data and times
 :func:`geometry.scene.parse_scene` on it: field checks, end ownership, the
 body-graph walk, the overlap check (a bounding-box sweep, then polyline
 crossings of the candidate pairs), degenerate magnitudes and the structure
 check. Prints, per n, the median wall time over the repeats, the time per
-flexure and the number of flexure pairs the overlap check tests, against all
-n (n - 1) / 2 pairs.
+flexure and the number of flexure pairs the overlap check tests (neighbours'
+bounding boxes touch at the shared point: n - 1), against all n (n - 1) / 2.
 
 Usage::
 
@@ -27,11 +28,13 @@ from geometry.overlap import SAMPLES, candidate_pairs
 from geometry.scene import parse_scene
 
 SIZES = (10, 100, 1000)
-PITCH, RADIUS, WIDTH_DEG = 3.0, 1.0, 120.0      # mm, mm, deg
+RADIUS, WIDTH_DEG = 1.0, 120.0                            # mm, deg
+PITCH = 2.0 * RADIUS * math.sin(math.radians(WIDTH_DEG / 2))  # the chord, mm: ends meet
 
 
 def chain_scene(n: int) -> dict:
-    """Scene data of an open chain of n arcs along x: body k holds arc k's left end."""
+    """Scene data of an open chain of n arcs along x: body k holds arc k's left end,
+    which is also arc k-1's right end."""
     half = math.radians(WIDTH_DEG / 2)
     left = np.array([-RADIUS * math.sin(half), RADIUS * math.cos(half)])   # relative to the centre
     flexures = [{"name": f"e{k}", "bodies": [str(k), str(k + 1)], "center": [PITCH * k, 0.0],

@@ -302,11 +302,16 @@ def assemble(
                        for p in pins)
     _check_points_used(flexures, pins_built, ground, ground_points, body_points, tol, source)
     check_overlaps(flexures, source, tol)
-    bodies: dict[str, Body] = {}
-    for name in body_names:
-        pts = ([f.end_point_of(name) for f in flexures if name in f.bodies]
-               + [p.point for p in pins_built if name in p.bodies])
-        bodies[name] = Body(name, np.array(pts, dtype=float), is_ground=(name == ground))
+    points: dict[str, list[np.ndarray]] = {name: [] for name in body_names}
+    for f in flexures:                      # flexure ends first, then pin points
+        start, end = f.shape.end_points
+        points[f.start_body].append(start)
+        points[f.end_body].append(end)
+    for pin in pins_built:
+        for name in pin.bodies:
+            points[name].append(pin.point)
+    bodies = {name: Body(name, np.array(points[name], dtype=float), is_ground=(name == ground))
+              for name in body_names}
     mechanism = Mechanism(
         bodies=bodies,
         flexures=flexures,

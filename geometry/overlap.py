@@ -3,8 +3,9 @@
 Centre lines are sampled as polylines (``SAMPLES`` segments per flexure);
 pairs whose bounding boxes overlap (found by a sweep, so the check scales
 about linearly with the number of flexures) are tested for proper segment
-crossings, vectorised over all segment pairs. Crossings within ``tol`` of a point where both flexures meet the same
-body (a shared attachment) are allowed. An arc whose two ends come closer
+crossings, vectorised over the pairs of their segments that lie in the
+overlap of the two boxes. Crossings within ``tol`` of a point where both
+flexures meet the same body (a shared attachment) are allowed. An arc whose two ends come closer
 than its thickness h would have overlapping end faces as a solid. Lengths mm.
 """
 
@@ -21,10 +22,26 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
 
+def _segments_meeting(line: np.ndarray, lo: np.ndarray, hi: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """Start and end points of the segments of ``line`` whose bounding boxes meet [lo, hi], in order."""
+    a, b = line[:-1], line[1:]
+    keep = np.all((np.maximum(a, b) >= lo) & (np.minimum(a, b) <= hi), axis=1)
+    return a[keep], b[keep]
+
+
 def crossings(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Intersection points (k, 2) of polylines p (m+1, 2) and q (n+1, 2), proper crossings only."""
-    a, b = p[:-1, None, :], p[1:, None, :]
-    c, d = q[None, :-1, :], q[None, 1:, :]
+    """Intersection points (k, 2) of polylines p (m+1, 2) and q (n+1, 2), proper crossings only.
+
+    Only segments inside the overlap of the two polylines' bounding boxes can
+    cross, so the all-pairs test runs on those (for neighbours that share an
+    end, a few segments near it).
+    """
+    lo, hi = np.maximum(p.min(axis=0), q.min(axis=0)), np.minimum(p.max(axis=0), q.max(axis=0))
+    if np.any(lo > hi):
+        return np.empty((0, 2))
+    (a, b), (c, d) = _segments_meeting(p, lo, hi), _segments_meeting(q, lo, hi)
+    a, b, c, d = a[:, None, :], b[:, None, :], c[None, :, :], d[None, :, :]
     r, s = b - a, d - c
     den = _cross(r, s)
     with np.errstate(divide="ignore", invalid="ignore"):

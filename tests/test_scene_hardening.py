@@ -301,3 +301,51 @@ def test_mechanism_size_does_not_change():
     pts = np.vstack([f.shape.end_points for f in mech.flexures] + [mech.target_point[None]])
     d = pts[:, None, :] - pts[None, :, :]
     assert mech.size() == float(np.sqrt((d**2).sum(axis=-1)).max())
+
+
+# --- overlap check: the spatial index prunes nothing that can cross ------------------------
+
+def _random_polylines(seed: int, n: int) -> list[np.ndarray]:
+    rng = np.random.default_rng(seed)
+    starts = rng.uniform(-20.0, 20.0, size=(n, 1, 2))
+    return [s + np.cumsum(rng.normal(scale=1.5, size=(12, 2)), axis=0) for s in starts[:, 0][:, None]]
+
+
+@pytest.mark.parametrize("seed,n", [(0, 2), (1, 15), (2, 60), (3, 120)])
+def test_candidate_pairs_are_exactly_the_overlapping_bounding_boxes(seed, n):
+    from geometry.overlap import candidate_pairs
+
+    lines = _random_polylines(seed, n)
+    lo = [line.min(axis=0) for line in lines]
+    hi = [line.max(axis=0) for line in lines]
+    brute = [(i, j) for i in range(n) for j in range(i + 1, n)
+             if np.all(lo[i] <= hi[j]) and np.all(lo[j] <= hi[i])]
+    assert candidate_pairs(lines) == brute
+
+
+@pytest.mark.parametrize("seed", [4, 5, 6, 7])
+def test_crossings_restricted_to_the_box_overlap_find_every_crossing(seed):
+    from geometry.overlap import crossings
+
+    def all_pairs(p, q):     # the test on every pair of segments, no pruning
+        found = []
+        for a, b in zip(p[:-1], p[1:]):
+            for c, d in zip(q[:-1], q[1:]):
+                r, s = b - a, d - c
+                den = r[0] * s[1] - r[1] * s[0]
+                if den == 0:
+                    continue
+                t = ((c - a)[0] * s[1] - (c - a)[1] * s[0]) / den
+                u = ((c - a)[0] * r[1] - (c - a)[1] * r[0]) / den
+                if 0 < t < 1 and 0 < u < 1:
+                    found.append(a + t * r)
+        return np.array(found).reshape(-1, 2)
+
+    lines = _random_polylines(seed, 12)
+    total = 0
+    for i in range(len(lines)):
+        for j in range(i + 1, len(lines)):
+            expected = all_pairs(lines[i], lines[j])
+            np.testing.assert_allclose(crossings(lines[i], lines[j]), expected, atol=1e-12)
+            total += len(expected)
+    assert total > 0          # the random walks do cross, so the comparison means something
