@@ -3,7 +3,8 @@
 import pytest
 from threadpoolctl import threadpool_info
 
-from geometry import load_scene, parse_model
+from geometry import load_scene
+from reducedmodels.catalogue import parse_model
 from reducedmodels import threads
 from reducedmodels.models import run_reduced
 from validation.cli import main
