@@ -7,7 +7,7 @@ from . import families as _families  # noqa: F401  (registers beam, prbm, dcmm, 
 from .catalogue import Family, ModelSpec, Option, Resolution, family, parse_model, register
 from .connector import Connector
 from .core import SolverError, SolverSettings, System
-from .loadpath import LoadPath, write_results
+from .loadpath import LoadPath
 from .loads import Loads
 from .models import build_system, run_reduced
 from .recorder import PathRecorder, solve_path
@@ -16,4 +16,4 @@ from .tracer import LoadControl, PathPoint, trace
 __all__ = ["Connector", "Family", "LoadControl", "LoadPath", "Loads", "ModelSpec", "Option",
            "PathPoint", "PathRecorder", "Resolution", "SolverError", "SolverSettings", "System",
            "build_system", "family", "parse_model", "register", "run_reduced", "solve_path",
-           "trace", "write_results"]
+           "trace"]

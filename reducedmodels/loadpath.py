@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -99,11 +98,3 @@ class LoadPath:
     def from_json(cls, text: str) -> "LoadPath":
         """Inverse of :meth:`to_json`."""
         return cls.from_dict(json.loads(text))
-
-
-def write_results(path: str | Path, scene: str, paths: list[LoadPath]) -> None:
-    """Write ``{"scene": ..., "results": [...]}`` JSON (the ``flexval run --json`` format)."""
-    Path(path).write_text(
-        json.dumps({"scene": scene, "results": [p.to_dict() for p in paths]}, indent=1),
-        encoding="utf-8",
-    )

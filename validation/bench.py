@@ -8,7 +8,6 @@ the time is the mean over load cases of the median wall time per load path.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from geometry import Scene
@@ -17,6 +16,7 @@ from reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
 from .cache import ResultCache
 from .campaign import Progress, run_campaign
 from .compare import errors
+from .outputs import output_path, write_json, write_text
 
 #: the reduced models of the study, every resolution of the paper's range and beyond
 SWEEP_MODELS = (*(f"beam:{n}" for n in (5, 10, 20, 40, 100, 200, 400)),
@@ -67,11 +67,16 @@ def runtime_vs_error(scene: Scene, reference: ModelSpec, specs: list[ModelSpec],
     return rows, failures
 
 
-def write_bench(scene: Scene, rows: list[dict], reference: str, out: Path) -> None:
-    """Table (Markdown), plot (PNG) and JSON of a runtime-versus-error study in ``out``."""
+def write_bench(scene: Scene, rows: list[dict], reference: str, out: Path) -> Path:
+    """Table (Markdown), plot (PNG) and JSON of a runtime-versus-error study in ``out``.
+
+    The files are ``bench_<scene>.md/.png/.json`` with the scene name made
+    safe (:func:`validation.outputs.safe_name`); returns the Markdown path.
+    """
     from .figures import pareto_front, runtime_vs_error as plot
 
     out.mkdir(parents=True, exist_ok=True)
+    stem = f"bench_{scene.name}"
     front = set(pareto_front([(r["seconds"], r["error"]) for r in rows]))
     lines = [f"# Runtime versus error: {scene.name}", "",
              f"Reference: `{reference}`. Error: largest over load cases of the path "
@@ -81,10 +86,9 @@ def write_bench(scene: Scene, rows: list[dict], reference: str, out: Path) -> No
     for k, r in enumerate(rows):
         lines.append(f"| {r['model']} | {r['seconds']:.4f} | {r['error']:.3g} | "
                      f"{'yes' if k in front else ''} |")
-    plot(rows, f"{scene.name}: runtime vs error (reference {reference})",
-         out / f"bench_{scene.name}.png")
-    lines += ["", f"![runtime vs error](bench_{scene.name}.png)", ""]
-    (out / f"bench_{scene.name}.md").write_text("\n".join(lines), encoding="utf-8")
-    (out / f"bench_{scene.name}.json").write_text(
-        json.dumps({"scene": scene.name, "reference": reference, "rows": rows}, indent=1),
-        encoding="utf-8")
+    png = plot(rows, f"{scene.name}: runtime vs error (reference {reference})",
+               output_path(out, stem, ".png"))
+    lines += ["", f"![runtime vs error]({png})", ""]
+    write_json(output_path(out, stem, ".json"), {"scene": scene.name, "reference": reference,
+                                             "rows": rows})
+    return write_text(output_path(out, stem, ".md"), "\n".join(lines))

@@ -1,21 +1,55 @@
 """The ``flexval`` command line.
 
 Exit codes: 0 success, 2 bad input (message on stderr, no traceback),
-3 solver failure (message with the last converged load level).
+3 solver failure (message with the last converged load level), 4 an output
+file could not be written although it was checked before the work (device
+full, I/O error, folder removed meanwhile; the message names the file).
+
+Every argument is checked before any work: numeric options against their
+ranges, and every output path (``--json``, ``-o``, ``--out``, ``--out-dir``)
+for writability (:mod:`validation.outputs`); such errors exit with 2.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import sys
-from pathlib import Path
+import warnings
 
 from geometry import SceneError, load_scene
 
-EXIT_OK, EXIT_INPUT, EXIT_SOLVER = 0, 2, 3
+from .outputs import OutputError, check_file, check_folder, output_path, write_json, write_text
+
+EXIT_OK, EXIT_INPUT, EXIT_SOLVER, EXIT_OUTPUT = 0, 2, 3, 4
+COMMAND_LINE = "<command line>"
+MAX_REPEATS = 1000
+"""Most timing repeats per load path (a median of more adds nothing but time)."""
+
+
+def _int_in(low: int, high: int):
+    """argparse type: an integer from ``low`` to ``high`` (checked while parsing, exit 2)."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"must be from {low} to {high}, got {value}")
+        return value
+    return parse
+
+
+def _check_load_levels(levels: int | None) -> None:
+    """``--levels`` of ``run``: 2 .. the solver's sub-step cap (one sub-step per increment)."""
+    from reducedmodels.core import SolverSettings
+
+    cap = SolverSettings().max_substeps
+    if levels is not None and not 2 <= levels <= cap:
+        raise SceneError(COMMAND_LINE, "--levels", levels,
+                         f"must be from 2 to {cap} (each of the levels - 1 load increments "
+                         f"takes at least one of the solver's {cap} sub-steps)")
 
 
 def _parse_models(texts, source: str, field: str) -> list:
@@ -28,27 +62,32 @@ def _parse_models(texts, source: str, field: str) -> list:
 def _cmd_info(args: argparse.Namespace) -> int:
     from .info import format_info, scene_info
 
+    json_path = check_file(args.json, "--json") if args.json else None
     info = scene_info(load_scene(args.scene))
     print(format_info(info))
-    if args.json:
-        Path(args.json).write_text(json.dumps(info, indent=1), encoding="utf-8")
+    if json_path:
+        write_json(json_path, info)
     return EXIT_OK
 
 
 def _cmd_plot(args: argparse.Namespace) -> int:
     from .drawing import plot_mechanism
 
+    output = check_file(args.output, "--output")
     scene = load_scene(args.scene)
-    plot_mechanism(scene, args.output)
-    print(f"wrote {args.output}")
+    plot_mechanism(scene, output)
+    print(f"wrote {output}")
     return EXIT_OK
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from reducedmodels import SolverError, write_results
+    from reducedmodels import SolverError
 
+    from .cache import ResultCache, result_key
     from .run import run_model
 
+    _check_load_levels(args.levels)
+    json_path = check_file(args.json, "--json") if args.json else None
     scene = load_scene(args.scene)
     from reducedmodels.catalogue import FIELDS, families
 
@@ -59,13 +98,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
         raise SceneError(scene.source, "--model", None,
                          "no model requested (give --model or request.models in the scene)")
     cases = [scene.load_case(n) for n in args.load_case] if args.load_case else scene.load_cases
-    if args.levels is not None and not 2 <= args.levels <= 100_000:
-        raise SceneError("<command line>", "--levels", args.levels, "must be from 2 to 100000")
     fields = scene.outputs & {"vtu", "png"}
     if fields and not any(sp.model_family.has(FIELDS) for sp in specs):
         with_fields = [f.name for f in families() if f.has(FIELDS)]
         raise SceneError(scene.source, "request.outputs", sorted(fields),
                          f"VTU and PNG stress fields come from these models only: {with_fields}")
+    out_dir = check_folder(args.out_dir, "--out-dir") if fields else None
+    cache = ResultCache(enabled=args.cache)
     results, status = [], EXIT_OK
     w = max(14, *(len(sp.id) for sp in specs))
     print(f"{'model':<{w}} {'case':<6} {'load':>11} {'dx mm':>10} {'dy mm':>10} {'|d| mm':>10} "
@@ -74,15 +113,22 @@ def _cmd_run(args: argparse.Namespace) -> int:
         for case in cases:
             extra = {}
             if spec.model_family.has(FIELDS) and fields:
-                out_dir = Path(args.out_dir)
-                out_dir.mkdir(parents=True, exist_ok=True)
                 extra["vtu_dir"] = out_dir
                 if "png" in fields:
-                    extra["png"] = out_dir / f"{scene.name}_{case.name}_{spec.id.replace(':', '')}.png"
+                    stem = f"{scene.name}_{case.name}_{spec.id.replace(':', '')}"
+                    extra["png"] = output_path(out_dir, stem, ".png")
+            record = {"record_poses": "poses" in scene.outputs,
+                      "record_shapes": "shape" in scene.outputs}
+            key = result_key(scene, spec.id, case.name, args.levels, record) \
+                if cache.enabled and not extra else None      # field outputs need the solve
+            lp = cache.get(key) if key else None
             try:
-                lp = run_model(scene, spec, case, args.levels,
-                               record_poses="poses" in scene.outputs,
-                               record_shapes="shape" in scene.outputs, **extra)
+                if lp is None:
+                    lp = run_model(scene, spec, case, args.levels, **record, **extra)
+                    if key:
+                        cache.put(key, lp)
+                else:
+                    lp.stats["cached"] = True
             except SolverError as exc:
                 print(f"flexval: solver failure: {exc}", file=sys.stderr)
                 if exc.path is not None:
@@ -94,8 +140,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
                   f"{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} {lp.displacement[-1]:>10.4f} "
                   f"{math.degrees(lp.rotation[-1]):>9.3f} "
                   f"{lp.stats.get('newton_iterations', 0):>6} {lp.seconds:>9.4f}")
-    if args.json:
-        write_results(args.json, scene.name, results)
+    if json_path:
+        write_json(json_path, {"scene": scene.name, "results": [p.to_dict() for p in results]})
     return status
 
 
@@ -105,19 +151,18 @@ def _parse_levels(text: str, spec) -> list[int]:
     N); a comma list is taken as is."""
     res = spec.model_family.resolution
     try:
-        if ":" in text:
-            lo, hi = (int(x) for x in text.split(":"))
-            vals = res.series(lo, hi)
-        else:
-            vals = [int(x) for x in text.split(",")]
+        vals = [int(x) for x in text.split(":" if ":" in text else ",")]
     except ValueError:
-        raise SceneError("<command line>", "--levels", text,
+        raise SceneError(COMMAND_LINE, "--levels", text,
                          "expected LO:HI or a comma-separated list of integers") from None
+    if ":" in text and len(vals) != 2:
+        raise SceneError(COMMAND_LINE, "--levels", text, "expected LO:HI")
+    # range first: the series is built only from checked ends (a doubling from 0 never ends)
     if not vals or vals != sorted(set(vals)) or not res.low <= min(vals) <= max(vals) <= res.high:
-        raise SceneError("<command line>", "--levels", text,
+        raise SceneError(COMMAND_LINE, "--levels", text,
                          f"resolutions must increase, within {res.low}..{res.high} for the "
                          f"{res.name} of '{spec.family}' ({res.meaning})")
-    return vals
+    return res.series(*vals) if ":" in text else vals
 
 
 def _cmd_converge(args: argparse.Namespace) -> int:
@@ -125,7 +170,6 @@ def _cmd_converge(args: argparse.Namespace) -> int:
 
     from .convergence import format_study, study
 
-    scene = load_scene(args.scene)
     from reducedmodels.catalogue import families
 
     spec, = _parse_models([args.model], "<command line>", "--model")
@@ -135,6 +179,8 @@ def _cmd_converge(args: argparse.Namespace) -> int:
         raise SceneError("<command line>", "--model", args.model,
                          f"convergence studies need a model with a resolution: {refinable}")
     resolutions = _parse_levels(args.levels or "{}:{}".format(*res.study), spec)
+    json_path = check_file(args.json, "--json") if args.json else None
+    scene = load_scene(args.scene)
     cases = [scene.load_case(n) for n in args.load_case] if args.load_case else scene.load_cases
     out = []
     for case in cases:
@@ -146,21 +192,21 @@ def _cmd_converge(args: argparse.Namespace) -> int:
         print(format_study(st) + "\n")
         out.append({"family": st.family, "load_case": st.load_case, "ratio": st.ratio,
                     "rows": st.rows, "summary": st.summary})
-    if args.json:
-        Path(args.json).write_text(json.dumps({"scene": scene.name, "studies": out}, indent=1),
-                                   encoding="utf-8")
+    if json_path:
+        write_json(json_path, {"scene": scene.name, "studies": out})
     return EXIT_OK
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
     from .report import DEFAULT_MODELS, build_report
 
+    out = check_folder(args.out, "--out")
     scenes = args.scene or ["open_chain", "closed_chain"]
     for name in scenes:
         load_scene(name)        # bad input fails before any work
     models = args.model or list(DEFAULT_MODELS)
     _parse_models(models, "<command line>", "--model")
-    path = build_report(scenes, Path(args.out), models, repeats=args.repeats,
+    path = build_report(scenes, out, models, repeats=args.repeats,
                         use_cache=not args.no_cache, progress=not args.quiet,
                         bench=not args.no_bench, converge=not args.no_converge)
     print(f"wrote {path}")
@@ -171,21 +217,22 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from .bench import runtime_vs_error, sweep_specs, write_bench
     from .cache import ResultCache
 
+    out = check_folder(args.out, "--out")
     scene = load_scene(args.scene)
     ref, = _parse_models([args.reference], "<command line>", "--reference")
     rows, failures = runtime_vs_error(scene, ref, sweep_specs(ref), args.repeats,
                                       ResultCache(enabled=not args.no_cache), not args.quiet)
     for msg in failures:
         print(f"flexval: solver failure: {msg}", file=sys.stderr)
-    out = Path(args.out)
-    write_bench(scene, rows, ref.id, out)
-    print((out / f"bench_{scene.name}.md").read_text(encoding="utf-8"))
+    md = write_bench(scene, rows, ref.id, out)
+    print(md.read_text(encoding="utf-8"))
     return EXIT_OK
 
 
 def _cmd_stress(args: argparse.Namespace) -> int:
     from .stress import stress_report, write_stress
 
+    out = check_folder(args.out, "--out")
     scene = load_scene(args.scene)
     models = args.model or ["ee", "dcmm:1", "dcmm:2", "prbm", "beam:20"]
     specs = _parse_models(models, "<command line>", "--model")
@@ -195,7 +242,7 @@ def _cmd_stress(args: argparse.Namespace) -> int:
             print(line, file=sys.stderr, flush=True)
 
     report = stress_report(scene, specs, quick=args.quick, progress=progress)
-    md, _ = write_stress(report, args.out)
+    md, _ = write_stress(report, out)
     print(md.read_text(encoding="utf-8"))
     if args.sweeps:
         from .sweeps import ARC_ANGLES, SLENDERNESS, format_sweep, sweep
@@ -203,15 +250,15 @@ def _cmd_stress(args: argparse.Namespace) -> int:
         text = "\n".join(format_sweep(sweep(pts, models, progress=progress), title) for pts, title
                          in ((SLENDERNESS, "Slenderness h/r (120 deg arc, vs continuum:0)"),
                              (ARC_ANGLES, "Arc angle (h/r = 1/30, vs continuum:0)")))
-        path = Path(args.out) / "sweeps.md"
-        path.write_text("# Geometry sweeps of a cantilever flexure\n\n" + text, encoding="utf-8")
+        write_text(out / "sweeps.md", "# Geometry sweeps of a cantilever flexure\n\n" + text)
         print(text)
     return EXIT_OK
 
 
 def _campaign_options(q: argparse.ArgumentParser) -> None:
     """Options shared by the commands that run many models: timing, cache, progress."""
-    q.add_argument("--repeats", type=int, default=3, help="timing repeats (median; default 3)")
+    q.add_argument("--repeats", type=_int_in(1, MAX_REPEATS), default=3,
+                   help=f"timing repeats, 1 to {MAX_REPEATS} (median; default 3)")
     q.add_argument("--no-cache", action="store_true", help="recompute everything")
     q.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -257,6 +304,10 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--levels", type=int, metavar="N",
                    help="number of equally spaced load levels from 0 (default: the scene's, 11)")
     q.add_argument("--json", metavar="PATH", help="write all LoadPaths as JSON")
+    q.add_argument("--cache", action="store_true",
+                   help="reuse and store results in the result cache ($FLEXVAL_CACHE or "
+                        "~/.cache/flexval; default: always compute, so timings are fresh; "
+                        "runs that write VTU/PNG fields always compute)")
     q.add_argument("--out-dir", default="flexval_out", metavar="DIR",
                    help="folder for the continuum's VTU/PNG outputs when the scene requests "
                         "them (request.outputs = [\"vtu\", \"png\"]; default flexval_out)")
@@ -310,11 +361,23 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings as one plain line on stderr (no source location): they are for the user."""
+    print(f"flexval: warning: {message}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``flexval`` console script; returns the exit code."""
+    args = build_parser().parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        return _dispatch(args)
+
+
+def _dispatch(args: argparse.Namespace) -> int:
+    """Run the chosen command; bad input, solver and output failures become exit codes."""
     from reducedmodels.threads import ENV_VARIABLE, RULE, request_threads
 
-    args = build_parser().parse_args(argv)
     try:
         try:
             request_threads(args.blas_threads)
@@ -326,6 +389,9 @@ def main(argv: list[str] | None = None) -> int:
     except SceneError as exc:
         print(f"flexval: bad input: {exc}", file=sys.stderr)
         return EXIT_INPUT
+    except OutputError as exc:
+        print(f"flexval: output not written: {exc}", file=sys.stderr)
+        return EXIT_OUTPUT
 
 
 if __name__ == "__main__":

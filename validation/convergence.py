@@ -25,7 +25,13 @@ from .run import run_model
 
 @dataclass
 class ConvergenceStudy:
-    """Results of one refinement study of one model family on one load case."""
+    """Results of one refinement study of one model family on one load case.
+
+    ``ratio`` is the constant refinement ratio, NaN when the resolutions are
+    not refined by one constant ratio (a comma list such as ``5,7,20``) or
+    fewer than two are given; then no order or Richardson value is computed,
+    and JSON outputs write it as ``null`` (strict JSON has no NaN).
+    """
 
     family: str
     load_case: str

@@ -15,6 +15,8 @@ import numpy as np  # noqa: E402
 
 from geometry import Force, Moment, Scene  # noqa: E402
 
+from .outputs import save_figure  # noqa: E402
+
 
 def draw_mechanism(scene: Scene, ax=None, load_case: str | None = None):
     """Draw flexures, rigid links, body labels, target point and load arrows on ``ax``."""
@@ -79,5 +81,7 @@ def plot_mechanism(scene: Scene, path: str | Path) -> None:
     fig, ax = plt.subplots(figsize=(7, 7))
     draw_mechanism(scene, ax)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    try:
+        save_figure(fig, path, dpi=120)
+    finally:
+        plt.close(fig)

@@ -17,6 +17,7 @@ from geometry.kinematics import place_points  # noqa: E402
 from reducedmodels import LoadPath  # noqa: E402
 
 from .drawing import draw_mechanism  # noqa: E402
+from .outputs import save_figure  # noqa: E402
 
 #: fixed style per model family so models stay distinguishable across figures
 _STYLE = {
@@ -42,8 +43,10 @@ def style(model: str) -> dict:
 
 def _save(fig, path: Path) -> str:
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        save_figure(fig, path, dpi=110)
+    finally:
+        plt.close(fig)
     return path.name
 
 

@@ -13,7 +13,6 @@ the output folder. Every number in the tables is computed from the LoadPaths in
 
 from __future__ import annotations
 
-import json
 import math
 import platform
 from dataclasses import dataclass, field
@@ -30,6 +29,7 @@ from .cache import ResultCache, code_version
 from .campaign import Progress, run_campaign
 from .compare import errors, paper_percent, paper_seconds
 from .convergence import study
+from .outputs import output_path, write_json, write_text
 from .run import run_model
 
 DEFAULT_MODELS = ("continuum", "beam:100", "beam:20", "prbm", "dcmm:1", "dcmm:2", "dcmm:3", "ee")
@@ -239,10 +239,11 @@ def _scene_section(res: SceneResults, out: Path, continuum_id: str | None) -> li
     name = sc.name
     from .drawing import plot_mechanism
 
-    plot_mechanism(sc, out / f"{name}_mechanism.png")
+    mechanism_png = output_path(out, f"{name}_mechanism", ".png")
+    plot_mechanism(sc, mechanism_png)
     mech = sc.mechanism
     L = [f"## {name}", "", sc.description, "",
-         f"![{name}]({name}_mechanism.png)", "",
+         f"![{name}]({mechanism_png.name})", "",
          f"E = {mech.material.youngs_modulus:g} MPa, nu = {mech.material.poisson_ratio:g}; "
          + "; ".join(f"{f.name}: b = {f.section.depth:g} mm, h = {f.section.thickness:g} mm, "
                      f"L = {f.shape.length:.3f} mm" for f in mech.flexures) + ".", ""]
@@ -269,7 +270,7 @@ def _scene_section(res: SceneResults, out: Path, continuum_id: str | None) -> li
     L += ["### Load paths", ""]
     for c in res.cases:
         paths = {m: res.paths[(m, c)] for m in res.models if (m, c) in res.paths}
-        fig = figures.load_paths(sc, c, paths, out / f"{name}_{c}_paths.png")
+        fig = figures.load_paths(sc, c, paths, output_path(out, f"{name}_{c}_paths", ".png"))
         L += [f"![{name} {c}]({fig})", ""]
     rec = [m for m in (continuum_id, PAPER_REFERENCE) if m and (m, res.cases[0]) in res.paths
            and res.paths[(m, res.cases[0])].poses]
@@ -278,25 +279,27 @@ def _scene_section(res: SceneResults, out: Path, continuum_id: str | None) -> li
         for c in res.cases:
             lp = res.paths.get((rec[-1], c))
             if lp and lp.poses and lp.shapes:
-                L += [f"![{c}]({figures.deformed(sc, c, lp, out / f'{name}_{c}_deformed.png')})",
-                      ""]
+                png = output_path(out, f"{name}_{c}_deformed", ".png")
+                L += [f"![{c}]({figures.deformed(sc, c, lp, png)})", ""]
         if len(mech.flexures) > 3:
             L += ["Relative rotations of the links (paper Fig. 15):", ""]
             for c in res.cases:
                 lp = res.paths.get((rec[-1], c))
                 if lp and lp.poses:
-                    f = figures.relative_rotations(sc, c, lp, out / f"{name}_{c}_relrot.png")
+                    png = output_path(out, f"{name}_{c}_relrot", ".png")
+                    f = figures.relative_rotations(sc, c, lp, png)
                     L += [f"![{c}]({f})", ""]
     if res.bench_rows:
-        write_bench(sc, res.bench_rows, res.bench_reference, out)
+        md = write_bench(sc, res.bench_rows, res.bench_reference, out)
         L += ["### Runtime versus error", "",
               f"Every model and resolution against `{res.bench_reference}`; details in "
-              f"[bench_{name}.md](bench_{name}.md).", "",
-              f"![runtime vs error](bench_{name}.png)", ""]
+              f"[{md.name}]({md.name}).", "",
+              f"![runtime vs error]({md.with_suffix('.png').name})", ""]
     for st in res.convergence:
         fig = figures.convergence(st.rows, {k: v["extrapolated"] for k, v in st.summary.items()},
                                   f"{name} {st.load_case}: {st.family} convergence",
-                                  out / f"{name}_{st.load_case}_{st.family}_convergence.png")
+                                  output_path(out, f"{name}_{st.load_case}_{st.family}_convergence",
+                                              ".png"))
         L += [f"### {st.family} convergence ({st.load_case})", "",
               "| model | unknowns | seconds | disp. (mm) | rotation (deg) |",
               "|---|---:|---:|---:|---:|"]
@@ -367,13 +370,13 @@ def build_report(scene_names: list[str], out: Path, models: list[str] | None = N
     for res in results:
         lines += _scene_section(res, out, continuum_id)
     lines += DISCUSSION
-    (out / "report.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_text(out / "report.md", "\n".join(lines) + "\n")
     dump = {"code_version": code_version(), "scenes": {
         r.scene.name: {"results": [lp.to_dict() for lp in r.paths.values()],
                        "failures": r.failures, "bench": r.bench_rows}
         for r in results}}
-    (out / "results.json").write_text(json.dumps(dump, indent=1), encoding="utf-8")
+    write_json(out / "results.json", dump)
     refs = [PAPER_REFERENCE] + ([continuum_id] if continuum_id else [])
     gates = {r.scene.name: {ref: r.error_table(ref) for ref in refs} for r in results}
-    (out / "gates.json").write_text(json.dumps(gates, indent=1), encoding="utf-8")
+    write_json(out / "gates.json", gates)
     return out / "report.md"

@@ -29,8 +29,6 @@ Units: mm, N, N mm, rad (the metre variant is internal to (c)).
 from __future__ import annotations
 
 import dataclasses
-import json
-import math
 import time
 from pathlib import Path
 from typing import Callable, Sequence
@@ -43,6 +41,7 @@ from reducedmodels.catalogue import ARCLENGTH, ModelSpec, parse_model
 from reducedmodels.continuation import limit_loads, solve_arclength
 
 from .compare import errors
+from .outputs import output_path, write_json, write_text
 from .run import run_model
 
 AMPLIFICATIONS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
@@ -363,23 +362,10 @@ def format_markdown(report: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _json_safe(x):
-    """Non-finite floats become None (strict JSON has no NaN or Infinity)."""
-    if isinstance(x, float):
-        return x if math.isfinite(x) else None
-    if isinstance(x, dict):
-        return {k: _json_safe(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_json_safe(v) for v in x]
-    return x
-
-
 def write_stress(report: dict, out_dir: str | Path) -> tuple[Path, Path]:
     """Write ``stress_<scene>.md`` and ``stress_<scene>.json`` into ``out_dir`` (created)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    md = out / f"stress_{report['scene']}.md"
-    js = out / f"stress_{report['scene']}.json"
-    md.write_text(format_markdown(report), encoding="utf-8")
-    js.write_text(json.dumps(_json_safe(report), indent=1, allow_nan=False), encoding="utf-8")
-    return md, js
+    stem = f"stress_{report['scene']}"
+    md = write_text(output_path(out, stem, ".md"), format_markdown(report))
+    return md, write_json(output_path(out, stem, ".json"), report)

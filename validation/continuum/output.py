@@ -15,6 +15,8 @@ from typing import Sequence
 
 import numpy as np
 
+from geometry.files import atomic_path
+
 from .connector import ContinuumConnector
 from .material import out_of_plane
 
@@ -78,7 +80,8 @@ def write_vtu(path: str | Path, conns: Sequence[ContinuumConnector],
         cell_data={"flexure": [np.concatenate(flex)]})
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    mesh.write(path)
+    with atomic_path(path) as tmp:
+        mesh.write(tmp, file_format="vtu")
     return path
 
 
@@ -100,6 +103,9 @@ def render_png(vtu: str | Path, png: str | Path, title: str = "") -> Path:
         plotter.view_xy()
         png = Path(png)
         png.parent.mkdir(parents=True, exist_ok=True)
-        plotter.screenshot(str(png))
-        plotter.close()
+        try:
+            with atomic_path(png) as tmp:
+                plotter.screenshot(str(tmp))
+        finally:
+            plotter.close()
     return png

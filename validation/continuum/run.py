@@ -86,9 +86,12 @@ def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None
     if vtu_dir is not None or png is not None:
         from .output import render_png, write_vtu
 
-        name = f"{scene + '_' if scene else ''}{case.name}_continuum{level}.vtu"
+        from ..outputs import output_path
+
+        stem = f"{scene + '_' if scene else ''}{case.name}_continuum{level}"
         folder = Path(vtu_dir) if vtu_dir is not None else Path(png).parent
-        vtu = write_vtu(folder / name, system.connectors, system.local_states(full_load.state))
+        vtu = write_vtu(output_path(folder, stem, ".vtu"), system.connectors,
+                        system.local_states(full_load.state))
         if png is not None:
             render_png(vtu, png, f"{scene} {case.name} {model}")
     return lp
