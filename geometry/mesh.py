@@ -37,7 +37,12 @@ the face's segment within a tolerance); conversion to any FE library is
 done from the plain arrays here, not through a mesh file's tags.
 
 Meshes are cached on disk (``$FLEXVAL_CACHE/meshes`` or
-``~/.cache/flexval/meshes``) under a hash of everything that defines them.
+``~/.cache/flexval/meshes``, see :func:`geometry.files.cache_dir`) under a
+hash of the exact values that define them (``float.hex``). Each entry is an
+``.npz`` written atomically under a unique temporary name, with a SHA-256
+checksum of its arrays and its key; an entry that is truncated, empty,
+foreign or inconsistent with its mesh level is discarded with a
+:class:`geometry.files.CacheWarning` and the mesh is rebuilt.
 Nothing here knows about a solver. Units: mm, rad.
 """
 
@@ -46,8 +51,8 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
-import tempfile
+import warnings
+import zipfile
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -55,6 +60,7 @@ from typing import Iterator
 
 import numpy as np
 
+from .files import CacheWarning, atomic_path, cache_dir
 from .shapes import Arc, FlexureShape
 
 MESH_VERSION = 2
@@ -67,6 +73,11 @@ ASPECT_RATIO = 1.0
 """Element length along the centre line over element size across the thickness."""
 
 MAX_LEVEL = 8
+
+CACHE_FORMAT = 2
+"""Layout of a cached mesh file (2: with a checksum); part of the key."""
+
+_ARRAYS = ("nodes", "elements", "start_face", "end_face", "centre_line")
 
 # quad9 node order (Gmsh and meshio): corners 0-3 counterclockwise, then
 # mid-edge nodes of edges 0-1, 1-2, 2-3, 3-0, then the centre.  Natural
@@ -133,15 +144,18 @@ def _key(shape: FlexureShape, thickness: float, level: int) -> str:
         desc = {"kind": "segment", "start": list(map(float.hex, map(float, shape.start))),
                 "end": list(map(float.hex, map(float, shape.end)))}
     desc.update(h=float(thickness).hex(), level=level, order=ELEMENT_ORDER,
-                aspect=ASPECT_RATIO, version=MESH_VERSION)
+                aspect=ASPECT_RATIO, version=MESH_VERSION, cache_format=CACHE_FORMAT)
     return hashlib.sha256(json.dumps(desc, sort_keys=True).encode()).hexdigest()[:24]
 
 
-def cache_dir() -> Path:
-    """Directory of cached meshes: ``$FLEXVAL_CACHE/meshes`` or ``~/.cache/flexval/meshes``."""
-    root = os.environ.get("FLEXVAL_CACHE")
-    base = Path(root) if root else Path.home() / ".cache" / "flexval"
-    return base / "meshes"
+def _checksum(key: str, arrays: dict[str, np.ndarray]) -> str:
+    """SHA-256 of the key and every array's dtype, shape and bytes."""
+    h = hashlib.sha256(key.encode())
+    for name in _ARRAYS:
+        a = np.ascontiguousarray(arrays[name])
+        h.update(f"{name}:{a.dtype.str}:{a.shape}".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
 
 
 def mesh_flexure(shape: FlexureShape, thickness: float, level: int,
@@ -163,11 +177,13 @@ def mesh_flexure(shape: FlexureShape, thickness: float, level: int,
     if thickness >= shape.max_thickness:
         raise ValueError(f"thickness {thickness} must be smaller than the diameter "
                          f"{shape.max_thickness}")
-    path = cache_dir() / f"{_key(shape, thickness, level)}.npz"
-    if use_cache and path.is_file():
-        with np.load(path) as z:
-            return FlexureMesh(z["nodes"], z["elements"], z["start_face"], z["end_face"],
-                               z["centre_line"], level, n_t, n_l)
+    key = _key(shape, thickness, level)
+    root = cache_dir() if use_cache else None
+    path = root / "meshes" / f"{key}.npz" if root is not None else None
+    if path is not None:
+        cached = _load(path, key, level, n_t, n_l)
+        if cached is not None:
+            return cached
     nodes, elements, faces = _gmsh_band(shape, thickness, n_t, n_l)
     if isinstance(shape, Arc):
         nodes = _snap_polar(nodes, elements, shape)
@@ -176,18 +192,58 @@ def mesh_flexure(shape: FlexureShape, thickness: float, level: int,
                   for k in (0, 1))
     centre = _centre_line(nodes, shape, thickness, 2 * n_l + 1)
     mesh = FlexureMesh(nodes, elements, start, end, centre, level, n_t, n_l)
-    if use_cache:
-        _save(path, mesh)
+    if path is not None:
+        _save(path, key, mesh)
     return mesh
 
 
-def _save(path: Path, mesh: FlexureMesh) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
-    with os.fdopen(fd, "wb") as fh:
-        np.savez(fh, nodes=mesh.nodes, elements=mesh.elements, start_face=mesh.start_face,
-                 end_face=mesh.end_face, centre_line=mesh.centre_line)
-    os.replace(tmp, path)
+def _load(path: Path, key: str, level: int, n_t: int, n_l: int) -> FlexureMesh | None:
+    """The cached mesh at ``path``, or None (a damaged entry is discarded with a warning)."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {name: z[name] for name in _ARRAYS}
+            stored = str(z["checksum"])
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+        return _discard(path, f"unreadable ({type(exc).__name__})")
+    if stored != _checksum(key, arrays):
+        return _discard(path, "checksum mismatch")
+    mesh = FlexureMesh(*(arrays[name] for name in _ARRAYS), level, n_t, n_l)
+    if not _consistent(mesh):
+        return _discard(path, f"not a level-{level} mesh of {n_t} x {n_l} elements")
+    return mesh
+
+
+def _consistent(mesh: FlexureMesh) -> bool:
+    """Array shapes, dtypes and index ranges match a structured quad9 mesh of its divisions."""
+    n_nodes = (2 * mesh.n_t + 1) * (2 * mesh.n_l + 1)
+    indices = (mesh.elements, mesh.start_face, mesh.end_face, mesh.centre_line)
+    return (mesh.nodes.shape == (n_nodes, 2) and mesh.nodes.dtype == np.float64
+            and bool(np.all(np.isfinite(mesh.nodes)))
+            and mesh.elements.shape == (mesh.n_t * mesh.n_l, 9)
+            and mesh.start_face.shape == mesh.end_face.shape == (2 * mesh.n_t + 1,)
+            and mesh.centre_line.shape == (2 * mesh.n_l + 1,)
+            and all(np.issubdtype(a.dtype, np.integer) and a.size and 0 <= a.min()
+                    and a.max() < n_nodes for a in indices))
+
+
+def _discard(path: Path, reason: str) -> None:
+    warnings.warn(f"cached mesh {path} discarded ({reason}); rebuilding it", CacheWarning,
+                  stacklevel=3)
+    path.unlink(missing_ok=True)
+    return None
+
+
+def _save(path: Path, key: str, mesh: FlexureMesh) -> None:
+    """Store ``mesh`` atomically with its checksum (a failure only warns: caching is optional)."""
+    arrays = {name: getattr(mesh, name) for name in _ARRAYS}
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, checksum=np.array(_checksum(key, arrays)), **arrays)
+    except OSError as exc:
+        warnings.warn(f"mesh not cached: {exc}", CacheWarning, stacklevel=3)
 
 
 @contextmanager

@@ -1,27 +1,41 @@
-"""On-disk cache of LoadPaths, keyed by everything that determines them.
+"""On-disk cache of LoadPaths, keyed by the exact values that determine them.
 
-The key hashes the scene's mechanism and load case (their full dataclass
-representation), the model id and options, the number of levels, what is
-recorded, and the code version: a hash of the source of the ``geometry``,
-``reducedmodels`` and ``validation`` packages, so any code change
-invalidates the cache. Location: ``$FLEXVAL_CACHE`` or ``~/.cache/flexval``.
+The key hashes the scene's name, its mechanism and load case, the model id
+and options, the number of levels, what is recorded, and the code version (a
+hash of the source of the ``geometry``, ``reducedmodels`` and ``validation``
+packages, so any code change invalidates the cache). Numbers enter the key
+exactly: floats as ``float.hex``, arrays by their dtype, shape and bytes
+(:func:`exact`), never as printed text, so moving a point by any amount
+changes the key. Fields that do not define the mechanism (its ``source``,
+i.e. how the scene path was typed) are left out.
+
+Location: ``$FLEXVAL_CACHE/results`` or ``~/.cache/flexval/results``
+(:func:`geometry.files.cache_dir`; an unusable folder means no caching,
+with a warning). Each entry is one JSON document holding the LoadPath, its
+key and a SHA-256 checksum of its canonical text, written atomically under a
+unique temporary name, so concurrent runs sharing one cache never see each
+other's partial files. An entry that is truncated, empty, binary, of another
+format or whose checksum does not match is discarded with a
+:class:`geometry.files.CacheWarning` and recomputed.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
-import os
+import warnings
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
+import numpy as np
+
+from geometry.files import CacheWarning, cache_dir, write_bytes
 from reducedmodels import LoadPath
 
-
-def cache_dir() -> Path:
-    """Root of flexval's caches."""
-    return Path(os.environ.get("FLEXVAL_CACHE", Path.home() / ".cache" / "flexval"))
+ENTRY_FORMAT = "flexval-loadpath/2"
+"""Format tag of a cache entry (a different tag is a foreign entry)."""
 
 
 @lru_cache(maxsize=1)
@@ -37,38 +51,126 @@ def code_version() -> str:
     return h.hexdigest()[:16]
 
 
+def exact(value) -> object:
+    """A JSON-ready form of ``value`` that keeps every bit of every number.
+
+    Floats become ``float.hex`` strings, arrays their dtype, shape and a
+    SHA-256 of their bytes, dataclasses the exact form of each compared
+    field (fields declared ``compare=False``, such as a mechanism's source
+    file, are left out); containers are converted element by element.
+
+    Raises
+    ------
+    TypeError
+        For a type without an exact form (never fall back to ``repr``).
+    """
+    if value is None or isinstance(value, (bool, str, np.bool_)):
+        return bool(value) if isinstance(value, np.bool_) else value
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return {"float": float(value).hex()}
+    if isinstance(value, np.ndarray):
+        data = np.ascontiguousarray(value)
+        return {"array": str(data.dtype), "shape": list(data.shape),
+                "sha256": hashlib.sha256(data.tobytes()).hexdigest()}
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {"type": type(value).__qualname__,
+                "fields": {f.name: exact(getattr(value, f.name))
+                           for f in dataclasses.fields(value) if f.compare}}
+    if isinstance(value, dict):
+        return {"dict": sorted(([exact(k), exact(v)] for k, v in value.items()),
+                               key=lambda kv: json.dumps(kv[0], sort_keys=True))}
+    if isinstance(value, (list, tuple)):
+        return [exact(v) for v in value]
+    if isinstance(value, (set, frozenset)):
+        return {"set": sorted((exact(v) for v in value), key=lambda v: json.dumps(v,
+                                                                                   sort_keys=True))}
+    raise TypeError(f"no exact cache-key form for {type(value).__name__}")
+
+
 def result_key(scene, model: str, case_name: str, levels: int | None, extra: dict) -> str:
-    """Hash of what determines one LoadPath."""
+    """Hash of what determines one LoadPath (exact values, see :func:`exact`)."""
     payload = json.dumps({
-        "mechanism": repr(scene.mechanism),
-        "case": repr(scene.load_case(case_name)),
+        "scene": scene.name,
+        "mechanism": exact(scene.mechanism),
+        "case": exact(scene.load_case(case_name)),
         "model": model,
         "levels": levels,
-        "extra": extra,
+        "extra": exact(extra),
         "code": code_version(),
-    }, sort_keys=True, default=str)
-    return hashlib.sha256(payload.encode()).hexdigest()[:24]
+        "format": ENTRY_FORMAT,
+    }, sort_keys=True)
+    return hashlib.sha256(payload.encode()).hexdigest()[:32]
+
+
+def _checksum(body: dict) -> str:
+    return hashlib.sha256(json.dumps(body, sort_keys=True, allow_nan=False).encode()).hexdigest()
 
 
 class ResultCache:
-    """LoadPath store under ``cache_dir()/results`` (disabled: always misses)."""
+    """LoadPath store under ``cache_dir()/results`` (disabled or unusable: always misses).
+
+    Parameters
+    ----------
+    enabled : bool
+        False: ``get`` always misses and ``put`` stores nothing.
+    root : Path, optional
+        Cache root instead of :func:`geometry.files.cache_dir`.
+    """
 
     def __init__(self, enabled: bool = True, root: Path | None = None):
-        self.enabled = enabled
-        self.root = (root or cache_dir()) / "results"
+        base = (root if root is not None else cache_dir()) if enabled else None
+        self.enabled = base is not None
+        self.root = Path(base) / "results" if base is not None else None
+
+    def _entry(self, key: str) -> Path:
+        return self.root / f"{key}.json"
 
     def get(self, key: str) -> LoadPath | None:
-        """The cached LoadPath for ``key`` or None."""
-        path = self.root / f"{key}.json"
-        if not self.enabled or not path.is_file():
+        """The cached LoadPath for ``key``, or None (a bad entry is discarded with a warning)."""
+        if not self.enabled:
             return None
-        return LoadPath.from_json(path.read_text(encoding="utf-8"))
+        path = self._entry(key)
+        try:
+            data = path.read_bytes()
+        except FileNotFoundError:
+            return None
+        except OSError as exc:
+            warnings.warn(f"cache entry {path} cannot be read ({exc.strerror or exc}); "
+                          "recomputing", CacheWarning, stacklevel=2)
+            return None
+        lp = _decode(key, data)
+        if lp is None:
+            warnings.warn(f"cache entry {path} is damaged or foreign; discarded and recomputed",
+                          CacheWarning, stacklevel=2)
+            path.unlink(missing_ok=True)
+        return lp
 
     def put(self, key: str, lp: LoadPath) -> None:
-        """Store a converged LoadPath (failures are never cached)."""
+        """Store a converged LoadPath (failures, and paths with non-finite values, are not)."""
         if not self.enabled or not lp.converged:
             return
-        self.root.mkdir(parents=True, exist_ok=True)
-        tmp = self.root / f"{key}.tmp"
-        tmp.write_text(lp.to_json(), encoding="utf-8")
-        tmp.replace(self.root / f"{key}.json")
+        body = lp.to_dict()
+        try:
+            checksum = _checksum(body)
+        except ValueError:          # NaN or inf: strict JSON could not hold it losslessly
+            return
+        doc = {"format": ENTRY_FORMAT, "key": key, "sha256": checksum, "loadpath": body}
+        try:
+            self.root.mkdir(parents=True, exist_ok=True)
+            write_bytes(self._entry(key), json.dumps(doc, allow_nan=False).encode("utf-8"))
+        except OSError as exc:
+            warnings.warn(f"result not cached: {exc}", CacheWarning, stacklevel=2)
+
+
+def _decode(key: str, data: bytes) -> LoadPath | None:
+    """The LoadPath of a cache entry, or None if it is not a sound entry for ``key``."""
+    try:
+        doc = json.loads(data.decode("utf-8"))
+        if (not isinstance(doc, dict) or doc.get("format") != ENTRY_FORMAT
+                or doc.get("key") != key or _checksum(doc["loadpath"]) != doc.get("sha256")):
+            return None
+        return LoadPath.from_dict(doc["loadpath"])
+    except (UnicodeDecodeError, ValueError, KeyError, TypeError, RecursionError):
+        return None
