@@ -53,6 +53,7 @@ from geometry import Flexure, Mechanism
 from geometry.kinematics import body_point
 
 from .connector import Connector, LocalState
+from .validity import MAX_CHORD_TURN, MAX_STRAIN, rotation_reasons, stretch_reasons
 
 SHEAR_CORRECTION = 5.0 / 6.0
 """Timoshenko shear coefficient kappa of a rectangular section."""
@@ -108,6 +109,15 @@ def bending_stiffness_terms(EI: float, l0: np.ndarray, shear_stiffness: float | 
     return scale * (4.0 + phi), scale * (2.0 - phi)
 
 
+def chord_rotation(chord0: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """Rotation (rad, in (-pi, pi]) of each chord d (n, 2) from its initial unit chord (n, 2).
+
+    Taken with atan2 of the cross and dot products: robust for any magnitude.
+    """
+    return np.arctan2(chord0[:, 0] * d[:, 1] - chord0[:, 1] * d[:, 0],
+                      chord0[:, 0] * d[:, 0] + chord0[:, 1] * d[:, 1])
+
+
 def corotational_elements(x: np.ndarray, theta: np.ndarray, chord0: np.ndarray, l0: np.ndarray,
                           k_axial: np.ndarray, k11: np.ndarray, k12: np.ndarray
                           ) -> tuple[float, np.ndarray, np.ndarray]:
@@ -150,9 +160,7 @@ def corotational_elements(x: np.ndarray, theta: np.ndarray, chord0: np.ndarray, 
     d = x[1:] - x[:-1]
     length = np.hypot(d[:, 0], d[:, 1])
     c, s = d[:, 0] / length, d[:, 1] / length
-    # chord rotation from the initial chord, robust for any magnitude: (-pi, pi]
-    alpha = np.arctan2(chord0[:, 0] * d[:, 1] - chord0[:, 1] * d[:, 0],
-                       chord0[:, 0] * d[:, 0] + chord0[:, 1] * d[:, 1])
+    alpha = chord_rotation(chord0, d)
     a1 = wrap_angle(theta[:-1] - alpha)
     a2 = wrap_angle(theta[1:] - alpha)
     u = length - l0
@@ -380,6 +388,24 @@ class BeamConnector(Connector):
         share = np.concatenate([[0.0], np.cumsum(length)]) / length.sum()
         x += share[:, None] * (end - x[-1])
         return np.column_stack([x[1:-1], theta[1:-1]]).ravel()
+
+    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+                 ) -> list[str]:
+        """Reasons: element stretch over MAX_STRAIN, end turns from the chord over MAX_CHORD_TURN.
+
+        See :mod:`reducedmodels.validity`: the first is material strain, the
+        second an element too coarse for the curvature it carries.
+        """
+        x, theta, _ = self._nodes(pose_a, pose_b, internal)
+        d = x[1:] - x[:-1]
+        length = np.hypot(d[:, 0], d[:, 1])
+        alpha = chord_rotation(self._chord0, d)
+        turn = np.maximum(np.abs(wrap_angle(theta[:-1] - alpha)),
+                          np.abs(wrap_angle(theta[1:] - alpha)))
+        if np.abs(length / self._l0 - 1.0).max() <= MAX_STRAIN and turn.max() <= MAX_CHORD_TURN:
+            return []
+        return (stretch_reasons("element", length, self._l0)
+                + rotation_reasons("element", turn, MAX_CHORD_TURN))
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed node positions (N + 1, 2), mm, from the flexure's start to its end."""

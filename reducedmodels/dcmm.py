@@ -27,9 +27,10 @@ import math
 import numpy as np
 
 from geometry import Flexure, Mechanism
-from geometry.kinematics import place_points, rotate_xy
+from geometry.kinematics import rotate_xy
 
 from .connector import Connector
+from .validity import MAX_RELATIVE_ROTATION, MAX_STRAIN, rotation_reasons, stretch_reasons
 
 
 def _expansion() -> tuple[np.ndarray, np.ndarray]:
@@ -154,6 +155,7 @@ class DcmmConnector(Connector):
         refs = [mechanism.bodies[self.bodies[0]].reference, *cuts,
                 mechanism.bodies[self.bodies[1]].reference]
         self._cuts = np.array(cuts).reshape(-1, 2)
+        self._arc_lengths = [p.length for p in parts]               # chain order, mm
         self._elements = []
         for k, part in enumerate(parts):
             ell = part.ellipse(EI)
@@ -170,9 +172,9 @@ class DcmmConnector(Connector):
                                        for k in range(n)])
         self._rows = np.repeat(self._element_dofs, 6, axis=1).ravel()
         self._cols = np.tile(self._element_dofs, (1, 6)).ravel()
-        self._ends = np.array([flexure.end_point_of(self.bodies[0]),
-                               flexure.end_point_of(self.bodies[1])])
-        self._ref_ends = np.array([refs[0], refs[-1]])
+        # flexure ends' offsets from the end bodies' reference points, float pairs (mm)
+        self._end_rel = [tuple((np.asarray(flexure.end_point_of(self.bodies[k]), float)
+                                - refs[-k]).tolist()) for k in (0, 1)]
 
     def initial_internal(self) -> np.ndarray:
         """Cut-point bodies at rest: (x, y, 0) each."""
@@ -203,15 +205,36 @@ class DcmmConnector(Connector):
                                minlength=6 + self.n_internal)
         return energy, gradient, np.concatenate(hessians)
 
+    def _points(self, pose_a, pose_b, internal) -> tuple[list, list[tuple[float, float]]]:
+        """Chain poses and the polyline flexure end, cut points, flexure end (float pairs, mm).
+
+        Plain floats: the validity monitor runs this at every load level, and
+        for a few sub-arcs small numpy arrays cost more than the algebra.
+        """
+        chain = [pose_a.tolist(), *np.asarray(internal).reshape(-1, 3).tolist(), pose_b.tolist()]
+        (xa, ya, ta), (xb, yb, tb) = chain[0], chain[-1]
+        ea, eb = rotate_xy(ta, *self._end_rel[0]), rotate_xy(tb, *self._end_rel[1])
+        points = [(xa + ea[0], ya + ea[1]), *((p[0], p[1]) for p in chain[1:-1]),
+                  (xb + eb[0], yb + eb[1])]
+        return chain, points
+
+    def validity(self, pose_a, pose_b, internal) -> list[str]:
+        """Reasons: sub-arc chords longer than their arcs, relative rotations over the limits.
+
+        A sub-arc's chord may shorten freely (bending) but not exceed the
+        arc's length by more than the strain limit: its ends would have to be
+        farther apart than the material allows. See :mod:`reducedmodels.validity`.
+        """
+        chain, points = self._points(pose_a, pose_b, internal)
+        chords = [math.dist(p, r) for p, r in zip(points, points[1:])]
+        turns = [f[2] - lead[2] for lead, f in zip(chain, chain[1:])]
+        if (max(c / a for c, a in zip(chords, self._arc_lengths)) - 1.0 <= MAX_STRAIN
+                and max(map(abs, turns)) <= MAX_RELATIVE_ROTATION):
+            return []
+        return (stretch_reasons("sub-arc chord", np.array(chords), np.array(self._arc_lengths),
+                                one_sided=True)
+                + rotation_reasons("sub-arc", np.array(turns), MAX_RELATIVE_ROTATION))
+
     def shape(self, pose_a, pose_b, internal) -> np.ndarray:
         """Polyline through the flexure ends and the cut points, mm."""
-        chain = self._chain(pose_a, pose_b, internal)
-        pts = []
-        for k, pose in enumerate(chain):
-            if k == 0 or k == len(chain) - 1:
-                end = self._ends[0 if k == 0 else 1]
-                ref = self._ref_ends[0 if k == 0 else 1]
-                pts.append(place_points(pose, (end - ref)[None])[0])
-            else:
-                pts.append(pose[:2])
-        return np.array(pts)
+        return np.array(self._points(pose_a, pose_b, internal)[1])

@@ -116,7 +116,11 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
 
     Solves K0 dq = lambda f with the elastic tangent K0 at rest (no load
     stiffness, no large-rotation terms) and reports the linearised target
-    displacement J dq; it is proportional to the load.
+    displacement J dq; it is proportional to the load. The validity monitor
+    does not judge it (``valid`` stays None): q0 + lambda dq is a linear
+    response, not a configuration, and its linearised rigid rotations
+    stretch chords by theta^2 / 2 times their lever arms, which the
+    connectors' stretch limits would read as strain.
     """
     t0 = time.perf_counter()
     loads = system.loads(case)

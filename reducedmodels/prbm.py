@@ -82,6 +82,7 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
@@ -95,6 +96,7 @@ from geometry.kinematics import place_points, rotate, rotate_xy
 from geometry.shapes import Shape, arc_semi_axes
 
 from .connector import Connector
+from .validity import MAX_STRAIN, rotation_reasons, stretch_reasons
 
 TABLE_RESOURCE = "data/prbm_table.json"
 
@@ -177,6 +179,11 @@ def table_parameters(width: float) -> PrbmParameters:
         raise ValueError(f"prbm: arc angle {np.degrees(width):.6g} deg is outside the fitted "
                          f"range 0 .. {np.degrees(top):.6g} deg of {TABLE_RESOURCE}")
     return PrbmParameters.from_rho(width, float(spline(width)))
+
+
+def fitted_rotation() -> float:
+    """Largest flexure end rotation (rad) in the load set the shipped table was fitted on."""
+    return math.radians(load_table()["metadata"]["settings"]["max_rotation_deg"])
 
 
 def shape_frame(shape: Shape) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float]:
@@ -267,6 +274,9 @@ class PrbmConnector(Connector):
                                          joints[1] - joints[0], joints[2] - joints[1]))
         self._ends = np.array([flexure.end_point_of(self.bodies[0]),
                                flexure.end_point_of(self.bodies[1])])
+        self.length = length
+        self._end_rel = [tuple((self._ends[k] - self._ref[k]).tolist()) for k in (0, 1)]
+        self._fitted_rotation = fitted_rotation()
 
     def internal_is_rotation(self) -> np.ndarray:
         """[True, True, False, False]: two link rotations, then the multiplier (mm)."""
@@ -316,6 +326,27 @@ class PrbmConnector(Connector):
                   k3 + cmx * rbx + cmy * rby,
                   c, -c, c, -c, *mixed, c, -c, c, -c, *mixed]
         return energy, grad, np.array(values)
+
+    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+                 ) -> list[str]:
+        """Flexure ends farther apart than its length allows; end rotation beyond the fitted range.
+
+        The rigid links cannot stretch, but the chain's end-to-end span can
+        exceed the flexure's length L, which a real flexure reaches only by
+        straining: a chord longer than L (1 + MAX_STRAIN) is refused as in
+        DCMM. The chain's parameters are fitted on end rotations up to
+        :func:`fitted_rotation`; beyond it the model extrapolates. See
+        :mod:`reducedmodels.validity`. (Plain floats: it runs at every level.)
+        """
+        (xa, ya, ta), (xb, yb, tb) = pose_a.tolist(), pose_b.tolist()
+        ea, eb = rotate_xy(ta, *self._end_rel[0]), rotate_xy(tb, *self._end_rel[1])
+        chord = math.hypot(xb + eb[0] - xa - ea[0], yb + eb[1] - ya - ea[1])
+        turn = tb - ta
+        if chord / self.length - 1.0 <= MAX_STRAIN and abs(turn) <= self._fitted_rotation:
+            return []
+        return (stretch_reasons("chord", np.array([chord]), np.array([self.length]),
+                                one_sided=True)
+                + rotation_reasons("end rotation", np.array([turn]), self._fitted_rotation))
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Polyline end_a, R_a, R_2, R_b, end_b in the current configuration, (5, 2) mm."""

@@ -108,7 +108,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     results, status = [], EXIT_OK
     w = max(14, *(len(sp.id) for sp in specs))
     print(f"{'model':<{w}} {'case':<6} {'load':>11} {'dx mm':>10} {'dy mm':>10} {'|d| mm':>10} "
-          f"{'rot deg':>9} {'iters':>6} {'seconds':>9}")
+          f"{'rot deg':>9} {'iters':>6} {'seconds':>9} {'valid':>7}")
     for spec in specs:
         for case in cases:
             extra = {}
@@ -139,10 +139,28 @@ def _cmd_run(args: argparse.Namespace) -> int:
             print(f"{lp.model:<{w}} {lp.load_case:<6} {lp.load[-1]:>9.4g} {lp.load_unit:<2}"
                   f"{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} {lp.displacement[-1]:>10.4f} "
                   f"{math.degrees(lp.rotation[-1]):>9.3f} "
-                  f"{lp.stats.get('newton_iterations', 0):>6} {lp.seconds:>9.4f}")
+                  f"{lp.stats.get('newton_iterations', 0):>6} {lp.seconds:>9.4f} "
+                  f"{_valid_cell(lp):>7}")
+            note = _validity_note(lp)
+            if note:
+                print(note)
     if json_path:
         write_json(json_path, {"scene": scene.name, "results": [p.to_dict() for p in results]})
     return status
+
+
+def _valid_cell(lp) -> str:
+    """``valid/levels`` of the validity monitor, ``-`` for a model it does not judge."""
+    return "-" if lp.valid is None else f"{sum(lp.valid)}/{len(lp.valid)}"
+
+
+def _validity_note(lp) -> str:
+    """A marked line naming the first level outside the model's range and why ('' if none)."""
+    if lp.valid is None or all(lp.valid):
+        return ""
+    k = lp.valid.index(False)
+    return (f"  ! {lp.model} {lp.load_case}: outside the model's range from level {k + 1} "
+            f"({lp.load[k]:.4g} {lp.load_unit}): {lp.validity[k]}")
 
 
 def _parse_levels(text: str, spec) -> list[int]:

@@ -24,6 +24,7 @@ from geometry import Flexure, Mechanism
 from geometry.kinematics import rigid_points
 from geometry.mesh import FlexureMesh, mesh_flexure
 from reducedmodels.connector import Connector
+from reducedmodels.validity import MIN_DET_F, stretch_reasons
 
 from .material import make_law
 from .solid import Solid
@@ -144,6 +145,25 @@ class ContinuumConnector(Connector):
         t, p, q = self._mixed
         hess = np.concatenate([ke[self._plain_src], ke[t] * coef[p] * coef[q], second])
         return energy, grad, hess
+
+    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+                 ) -> list[str]:
+        """Centre-line fibre stretch beyond MAX_STRAIN; elements near inversion (det F < MIN_DET_F).
+
+        See :mod:`reducedmodels.validity`.
+        """
+        x = self.positions(pose_a, pose_b, internal)
+        line = self.mesh.centre_line
+        d, d0 = np.diff(x[line], axis=0), np.diff(self.mesh.nodes[line], axis=0)
+        reasons = stretch_reasons("centre-line segment", np.hypot(d[:, 0], d[:, 1]),
+                                  np.hypot(d0[:, 0], d0[:, 1]))
+        F = self.solid.deformation_gradient(x)
+        det = (F[..., 0, 0] * F[..., 1, 1] - F[..., 0, 1] * F[..., 1, 0]).min(axis=1)
+        k = int(np.argmin(det))
+        if det[k] < MIN_DET_F:
+            reasons.append(f"element {k + 1} near inversion: det F {det[k]:.3g} "
+                           f"(limit {MIN_DET_F:.3g})")
+        return reasons
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed centre line (nodes at mid-thickness, start to end), mm."""

@@ -89,6 +89,12 @@ class Solid:
         """Size of the mesh's bounding box, mm."""
         return float(np.ptp(self.nodes, axis=0).max())
 
+    def deformation_gradient(self, x: np.ndarray) -> np.ndarray:
+        """Deformation gradient F (n_el, n_q, 2, 2) at the quadrature points; x: node positions, mm."""
+        xe = x[self.elements]
+        xe = xe - xe[:, :1]            # sum_a dN_a = 0: removes a translation, limits round-off
+        return np.matmul(xe.transpose(0, 2, 1)[:, None], self.grad)
+
     def state(self, x: np.ndarray) -> ElementState:
         """Kinematics and stresses at the quadrature points for node positions x (n_nodes, 2).
 
@@ -98,9 +104,7 @@ class Solid:
             If an element is inverted (det F <= 0 at a quadrature point): the
             multibody core then treats the state as refused and cuts the step.
         """
-        xe = x[self.elements]
-        xe = xe - xe[:, :1]            # sum_a dN_a = 0: removes a translation, limits round-off
-        F = np.matmul(xe.transpose(0, 2, 1)[:, None], self.grad)           # (n_el, n_q, 2, 2)
+        F = self.deformation_gradient(x)                                   # (n_el, n_q, 2, 2)
         if not np.all(F[..., 0, 0] * F[..., 1, 1] - F[..., 0, 1] * F[..., 1, 0] > 0.0):
             raise ValueError("continuum: inverted element (det F <= 0)")
         C = np.matmul(F.transpose(0, 1, 3, 2), F)

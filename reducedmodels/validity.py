@@ -1,0 +1,104 @@
+"""The validity monitor's limits: where the flexibility models stop meaning anything.
+
+A converged state is not necessarily a state a mechanism can reach: under
+loads far beyond their design, the reduced models happily report a 12.6 mm
+flexure with its ends 694 mm apart. Each connector's
+:meth:`~reducedmodels.connector.Connector.validity` compares its state with
+the limits below and names what it finds; the recorder stores the verdict
+per load level (``LoadPath.valid``, ``LoadPath.validity``) without
+stopping the run. The limits follow from the models' shared assumptions
+(linear elastic material, small strain, large rotation), and each is
+derived from :data:`MAX_STRAIN` or a model's own calibration rather than
+typed in:
+
+* :data:`MAX_STRAIN` bounds material strain: a beam element's or a
+  continuum fibre's stretch, and how far a flexure (or a sub-arc of it)
+  would have to stretch for its ends to be as far apart as the model puts
+  them (its chord may not exceed its arc length by more).
+* :data:`MAX_CHORD_TURN` bounds a corotational beam element's end rotations
+  from its chord.
+* :data:`MAX_RELATIVE_ROTATION` bounds a DCMM sub-arc's relative rotation.
+* :data:`MIN_DET_F` marks continuum elements near inversion.
+* the PRBM is meaningful within the end rotations its table was fitted on
+  (:func:`reducedmodels.prbm.fitted_rotation`).
+
+``tests/test_validity.py`` checks that every model's states at the paper's
+loads are inside, and that DCMM_1 at 100 and 1000 times them is not.
+
+Units: dimensionless strains, rad.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+MAX_STRAIN = 0.02
+"""Largest material strain (2 %) the models mean anything at.
+
+Every model takes the material as linear elastic (Hooke's law in the beam's
+axial and bending terms, Saint Venant-Kirchhoff or neo-Hookean with the
+small-strain moduli in the continuum). Flexure materials leave their
+elastic range below this (spring steels and titanium alloys near 0.5-1 %,
+engineering polymers 1-3 %), and the hyperelastic laws differ from each
+other by O(strain) = 2 % in stress there."""
+
+MAX_CHORD_TURN = math.sqrt(6.0 * MAX_STRAIN)
+"""Largest end rotation of a corotational beam element from its chord, rad (0.35).
+
+An element whose end sections turn by +-a from its chord stands for an arc
+of angle 2a, whose length exceeds the chord by a^2 / 6 to leading order:
+at a = sqrt(6 MAX_STRAIN) the straight element's geometric error is as
+large as the strain limit, and the element no longer resolves the
+curvature (refine N)."""
+
+MAX_RELATIVE_ROTATION = math.pi / 3.0
+"""Largest relative rotation of a DCMM sub-arc's two end bodies, rad (60 deg).
+
+DCMM measures a sub-arc's relative displacement v in the displaced frame of
+one of its two bodies; the two frames' measures differ by (R(phi) - I) v,
+of size 2 sin(phi / 2) |v|. At phi = pi / 3 that difference is |v| itself:
+which frame is chosen changes the element's deformation by 100 %, so a
+linear compliance acting on it has no meaning left."""
+
+MIN_DET_F = 1.0 / math.sqrt(3.0)
+"""Smallest area ratio det F of a continuum element (0.577): near inversion.
+
+Saint Venant-Kirchhoff's nominal stress in uniaxial compression,
+E lambda (lambda^2 - 1) / 2, peaks at lambda = 1/sqrt(3) and falls beyond
+(the law loses stability); an element compressed that far is in a range no
+flexure material shares. (At det F <= 0 the element is inverted and the
+connector refuses the state outright.)"""
+
+
+def stretch_reasons(what: str, lengths: np.ndarray, reference: np.ndarray,
+                    one_sided: bool = False) -> list[str]:
+    """The worst stretch of ``lengths`` against ``reference`` (mm) beyond :data:`MAX_STRAIN`.
+
+    ``one_sided``: only lengthening counts (a chord against its arc length
+    may shorten freely by bending). Returns at most one reason, naming the
+    worst entry (1-based) of ``what``.
+    """
+    strain = np.asarray(lengths, float) / np.asarray(reference, float) - 1.0
+    measure = strain if one_sided else np.abs(strain)
+    k = int(np.argmax(measure))
+    if not measure[k] > MAX_STRAIN:
+        return []
+    return [f"{_label(what, k, measure.size)} stretched {100.0 * strain[k]:.3g} % "
+            f"({lengths[k]:.4g} mm for {reference[k]:.4g} mm; limit {100.0 * MAX_STRAIN:g} %)"]
+
+
+def rotation_reasons(what: str, angles: np.ndarray, limit: float) -> list[str]:
+    """The largest |angle| (rad) beyond ``limit`` (rad), at most one reason naming its entry."""
+    measure = np.abs(np.asarray(angles, float))
+    k = int(np.argmax(measure))
+    if not measure[k] > limit:
+        return []
+    return [f"{_label(what, k, measure.size)} turned {math.degrees(measure[k]):.3g} deg "
+            f"(limit {math.degrees(limit):.3g} deg)"]
+
+
+def _label(what: str, k: int, count: int) -> str:
+    """``what`` with the 1-based entry number when there are several."""
+    return what if count == 1 else f"{what} {k + 1}"
