@@ -20,7 +20,6 @@ from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
-from scipy.spatial.distance import pdist
 
 from .errors import SceneError
 from .magnitudes import check_magnitudes
@@ -188,7 +187,9 @@ class Mechanism:
         pts = np.vstack([f.shape.end_points for f in self.flexures]
                         + [np.asarray(p.point, float)[None] for p in self.pins]
                         + [self.target_point[None]])
-        return float(pdist(pts).max()) if len(pts) > 1 else 0.0
+        # numpy, not scipy.spatial.distance.pdist: importing scipy.spatial costs a
+        # command's start-up 0.1-0.2 s, and a mechanism has a few dozen points
+        return float(np.linalg.norm(pts[:, None] - pts[None], axis=-1).max())
 
     def transformed(self, angle: float, shift: np.ndarray) -> "Mechanism":
         """The same mechanism rotated by ``angle`` (rad) about the origin, then shifted (mm)."""

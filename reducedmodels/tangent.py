@@ -81,42 +81,58 @@ class BandedTangent:
 
     ``storage`` is Fortran-ordered (3b + 1, n) with
     ``storage[2b + i - j, j] = K[perm[i], perm[j]]`` for |i - j| <= b; the
-    top b rows are the room ``dgbtrf`` needs for its row interchanges. LAPACK
-    is called directly: the wrappers' copies and checks cost more than the
+    top b rows are the room ``dgbtrf`` needs for its row interchanges, rows
+    b..2b are the upper band form ``dpbtrf`` reads. LAPACK is called
+    directly: the wrappers' copies and checks cost more than the
     factorisation of a narrow band.
+
+    One factorisation serves both the solves and the inertia: a banded
+    Cholesky first (the usual, stable case: about a third of a banded LU's
+    work, and it proves there is no negative eigenvalue), a banded LU with
+    pivoting only when the Cholesky meets a non-positive pivot.
     """
 
     def __init__(self, storage: np.ndarray, perm: np.ndarray, half_bandwidth: int):
         self.storage, self.perm, self.b = storage, perm, half_bandwidth
         self.n = storage.shape[1]
-        self._factors = None
+        self._cholesky = None       # upper Cholesky factor in band form, when K is positive definite
+        self._lu = None             # (lu, piv, info) of dgbtrf, when it is not
+
+    def _factorise(self) -> None:
+        if self._cholesky is None and self._lu is None:
+            b = self.b
+            factor, info = lapack.dpbtrf(self.storage[b: 2 * b + 1], lower=0)
+            if info == 0:
+                self._cholesky = factor
+            else:
+                self._lu = lapack.dgbtrf(self.storage, b, b)
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
-        b = self.b
-        if self._factors is None:
-            lu, piv, info = lapack.dgbtrf(self.storage, b, b)
+        self._factorise()
+        if self._cholesky is not None:
+            x_perm, _ = lapack.dpbtrs(self._cholesky, rhs[self.perm], lower=0)
+        else:
+            lu, piv, info = self._lu
             if info > 0:
                 raise np.linalg.LinAlgError(f"singular tangent (zero pivot {info})")
-            self._factors = (lu, piv)
-        lu, piv = self._factors
-        x_perm, info = lapack.dgbtrs(lu, b, b, rhs[self.perm], piv)
+            x_perm, _ = lapack.dgbtrs(lu, self.b, self.b, rhs[self.perm], piv)
         x = np.empty_like(x_perm)
         x[self.perm] = x_perm
         return x
 
     def negative_eigenvalues(self) -> int | None:
-        """Zero when a banded Cholesky succeeds (the usual, stable case, O(n b^2)).
+        """Zero when the banded Cholesky of the solves succeeded (O(n b^2), no extra work).
 
         Otherwise the count comes from banded bisection (``eigvals_banded``),
         exact but some 30 times slower; saddle-point systems always take it.
         """
         b = self.b
-        upper = self.storage[b:]                 # rows b..3b: the upper band form (diagonal last)
+        upper = self.storage[b: 2 * b + 1]      # the upper band form (diagonal last)
         if not np.all(np.isfinite(upper)):
             return None
-        if lapack.dpbtrf(upper[: b + 1], lower=0)[1] == 0:
+        self._factorise()
+        if self._cholesky is not None:
             return 0
-        upper = upper[: b + 1]
         scale = np.abs(upper).max(initial=0.0) * (2 * b + 1)        # >= spectral radius
         negative = sla.eigvals_banded(upper, select="v", select_range=(-np.inf, -ROUND_OFF * scale),
                                       check_finite=False)
@@ -170,20 +186,16 @@ class TangentLayout:
         Global row and column of every value slot (duplicates are summed).
     n_multipliers : int
         Lagrange multipliers among the unknowns (they make K a saddle point).
-    kind : {'dense', 'banded', 'sparse'}, optional
-        Force a storage (benchmarks, tests); by default dense up to
-        ``DENSE_LIMIT`` unknowns, else banded if the reordered half-bandwidth
-        is at most ``BAND_LIMIT``, else sparse.
+
+    The storage is dense up to ``DENSE_LIMIT`` unknowns, else banded if the
+    reordered half-bandwidth is at most ``BAND_LIMIT``, else sparse.
     """
 
-    def __init__(self, n: int, rows: np.ndarray, cols: np.ndarray, n_multipliers: int = 0,
-                 kind: str | None = None):
-        if kind not in (None, "dense", "banded", "sparse"):
-            raise ValueError(f"tangent storage must be dense, banded or sparse, got {kind!r}")
+    def __init__(self, n: int, rows: np.ndarray, cols: np.ndarray, n_multipliers: int = 0):
         limit_threads()               # once per process: small banded systems want 1 BLAS thread
         self.n, self.n_multipliers = n, n_multipliers
         rows, cols = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
-        if kind == "dense" or (kind is None and n <= DENSE_LIMIT):
+        if n <= DENSE_LIMIT:
             self.kind, self._slot, self._size = "dense", rows * n + cols, n * n
             return
         graph = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
@@ -192,7 +204,7 @@ class TangentLayout:
         position[perm] = np.arange(n)
         i, j = position[rows], position[cols]
         b = int(np.abs(i - j).max(initial=0))
-        if kind == "banded" or (kind is None and b <= BAND_LIMIT):
+        if b <= BAND_LIMIT:
             self.kind, self.perm, self.b = "banded", perm, b
             self._slot, self._size = j * (3 * b + 1) + (2 * b + i - j), (3 * b + 1) * n
             return
