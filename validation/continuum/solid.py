@@ -29,6 +29,7 @@ from skfem import CellBasis, ElementQuad2, MeshQuad2
 from .material import Law
 
 _QUADRATURE_ORDER = 4   # 3 x 3 Gauss points: full integration of quad9
+_VOIGT = (np.array([0, 1, 0]), np.array([0, 1, 1]))   # (M, N) of E11, E22, 2 E12
 
 
 @dataclass
@@ -93,7 +94,9 @@ class Solid:
         """Deformation gradient F (n_el, n_q, 2, 2) at the quadrature points; x: node positions, mm."""
         xe = x[self.elements]
         xe = xe - xe[:, :1]            # sum_a dN_a = 0: removes a translation, limits round-off
-        return np.matmul(xe.transpose(0, 2, 1)[:, None], self.grad)
+        n_el, n_q = self.weight.shape
+        F = np.matmul(xe.transpose(0, 2, 1), self._grad_qb.transpose(0, 2, 1))   # [i, (q, J)]
+        return F.reshape(n_el, 2, n_q, 2).transpose(0, 2, 1, 3)
 
     def state(self, x: np.ndarray) -> ElementState:
         """Kinematics and stresses at the quadrature points for node positions x (n_nodes, 2).
@@ -105,9 +108,13 @@ class Solid:
             multibody core then treats the state as refused and cuts the step.
         """
         F = self.deformation_gradient(x)                                   # (n_el, n_q, 2, 2)
-        if not np.all(F[..., 0, 0] * F[..., 1, 1] - F[..., 0, 1] * F[..., 1, 0] > 0.0):
+        F00, F01, F10, F11 = F[..., 0, 0], F[..., 0, 1], F[..., 1, 0], F[..., 1, 1]
+        if not np.all(F00 * F11 - F01 * F10 > 0.0):
             raise ValueError("continuum: inverted element (det F <= 0)")
-        C = np.matmul(F.transpose(0, 1, 3, 2), F)
+        C = np.empty(F.shape)                                               # F^T F
+        C[..., 0, 0] = F00 * F00 + F10 * F10
+        C[..., 1, 1] = F01 * F01 + F11 * F11
+        C[..., 0, 1] = C[..., 1, 0] = F00 * F01 + F10 * F11
         W, S, CC = self.law(C)
         return ElementState(F, C, W, S, CC)
 
@@ -118,19 +125,30 @@ class Solid:
         (``Ke.ravel()``), duplicates to be summed.
         """
         st = self.state(x)
-        w = self.weight[..., None, None]
-        P = np.matmul(st.F, st.S) * w
-        fe = np.matmul(self.grad, P.transpose(0, 1, 3, 2)).sum(axis=1)    # (n_el, 9, 2)
+        F, S, w = st.F, st.S, self.weight
+        g0, g1 = self.grad[..., 0], self.grad[..., 1]                       # (n_el, n_q, 9)
+        n_el, n_q = w.shape
+        # B: the Green-strain operator, dE_v = B[v, (a, i)] dx_(a, i), v = E11, E22, 2 E12
+        B = np.empty((n_el, n_q, 3, 9, 2))
+        for i in (0, 1):
+            f0, f1 = F[..., i, 0, None], F[..., i, 1, None]
+            B[:, :, 0, :, i] = g0 * f0
+            B[:, :, 1, :, i] = g1 * f1
+            B[:, :, 2, :, i] = g1 * f0 + g0 * f1
+        B = B.reshape(n_el, 3 * n_q, 18)                                    # [(q, v), (a, i)]
+        sw = S[..., _VOIGT[0], _VOIGT[1]] * w[..., None]                    # (n_el, n_q, 3)
+        fe = np.matmul(sw.reshape(n_el, 1, 3 * n_q), B)                     # B^T S w, N
         forces = np.bincount(self.element_dofs.ravel(), weights=fe.ravel(), minlength=self.n_dofs)
-        n_el, n_q = self.weight.shape
-        FC = np.matmul(st.F, st.CC.reshape(n_el, n_q, 2, 8)).reshape(n_el, n_q, 4, 2, 2)
-        A = np.matmul(st.F[:, :, None], FC).reshape(n_el, n_q, 2, 2, 2, 2)  # [i, J, k, L]
-        A[:, :, 0, :, 0] += st.S
-        A[:, :, 1, :, 1] += st.S
-        A *= w[..., None, None]
-        AJ = A.transpose(0, 1, 3, 2, 4, 5).reshape(n_el, n_q, 2, 8)       # [J, (i, k, L)]
-        T = np.matmul(self.grad, AJ).reshape(n_el, n_q, 9, 2, 2, 2)        # [a, i, k, L]
-        T = T.transpose(0, 2, 3, 4, 1, 5).reshape(n_el, 36, 2 * n_q)       # [(a, i, k), (q, L)]
-        K = np.matmul(T, self._grad_qb).reshape(n_el, 9, 2, 2, 9)          # [a, i, k, b]
-        Ke = K.transpose(0, 1, 2, 4, 3).reshape(n_el, 18, 18)
+        # material part sum_q B^T D B w, D the Voigt form of CC
+        D = st.CC[..., _VOIGT[0][:, None], _VOIGT[1][:, None], _VOIGT[0], _VOIGT[1]] \
+            * w[..., None, None]
+        DB = np.matmul(D, B.reshape(n_el, n_q, 3, 18)).reshape(n_el, 3 * n_q, 18)
+        Ke = np.matmul(B.transpose(0, 2, 1), DB)                            # (n_el, 18, 18)
+        # geometric part delta_ik sum_q (g S g^T)_ab w
+        GS = np.empty((n_el, n_q, 2, 9))
+        GS[:, :, 0] = (sw[..., 0, None] * g0 + sw[..., 2, None] * g1)
+        GS[:, :, 1] = (sw[..., 2, None] * g0 + sw[..., 1, None] * g1)
+        Kg = np.matmul(GS.reshape(n_el, 2 * n_q, 9).transpose(0, 2, 1), self._grad_qb)
+        Ke[:, 0::2, 0::2] += Kg
+        Ke[:, 1::2, 1::2] += Kg
         return float(np.sum(st.W * self.weight)), forces, Ke
