@@ -32,7 +32,8 @@ THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"
 
 def worker(scene_name: str, case_name: str, model: str, repeats: int) -> None:
     """Run the path once untimed, then ``repeats`` timed runs; print the median seconds."""
-    from geometry import load_scene, parse_model
+    from geometry import load_scene
+    from reducedmodels.catalogue import parse_model
     from validation.run import run_model
 
     scene = load_scene(scene_name)

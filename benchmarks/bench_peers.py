@@ -38,8 +38,9 @@ import time
 
 import numpy as np
 
-from geometry import Force, LoadCase, Mechanism, Moment, load_scene, parse_model
+from geometry import Force, LoadCase, Mechanism, Moment, load_scene
 from reducedmodels import run_reduced
+from reducedmodels.catalogue import parse_model
 
 RIGID_FACTOR = 1e8      # spokes' EA, EI over the flexures': the end values move 1e-4 % from
                         # 1e8 to 1e10 (0.01 % from 1e6 to 1e8); 1e10 breaks the 1e-10 test
