@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import argparse
 import cProfile
-import json
 import pstats
 import time
 
-from geometry import load_scene
+from geometry import SceneError, load_scene
 from validation.continuum import DEFAULT_LEVEL, run_continuum
+from validation.outputs import check_file, write_json
 
 CASES = {"open_chain": "f+", "closed_chain": "f+"}
 
@@ -62,6 +62,11 @@ def main() -> None:
     parser.add_argument("--level", type=int, default=DEFAULT_LEVEL, help="mesh level")
     parser.add_argument("--json", help="also write the results to this JSON file")
     args = parser.parse_args()
+    try:
+        if args.json:
+            check_file(args.json, "--json")      # before the minutes of work, not after
+    except SceneError as exc:
+        parser.error(str(exc))
     rows = [bench(s, c, args.level) for s, c in CASES.items()]
     head = (f"{'scene':<13}{'case':<5}{'model':<13}{'unknowns':>9}{'iters':>6}{'s':>7}"
             f"{'s/iter':>8}{'setup':>7}{'kernel':>8}{'assem':>7}{'LU':>7}{'other':>7}")
@@ -72,8 +77,7 @@ def main() -> None:
               f"{r['setup_s']:>7.2f}{r['element_kernels_s']:>8.2f}{r['global_assembly_s']:>7.2f}"
               f"{r['factorisation_s']:>7.2f}{r['other_s']:>7.2f}")
     if args.json:
-        with open(args.json, "w", encoding="utf-8") as fh:
-            json.dump(rows, fh, indent=2)
+        write_json(args.json, rows)
 
 
 if __name__ == "__main__":

@@ -320,3 +320,35 @@ def test_bench_and_stress_files_stay_inside(name, tmp_path, monkeypatch):
             assert out in p.parents
     assert md.parent == out.resolve() and smd.parent == out.resolve()
     assert _strict_loads(sjs.read_text())["scene"] == name
+
+
+@pytest.mark.parametrize("name", ["m.xyz", "m.png.exe", "m.json"])
+def test_plot_refuses_unknown_picture_formats(name, tmp_path, capsys, monkeypatch):
+    import validation.drawing
+    monkeypatch.setattr(validation.drawing, "plot_mechanism",
+                        lambda *a: pytest.fail("plotted before checking the output"))
+    assert main(["plot", "open_chain", "-o", str(tmp_path / name)]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert "--output" in err and name in err and "format" in err
+
+
+@pytest.mark.parametrize("name", ["m.svg", "m.pdf", "m"])
+def test_plot_writes_other_known_formats(name, tmp_path):
+    assert main(["plot", "open_chain", "-o", str(tmp_path / name)]) == 0
+    assert (tmp_path / name).stat().st_size > 0
+    assert [p.name for p in tmp_path.iterdir()] == [name]
+
+
+@pytest.mark.parametrize("kind", ["a regular file", "under a regular file",
+                                  "a device (/dev/full)", "read-only place (/proc)"])
+def test_run_out_dir_for_fields_refused_before_work(kind, tmp_path, no_work, capsys):
+    from importlib import resources
+
+    text = resources.files("geometry").joinpath("scenes", "closed_chain.toml").read_text()
+    scene = tmp_path / "s.toml"
+    scene.write_text(text.replace('models = ["beam:100"',
+                                  'outputs = ["vtu", "png"]\nmodels = ["beam:100"'))
+    target = str(_bad_folder_targets(tmp_path)[kind])
+    assert main(["run", str(scene), "--model", "continuum:0", "--out-dir", target]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert "--out-dir" in err and target in err

@@ -20,7 +20,8 @@ import warnings
 
 from geometry import SceneError, load_scene
 
-from .outputs import OutputError, check_file, check_folder, output_path, write_json, write_text
+from .outputs import (OutputError, check_figure_file, check_file, check_folder, output_path,
+                      write_json, write_text)
 
 EXIT_OK, EXIT_INPUT, EXIT_SOLVER, EXIT_OUTPUT = 0, 2, 3, 4
 COMMAND_LINE = "<command line>"
@@ -73,7 +74,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
 def _cmd_plot(args: argparse.Namespace) -> int:
     from .drawing import plot_mechanism
 
-    output = check_file(args.output, "--output")
+    output = check_figure_file(args.output, "--output")
     scene = load_scene(args.scene)
     plot_mechanism(scene, output)
     print(f"wrote {output}")

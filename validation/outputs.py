@@ -31,7 +31,7 @@ import numpy as np
 from geometry import SceneError
 from geometry.files import OutputError, atomic_path, write_bytes
 
-__all__ = ["OutputError", "check_file", "check_folder", "inside", "json_safe", "safe_name",
+__all__ = ["OutputError", "check_figure_file", "check_file", "check_folder", "inside", "json_safe", "safe_name",
            "output_path", "save_figure", "write_json", "write_text"]
 
 _COMMAND_LINE = "<command line>"
@@ -76,6 +76,28 @@ def check_file(path: str | Path, option: str) -> Path:
     reason = _probe(folder)
     if reason:
         raise SceneError(_COMMAND_LINE, option, text, reason)
+    return target
+
+
+def check_figure_file(path: str | Path, option: str) -> Path:
+    """:func:`check_file` for a picture: its suffix must be a format Matplotlib writes
+    (no suffix: PNG).
+
+    Raises
+    ------
+    SceneError
+        Naming ``option`` and ``path`` when the file cannot be written or
+        the format is unknown.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    target = check_file(path, option)
+    fmt = target.suffix.lstrip(".").lower()
+    formats = FigureCanvasAgg.get_supported_filetypes()
+    if fmt and fmt not in formats:
+        raise SceneError(_COMMAND_LINE, option, str(path),
+                         f"unknown picture format '.{fmt}'; use one of "
+                         f"{', '.join('.' + f for f in sorted(formats))}")
     return target
 
 
