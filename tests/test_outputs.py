@@ -352,3 +352,12 @@ def test_run_out_dir_for_fields_refused_before_work(kind, tmp_path, no_work, cap
     assert main(["run", str(scene), "--model", "continuum:0", "--out-dir", target]) == EXIT_INPUT
     err = capsys.readouterr().err
     assert "--out-dir" in err and target in err
+
+
+@pytest.mark.parametrize("command", [["report", "no_such_scene"], ["bench", "no_such_scene"],
+                                     ["stress", "open_chain", "--model", "nonsense:3"]],
+                         ids=lambda c: c[0])
+def test_bad_input_creates_no_output_folder(command, tmp_path, no_work):
+    out = tmp_path / "new" / "out"
+    assert main(command + ["--out", str(out)]) == EXIT_INPUT
+    assert not (tmp_path / "new").exists()

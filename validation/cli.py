@@ -219,12 +219,12 @@ def _cmd_converge(args: argparse.Namespace) -> int:
 def _cmd_report(args: argparse.Namespace) -> int:
     from .report import DEFAULT_MODELS, build_report
 
-    out = check_folder(args.out, "--out")
     scenes = args.scene or ["open_chain", "closed_chain"]
     for name in scenes:
         load_scene(name)        # bad input fails before any work
     models = args.model or list(DEFAULT_MODELS)
     _parse_models(models, "<command line>", "--model")
+    out = check_folder(args.out, "--out")     # created only once the rest is known good
     path = build_report(scenes, out, models, repeats=args.repeats,
                         use_cache=not args.no_cache, progress=not args.quiet,
                         bench=not args.no_bench, converge=not args.no_converge)
@@ -236,9 +236,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from .bench import runtime_vs_error, sweep_specs, write_bench
     from .cache import ResultCache
 
-    out = check_folder(args.out, "--out")
     scene = load_scene(args.scene)
     ref, = _parse_models([args.reference], "<command line>", "--reference")
+    out = check_folder(args.out, "--out")
     rows, failures = runtime_vs_error(scene, ref, sweep_specs(ref), args.repeats,
                                       ResultCache(enabled=not args.no_cache), not args.quiet)
     for msg in failures:
@@ -251,10 +251,10 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 def _cmd_stress(args: argparse.Namespace) -> int:
     from .stress import stress_report, write_stress
 
-    out = check_folder(args.out, "--out")
     scene = load_scene(args.scene)
     models = args.model or ["ee", "dcmm:1", "dcmm:2", "prbm", "beam:20"]
     specs = _parse_models(models, "<command line>", "--model")
+    out = check_folder(args.out, "--out")
 
     def progress(line: str) -> None:
         if not args.quiet:
