@@ -22,6 +22,7 @@ from typing import Sequence
 import numpy as np
 
 from .errors import SceneError
+from .inertia import MassData
 from .magnitudes import check_magnitudes
 from .mobility import check_structure
 from .overlap import check_overlaps
@@ -163,6 +164,9 @@ class Mechanism:
         The tracing point (mm), attached to ``target_body``.
     pins : tuple[Pin, ...]
         Revolute joints between bodies (none by default).
+    inertia : MassData
+        Density, rigid-body masses and gravity (default: none, see
+        :mod:`geometry.inertia`).
     """
 
     bodies: dict[str, Body]
@@ -173,6 +177,7 @@ class Mechanism:
     target_point: np.ndarray
     source: str = field(default="<scene>", compare=False)
     pins: tuple[Pin, ...] = ()
+    inertia: MassData = field(default_factory=MassData, compare=False)
 
     @property
     def moving_bodies(self) -> list[str]:
@@ -198,7 +203,8 @@ class Mechanism:
         shift = np.asarray(shift, dtype=float)
         pins = tuple(dataclasses.replace(p, point=transform_point(p.point, angle, shift))
                      for p in self.pins)
-        return dataclasses.replace(transform_mechanism(self, angle, shift), pins=pins)
+        return dataclasses.replace(transform_mechanism(self, angle, shift), pins=pins,
+                                   inertia=self.inertia.transformed(angle, shift))
 
 
 @dataclass(frozen=True)

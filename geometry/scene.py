@@ -20,6 +20,9 @@ The format (see README.md for a full example)::
     [[bodies]]  name, points   (optional: known points of a link)
     [[pins]]    name, bodies = [i, j], point = [x, y]
                 (optional revolute joints; either body may be the ground)
+    mass data (optional, see geometry.inertia): material.density,
+                [gravity] acceleration, and per [[bodies]] mass, inertia,
+                center_of_mass or outline (+ depth)
     [[load_cases]] name, kind = "moment" | "force", value, body, point,
                    angle_deg, levels; or loads = [{...}, ...] to combine
     [request]   models = [...], outputs = [...]
@@ -27,6 +30,7 @@ The format (see README.md for a full example)::
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import unicodedata
 from collections import Counter
@@ -39,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from .errors import SceneError
+from .inertia import MASS_KEYS, MassData, parse_body_mass, parse_density, parse_gravity
 from .loads import DEFAULT_LEVELS, Force, LoadCase, Moment
 from .magnitudes import SMALLEST_NORMAL
 from .mechanism import FlexureSpec, Material, Mechanism, PinSpec, Section, assemble
@@ -256,10 +261,10 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
     """Build and check a Scene from parsed TOML ``data`` read from ``source``."""
     rd = _Reader(source)
     rd.known_keys(data, {"name", "description", "material", "section", "ground", "target",
-                         "flexures", "bodies", "pins", "load_cases", "request"}, "")
+                         "flexures", "bodies", "pins", "load_cases", "request", "gravity"}, "")
     name = _scene_name(rd, data.get("name", default_name))
     mat = rd.table(data, "material", "")
-    rd.known_keys(mat, {"youngs_modulus", "poisson_ratio"}, "material.")
+    rd.known_keys(mat, {"youngs_modulus", "poisson_ratio", "density"}, "material.")
     E = rd.number(mat, "youngs_modulus", "material.", positive=True)
     nu = rd.number(mat, "poisson_ratio", "material.", default=0.3)
     if not -1.0 < nu < 0.5:
@@ -284,13 +289,17 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
     if not (isinstance(flex, list) and flex):
         rd.fail("flexures", flex, "must be a non-empty array of tables [[flexures]]")
     specs = [_flexure_spec(rd, f, k, section) for k, f in enumerate(flex)]
-    body_points = {}
+    body_points, body_masses = {}, {}
+    density = parse_density(mat, rd.fail)
     for k, b in enumerate(rd.array(data, "bodies", "", "tables [[bodies]]")):
         b = rd.item_table(b, f"bodies[{k}]")
         bname = rd.name(b, "name", f"bodies[{k}].")
-        rd.known_keys(b, {"name", "points"}, f"bodies.{bname}.")
+        rd.known_keys(b, {"name", "points", *MASS_KEYS}, f"bodies.{bname}.")
         if bname in body_points:
             rd.fail("bodies.name", bname, "duplicate [[bodies]] entry: list a body's points once")
+        rigid_mass = parse_body_mass(b, f"bodies.{bname}.", density, section.depth, rd.fail)
+        if rigid_mass is not None:
+            body_masses[bname] = rigid_mass
         body_points[bname] = np.array([rd.point({"p": p}, "p", f"bodies.{bname}.points.")
                                        for p in rd.array(b, "points", f"bodies.{bname}.",
                                                          "points [x, y]")])
@@ -300,6 +309,12 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
     pins = [_pin_spec(rd, p, k) for k, p in enumerate(raw_pins)]
     mech = assemble(specs, ground, ground_points, Material(E, nu), target_body, target_point,
                     source=source, body_points=body_points, pin_specs=pins)
+    for bname in body_masses:
+        if bname not in mech.bodies or bname == mech.ground:
+            rd.fail(f"bodies.{bname}.mass", bname, "mass data for the ground or for a body no "
+                    f"flexure or pin holds; moving bodies are {mech.moving_bodies}")
+    mech = dataclasses.replace(mech, inertia=MassData(density, parse_gravity(data, rd.fail),
+                                                      body_masses))
 
     cases = []
     raw_cases = data.get("load_cases", [])

@@ -55,6 +55,8 @@ from geometry.kinematics import body_point
 from .connector import Connector, LocalState
 from .validity import MAX_CHORD_TURN, MAX_STRAIN, rotation_reasons, stretch_reasons
 
+from .inertia import MassPoints, chain_mass_points
+
 SHEAR_CORRECTION = 5.0 / 6.0
 """Timoshenko shear coefficient kappa of a rectangular section."""
 
@@ -267,6 +269,7 @@ class BeamConnector(Connector):
         self._end_rel = np.array([
             self._nodes0[0] - mechanism.bodies[flexure.start_body].reference,
             self._nodes0[-1] - mechanism.bodies[flexure.end_body].reference])
+        self._area, self._arc_length = flexure.section.area, flexure.shape.length
         self._element_dofs = self._element_dof_table()
         self._rows = np.repeat(self._element_dofs, 6, axis=1).ravel()
         self._cols = np.tile(self._element_dofs, (1, 6)).ravel()
@@ -282,6 +285,25 @@ class BeamConnector(Connector):
         node_dofs[-1] = 3 * self._end_pose[1] + np.arange(3)
         node_dofs[1:-1] = 6 + np.arange(self.n_internal).reshape(-1, 3)
         return np.hstack([node_dofs[:-1], node_dofs[1:]])
+
+    def mass_points(self, density: float) -> MassPoints:
+        """The flexure's mass (density in t/mm^3) lumped on the nodes (HRZ rule).
+
+        Lumped rather than consistent: each node's mass is a point mass with
+        its own rotary inertia on the node's (x, y, theta), so the kinetic
+        energy stays exact and frame-independent at any rotation (a
+        consistent Hermite mass would have to turn with each chord). Each
+        element gives m/2 and m l^2/78 to each end node
+        (:func:`reducedmodels.inertia.chain_mass_points`); the end nodes'
+        masses sit on the end bodies at the flexure's end points.
+        """
+        n = self._n_nodes - 1
+        frames = [np.arange(3 * s, 3 * s + 3) for s in self._end_pose]
+        node_dofs = [frames[0], *(6 + np.arange(self.n_internal).reshape(-1, 3)), frames[1]]
+        rel = np.zeros((n + 1, 2))
+        rel[0], rel[-1] = self._end_rel
+        return chain_mass_points(node_dofs, rel, np.full(n, self._arc_length / n),
+                                 density * self._area)
 
     def initial_internal(self) -> np.ndarray:
         """Interior nodes at rest: (x, y, 0) each, mm and rad."""

@@ -17,9 +17,14 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
+
+    from .inertia import MassPoints
 
 LocalState = tuple[np.ndarray, np.ndarray, np.ndarray]
 """(pose_a, pose_b, internal) of one connector: (3,), (3,), (n_internal,)."""
@@ -132,6 +137,30 @@ class Connector(ABC):
         12.5 % > 2 %"``.
         """
         return []
+
+    # --- optional mass (reducedmodels.inertia) ---------------------------
+    def mass_points(self, density: float) -> "MassPoints | None":
+        """The connector's mass as point masses over its local coordinates.
+
+        ``density`` is the flexure material's, t/mm^3. Returns a
+        :class:`reducedmodels.inertia.MassPoints` table (mass in t, rotary
+        inertia in t mm^2, offsets in mm), which also gives the weight under
+        gravity. Default None: massless (pins, and any model that does not
+        say how its flexure's mass is distributed); a modal or dynamic
+        analysis then treats the internal coordinates as quasi-static and
+        refuses massless body coordinates.
+        """
+        return None
+
+    def mass_matrix(self, density: float, pose_a: np.ndarray, pose_b: np.ndarray,
+                    internal: np.ndarray) -> "sp.spmatrix | None":
+        """A consistent mass matrix over the local coordinates at this state (t, t mm, t mm^2).
+
+        Default None: the mass is that of :meth:`mass_points`. A connector
+        that returns one (the continuum) has it used for the mass matrix,
+        while its ``mass_points`` still give its weight.
+        """
+        return None
 
 
 def overrides(connector: Connector, hook: str) -> bool:

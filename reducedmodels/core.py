@@ -202,8 +202,17 @@ class System:
 
     # --- loads -----------------------------------------------------------
     def loads(self, case: LoadCase) -> Loads:
-        """Dead loads of ``case`` at full value in global dof numbering."""
-        return Loads.of_case(case, self.pose_dofs, self.reference, self.size)
+        """Dead loads of ``case`` at full value in global dof numbering.
+
+        Connectors that carry dead loads of their own (weights, see
+        :mod:`reducedmodels.inertia`) declare their size as
+        ``dead_load_scale`` (N); it joins the force scale of the residual test,
+        so that a case without load (or a small one) still has a meaningful one.
+        """
+        loads = Loads.of_case(case, self.pose_dofs, self.reference, self.size)
+        loads.scale = max([loads.scale, *(getattr(c, "dead_load_scale", 0.0)
+                                           for c in self.connectors)])
+        return loads
 
     # --- assembly --------------------------------------------------------
     def assemble(self, q: np.ndarray, loads: Loads, factor: float

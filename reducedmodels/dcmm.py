@@ -30,6 +30,7 @@ from geometry import Flexure, Mechanism
 from geometry.kinematics import rotate_xy
 
 from .connector import Connector
+from .inertia import MassPoints, chain_mass_points
 from .validity import MAX_RELATIVE_ROTATION, MAX_STRAIN, rotation_reasons, stretch_reasons
 
 
@@ -175,6 +176,23 @@ class DcmmConnector(Connector):
         # flexure ends' offsets from the end bodies' reference points, float pairs (mm)
         self._end_rel = [tuple((np.asarray(flexure.end_point_of(self.bodies[k]), float)
                                 - refs[-k]).tolist()) for k in (0, 1)]
+        self._area, self._sub_lengths = flexure.section.area, np.array([p.length for p in parts])
+
+    def mass_points(self, density: float) -> MassPoints:
+        """The flexure's mass (density in t/mm^3) lumped on the chain's bodies.
+
+        Each sub-arc's mass goes half to each of its end cross-sections (a
+        cut body's reference point, or the flexure's end point on an end
+        body) with the HRZ rotary inertia m l^2 / 78: the same rule and the
+        same points as ``beam:n`` with n elements, so that the two models'
+        frequencies differ only by their flexibility.
+        """
+        n = len(self._sub_lengths)
+        node_dofs = [np.arange(3), *(6 + np.arange(self.n_internal).reshape(-1, 3)),
+                     np.arange(3, 6)]
+        rel = np.zeros((n + 1, 2))
+        rel[0], rel[-1] = self._end_rel
+        return chain_mass_points(node_dofs, rel, self._sub_lengths, density * self._area)
 
     def initial_internal(self) -> np.ndarray:
         """Cut-point bodies at rest: (x, y, 0) each."""

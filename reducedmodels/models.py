@@ -18,6 +18,7 @@ from geometry.kinematics import rigid_points
 
 from .catalogue import ModelSpec
 from .core import SolverSettings, System
+from .inertia import with_weights
 from .loadpath import LoadPath
 from .recorder import solve_path
 
@@ -30,7 +31,9 @@ def connector_system(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFacto
     """The System of ``mechanism`` with every flexure a ``make(...)`` connector.
 
     Pins (``mechanism.pins``) are added as exact Lagrange-multiplier joints
-    (:class:`reducedmodels.joints.PinConnector`) whatever the model.
+    (:class:`reducedmodels.joints.PinConnector`) whatever the model. With
+    ``[gravity]`` in the scene, the weights of the flexures and bodies are
+    dead loads in the potential (:func:`reducedmodels.inertia.with_weights`).
 
     Raises
     ------
@@ -49,7 +52,7 @@ def connector_system(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFacto
         from .joints import pin_connectors
 
         conns += pin_connectors(mechanism)
-    return System(mechanism, conns, settings or SolverSettings())
+    return System(mechanism, with_weights(mechanism, conns), settings or SolverSettings())
 
 
 def build_system(mechanism: Mechanism, spec: ModelSpec,

@@ -96,6 +96,7 @@ from geometry.kinematics import place_points, rotate, rotate_xy
 from geometry.shapes import Shape, arc_semi_axes
 
 from .connector import Connector
+from .inertia import MassPoints, chain_mass_points
 from .validity import MAX_STRAIN, rotation_reasons, stretch_reasons
 
 TABLE_RESOURCE = "data/prbm_table.json"
@@ -277,6 +278,18 @@ class PrbmConnector(Connector):
         self.length = length
         self._end_rel = [tuple((self._ends[k] - self._ref[k]).tolist()) for k in (0, 1)]
         self._fitted_rotation = fitted_rotation()
+        self._area = flexure.section.area
+
+    def mass_points(self, density: float) -> MassPoints:
+        """The flexure's mass (density in t/mm^3) lumped on its end bodies.
+
+        Half at each end point with the HRZ rotary inertia m L^2 / 78 (the
+        mass of ``beam:1`` and ``dcmm:1``); the pseudo-links are massless,
+        so their two angles follow the end bodies quasi-statically (the
+        modal analysis condenses them).
+        """
+        return chain_mass_points([np.arange(3), np.arange(3, 6)], self._ends - self._ref,
+                                 np.array([self.length]), density * self._area)
 
     def internal_is_rotation(self) -> np.ndarray:
         """[True, True, False, False]: two link rotations, then the multiplier (mm)."""

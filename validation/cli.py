@@ -106,6 +106,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
                          f"VTU and PNG stress fields come from these models only: {with_fields}")
     out_dir = check_folder(args.out_dir, "--out-dir") if fields else None
     cache = ResultCache(enabled=args.cache)
+    inertia = scene.mechanism.inertia
+    massless = inertia.massless_bodies(scene.mechanism.moving_bodies)
+    if inertia.gravity is not None and massless:
+        print(f"note: bodies without mass data are massless (no weight): {', '.join(massless)}")
     results, status = [], EXIT_OK
     w = max(14, *(len(sp.id) for sp in specs))
     print(f"{'model':<{w}} {'case':<6} {'load':>11} {'dx mm':>10} {'dy mm':>10} {'|d| mm':>10} "
@@ -162,6 +166,37 @@ def _validity_note(lp) -> str:
     k = lp.valid.index(False)
     return (f"  ! {lp.model} {lp.load_case}: outside the model's range from level {k + 1} "
             f"({lp.load[k]:.4g} {lp.load_unit}): {lp.validity[k]}")
+
+
+def _cmd_modes(args: argparse.Namespace) -> int:
+    from reducedmodels import SolverError, parse_model
+
+    from .modes import modes_record, plot_modes, run_modes
+
+    scene = load_scene(args.scene)
+    spec = parse_model(args.model, "<command line>", "--model")
+    json_path = check_file(args.json, "--json") if args.json else None
+    plot_path = check_file(args.plot, "--plot") if args.plot else None
+    case = scene.load_case(args.load_case) if args.load_case else (
+        scene.load_cases[0] if args.at > 0.0 else None)
+    massless = scene.mechanism.inertia.massless_bodies(scene.mechanism.moving_bodies)
+    if massless:
+        print(f"note: bodies without mass data (massless): {', '.join(massless)}")
+    try:
+        system, modes = run_modes(scene, spec, case, args.at, args.count)
+    except SolverError as exc:
+        print(f"flexval: solver failure: {exc}", file=sys.stderr)
+        return EXIT_SOLVER
+    where = "at rest" if case is None or args.at == 0.0 else f"at {args.at:g} of {case.name}"
+    print(f"{spec.id}: natural frequencies {where} (Hz)")
+    for k, f in enumerate(modes.frequencies_hz, 1):
+        print(f"  mode {k:>3}: {f:>14.6g}" + ("   (unstable)" if f < 0.0 else ""))
+    record = modes_record(scene, spec, case, args.at, system, modes)
+    if json_path:
+        write_json(json_path, record)
+    if plot_path:
+        plot_modes(system, modes, plot_path, f"{scene.name} {spec.id} {where}")
+    return EXIT_OK
 
 
 def _parse_levels(text: str, spec) -> list[int]:
@@ -331,6 +366,22 @@ def build_parser() -> argparse.ArgumentParser:
                    help="folder for the continuum's VTU/PNG outputs when the scene requests "
                         "them (request.outputs = [\"vtu\", \"png\"]; default flexval_out)")
     q.set_defaults(func=_cmd_run)
+
+    q = sub.add_parser("modes", help="natural frequencies and mode shapes about an equilibrium")
+    q.add_argument("scene", help=scene_help)
+    q.add_argument("--model", required=True, metavar="MODEL",
+                   help="continuum[:LEVEL], beam:N, prbm, dcmm:N or ee")
+    q.add_argument("--at", type=float, default=0.0, metavar="FRACTION",
+                   help="load level as a fraction of the load case, 0 (unloaded; with gravity "
+                        "if the scene has it) to 1 (default 0)")
+    q.add_argument("--load-case", metavar="NAME",
+                   help="load case for --at (default: the scene's first)")
+    q.add_argument("--count", type=int, default=6, metavar="K",
+                   help="number of modes, lowest first (default 6)")
+    q.add_argument("--json", metavar="PATH",
+                   help="write frequencies_hz, eigenvalues and mode shapes as JSON")
+    q.add_argument("--plot", metavar="FILE.png", help="draw the mode shapes")
+    q.set_defaults(func=_cmd_modes)
 
     q = sub.add_parser("converge", help="resolution study: order, Richardson value, GCI")
     q.add_argument("scene", help=scene_help)

@@ -19,13 +19,16 @@ built once, only the rotation coefficients change. Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from geometry import Flexure, Mechanism
 from geometry.kinematics import rigid_points
 from geometry.mesh import FlexureMesh, mesh_flexure
 from reducedmodels.connector import Connector
+from reducedmodels.inertia import MassPoints
 from reducedmodels.validity import MIN_DET_F, stretch_reasons
 
+from .mass import node_jacobian, scalar_mass
 from .material import make_law
 from .solid import Solid
 
@@ -164,6 +167,28 @@ class ContinuumConnector(Connector):
             reasons.append(f"element {k + 1} near inversion: det F {det[k]:.3g} "
                            f"(limit {MIN_DET_F:.3g})")
         return reasons
+
+    # --- optional mass hook (reducedmodels.inertia) ---------------------------
+    def mass_points(self, density: float) -> MassPoints:
+        """Each node's row sum of the consistent mass (t) as a point: carries the weight."""
+        lumped = np.asarray(scalar_mass(self.solid).sum(axis=1)).ravel() * density
+        dofs = np.full((lumped.size, 3), -1)
+        rel = np.zeros((lumped.size, 2))
+        dofs[self._free, 0] = 6 + 2 * np.arange(self._free.size)
+        dofs[self._free, 1] = dofs[self._free, 0] + 1
+        for s in (0, 1):
+            dofs[self._face[s]] = np.arange(3 * s, 3 * s + 3)
+            rel[self._face[s]] = self._rel[s]
+        return MassPoints(dofs, rel, lumped, np.zeros(lumped.size))
+
+    def mass_matrix(self, density: float, pose_a: np.ndarray, pose_b: np.ndarray,
+                    internal: np.ndarray) -> sp.csr_matrix:
+        """Consistent mass T^T M T (t, t mm, t mm^2) over [pose_a, pose_b, internal]."""
+        m = sp.kron(scalar_mass(self.solid), sp.identity(2), format="csr") * density
+        rotated = [rigid_points(np.asarray(p, float), r)[0] - np.asarray(p, float)[:2]
+                   for p, r in zip((pose_a, pose_b), self._rel)]
+        T = node_jacobian(self.mesh.nodes.shape[0], self._free, self._face, rotated)
+        return (T.T @ m @ T).tocsr()
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed centre line (nodes at mid-thickness, start to end), mm."""

@@ -23,6 +23,7 @@ from pathlib import Path
 from geometry import LoadCase, Mechanism
 from geometry.mesh import ASPECT_RATIO, ELEMENT_ORDER, MESH_VERSION
 from reducedmodels import LoadControl, LoadPath, PathRecorder, SolverSettings, System, trace
+from reducedmodels.inertia import with_weights
 
 from .connector import ContinuumConnector
 from .family import DEFAULT_LEVEL
@@ -37,7 +38,7 @@ def build_system(mechanism: Mechanism, level: int, law: str = "svk", plane: str 
     conns = [ContinuumConnector(f, mechanism, level, law=law, plane=plane)
              for f in mechanism.flexures]
     conns += pin_connectors(mechanism)
-    return System(mechanism, conns, settings or SolverSettings())
+    return System(mechanism, with_weights(mechanism, conns), settings or SolverSettings())
 
 
 def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None,

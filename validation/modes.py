@@ -1,0 +1,106 @@
+"""``flexval modes``: natural frequencies and mode shapes of one model about an equilibrium.
+
+The System is built exactly as for ``flexval run`` (gravity included); the
+equilibrium at a fraction of a load case is traced by the same core, and the
+modes come from :func:`reducedmodels.modes.natural_modes`. Units: Hz, mm, rad.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from geometry import LoadCase, Scene, SceneError
+from reducedmodels.catalogue import ModelSpec, parse_model
+from reducedmodels.modes import Modes, natural_modes
+
+from .outputs import save_figure
+
+
+def modal_system(scene: Scene, spec: ModelSpec):
+    """The System of ``scene`` with every flexure modelled as ``spec`` (``ee``: ``dcmm:1``,
+    whose tangent at rest is the ellipse of elasticity)."""
+    if spec.family == "continuum":
+        from .continuum.run import build_system as continuum_system
+
+        return continuum_system(scene.mechanism, spec.resolution, **spec.kwargs)
+    from reducedmodels.models import build_system
+
+    return build_system(scene.mechanism, parse_model("dcmm:1") if spec.family == "ee" else spec)
+
+
+def run_modes(scene: Scene, spec: ModelSpec, case: LoadCase | None, fraction: float,
+              count: int) -> tuple[object, Modes]:
+    """The System and its ``count`` lowest modes at ``fraction`` of ``case``.
+
+    Raises
+    ------
+    SceneError
+        Bad ``--at`` or ``--count``, or a massless body.
+    reducedmodels.core.SolverError
+        If the equilibrium cannot be reached.
+    """
+    if not 0.0 <= fraction <= 1.0 or not math.isfinite(fraction):
+        raise SceneError("<command line>", "--at", fraction,
+                         "must be a load fraction from 0 (unloaded) to 1 (full load)")
+    if spec.family == "ee" and fraction != 0.0:
+        raise SceneError("<command line>", "--at", fraction,
+                         "ee is linear: its modes are those at rest (use --at 0)")
+    if not 1 <= count <= 1000:
+        raise SceneError("<command line>", "--count", count, "must be from 1 to 1000")
+    system = modal_system(scene, spec)
+    return system, natural_modes(system, case, fraction, count)
+
+
+def modes_record(scene: Scene, spec: ModelSpec, case: LoadCase | None, fraction: float,
+                 system, modes: Modes) -> dict:
+    """The JSON record: frequencies (Hz), omega^2 (1/s^2) and each mode's body motions.
+
+    ``mode_shapes[k][body]`` is (dx, dy, dtheta) of the body's reference
+    point (mm, mm, rad) in mode k, normalised to unit modal mass (x^T M x = 1
+    in t mm^2); only the direction and the ratios are physical.
+    """
+    shapes = [{b: modes.shapes[k, system.pose_dofs(b)].tolist()
+               for b in system.mechanism.moving_bodies} for k in range(modes.eigenvalues.size)]
+    dx, dy, rot = system.target(modes.state)
+    inertia = scene.mechanism.inertia
+    return {"scene": scene.name, "model": spec.id,
+            "load_case": None if case is None else case.name, "at": fraction,
+            "frequencies_hz": modes.frequencies_hz.tolist(),
+            "eigenvalues": modes.eigenvalues.tolist(),
+            "equilibrium": {"dx": dx, "dy": dy, "rotation": rot},
+            "massless_bodies": inertia.massless_bodies(system.mechanism.moving_bodies),
+            "mode_shapes": shapes}
+
+
+def plot_modes(system, modes: Modes, path: str | Path, title: str) -> None:
+    """One panel per mode: the equilibrium shape (grey) and the mode shape (colour).
+
+    Each mode is scaled so that its largest body or node translation is 10 %
+    of the mechanism's size.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    k = modes.eigenvalues.size
+    fig, axes = plt.subplots(1, k, figsize=(3.2 * k, 3.4), squeeze=False)
+    translations = ~system.is_rotation
+    for j, ax in enumerate(axes[0]):
+        x = modes.shapes[j]
+        scale = 0.1 * system.size / max(float(np.abs(x[translations]).max()), 1e-300)
+        for q, style in ((modes.state, dict(color="0.7", lw=1.5)),
+                         (modes.state + scale * x, dict(color="tab:red", lw=1.5))):
+            for c, local in zip(system.connectors, system.local_states(q)):
+                pts = c.shape(*local)
+                ax.plot(pts[:, 0], pts[:, 1], **style)
+        ax.set_aspect("equal")
+        ax.set_title(f"mode {j + 1}: {modes.frequencies_hz[j]:.4g} Hz", fontsize=9)
+        ax.tick_params(labelsize=7)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110)
+    plt.close(fig)
