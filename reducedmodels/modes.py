@@ -39,9 +39,9 @@ import scipy.sparse.linalg as spla
 
 from geometry import Force, LoadCase, Moment, SceneError
 
-from .core import SolverError, System
+from .core import SolverError, System, local_hessian
 from .inertia import MassModel, describe_massless
-from .tangent import TangentLayout
+from .loads import Loads
 from .tracer import LoadControl, TraceFailure, trace
 
 SINGULAR_RELATIVE = 1e-12
@@ -127,32 +127,27 @@ DENSE_MODES_LIMIT = 600
 instead of dense ``eigh``: a 4000-coordinate continuum took 50 s dense."""
 
 
-def sparse_tangent(system: System, q: np.ndarray, loads, factor: float) -> sp.csc_matrix:
-    """The System's tangent at q assembled into sparse storage (whatever its usual storage).
+def sparse_tangent(system: System, q: np.ndarray, loads: Loads, factor: float) -> sp.csc_matrix:
+    """The System's tangent at q (N/mm, N, N mm) in sparse storage, whatever its usual one.
 
-    The value slots are the same as :meth:`System._build_scatter`'s (every
-    connector's Hessian pattern, then one diagonal slot per coordinate for
-    the loads), scattered through a sparse :class:`TangentLayout`.
+    Each connector's Hessian (:func:`reducedmodels.core.local_hessian`) is
+    scattered through its local-to-global map (ground rows and columns
+    dropped), and the loads add their diagonal (:meth:`Loads.add_to`), as in
+    :meth:`System.assemble`.
     """
-    rows, cols = [], []
-    for c, idx in zip(system.connectors, system._local_to_global):
-        pattern = getattr(c, "hessian_pattern", None)
-        if pattern is None:
-            r, cc = np.repeat(idx, idx.size), np.tile(idx, idx.size)
-        else:
-            lr, lc = pattern()
-            r, cc = idx[lr], idx[lc]
+    n = system.n_dofs
+    rows, cols, vals = [], [], []
+    for c, idx, local in zip(system.connectors, system._local_to_global,
+                             system.local_states(q)):
+        h = sp.coo_matrix(local_hessian(c, c.evaluate(*local)[2]))
+        r, cc = idx[h.row], idx[h.col]
         keep = (r >= 0) & (cc >= 0)
-        rows.append(r[keep]), cols.append(cc[keep])
-    diagonal = np.arange(system.n_dofs)
-    layout = TangentLayout(system.n_dofs, np.concatenate([*rows, diagonal]),
-                           np.concatenate([*cols, diagonal]), system.n_multipliers, kind="sparse")
-    usual, system.layout = system.layout, layout
-    try:
-        _, _, K = system.assemble(q, loads, factor)
-    finally:
-        system.layout = usual
-    return K.matrix
+        rows.append(r[keep]), cols.append(cc[keep]), vals.append(h.data[keep])
+    diagonal = np.zeros(n)
+    loads.add_to(q, factor, np.zeros(n), diagonal)
+    rows.append(np.arange(n)), cols.append(np.arange(n)), vals.append(diagonal)
+    return sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(n, n))
 
 
 def sparse_modes(system: System, mass: MassModel, q: np.ndarray, tangent: sp.spmatrix,
