@@ -33,7 +33,7 @@ the compliance lumped in the two outer joints:
 elasticity towards the arc's apex). So the PRBM reproduces the linear (EE)
 compliance of every arc and straight beam by construction, and rho is
 fitted per arc angle to the large-deflection response of a nonlinear beam
-(:mod:`reducedmodels.prbm_fit`). The fitted rho(2 gamma) ships in
+(offline, by ``benchmarks/calibrate_prbm.py``). The fitted rho(2 gamma) ships in
 ``data/prbm_table.json`` (0 to 330 deg every 15 deg) and is interpolated
 by a cubic spline in the arc angle; since only rho is interpolated, the
 linear exactness holds at every angle, tabulated or not. For a straight

@@ -7,6 +7,10 @@
   corotational chain under the same moment.
 * The linear tip compliance of a circular-arc cantilever by Castigliano's
   theorem (bending, axial and optionally shear complementary energy).
+* The large-deflection end pose of an initially curved (or straight)
+  inextensible cantilever under dead end loads, as a boundary-value problem
+  solved by collocation (scipy's ``solve_bvp``), independent of the shooting
+  solver of the PRBM calibration (``benchmarks/calibrate_prbm.py``).
 
 Units: mm, N, N mm, rad. The cantilevers are clamped at the shape's start.
 """
@@ -14,6 +18,7 @@ Units: mm, N, N mm, rad. The cantilevers are clamped at the shape's start.
 from __future__ import annotations
 
 import numpy as np
+from scipy.integrate import solve_bvp
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
 
@@ -133,3 +138,65 @@ def arc_tip_compliance(shape: Arc | Segment, EI: float, EA: float,
     b_v = np.column_stack([-t[:, 1], t[:, 0], np.zeros_like(s)])
     parts = [(b_m, EI), (b_n, EA)] + ([(b_v, shear_stiffness)] if shear_stiffness else [])
     return sum(np.einsum("k,ki,kj->ij", w, b, b) / k for b, k in parts)
+
+
+def curved_cantilever(width: float, load: np.ndarray, steps: int = 8,
+                      tol: float = 1e-8) -> np.ndarray:
+    """End pose change of a uniformly curved inextensible cantilever under dead end loads.
+
+    Dimensionless: length L = 1, EI = 1, initial curvature ``width`` (the arc
+    angle, rad; 0 is straight), clamped at the origin along +x and bending
+    towards +y. The end load ``load`` = (Fx, Fy, M) is in EI/L^2 and EI/L.
+    With the internal moment m(s) = M + (p(1) - p(s)) x F the Kirchhoff
+    elastica is the first-order system
+
+        x' = cos theta,  y' = sin theta,  theta' = width + m,
+        m' = Fx sin theta - Fy cos theta,
+
+    with x = y = theta = 0 at s = 0 and m(1) = M: a two-point problem solved by
+    collocation (residual tolerance ``tol``). The load is ramped from the
+    unloaded arc in ``steps`` equal increments, each solution the next one's
+    guess (an increment the collocation cannot take is halved), so the
+    stable branch is followed.
+
+    Returns
+    -------
+    numpy.ndarray
+        (dx, dy, dtheta): end displacement over L and end rotation (rad).
+
+    Raises
+    ------
+    RuntimeError
+        If the collocation fails even on an increment of 1/1000 of the load.
+    """
+    load = np.asarray(load, dtype=float)
+    s = np.linspace(0.0, 1.0, 101)
+    theta0 = width * s
+    if abs(width) > 1e-12:
+        x0, y0 = np.sin(theta0) / width, (1.0 - np.cos(theta0)) / width
+    else:
+        x0, y0 = s, 0.0 * s
+    rest = np.array([x0[-1], y0[-1], width])
+    guess = np.vstack([x0, y0, theta0, 0.0 * s])
+    lam, dlam, end = 0.0, 1.0 / steps, rest
+    while lam < 1.0:
+        trial = min(1.0, lam + dlam)
+        fx, fy, m_end = trial * load
+
+        def rhs(_s, u, fx=fx, fy=fy):
+            c, sn = np.cos(u[2]), np.sin(u[2])
+            return np.vstack([c, sn, width + u[3], fx * sn - fy * c])
+
+        def bc(ua, ub, m_end=m_end):
+            return np.array([ua[0], ua[1], ua[2], ub[3] - m_end])
+
+        sol = solve_bvp(rhs, bc, s, guess, tol=tol, max_nodes=5000)
+        if not sol.success:
+            dlam *= 0.5
+            if dlam < 1e-3:
+                raise RuntimeError(f"elastica collocation failed at {trial:.3f} of the load: "
+                                   f"{sol.message}")
+            continue
+        # the next guess on the initial mesh: collocation only ever adds nodes
+        lam, guess, end = trial, sol.sol(s), sol.y[:3, -1]
+    return end - rest

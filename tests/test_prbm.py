@@ -1,7 +1,7 @@
 """The 3R PRBM connector (``prbm``) and its fitted table.
 
 References independent of the PRBM: the curved elastica by shooting
-(``reducedmodels.prbm_fit``, itself checked here against the Bisshopp-Drucker
+(``benchmarks/calibrate_prbm.py``, the offline calibration, itself checked here against the Bisshopp-Drucker
 closed form), Castigliano's linear compliance and the exact circle under an
 end moment (``tests/elastica.py``), and the beam FEM when it is available.
 Dimensionless loads are in EI/L^2 (forces) and EI/L (moments).
@@ -11,7 +11,8 @@ Units: mm, N, MPa, N mm, rad.
 import numpy as np
 import pytest
 from builders import cantilever, fd_check, tip_moment
-from elastica import arc_tip_compliance, cantilever_tip_force, circle_under_end_moment
+from elastica import (arc_tip_compliance, cantilever_tip_force, circle_under_end_moment,
+                      curved_cantilever)
 
 from geometry import Arc, Force, LoadCase, Moment, Segment, load_scene
 from geometry.shapes import arc_semi_axes
@@ -20,8 +21,8 @@ from reducedmodels.core import local_hessian
 from reducedmodels import build_system, run_reduced, solve_path
 from reducedmodels.prbm import (PrbmConnector, PrbmParameters, load_table,
                                 shape_frame, table_parameters)
-from reducedmodels.prbm_fit import (FitSettings, chain_cantilever, elastica, reference_paths,
-                                    relative_errors, su2009_comparison)
+from calibrate_prbm import (FitSettings, chain_cantilever, elastica, reference_paths,
+                            relative_errors, su2009_comparison)
 
 LENGTH = 12.0          # mm, cantilever length in the dimensionless checks
 TEST_SET = FitSettings(n_directions=8, levels=5)   # a subset of the fit's samples
@@ -201,11 +202,18 @@ def test_elastica_reference_matches_bisshopp_drucker_and_euler():
     np.testing.assert_allclose(p200, p800, atol=1e-8)
 
 
+def independent_errors(width: float, loads: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """|e| of the fit's objective at each path's last sample, against the elastica
+    solved by collocation (``tests/elastica.py``), not by the calibration's shooting."""
+    ref = np.array([curved_cantilever(width, path[-1]) for path in loads])
+    return np.linalg.norm(relative_errors(pose[:, -1], ref, TEST_SET.floor), axis=-1)
+
+
 @pytest.mark.parametrize("width_deg", [150.0, 270.0])
-def test_connector_reproduces_the_fit_within_its_stated_error(width_deg):
+def test_connector_reproduces_the_fit_and_the_table_states_its_error(width_deg):
     row = table_row(width_deg)
     w = np.radians(width_deg)
-    loads, ref, _ = reference_paths(w, TEST_SET)
+    loads, _, _ = reference_paths(w, TEST_SET)
     fit_pose, ok = chain_cantilever(w, table_parameters(w), loads)
     mech = cantilever(unit_arc(width_deg))
     core_pose = np.array([prbm_cantilever_path(mech, path[-1], TEST_SET.levels + 1)
@@ -213,10 +221,12 @@ def test_connector_reproduces_the_fit_within_its_stated_error(width_deg):
     # the connector in the core is the fitted model ...
     assert ok.all()
     np.testing.assert_allclose(core_pose, fit_pose, atol=1e-8)
-    # ... and stays within the errors the table states for these (fit) samples
-    err = np.linalg.norm(relative_errors(core_pose, ref, TEST_SET.floor), axis=-1)
-    assert err.max() <= row["max_rel_error"] + 1e-6
-    assert np.abs(core_pose[..., 2] - ref[..., 2]).max() <= row["max_rotation_error"] + 1e-8
+    # ... and its error at the largest loads of these paths, computed against an
+    # independent elastica, is at most what the table claims (measured 0.044 at
+    # 150 deg, 0.116 at 270 deg; the table states 0.052 and 0.152 over 16 directions)
+    err = independent_errors(w, loads, core_pose)
+    print(f"{width_deg} deg: independent max |e| {err.max():.4f}, table {row['max_rel_error']:.4f}")
+    assert err.max() <= row["max_rel_error"]
 
 
 def test_interpolation_at_an_untabulated_angle():
@@ -227,10 +237,12 @@ def test_interpolation_at_an_untabulated_angle():
         max(rows[195.0]["rho"], rows[210.0]["rho"]) + 0.01
     assert p == PrbmParameters.from_rho(np.radians(200.0), rho)
     w = np.radians(200.0)
-    loads, ref, _ = reference_paths(w, TEST_SET)
+    loads, _, _ = reference_paths(w, TEST_SET)
     pose, ok = chain_cantilever(w, p, loads)
-    err = np.linalg.norm(relative_errors(pose, ref, TEST_SET.floor), axis=-1)
     assert ok.all()
+    # between its neighbours' errors, against the independent elastica
+    err = independent_errors(w, loads, pose)
+    print(f"200 deg: independent max |e| {err.max():.4f}")
     assert err.max() <= max(rows[195.0]["max_rel_error"], rows[210.0]["max_rel_error"])
     with pytest.raises(ValueError, match="outside the fitted range"):
         table_parameters(np.radians(345.0))
@@ -317,22 +329,3 @@ def test_builtin_scenes_converge_near_dcmm3(scene):
         assert np.hypot(p.dx[-1], p.dy[-1]) == pytest.approx(np.hypot(d.dx[-1], d.dy[-1]),
                                                              rel=0.03)
         assert p.rotation[-1] == pytest.approx(d.rotation[-1], rel=0.05)
-
-
-def test_elastica_and_prbm_against_the_beam_fem():
-    pytest.importorskip("reducedmodels.beam")
-    mech = cantilever(unit_arc(150.0))
-    EI = mech.flexures[0].bending_stiffness(mech.material)
-    load = np.array([1.5, -2.0, 0.0])
-    case = LoadCase("F", (Force("t", mech.target_point, float(np.arctan2(load[1], load[0])),
-                                float(np.hypot(*load[:2])) * EI / LENGTH**2),), 6)
-    beam = run_reduced(mech, parse_model("beam:100"), case)
-    beam_pose = np.array([beam.dx[-1] / LENGTH, beam.dy[-1] / LENGTH, beam.rotation[-1]])
-    guess = None
-    for lam in np.linspace(0.2, 1.0, 5):
-        ref, guess, _ = elastica(np.radians(150.0), load[None] * lam, guess)
-    # beam:100 differs from the inextensible elastica by discretisation and axial strain
-    np.testing.assert_allclose(beam_pose, ref[0], atol=2e-3 * np.linalg.norm(ref[0]))
-    prbm = prbm_cantilever_path(mech, load, 6)[-1]
-    assert np.linalg.norm(prbm - beam_pose) < table_row(150.0)["max_rel_error"] * \
-        np.linalg.norm(beam_pose)

@@ -60,7 +60,7 @@ DISCUSSION = [
     "to the beam solution.",
     "- **PRBM.** Our 3R parameters reproduce each arc's ellipse of elasticity exactly (the "
     "linear limit is exact) and one shape parameter is fitted against the curved elastica "
-    "(`reducedmodels/prbm_fit.py`); its errors are at or below the paper's.",
+    "(`benchmarks/calibrate_prbm.py`); its errors are at or below the paper's.",
     "- **Run times.** Ours are static Newton solutions on one core path in Python, the paper's "
     "are dynamic quasi-static runs in a commercial multibody code: compare the speed-up "
     "columns, not the seconds.",

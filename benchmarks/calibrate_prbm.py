@@ -1,8 +1,16 @@
-"""Fit of the PRBM table ``data/prbm_table.json``: rho(arc angle) against the elastica.
+"""Offline calibration of the PRBM table ``reducedmodels/data/prbm_table.json``.
 
-Run ``python -m reducedmodels.prbm_fit`` (about 70 s) to regenerate the
-shipped table, ``--quick`` for a coarse check (about 20 s, written to
-``prbm_table_quick.json`` unless ``--output`` says otherwise).
+Fits rho(arc angle) of :mod:`reducedmodels.prbm` against the elastica. It is
+not part of the runtime package (nothing under ``reducedmodels`` imports it);
+the runtime only reads the table it writes. Run from the repository root
+
+    python benchmarks/calibrate_prbm.py            # about 70 s: rewrites the shipped table
+    python benchmarks/calibrate_prbm.py --quick    # about 20 s: prbm_table_quick.json
+    python benchmarks/calibrate_prbm.py --su2009   # the straight-beam comparison below
+
+(``--output PATH`` writes elsewhere). ``tests/test_prbm_calibration.py``
+runs its pieces (the elastica against Bisshopp-Drucker, the fitted
+samples, the Su 2009 figures) in CI, so it stays runnable.
 
 What is fitted
 --------------
@@ -112,7 +120,9 @@ from scipy.optimize import minimize_scalar
 
 from geometry import Arc, Segment
 
-from .prbm import TABLE_RESOURCE, PrbmParameters, joint_positions, shape_frame, table_parameters
+import reducedmodels
+from reducedmodels.prbm import (TABLE_RESOURCE, PrbmParameters, joint_positions, shape_frame,
+                                table_parameters)
 
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])
 
@@ -475,7 +485,7 @@ def build_table(settings: FitSettings, progress: bool = True) -> dict:
             "settings": asdict(settings),
             "interpolation": "cubic spline (not-a-knot) of rho in the arc angle",
             "date": datetime.date.today().isoformat(),
-            "script": "python -m reducedmodels.prbm_fit",
+            "script": "python benchmarks/calibrate_prbm.py",
             "seconds": round(time.perf_counter() - t0, 1),
         },
         "table": rows,
@@ -484,7 +494,7 @@ def build_table(settings: FitSettings, progress: bool = True) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     """Command line: fit and write the table, or print the Su (2009) comparison."""
-    ap = argparse.ArgumentParser(prog="python -m reducedmodels.prbm_fit", description=__doc__
+    ap = argparse.ArgumentParser(prog="python benchmarks/calibrate_prbm.py", description=__doc__
                                  .split("\n")[0])
     ap.add_argument("--quick", action="store_true",
                     help="coarse fit (every 30 deg, 8 directions, 5 levels) for a smoke test")
@@ -503,7 +513,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     settings = QUICK if args.quick else FitSettings()
     out = args.output or (Path("prbm_table_quick.json") if args.quick
-                          else Path(__file__).parent / TABLE_RESOURCE)
+                          else Path(reducedmodels.__file__).parent / TABLE_RESOURCE)
     doc = build_table(settings)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
