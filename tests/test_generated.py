@@ -3,12 +3,13 @@ rigid links (some closed through a pin) under loads that give moderate
 deflections, and random corruptions of valid scene files.
 
 Every model either converges with finite results or raises SolverError with
-a message; bad input is always a SceneError that names a field. Examples are
+a message at a limit point that arc-length continuation confirms (any other
+solver failure fails the test); bad input is always a SceneError that names
+a field. Examples are
 derandomised so that the run is reproducible and its time bounded.
 """
 
 import copy
-import importlib.util
 import math
 import tomllib
 from importlib import resources
@@ -22,11 +23,10 @@ from geometry import Arc, Force, LoadCase, Material, Moment, SceneError, Section
 from geometry.mechanism import FlexureSpec, PinSpec, assemble
 from reducedmodels.catalogue import parse_model
 from geometry.scene import parse_scene
-from reducedmodels import SolverError, run_reduced
+from reducedmodels import SolverError, build_system, run_reduced
+from reducedmodels.continuation import limit_loads, solve_arclength
 
-MODELS = ["dcmm:1", "dcmm:2", "beam:8", "ee"]
-if importlib.util.find_spec("reducedmodels.prbm") is not None:
-    MODELS.append("prbm")
+MODELS = ["dcmm:1", "dcmm:2", "beam:8", "ee", "prbm"]
 LEVELS = 5
 
 # no shrinking: a failing chain is reported as drawn (shrinking re-solves it for minutes)
@@ -119,6 +119,19 @@ def _moderate(mech, case, disp: float, rot: float) -> LoadCase:
     return LoadCase(case.name, (comp,), LEVELS)
 
 
+def _assert_limit_point_below_full_load(mech, model: str, case: LoadCase,
+                                       exc: SolverError) -> None:
+    """A load-control failure is legitimate only at a limit point: arc-length
+    continuation of the same model must find the load turning back below full load,
+    at or above the load that load control reached (it stops just before the limit)."""
+    system = build_system(mech, parse_model(model))
+    path = solve_arclength(system, case, 1.0, 20, model=model, max_steps=2000,
+                           stop=lambda p: bool(p.stats["limit_points"]))
+    limits = [abs(p) / case.magnitude for p in limit_loads(path)]
+    assert limits and exc.load_factor * (1 - 1e-3) <= limits[0] <= 1.0, (
+        f"{model} failed under load control without a limit point: {exc}")
+
+
 def _check_every_model(mech, case) -> None:
     for model in MODELS:
         try:
@@ -129,6 +142,7 @@ def _check_every_model(mech, case) -> None:
             partial = exc.path
             if partial is not None:
                 assert np.all(np.isfinite(partial.dx + partial.dy + partial.rotation))
+            _assert_limit_point_below_full_load(mech, model, case, exc)
             continue
         event(f"{model}: converged")
         assert lp.converged and len(lp.load) == LEVELS, model
