@@ -1,16 +1,30 @@
-"""CI accuracy gates: every model's error against its reference may not grow.
+"""CI regression gates: every model's error figure against its reference may not move.
 
 The baseline is ``reports/paper/gates.json``, written by ``make report`` (the
-committed report). Each gated error must stay below
+committed report). Each gated error figure (percent) must reproduce its
+baseline within
 
-    baseline * (1 + REL_MARGIN) + ABS_MARGIN   (percent)
+    |error - baseline| <= GATE_TOL   (percentage points)
 
-REL_MARGIN = 10 % and ABS_MARGIN = 0.1 percentage point absorb floating-point
-differences between machines and BLAS builds (the solvers are deterministic;
-observed run-to-run spread is below 1e-6 points); a regression of any model
-beyond that fails CI. To keep CI fast, the reduced models are gated against
-beam:100 on every load case and against the continuum reference on the
-``f+`` case of each scene only.
+Why GATE_TOL = 1e-6 points. The solvers are deterministic: rerunning every
+gated figure (either order, 1 or 2 BLAS threads) reproduces gates.json
+bit for bit. What legitimately moves a figure is the solver's path to the
+same equilibrium: tracing every reduced model with sub-steps 5 times finer
+and a 100 times tighter Newton tolerance (``error_tol`` 1e-12), or 2 times
+coarser with ``error_tol`` 1e-9 (10 to 90 sub-steps per path), moved the
+208 gated figures by at most 5e-8 points (3e-7 of their value); the
+continuum reference, retraced the same ways, by at most 2e-9 of its
+values. GATE_TOL is 20 times that spread, and 10^4 times below the
+report's printed resolution (0.01 points): a change that shows in the
+report fails CI, whichever way it goes (a real improvement means
+regenerating the report). ``python benchmarks/gate_spread.py`` repeats the
+measurement.
+
+Regression gates only say that nothing moved; whether the figures are right
+is checked against independent references in ``test_reference_gates.py``.
+To keep CI fast, the reduced models are gated against beam:100 on every load
+case and against the continuum reference on the ``f+`` case of each scene
+only.
 """
 
 import json
@@ -24,7 +38,7 @@ from validation.compare import errors
 from validation.run import run_model
 
 GATES = Path(__file__).resolve().parents[1] / "reports" / "paper" / "gates.json"
-REL_MARGIN, ABS_MARGIN = 0.10, 0.1
+GATE_TOL = 1e-6
 GATED = ("end_disp_vec", "end_rot", "path_disp", "path_rot")
 
 
@@ -48,39 +62,39 @@ def _cases():
 _CACHE: dict = {}
 
 
-def _path(scene, model, case):
-    key = (scene.name, model, case)
+def _path(scene_name: str, model: str, case: str):
+    key = (scene_name, model, case)
     if key not in _CACHE:
+        scene = load_scene(scene_name)
         _CACHE[key] = run_model(scene, parse_model(model), scene.load_case(case))
     return _CACHE[key]
 
 
 @pytest.mark.parametrize("scene_name,reference,case", list(_cases()))
-def test_no_model_got_worse(scene_name, reference, case):
+def test_no_error_figure_moved(scene_name, reference, case):
     base = _baseline()[scene_name][reference]
-    scene = load_scene(scene_name)
-    ref = _path(scene, reference, case)
+    ref = _path(scene_name, reference, case)
     for model, per_case in base.items():
         if case not in per_case:
             continue
-        got = errors(_path(scene, model, case), ref)
+        got = errors(_path(scene_name, model, case), ref)
         for metric in GATED:
-            bound = per_case[case][metric] * (1 + REL_MARGIN) + ABS_MARGIN
-            assert got[metric] <= bound, (
+            was = per_case[case][metric]
+            assert abs(got[metric] - was) <= GATE_TOL, (
                 f"{model} vs {reference} on {scene_name}/{case}: {metric} = "
-                f"{got[metric]:.3f} % > gate {bound:.3f} % (baseline {per_case[case][metric]:.3f})")
+                f"{got[metric]:.8f} % moved from the committed {was:.8f} % "
+                f"(gate +-{GATE_TOL} points)")
 
 
-def test_baseline_is_physically_sane():
-    """Independent of the report: FEM100 agrees with the continuum on the gated cases
+@pytest.mark.parametrize("scene_name", ["open_chain", "closed_chain"])
+def test_fem_agrees_with_the_continuum_and_fem20_with_fem100(scene_name):
+    """Computed, not read from the baseline: beam:100 agrees with continuum:1 on f+
     within the thin-beam modelling error (shear, Poisson, through-thickness effects
-    are O((h/r)^2) ~ 0.2-1.5 % for these flexures; 3 % leaves room for the soft
-    open-chain f+ path), and FEM20 is within 1 % of FEM100 everywhere."""
-    for scene, refs in _baseline().items():
-        for ref, models in refs.items():
-            if ref.startswith("continuum") and "beam:100" in models:
-                for case, e in models["beam:100"].items():
-                    assert e["end_disp_vec"] < 3.0, (scene, case, e)
-            if ref == "beam:100" and "beam:20" in models:
-                for case, e in models["beam:20"].items():
-                    assert e["path_disp"] < 1.0, (scene, case, e)
+    are O((h/r)^2) ~ 0.2-1.5 % for these flexures; measured 0.008 % open, 0.34 %
+    closed), and beam:20 is within its O(1/N^2) discretisation error of beam:100
+    everywhere (measured at most 0.79 %, open chain f-)."""
+    e = errors(_path(scene_name, "beam:100", "f+"), _path(scene_name, "continuum:1", "f+"))
+    assert e["end_disp_vec"] < 3.0 and e["end_rot"] < 3.0, e
+    for case in load_scene(scene_name).load_cases:
+        e = errors(_path(scene_name, "beam:20", case.name), _path(scene_name, "beam:100", case.name))
+        assert e["path_disp"] < 1.0 and e["path_rot"] < 1.0, (case.name, e)

@@ -7,8 +7,8 @@ import re
 import numpy as np
 import pytest
 
-from geometry import load_scene, parse_model
-from reducedmodels import LoadPath
+from geometry import load_scene
+from reducedmodels import LoadPath, parse_model
 from validation.compare import errors
 from validation.report import build_report
 from validation.run import run_model
