@@ -16,6 +16,7 @@ from reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
 from .cache import ResultCache
 from .campaign import Progress, run_campaign
 from .compare import errors
+from .failures import Failure
 from .outputs import output_path, write_json, write_text
 
 #: the reduced models of the study, every resolution of the paper's range and beyond
@@ -40,8 +41,12 @@ def sweep_specs(reference: ModelSpec | None = None) -> list[ModelSpec]:
 
 def runtime_vs_error(scene: Scene, reference: ModelSpec, specs: list[ModelSpec],
                      repeats: int = 3, cache: ResultCache | None = None,
-                     progress: bool = True) -> tuple[list[dict], list[str]]:
-    """Rows {model, seconds, error, per_case} of the study, and failure messages."""
+                     progress: bool = True) -> tuple[list[dict], list[Failure]]:
+    """Rows {model, seconds, error, per_case} of the study, and the failures.
+
+    A model that fails on some load case has no row (its error is not
+    defined); its failures are returned.
+    """
     cases = list(scene.load_cases)
     all_specs = [reference] + [s for s in specs if s.id != reference.id]
     bar = Progress(len(all_specs) * len(cases), enabled=progress)
@@ -67,11 +72,13 @@ def runtime_vs_error(scene: Scene, reference: ModelSpec, specs: list[ModelSpec],
     return rows, failures
 
 
-def write_bench(scene: Scene, rows: list[dict], reference: str, out: Path) -> Path:
+def write_bench(scene: Scene, rows: list[dict], reference: str, out: Path,
+                failures: list[Failure] = ()) -> Path:
     """Table (Markdown), plot (PNG) and JSON of a runtime-versus-error study in ``out``.
 
     The files are ``bench_<scene>.md/.png/.json`` with the scene name made
     safe (:func:`validation.outputs.safe_name`); returns the Markdown path.
+    ``failures`` are listed below the table (a model that fails has no row).
     """
     from .figures import pareto_front, runtime_vs_error as plot
 
@@ -88,7 +95,11 @@ def write_bench(scene: Scene, rows: list[dict], reference: str, out: Path) -> Pa
                      f"{'yes' if k in front else ''} |")
     png = plot(rows, f"{scene.name}: runtime vs error (reference {reference})",
                output_path(out, stem, ".png"))
+    if failures:
+        lines += ["", "Failures (no row above):", ""]
+        lines += [f"- `{f.model}` on `{f.load_case}`: {f.summary()}" for f in failures]
     lines += ["", f"![runtime vs error]({png})", ""]
     write_json(output_path(out, stem, ".json"), {"scene": scene.name, "reference": reference,
-                                             "rows": rows})
+                                             "rows": rows,
+                                             "failures": [f.to_dict() for f in failures]})
     return write_text(output_path(out, stem, ".md"), "\n".join(lines))

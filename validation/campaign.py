@@ -13,10 +13,11 @@ import sys
 import time
 from typing import Callable
 
-from geometry import LoadCase, Scene
+from geometry import LoadCase, Scene, SceneError
 from reducedmodels import LoadPath, ModelSpec, SolverError
 
 from .cache import ResultCache, result_key
+from .failures import Failure, failure_of
 from .run import run_model
 
 
@@ -69,10 +70,16 @@ def run_campaign(scene: Scene, specs: list[ModelSpec], cases: list[LoadCase], re
                  cache: ResultCache | None, progress: Progress | None = None,
                  record_models: tuple[str, ...] = (),
                  repeats_for: Callable[[ModelSpec], int] | None = None,
-                 ) -> tuple[dict[tuple[str, str], LoadPath], list[str]]:
-    """Every spec on every case; returns ({(model, case): LoadPath}, failure messages)."""
+                 ) -> tuple[dict[tuple[str, str], LoadPath], list[Failure]]:
+    """Every spec on every case: ({(model, case): LoadPath}, failures).
+
+    A model that fails on a case is a result, not an error: its
+    :class:`~validation.failures.Failure` is listed and its partial path
+    (the levels it reached) kept, and the campaign carries on. So is a
+    model that cannot represent a flexure of the scene (a failure at load 0).
+    """
     results: dict[tuple[str, str], LoadPath] = {}
-    failures: list[str] = []
+    failures: list[Failure] = []
     for spec in specs:
         for case in cases:
             reps = repeats_for(spec) if repeats_for else repeats
@@ -80,9 +87,9 @@ def run_campaign(scene: Scene, specs: list[ModelSpec], cases: list[LoadCase], re
                 lp = timed_run(scene, spec, case, reps, cache, record=spec.id in record_models)
                 results[(spec.id, case.name)] = lp
                 label = f"{scene.name} {spec.id} {case.name} {lp.seconds:.3g} s"
-            except SolverError as exc:
-                failures.append(str(exc))
-                if exc.path is not None:
+            except (SolverError, SceneError) as exc:
+                failures.append(failure_of(exc, scene, spec, case))
+                if getattr(exc, "path", None) is not None:
                     results[(spec.id, case.name)] = exc.path
                 label = f"{scene.name} {spec.id} {case.name} FAILED"
             if progress:

@@ -220,11 +220,9 @@ def _parse_levels(text: str, spec) -> list[int]:
 
 
 def _cmd_converge(args: argparse.Namespace) -> int:
-    from reducedmodels import SolverError
+    from reducedmodels.catalogue import families
 
     from .convergence import format_study, study
-
-    from reducedmodels.catalogue import families
 
     spec, = _parse_models([args.model], "<command line>", "--model")
     res = spec.model_family.resolution
@@ -236,19 +234,19 @@ def _cmd_converge(args: argparse.Namespace) -> int:
     json_path = check_file(args.json, "--json") if args.json else None
     scene = load_scene(args.scene)
     cases = [scene.load_case(n) for n in args.load_case] if args.load_case else scene.load_cases
-    out = []
+    out, status = [], EXIT_OK
     for case in cases:
-        try:
-            st = study(scene, spec, resolutions, case)
-        except SolverError as exc:
-            print(f"flexval: solver failure: {exc}", file=sys.stderr)
-            return EXIT_SOLVER
+        st = study(scene, spec, resolutions, case)
+        for f in st.failures:
+            print(f"flexval: solver failure: {f.message}", file=sys.stderr)
+            status = EXIT_SOLVER
         print(format_study(st) + "\n")
         out.append({"family": st.family, "load_case": st.load_case, "ratio": st.ratio,
-                    "rows": st.rows, "summary": st.summary})
+                    "rows": st.rows, "summary": st.summary,
+                    "failures": [f.to_dict() for f in st.failures]})
     if json_path:
         write_json(json_path, {"scene": scene.name, "studies": out})
-    return EXIT_OK
+    return status
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
@@ -276,9 +274,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     out = check_folder(args.out, "--out")
     rows, failures = runtime_vs_error(scene, ref, sweep_specs(ref), args.repeats,
                                       ResultCache(enabled=not args.no_cache), not args.quiet)
-    for msg in failures:
-        print(f"flexval: solver failure: {msg}", file=sys.stderr)
-    md = write_bench(scene, rows, ref.id, out)
+    for f in failures:
+        print(f"flexval: {f.model} on {f.load_case} {f.summary()}: {f.message}", file=sys.stderr)
+    md = write_bench(scene, rows, ref.id, out, failures)
     print(md.read_text(encoding="utf-8"))
     return EXIT_OK
 

@@ -79,13 +79,28 @@ def paper_results() -> dict:
     return tomllib.loads(text)["paper_results"]
 
 
-def paper_percent(scene: str, load_cases: list[str]) -> dict[str, dict[str, dict[str, float]]]:
-    """The paper's percentages as {model id: {load case: {"disp": %, "rot": %}}} ("-" skipped)."""
-    table = paper_results()[scene]["percent_difference"]
+def paper_scene(scene: str) -> dict | None:
+    """The paper's data for the scene named ``scene`` (None if the paper has none).
+
+    Keys: ``load_cases`` (the columns), ``percent_table``, ``seconds_table``
+    and optionally ``relative_rotations_figure`` (labels in the paper),
+    ``percent_difference`` and ``seconds`` (the rows, see the data file).
+    """
+    return paper_results().get(scene)
+
+
+def paper_percent(scene: str, load_cases: list[str] | None = None
+                  ) -> dict[str, dict[str, dict[str, float]]]:
+    """The paper's percentages as {model id: {load case: {"disp": %, "rot": %}}} ("-" skipped).
+
+    ``load_cases`` name the columns (default: the data file's own).
+    """
+    data = paper_results()[scene]
+    cases = load_cases or data["load_cases"]
     out: dict[str, dict[str, dict[str, float]]] = {}
-    for name, row in table.items():
+    for name, row in data["percent_difference"].items():
         model = PAPER_MODELS[name]
-        for k, case in enumerate(load_cases):
+        for k, case in enumerate(cases):
             disp, rot = row[2 * k], row[2 * k + 1]
             if disp == "-":
                 continue
@@ -93,8 +108,10 @@ def paper_percent(scene: str, load_cases: list[str]) -> dict[str, dict[str, dict
     return out
 
 
-def paper_seconds(scene: str, load_cases: list[str]) -> dict[str, dict[str, float]]:
+def paper_seconds(scene: str, load_cases: list[str] | None = None
+                  ) -> dict[str, dict[str, float]]:
     """The paper's run times as {model id: {load case: seconds}} ("-" skipped)."""
-    table = paper_results()[scene]["seconds"]
-    return {PAPER_MODELS[name]: {c: float(v) for c, v in zip(load_cases, row) if v != "-"}
-            for name, row in table.items()}
+    data = paper_results()[scene]
+    cases = load_cases or data["load_cases"]
+    return {PAPER_MODELS[name]: {c: float(v) for c, v in zip(cases, row) if v != "-"}
+            for name, row in data["seconds"].items()}

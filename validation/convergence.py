@@ -18,8 +18,10 @@ import math
 from dataclasses import dataclass, field
 
 from geometry import LoadCase, Scene
+from reducedmodels import SolverError
 from reducedmodels.catalogue import ModelSpec
 
+from .failures import Failure, failure_of
 from .run import run_model
 
 
@@ -38,6 +40,7 @@ class ConvergenceStudy:
     ratio: float
     rows: list[dict] = field(default_factory=list)
     summary: dict = field(default_factory=dict)
+    failures: list[Failure] = field(default_factory=list)
 
 
 def richardson(f1: float, f2: float, f3: float, ratio: float) -> dict:
@@ -59,14 +62,25 @@ def richardson(f1: float, f2: float, f3: float, ratio: float) -> dict:
 def study(scene: Scene, model: ModelSpec, resolutions: list[int], case: LoadCase,
           levels: int | None = None, progress=None) -> ConvergenceStudy:
     """Run ``model`` (its options kept) at each resolution (increasing) on ``case`` and
-    analyse convergence."""
+    analyse convergence.
+
+    A resolution that fails is recorded in ``failures`` (no row) and the study
+    carries on; the Richardson summary needs the three finest resolutions to
+    have converged.
+    """
     refine = model.model_family.resolution
     ratios = {refine.ratio(a, b) for a, b in zip(resolutions, resolutions[1:])}
     ratio = ratios.pop() if len(ratios) == 1 else float("nan")
     st = ConvergenceStudy(model.family, case.name, ratio)
     for res in resolutions:
         spec = model.with_resolution(res)
-        lp = run_model(scene, spec, case, levels)
+        try:
+            lp = run_model(scene, spec, case, levels)
+        except SolverError as exc:
+            st.failures.append(failure_of(exc, scene, spec, case))
+            if progress:
+                progress(spec.id)
+            continue
         st.rows.append({"model": spec.id, "resolution": res,
                         "unknowns": lp.stats.get("unknowns"), "seconds": lp.seconds,
                         "dx": lp.dx[-1], "dy": lp.dy[-1],
@@ -74,7 +88,8 @@ def study(scene: Scene, model: ModelSpec, resolutions: list[int], case: LoadCase
                         "rotation": lp.rotation[-1]})
         if progress:
             progress(spec.id)
-    if len(st.rows) >= 3 and math.isfinite(ratio):
+    finest = [r["resolution"] for r in st.rows[-3:]]
+    if len(st.rows) >= 3 and finest == resolutions[-3:] and math.isfinite(ratio):
         f = st.rows[-3:]
         st.summary = {key: richardson(f[0][key], f[1][key], f[2][key], ratio)
                       for key in ("displacement", "rotation")}
@@ -98,4 +113,5 @@ def format_study(st: ConvergenceStudy) -> str:
         gci = "n/a" if s["gci_percent"] is None else f"{s['gci_percent']:.3g} %"
         lines.append(f"{key}: observed order {order}, extrapolated "
                      f"{s['extrapolated'] * conv:.6f} {unit}, GCI {gci}")
+    lines += [f"{f.model}: {f.summary()}" for f in st.failures]
     return "\n".join(lines)

@@ -36,11 +36,11 @@ from typing import Callable, Sequence
 import numpy as np
 
 from geometry import Force, LoadCase, Material, Mechanism, Scene, Section, rotation
-from reducedmodels import LoadPath, SolverError, SolverSettings, build_system
-from reducedmodels.catalogue import ARCLENGTH, ModelSpec, parse_model
-from reducedmodels.continuation import limit_loads, solve_arclength
+from reducedmodels import LoadPath, SolverError
+from reducedmodels.catalogue import ModelSpec, parse_model
 
 from .compare import errors
+from .failures import first_limit_load
 from .outputs import output_path, write_json, write_text
 from .run import run_model
 
@@ -53,10 +53,6 @@ RIGID_ANGLE = 2.1                      # rad
 RIGID_SHIFT = (-40.0, 17.0)            # mm
 METRE = 1e-3                           # length of 1 mm in the rescaled scene (m)
 REFERENCE, QUICK_REFERENCE = "beam:100", "beam:40"
-LIMIT_SETTINGS = SolverSettings(max_translation_step=0.01, max_rotation_step=0.05)
-"""Step bounds (1 % of the size, 0.05 rad) of the arc-length search for limit points: fine
-enough that the parabola through the peak's points gives the limit load to ~1e-5 (measured
-against the last load that load control converges on the closed chain)."""
 
 
 def scale_case(case: LoadCase, factor: float) -> LoadCase:
@@ -160,26 +156,6 @@ class _Reference:
         return self.paths[key], None
 
 
-def _limit_load(scene: Scene, spec: ModelSpec, case: LoadCase) -> float | None:
-    """Load (N or N mm) at the first limit point of ``case``'s path below full load, or None.
-
-    Arc-length continuation from rest with the step bounds of
-    :data:`LIMIT_SETTINGS`, stopped just past the first local maximum of the
-    load magnitude; None for the linear EE and the continuum, or when the
-    path reaches full load (or fails) without one.
-    """
-    if not spec.model_family.has(ARCLENGTH):
-        return None
-    system = build_system(scene.mechanism, spec, LIMIT_SETTINGS)
-    try:
-        lp = solve_arclength(system, case, 1.0, 20, model=spec.id, max_steps=2000,
-                             stop=lambda p: bool(p.stats["limit_points"]))
-    except SolverError:
-        return None
-    loads = limit_loads(lp)
-    return loads[0] if loads else None
-
-
 def _amplification(scene: Scene, spec: ModelSpec, case: LoadCase, factors: Sequence[float],
                    reference: _Reference, progress: Callable[[str], None] | None
                    ) -> tuple[dict, LoadPath | None]:
@@ -193,7 +169,7 @@ def _amplification(scene: Scene, spec: ModelSpec, case: LoadCase, factors: Seque
         if failure is not None:
             failure["factor"] = k
             if failure["kind"] == "solver":
-                failure["limit_load"] = _limit_load(scene, spec, scale_case(case, k))
+                failure["limit_load"] = first_limit_load(scene, spec, scale_case(case, k))
             break
         first = lp if first is None else first
         reached = k

@@ -1,0 +1,101 @@
+"""A model that cannot reach full load is a result: how far it got and why.
+
+Every command that runs several models (``report``, ``bench``, ``converge``,
+``stress``) turns a :class:`reducedmodels.SolverError` into a
+:class:`Failure` and carries on. When the model can be traced by arc length
+(capability ``arclength``) the path is searched for a limit point below full
+load: if there is one, the failure is that limit point (load control cannot
+pass it whatever the solver) and its load is given. Units: N or N mm.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from geometry import LoadCase, Scene, SceneError
+from reducedmodels import SolverError, SolverSettings, build_system
+from reducedmodels.catalogue import ARCLENGTH, ModelSpec
+from reducedmodels.continuation import limit_loads, solve_arclength
+
+LIMIT_SETTINGS = SolverSettings(max_translation_step=0.01, max_rotation_step=0.05)
+"""Step bounds (1 % of the size, 0.05 rad) of the arc-length search for limit points: fine
+enough that the parabola through the peak's points gives the limit load to ~1e-5 (measured
+against the last load that load control converges on the closed chain)."""
+
+#: ``Failure.reason`` of a path that stops at a limit point found by arc length
+LIMIT_POINT = "limit point"
+
+
+@dataclass(frozen=True)
+class Failure:
+    """A model's failure on one load case.
+
+    Attributes
+    ----------
+    model, load_case : str
+        Model id and load case name.
+    factor : float
+        Last converged load factor (0..1).
+    load : float
+        The load of the failure (N or N mm): the limit load when
+        ``reason`` is :data:`LIMIT_POINT`, else the last converged load.
+    unit : str
+        ``N`` or ``N mm``.
+    reason : str
+        :data:`LIMIT_POINT` or the solver's own reason.
+    message : str
+        The solver's full message.
+    """
+
+    model: str
+    load_case: str
+    factor: float
+    load: float
+    unit: str
+    reason: str
+    message: str
+
+    def summary(self) -> str:
+        """E.g. ``fails at 78 % (limit point, 2.65 N)``."""
+        return f"fails at {100 * self.factor:.0f} % ({self.reason}, {self.load:.3g} {self.unit})"
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields."""
+        return asdict(self)
+
+
+def first_limit_load(scene: Scene, spec: ModelSpec, case: LoadCase) -> float | None:
+    """Load (N or N mm) at the first limit point of ``case``'s path below full load, or None.
+
+    Arc-length continuation from rest with the step bounds of
+    :data:`LIMIT_SETTINGS`, stopped just past the first local maximum of the
+    load magnitude; None for models without the ``arclength`` capability, or
+    when the path reaches full load (or fails) without one.
+    """
+    if not spec.model_family.has(ARCLENGTH):
+        return None
+    system = build_system(scene.mechanism, spec, LIMIT_SETTINGS)
+    try:
+        lp = solve_arclength(system, case, 1.0, 20, model=spec.id, max_steps=2000,
+                             stop=lambda p: bool(p.stats["limit_points"]))
+    except SolverError:
+        return None
+    loads = limit_loads(lp)
+    return loads[0] if loads else None
+
+
+def failure_of(exc: SolverError | SceneError, scene: Scene, spec: ModelSpec,
+               case: LoadCase) -> Failure:
+    """The :class:`Failure` of ``spec`` on ``case`` that raised ``exc``.
+
+    A SceneError here means the model cannot represent a flexure of the
+    scene (e.g. a PRBM arc outside its fitted range): a failure at load 0.
+    """
+    if isinstance(exc, SceneError):
+        return Failure(spec.id, case.name, 0.0, 0.0, case.unit, exc.reason, str(exc))
+    reason = (exc.path.stats.get("failure") if exc.path is not None else None) or str(exc)
+    load = exc.load_factor * case.magnitude
+    limit = first_limit_load(scene, spec, case)
+    if limit is not None and limit <= case.magnitude:
+        reason, load = LIMIT_POINT, limit
+    return Failure(spec.id, case.name, exc.load_factor, load, case.unit, reason, str(exc))
