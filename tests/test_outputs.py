@@ -19,6 +19,7 @@ import geometry.files
 import validation.bench
 import validation.convergence
 import validation.report
+import validation.reportdata
 import validation.run
 import validation.stress
 from geometry import load_scene
@@ -291,7 +292,7 @@ def _hostile_scene(name: str, case_name: str):
                                              ("/abs/olute", ".."), ("..", "/")])
 def test_report_writes_only_inside_its_folder(name, case_name, tmp_path, monkeypatch):
     scene = _hostile_scene(name, case_name)
-    monkeypatch.setattr(validation.report, "load_scene", lambda _: scene)
+    monkeypatch.setattr(validation.reportdata, "load_scene", lambda _: scene)
     out = tmp_path / "deep" / "out"
     md = validation.report.build_report(["hostile"], out, ["beam:20", "ee"], repeats=1,
                                         use_cache=False, progress=False, bench=False,
