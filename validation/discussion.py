@@ -118,8 +118,8 @@ def _paper_above_bullet(data: ReportData) -> list[str]:
                       "along the path)" for r, m, c, e, p in above)
     return [f"- **Where the paper's figures are above ours.** Most: {named}. A dynamic "
             "quasi-static simulation (the paper used RecurDyn with damping) lags behind a steep "
-            "stretch of the path, so its errors can approach our path maxima; in a static "
-            "solution two beam discretisations differ only by their discretisation error."]
+            "stretch of the path, so its errors can approach our path maxima rather than our "
+            "end-of-ramp errors."]
 
 
 def _frame_bullet(data: ReportData) -> list[str]:
