@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kinematics import rotation
+from .timelaw import TimeLaw
 
 DEFAULT_LEVELS = 11
 
@@ -64,11 +65,15 @@ class LoadCase:
         Loads at full value (load factor 1).
     levels : int
         Number of equally spaced load levels from 0 to full load (>= 2).
+    time_law : TimeLaw or None
+        How the load grows in time in a dynamic run (:mod:`geometry.timelaw`);
+        None: the run's command-line default.
     """
 
     name: str
     components: tuple
     levels: int = DEFAULT_LEVELS
+    time_law: TimeLaw | None = None
 
     def factors(self, levels: int | None = None) -> np.ndarray:
         """Load factors 0 .. 1 of the requested levels."""
@@ -87,4 +92,4 @@ class LoadCase:
     def transformed(self, angle: float, shift: np.ndarray) -> "LoadCase":
         """The load case for a rigidly moved mechanism."""
         return LoadCase(self.name, tuple(c.transformed(angle, shift) for c in self.components),
-                        self.levels)
+                        self.levels, self.time_law)

@@ -48,6 +48,7 @@ from .loads import DEFAULT_LEVELS, Force, LoadCase, Moment
 from .magnitudes import SMALLEST_NORMAL
 from .mechanism import FlexureSpec, Material, Mechanism, PinSpec, Section, assemble
 from .shapes import Arc, Segment
+from .timelaw import TIME_LAW_KEYS, parse_time_law
 
 BUILTIN_SCENES = ("open_chain", "closed_chain")
 OUTPUTS = {"poses", "shape", "vtu", "png"}
@@ -328,7 +329,7 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
         if isinstance(levels, bool) or not isinstance(levels, int) or not 2 <= levels <= 100_000:
             rd.fail(f"{where}levels", levels, "must be an integer from 2 to 100000")
         if "loads" in c:
-            rd.known_keys(c, {"name", "levels", "loads"}, where)
+            rd.known_keys(c, {"name", "levels", "loads", *TIME_LAW_KEYS}, where)
             comps = tuple(_load_component(rd, rd.item_table(x, f"{where}loads[{i}]"),
                                           f"{where}loads[{i}].", target_body, target_point,
                                           _COMPONENT_KEYS)
@@ -337,7 +338,7 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
                 rd.fail(f"{where}loads", [], "must contain at least one load")
         else:
             comps = (_load_component(rd, c, where, target_body, target_point,
-                                     _COMPONENT_KEYS | {"name", "levels"}),)
+                                     _COMPONENT_KEYS | {"name", "levels", *TIME_LAW_KEYS}),)
         for comp in comps:
             if comp.body not in mech.bodies:
                 rd.fail(f"{where}body", comp.body, f"unknown body; bodies are {list(mech.bodies)}")
@@ -345,7 +346,7 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
                 rd.fail(f"{where}body", comp.body, "a load on the ground does nothing")
         if any(lc.name == lname for lc in cases):
             rd.fail("load_cases.name", lname, "duplicate load case name")
-        cases.append(LoadCase(lname, comps, levels))
+        cases.append(LoadCase(lname, comps, levels, parse_time_law(c, where, rd.fail)))
 
     loaded = {c.body for lc in cases for c in lc.components} | {target_body}
     links = Counter(b for link in (*mech.flexures, *mech.pins) for b in link.bodies)

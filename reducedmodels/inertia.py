@@ -332,6 +332,31 @@ class MassModel:
         return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                              shape=(self.n, self.n))
 
+    def convective(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Velocity-dependent inertia forces of the mass points (N): -sum m theta'^2 r.
+
+        A point's acceleration is a_p + theta'' k x r - theta'^2 r, so the
+        equations of motion are M(q) a + c(q, v) = f with c on the point's
+        translations (its theta row gets (k x r) . r = 0). Consistent
+        matrices (``mass_matrix`` connectors) are not covered.
+        """
+        d, m = self.points.dofs, self.points.mass
+        has_theta = d[:, 2] >= 0
+        rr = _rotated(_angles(q, d[:, 2]), self.points.rel)
+        omega2 = np.where(has_theta, v[np.maximum(d[:, 2], 0)], 0.0) ** 2
+        return (np.bincount(d[:, 0], weights=-m * omega2 * rr[:, 0], minlength=self.n)
+                + np.bincount(d[:, 1], weights=-m * omega2 * rr[:, 1], minlength=self.n))
+
+    def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
+        """1/2 v^T M(q) v, N mm (t mm^2/s^2)."""
+        return 0.5 * float(v @ (self.matrix(q) @ v))
+
+    @property
+    def has_consistent(self) -> bool:
+        """True if some connector gives a consistent mass matrix (its convective terms are
+        not modelled: :meth:`convective` covers mass points only)."""
+        return bool(self._consistent)
+
     def massless(self) -> np.ndarray:
         """Boolean mask of the coordinates without mass (zero diagonal of M at rest)."""
         return self.matrix(self.system.initial_state()).diagonal() <= 0.0

@@ -56,6 +56,9 @@ class LoadPath:
     validity : list of (str or None), optional
         Why a level is not valid (the connectors' reasons, ``"; "``-joined),
         None where it is. The run is never stopped by it.
+    time : list of float, optional
+        Time (s) of each recorded state of a dynamic run
+        (:mod:`reducedmodels.dynamics`); ``load`` is then the load at that time.
     """
 
     model: str
@@ -75,6 +78,7 @@ class LoadPath:
     reactions: list | None = None
     valid: list | None = None
     validity: list | None = None
+    time: list | None = None
 
     @property
     def displacement(self) -> np.ndarray:

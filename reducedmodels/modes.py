@@ -75,7 +75,8 @@ class Modes:
         return np.sign(lam) * np.sqrt(np.abs(lam)) / (2.0 * math.pi)
 
 
-def _refuse_massless_bodies(system: System, massless: np.ndarray, what: str) -> None:
+def refuse_massless_bodies(system: System, massless: np.ndarray, what: str) -> None:
+    """SceneError naming the massless body coordinates, if any (``what`` needs them)."""
     n_body = 3 * len(system.body_index)
     if massless[:n_body].any():
         names = describe_massless(system, np.concatenate([massless[:n_body],
@@ -97,7 +98,7 @@ def modes_at(system: System, mass: MassModel, q: np.ndarray, tangent: np.ndarray
         Consistent tangent of the total potential at q (N/mm, N, N mm).
     """
     massless = mass.massless()
-    _refuse_massless_bodies(system, massless, "a modal analysis")
+    refuse_massless_bodies(system, massless, "a modal analysis")
     K = 0.5 * (tangent + tangent.T)
     M = mass.matrix(q).toarray()
     m, s = np.flatnonzero(~massless), np.flatnonzero(massless)
@@ -163,7 +164,7 @@ def sparse_modes(system: System, mass: MassModel, q: np.ndarray, tangent: sp.spm
     x = K^-1 (M x) omega^2, normalised to x^T M x = 1.
     """
     massless = mass.massless()
-    _refuse_massless_bodies(system, massless, "a modal analysis")
+    refuse_massless_bodies(system, massless, "a modal analysis")
     M = mass.matrix(q).tocsc()
     m = np.flatnonzero(~massless)
     lu = spla.splu((0.5 * (tangent + tangent.T)).tocsc())
@@ -235,7 +236,7 @@ def natural_modes(system: System, case: LoadCase | None = None, fraction: float 
         If the equilibrium cannot be reached.
     """
     mass = MassModel(system)
-    _refuse_massless_bodies(system, mass.massless(), "a modal analysis")
+    refuse_massless_bodies(system, mass.massless(), "a modal analysis")
     scaled = scaled_case(system, case, fraction)
     q = equilibrium(system, scaled)
     loads = system.loads(scaled)

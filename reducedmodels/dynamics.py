@@ -1,0 +1,277 @@
+"""Time integration of the multibody System: generalised-alpha on the core's one Newton.
+
+Equations of motion (mm, N, t, s):
+
+    M(q) a + c(q, v) + D v + grad Pi(q, lambda(t)) = 0,
+
+with grad Pi the System's gradient (elastic forces, weights, load case at the
+load factor lambda(t) of the time law), M and c the mass matrix and
+convective forces of :class:`reducedmodels.inertia.MassModel`, and Rayleigh
+damping D = alpha M + beta K_n (K_n the tangent at the start of the step,
+so that the damping is linear within a step). Coordinates without mass
+(Lagrange multipliers, massless internal coordinates) keep static rows.
+
+Integrator: generalised-alpha in the form of Arnold and Bruls (2007, Multibody
+Syst. Dyn. 18:185), equilibrium enforced at t_(n+1), with the algorithmic
+acceleration
+
+    (1 - am) A_(n+1) + am A_n = (1 - af) a_(n+1) + af a_n,
+    q_(n+1) = q_n + h v_n + h^2 (1/2 - b) A_n + h^2 b A_(n+1),
+    v_(n+1) = v_n + h (1 - g) A_n + h g A_(n+1),
+
+am = (2 rho - 1)/(rho + 1), af = rho/(rho + 1), g = 1/2 + af - am,
+b = (g + 1/2)^2 / 4 (Chung and Hulbert 1993): second order, unconditionally
+stable, spectral radius rho_inf at infinite frequency. rho_inf = 1 has no
+numerical dissipation (A = a, Newmark's trapezoidal rule: energy conserved
+exactly on a linear undamped system); rho_inf < 1 damps the high
+frequencies. Each step is one :func:`reducedmodels.newton.solve_step` on
+:class:`DynamicStep`, whose tangent is K + g/(b h) D + (1 - am)/((1 - af) b h^2) M.
+
+Adaptive steps: the local error of the displacement is estimated as
+h^2 |b - 1/6| |A_(n+1) - A_n| (Zienkiewicz and Xie 1991), scaled like the
+core's corrections (lengths / mechanism size, angles as is); a step above
+``error_tol`` is repeated with a smaller h, and h grows or shrinks by
+0.9 (tol / error)^(1/3) within [1/2, 2] after each accepted step.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as la
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from geometry import LoadCase
+from geometry.timelaw import TimeLaw
+
+from .core import SolverError, System
+from .inertia import MassModel
+from .loadpath import LoadPath
+from .loads import Loads
+from .modes import refuse_massless_bodies
+from .newton import FixedLoad, StepProblem, solve_step
+from .tangent import Tangent
+
+
+@dataclass(frozen=True)
+class Rayleigh:
+    """Rayleigh damping D = alpha M + beta K: alpha in 1/s, beta in s."""
+
+    alpha: float = 0.0
+    beta: float = 0.0
+
+    @classmethod
+    def from_ratio(cls, ratio: float, f1: float, f2: float) -> "Rayleigh":
+        """The damping ratio ``ratio`` at the two frequencies f1 < f2 (Hz), exactly.
+
+        zeta(omega) = alpha / (2 omega) + beta omega / 2; between f1 and f2 it
+        is a little below ``ratio``, outside it grows.
+        """
+        w1, w2 = 2.0 * math.pi * f1, 2.0 * math.pi * f2
+        return cls(2.0 * ratio * w1 * w2 / (w1 + w2), 2.0 * ratio / (w1 + w2))
+
+
+@dataclass(frozen=True)
+class GeneralizedAlpha:
+    """Chung-Hulbert parameters from the spectral radius at infinite frequency, rho_inf in [0, 1]."""
+
+    rho_inf: float = 0.9
+
+    @property
+    def am(self) -> float:
+        return (2.0 * self.rho_inf - 1.0) / (self.rho_inf + 1.0)
+
+    @property
+    def af(self) -> float:
+        return self.rho_inf / (self.rho_inf + 1.0)
+
+    @property
+    def gamma(self) -> float:
+        return 0.5 + self.af - self.am
+
+    @property
+    def beta(self) -> float:
+        return 0.25 * (self.gamma + 0.5) ** 2
+
+
+@dataclass
+class DynamicSettings:
+    """Time-stepping parameters.
+
+    ``error_tol`` bounds the estimated local displacement error per step
+    (scaled: lengths / mechanism size, angles in rad); ``first_step`` and
+    ``max_step`` are fractions of the duration; ``min_step`` (s) ends a run
+    that cannot proceed.
+    """
+
+    rho_inf: float = 0.9
+    error_tol: float = 1e-5
+    first_step: float = 1e-3
+    max_step: float = 0.02
+    min_step: float = 1e-12
+    max_steps: int = 200_000
+    adaptive: bool = True
+
+
+class _EffectiveTangent:
+    """K + c_d D + c_m M, factorised once for the Newton solves of one iterate."""
+
+    def __init__(self, matrix):
+        if sp.issparse(matrix):
+            self._lu = spla.splu(sp.csc_matrix(matrix))
+            self._solve = self._lu.solve
+        else:
+            factors = la.lu_factor(matrix, check_finite=False)
+            self._solve = lambda rhs: la.lu_solve(factors, rhs, check_finite=False)
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        return self._solve(rhs)
+
+
+def _matrix(tangent: Tangent):
+    """A Tangent's matrix: sparse where it is stored sparse, else dense."""
+    matrix = getattr(tangent, "matrix", None)
+    return matrix if matrix is not None and sp.issparse(matrix) else tangent.toarray()
+
+
+class DynamicStep(StepProblem):
+    """One generalised-alpha step from (q_n, v_n, a_n, A_n) over h at load factor lambda(t_(n+1)).
+
+    Its residual is the out-of-balance force including inertia and damping;
+    its tangent the effective one (the derivatives of M(q) and c(q, v) with
+    respect to q are left out: they change Newton's rate, not its answer).
+    """
+
+    def __init__(self, system: System, loads: Loads, factor: float, mass: MassModel,
+                 state: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], h: float,
+                 scheme: GeneralizedAlpha, damping: Rayleigh, k_start):
+        super().__init__(system, loads, factor)
+        self.mass, self.h, self.scheme, self.damping = mass, h, scheme, damping
+        self.q0, self.v0, self.a0, self.A0 = state
+        self.k_start = k_start
+        b, g = scheme.beta, scheme.gamma
+        self.c_m = (1.0 - scheme.am) / ((1.0 - scheme.af) * b * h * h)
+        self.c_d = g / (b * h)
+
+    def kinematics(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Velocity, acceleration and algorithmic acceleration at iterate q (mm/s, mm/s^2)."""
+        s, h = self.scheme, self.h
+        A = (q - self.q0 - h * self.v0 - h * h * (0.5 - s.beta) * self.A0) / (s.beta * h * h)
+        v = self.v0 + h * ((1.0 - s.gamma) * self.A0 + s.gamma * A)
+        a = ((1.0 - s.am) * A + s.am * self.A0 - s.af * self.a0) / (1.0 - s.af)
+        return v, a, A
+
+    def assemble(self, q: np.ndarray) -> tuple[np.ndarray, _EffectiveTangent]:
+        """Out-of-balance force with inertia and damping (N, N mm) and the effective tangent."""
+        _, g, K = self.system.assemble(q, self.loads, self.factor)
+        v, a, _ = self.kinematics(q)
+        M = self.mass.matrix(q)
+        alpha, beta = self.damping.alpha, self.damping.beta
+        r = g + M @ a + self.mass.convective(q, v) + alpha * (M @ v)
+        k = _matrix(K)
+        mass_term = M if sp.issparse(k) else M.toarray()
+        effective = k + (self.c_m + self.c_d * alpha) * mass_term
+        if beta:
+            r = r + beta * (self.k_start @ v)
+            effective = effective + (self.c_d * beta) * self.k_start
+        return r, _EffectiveTangent(effective)
+
+    def correction(self, q: np.ndarray, g: np.ndarray, K) -> tuple[np.ndarray, float]:
+        return K.solve(-g), 0.0
+
+
+def solve_dynamic(system: System, case: LoadCase, law: TimeLaw, duration: float,
+                  damping: Rayleigh = Rayleigh(), settings: DynamicSettings | None = None,
+                  model: str = "", scene: str = "", record_poses: bool = False,
+                  initial_velocity: np.ndarray | None = None) -> LoadPath:
+    """Integrate from rest (the equilibrium at lambda(0), gravity included) to ``duration`` (s).
+
+    Every accepted step is recorded: ``time`` (s), ``load`` (lambda(t) times
+    the case's value), the target's ``dx``, ``dy``, ``rotation`` and, on
+    request, every body's pose. ``stats`` adds ``steps``, ``rejected_steps``
+    and the ``energy`` balance terms at the end (kinetic, N mm).
+
+    Raises
+    ------
+    SceneError
+        If a moving body has no mass.
+    SolverError
+        If a step fails below ``min_step``; carries the path so far.
+    """
+    t_start = time.perf_counter()
+    s = settings or DynamicSettings()
+    scheme = GeneralizedAlpha(s.rho_inf)
+    mass = MassModel(system)
+    massless = mass.massless()
+    refuse_massless_bodies(system, massless, "a dynamic run")
+    massive = ~massless
+    loads = system.loads(case)
+    path = LoadPath(model=model, load_case=case.name, load=[], dx=[], dy=[], rotation=[],
+                    seconds=0.0, scene=scene, load_unit=case.unit, time=[],
+                    poses={b: [] for b in system.mechanism.bodies} if record_poses else None,
+                    settings={"rho_inf": s.rho_inf, "rayleigh_alpha": damping.alpha,
+                              "rayleigh_beta": damping.beta, "ramp": law.ramp, "t0": law.t0,
+                              "t1": law.t1, "duration": duration})
+    stats = {"unknowns": system.n_dofs, "steps": 0, "rejected_steps": 0, "newton_iterations": 0}
+
+    def record(t: float, q: np.ndarray) -> None:
+        dx, dy, rot = system.target(q)
+        path.time.append(t)
+        path.load.append(law(t) * case.magnitude)
+        path.dx.append(dx), path.dy.append(dy), path.rotation.append(rot)
+        if path.poses is not None:
+            for b in system.mechanism.bodies:
+                path.poses[b].append(system.pose(q, b).tolist())
+
+    def fail(message: str, t: float) -> SolverError:
+        stats["failure"] = message
+        path.converged, path.stats = False, stats
+        path.seconds = time.perf_counter() - t_start
+        return SolverError(f"{model or 'model'} dynamic run on '{case.name}': {message}; "
+                           f"reached t = {t:.6g} s of {duration:.6g} s", law(t), path)
+
+    first = solve_step(FixedLoad(system, loads, law(0.0)), system.initial_state(), system.settings)
+    if first.state is None:
+        raise fail(f"no initial equilibrium ({first.reason})", 0.0)
+    q = first.state
+    v = np.zeros(system.n_dofs) if initial_velocity is None else np.asarray(initial_velocity,
+                                                                             float)
+    a = np.zeros(system.n_dofs)
+    A = a.copy()
+    t, h = 0.0, s.first_step * duration
+    record(t, q)
+    while t < duration * (1.0 - 1e-12):
+        h = min(h, s.max_step * duration, duration - t)
+        _, _, K0 = system.assemble(q, loads, law(t))
+        step = DynamicStep(system, loads, law(t + h), mass, (q, v, a, A), h, scheme, damping,
+                           _matrix(K0) if damping.beta else None)
+        guess = q + h * v + h * h * (0.5 - scheme.beta) * A + h * h * scheme.beta * A
+        result = solve_step(step, guess, system.settings)
+        stats["newton_iterations"] += result.iterations
+        error = math.inf
+        if result.state is not None:
+            v_new, a_new, A_new = step.kinematics(result.state)
+            change = system.scaled(h * h * abs(scheme.beta - 1.0 / 6.0) * (A_new - A))
+            error = float(np.abs(change[massive]).max(initial=0.0)) if s.adaptive else 0.0
+        if error > s.error_tol:
+            stats["rejected_steps"] += 1
+            h *= 0.5 if not math.isfinite(error) else max(0.2, 0.9 * (s.error_tol / error) ** (1 / 3))
+            if h < s.min_step:
+                raise fail(f"time step below {s.min_step:g} s "
+                           f"({result.reason or 'local error too large'})", t)
+            continue
+        q, v, a, A, t = result.state, v_new, a_new, A_new, t + h
+        stats["steps"] += 1
+        if stats["steps"] > s.max_steps:
+            raise fail(f"more than {s.max_steps} time steps", t)
+        record(t, q)
+        if s.adaptive:
+            h *= min(2.0, max(0.5, 0.9 * (s.error_tol / max(error, 1e-300)) ** (1 / 3)))
+    stats["kinetic_energy"] = mass.kinetic_energy(q, v)
+    path.stats = stats
+    path.seconds = time.perf_counter() - t_start
+    return path
