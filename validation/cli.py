@@ -21,7 +21,7 @@ import warnings
 from geometry import SceneError, load_scene
 
 from .outputs import (OutputError, check_figure_file, check_file, check_folder, output_path,
-                      write_json, write_text)
+                      safe_name, write_json)
 
 EXIT_OK, EXIT_INPUT, EXIT_SOLVER, EXIT_OUTPUT = 0, 2, 3, 4
 COMMAND_LINE = "<command line>"
@@ -331,14 +331,51 @@ def _cmd_stress(args: argparse.Namespace) -> int:
     report = stress_report(scene, specs, quick=args.quick, progress=progress)
     md, _ = write_stress(report, out)
     print(md.read_text(encoding="utf-8"))
-    if args.sweeps:
-        from .sweeps import ARC_ANGLES, SLENDERNESS, format_sweep, sweep
+    return EXIT_OK
 
-        text = "\n".join(format_sweep(sweep(pts, models, progress=progress), title) for pts, title
-                         in ((SLENDERNESS, "Slenderness h/r (120 deg arc, vs continuum:0)"),
-                             (ARC_ANGLES, "Arc angle (h/r = 1/30, vs continuum:0)")))
-        write_text(out / "sweeps.md", "# Geometry sweeps of a cantilever flexure\n\n" + text)
-        print(text)
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    import dataclasses
+
+    from .sweep import load_sweep, local_cluster, results_store, run_sweep, write_outputs
+
+    sweep = load_sweep(args.sweep)            # every point is checked before anything runs
+    if args.batch is not None:
+        sweep = dataclasses.replace(sweep, batch=args.batch)
+    out = check_folder(args.out or os.path.join("sweeps", safe_name(sweep.name)), "--out")
+    invalid = len(sweep.points) - len(sweep.valid_points)
+    print(f"sweep {sweep.name}: {len(sweep.points)} points ({invalid} invalid), "
+          f"{len(sweep.models)} models + reference {sweep.reference.id}, "
+          f"{len(sweep.load_cases)} load cases -> {out}", file=sys.stderr)
+
+    def progress(line: str) -> None:
+        if not args.quiet:
+            print(line, file=sys.stderr, flush=True)
+
+    from distributed import Client
+
+    cluster = None
+    try:
+        if args.scheduler:
+            try:
+                client = Client(args.scheduler, timeout="20s")
+            except (OSError, TimeoutError) as exc:
+                raise SceneError(COMMAND_LINE, "--scheduler", args.scheduler,
+                                 f"cannot reach the Dask scheduler: {exc}") from None
+        else:
+            cluster = local_cluster(args.workers)
+            client = Client(cluster)
+        with client:
+            stats = run_sweep(sweep, out, client, use_cache=not args.no_cache,
+                              progress=progress)
+    finally:
+        if cluster is not None:
+            cluster.close()
+    rows = results_store(sweep, out).rows()
+    write_outputs(sweep, rows, out, stats.seconds)
+    print(f"{stats.tasks} tasks, {stats.rows_written} rows written ({stats.rows_failed} failed), "
+          f"{stats.rows_skipped} already present; {stats.seconds:.1f} s", file=sys.stderr)
+    print((out / "summary.md").read_text(encoding="utf-8"))
     return EXIT_OK
 
 
@@ -469,12 +506,28 @@ def build_parser() -> argparse.ArgumentParser:
                    help="models to stress (repeatable; default: ee, dcmm:1, dcmm:2, prbm, beam:20)")
     q.add_argument("--quick", action="store_true",
                    help="small study: loads up to x100, beam:40 reference, no 1001-level run")
-    q.add_argument("--sweeps", action="store_true",
-                   help="also sweep slenderness h/r (1/3 .. 1/1000) and arc angle (0 .. 350 deg) "
-                        "of a cantilever against the continuum")
     q.add_argument("--out", default="reports/stress", metavar="DIR", help="output folder")
     q.add_argument("--quiet", action="store_true", help="no progress lines")
     q.set_defaults(func=_cmd_stress)
+
+    q = sub.add_parser("sweep", help="parameter sweep of a scene on Dask (Parquet results, "
+                                     "resumable, error maps)")
+    q.add_argument("sweep", help="sweep file (TOML) or built-in sweep: open_chain_arcs, "
+                                 "slenderness, arc_angle")
+    q.add_argument("--out", metavar="DIR",
+                   help="output folder: results/ (Parquet), summary.md, timings.md, figures "
+                        "(default: sweeps/NAME)")
+    q.add_argument("--scheduler", metavar="ADDRESS",
+                   help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786 "
+                        "(default: a local cluster)")
+    q.add_argument("--workers", type=_int_in(1, 1024), metavar="N",
+                   help="local cluster size (default: one single-threaded process per core)")
+    q.add_argument("--batch", type=_int_in(1, 100_000), metavar="N",
+                   help="points per task of a reduced model (default: the sweep's, 10)")
+    q.add_argument("--no-cache", action="store_true",
+                   help="recompute reference paths even if cached")
+    q.add_argument("--quiet", action="store_true", help="no progress lines")
+    q.set_defaults(func=_cmd_sweep)
     return p
 
 

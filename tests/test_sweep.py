@@ -1,0 +1,214 @@
+"""`flexval sweep`: sweep files, the Dask engine, the Parquet store, resume and failures."""
+
+import dataclasses
+import textwrap
+
+import pyarrow.parquet as pq
+import pytest
+from distributed import Client, LocalCluster
+
+from geometry import parse_model
+from validation.cli import main
+from validation.compare import errors
+from validation.run import run_model
+from validation.sweep import load_sweep, results_store, run_sweep, write_outputs
+from validation.sweep import tasks as sweep_tasks
+
+TINY = """
+name = "tiny"
+base = "open_chain"
+models = ["ee", "dcmm:1"]
+reference = "prbm"
+load_cases = ["m+", "f+"]
+batch = 2
+
+[[axes]]
+path = "section.thickness"
+values = [0.09, 0.11]
+
+[[axes]]
+path = "material.youngs_modulus"
+values = [2000.0, 2200.0]
+"""
+
+
+def _write(tmp_path, text, name="sw.toml"):
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(text), encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="module")
+def client():
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                      dashboard_address=None) as cluster, Client(cluster) as c:
+        yield c
+
+
+def test_points_edit_the_base_scene_through_the_loader(tmp_path):
+    sweep = load_sweep(_write(tmp_path, TINY))
+    assert len(sweep.points) == 4 and len(sweep.valid_points) == 4
+    p = sweep.points[3]
+    assert p.params == {"section.thickness": 0.11, "material.youngs_modulus": 2200.0}
+    assert all(f.section.thickness == 0.11 for f in p.scene.mechanism.flexures)
+    assert p.scene.mechanism.material.youngs_modulus == 2200.0
+    assert len({q.digest for q in sweep.points}) == 4
+
+
+def test_tiny_sweep_matches_a_plain_loop_and_resumes(tmp_path, client):
+    sweep = load_sweep(_write(tmp_path, TINY))
+    out = tmp_path / "out"
+    stats = run_sweep(sweep, out, client, use_cache=False)
+    # 2 batches of 2 points for the reference and for each of the 2 models
+    assert stats.tasks == 6 and stats.rows_written == 4 * 3 * 2 and stats.rows_failed == 0
+    rows = results_store(sweep, out).rows()
+    assert {r["status"] for r in rows} == {"ok"}
+    # independent check: the errors of a plain in-process loop on the same scenes
+    p = sweep.points[2]
+    for model in ("ee", "dcmm:1"):
+        for case in ("m+", "f+"):
+            lc = p.scene.load_case(case)
+            want = errors(run_model(p.scene, parse_model(model), lc),
+                          run_model(p.scene, parse_model("prbm"), lc))
+            got = next(r for r in rows if r["point"] == 2 and r["model"] == model
+                       and r["load_case"] == case)
+            assert got["param:section.thickness"] == 0.11
+            for metric, value in want.items():
+                assert got[metric] == pytest.approx(value, rel=1e-9)
+    # an interruption loses whole parts only: drop one, and a rerun does only that task
+    # (plus the reference task of those points when the lost part is a model's)
+    lost = stats.parts[-1]
+    lost_rows = pq.read_table(lost).to_pylist()
+    lost.unlink()
+    again = run_sweep(sweep, out, client, use_cache=False)
+    n_lost = len(lost_rows)
+    assert n_lost == 2 * 2 and again.rows_written == n_lost
+    assert again.tasks == (1 if lost_rows[0]["model"] == "prbm" else 2)
+    assert again.rows_skipped == len(rows) - n_lost
+    def results(rs):  # everything but the run times
+        return [{k: v for k, v in r.items() if k != "seconds"} for r in rs]
+
+    assert results(results_store(sweep, out).rows()) == results(rows)
+    assert run_sweep(sweep, out, client).tasks == 0
+    files = write_outputs(sweep, rows, out)
+    assert all(f.stat().st_size > 0 for f in files)
+    text = (out / "summary.md").read_text()
+    assert "| ee | 4/4 |" in text and "None: every run reached full load." in text
+
+
+def test_a_failing_task_and_a_failing_model_are_recorded(tmp_path, client, monkeypatch):
+    real = sweep_tasks.run_model
+
+    def crash_on_dcmm(scene, spec, case, *a, **k):
+        if spec.family == "dcmm" and case.name == "f+":
+            raise KeyError("injected worker crash")
+        return real(scene, spec, case, *a, **k)
+
+    monkeypatch.setattr(sweep_tasks, "run_model", crash_on_dcmm)
+    text = TINY.replace('reference = "prbm"', 'reference = "beam:20"').replace(
+        '"dcmm:1"]', '"dcmm:1", "prbm"]')
+    text = text.replace("values = [0.09, 0.11]", "values = [0.11]").replace(
+        "values = [2000.0, 2200.0]", "values = [2100.0]")
+    text = text.replace('load_cases = ["m+", "f+"]', 'load_cases = ["f+"]')
+    sweep = load_sweep(_write(tmp_path, text))
+    stats = run_sweep(sweep, tmp_path / "o", client, use_cache=False)
+    rows = {r["model"]: r for r in results_store(sweep, tmp_path / "o").rows()}
+    assert stats.rows_failed == 1 and rows["dcmm:1"]["status"] == "error"
+    assert "KeyError" in rows["dcmm:1"]["reason"] and rows["dcmm:1"]["end_rot"] is None
+    assert rows["ee"]["status"] == "ok" and rows["prbm"]["status"] == "ok"
+
+
+def test_solver_failure_records_the_load_reached(tmp_path, client):
+    # m+ of the open chain x1000: beam:20's load stepping gives up at 35 % of the load
+    text = TINY.replace('load_cases = ["m+", "f+"]', 'load_cases = ["m+"]').replace(
+        'reference = "prbm"', 'reference = "ee"').replace('["ee", "dcmm:1"]', '["beam:20"]')
+    text = text.split("[[axes]]")[0] + textwrap.dedent("""
+        [[axes]]
+        path = "load_cases.m+.value"
+        values = [5.0]
+        """)
+    sweep = load_sweep(_write(tmp_path, text))
+    run_sweep(sweep, tmp_path / "o", client, use_cache=False)
+    row = next(r for r in results_store(sweep, tmp_path / "o").rows() if r["model"] == "beam:20")
+    assert row["status"] == "solver_failure"
+    assert 0.3 < row["load_reached"] < 0.4
+    assert f"{100 * row['load_reached']:.2f} % of full load" in row["reason"]
+    assert row["end_rot"] is None
+
+
+def test_generated_invalid_points_are_reported_not_fatal(tmp_path, client):
+    # h drawn up to 8 mm: above 2 r = 5 mm (e34) the loader refuses the arc, and thick
+    # arcs close on themselves or overlap their neighbours well before
+    text = TINY.split("[[axes]]")[0] + textwrap.dedent("""
+        [[axes]]
+        path = "section.thickness"
+        sample = "uniform"
+        low = 0.05
+        high = 8.0
+        count = 6
+        seed = 3
+        """)
+    sweep = load_sweep(_write(tmp_path, text))
+    bad = [p for p in sweep.points if p.scene is None]
+    assert bad and len(bad) < len(sweep.points)
+    assert all(p in bad for p in sweep.points if p.params["section.thickness"] >= 5.0)
+    assert all(p.reason.startswith("flexures.") for p in bad)
+    sweep = dataclasses.replace(sweep, models=sweep.models[:1])
+    run_sweep(sweep, tmp_path / "o", client, use_cache=False)
+    rows = results_store(sweep, tmp_path / "o").rows()
+    assert sum(r["status"] == "invalid_point" for r in rows) == len(bad)
+
+
+@pytest.mark.parametrize("edit, field, words", [
+    (("section.thickness", "flexures.e99.thickness"), "axes[0].path", "e99"),
+    (("section.thickness", "material.colour"), "material.colour", "unknown field"),
+    (("values = [0.09, 0.11]", "values = [0.09, -0.11]"), "section.thickness", "point 2"),
+    (("values = [0.09, 0.11]", 'values = [0.09, "thin"]'), "axes[0].values", "thin"),
+    (("combine", "combine"), "combine", "'diagonal'"),
+])
+def test_bad_sweep_files_exit_2_naming_the_field(tmp_path, capsys, edit, field, words):
+    text = TINY.replace(*edit)
+    if field == "combine":
+        text = text.replace('batch = 2', 'batch = 2\ncombine = "diagonal"')
+    code = main(["sweep", str(_write(tmp_path, text)), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert code == 2 and field in err and words in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_cli_sweep_on_a_local_process_cluster(tmp_path, capsys):
+    text = TINY.replace('["ee", "dcmm:1"]', '["ee"]').replace('reference = "prbm"',
+                                                               'reference = "dcmm:1"')
+    out = tmp_path / "o"
+    args = ["sweep", str(_write(tmp_path, text)), "--out", str(out), "--workers", "1",
+            "--quiet"]
+    assert main(args) == 0
+    assert "Sweep `tiny`" in capsys.readouterr().out
+    assert {p.name for p in out.iterdir()} >= {"results", "summary.md", "timings.md",
+                                               "errors.png", "runtime.png"}
+    assert main(args) == 0
+    assert "0 tasks" in capsys.readouterr().err
+
+
+def test_cantilever_geometry_extremes(tmp_path, client):
+    """The former `flexval stress --sweeps` checks, now built-in sweeps on the same engine."""
+    slender = load_sweep("slenderness")
+    thinnest = min(slender.points, key=lambda p: p.params["section.thickness"])
+    angle = load_sweep("arc_angle")
+    widest = max(angle.points, key=lambda p: p.params["flexures.f.width_deg"])
+    models = tuple(parse_model(m) for m in ("beam:40", "prbm"))
+    got = {}
+    for sweep, point in ((slender, thinnest), (angle, widest)):
+        sweep = dataclasses.replace(sweep, points=(point,), models=models)
+        run_sweep(sweep, tmp_path / sweep.name, client, use_cache=False)
+        got[sweep.name] = {r["model"]: r for r in results_store(sweep, tmp_path / sweep.name).rows()}
+    # h/r = 1/1000: shear and thickness effects are O((h/r)^2) = 1e-6, so the continuum
+    # must meet the thin-beam limit; a locking mesh would be orders of magnitude stiffer.
+    # beam:40's own discretisation error is ~ (2.1/40)^2/24 ~ 1e-4: gate 0.2 %
+    thin = got["slenderness"]["beam:40"]
+    assert thin["end_disp_vec"] < 0.2 and thin["end_rot"] < 0.2
+    # 350 deg: the beam still follows the continuum, the table-bound PRBM refuses by name
+    closed = got["arc_angle"]
+    assert closed["beam:40"]["end_disp_vec"] < 1.0
+    assert closed["prbm"]["status"] == "model_invalid"
+    assert "outside the fitted range" in closed["prbm"]["reason"]

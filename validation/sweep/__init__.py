@@ -1,0 +1,14 @@
+"""``flexval sweep``: parameter sweeps of a scene on Dask, results in a Parquet dataset.
+
+:mod:`.spec` reads a sweep file into checked points, :mod:`.engine` runs them
+on a Dask cluster (:mod:`.tasks` is what the workers run), :mod:`.store`
+keeps the rows, :mod:`.summary` writes the Markdown summary and figures,
+:mod:`.builtin` holds the built-in sweeps.
+"""
+
+from .engine import SweepStats, local_cluster, results_store, run_sweep
+from .spec import Axis, Point, Sweep, load_sweep, parse_sweep
+from .summary import write_outputs
+
+__all__ = ["Axis", "Point", "Sweep", "SweepStats", "load_sweep", "local_cluster", "parse_sweep",
+           "results_store", "run_sweep", "write_outputs"]

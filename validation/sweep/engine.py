@@ -1,0 +1,167 @@
+"""Run a sweep on a Dask cluster, appending rows to the Parquet store as tasks finish.
+
+Tasks are whole runs of one model on a batch of points (every load case of
+the sweep): :attr:`Sweep.batch` points per task for the reduced models, so
+the per-task cost of Dask stays small against the work, and one point per
+task for the continuum. The reference runs once per point in its own
+tasks; a model task receives the reference paths of its points from Dask.
+
+Resuming: every row's key hashes the point's scene, the model, the load
+case, the reference and the code version; a (point, model) pair whose rows
+are all stored already is not run again. A task that raises even after
+Dask's retries (a worker that keeps dying) becomes rows with status
+``error``: the sweep goes on.
+
+Units: times in s.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Iterator
+
+from ..cache import code_version
+from .spec import Point, Sweep
+from .store import ResultStore
+from .tasks import TaskInfo, base_row, run_model_batch, run_reference
+
+RETRIES = 2
+"""Times Dask reruns a task whose worker died before it finished."""
+BLAS_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+"""Worker environment of the local cluster: one BLAS thread per single-threaded worker."""
+
+
+@dataclass
+class SweepStats:
+    """What one call of :func:`run_sweep` did."""
+
+    tasks: int = 0
+    rows_written: int = 0
+    rows_failed: int = 0
+    rows_skipped: int = 0
+    seconds: float = 0.0
+    parts: list = field(default_factory=list)
+
+
+def chunks(points: list[Point], size: int) -> Iterator[list[Point]]:
+    """``points`` in consecutive runs of ``size`` (the last may be shorter)."""
+    for k in range(0, len(points), size):
+        yield points[k:k + size]
+
+
+def _batch_size(sweep: Sweep, family: str) -> int:
+    return 1 if family == "continuum" else sweep.batch
+
+
+def local_cluster(workers: int | None = None):
+    """A LocalCluster of single-threaded worker processes (default: one per core)."""
+    import os
+
+    from distributed import LocalCluster
+
+    n = workers or os.cpu_count() or 1
+    return LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                        dashboard_address=":0", env=BLAS_ENV)
+
+
+class _Progress:
+    """One line per finished task: tasks done, failed rows, ETA from the mean task rate."""
+
+    def __init__(self, total: int, emit: Callable[[str], None] | None):
+        self.total, self.emit, self.done, self.failed = total, emit, 0, 0
+        self.t0 = time.perf_counter()
+
+    def update(self, failed_rows: int) -> None:
+        self.done += 1
+        self.failed += failed_rows
+        if self.emit is None:
+            return
+        elapsed = time.perf_counter() - self.t0
+        eta = elapsed / self.done * (self.total - self.done)
+        self.emit(f"sweep: {self.done}/{self.total} tasks, {self.failed} failed rows, "
+                  f"{elapsed:.0f} s elapsed, ETA {eta:.0f} s")
+
+
+def run_sweep(sweep: Sweep, out_dir: str | Path, client, use_cache: bool = True,
+              progress: Callable[[str], None] | None = None) -> SweepStats:
+    """Run what is missing of ``sweep`` on the Dask ``client``; rows go to ``out_dir/results``.
+
+    Parameters
+    ----------
+    sweep : Sweep
+    out_dir : path
+        Output folder; the Parquet dataset is its ``results`` sub-folder.
+    client : distributed.Client
+    use_cache : bool
+        Let workers reuse cached converged reference paths.
+    progress : callable, optional
+        Called with a progress line after each finished task.
+    """
+    from distributed import as_completed
+
+    t0 = time.perf_counter()
+    store = results_store(sweep, out_dir)
+    done = store.keys()
+    info = TaskInfo(sweep.name, sweep.reference.id, code_version())
+    stats = SweepStats()
+
+    invalid = [base_row(p, "-", "-", info) | {"status": "invalid_point", "reason": p.reason}
+               for p in sweep.points if p.scene is None]
+    fresh_invalid = [r for r in invalid if r["key"] not in done]
+    if fresh_invalid:
+        stats.parts.append(store.append(fresh_invalid))
+    stats.rows_written += len(fresh_invalid)
+
+    def missing(model: str) -> list[Point]:
+        return [p for p in sweep.valid_points
+                if any(base_row(p, model, c, info)["key"] not in done for c in sweep.load_cases)]
+
+    todo = {spec: missing(spec.id) for spec in (sweep.reference, *sweep.models)}
+    stats.rows_skipped = ((len(sweep.valid_points) * (len(sweep.models) + 1)
+                           - sum(len(v) for v in todo.values())) * len(sweep.load_cases))
+    need_ref = {p.index for pts in todo.values() for p in pts}
+    ref_points = [p for p in sweep.valid_points if p.index in need_ref]
+    tasks = {}
+    ref_future = {}
+    for chunk in chunks(ref_points, _batch_size(sweep, sweep.reference.family)):
+        fut = client.submit(run_reference, chunk, sweep.reference, sweep.load_cases, info,
+                            use_cache, retries=RETRIES, pure=False)
+        tasks[fut] = (chunk, sweep.reference.id)
+        for p in chunk:
+            ref_future[p.index] = fut
+    for spec in sweep.models:
+        for chunk in chunks(todo[spec], _batch_size(sweep, spec.family)):
+            refs = list({id(ref_future[p.index]): ref_future[p.index] for p in chunk}.values())
+            fut = client.submit(run_model_batch, chunk, spec, sweep.load_cases, info, refs,
+                                retries=RETRIES, pure=False)
+            tasks[fut] = (chunk, spec.id)
+    stats.tasks = len(tasks)
+    bar = _Progress(len(tasks), progress)
+    for fut in as_completed(list(tasks)):
+        chunk, model = tasks.pop(fut)
+        try:
+            result = fut.result()
+            rows = result["rows"] if isinstance(result, dict) else result
+        except Exception as exc:  # a lost task is a recorded failure, not a lost sweep
+            reason = f"task failed: {type(exc).__name__}: {exc}"
+            rows = [base_row(p, model, c, info) | {"status": "error", "reason": reason}
+                    for p in chunk for c in sweep.load_cases]
+        rows = [r for r in rows if r["key"] not in done]
+        failed = sum(r["status"] != "ok" for r in rows)
+        part = store.append(rows)
+        if part is not None:
+            stats.parts.append(part)
+        done.update(r["key"] for r in rows)
+        stats.rows_written += len(rows)
+        stats.rows_failed += failed
+        fut.release()
+        bar.update(failed)
+    stats.seconds = time.perf_counter() - t0
+    return stats
+
+
+def results_store(sweep: Sweep, out_dir: str | Path) -> ResultStore:
+    """The Parquet store of ``sweep``'s results: the ``results`` folder of ``out_dir``."""
+    return ResultStore(Path(out_dir) / "results", [a.path for a in sweep.axes])

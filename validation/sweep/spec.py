@@ -1,0 +1,405 @@
+"""Sweep files: a base scene, parameter axes and models, expanded into checked points.
+
+A sweep file (TOML) names a base scene and the parameters to vary::
+
+    name = "open_chain_arcs"
+    base = "open_chain"              # built-in scene, or a path relative to this file
+    models = ["ee", "dcmm:1", "prbm", "beam:20"]
+    reference = "beam:100"           # errors are measured against it
+    load_cases = ["f+", "m+"]        # optional; default: all of the base scene's
+    combine = "grid"                 # "grid" (every combination) or "zip" (i-th with i-th)
+    metric = "worst"                 # summary metric: worst = max(end_disp_vec, end_rot)
+    linear_rotation = 0.3            # optional (rad): scale each load case so that the
+                                     # linear (ee) end rotation is this at every point
+    batch = 10                       # optional: points per task of a reduced model
+
+    [[axes]]
+    path = "section.thickness"       # any numeric field of the scene, by path
+    linspace = [0.05, 0.2, 4]        # or values = [...], logspace = [lo, hi, n],
+                                     # or sample = "uniform" (low, high),
+                                     # "normal" (mean, std), "lognormal" (median, sigma)
+                                     # with count and seed
+
+A path walks the scene's TOML tables: ``material.youngs_modulus``,
+``flexures.e12.thickness``, ``load_cases.f+.value`` (arrays of tables are
+addressed by their ``name``), ``ground.points.0.1`` (plain arrays by index).
+The last key may be absent from the base scene when the scene format allows
+it there (``flexures.e12.thickness`` overrides the ``[section]`` default).
+
+Every point is the base scene's parsed TOML with the axis values written in,
+loaded through :func:`geometry.scene.parse_scene`, so every scene check
+applies. A point built from listed values (``values``, ``linspace``,
+``logspace``) that the loader refuses is bad input (:class:`SceneError`
+naming the point and the field); a point built from random samples that the
+loader refuses is kept as an *invalid point* and reported, since a random
+draw can fall outside the mechanism's valid range.
+
+Units: those of the addressed scene fields (mm, MPa, N, N mm, degrees).
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import hashlib
+import itertools
+import json
+import math
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from geometry import BUILTIN_SCENES, ModelSpec, Scene, SceneError, parse_model
+from geometry.scene import parse_scene
+from reducedmodels import run_reduced
+
+from ..compare import METRICS
+from ..stress import scale_case
+
+COMBINE = ("grid", "zip")
+SAMPLES = {"uniform": ("low", "high"), "normal": ("mean", "std"),
+           "lognormal": ("median", "sigma")}
+SUMMARY_METRICS = ("worst",) + METRICS
+"""``worst`` is max(end_disp_vec, end_rot): a model is as good as its worse end error."""
+DEFAULT_BATCH = 10
+"""Points per task of a reduced model (continuum tasks are one point each)."""
+NAMED_ARRAYS = ("flexures", "load_cases", "bodies", "pins")
+_SWEEP_KEYS = {"name", "description", "base", "models", "reference", "load_cases", "combine",
+               "metric", "linear_rotation", "batch", "axes"}
+_AXIS_KEYS = {"path", "values", "linspace", "logspace", "sample", "count", "seed",
+              *{k for pair in SAMPLES.values() for k in pair}}
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One swept parameter: the scene path and its values (in the field's unit)."""
+
+    path: str
+    values: tuple[float, ...]
+    random: bool
+
+
+@dataclass(frozen=True)
+class Point:
+    """One point of the sweep: its parameter values and its loaded scene.
+
+    ``scene`` is None for an invalid generated point, whose ``reason`` says
+    why the scene loader refused it. ``digest`` hashes the point's scene
+    data (after every edit), so equal scenes have equal digests.
+    """
+
+    index: int
+    params: dict[str, float]
+    scene: Scene | None
+    digest: str
+    reason: str | None = None
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A checked sweep: axes, models, reference and every point."""
+
+    name: str
+    description: str
+    source: str
+    base: str
+    axes: tuple[Axis, ...]
+    combine: str
+    models: tuple[ModelSpec, ...]
+    reference: ModelSpec
+    load_cases: tuple[str, ...]
+    metric: str
+    linear_rotation: float | None
+    batch: int
+    points: tuple[Point, ...]
+
+    @property
+    def valid_points(self) -> tuple[Point, ...]:
+        """The points whose scene loaded."""
+        return tuple(p for p in self.points if p.scene is not None)
+
+
+def _fail(source: str, field: str, value: Any, reason: str) -> None:
+    raise SceneError(source, field, value, reason)
+
+
+def _number(source: str, field: str, v: Any, positive: bool = False) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        _fail(source, field, v, "must be a finite number")
+    if positive and v <= 0:
+        _fail(source, field, v, "must be positive")
+    return float(v)
+
+
+def _count(source: str, field: str, v: Any) -> int:
+    if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 1_000_000:
+        _fail(source, field, v, "must be an integer from 1 to 1000000")
+    return v
+
+
+def _axis(source: str, k: int, a: Any) -> Axis:
+    """Parse ``axes[k]``: one of values, linspace, logspace or sample."""
+    where = f"axes[{k}]"
+    if not isinstance(a, dict):
+        _fail(source, where, a, "must be a table [[axes]]")
+    for key in a:
+        if key not in _AXIS_KEYS:
+            _fail(source, f"{where}.{key}", a[key],
+                  f"unknown field; expected one of {sorted(_AXIS_KEYS)}")
+    path = a.get("path")
+    if not isinstance(path, str) or not path.strip():
+        _fail(source, f"{where}.path", path, "must be a scene field path, e.g. section.thickness")
+    kinds = [x for x in ("values", "linspace", "logspace", "sample") if x in a]
+    if len(kinds) != 1:
+        _fail(source, where, kinds, "give exactly one of values, linspace, logspace, sample")
+    kind = kinds[0]
+    field = f"{where}.{kind}"
+    if kind == "values":
+        vals = a["values"]
+        if not isinstance(vals, list) or not vals:
+            _fail(source, field, vals, "must be a non-empty list of numbers")
+        return Axis(path, tuple(_number(source, field, v) for v in vals), False)
+    if kind in ("linspace", "logspace"):
+        spec = a[kind]
+        if not (isinstance(spec, list) and len(spec) == 3):
+            _fail(source, field, spec, "must be [first, last, count]")
+        lo = _number(source, field, spec[0], positive=kind == "logspace")
+        hi = _number(source, field, spec[1], positive=kind == "logspace")
+        n = _count(source, field, spec[2])
+        vals = (np.linspace(lo, hi, n) if kind == "linspace"
+                else np.geomspace(lo, hi, n))
+        return Axis(path, tuple(float(v) for v in vals), False)
+    dist = a["sample"]
+    if dist not in SAMPLES:
+        _fail(source, field, dist, f"must be one of {sorted(SAMPLES)}")
+    p1, p2 = SAMPLES[dist]
+    x1 = _number(source, f"{where}.{p1}", a.get(p1), positive=dist == "lognormal")
+    x2 = _number(source, f"{where}.{p2}", a.get(p2), positive=dist != "uniform")
+    if dist == "uniform" and not x1 < x2:
+        _fail(source, f"{where}.high", x2, f"must exceed low = {x1:g}")
+    n = _count(source, f"{where}.count", a.get("count"))
+    seed = a.get("seed")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        _fail(source, f"{where}.seed", seed, "must be a non-negative integer (repeatable draws)")
+    rng = np.random.default_rng(seed)
+    vals = {"uniform": lambda: rng.uniform(x1, x2, n),
+            "normal": lambda: rng.normal(x1, x2, n),
+            "lognormal": lambda: rng.lognormal(math.log(x1), x2, n)}[dist]()
+    return Axis(path, tuple(float(v) for v in vals), True)
+
+
+def _slot(data: dict, path: str, source: str, field: str) -> tuple[Any, Any]:
+    """The container and key that ``path`` addresses in the scene data ``data``.
+
+    Raises SceneError (naming ``field`` of the sweep file) when a step of the
+    path does not exist or the addressed value is not a number.
+    """
+    parts = path.split(".")
+    node: Any = data
+    walked = []
+    for depth, part in enumerate(parts):
+        last = depth == len(parts) - 1
+        where = ".".join(walked) or "<scene>"
+        if isinstance(node, dict):
+            if last:
+                if part in node and (isinstance(node[part], bool)
+                                     or not isinstance(node[part], (int, float))):
+                    _fail(source, field, path, f"'{part}' of {where} is not a number")
+                if part not in node and (not walked or walked[0] not in
+                                         ("section", "material", *NAMED_ARRAYS)):
+                    _fail(source, field, path, f"{where} has no field '{part}'")
+                return node, part
+            if part not in node:
+                _fail(source, field, path, f"{where} has no field '{part}'")
+            node = node[part]
+        elif isinstance(node, list):
+            if walked and walked[-1] in NAMED_ARRAYS and all(isinstance(x, dict) for x in node):
+                match = [x for x in node if str(x.get("name")) == part]
+                if not match:
+                    _fail(source, field, path, f"{where} has no entry named '{part}'; names are "
+                          f"{[str(x.get('name')) for x in node]}")
+                if last:
+                    _fail(source, field, path, f"{where}.{part} is a table, not a number")
+                node = match[0]
+            else:
+                if not part.isdigit() or int(part) >= len(node):
+                    _fail(source, field, path,
+                          f"{where} is an array of {len(node)}: expected an index")
+                if last:
+                    if isinstance(node[int(part)], bool) or not isinstance(node[int(part)],
+                                                                           (int, float)):
+                        _fail(source, field, path, f"{where}[{part}] is not a number")
+                    return node, int(part)
+                node = node[int(part)]
+        else:
+            _fail(source, field, path, f"{where} is a value, not a table")
+        walked.append(part)
+    raise AssertionError("unreachable: the loop returns at the last part")
+
+
+def _combine(axes: tuple[Axis, ...], combine: str, source: str) -> list[tuple[float, ...]]:
+    """The parameter tuples of every point, in axis order."""
+    if not axes:
+        return [()]
+    if combine == "zip":
+        lengths = {len(a.values) for a in axes}
+        if len(lengths) != 1:
+            _fail(source, "axes", [len(a.values) for a in axes],
+                  "zipped axes must have the same number of values")
+        return list(zip(*(a.values for a in axes)))
+    return list(itertools.product(*(a.values for a in axes)))
+
+
+def _normalise(scene: Scene, data: dict, cases: tuple[str, ...], rotation: float
+               ) -> Scene:
+    """``scene`` with each load case scaled so that the ee end rotation is ``rotation`` (rad).
+
+    The case values in ``data`` are scaled alike, so the digest sees them.
+    """
+    scaled = []
+    for case in scene.load_cases:
+        if case.name not in cases:
+            scaled.append(case)
+            continue
+        lin = run_reduced(scene.mechanism, parse_model("ee"), case)
+        factor = rotation / max(abs(lin.rotation[-1]), np.finfo(float).tiny)
+        scaled.append(scale_case(case, factor))
+        entry = next(c for c in data["load_cases"] if str(c.get("name")) == case.name)
+        for comp in entry.get("loads", [entry]):
+            comp["value"] = comp["value"] * factor
+    return dataclasses.replace(scene, load_cases=tuple(scaled))
+
+
+def digest(data: dict) -> str:
+    """Hash of a point's scene data (24 hex digits)."""
+    text = json.dumps(data, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def _base_data(base: Any, source: str, folder: Path) -> tuple[str, dict]:
+    """(label, parsed TOML) of the base scene: a built-in name, a path or an inline table."""
+    if isinstance(base, dict):
+        return "<inline>", base
+    if not isinstance(base, str):
+        _fail(source, "base", base, "must be a built-in scene name or a scene file path")
+    if base in BUILTIN_SCENES:
+        text = resources.files("geometry").joinpath("scenes", f"{base}.toml").read_text(
+            encoding="utf-8")
+        label = base
+    else:
+        path = Path(base) if Path(base).is_absolute() else folder / base
+        if not path.is_file():
+            _fail(source, "base", base,
+                  f"no such scene file, and not a built-in scene {list(BUILTIN_SCENES)}")
+        text, label = path.read_text(encoding="utf-8"), str(path)
+    try:
+        return label, tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        _fail(source, "base", base, f"malformed TOML: {exc}")
+
+
+def parse_sweep(data: dict, source: str, folder: Path = Path("."),
+                default_name: str = "sweep") -> Sweep:
+    """Check a parsed sweep file and build every point (nothing is run but ee scaling).
+
+    Raises
+    ------
+    SceneError
+        For a bad field of the sweep file, or a listed point that the scene
+        loader refuses (the message names the point, its values and the field).
+    """
+    for key in data:
+        if key not in _SWEEP_KEYS:
+            _fail(source, key, data[key], f"unknown field; expected one of {sorted(_SWEEP_KEYS)}")
+    name = str(data.get("name", default_name))
+    if "base" not in data:
+        _fail(source, "base", None, "missing: the base scene (built-in name or path)")
+    label, base = _base_data(data["base"], source, folder)
+    base_scene = parse_scene(copy.deepcopy(base), f"{source}: base {label}")
+    models = data.get("models")
+    if not isinstance(models, list) or not models:
+        _fail(source, "models", models, "must be a non-empty list of model ids")
+    specs = tuple(parse_model(m, source, "models") for m in models)
+    if len({s.id for s in specs}) != len(specs):
+        _fail(source, "models", models, "lists a model twice")
+    reference = parse_model(data.get("reference", "beam:100"), source, "reference")
+    if reference.family == "continuum" and reference.resolution is None:
+        _fail(source, "reference", reference.id, "give the continuum's mesh level, e.g. "
+              "continuum:0 (the reference is part of every result's key)")
+    if reference in specs:
+        _fail(source, "models", reference.id, "the reference is not compared with itself")
+    names = [c.name for c in base_scene.load_cases]
+    cases = data.get("load_cases", names)
+    if not isinstance(cases, list) or not cases:
+        _fail(source, "load_cases", cases, "must be a non-empty list of load case names")
+    for c in cases:
+        if c not in names:
+            _fail(source, "load_cases", c, f"unknown load case; the base scene has {names}")
+    combine = data.get("combine", "grid")
+    if combine not in COMBINE:
+        _fail(source, "combine", combine, f"must be one of {list(COMBINE)}")
+    metric = data.get("metric", "worst")
+    if metric not in SUMMARY_METRICS:
+        _fail(source, "metric", metric, f"must be one of {list(SUMMARY_METRICS)}")
+    rotation = data.get("linear_rotation")
+    if rotation is not None:
+        rotation = _number(source, "linear_rotation", rotation, positive=True)
+    batch = _count(source, "batch", data.get("batch", DEFAULT_BATCH))
+    raw_axes = data.get("axes", [])
+    if not isinstance(raw_axes, list):
+        _fail(source, "axes", raw_axes, "must be an array of tables [[axes]]")
+    axes = tuple(_axis(source, k, a) for k, a in enumerate(raw_axes))
+    if len({a.path for a in axes}) != len(axes):
+        _fail(source, "axes", [a.path for a in axes], "a path is swept twice")
+    for k, a in enumerate(axes):
+        _slot(base, a.path, source, f"axes[{k}].path")
+
+    points = []
+    for i, values in enumerate(_combine(axes, combine, source)):
+        params = {a.path: v for a, v in zip(axes, values)}
+        pdata = copy.deepcopy(base)
+        for k, (path, v) in enumerate(params.items()):
+            node, key = _slot(pdata, path, source, f"axes[{k}].path")
+            node[key] = v
+        where = f"{source}: point {i} {params}"
+        try:
+            scene = parse_scene(copy.deepcopy(pdata), where, default_name=name)
+        except SceneError as exc:
+            if not any(a.random for a in axes):
+                raise
+            points.append(Point(i, params, None, digest(pdata), f"{exc.field}: {exc.reason}"))
+            continue
+        if rotation is not None:
+            scene = _normalise(scene, pdata, tuple(cases), rotation)
+        points.append(Point(i, params, scene, digest(pdata)))
+    return Sweep(name, str(data.get("description", "")), source, label, axes, combine, specs,
+                 reference, tuple(cases), metric, rotation, batch, tuple(points))
+
+
+def load_sweep(name_or_path: str | Path) -> Sweep:
+    """Load a built-in sweep by name (see :mod:`validation.sweep.builtin`) or a sweep file.
+
+    Raises
+    ------
+    SceneError
+        If the file is missing, malformed, or any field or point is bad.
+    """
+    from .builtin import BUILTIN_SWEEPS, builtin_sweep
+
+    text_id = str(name_or_path)
+    if text_id in BUILTIN_SWEEPS:
+        return parse_sweep(builtin_sweep(text_id), f"<builtin sweep {text_id}>",
+                           default_name=text_id)
+    path = Path(text_id)
+    if not path.is_file():
+        _fail(text_id, "sweep", text_id,
+              f"no such file, and not a built-in sweep {sorted(BUILTIN_SWEEPS)}")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        _fail(str(path), "toml", None, f"malformed TOML: {exc}")
+    return parse_sweep(data, str(path), path.parent, default_name=path.stem)

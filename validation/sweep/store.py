@@ -1,0 +1,86 @@
+"""The results of a sweep as a Parquet dataset: one part file per finished task.
+
+One row per (point, model, load case). A part file is written to a
+temporary name and renamed into place, so a sweep interrupted at any moment
+leaves only whole parts; rerunning it reads the ``key`` column of every part
+and skips what is there. Failed runs are rows too (``status`` and
+``reason``), with empty (null) errors: a Parquet file never holds a NaN.
+
+Units: errors in percent, times in s, ``load_reached`` as a fraction of the
+full load, parameters in their scene field's unit.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from ..compare import METRICS
+
+PARAM_PREFIX = "param:"
+STATUSES = ("ok", "solver_failure", "model_invalid", "error", "invalid_point")
+"""``ok``: converged (errors null only if the reference failed); ``solver_failure``: the
+model stopped below full load (``load_reached``); ``model_invalid``: the model refuses
+the geometry (e.g. PRBM outside its fitted range); ``error``: an unexpected exception or a
+lost task; ``invalid_point``: a generated point that the scene loader refuses."""
+_FIXED = [("key", pa.string()), ("sweep", pa.string()), ("point", pa.int64()),
+          ("model", pa.string()), ("reference", pa.string()), ("load_case", pa.string()),
+          ("status", pa.string()), ("reason", pa.string()), ("load_reached", pa.float64()),
+          *[(m, pa.float64()) for m in METRICS], ("seconds", pa.float64()),
+          ("newton_iterations", pa.int64())]
+
+
+def schema(paths: list[str]) -> pa.Schema:
+    """The dataset's schema for a sweep over the parameter ``paths``."""
+    return pa.schema(_FIXED + [(PARAM_PREFIX + p, pa.float64()) for p in paths])
+
+
+def _clean(row: dict) -> dict:
+    """Non-finite floats become null."""
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+            for k, v in row.items()}
+
+
+class ResultStore:
+    """The Parquet dataset in ``folder`` (created on first write)."""
+
+    def __init__(self, folder: str | Path, paths: list[str]):
+        self.folder = Path(folder)
+        self.schema = schema(paths)
+
+    def parts(self) -> list[Path]:
+        """The finished part files, sorted by name."""
+        return sorted(self.folder.glob("part-*.parquet")) if self.folder.is_dir() else []
+
+    def keys(self) -> set[str]:
+        """Keys of every row already stored."""
+        out: set[str] = set()
+        for part in self.parts():
+            out.update(pq.read_table(part, columns=["key"]).column("key").to_pylist())
+        return out
+
+    def append(self, rows: list[dict]) -> Path | None:
+        """Write ``rows`` as one new part file, atomically; None if ``rows`` is empty."""
+        if not rows:
+            return None
+        table = pa.Table.from_pylist([_clean(r) for r in rows], schema=self.schema)
+        name = hashlib.sha256("".join(sorted(r["key"] for r in rows)).encode()).hexdigest()[:20]
+        self.folder.mkdir(parents=True, exist_ok=True)
+        final = self.folder / f"part-{name}.parquet"
+        tmp = self.folder / f".part-{name}.parquet.tmp"
+        pq.write_table(table, tmp)
+        os.replace(tmp, final)
+        return final
+
+    def rows(self) -> list[dict]:
+        """Every stored row, sorted by point, model and load case."""
+        tables = [pq.read_table(p, schema=self.schema) for p in self.parts()]
+        if not tables:
+            return []
+        rows = pa.concat_tables(tables).to_pylist()
+        return sorted(rows, key=lambda r: (r["point"], r["model"], r["load_case"]))
