@@ -27,12 +27,14 @@ STATUSES = ("ok", "solver_failure", "model_invalid", "error", "invalid_point")
 """``ok``: converged (errors null only if the reference failed); ``solver_failure``: the
 model stopped below full load (``load_reached``); ``model_invalid``: the model refuses
 the geometry (e.g. PRBM outside its fitted range); ``error``: an unexpected exception or a
-lost task; ``invalid_point``: a generated point that the scene loader refuses."""
+lost task; ``invalid_point``: a generated point that the scene loader refuses.
+Independently, ``valid`` says whether the validity monitor found every level of a converged
+path inside the model's range of meaning, and ``validity`` gives its first reason."""
 _FIXED = [("key", pa.string()), ("sweep", pa.string()), ("point", pa.int64()),
           ("model", pa.string()), ("reference", pa.string()), ("load_case", pa.string()),
           ("status", pa.string()), ("reason", pa.string()), ("load_reached", pa.float64()),
           *[(m, pa.float64()) for m in METRICS], ("seconds", pa.float64()),
-          ("newton_iterations", pa.int64())]
+          ("newton_iterations", pa.int64()), ("valid", pa.bool_()), ("validity", pa.string())]
 
 
 def schema(paths: list[str]) -> pa.Schema:

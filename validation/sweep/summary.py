@@ -121,6 +121,14 @@ def format_summary(sweep: Sweep, rows: list[dict]) -> str:
                      f"{r['load_case']}: {r['status']}{reached}: {r['reason']}")
     if len(failed) > MAX_LISTED:
         lines.append(f"- ... and {len(failed) - MAX_LISTED} more (see the Parquet dataset)")
+    flagged = [r for r in rows if r["valid"] is False]
+    lines += ["", "## Validity", ""]
+    if not flagged:
+        lines.append("The validity monitor flagged no converged run.")
+    for r in flagged[:MAX_LISTED]:
+        lines.append(f"- point {r['point']}, {r['model']}, {r['load_case']}: {r['validity']}")
+    if len(flagged) > MAX_LISTED:
+        lines.append(f"- ... and {len(flagged) - MAX_LISTED} more (see the Parquet dataset)")
     return "\n".join(lines) + "\n"
 
 

@@ -47,7 +47,8 @@ def base_row(point: Point, model: str, case: str, info: TaskInfo) -> dict:
     row = {"key": row_key(point.digest, model, case, info), "sweep": info.sweep,
            "point": point.index, "model": model, "reference": info.reference,
            "load_case": case, "status": "ok", "reason": None, "load_reached": None,
-           "seconds": None, "newton_iterations": None, **{m: None for m in METRICS}}
+           "seconds": None, "newton_iterations": None, "valid": None, "validity": None,
+           **{m: None for m in METRICS}}
     row.update({PARAM_PREFIX + k: v for k, v in point.params.items()})
     return row
 
@@ -83,6 +84,9 @@ def attempt(point: Point, spec: ModelSpec, case: str, row: dict,
         return None
     row.update(load_reached=1.0, seconds=lp.seconds,
                newton_iterations=int(lp.stats.get("newton_iterations", 0)))
+    if lp.valid is not None:
+        row["valid"] = all(lp.valid)
+        row["validity"] = next((v for v in lp.validity or () if v), None)
     return lp
 
 
