@@ -17,7 +17,12 @@ Printed: runs (load paths) per second of each, Dask's overhead against the
 loop (1 worker; target < 20 %), the scaling efficiency from 1 to 2
 workers, T1 / (2 T2) (target >= 80 %), and the same on ``--continuum-n``
 points with continuum:0 as the reference. The load average is printed too:
-on a machine shared with other jobs, 2 workers cannot get 2 cores.
+on a machine shared with other jobs, 2 workers cannot get 2 cores. So each
+configuration also prints its *busy fraction*: the seconds spent inside the
+models' runs (summed over the rows) over wall time x workers. Contention
+slows both alike, so the busy fractions show what Dask itself costs (idle
+workers, scheduling, result transfer, Parquet writes) even on a loaded
+machine.
 """
 
 from __future__ import annotations
@@ -31,7 +36,7 @@ import time
 from distributed import Client
 
 from validation.cache import code_version
-from validation.sweep import local_cluster, parse_sweep, run_sweep
+from validation.sweep import local_cluster, parse_sweep, results_store, run_sweep
 from validation.sweep.engine import chunks
 from validation.sweep.tasks import TaskInfo, run_model_batch, run_reference
 
@@ -51,27 +56,33 @@ def variants(n: int, reference: str, batch: int) -> dict:
                       "high": 4e-3, "count": n, "seed": 3}]}
 
 
-def plain_loop(sweep) -> tuple[float, int]:
-    """Seconds and rows of the same tasks called one after the other in this process."""
+def _busy(rows: list[dict]) -> float:
+    """Seconds spent inside the models' runs (the useful work of the rows)."""
+    return sum(r["seconds"] for r in rows if r["seconds"] is not None)
+
+
+def plain_loop(sweep) -> tuple[float, int, float]:
+    """Wall seconds, rows and model seconds of the same tasks called one after the other."""
     info = TaskInfo(sweep.name, sweep.reference.id, code_version())
     t0 = time.perf_counter()
     ref = run_reference(list(sweep.valid_points), sweep.reference, sweep.load_cases, info,
                         use_cache=False)
-    rows = len(ref["rows"])
+    rows = list(ref["rows"])
     for spec in sweep.models:
         for chunk in chunks(list(sweep.valid_points), sweep.batch):
-            rows += len(run_model_batch(chunk, spec, sweep.load_cases, info, [ref]))
-    return time.perf_counter() - t0, rows
+            rows += run_model_batch(chunk, spec, sweep.load_cases, info, [ref])
+    return time.perf_counter() - t0, len(rows), _busy(rows)
 
 
-def on_dask(sweep, workers: int) -> tuple[float, int, int]:
-    """Seconds, rows and tasks of run_sweep on a fresh LocalCluster of ``workers``."""
+def on_dask(sweep, workers: int) -> tuple[float, int, int, float]:
+    """Wall seconds, rows, tasks and model seconds of run_sweep on a fresh LocalCluster."""
     out = tempfile.mkdtemp(prefix="bench_sweep_")
     try:
         with local_cluster(workers) as cluster, Client(cluster) as client:
             client.wait_for_workers(workers)
             stats = run_sweep(sweep, out, client, use_cache=False)
-        return stats.seconds, stats.rows_written, stats.tasks
+        rows = results_store(sweep, out).rows()
+        return stats.seconds, stats.rows_written, stats.tasks, _busy(rows)
     finally:
         shutil.rmtree(out)
 
@@ -82,16 +93,21 @@ def report(label: str, sweep, loop: bool) -> None:
           f"{sweep.reference.id}) x {len(sweep.load_cases)} cases; batch {sweep.batch}; "
           f"load average {os.getloadavg()[0]:.2f}")
     if loop:
-        t_loop, rows = plain_loop(sweep)
-        print(f"  plain loop : {t_loop:8.2f} s  {rows / t_loop:8.1f} runs/s")
-    t1, rows1, tasks = on_dask(sweep, 1)
-    print(f"  dask 1 wkr : {t1:8.2f} s  {rows1 / t1:8.1f} runs/s  ({tasks} tasks)")
-    t2, rows2, _ = on_dask(sweep, 2)
-    print(f"  dask 2 wkr : {t2:8.2f} s  {rows2 / t2:8.1f} runs/s")
+        t_loop, rows, busy = plain_loop(sweep)
+        print(f"  plain loop : {t_loop:8.2f} s  {rows / t_loop:8.1f} runs/s  "
+              f"busy {100 * busy / t_loop:5.1f} %")
+    t1, rows1, tasks, busy1 = on_dask(sweep, 1)
+    print(f"  dask 1 wkr : {t1:8.2f} s  {rows1 / t1:8.1f} runs/s  busy {100 * busy1 / t1:5.1f} %"
+          f"  ({tasks} tasks)")
+    t2, rows2, _, busy2 = on_dask(sweep, 2)
+    print(f"  dask 2 wkr : {t2:8.2f} s  {rows2 / t2:8.1f} runs/s  "
+          f"busy {100 * busy2 / (2 * t2):5.1f} %")
     if loop:
-        print(f"  Dask overhead vs loop (1 worker): {100 * (t1 / t_loop - 1):+.1f} %  "
+        print(f"  Dask overhead vs loop (1 worker): {100 * (t1 / t_loop - 1):+.1f} % wall, "
+              f"{100 * (busy / t_loop - busy1 / t1):+.1f} points of busy fraction  "
               f"({1e3 * (t1 - t_loop) / tasks:+.1f} ms per task)")
-    print(f"  scaling efficiency 1 -> 2 workers: {100 * t1 / (2 * t2):.0f} %")
+    print(f"  scaling efficiency 1 -> 2 workers: {100 * t1 / (2 * t2):.0f} % wall, "
+          f"{100 * (busy2 / (2 * t2)) / (busy1 / t1):.0f} % of 1 worker's busy fraction")
 
 
 def main() -> None:
