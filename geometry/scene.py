@@ -377,6 +377,17 @@ def load_scene(name_or_path: str | Path) -> Scene:
     SceneError
         If the file is missing, is not valid TOML, or has a bad field.
     """
+    source, data, stem = read_scene_data(name_or_path)
+    return parse_scene(data, source, default_name=stem)
+
+
+def read_scene_data(name_or_path: str | Path) -> tuple[str, dict, str]:
+    """(source label, parsed TOML, file stem) of a built-in scene or a scene file, unchecked.
+
+    For callers that edit a scene's fields before :func:`parse_scene` checks
+    them (``flexval sweep``). Raises SceneError for a missing, unreadable or
+    malformed file.
+    """
     text_id = str(name_or_path)
     if text_id in BUILTIN_SCENES:
         res = resources.files("geometry").joinpath("scenes", f"{text_id}.toml")
@@ -394,7 +405,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
     except RecursionError:
         raise SceneError(source, "toml", None, "arrays or tables nested too deeply to read "
                          "(a scene needs at most 3 levels)") from None
-    return parse_scene(data, source, default_name=stem)
+    return source, data, stem
 
 
 _BYTE_ORDER_MARKS = {b"\xff\xfe": "UTF-16", b"\xfe\xff": "UTF-16",

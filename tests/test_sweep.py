@@ -7,7 +7,7 @@ import pyarrow.parquet as pq
 import pytest
 from distributed import Client, LocalCluster
 
-from geometry import parse_model
+from reducedmodels import parse_model
 from validation.cli import main
 from validation.compare import errors
 from validation.run import run_model

@@ -3,7 +3,7 @@
 Tasks are whole runs of one model on a batch of points (every load case of
 the sweep): :attr:`Sweep.batch` points per task for the reduced models, so
 the per-task cost of Dask stays small against the work, and one point per
-task for the continuum. The reference runs once per point in its own
+task for the costly reference-class models (the continuum). The reference runs once per point in its own
 tasks; a model task receives the reference paths of its points from Dask.
 
 Resuming: every row's key hashes the point's scene, the model, the load
@@ -21,6 +21,9 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterator
+
+from reducedmodels import ModelSpec
+from reducedmodels.catalogue import REFERENCE
 
 from ..cache import code_version
 from .spec import Point, Sweep
@@ -51,8 +54,9 @@ def chunks(points: list[Point], size: int) -> Iterator[list[Point]]:
         yield points[k:k + size]
 
 
-def _batch_size(sweep: Sweep, family: str) -> int:
-    return 1 if family == "continuum" else sweep.batch
+def _batch_size(sweep: Sweep, spec: ModelSpec) -> int:
+    """Points per task: one for a reference-class (costly) model, the sweep's batch otherwise."""
+    return 1 if spec.model_family.has(REFERENCE) else sweep.batch
 
 
 def local_cluster(workers: int | None = None):
@@ -125,14 +129,14 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, client, use_cache: bool = True,
     ref_points = [p for p in sweep.valid_points if p.index in need_ref]
     tasks = {}
     ref_future = {}
-    for chunk in chunks(ref_points, _batch_size(sweep, sweep.reference.family)):
+    for chunk in chunks(ref_points, _batch_size(sweep, sweep.reference)):
         fut = client.submit(run_reference, chunk, sweep.reference, sweep.load_cases, info,
                             use_cache, retries=RETRIES, pure=False)
         tasks[fut] = (chunk, sweep.reference.id)
         for p in chunk:
             ref_future[p.index] = fut
     for spec in sweep.models:
-        for chunk in chunks(todo[spec], _batch_size(sweep, spec.family)):
+        for chunk in chunks(todo[spec], _batch_size(sweep, spec)):
             refs = list({id(ref_future[p.index]): ref_future[p.index] for p in chunk}.values())
             fut = client.submit(run_model_batch, chunk, spec, sweep.load_cases, info, refs,
                                 retries=RETRIES, pure=False)

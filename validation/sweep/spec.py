@@ -47,15 +47,14 @@ import json
 import math
 import tomllib
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from geometry import BUILTIN_SCENES, ModelSpec, Scene, SceneError, parse_model
-from geometry.scene import parse_scene
-from reducedmodels import run_reduced
+from geometry import BUILTIN_SCENES, Scene, SceneError
+from geometry.scene import parse_scene, read_scene_data
+from reducedmodels import ModelSpec, parse_model, run_reduced
 
 from ..compare import METRICS
 from ..stress import scale_case
@@ -281,25 +280,19 @@ def digest(data: dict) -> str:
 
 
 def _base_data(base: Any, source: str, folder: Path) -> tuple[str, dict]:
-    """(label, parsed TOML) of the base scene: a built-in name, a path or an inline table."""
+    """(label, parsed TOML) of the base scene: a built-in name, a path (relative to the
+    sweep file's folder) or an inline table."""
     if isinstance(base, dict):
         return "<inline>", base
     if not isinstance(base, str):
         _fail(source, "base", base, "must be a built-in scene name or a scene file path")
     if base in BUILTIN_SCENES:
-        text = resources.files("geometry").joinpath("scenes", f"{base}.toml").read_text(
-            encoding="utf-8")
-        label = base
-    else:
-        path = Path(base) if Path(base).is_absolute() else folder / base
-        if not path.is_file():
-            _fail(source, "base", base,
-                  f"no such scene file, and not a built-in scene {list(BUILTIN_SCENES)}")
-        text, label = path.read_text(encoding="utf-8"), str(path)
-    try:
-        return label, tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        _fail(source, "base", base, f"malformed TOML: {exc}")
+        return base, read_scene_data(base)[1]
+    path = Path(base) if Path(base).is_absolute() else folder / base
+    if not path.is_file():
+        _fail(source, "base", base,
+              f"no such scene file, and not a built-in scene {list(BUILTIN_SCENES)}")
+    return str(path), read_scene_data(path)[1]
 
 
 def parse_sweep(data: dict, source: str, folder: Path = Path("."),
@@ -327,9 +320,6 @@ def parse_sweep(data: dict, source: str, folder: Path = Path("."),
     if len({s.id for s in specs}) != len(specs):
         _fail(source, "models", models, "lists a model twice")
     reference = parse_model(data.get("reference", "beam:100"), source, "reference")
-    if reference.family == "continuum" and reference.resolution is None:
-        _fail(source, "reference", reference.id, "give the continuum's mesh level, e.g. "
-              "continuum:0 (the reference is part of every result's key)")
     if reference in specs:
         _fail(source, "models", reference.id, "the reference is not compared with itself")
     names = [c.name for c in base_scene.load_cases]

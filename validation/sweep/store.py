@@ -14,11 +14,12 @@ from __future__ import annotations
 
 import hashlib
 import math
-import os
 from pathlib import Path
 
 import pyarrow as pa
 import pyarrow.parquet as pq
+
+from geometry.files import atomic_path
 
 from ..compare import METRICS
 
@@ -74,9 +75,8 @@ class ResultStore:
         name = hashlib.sha256("".join(sorted(r["key"] for r in rows)).encode()).hexdigest()[:20]
         self.folder.mkdir(parents=True, exist_ok=True)
         final = self.folder / f"part-{name}.parquet"
-        tmp = self.folder / f".part-{name}.parquet.tmp"
-        pq.write_table(table, tmp)
-        os.replace(tmp, final)
+        with atomic_path(final) as tmp:
+            pq.write_table(table, tmp)
         return final
 
     def rows(self) -> list[dict]:

@@ -16,11 +16,11 @@ Units: errors in percent, times in s, parameters in their field's unit.
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 
 import numpy as np
 
+from ..outputs import save_figure, write_text
 from .spec import Sweep
 from .store import PARAM_PREFIX
 
@@ -151,9 +151,7 @@ def format_timings(sweep: Sweep, rows: list[dict], wall: float | None) -> str:
 
 
 def _save(fig, path: Path) -> None:
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    fig.savefig(tmp, dpi=90)
-    os.replace(tmp, path)
+    save_figure(fig, path, dpi=90)
 
 
 def _threshold_lines(ax, horizontal: bool = True) -> None:
@@ -280,10 +278,7 @@ def write_outputs(sweep: Sweep, rows: list[dict], out_dir: str | Path,
     written = []
     for name, text in (("summary.md", format_summary(sweep, rows)),
                        ("timings.md", format_timings(sweep, rows, wall))):
-        tmp = out / f".{name}.tmp"
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, out / name)
-        written.append(out / name)
+        written.append(write_text(out / name, text))
     metrics = point_metrics(sweep, rows)
     errors_png = out / "errors.png"
     if len(sweep.axes) == 2 and sweep.combine == "grid" and not any(a.random for a in sweep.axes):

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from geometry import ModelSpec, SceneError
-from reducedmodels import LoadPath, SolverError
+from geometry import SceneError
+from reducedmodels import LoadPath, ModelSpec, SolverError
 
 from ..cache import ResultCache, result_key
 from ..compare import METRICS, errors
