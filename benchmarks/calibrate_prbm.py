@@ -119,6 +119,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from geometry import Arc, Segment
+from geometry.files import write_bytes
 
 import reducedmodels
 from reducedmodels.prbm import (TABLE_RESOURCE, PrbmParameters, joint_positions, shape_frame,
@@ -516,7 +517,7 @@ def main(argv: list[str] | None = None) -> int:
                           else Path(reducedmodels.__file__).parent / TABLE_RESOURCE)
     doc = build_table(settings)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+    write_bytes(out, (json.dumps(doc, indent=1, allow_nan=False) + "\n").encode("utf-8"))
     print(f"wrote {out}", file=sys.stderr)
     return 0
 
