@@ -362,3 +362,15 @@ def test_bad_input_creates_no_output_folder(command, tmp_path, no_work):
     out = tmp_path / "new" / "out"
     assert main(command + ["--out", str(out)]) == EXIT_INPUT
     assert not (tmp_path / "new").exists()
+
+
+@pytest.mark.parametrize("option, name", [("--json", "x/none.json"), ("--plot", "m.xyz"),
+                                          ("--plot", "x/none.png")])
+def test_modes_outputs_refused_before_work(option, name, tmp_path, capsys, monkeypatch):
+    import validation.modes
+    monkeypatch.setattr(validation.modes, "run_modes",
+                        lambda *a: pytest.fail("computed before checking the output"))
+    target = str(tmp_path / name)
+    assert main(["modes", "open_chain", "--model", "ee", option, target]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert option in err and target in err

@@ -211,7 +211,7 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene)
     spec = parse_model(args.model, "<command line>", "--model")
     json_path = check_file(args.json, "--json") if args.json else None
-    plot_path = check_file(args.plot, "--plot") if args.plot else None
+    plot_path = check_figure_file(args.plot, "--plot") if args.plot else None
     case = scene.load_case(args.load_case) if args.load_case else (
         scene.load_cases[0] if args.at > 0.0 else None)
     massless = scene.mechanism.inertia.massless_bodies(scene.mechanism.moving_bodies)
