@@ -7,15 +7,16 @@ baseline within
     |error - baseline| <= GATE_TOL   (percentage points)
 
 Why GATE_TOL = 1e-6 points. The solvers are deterministic: rerunning every
-gated figure (either order, 1 or 2 BLAS threads) reproduces gates.json
-bit for bit. What legitimately moves a figure is the solver's path to the
-same equilibrium: tracing every reduced model with sub-steps 5 times finer
-and a 100 times tighter Newton tolerance (``error_tol`` 1e-12), or 2 times
-coarser with ``error_tol`` 1e-9 (10 to 90 sub-steps per path), moved the
-208 gated figures by at most 5e-8 points (3e-7 of their value); the
-continuum reference, retraced the same ways, by at most 2e-9 of its
-values. GATE_TOL is 20 times that spread, and 10^4 times below the
-report's printed resolution (0.01 points): a change that shows in the
+gated figure (either order, 1 or 2 BLAS threads) gives identical figures,
+and the kernel and ellipse refactors of issue 10 moved them from gates.json
+by at most 4e-11 points. What legitimately moves a figure is the solver's
+path to the same equilibrium: tracing every reduced model with sub-step
+bounds 5 times finer and a 100 times tighter Newton tolerance (``error_tol``
+1e-12), or 2 times coarser with ``error_tol`` 1e-9 (10 to 90 sub-steps per
+path), moved the 208 gated figures by at most 5e-8 points (5e-7 of their
+value); the continuum reference, retraced the same ways, moved by at most
+4e-10 of its values. GATE_TOL is 20 times that spread, and 10^4 times below
+the report's printed resolution (0.01 points): a change that shows in the
 report fails CI, whichever way it goes (a real improvement means
 regenerating the report). ``python benchmarks/gate_spread.py`` repeats the
 measurement.
