@@ -54,6 +54,7 @@ from geometry.kinematics import body_point
 
 from .connector import Connector, LocalState
 from .validity import MAX_CHORD_TURN, MAX_STRAIN, rotation_reasons, stretch_reasons
+from .sections import SectionForces, statics_section_forces, unit_vectors
 
 from .inertia import MassPoints, chain_mass_points
 
@@ -253,6 +254,9 @@ class BeamConnector(Connector):
         self.n_internal = 3 * (n_elements - 1)
         self._n_nodes = n_elements + 1
         self._nodes0 = flexure.shape.point(np.linspace(0.0, flexure.shape.length, n_elements + 1))
+        self._node_fractions = np.linspace(0.0, 1.0, n_elements + 1)
+        self._node_tangent0 = flexure.shape.tangent_angle(self._node_fractions
+                                                          * flexure.shape.length)
         chord = np.diff(self._nodes0, axis=0)
         l0 = np.hypot(chord[:, 0], chord[:, 1])
         self._l0 = l0
@@ -440,3 +444,20 @@ class BeamConnector(Connector):
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed node positions (N + 1, 2), mm, from the flexure's start to its end."""
         return self._nodes(pose_a, pose_b, internal)[0]
+
+    def section_forces(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray,
+                       gradient: np.ndarray | None = None) -> SectionForces:
+        """Normal force (N) and bending moment (N mm) at the nodes.
+
+        The elements' end forces on the end body's pose, carried by statics
+        from node to node; with the interior nodes in equilibrium they are
+        the elements' own end forces. The section axis at a node is the
+        initial tangent turned by the node's rotation.
+        """
+        if gradient is None:
+            gradient = self.evaluate(pose_a, pose_b, internal)[1]
+        slot = self._end_pose[1]
+        x, theta, _ = self._nodes(pose_a, pose_b, internal)
+        return statics_section_forces(x, self._node_fractions, gradient[3 * slot:3 * slot + 3],
+                                      (pose_a, pose_b)[slot],
+                                      axes=unit_vectors(self._node_tangent0 + theta))

@@ -25,6 +25,7 @@ if TYPE_CHECKING:
     import scipy.sparse as sp
 
     from .inertia import MassPoints
+    from .sections import SectionForces
 
 LocalState = tuple[np.ndarray, np.ndarray, np.ndarray]
 """(pose_a, pose_b, internal) of one connector: (3,), (3,), (n_internal,)."""
@@ -159,6 +160,30 @@ class Connector(ABC):
         Default None: the mass is that of :meth:`mass_points`. A connector
         that returns one (the continuum) has it used for the mass matrix,
         while its ``mass_points`` still give its weight.
+        """
+        return None
+
+    def section_forces(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray,
+                       gradient: np.ndarray | None = None) -> "SectionForces | None":
+        """Normal force (N) and bending moment (N mm) along the flexure at a converged state.
+
+        Recorded at every load level by the path recorder, which turns them
+        into the peak outer-fibre stress of the flexure's section (MPa) and
+        where it occurs (:class:`reducedmodels.sections.SectionForces`).
+        They come from the model's own internal forces; a flexure model
+        typically passes its energy gradient on the end body's pose and its
+        displaced centre line to
+        :func:`reducedmodels.sections.statics_section_forces`.
+
+        Parameters
+        ----------
+        pose_a, pose_b, internal :
+            The local state (internal coordinates in equilibrium).
+        gradient : array (6 + n_internal,), optional
+            The local energy gradient at this state if already known (e.g.
+            the linear response's K0 dq); default: from :meth:`evaluate`.
+
+        Default: None, the connector reports no section forces (a pin).
         """
         return None
 

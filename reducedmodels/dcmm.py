@@ -27,11 +27,15 @@ import math
 import numpy as np
 
 from geometry import Flexure, Mechanism
-from geometry.kinematics import rotate_xy
+from geometry.kinematics import place_points, rotate_xy
 
 from .connector import Connector
 from .inertia import MassPoints, chain_mass_points
 from .validity import MAX_RELATIVE_ROTATION, MAX_STRAIN, rotation_reasons, stretch_reasons
+from .sections import SectionForces, statics_section_forces, unit_vectors
+
+SAMPLES_PER_SUB_ARC = 16
+"""Segments of each displaced sub-arc at whose ends the section forces are reported."""
 
 
 def _expansion() -> tuple[np.ndarray, np.ndarray]:
@@ -177,6 +181,8 @@ class DcmmConnector(Connector):
         self._end_rel = [tuple((np.asarray(flexure.end_point_of(self.bodies[k]), float)
                                 - refs[-k]).tolist()) for k in (0, 1)]
         self._area, self._sub_lengths = flexure.section.area, np.array([p.length for p in parts])
+        self._forward = forward
+        self._sub_arc_samples(parts, refs, forward)
 
     def mass_points(self, density: float) -> MassPoints:
         """The flexure's mass (density in t/mm^3) lumped on the chain's bodies.
@@ -193,6 +199,28 @@ class DcmmConnector(Connector):
         rel = np.zeros((n + 1, 2))
         rel[0], rel[-1] = self._end_rel
         return chain_mass_points(node_dofs, rel, self._sub_lengths, density * self._area)
+
+    def _sub_arc_samples(self, parts, refs, forward: bool) -> None:
+        """Points of each sub-arc (chain order) as offsets from its two chain bodies.
+
+        The displaced sub-arc is the blend (1 - w) x_leading + w x_following
+        of the point carried rigidly by each of its bodies, w the fraction
+        along the sub-arc: it leaves the leading body's cut and reaches the
+        following body's.
+        """
+        w = np.linspace(0.0, 1.0, SAMPLES_PER_SUB_ARC + 1)
+        self._samples = []
+        for k, part in enumerate(parts):
+            s = (w if forward else w[::-1]) * part.length
+            pts = part.point(s)
+            # tangent towards body b, as an angle
+            tangent = part.tangent_angle(s) + (0.0 if forward else np.pi)
+            first = 0 if k == 0 else 1            # a cut is shared by two sub-arcs
+            self._samples.append((pts[first:] - refs[k], pts[first:] - refs[k + 1], w[first:],
+                                  tangent[first:]))
+        n = len(parts)
+        self._sample_fractions = np.concatenate(
+            [(k + sample[2]) / n for k, sample in enumerate(self._samples)])
 
     def initial_internal(self) -> np.ndarray:
         """Cut-point bodies at rest: (x, y, 0) each."""
@@ -256,3 +284,25 @@ class DcmmConnector(Connector):
     def shape(self, pose_a, pose_b, internal) -> np.ndarray:
         """Polyline through the flexure ends and the cut points, mm."""
         return np.array(self._points(pose_a, pose_b, internal)[1])
+
+    def section_forces(self, pose_a, pose_b, internal,
+                       gradient: np.ndarray | None = None) -> SectionForces:
+        """Normal force (N) and bending moment (N mm) along the displaced sub-arcs.
+
+        Every sub-arc carries the same generalised force (no load acts
+        inside the flexure): the gradient on body b's pose, carried by
+        statics to points of the displaced sub-arcs (see
+        :meth:`_sub_arc_samples`), :data:`SAMPLES_PER_SUB_ARC` segments each,
+        whose sections turn with the blend of the two bodies' rotations.
+        """
+        if gradient is None:
+            gradient = self.evaluate(pose_a, pose_b, internal)[1]
+        chain = self._chain(np.asarray(pose_a, float), np.asarray(pose_b, float),
+                            np.asarray(internal, float))
+        pts, axes = [], []
+        for k, (lead, follow, w, tangent) in enumerate(self._samples):
+            pts.append((1.0 - w)[:, None] * place_points(chain[k], lead)
+                       + w[:, None] * place_points(chain[k + 1], follow))
+            axes.append(unit_vectors(tangent + (1.0 - w) * chain[k][2] + w * chain[k + 1][2]))
+        return statics_section_forces(np.vstack(pts), self._sample_fractions, gradient[3:6],
+                                      chain[-1], reverse=not self._forward, axes=np.vstack(axes))

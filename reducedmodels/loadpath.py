@@ -59,6 +59,16 @@ class LoadPath:
     time : list of float, optional
         Time (s) of each recorded state of a dynamic run
         (:mod:`reducedmodels.dynamics`); ``load`` is then the load at that time.
+    peak_stress : dict of flexure -> list of float, optional
+        Peak outer-fibre normal stress |N|/A + |M| h/(2 I) in each flexure
+        at each level, MPa, from the model's own section forces
+        (:meth:`reducedmodels.connector.Connector.section_forces`).
+    peak_stress_at : dict of flexure -> list of float, optional
+        Where that peak lies: arc-length fraction from the flexure's first
+        end (the start of its centre line), 0..1.
+    stress_profile : dict of flexure -> {"at": [...], "stress": [...]}, optional
+        Outer-fibre stress (MPa) along each flexure at the last level
+        (arc-length fractions from the first end).
     """
 
     model: str
@@ -79,6 +89,9 @@ class LoadPath:
     valid: list | None = None
     validity: list | None = None
     time: list | None = None
+    peak_stress: dict | None = None
+    peak_stress_at: dict | None = None
+    stress_profile: dict | None = None
 
     @property
     def displacement(self) -> np.ndarray:

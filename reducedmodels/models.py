@@ -17,10 +17,10 @@ from geometry import LoadCase, Mechanism, SceneError
 from geometry.kinematics import rigid_points
 
 from .catalogue import ModelSpec
-from .core import SolverSettings, System
+from .core import SolverSettings, System, local_hessian
 from .inertia import with_weights
 from .loadpath import LoadPath
-from .recorder import solve_path
+from .recorder import record_stress, solve_path
 
 #: ``make(flexure, mechanism, spec, **options) -> Connector`` of one flexure
 ConnectorFactory = Callable[..., Any]
@@ -138,12 +138,21 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
     unit = jac[0] @ dq[tdofs]
     rot = float(dq[tdofs[2]])
     lam = case.factors(levels)
-    return LoadPath(model=model, load_case=case.name, load=list(lam * case.magnitude),
-                    dx=list(lam * unit[0]), dy=list(lam * unit[1]), rotation=list(lam * rot),
-                    seconds=time.perf_counter() - t0, converged=True,
-                    stats={"unknowns": system.n_dofs, "newton_iterations": 0, "step_cuts": 0,
-                           "substeps": 0},
-                    settings={}, scene=scene, load_unit=case.unit)
+    lp = LoadPath(model=model, load_case=case.name, load=list(lam * case.magnitude),
+                  dx=list(lam * unit[0]), dy=list(lam * unit[1]), rotation=list(lam * rot),
+                  seconds=0.0, converged=True,
+                  stats={"unknowns": system.n_dofs, "newton_iterations": 0, "step_cuts": 0,
+                         "substeps": 0},
+                  settings={}, scene=scene, load_unit=case.unit)
+    # section forces of the linear response: K0 dq on the undeformed centre lines
+    rest, moved = system.local_states(q0), system.local_states(q0 + dq)
+    gradients = [local_hessian(c, c.evaluate(*r)[2]) @ (np.concatenate(m) - np.concatenate(r))
+                 for c, r, m in zip(system.connectors, rest, moved)]
+    sections = {f.name: f.section for f in mech.flexures}
+    for factor in lam:
+        record_stress(lp, system.connectors, rest, sections, factor, gradients)
+    lp.seconds = time.perf_counter() - t0
+    return lp
 
 
 def run_reduced(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int | None = None,

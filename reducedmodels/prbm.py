@@ -98,6 +98,7 @@ from geometry.shapes import Shape, arc_semi_axes
 from .connector import Connector
 from .inertia import MassPoints, chain_mass_points
 from .validity import MAX_STRAIN, rotation_reasons, stretch_reasons
+from .sections import SectionForces, polyline_fractions, statics_section_forces
 
 TABLE_RESOURCE = "data/prbm_table.json"
 
@@ -279,6 +280,9 @@ class PrbmConnector(Connector):
         self._end_rel = [tuple((self._ends[k] - self._ref[k]).tolist()) for k in (0, 1)]
         self._fitted_rotation = fitted_rotation()
         self._area = flexure.section.area
+        self._forward = flexure.start_body == self.bodies[0]
+        rest = np.array([*self._ends[:1], *joints, *self._ends[1:]])
+        self._fractions = polyline_fractions(rest)
 
     def mass_points(self, density: float) -> MassPoints:
         """The flexure's mass (density in t/mm^3) lumped on its end bodies.
@@ -367,3 +371,17 @@ class PrbmConnector(Connector):
         j2 = ja + rotate(internal[0], self._v_h)
         jb, end_b = place_points(pose_b, np.array([self._r_b, self._ends[1] - self._ref[1]]))
         return np.array([end_a, ja, j2, jb, end_b])
+
+    def section_forces(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray,
+                       gradient: np.ndarray | None = None) -> SectionForces:
+        """Normal force (N) and bending moment (N mm) along the displaced links.
+
+        The chain transmits one wrench (the gradient on body b's pose,
+        closure multiplier included), carried by statics along the polyline
+        end_a, R_a, R_2, R_b, end_b; fractions are those of the undeformed
+        polyline.
+        """
+        if gradient is None:
+            gradient = self.evaluate(pose_a, pose_b, internal)[1]
+        return statics_section_forces(self.shape(pose_a, pose_b, internal), self._fractions,
+                                      gradient[3:6], pose_b, reverse=not self._forward)

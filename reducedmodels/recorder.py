@@ -15,6 +15,8 @@ from __future__ import annotations
 import time
 from typing import Callable, Iterator
 
+import numpy as np
+
 from geometry import LoadCase
 
 from .core import SolverError, System
@@ -65,6 +67,7 @@ class PathRecorder:
             self.stats["limit_points"] = []
         self.path.stats = self.stats
         self.factors: list[float] = []
+        self.sections = {f.name: f.section for f in system.mechanism.flexures}
 
     def record(self, point: PathPoint) -> None:
         """Append one converged point."""
@@ -77,6 +80,7 @@ class PathRecorder:
         lp.validity.append("; ".join(reasons) if reasons else None)
         if lp.reactions is not None:
             lp.reactions.append(system.reaction(q).tolist())
+        record_stress(lp, system.connectors, system.local_states(q), self.sections)
         if lp.poses is not None:
             for b in system.mechanism.bodies:
                 lp.poses[b].append(system.pose(q, b).tolist())
@@ -129,6 +133,40 @@ class PathRecorder:
         except TraceFailure as exc:
             raise self.failure(exc) from None
         return self.finish(), last
+
+
+def record_stress(path: LoadPath, connectors, states, sections: dict, scale: float = 1.0,
+                  gradients=None) -> None:
+    """Append each flexure's peak outer-fibre stress (MPa) and its place to ``path``.
+
+    Connectors whose :meth:`~reducedmodels.connector.Connector.section_forces`
+    is None (pins) are skipped; the stress profile along each flexure is
+    kept for the last level only (``path.stress_profile``).
+
+    Parameters
+    ----------
+    path : LoadPath
+    connectors, states :
+        The system's connectors and their local states at the level.
+    sections : dict of flexure name -> Section
+    scale : float
+        Factor on the section forces (the load factor of a linear response).
+    gradients : list, optional
+        Each connector's local gradient if already known (see ``section_forces``).
+    """
+    for k, (c, local) in enumerate(zip(connectors, states)):
+        section = sections.get(c.name)
+        forces = None if section is None else c.section_forces(
+            *local, gradient=None if gradients is None else gradients[k])
+        if forces is None:
+            continue
+        sigma = abs(scale) * forces.fibre_stress(section)
+        peak = int(np.argmax(sigma))
+        if path.peak_stress is None:
+            path.peak_stress, path.peak_stress_at, path.stress_profile = {}, {}, {}
+        path.peak_stress.setdefault(c.name, []).append(float(sigma[peak]))
+        path.peak_stress_at.setdefault(c.name, []).append(float(forces.at[peak]))
+        path.stress_profile[c.name] = {"at": forces.at.tolist(), "stress": sigma.tolist()}
 
 
 def solve_path(system: System, case: LoadCase, levels: int | None = None,

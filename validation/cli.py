@@ -115,7 +115,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     results, status = [], EXIT_OK
     w = max(14, *(len(sp.id) for sp in specs))
     print(f"{'model':<{w}} {'case':<6} {'load':>11} {'dx mm':>10} {'dy mm':>10} {'|d| mm':>10} "
-          f"{'rot deg':>9} {'iters':>6} {'seconds':>9} {'valid':>7}")
+          f"{'rot deg':>9} {'peak MPa':>9} {'at':<12} {'iters':>6} {'seconds':>9} {'valid':>7}")
     for spec in specs:
         for case in cases:
             extra = {}
@@ -145,7 +145,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             results.append(lp)
             print(f"{lp.model:<{w}} {lp.load_case:<6} {lp.load[-1]:>9.4g} {lp.load_unit:<2}"
                   f"{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} {lp.displacement[-1]:>10.4f} "
-                  f"{math.degrees(lp.rotation[-1]):>9.3f} "
+                  f"{math.degrees(lp.rotation[-1]):>9.3f} {_peak_column(lp)} "
                   f"{lp.stats.get('newton_iterations', 0):>6} {lp.seconds:>9.4f} "
                   f"{_valid_cell(lp):>7}")
             note = _validity_note(lp)
@@ -232,6 +232,16 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     if plot_path:
         plot_modes(system, modes, plot_path, f"{scene.name} {spec.id} {where}")
     return EXIT_OK
+
+
+def _peak_column(lp) -> str:
+    """``peak MPa`` and ``at`` of a run line: the largest outer-fibre stress over the flexures
+    at the last level and where (``flexure@fraction`` of its length from its first end)."""
+    if not lp.peak_stress:
+        return f"{'-':>9} {'':<12}"
+    name = max(lp.peak_stress, key=lambda f: lp.peak_stress[f][-1])
+    where = f"{name}@{lp.peak_stress_at[name][-1]:.2f}"
+    return f"{lp.peak_stress[name][-1]:>9.4g} {where:<12}"
 
 
 def _parse_levels(text: str, spec) -> list[int]:

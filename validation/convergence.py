@@ -10,6 +10,9 @@ the three finest resolutions f1 (coarse), f2, f3 (fine) give
 * the Richardson-extrapolated value f_ext = f3 + (f3 - f2) / (r^p - 1),
 * Roache's grid-convergence index GCI = 1.25 |(f3 - f2) / f3| / (r^p - 1)
   (percent), an error band on the finest value.
+
+The same analysis is made of the largest peak outer-fibre stress over the
+flexures at full load (MPa, ``peak_stress``) for models that report it.
 """
 
 from __future__ import annotations
@@ -85,14 +88,18 @@ def study(scene: Scene, model: ModelSpec, resolutions: list[int], case: LoadCase
                         "unknowns": lp.stats.get("unknowns"), "seconds": lp.seconds,
                         "dx": lp.dx[-1], "dy": lp.dy[-1],
                         "displacement": float(lp.displacement[-1]),
-                        "rotation": lp.rotation[-1]})
+                        "rotation": lp.rotation[-1],
+                        "peak_stress": (max(v[-1] for v in lp.peak_stress.values())
+                                        if lp.peak_stress else None)})
         if progress:
             progress(spec.id)
     finest = [r["resolution"] for r in st.rows[-3:]]
     if len(st.rows) >= 3 and finest == resolutions[-3:] and math.isfinite(ratio):
         f = st.rows[-3:]
-        st.summary = {key: richardson(f[0][key], f[1][key], f[2][key], ratio)
-                      for key in ("displacement", "rotation")}
+        keys = ["displacement", "rotation"]
+        if all(r["peak_stress"] is not None for r in f):
+            keys.append("peak_stress")
+        st.summary = {key: richardson(f[0][key], f[1][key], f[2][key], ratio) for key in keys}
     return st
 
 
@@ -104,8 +111,8 @@ def format_study(st: ConvergenceStudy) -> str:
     for r in st.rows:
         lines.append(f"{r['model']:<14} {r['unknowns']:>9} {r['seconds']:>9.3f} "
                      f"{r['displacement']:>12.6f} {math.degrees(r['rotation']):>12.6f}")
-    for key, unit, conv in (("displacement", "mm", 1.0), ("rotation", "deg",
-                                                           math.degrees(1.0))):
+    for key, unit, conv in (("displacement", "mm", 1.0), ("rotation", "deg", math.degrees(1.0)),
+                            ("peak_stress", "MPa", 1.0)):
         s = st.summary.get(key)
         if not s:
             continue

@@ -27,6 +27,8 @@ from geometry.mesh import FlexureMesh, mesh_flexure
 from reducedmodels.connector import Connector
 from reducedmodels.inertia import MassPoints
 from reducedmodels.validity import MIN_DET_F, stretch_reasons
+from reducedmodels.sections import (SectionForces, polyline_axes, polyline_fractions,
+                                   statics_section_forces)
 
 from .mass import node_jacobian, scalar_mass
 from .material import make_law
@@ -69,6 +71,8 @@ class ContinuumConnector(Connector):
         self._rel = [self.mesh.nodes[faces[s]] - mechanism.bodies[self.bodies[s]].reference
                      for s in (0, 1)]
         self._free = np.flatnonzero(role < 0)
+        self._end_slot = self.bodies.index(flexure.end_body)
+        self._centre_fractions = polyline_fractions(self.mesh.nodes[self.mesh.centre_line])
         self.n_internal = 2 * self._free.size
         self._n = 6 + self.n_internal
         self._build_expansion(role)
@@ -193,3 +197,21 @@ class ContinuumConnector(Connector):
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed centre line (nodes at mid-thickness, start to end), mm."""
         return self.positions(pose_a, pose_b, internal)[self.mesh.centre_line]
+
+    def section_forces(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray,
+                       gradient: np.ndarray | None = None) -> SectionForces:
+        """Section resultants N (N) and M (N mm) along the deformed mid-thickness line.
+
+        By equilibrium of the part of the solid beyond a cut, the resultant
+        of the stresses on any cross-section through a centre-line node is
+        the end face's reaction (the gradient on the end body's pose: the
+        sum of the face's nodal forces) carried there by statics. Unlike the
+        raw peak stress, which is singular at the corners of the rigidly held
+        end faces, it converges with the mesh at the rate of the reactions.
+        """
+        if gradient is None:
+            gradient = self.evaluate(pose_a, pose_b, internal)[1]
+        s = self._end_slot
+        line = self.shape(pose_a, pose_b, internal)
+        return statics_section_forces(line, self._centre_fractions, gradient[3 * s:3 * s + 3],
+                                      (pose_a, pose_b)[s], axes=polyline_axes(line))

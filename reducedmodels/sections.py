@@ -1,0 +1,137 @@
+"""Section forces and outer-fibre stress along a flexure, by statics of its end wrench.
+
+A flexure carries no load between its ends, so the wrench it transmits is
+the same at every cross-section; the section's normal force N and bending
+moment M follow from the force and moment the flexure's end body exerts on
+it and from the section's position and direction in the (displaced)
+configuration:
+
+    N(s) = F . t(s),    M(s) = M_ref + (p_ref - x(s)) x F,
+
+with F the force (N) and M_ref the moment (N mm, about the end body's
+reference point p_ref) the end body exerts on the flexure, x(s) the section's
+current position and t(s) its current axis (pointing towards the end body).
+The peak normal stress of the rectangular section is the outer-fibre value
+
+    sigma(s) = |N| / A + |M| h / (2 I)       (MPa).
+
+Every flexure connector reports its section forces from its own internal
+forces (the gradient of its energy on the end body's pose) along its own
+displaced centre line (beam nodes, DCMM displaced sub-arcs, PRBM links,
+continuum mid-thickness nodes): see :meth:`reducedmodels.connector.Connector.section_forces`.
+
+Units: mm, N, N mm, MPa.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from geometry import Section
+
+
+@dataclass(frozen=True)
+class SectionForces:
+    """Normal force and bending moment at stations along one flexure.
+
+    Attributes
+    ----------
+    at : array (m,)
+        Arc-length fraction of each station from the flexure's first end
+        (the start of its centre line), 0..1, increasing (a polyline vertex
+        appears twice, once per adjacent segment, when the axis turns there).
+    axial : array (m,)
+        Normal force N, N (tension positive).
+    moment : array (m,)
+        Bending moment M, N mm (counterclockwise positive on the part
+        towards the flexure's end body).
+    """
+
+    at: np.ndarray
+    axial: np.ndarray
+    moment: np.ndarray
+
+    def fibre_stress(self, section: Section) -> np.ndarray:
+        """Outer-fibre normal stress |N|/A + |M| h/(2 I) at each station, MPa."""
+        return (np.abs(self.axial) / section.area
+                + np.abs(self.moment) * section.thickness / (2.0 * section.inertia))
+
+    def peak(self, section: Section) -> tuple[float, float]:
+        """Largest outer-fibre stress (MPa) and its arc-length fraction from the first end."""
+        sigma = self.fibre_stress(section)
+        k = int(np.argmax(sigma))
+        return float(sigma[k]), float(self.at[k])
+
+
+def statics_section_forces(points: np.ndarray, fractions: np.ndarray, wrench: np.ndarray,
+                           end_pose: np.ndarray, reverse: bool = False,
+                           axes: np.ndarray | None = None) -> SectionForces:
+    """Section forces along a displaced centre line from the wrench at its end body.
+
+    Parameters
+    ----------
+    points : array (m, 2)
+        Current centre line as a polyline ending at the end body, mm.
+    fractions : array (m,)
+        Arc-length fraction of each point measured along the same direction, 0..1.
+    wrench : array (3,)
+        The connector's energy gradient on the end body's pose: the force
+        (N, N) the end body exerts on the flexure and its moment (N mm) about
+        the body's reference point, at equilibrium of the internal coordinates.
+    end_pose : array (3,)
+        The end body's pose (mm, mm, rad).
+    reverse : bool
+        The polyline runs from the flexure's last end to its first: report
+        fractions from the first end (1 - fraction) and stations in that order.
+    axes : array (m, 2), optional
+        The sections' current unit axes at the points (towards the end
+        body), where the model knows them (a curved centre line); default:
+        each straight segment's own axis.
+
+    Returns
+    -------
+    SectionForces
+        One station per point with ``axes``; otherwise two per segment (its
+        two ends, with the segment's axis).
+    """
+    points = np.asarray(points, float)
+    fractions = np.asarray(fractions, float)
+    if axes is not None:
+        x, t, at = points, np.asarray(axes, float), fractions
+    else:
+        keep = np.concatenate([[True], np.any(np.diff(points, axis=0) != 0.0, axis=1)])
+        points, fractions = points[keep], fractions[keep]     # coincident vertices: no axis
+        seg = np.diff(points, axis=0)
+        axis = seg / np.hypot(seg[:, 0], seg[:, 1])[:, None]
+        x = np.concatenate([points[:-1], points[1:]])
+        t = np.concatenate([axis, axis])
+        at = np.concatenate([fractions[:-1], fractions[1:]])
+    force = np.asarray(wrench[:2], float)
+    wrench = np.asarray(wrench, float)
+    r = np.asarray(end_pose[:2], float) - x
+    moment = wrench[2] + r[:, 0] * force[1] - r[:, 1] * force[0]
+    axial = t @ force
+    if reverse:
+        at = 1.0 - at
+    order = np.argsort(at, kind="stable")
+    return SectionForces(at[order], axial[order], moment[order])
+
+
+def polyline_fractions(points: np.ndarray) -> np.ndarray:
+    """Cumulative length fraction (0..1) of the vertices of a polyline (m, 2)."""
+    seg = np.hypot(*np.diff(np.asarray(points, float), axis=0).T)
+    length = np.concatenate([[0.0], np.cumsum(seg)])
+    return length / length[-1]
+
+
+def unit_vectors(angle: np.ndarray) -> np.ndarray:
+    """(cos, sin) of each angle (rad), shape (m, 2)."""
+    return np.column_stack([np.cos(angle), np.sin(angle)])
+
+
+def polyline_axes(points: np.ndarray) -> np.ndarray:
+    """Unit axes of a finely sampled smooth curve at its points, by central differences."""
+    d = np.gradient(np.asarray(points, float), axis=0)
+    return d / np.hypot(d[:, 0], d[:, 1])[:, None]
