@@ -69,6 +69,10 @@ class LoadPath:
     stress_profile : dict of flexure -> {"at": [...], "stress": [...]}, optional
         Outer-fibre stress (MPa) along each flexure at the last level
         (arc-length fractions from the first end).
+    limit_points : list of dict, optional
+        Of an arc-length trace: where the load turns, each ``{"index",
+        "load", "traced_load", "dx", "dy", "rotation"}`` (see
+        :func:`validation.limits.limit_points`; N or N mm, mm, rad).
     """
 
     model: str
@@ -92,6 +96,7 @@ class LoadPath:
     peak_stress: dict | None = None
     peak_stress_at: dict | None = None
     stress_profile: dict | None = None
+    limit_points: list | None = None
 
     @property
     def displacement(self) -> np.ndarray:

@@ -99,6 +99,18 @@ def _cmd_run(args: argparse.Namespace) -> int:
         raise SceneError(scene.source, "--model", None,
                          "no model requested (give --model or request.models in the scene)")
     cases = [scene.load_case(n) for n in args.load_case] if args.load_case else scene.load_cases
+    if args.max_load_factor is not None and not args.arclength:
+        raise SceneError("<command line>", "--max-load-factor", args.max_load_factor,
+                         "applies to --arclength traces only")
+    max_factor = 1.0 if args.max_load_factor is None else args.max_load_factor
+    if not (math.isfinite(max_factor) and 0.0 < max_factor <= 1e6):
+        raise SceneError("<command line>", "--max-load-factor", max_factor,
+                         "must be a positive number up to 1e6")
+    if args.arclength:
+        from .limits import check_arclength
+
+        for spec in specs:
+            check_arclength(spec)
     fields = scene.outputs & {"vtu", "png"}
     if fields and not any(sp.model_family.has(FIELDS) for sp in specs):
         with_fields = [f.name for f in families() if f.has(FIELDS)]
@@ -126,11 +138,18 @@ def _cmd_run(args: argparse.Namespace) -> int:
                     extra["png"] = output_path(out_dir, stem, ".png")
             record = {"record_poses": "poses" in scene.outputs,
                       "record_shapes": "shape" in scene.outputs}
+            # field outputs need the solve; arc-length traces are not cached
             key = result_key(scene, spec.id, case.name, args.levels, record) \
-                if cache.enabled and not extra else None      # field outputs need the solve
+                if cache.enabled and not extra and not args.arclength else None
             lp = cache.get(key) if key else None
             try:
-                if lp is None:
+                if lp is None and args.arclength:
+                    from .limits import DEFAULT_STEPS, trace_arclength
+
+                    lp = trace_arclength(scene, spec, case, max_factor,
+                                         args.levels - 1 if args.levels else DEFAULT_STEPS,
+                                         record_poses=record["record_poses"])
+                elif lp is None:
                     lp = run_model(scene, spec, case, args.levels, **record, **extra)
                     if key:
                         cache.put(key, lp)
@@ -151,6 +170,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
             note = _validity_note(lp)
             if note:
                 print(note)
+            for point in lp.limit_points or []:
+                print(f"{'':<{w}} limit point: load {point['load']:.6g} {lp.load_unit}, "
+                      f"dx {point['dx']:.6g} mm, dy {point['dy']:.6g} mm, "
+                      f"rot {math.degrees(point['rotation']):.6g} deg")
     if json_path:
         write_json(json_path, {"scene": scene.name, "results": [p.to_dict() for p in results]})
     return status
@@ -442,6 +465,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="reuse and store results in the result cache ($FLEXVAL_CACHE or "
                         "~/.cache/flexval; default: always compute, so timings are fresh; "
                         "runs that write VTU/PNG fields always compute)")
+    q.add_argument("--arclength", action="store_true",
+                   help="trace by arc-length continuation, through limit points, up to the "
+                        "load case's full value (every converged point is reported; --levels N "
+                        "sets the initial arc length to reach it in N - 1 steps, default 20)")
+    q.add_argument("--max-load-factor", type=float, metavar="X",
+                   help="with --arclength: trace up to X times the load case's value (default 1)")
     q.add_argument("--out-dir", default="flexval_out", metavar="DIR",
                    help="folder for the continuum's VTU/PNG outputs when the scene requests "
                         "them (request.outputs = [\"vtu\", \"png\"]; default flexval_out)")

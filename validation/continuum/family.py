@@ -10,8 +10,8 @@ from __future__ import annotations
 from geometry import LoadCase, Mechanism
 from geometry.mesh import MAX_LEVEL
 from reducedmodels import LoadPath, SolverError
-from reducedmodels.catalogue import (FIELDS, REFERENCE, Family, ModelSpec, Option, Resolution,
-                                     register)
+from reducedmodels.catalogue import (ARCLENGTH, FIELDS, REFERENCE, Family, ModelSpec, Option,
+                                     Resolution, register)
 
 from .material import LAWS, PLANES
 
@@ -68,6 +68,15 @@ def run(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int | Non
     return lp
 
 
+def system(mechanism: Mechanism, spec: ModelSpec, settings=None, **options):
+    """The multibody System of ``mechanism`` with every flexure meshed as ``spec`` says
+    (for arc-length traces; see :func:`.run.build_system`)."""
+    from .run import build_system
+
+    return build_system(mechanism, spec.resolution, settings=settings,
+                        **{**spec.kwargs, **options})
+
+
 CONTINUUM = register(Family(
     "continuum", "flexures meshed as 2D solids (Gmsh, quadratic quadrilaterals), geometrically "
     "nonlinear hyperelastic, scikit-fem; the end faces follow the rigid bodies exactly",
@@ -79,4 +88,4 @@ CONTINUUM = register(Family(
      Option.choice("plane", "plane stress (free out-of-plane faces) or plane strain (no "
                    "out-of-plane strain); a wide flexure (depth b >> thickness h) lies between",
                    PLANES, "stress")),
-    frozenset({FIELDS, REFERENCE})))
+    frozenset({FIELDS, REFERENCE, ARCLENGTH}), system))
