@@ -116,3 +116,39 @@ def test_linked_figures_exist(report):
     assert links
     for name in links:
         assert (report.parent / name).is_file(), name
+
+
+def test_peak_stress_table_matches_results_json(report):
+    text = report.read_text()
+    data = json.loads((report.parent / "results.json").read_text())
+    paths = {(r["model"], r["load_case"]): LoadPath.from_dict(r)
+             for r in data["scenes"]["tiny"]["results"]}
+    section = text.split("### Peak stress")[1].split("###")[0]
+    rows = re.findall(r"^\| `(\S+)` \| (.+) \|$", section, flags=re.M)
+    assert [m for m, _ in rows] == ["beam:100", "beam:10", "dcmm:1", "ee"]
+    for model, cells in rows:
+        for case, cell in zip(("up", "twist"), cells.split(" | ")):
+            lp, ref = paths[(model, case)], paths[("beam:100", case)]
+            value, err = re.match(r"([\d.e+-]+) MPa at a@[\d.]+ \(([+-][\d.]+) %\)", cell).groups()
+            peak, ref_peak = lp.peak_stress["a"][-1], ref.peak_stress["a"][-1]
+            assert float(value) == pytest.approx(peak, rel=5e-4)       # 4 significant digits
+            assert float(err) == pytest.approx(100 * (peak - ref_peak) / ref_peak, abs=0.006)
+    assert "Winkler-Bach" in section and "r/h = 10.0" in section
+
+
+def test_limit_load_table_of_a_scene_with_a_limit_point(tmp_path):
+    # Lee's frame: load control stops at the limit point, which arc length finds
+    from pathlib import Path
+
+    scene = Path(__file__).parent / "scenes" / "lee_frame.toml"
+    md = build_report([str(scene)], tmp_path / "out", ["beam:10", "prbm"], repeats=1,
+                      use_cache=False, progress=False, bench=False, converge=False)
+    text = md.read_text()
+    data = json.loads((md.parent / "results.json").read_text())["scenes"]["lee_frame"]
+    limits = {f["model"]: f for f in data["failures"] if f["reason"] == "limit point"}
+    assert set(limits) == {"beam:10", "prbm"}
+    table = text.split("### Limit loads")[1].split("###")[0]
+    for model, f in limits.items():
+        assert f"| `{model}` | {f['load']:.5g} N |" in table
+    # beam:10 (10 elements per member) is 0.55 % above Lee's published 1.855 N
+    assert limits["beam:10"]["load"] == pytest.approx(1.855, rel=1e-2)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from . import figures
+from . import figures, strength
 from .bench import write_bench
 from .failures import Failure
 from .outputs import output_path, write_json, write_text
@@ -230,6 +230,8 @@ def _scene_section(res: SceneResults, out: Path, data: ReportData) -> list[str]:
     if res.has_reference():
         L += [f"### Errors against the continuum reference `{res.reference}`", ""]
         L += _metrics_table(res, res.reference) + [""]
+    L += strength.section(sc, res.paths, res.failures, res.models,
+                          res.reference if res.has_reference() else PAPER_REFERENCE, out)
     seconds_note = f" ({res.paper.seconds_table})" if res.paper else ""
     L += [f"### Run times{seconds_note}", "",
           f"Ours: median wall time of the whole load path ({_levels_text(data)} levels, model "

@@ -1,0 +1,186 @@
+"""Peak stresses and limit loads in the validation report: the data, then its Markdown and figures.
+
+* Peak stress: every model's peak outer-fibre stress at full load
+  (:attr:`reducedmodels.LoadPath.peak_stress`, MPa) with the flexure and the
+  place where it occurs, and its error against the reference model; a figure
+  of the stress along each flexure at full load (the paper's Fig. 13 idea).
+  Beam formulas turn section forces into fibre stress as if the flexure were
+  straight; on a thick curved flexure the inner fibre carries more
+  (Winkler-Bach curved-beam theory, :func:`curved_beam_factor`).
+* Limit loads: a model that stops at a limit point under load control is
+  traced by arc length when its failure is recorded
+  (:func:`validation.failures.failure_of`); the limit loads are tabulated
+  with their error against the reference's own limit load where it has one.
+
+Units: MPa, N or N mm, mm.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from geometry import Scene  # noqa: E402
+from reducedmodels import LoadPath  # noqa: E402
+
+from .failures import LIMIT_POINT, Failure  # noqa: E402
+from .figures import _save, style  # noqa: E402
+from .outputs import output_path  # noqa: E402
+
+
+def curved_beam_factor(radius: float, thickness: float) -> float:
+    """Inner-fibre bending stress of a curved rectangular bar over the straight-beam value.
+
+    Winkler-Bach theory: with r_i, r_o = r -+ h/2 the neutral radius is
+    r_n = h / ln(r_o / r_i), its offset e = r - r_n, and a moment M gives the
+    inner-fibre stress M (r_n - r_i) / (A e r_i) instead of 6 M / (b h^2);
+    the ratio is h (r_n - r_i) / (6 e r_i) (dimensionless, > 1; -> 1 + h/(3r)
+    for r >> h). ``radius`` is the centre-line radius (mm, inf for a straight flexure).
+    """
+    if math.isinf(radius):
+        return 1.0
+    r_i, r_o = radius - thickness / 2.0, radius + thickness / 2.0
+    r_n = thickness / math.log(r_o / r_i)
+    e = radius - r_n
+    return thickness * (r_n - r_i) / (6.0 * e * r_i)
+
+
+# --- data ----------------------------------------------------------------------------------
+def peak_at_full_load(lp: LoadPath) -> dict | None:
+    """``{"stress", "flexure", "at"}``: the largest peak stress over the flexures at the last
+    level (MPa), which flexure and where (fraction from its first end); None without one."""
+    if not lp.peak_stress:
+        return None
+    name = max(lp.peak_stress, key=lambda f: lp.peak_stress[f][-1])
+    return {"stress": lp.peak_stress[name][-1], "flexure": name,
+            "at": lp.peak_stress_at[name][-1]}
+
+
+def peak_stress_data(paths: dict[tuple[str, str], LoadPath], models: list[str],
+                     cases: list[str], reference: str) -> dict[str, dict[str, dict]]:
+    """{model: {case: peak_at_full_load + "error_percent"}} of the paths that reached full load.
+
+    The error is (model - reference) / reference in percent (None without a reference).
+    """
+    out: dict[str, dict[str, dict]] = {}
+    for m in models:
+        for c in cases:
+            lp = paths.get((m, c))
+            peak = peak_at_full_load(lp) if lp is not None and lp.converged else None
+            if peak is None:
+                continue
+            ref = paths.get((reference, c))
+            ref_peak = peak_at_full_load(ref) if ref is not None and ref.converged else None
+            peak["error_percent"] = (100.0 * (peak["stress"] - ref_peak["stress"])
+                                     / ref_peak["stress"] if ref_peak else None)
+            out.setdefault(m, {})[c] = peak
+    return out
+
+
+def limit_load_data(failures: list[Failure], reference: str) -> dict[str, dict[str, dict]]:
+    """{model: {case: {"load", "unit", "error_percent"}}} of the failures at a limit point.
+
+    The error is against the reference's limit load on the same case (None
+    when the reference has none in range).
+    """
+    limits = {(f.model, f.load_case): f for f in failures if f.reason == LIMIT_POINT}
+    out: dict[str, dict[str, dict]] = {}
+    for (m, c), f in limits.items():
+        ref = limits.get((reference, c))
+        err = 100.0 * (f.load - ref.load) / ref.load if ref else None
+        out.setdefault(m, {})[c] = {"load": f.load, "unit": f.unit, "error_percent": err}
+    return out
+
+
+# --- render --------------------------------------------------------------------------------
+def _cell(v: dict | None, value: str) -> str:
+    if v is None:
+        return "—"
+    err = v.get("error_percent")
+    return value if err is None else f"{value} ({err:+.2f} %)"
+
+
+def peak_stress_table(data: dict[str, dict[str, dict]], cases: list[str]) -> list[str]:
+    """Markdown: model x load case, peak stress (MPa), where, error against the reference."""
+    lines = ["| model | " + " | ".join(cases) + " |", "|---|" + "---:|" * len(cases)]
+    for m, row in data.items():
+        cells = [_cell(row.get(c), f"{row[c]['stress']:.4g} MPa at {row[c]['flexure']}"
+                                   f"@{row[c]['at']:.2f}") if c in row else "—" for c in cases]
+        lines.append(f"| `{m}` | " + " | ".join(cells) + " |")
+    return lines
+
+
+def limit_load_table(data: dict[str, dict[str, dict]], cases: list[str]) -> list[str]:
+    """Markdown: model x load case, first limit load and its error against the reference."""
+    lines = ["| model | " + " | ".join(cases) + " |", "|---|" + "---:|" * len(cases)]
+    for m, row in data.items():
+        cells = [_cell(row[c], f"{row[c]['load']:.5g} {row[c]['unit']}") if c in row else "—"
+                 for c in cases]
+        lines.append(f"| `{m}` | " + " | ".join(cells) + " |")
+    return lines
+
+
+def stress_profiles(scene: Scene, case_name: str, paths: dict[str, LoadPath], path: Path) -> str:
+    """Outer-fibre stress (MPa) along each flexure at full load, one panel per flexure."""
+    names = [f.name for f in scene.mechanism.flexures]
+    cols = min(len(names), 3)
+    rows = math.ceil(len(names) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows), squeeze=False)
+    for ax, name in zip(axes.ravel(), names):
+        for model, lp in paths.items():
+            profile = (lp.stress_profile or {}).get(name)
+            if profile and lp.converged:
+                ax.plot(profile["at"], profile["stress"], label=model,
+                        **{**style(model), "marker": None})
+        ax.set_title(name)
+        ax.set_xlabel("arc-length fraction from the first end")
+        ax.set_ylabel("outer-fibre stress (MPa)")
+        ax.grid(alpha=0.3)
+    for ax in axes.ravel()[len(names):]:
+        ax.axis("off")
+    if axes[0, 0].get_legend_handles_labels()[0]:
+        axes[0, 0].legend(fontsize=7)
+    fig.suptitle(f"{scene.name}, load case {case_name}: stress along the flexures at full load")
+    return _save(fig, path)
+
+
+def section(scene: Scene, paths: dict[tuple[str, str], LoadPath], failures: list[Failure],
+            models: list[str], reference: str, out: Path) -> list[str]:
+    """The report's Markdown on peak stresses and limit loads of one scene (figures into ``out``)."""
+    cases = [c.name for c in scene.load_cases]
+    name = scene.name
+    lines = [f"### Peak stress against `{reference}`", "",
+             "Largest outer-fibre normal stress |N|/A + |M| h/(2I) over the flexures at full "
+             "load, from each model's own section forces (the wrench a flexure transmits, carried "
+             "by statics along the model's displaced centre line; for the continuum the section "
+             "resultants of its stresses), where it occurs (flexure@fraction of its length from "
+             "its first end) and its error against the reference.", ""]
+    lines += peak_stress_table(peak_stress_data(paths, models, cases, reference), cases) + [""]
+    curved = [(f.name, f.shape.radius, f.section.thickness,
+               curved_beam_factor(f.shape.radius, f.section.thickness))
+              for f in scene.mechanism.flexures if hasattr(f.shape, "radius")]
+    if curved:
+        lines += ["These are beam formulas: they treat each section as straight. On a curved "
+                  "flexure the bending stress at the inner fibre is higher (Winkler-Bach "
+                  "curved-beam theory) by "
+                  + ", ".join(f"{100 * (k - 1):.1f} % ({n}, r/h = {r / h:.1f})"
+                              for n, r, h, k in curved)
+                  + "; the section resultants the models and the continuum agree on do not "
+                  "see it.", ""]
+    for c in cases:
+        full = {m: paths[(m, c)] for m in models if (m, c) in paths}
+        png = stress_profiles(scene, c, full, output_path(out, f"{name}_{c}_stress", ".png"))
+        lines += [f"![{name} {c} stress]({png})", ""]
+    data = limit_load_data(failures, reference)
+    if data:
+        lines += [f"### Limit loads against `{reference}`", "",
+                  "Models that stopped at a limit point under load control, traced by arc "
+                  "length: first limit load on the path and its error against the reference's "
+                  "(— where the reference has none in range).", ""]
+        lines += limit_load_table(data, cases) + [""]
+    return lines
