@@ -447,17 +447,28 @@ class BeamConnector(Connector):
 
     def section_forces(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray,
                        gradient: np.ndarray | None = None) -> SectionForces:
-        """Normal force (N) and bending moment (N mm) at the nodes.
+        """Normal force (N) and bending moment (N mm) at both end nodes of every element.
 
-        The elements' end forces on the end body's pose, carried by statics
-        from node to node; with the interior nodes in equilibrium they are
-        the elements' own end forces. The section axis at a node is the
-        initial tangent turned by the node's rotation.
+        Each element's own end forces (its internal-force vector at each
+        node), so a load inside the flexure (its weight) is accounted for.
+        The section axis at a node is the initial tangent turned by the
+        node's rotation. ``gradient`` (a linear response's K0 dq) gives the
+        forces by statics of the end wrench instead, along the nodes.
         """
-        if gradient is None:
-            gradient = self.evaluate(pose_a, pose_b, internal)[1]
-        slot = self._end_pose[1]
         x, theta, _ = self._nodes(pose_a, pose_b, internal)
-        return statics_section_forces(x, self._node_fractions, gradient[3 * slot:3 * slot + 3],
-                                      (pose_a, pose_b)[slot],
-                                      axes=unit_vectors(self._node_tangent0 + theta))
+        axes = unit_vectors(self._node_tangent0 + theta)
+        if gradient is not None:
+            slot = self._end_pose[1]
+            return statics_section_forces(x, self._node_fractions,
+                                          gradient[3 * slot:3 * slot + 3],
+                                          (pose_a, pose_b)[slot], axes=axes)
+        grad = corotational_elements(x, theta, self._chord0, self._l0, self._k_axial,
+                                     self._k11, self._k12)[1]
+        # on the part towards the end body, from the part before: at an element's start
+        # node the force that holds the element there, at its end node minus that force
+        axial = np.concatenate([-np.einsum("ij,ij->i", grad[:, 0:2], axes[:-1]),
+                                np.einsum("ij,ij->i", grad[:, 3:5], axes[1:])])
+        moment = np.concatenate([grad[:, 2], -grad[:, 5]])
+        at = np.concatenate([self._node_fractions[:-1], self._node_fractions[1:]])
+        order = np.argsort(at, kind="stable")
+        return SectionForces(at[order], axial[order], moment[order])

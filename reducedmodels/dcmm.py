@@ -31,8 +31,8 @@ from geometry.kinematics import place_points, rotate_xy
 
 from .connector import Connector
 from .inertia import MassPoints, chain_mass_points
-from .validity import MAX_RELATIVE_ROTATION, MAX_STRAIN, rotation_reasons, stretch_reasons
 from .sections import SectionForces, statics_section_forces, unit_vectors
+from .validity import MAX_RELATIVE_ROTATION, MAX_STRAIN, rotation_reasons, stretch_reasons
 
 SAMPLES_PER_SUB_ARC = 16
 """Segments of each displaced sub-arc at whose ends the section forces are reported."""
@@ -289,20 +289,30 @@ class DcmmConnector(Connector):
                        gradient: np.ndarray | None = None) -> SectionForces:
         """Normal force (N) and bending moment (N mm) along the displaced sub-arcs.
 
-        Every sub-arc carries the same generalised force (no load acts
-        inside the flexure): the gradient on body b's pose, carried by
-        statics to points of the displaced sub-arcs (see
-        :meth:`_sub_arc_samples`), :data:`SAMPLES_PER_SUB_ARC` segments each,
-        whose sections turn with the blend of the two bodies' rotations.
+        Each sub-arc's own generalised force (its gradient on its following
+        body's pose) carried by statics to points of its displaced shape
+        (see :meth:`_sub_arc_samples`), :data:`SAMPLES_PER_SUB_ARC` segments
+        each, whose sections turn with the blend of its two bodies'
+        rotations. ``gradient`` (a linear response's K0 dq) gives the
+        flexure's end wrench instead, carried along every sub-arc.
         """
-        if gradient is None:
-            gradient = self.evaluate(pose_a, pose_b, internal)[1]
         chain = self._chain(np.asarray(pose_a, float), np.asarray(pose_b, float),
                             np.asarray(internal, float))
-        pts, axes = [], []
+        pts, axes, wrenches = [], [], []
         for k, (lead, follow, w, tangent) in enumerate(self._samples):
             pts.append((1.0 - w)[:, None] * place_points(chain[k], lead)
                        + w[:, None] * place_points(chain[k + 1], follow))
             axes.append(unit_vectors(tangent + (1.0 - w) * chain[k][2] + w * chain[k + 1][2]))
-        return statics_section_forces(np.vstack(pts), self._sample_fractions, gradient[3:6],
-                                      chain[-1], reverse=not self._forward, axes=np.vstack(axes))
+            wrenches.append(gradient[3:6] if gradient is not None else
+                            sub_arc_energy(chain[k], chain[k + 1], *self._elements[k])[1][3:6])
+        n = [len(p) for p in pts]
+        bounds = np.concatenate([[0], np.cumsum(n)])
+        parts = [statics_section_forces(p, self._sample_fractions[a:b], wrench, chain[k + 1]
+                                        if gradient is None else chain[-1],
+                                        reverse=not self._forward, axes=t)
+                 for k, (p, t, wrench, a, b) in enumerate(zip(pts, axes, wrenches, bounds[:-1],
+                                                              bounds[1:]))]
+        at = np.concatenate([f.at for f in parts])
+        order = np.argsort(at, kind="stable")
+        return SectionForces(at[order], np.concatenate([f.axial for f in parts])[order],
+                             np.concatenate([f.moment for f in parts])[order])

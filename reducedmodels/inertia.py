@@ -211,6 +211,10 @@ class Weighted(Connector):
         """The wrapped connector's."""
         return self.inner.mass_points(density)
 
+    def section_forces(self, pose_a, pose_b, internal, gradient=None):
+        """The wrapped connector's (from its elastic forces: the weights are not section forces)."""
+        return self.inner.section_forces(pose_a, pose_b, internal, gradient)
+
     def mass_matrix(self, density, pose_a, pose_b, internal):
         """The wrapped connector's."""
         return self.inner.mass_matrix(density, pose_a, pose_b, internal)

@@ -97,8 +97,8 @@ from geometry.shapes import Shape, arc_semi_axes
 
 from .connector import Connector
 from .inertia import MassPoints, chain_mass_points
-from .validity import MAX_STRAIN, rotation_reasons, stretch_reasons
 from .sections import SectionForces, polyline_fractions, statics_section_forces
+from .validity import MAX_STRAIN, rotation_reasons, stretch_reasons
 
 TABLE_RESOURCE = "data/prbm_table.json"
 

@@ -6,7 +6,7 @@ moment M follow from the force and moment the flexure's end body exerts on
 it and from the section's position and direction in the (displaced)
 configuration:
 
-    N(s) = F . t(s),    M(s) = M_ref + (p_ref - x(s)) x F,
+    N(s) = F . t(s),    M(s) = -(M_ref + (p_ref - x(s)) x F),
 
 with F the force (N) and M_ref the moment (N mm, about the end body's
 reference point p_ref) the end body exerts on the flexure, x(s) the section's
@@ -45,8 +45,8 @@ class SectionForces:
     axial : array (m,)
         Normal force N, N (tension positive).
     moment : array (m,)
-        Bending moment M, N mm (counterclockwise positive on the part
-        towards the flexure's end body).
+        Bending moment M, N mm: the moment the part before the section
+        exerts on the part towards the end body (counterclockwise positive).
     """
 
     at: np.ndarray
@@ -111,7 +111,8 @@ def statics_section_forces(points: np.ndarray, fractions: np.ndarray, wrench: np
     force = np.asarray(wrench[:2], float)
     wrench = np.asarray(wrench, float)
     r = np.asarray(end_pose[:2], float) - x
-    moment = wrench[2] + r[:, 0] * force[1] - r[:, 1] * force[0]
+    # the part beyond the section is held by the end body and by the part before it
+    moment = -(wrench[2] + r[:, 0] * force[1] - r[:, 1] * force[0])
     axial = t @ force
     if reverse:
         at = 1.0 - at
