@@ -145,3 +145,26 @@ def test_self_weight_moment_follows_the_distributed_load(model):
         at = np.asarray(profile["at"])
         np.testing.assert_allclose(profile["stress"], stress(at * L), rtol=1e-5,
                                    atol=1e-5 * stress(0.0))
+
+
+@pytest.mark.parametrize("r_over_h", [2.0, 8.3, 30.0])
+def test_curved_beam_factor_is_the_winkler_bach_inner_fibre_stress(r_over_h):
+    """sigma(r) = M (r_n - r) / (A e r) carries no net force and the moment M about the
+    centroid (checked by quadrature), and its inner-fibre value over 6 M / (b h^2) is the
+    factor; for r >> h it tends to 1 + h / (3 r)."""
+    from scipy.integrate import quad
+
+    from validation.strength import curved_beam_factor
+
+    h, b, M = 1.0, 1.0, 1.0
+    r = r_over_h * h
+    r_i, r_o = r - h / 2, r + h / 2
+    r_n = h / math.log(r_o / r_i)
+    e = r - r_n
+    sigma = lambda x: M * (r_n - x) / (b * h * e * x)              # noqa: E731
+    assert abs(quad(sigma, r_i, r_o, epsabs=1e-13)[0] * b) < 1e-9
+    assert quad(lambda x: sigma(x) * (r - x), r_i, r_o)[0] * b == pytest.approx(M, rel=1e-9)
+    factor = curved_beam_factor(r, h)
+    assert factor == pytest.approx(sigma(r_i) / (6 * M / (b * h**2)), rel=1e-12)
+    assert factor == pytest.approx(1 + h / (3 * r), rel=0.2 * (h / r) ** 2)
+    assert curved_beam_factor(math.inf, h) == 1.0
