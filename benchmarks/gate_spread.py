@@ -16,9 +16,9 @@ from pathlib import Path
 
 from geometry import load_scene
 from reducedmodels import SolverSettings, build_system, parse_model, solve_path
+from reducedmodels.catalogue import LINEAR
 from reducedmodels.models import solve_linear
 from validation.compare import errors
-from validation.continuum.run import build_system as build_continuum
 
 GATES = Path(__file__).resolve().parents[1] / "reports" / "paper" / "gates.json"
 GATED = ("end_disp_vec", "end_rot", "path_disp", "path_rot")
@@ -30,11 +30,8 @@ def trace(scene, model: str, case: str, settings: SolverSettings):
     """The load path of ``model`` on ``case`` with the given solver settings."""
     spec = parse_model(model)
     load_case = scene.load_case(case)
-    if spec.family == "continuum":
-        system = build_continuum(scene.mechanism, spec.resolution, settings=settings)
-        return solve_path(system, load_case, model=model)
     system = build_system(scene.mechanism, spec, settings=settings)
-    if spec.family == "ee":
+    if spec.model_family.has(LINEAR):
         return solve_linear(system, load_case, model=model)
     return solve_path(system, load_case, model=model)
 

@@ -230,3 +230,17 @@ def test_every_family_documents_itself():
             assert parse_model(fam.name).resolution == res.default
         for opt in fam.options:
             assert opt.doc and opt.default in opt.allowed
+
+
+def test_every_family_with_a_system_builds_it_with_its_options():
+    """build_system reaches each family's System, the spec's options included (modes, the
+    gate-spread benchmark and arc length build Systems this way)."""
+    from reducedmodels import build_system
+
+    mech = _mech()
+    system = build_system(mech, parse_model("continuum:0[plane=strain,law=neo-hookean]"))
+    conn = system.connectors[0]
+    assert (conn.plane, conn.law) == ("strain", "neo-hookean")
+    follower = build_system(mech, parse_model("dcmm:2[frame=follower]")).connectors[0]
+    leader = build_system(mech, parse_model("dcmm:2")).connectors[0]
+    assert follower.bodies == leader.bodies[::-1]

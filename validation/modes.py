@@ -13,22 +13,18 @@ from pathlib import Path
 import numpy as np
 
 from geometry import LoadCase, Scene, SceneError
-from reducedmodels.catalogue import ModelSpec, parse_model
+from reducedmodels.catalogue import LINEAR, ModelSpec
 from reducedmodels.modes import Modes, natural_modes
 
 from .outputs import save_figure
 
 
 def modal_system(scene: Scene, spec: ModelSpec):
-    """The System of ``scene`` with every flexure modelled as ``spec`` (``ee``: ``dcmm:1``,
-    whose tangent at rest is the ellipse of elasticity)."""
-    if spec.family == "continuum":
-        from .continuum.run import build_system as continuum_system
-
-        return continuum_system(scene.mechanism, spec.resolution, **spec.kwargs)
+    """The System of ``scene`` with every flexure modelled as ``spec`` (the family's
+    ``system``; ``ee``'s is ``dcmm:1``'s, whose tangent at rest is the ellipse of elasticity)."""
     from reducedmodels.models import build_system
 
-    return build_system(scene.mechanism, parse_model("dcmm:1") if spec.family == "ee" else spec)
+    return build_system(scene.mechanism, spec)
 
 
 def run_modes(scene: Scene, spec: ModelSpec, case: LoadCase | None, fraction: float,
@@ -45,9 +41,9 @@ def run_modes(scene: Scene, spec: ModelSpec, case: LoadCase | None, fraction: fl
     if not 0.0 <= fraction <= 1.0 or not math.isfinite(fraction):
         raise SceneError("<command line>", "--at", fraction,
                          "must be a load fraction from 0 (unloaded) to 1 (full load)")
-    if spec.family == "ee" and fraction != 0.0:
+    if spec.model_family.has(LINEAR) and fraction != 0.0:
         raise SceneError("<command line>", "--at", fraction,
-                         "ee is linear: its modes are those at rest (use --at 0)")
+                         f"{spec.id} is linear: its modes are those at rest (use --at 0)")
     if not 1 <= count <= 1000:
         raise SceneError("<command line>", "--count", count, "must be from 1 to 1000")
     system = modal_system(scene, spec)
