@@ -33,8 +33,10 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 from .threads import limit_threads
 
 DENSE_LIMIT = 96     # above ~100 unknowns, multithreaded LAPACK stalls on a loaded 2-core machine
-BAND_LIMIT = 60      # banded LU beats SuperLU up to about this half-bandwidth: measured on the
-                     # continuum meshes, b = 29 is 2x faster, b = 61 even, b = 117 2x slower
+BAND_LIMIT = 64      # band storage beats SuperLU up to at least this half-bandwidth, measured on
+                     # the continuum meshes: banded LU was 2x faster at b = 29, even at b = 61, 2x
+                     # slower at b = 117; the banded Cholesky now used makes whole level-2 paths
+                     # (b = 61 on both scenes) 1.6x faster than SuperLU; b = 117 is not measured
 ROUND_OFF = 1e-12    # eigenvalues above -ROUND_OFF * |K| count as zero, not as negative
 
 
