@@ -244,3 +244,18 @@ def test_every_family_with_a_system_builds_it_with_its_options():
     follower = build_system(mech, parse_model("dcmm:2[frame=follower]")).connectors[0]
     leader = build_system(mech, parse_model("dcmm:2")).connectors[0]
     assert follower.bodies == leader.bodies[::-1]
+
+
+def test_continuum_variants_write_their_own_fields(tmp_path):
+    """Two options of one mesh level are two models: each keeps its VTU file."""
+    from importlib import resources
+
+    text = resources.files("geometry").joinpath("scenes", "closed_chain.toml").read_text()
+    scene = tmp_path / "s.toml"
+    scene.write_text(text.replace('models = ["beam:100"',
+                                  'outputs = ["vtu"]\nmodels = ["beam:100"'))
+    out = tmp_path / "fields"
+    assert main(["run", str(scene), "--model", "continuum:0", "--model",
+                 "continuum:0[plane=strain]", "--load-case", "f+", "--levels", "2",
+                 "--out-dir", str(out)]) == 0
+    assert len(list(out.glob("*.vtu"))) == 2

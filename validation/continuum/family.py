@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from geometry import LoadCase, Mechanism
 from geometry.mesh import MAX_LEVEL
-from reducedmodels import LoadPath, SolverError
+from reducedmodels import LoadPath
 from reducedmodels.catalogue import (ARCLENGTH, FIELDS, REFERENCE, Family, ModelSpec, Option,
                                      Resolution, register)
 
@@ -52,20 +52,12 @@ def run(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int | Non
     ``record_poses`` and ``record_reactions`` are accepted for a uniform
     runner signature and not recorded; ``extra`` are ``vtu_dir`` and ``png``
     (:data:`~reducedmodels.catalogue.FIELDS`) or options overriding the
-    spec's. The result (and the partial path of a SolverError) carries the
-    spec's canonical id.
+    spec's. The result carries the spec's canonical id.
     """
     from .run import run_continuum
 
-    try:
-        lp = run_continuum(mechanism, case, level=spec.resolution, levels=levels, scene=scene,
-                           record_shapes=record_shapes, **{**spec.kwargs, **extra})
-    except SolverError as exc:
-        if exc.path is not None:
-            exc.path.model = spec.id
-        raise
-    lp.model = spec.id
-    return lp
+    return run_continuum(mechanism, case, level=spec.resolution, levels=levels, scene=scene,
+                         record_shapes=record_shapes, model=spec.id, **{**spec.kwargs, **extra})
 
 
 def system(mechanism: Mechanism, spec: ModelSpec, settings=None, **options):

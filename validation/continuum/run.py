@@ -44,7 +44,7 @@ def build_system(mechanism: Mechanism, level: int, law: str = "svk", plane: str 
 def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None,
                   levels: int | None = None, scene: str = "", record_shapes: bool = False,
                   law: str = "svk", plane: str = "stress", vtu_dir: str | Path | None = None,
-                  png: str | Path | None = None) -> LoadPath:
+                  png: str | Path | None = None, model: str | None = None) -> LoadPath:
     """Trace ``case`` with the continuum model (wall time includes meshing and set-up).
 
     Parameters
@@ -68,6 +68,10 @@ def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None
         Green-Lagrange strain, von Mises Cauchy stress).
     png : path, optional
         Render the deformed flexures at full load, coloured by von Mises stress.
+    model : str, optional
+        Model id of the result and of the VTU file's name (default
+        ``continuum:LEVEL``; the catalogue passes the canonical id with its
+        options, so variants of one level do not overwrite each other's file).
 
     Raises
     ------
@@ -77,7 +81,7 @@ def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None
     t0 = time.perf_counter()
     level = DEFAULT_LEVEL if level is None else int(level)
     system = build_system(mechanism, level, law, plane)
-    model = f"continuum:{level}"
+    model = model or f"continuum:{level}"
     settings = {"level": level, "law": law, "plane": plane, "element_order": ELEMENT_ORDER,
                 "aspect_ratio": ASPECT_RATIO, "mesh_version": MESH_VERSION}
     recorder = PathRecorder(system, case, model, scene, settings, record_shapes=record_shapes)
@@ -89,7 +93,7 @@ def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None
 
         from ..outputs import output_path
 
-        stem = f"{scene + '_' if scene else ''}{case.name}_continuum{level}"
+        stem = f"{scene + '_' if scene else ''}{case.name}_{model.replace(':', '')}"
         folder = Path(vtu_dir) if vtu_dir is not None else Path(png).parent
         vtu = write_vtu(output_path(folder, stem, ".vtu"), system.connectors,
                         system.local_states(full_load.state))
