@@ -69,6 +69,10 @@ class LoadPath:
     stress_profile : dict of flexure -> {"at": [...], "stress": [...]}, optional
         Outer-fibre stress (MPa) along each flexure at the last level
         (arc-length fractions from the first end).
+    fibre_stress : dict of flexure -> {"stress", "at", "layer"}, optional
+        The continuum's own peak fibre normal stress at full load (MPa), where
+        (fraction from the first end) and the boundary layer excluded at each
+        end face (mm): see :mod:`validation.continuum.fibre`.
     limit_points : list of dict, optional
         Of an arc-length trace: where the load turns, each ``{"index",
         "load", "traced_load", "dx", "dy", "rotation"}`` (see
@@ -97,6 +101,7 @@ class LoadPath:
     peak_stress_at: dict | None = None
     stress_profile: dict | None = None
     limit_points: list | None = None
+    fibre_stress: dict | None = None
 
     @property
     def displacement(self) -> np.ndarray:

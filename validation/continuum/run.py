@@ -88,6 +88,9 @@ def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None
     lp, full_load = recorder.run(trace(system, system.loads(case),
                                        LoadControl(case.factors(levels))))
     lp.seconds = time.perf_counter() - t0
+    from .fibre import fibre_stresses
+
+    lp.fibre_stress = fibre_stresses(system, full_load.state)
     if vtu_dir is not None or png is not None:
         from .output import render_png, write_vtu
 
