@@ -201,13 +201,13 @@ def section(scene: Scene, paths: dict[tuple[str, str], LoadPath], failures: list
                curved_beam_factor(f.shape.radius, f.section.thickness))
               for f in scene.mechanism.flexures if hasattr(f.shape, "radius")]
     if curved:
-        lines += ["These are beam formulas: they treat each section as straight. On a curved "
-                  "flexure the bending stress at the inner fibre is higher (Winkler-Bach "
-                  "curved-beam theory) by "
+        lines += ["These are beam formulas: they treat each section as straight. Under pure "
+                  "bending the inner fibre of a curved section carries more (Winkler-Bach "
+                  "curved-beam theory): "
                   + ", ".join(f"{100 * (k - 1):.1f} % ({n}, r/h = {r / h:.1f})"
                               for n, r, h, k in curved)
-                  + "; the section resultants the models and the continuum agree on do not "
-                  "see it.", ""]
+                  + ". Where the continuum's own fibre stress can be compared, the table below "
+                  "says how much it differs.", ""]
     lines += fibre_table(scene, paths, reference, cases)
     for c in cases:
         full = {m: paths[(m, c)] for m in models if (m, c) in paths}
