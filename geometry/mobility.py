@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import SceneError
+from .graph import connected_roots
 
 if TYPE_CHECKING:
     from .mechanism import Mechanism, Pin
@@ -34,20 +35,6 @@ if TYPE_CHECKING:
 RANK_TOL = 1e-9
 """Singular values below this fraction of the largest count as zero (the matrices are O(1))."""
 
-
-def _clusters(mech: "Mechanism") -> dict[str, str]:
-    """Representative body of each body's flexure-connected cluster (union-find)."""
-    parent = {name: name for name in mech.bodies}
-
-    def root(x: str) -> str:
-        while parent[x] != x:
-            parent[x] = parent[parent[x]]
-            x = parent[x]
-        return x
-
-    for f in mech.flexures:
-        parent[root(f.bodies[0])] = root(f.bodies[1])
-    return {name: root(name) for name in mech.bodies}
 
 
 def _pin_rows(pins: "list[Pin]", column: dict[str, int], origin: dict[str, np.ndarray],
@@ -95,7 +82,7 @@ def check_structure(mech: "Mechanism") -> None:
                                  f"body {body!r} is held by this pin only and would turn freely "
                                  "about it")
     scale = mech.size() or 1.0
-    cluster = _clusters(mech)
+    cluster = connected_roots(mech.bodies, (f.bodies for f in mech.flexures))
     ground_cluster = cluster[mech.ground]
     moving_clusters = [c for c in dict.fromkeys(cluster.values()) if c != ground_cluster]
     column = {c: k for k, c in enumerate(moving_clusters)}

@@ -24,7 +24,8 @@ from reducedmodels.continuation import limit_loads, solve_arclength
 from validation.cli import main
 from validation.failures import LIMIT_POINT, LIMIT_SETTINGS
 from validation.report import write_report
-from validation.reportdata import compute_report, independent_loops
+from geometry.graph import independent_loops
+from validation.reportdata import compute_report
 
 ARCH = """
 name = "arch"

@@ -19,7 +19,8 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from importlib import metadata
 
-from geometry import Mechanism, Scene, load_scene
+from geometry import Scene, load_scene
+from geometry.graph import independent_loops
 from reducedmodels import LoadPath
 from reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
 
@@ -37,27 +38,6 @@ PAPER_REFERENCE = "beam:100"
 BENCH_REFERENCE = "beam:400"
 #: option whose values the frame-sensitivity table compares (DCMM's measuring frame)
 FRAME_OPTION = "frame"
-
-
-def independent_loops(mechanism: Mechanism) -> int:
-    """Number of independent closed loops of the body graph (its cycle rank).
-
-    Bodies (the ground included) are vertices, flexures and pins edges:
-    loops = edges - vertices + connected components. 0 for an open chain.
-    """
-    parent = {b: b for b in mechanism.bodies}
-
-    def root(b: str) -> str:
-        while parent[b] != b:
-            parent[b] = parent[parent[b]]
-            b = parent[b]
-        return b
-
-    edges = [link.bodies for link in (*mechanism.flexures, *mechanism.pins)]
-    for a, b in edges:
-        parent[root(a)] = root(b)
-    components = len({root(b) for b in mechanism.bodies})
-    return len(edges) - len(mechanism.bodies) + components
 
 
 @dataclass
