@@ -182,3 +182,5 @@ def test_cli_modes_json_and_refusal(tmp_path):
     assert len(record["frequencies_hz"]) == 2 and record["frequencies_hz"][0] > 0.0
     assert main(["modes", "open_chain", "--model", "prbm"]) == 2
     assert main(["modes", str(scene), "--model", "beam:10", "--at", "2"]) == 2
+    assert main(["modes", "open_chain", "--model", "dcmm:2", "--density", "1.24e-9"]) == 0
+    assert main(["modes", "open_chain", "--model", "dcmm:2", "--density", "1240"]) == 2

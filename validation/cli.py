@@ -229,12 +229,14 @@ def _validity_note(lp) -> str:
 def _cmd_modes(args: argparse.Namespace) -> int:
     from reducedmodels import SolverError, parse_model
 
-    from .modes import modes_record, plot_modes, run_modes
+    from .modes import modes_record, plot_modes, run_modes, with_density
 
     scene = load_scene(args.scene)
     spec = parse_model(args.model, "<command line>", "--model")
     json_path = check_file(args.json, "--json") if args.json else None
     plot_path = check_figure_file(args.plot, "--plot") if args.plot else None
+    if args.density is not None:
+        scene = with_density(scene, args.density)
     case = scene.load_case(args.load_case) if args.load_case else (
         scene.load_cases[0] if args.at > 0.0 else None)
     massless = scene.mechanism.inertia.massless_bodies(scene.mechanism.moving_bodies)
@@ -504,6 +506,10 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--json", metavar="PATH",
                    help="write frequencies_hz, eigenvalues and mode shapes as JSON")
     q.add_argument("--plot", metavar="FILE.png", help="draw the mode shapes")
+    q.add_argument("--density", type=float, metavar="RHO",
+                   help="flexure density in t/mm^3 instead of the scene's material.density "
+                        "(PLA: 1.24e-9), e.g. for the built-in scenes, whose links are then "
+                        "massless and carry the flexures' end masses")
     q.set_defaults(func=_cmd_modes)
 
     q = sub.add_parser("converge", help="resolution study: order, Richardson value, GCI")

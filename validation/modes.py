@@ -19,6 +19,21 @@ from reducedmodels.modes import Modes, natural_modes
 from .outputs import save_figure
 
 
+def with_density(scene: Scene, density: float) -> Scene:
+    """``scene`` with its flexures' density replaced (t/mm^3; checked like the scene field)."""
+    import dataclasses
+
+    from geometry.inertia import parse_density
+
+    def fail(field: str, value, reason: str) -> None:
+        raise SceneError("<command line>", "--density", value, reason)
+
+    inertia = dataclasses.replace(scene.mechanism.inertia,
+                                  density=parse_density({"density": density}, fail))
+    return dataclasses.replace(scene, mechanism=dataclasses.replace(scene.mechanism,
+                                                                    inertia=inertia))
+
+
 def modal_system(scene: Scene, spec: ModelSpec):
     """The System of ``scene`` with every flexure modelled as ``spec`` (the family's
     ``system``; ``ee``'s is ``dcmm:1``'s, whose tangent at rest is the ellipse of elasticity)."""
