@@ -117,9 +117,11 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
                  scene: str = "") -> LoadPath:
     """Linear response at the undeformed configuration (the EE prediction).
 
-    Solves K0 dq = lambda f with the elastic tangent K0 at rest (no load
-    stiffness, no large-rotation terms) and reports the linearised target
-    displacement J dq; it is proportional to the load. The validity monitor
+    Solves K0 dq = w + lambda f with the elastic tangent K0 at rest (no load
+    stiffness, no large-rotation terms), w the weights of a scene with
+    gravity (applied before the load case, as in every static run) and f the
+    load case at full value, and reports the linearised target displacement
+    J dq; without gravity it is proportional to the load. The validity monitor
     does not judge it (``valid`` stays None): q0 + lambda dq is a linear
     response, not a configuration, and its linearised rigid rotations
     stretch chords by theta^2 / 2 times their lever arms, which the
@@ -130,27 +132,37 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
     q0 = system.initial_state()
     _, g_unit, _ = system.assemble(q0, loads, 1.0)   # g = grad E(q0) - f = -f at rest
     _, g_zero, K0 = system.assemble(q0, loads, 0.0)
-    dq = K0.solve(g_zero - g_unit)
+    dq = K0.solve(g_zero - g_unit)                   # per unit load factor
+    # the weights, g = -w at rest and no load (without gravity g_zero is only round-off)
+    has_weights = system.mechanism.inertia.gravity is not None
+    dq_dead = K0.solve(-g_zero) if has_weights else np.zeros_like(dq)
     mech = system.mechanism
     tdofs = system.pose_dofs(mech.target_body)
     rel = mech.target_point - system.reference[mech.target_body]
     _, jac, _ = rigid_points(np.array([*system.reference[mech.target_body], 0.0]), rel[None])
-    unit = jac[0] @ dq[tdofs]
-    rot = float(dq[tdofs[2]])
+    unit, dead = jac[0] @ dq[tdofs], jac[0] @ dq_dead[tdofs]
+    rot, dead_rot = float(dq[tdofs[2]]), float(dq_dead[tdofs[2]])
     lam = case.factors(levels)
     lp = LoadPath(model=model, load_case=case.name, load=list(lam * case.magnitude),
-                  dx=list(lam * unit[0]), dy=list(lam * unit[1]), rotation=list(lam * rot),
+                  dx=list(dead[0] + lam * unit[0]), dy=list(dead[1] + lam * unit[1]),
+                  rotation=list(dead_rot + lam * rot),
                   seconds=0.0, converged=True,
                   stats={"unknowns": system.n_dofs, "newton_iterations": 0, "step_cuts": 0,
                          "substeps": 0},
                   settings={}, scene=scene, load_unit=case.unit)
     # section forces of the linear response: K0 dq on the undeformed centre lines
-    rest, moved = system.local_states(q0), system.local_states(q0 + dq)
-    gradients = [local_hessian(c, c.evaluate(*r)[2]) @ (np.concatenate(m) - np.concatenate(r))
-                 for c, r, m in zip(system.connectors, rest, moved)]
+    rest = system.local_states(q0)
+
+    def section_gradients(dq_: np.ndarray) -> list[np.ndarray]:
+        moved = system.local_states(q0 + dq_)
+        return [local_hessian(c, c.evaluate(*r)[2]) @ (np.concatenate(m) - np.concatenate(r))
+                for c, r, m in zip(system.connectors, rest, moved)]
+
+    per_unit, of_weights = section_gradients(dq), section_gradients(dq_dead)
     sections = {f.name: f.section for f in mech.flexures}
     for factor in lam:
-        record_stress(lp, system.connectors, rest, sections, factor, gradients)
+        record_stress(lp, system.connectors, rest, sections, 1.0,
+                      [w + factor * g for w, g in zip(of_weights, per_unit)])
     lp.seconds = time.perf_counter() - t0
     return lp
 
