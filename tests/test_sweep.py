@@ -96,6 +96,32 @@ def test_tiny_sweep_matches_a_plain_loop_and_resumes(tmp_path, client):
     assert "| ee | 4/4 |" in text and "None: every run reached full load." in text
 
 
+class _Interrupt(Exception):
+    """Stands for Ctrl-C in the middle of a sweep."""
+
+
+def test_an_interrupted_sweep_resumes_with_the_missing_rows_only(tmp_path, client):
+    sweep = load_sweep(_write(tmp_path, TINY))
+    out = tmp_path / "out"
+    finished = []
+
+    def stop_after_three(line):
+        finished.append(line)
+        if len(finished) == 3:
+            raise _Interrupt
+
+    with pytest.raises(_Interrupt):
+        run_sweep(sweep, out, client, use_cache=False, progress=stop_after_three)
+    kept = results_store(sweep, out).rows()
+    # three tasks finished, each wrote its part before the progress line
+    assert len(results_store(sweep, out).parts()) == 3 and 0 < len(kept) < 4 * 3 * 2
+    again = run_sweep(sweep, out, client, use_cache=False)
+    assert again.rows_written == 4 * 3 * 2 - len(kept) and again.rows_skipped == len(kept)
+    rows = results_store(sweep, out).rows()
+    assert len({r["key"] for r in rows}) == len(rows) == 4 * 3 * 2
+    assert {r["status"] for r in rows} == {"ok"}
+
+
 def test_a_failing_task_and_a_failing_model_are_recorded(tmp_path, client, monkeypatch):
     real = sweep_tasks.run_model
 
