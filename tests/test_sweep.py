@@ -202,6 +202,13 @@ def test_bad_sweep_files_exit_2_naming_the_field(tmp_path, capsys, edit, field, 
     assert not (tmp_path / "o").exists()
 
 
+def test_workers_with_an_existing_cluster_is_refused(tmp_path, capsys):
+    args = ["sweep", str(_write(tmp_path, TINY)), "--scheduler", "tcp://127.0.0.1:8786",
+            "--workers", "2", "--out", str(tmp_path / "o")]
+    assert main(args) == 2 and "--workers" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
 def test_cli_sweep_on_a_local_process_cluster(tmp_path, capsys):
     text = TINY.replace('["ee", "dcmm:1"]', '["ee"]').replace('reference = "prbm"',
                                                                'reference = "dcmm:1"')

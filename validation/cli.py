@@ -374,6 +374,9 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
     from .sweep import load_sweep, local_cluster, results_store, run_sweep, write_outputs
 
+    if args.scheduler and args.workers is not None:
+        raise SceneError(COMMAND_LINE, "--workers", args.workers,
+                         "sizes the local cluster; an existing one (--scheduler) has its own")
     sweep = load_sweep(args.sweep)            # every point is checked before anything runs
     if args.batch is not None:
         sweep = dataclasses.replace(sweep, batch=args.batch)
@@ -563,7 +566,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="output folder: results/ (Parquet), summary.md, timings.md, figures "
                         "(default: sweeps/NAME)")
     q.add_argument("--scheduler", metavar="ADDRESS",
-                   help="address of an existing Dask scheduler, e.g. tcp://10.0.0.5:8786 "
+                   help="address of an existing Dask scheduler, e.g. tcp://HOST:8786 "
                         "(default: a local cluster)")
     q.add_argument("--workers", type=_int_in(1, 1024), metavar="N",
                    help="local cluster size (default: one single-threaded process per core)")
