@@ -234,7 +234,8 @@ def test_cantilever_geometry_extremes(tmp_path, client):
     for sweep, point in ((slender, thinnest), (angle, widest)):
         sweep = dataclasses.replace(sweep, points=(point,), models=models)
         run_sweep(sweep, tmp_path / sweep.name, client, use_cache=False)
-        got[sweep.name] = {r["model"]: r for r in results_store(sweep, tmp_path / sweep.name).rows()}
+        rows = results_store(sweep, tmp_path / sweep.name).rows()
+        got[sweep.name] = {r["model"]: r for r in rows}
     # h/r = 1/1000: shear and thickness effects are O((h/r)^2) = 1e-6, so the continuum
     # must meet the thin-beam limit; a locking mesh would be orders of magnitude stiffer.
     # beam:40's own discretisation error is ~ (2.1/40)^2/24 ~ 1e-4: gate 0.2 %

@@ -3,8 +3,9 @@
 Tasks are whole runs of one model on a batch of points (every load case of
 the sweep): :attr:`Sweep.batch` points per task for the reduced models, so
 the per-task cost of Dask stays small against the work, and one point per
-task for the costly reference-class models (the continuum). The reference runs once per point in its own
-tasks; a model task receives the reference paths of its points from Dask.
+task for the costly reference-class models (the continuum). The reference
+runs once per point in its own tasks; a model task receives the reference
+paths of its points from Dask.
 
 Resuming: every row's key hashes the point's scene, the model, the load
 case, the reference and the code version; a (point, model) pair whose rows

@@ -15,7 +15,8 @@ A sweep file (TOML) names a base scene and the parameters to vary::
 
     [[axes]]
     path = "section.thickness"       # any numeric field of the scene, by path
-    linspace = [0.05, 0.2, 4]        # or values = [...], logspace = [lo, hi, n],
+    linspace = [0.05, 0.2, 4]        # or values = [...], logspace = [lo, hi, n]
+                                     # (n values in geometric progression),
                                      # or sample = "uniform" (low, high),
                                      # "normal" (mean, std), "lognormal" (median, sigma)
                                      # with count and seed

@@ -22,7 +22,6 @@ import numpy as np
 
 from ..outputs import save_figure, write_text
 from .spec import Sweep
-from .store import PARAM_PREFIX
 
 THRESHOLDS = (1.0, 5.0)
 """Error levels (percent) of the "within" regions."""
