@@ -152,3 +152,75 @@ def test_limit_load_table_of_a_scene_with_a_limit_point(tmp_path):
         assert f"| `{model}` | {f['load']:.5g} N |" in table
     # beam:10 (10 elements per member) is 0.55 % above Lee's published 1.855 N
     assert limits["beam:10"]["load"] == pytest.approx(1.855, rel=1e-2)
+
+
+@pytest.fixture(scope="module")
+def builtin_report(tmp_path_factory):
+    """Both built-in scenes with one reduced model (the reference beam:100 is added)."""
+    from validation.report import write_report
+    from validation.reportdata import compute_report
+
+    data = compute_report(["open_chain", "closed_chain"], ["dcmm:1"], repeats=1,
+                          use_cache=False, progress=False, bench=False, converge=False)
+    return data, write_report(data, tmp_path_factory.mktemp("builtin") / "out")
+
+
+def _frequency_rows(text: str, scene: str) -> dict[str, list[tuple[str, float]]]:
+    """{model: [(printed Hz, printed % error)]} of ``scene``'s natural-frequency table."""
+    part = text.split(f"\n## {scene}\n")[1].split("\n## ")[0]
+    table = part.split("### Natural frequencies against `beam:100`")[1].split("###")[0]
+    rows = {}
+    for model, cells in re.findall(r"^\| `(\S+)` \| (.+) \|$", table, flags=re.M):
+        rows[model] = [(v, float(e)) for v, e in
+                       (re.fullmatch(r"(\S+) \(([+-][\d.]+) %\)", c).groups()
+                        for c in cells.split(" | "))]
+    return rows
+
+
+@pytest.mark.parametrize("scene_name", ["open_chain", "closed_chain"])
+def test_frequency_table_equals_direct_modal_analysis(builtin_report, scene_name):
+    """Each scene's table: the reference's own row at 0 %, every cell the frequency of a
+    direct modal analysis (PLA flexures, massless links) and its error against the reference's."""
+    from reducedmodels.models import build_system
+    from reducedmodels.modes import natural_modes
+    from validation.frequencies import DEFAULT_DENSITY, MODE_COUNT
+    from validation.modes import with_density
+
+    data, md = builtin_report
+    res = next(r for r in data.scenes if r.scene.name == scene_name)
+    assert res.frequencies.errors["beam:100"] == [0.0] * MODE_COUNT
+    rows = _frequency_rows(md.read_text(), scene_name)
+    assert list(rows) == ["beam:100", "dcmm:1"]
+    mechanism = with_density(load_scene(scene_name), DEFAULT_DENSITY).mechanism
+    direct = {m: natural_modes(build_system(mechanism, parse_model(m)), count=MODE_COUNT)
+              .frequencies_hz for m in rows}
+    for model, cells in rows.items():
+        for (value, err), f, f_ref in zip(cells, direct[model], direct["beam:100"]):
+            assert value == f"{f:.5g}", (model, value, f)
+            assert err == pytest.approx(100 * (f - f_ref) / f_ref, abs=0.006)  # 2 decimals
+    assert all(e == 0.0 for _, e in rows["beam:100"])
+
+
+def test_a_failed_modal_analysis_is_a_row_of_the_table(monkeypatch, tmp_path):
+    """A model whose modal analysis raises is recorded as a failure; the others are kept."""
+    from reducedmodels import SolverError
+    from validation import frequencies
+
+    real = frequencies.run_modes
+
+    def failing_for_dcmm(scene, spec, case, fraction, count):
+        if spec.id == "dcmm:1":
+            raise SolverError("equilibrium for the modal analysis: no convergence", 0.25)
+        return real(scene, spec, case, fraction, count)
+
+    monkeypatch.setattr(frequencies, "run_modes", failing_for_dcmm)
+    (tmp_path / "tiny.toml").write_text(TINY)
+    table = frequencies.frequency_data(load_scene(tmp_path / "tiny.toml"), ["dcmm:1", "ee"],
+                                       "beam:100")
+    assert table.models == ["beam:100", "dcmm:1", "ee"]
+    assert [(f.model, f.factor) for f in table.failures] == [("dcmm:1", 0.25)]
+    assert set(table.frequencies) == {"beam:100", "ee"}
+    text = "\n".join(frequencies.section(table))
+    assert "| `dcmm:1` | fails (below) | — | — | — |" in text
+    assert "- `dcmm:1`: modal analysis failed: equilibrium for the modal analysis: " \
+        "no convergence" in text

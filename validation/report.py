@@ -9,7 +9,7 @@ accuracy gates). Every number in the text is filled in from the data: the
 tables against ``beam:100`` (with the paper's figures beside ours where the
 paper has the scene) and against the continuum reference, run times,
 failures ("fails at 84 % (limit point, 0.126 N)") wherever the model
-appears, the findings and the discussion.
+appears, the natural frequencies at rest, the findings and the discussion.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from . import figures, strength
+from . import figures, frequencies, strength
 from .bench import write_bench
 from .failures import Failure
 from .outputs import output_path, write_json, write_text
@@ -232,6 +232,8 @@ def _scene_section(res: SceneResults, out: Path, data: ReportData) -> list[str]:
         L += _metrics_table(res, res.reference) + [""]
     L += strength.section(sc, res.paths, res.failures, res.models,
                           res.reference if res.has_reference() else PAPER_REFERENCE, out)
+    if res.frequencies is not None:
+        L += frequencies.section(res.frequencies)
     seconds_note = f" ({res.paper.seconds_table})" if res.paper else ""
     L += [f"### Run times{seconds_note}", "",
           f"Ours: median wall time of the whole load path ({_levels_text(data)} levels, model "

@@ -30,6 +30,7 @@ from .campaign import Progress, run_campaign
 from .compare import errors, paper_percent, paper_scene, paper_seconds
 from .convergence import ConvergenceStudy, study
 from .failures import Failure
+from .frequencies import FrequencyTable, frequency_data
 
 DEFAULT_MODELS = ("continuum", "beam:100", "beam:20", "prbm", "dcmm:1", "dcmm:2", "dcmm:3", "ee")
 #: the paper's reference (its FEM100): every scene is compared against it
@@ -96,6 +97,7 @@ class SceneResults:
     bench_reference: str = ""
     bench_failures: list[Failure] = field(default_factory=list)
     convergence: list[ConvergenceStudy] = field(default_factory=list)
+    frequencies: FrequencyTable | None = None
 
     @property
     def cases(self) -> list[str]:
@@ -232,6 +234,7 @@ def compute_report(scene_names: list[str], models: list[str] | None = None, repe
             repeats_for=lambda s: 1 if s.model_family.has(REFERENCE) else repeats)
         res = SceneResults(sc, paths, failures, [s.id for s in specs], ref_id)
         res.frames = _frame_rows(res, specs, cache)
+        res.frequencies = frequency_data(sc, res.models, ref_id or PAPER_REFERENCE)
         if bench:
             bref = reference or parse_model(BENCH_REFERENCE)
             res.bench_rows, res.bench_failures = runtime_vs_error(
