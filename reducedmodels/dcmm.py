@@ -27,11 +27,11 @@ import math
 import numpy as np
 
 from geometry import Flexure, Mechanism
-from geometry.kinematics import place_points, rotate_xy
+from geometry.kinematics import rotate_xy
 
 from .connector import Connector
 from .inertia import MassPoints, chain_mass_points
-from .sections import SectionForces, statics_section_forces, unit_vectors
+from .sections import SectionForces, unit_vectors
 from .validity import MAX_RELATIVE_ROTATION, MAX_STRAIN, rotation_reasons, stretch_reasons
 
 SAMPLES_PER_SUB_ARC = 16
@@ -123,6 +123,13 @@ def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f:
     ])
     grad = np.array([g[0], g[1], g[2], -g[0], -g[1], g[3]])
     return energy, grad, upper[_SOURCE] * _SIGN
+
+
+def _place_rows(poses: np.ndarray, rel: np.ndarray) -> np.ndarray:
+    """Current positions p + R(theta) rel of points (m, 2), each carried by its own pose (m, 3), mm."""
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    return np.column_stack([poses[:, 0] + (rel[:, 0] * c - rel[:, 1] * s),
+                            poses[:, 1] + (rel[:, 0] * s + rel[:, 1] * c)])
 
 
 class DcmmConnector(Connector):
@@ -221,6 +228,11 @@ class DcmmConnector(Connector):
         n = len(parts)
         self._sample_fractions = np.concatenate(
             [(k + sample[2]) / n for k, sample in enumerate(self._samples)])
+        # the same samples flattened over the sub-arcs, for one batched pass per level
+        self._sample_part = np.concatenate([np.full(len(sample[2]), k)
+                                            for k, sample in enumerate(self._samples)])
+        self._sample_lead, self._sample_follow, self._sample_w, self._sample_tangent = (
+            np.concatenate(column) for column in zip(*self._samples))
 
     def initial_internal(self) -> np.ndarray:
         """Cut-point bodies at rest: (x, y, 0) each."""
@@ -296,23 +308,23 @@ class DcmmConnector(Connector):
         rotations. ``gradient`` (a linear response's K0 dq) gives the
         flexure's end wrench instead, carried along every sub-arc.
         """
-        chain = self._chain(np.asarray(pose_a, float), np.asarray(pose_b, float),
-                            np.asarray(internal, float))
-        pts, axes, wrenches = [], [], []
-        for k, (lead, follow, w, tangent) in enumerate(self._samples):
-            pts.append((1.0 - w)[:, None] * place_points(chain[k], lead)
-                       + w[:, None] * place_points(chain[k + 1], follow))
-            axes.append(unit_vectors(tangent + (1.0 - w) * chain[k][2] + w * chain[k + 1][2]))
-            wrenches.append(gradient[3:6] if gradient is not None else
-                            sub_arc_energy(chain[k], chain[k + 1], *self._elements[k])[1][3:6])
-        n = [len(p) for p in pts]
-        bounds = np.concatenate([[0], np.cumsum(n)])
-        parts = [statics_section_forces(p, self._sample_fractions[a:b], wrench, chain[k + 1]
-                                        if gradient is None else chain[-1],
-                                        reverse=not self._forward, axes=t)
-                 for k, (p, t, wrench, a, b) in enumerate(zip(pts, axes, wrenches, bounds[:-1],
-                                                              bounds[1:]))]
-        at = np.concatenate([f.at for f in parts])
-        order = np.argsort(at, kind="stable")
-        return SectionForces(at[order], np.concatenate([f.axial for f in parts])[order],
-                             np.concatenate([f.moment for f in parts])[order])
+        poses = np.concatenate([np.asarray(pose_a, float), np.asarray(internal, float),
+                                np.asarray(pose_b, float)]).reshape(-1, 3)   # chain order
+        part, w = self._sample_part, self._sample_w
+        lead, follow = poses[part], poses[part + 1]
+        pts = ((1.0 - w)[:, None] * _place_rows(lead, self._sample_lead)
+               + w[:, None] * _place_rows(follow, self._sample_follow))
+        axes = unit_vectors(self._sample_tangent + (1.0 - w) * lead[:, 2] + w * follow[:, 2])
+        if gradient is None:
+            wrenches = np.array([sub_arc_energy(poses[k], poses[k + 1], *element)[1][3:6]
+                                 for k, element in enumerate(self._elements)])[part]
+            end = follow
+        else:
+            wrenches, end = np.asarray(gradient, float)[3:6][None], poses[-1][None]
+        # statics of each sub-arc's wrench (see statics_section_forces), all samples at once
+        r = end[:, :2] - pts
+        moment = -(wrenches[:, 2] + r[:, 0] * wrenches[:, 1] - r[:, 1] * wrenches[:, 0])
+        axial = axes[:, 0] * wrenches[:, 0] + axes[:, 1] * wrenches[:, 1]
+        at = self._sample_fractions if self._forward else 1.0 - self._sample_fractions
+        order = np.argsort(at, kind="stable")    # the fractions are distinct
+        return SectionForces(at[order], axial[order], moment[order])
