@@ -92,7 +92,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from geometry import Flexure, Mechanism
-from geometry.kinematics import place_points, rotate, rotate_xy
+from geometry.kinematics import rotate_xy
 from geometry.shapes import Shape, arc_semi_axes
 
 from .connector import Connector
@@ -366,11 +366,18 @@ class PrbmConnector(Connector):
                 + rotation_reasons("end rotation", np.array([turn]), self._fitted_rotation))
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
-        """Polyline end_a, R_a, R_2, R_b, end_b in the current configuration, (5, 2) mm."""
-        end_a, ja = place_points(pose_a, np.array([self._ends[0] - self._ref[0], self._r_a]))
-        j2 = ja + rotate(internal[0], self._v_h)
-        jb, end_b = place_points(pose_b, np.array([self._r_b, self._ends[1] - self._ref[1]]))
-        return np.array([end_a, ja, j2, jb, end_b])
+        """Polyline end_a, R_a, R_2, R_b, end_b in the current configuration, (5, 2) mm.
+
+        Plain floats: stresses are recorded at every level, and five points
+        cost less as scalar algebra than as small numpy arrays.
+        """
+        (xa, ya, ta), (xb, yb, tb) = pose_a.tolist(), pose_b.tolist()
+        (eax, eay), (rax, ray) = rotate_xy(ta, *self._end_rel[0]), rotate_xy(ta, *self._r_a)
+        (ebx, eby), (rbx, rby) = rotate_xy(tb, *self._end_rel[1]), rotate_xy(tb, *self._r_b)
+        vhx, vhy = rotate_xy(float(internal[0]), *self._v_h)
+        jax, jay = xa + rax, ya + ray
+        return np.array([[xa + eax, ya + eay], [jax, jay], [jax + vhx, jay + vhy],
+                         [xb + rbx, yb + rby], [xb + ebx, yb + eby]])
 
     def section_forces(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray,
                        gradient: np.ndarray | None = None) -> SectionForces:
