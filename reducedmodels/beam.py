@@ -366,19 +366,19 @@ class BeamConnector(Connector):
         axial stiffness turns that O(h^2) error into forces far larger than
         the load (tens of Newton iterations on slender flexures).
         """
-        last = self._nodes(*states[-1])[0]
-        d_last = np.diff(last, axis=0)
-        angle_last = np.arctan2(d_last[:, 1], d_last[:, 0])
+        nodes = [self._nodes(*state)[:2] for state in states]
+        chords = [np.diff(x, axis=0) for x, _ in nodes]
+        angle_last = np.arctan2(chords[-1][:, 1], chords[-1][:, 0])
         length = np.zeros(len(self._l0))
         turn = np.zeros(len(self._l0))
         theta = np.zeros(self._n_nodes)
-        for w, state in zip(weights, states):
-            x, th, _ = self._nodes(*state)
-            d = np.diff(x, axis=0)
+        for w, d, (_, th) in zip(weights, chords, nodes):
             length += w * np.hypot(d[:, 0], d[:, 1])
             turn += w * wrap_angle(np.arctan2(d[:, 1], d[:, 0]) - angle_last)
             theta += w * th
-        start, end = self._nodes(pose_a, pose_b, states[-1][2])[0][[0, -1]]
+        poses = (pose_a, pose_b)
+        start, end = (body_point(np.asarray(poses[self._end_pose[k]], float), self._end_rel[k])[0]
+                      for k in (0, 1))
         return self._closed_chain(length, angle_last + turn, start, end, theta)
 
     def update_internal(self, old: LocalState, new: LocalState) -> np.ndarray:
