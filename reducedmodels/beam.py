@@ -50,7 +50,7 @@ from typing import Sequence
 import numpy as np
 
 from geometry import Flexure, Mechanism
-from geometry.kinematics import body_point
+from geometry.kinematics import body_point, rotate_xy
 
 from .connector import Connector, LocalState
 from .validity import MAX_CHORD_TURN, MAX_STRAIN, rotation_reasons, stretch_reasons
@@ -215,12 +215,14 @@ def attach_to_body(grad: np.ndarray, hess: np.ndarray, slot: int, pose: np.ndarr
     rel : array (2,)
         Node offset from the body's reference point in the initial configuration, mm.
     """
-    _, t = body_point(pose, rel)
+    rx, ry = rotate_xy(float(pose[2]), float(rel[0]), float(rel[1]))
+    t0, t1 = -ry, rx                                    # t = dx/dtheta (plain floats: 2 nodes)
     x, y, th = slot, slot + 1, slot + 2
-    geometric = -(grad[x] * t[1] - grad[y] * t[0])      # g_xy . (-R rel), with R rel = -J t
-    grad[th] += t[0] * grad[x] + t[1] * grad[y]
-    hess[th, :] += t[0] * hess[x, :] + t[1] * hess[y, :]
-    hess[:, th] += t[0] * hess[:, x] + t[1] * hess[:, y]
+    gx, gy = float(grad[x]), float(grad[y])
+    geometric = -(gx * t1 - gy * t0)                    # g_xy . (-R rel), with R rel = -J t
+    grad[th] += t0 * gx + t1 * gy
+    hess[th, :] += t0 * hess[x, :] + t1 * hess[y, :]
+    hess[:, th] += t0 * hess[:, x] + t1 * hess[:, y]
     hess[th, th] += geometric
 
 
