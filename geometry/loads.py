@@ -16,6 +16,11 @@ from .kinematics import rotation
 from .timelaw import TimeLaw
 
 DEFAULT_LEVELS = 11
+MAX_LOAD_SUBSTEPS = 20_000
+"""The solver's cap on load sub-steps of one load path (``SolverSettings.max_substeps``).
+
+Each of a load case's ``levels - 1`` increments takes at least one sub-step, so a load
+case may have at most this many levels; more would run long and then stop at the cap."""
 
 
 @dataclass(frozen=True)

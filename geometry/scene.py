@@ -44,7 +44,7 @@ import numpy as np
 
 from .errors import SceneError
 from .inertia import MASS_KEYS, MassData, parse_body_mass, parse_density, parse_gravity
-from .loads import DEFAULT_LEVELS, Force, LoadCase, Moment
+from .loads import DEFAULT_LEVELS, MAX_LOAD_SUBSTEPS, Force, LoadCase, Moment
 from .magnitudes import SMALLEST_NORMAL
 from .mechanism import FlexureSpec, Material, Mechanism, PinSpec, Section, assemble
 from .shapes import Arc, Segment
@@ -326,8 +326,11 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
         lname = rd.name(c, "name", f"load_cases[{k}].")
         where = f"load_cases.{lname}."
         levels = c.get("levels", DEFAULT_LEVELS)
-        if isinstance(levels, bool) or not isinstance(levels, int) or not 2 <= levels <= 100_000:
-            rd.fail(f"{where}levels", levels, "must be an integer from 2 to 100000")
+        if isinstance(levels, bool) or not isinstance(levels, int) or not 2 <= levels <= MAX_LOAD_SUBSTEPS:
+            rd.fail(f"{where}levels", levels,
+                    f"must be an integer from 2 to {MAX_LOAD_SUBSTEPS} (each of the levels - 1 "
+                    f"load increments takes at least one of the solver's {MAX_LOAD_SUBSTEPS} "
+                    "sub-steps)")
         if "loads" in c:
             rd.known_keys(c, {"name", "levels", "loads", *TIME_LAW_KEYS}, where)
             comps = tuple(_load_component(rd, rd.item_table(x, f"{where}loads[{i}]"),

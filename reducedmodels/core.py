@@ -24,6 +24,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from geometry import LoadCase, Mechanism
+from geometry.loads import MAX_LOAD_SUBSTEPS
 from geometry.kinematics import rigid_points
 
 from .connector import Connector, LocalState, overrides
@@ -90,7 +91,7 @@ class SolverSettings:
     error_tol: float = 1e-10
     max_iterations: int = 25
     max_cuts: int = 40
-    max_substeps: int = 20000
+    max_substeps: int = MAX_LOAD_SUBSTEPS
     max_rotation_step: float = 0.25
     max_translation_step: float = 0.05
     fast_iterations: int = 5
