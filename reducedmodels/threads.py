@@ -23,7 +23,10 @@ import os
 
 ENV_VARIABLE = "FLEXVAL_BLAS_THREADS"
 DEFAULT_THREADS = 1
-RULE = "must be a whole number of threads >= 0 (0: leave the BLAS pools alone)"
+MAX_THREADS = os.cpu_count() or 1
+"""Most threads a cap may ask for: the logical CPUs (more only busy-wait against each other)."""
+RULE = (f"must be a whole number of threads from 0 to {MAX_THREADS}, the logical CPUs "
+        "(0: leave the BLAS pools alone)")
 
 _requested: int | None = None        # the command line's cap, when it gave one
 _applied: int | None = None          # the cap in force (0: pools left alone), None: not yet applied
@@ -33,13 +36,13 @@ def requested_threads(value: str | int | None = None) -> int:
     """The thread cap asked for: ``value``, else ``$FLEXVAL_BLAS_THREADS``, else the default.
 
     Raises ``ValueError`` naming the source and the value when it is not a
-    whole number >= 0.
+    whole number from 0 to ``MAX_THREADS``.
     """
     source = "--blas-threads"
     if value is None:
         source, value = ENV_VARIABLE, os.environ.get(ENV_VARIABLE, "").strip() or DEFAULT_THREADS
     text = str(value).strip()
-    if not text.isdigit():
+    if not (text.isascii() and text.isdigit()) or int(text) > MAX_THREADS:
         raise ValueError(f"{source} {RULE}, got {value!r}")
     return int(text)
 

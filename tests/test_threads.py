@@ -38,19 +38,22 @@ def test_building_a_system_caps_every_blas_pool_at_one(restore_pools, monkeypatc
     assert {i["num_threads"] for i in blas} == {threads.DEFAULT_THREADS}
 
 
-@pytest.mark.parametrize("text, expected", [("0", 0), ("1", 1), (" 4 ", 4), (2, 2)])
+@pytest.mark.parametrize("text, expected", [("0", 0), ("1", 1), (f" {threads.MAX_THREADS} ",
+                                                                   threads.MAX_THREADS),
+                                            (threads.MAX_THREADS, threads.MAX_THREADS)])
 def test_requested_threads_reads_whole_numbers(text, expected):
     assert threads.requested_threads(text) == expected
 
 
 def test_environment_variable_is_the_default(monkeypatch):
-    monkeypatch.setenv(threads.ENV_VARIABLE, "3")
-    assert threads.requested_threads() == 3
+    monkeypatch.setenv(threads.ENV_VARIABLE, str(threads.MAX_THREADS))
+    assert threads.requested_threads() == threads.MAX_THREADS
     monkeypatch.delenv(threads.ENV_VARIABLE)
     assert threads.requested_threads() == threads.DEFAULT_THREADS
 
 
-@pytest.mark.parametrize("text", ["-1", "1.5", "two", ""])
+@pytest.mark.parametrize("text", ["-1", "1.5", "two", "", "\u00b2", "\u0663",
+                                  str(threads.MAX_THREADS + 1), "100000000", str(2**63)])
 def test_bad_cap_is_refused_naming_source_and_value(text):
     with pytest.raises(ValueError, match="--blas-threads.*got"):
         threads.requested_threads(text)
