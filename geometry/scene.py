@@ -229,6 +229,10 @@ def _load_component(rd: _Reader, c: dict, where: str, target_body: str,
     value = rd.number(c, "value", where, limit=1e9)
     body = rd.name(c, "body", where) if "body" in c else target_body
     if kind == "moment":
+        for key in ("point", "angle_deg"):
+            if key in c:
+                rd.fail(f"{where}{key}", c[key], "a moment has no point of application or "
+                        "direction (it acts on the whole body): remove it or use kind = 'force'")
         return Moment(body, value)
     if kind == "force":
         point = rd.point(c, "point", where) if "point" in c else target_point

@@ -37,3 +37,34 @@ def test_scene_levels_within_the_cap_are_accepted(tmp_path, levels):
     path = tmp_path / "levels.toml"
     path.write_text(_dump(data))
     assert load_scene(path).load_cases[0].levels == levels
+
+
+@pytest.mark.parametrize("key,value", [("point", [1.0, 1.0]), ("point", [20.0, 15.8]),
+                                       ("angle_deg", 30.0), ("angle_deg", 0.0)])
+def test_a_moment_with_a_point_or_direction_is_refused(tmp_path, key, value):
+    """A moment acts on its whole body: a ``point`` or ``angle_deg`` given with it was
+    silently ignored, hiding a scene that meant a force."""
+    data = _base()
+    data["load_cases"][0][key] = value
+    path = tmp_path / "moment.toml"
+    path.write_text(_dump(data))
+    with pytest.raises(SceneError) as info:
+        load_scene(path)
+    assert f"'load_cases.m+.{key}'" in str(info.value), str(info.value)
+
+
+@pytest.mark.parametrize("model,levels", [("dcmm", "2"), ("beam", "20001"), ("beam", "5:9"),
+                                          ("dcmm", "3:5"), ("continuum", "1")])
+def test_a_study_of_one_resolution_is_refused_before_work(model, levels, monkeypatch, capsys):
+    """One resolution gives no ratio, order or Richardson value (the table printed
+    'refinement ratio nan'); a large single N ran for minutes before saying so."""
+    import validation.convergence
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("the study ran although --levels was refused")
+
+    monkeypatch.setattr(validation.convergence, "study", forbidden)
+    argv = ["converge", "open_chain", "--model", model, "--levels", levels]
+    assert main(argv) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert "'--levels'" in err and levels in err and "single resolution" in err, err

@@ -239,7 +239,7 @@ def test_json_writer_turns_non_finite_into_null(bad, tmp_path):
     assert json_safe(1.25) == 1.25
 
 
-@pytest.mark.parametrize("levels", ["1,3,4", "1,2,5", "1"])
+@pytest.mark.parametrize("levels", ["1,3,4", "1,2,5", "1,2,6"])
 def test_converge_json_is_strict_and_ratio_null_when_undefined(levels, tmp_path):
     out = tmp_path / "c.json"
     assert main(["converge", "open_chain", "--model", "dcmm", "--levels", levels,

@@ -286,7 +286,12 @@ def _parse_levels(text: str, spec) -> list[int]:
         raise SceneError(COMMAND_LINE, "--levels", text,
                          f"resolutions must increase, within {res.low}..{res.high} for the "
                          f"{res.name} of '{spec.family}' ({res.meaning})")
-    return res.series(*vals) if ":" in text else vals
+    series = res.series(*vals) if ":" in text else vals
+    if len(series) < 2:
+        raise SceneError(COMMAND_LINE, "--levels", text,
+                         f"gives the single resolution {series[0]}: a study compares at least "
+                         f"two (three for the order and the Richardson value)")
+    return series
 
 
 def _cmd_converge(args: argparse.Namespace) -> int:
