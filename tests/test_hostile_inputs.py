@@ -68,3 +68,29 @@ def test_a_study_of_one_resolution_is_refused_before_work(model, levels, monkeyp
     assert main(argv) == EXIT_INPUT
     err = capsys.readouterr().err
     assert "'--levels'" in err and levels in err and "single resolution" in err, err
+
+
+@pytest.mark.parametrize("law,field,shown", [
+    ('t1 = 1e-300\n', "t1", "1e-300"), ('t1 = 5e-324\n', "t1", "5e-324"),
+    ('t1 = 1e-12\n', "t1", "1e-12"), ('t1 = 1.0\nend_time = 1e-200\n', "end_time", "1e-200")])
+def test_a_time_law_too_short_to_integrate_is_refused(tmp_path, capsys, law, field, shown):
+    """A run shorter than the integrator's smallest first step ended in ZeroDivisionError."""
+    from test_dynamics import SCENE
+
+    scene = tmp_path / "short.toml"
+    scene.write_text(SCENE + 'ramp = "eq15"\n' + law, encoding="utf-8")
+    assert main(["run", str(scene), "--dynamic", "--model", "ee"]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert f"'load_cases.m.{field}'" in err and shown in err and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("duration", ["1e-300", "5e-324", "1e-10", "0", "1e7", "nan", "inf"])
+def test_a_duration_outside_the_integrators_range_is_refused(tmp_path, capsys, duration):
+    from test_dynamics import SCENE
+
+    scene = tmp_path / "dyn.toml"
+    scene.write_text(SCENE, encoding="utf-8")
+    assert main(["run", str(scene), "--dynamic", "--model", "ee",
+                 "--duration", duration]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert "'--duration'" in err and str(float(duration)) in err, err

@@ -26,12 +26,18 @@ from .modes import modal_system
 
 DEFAULT_RAMP_FRACTION = 0.8
 """Without a time law in the scene, the Eq. 15 ramp ends at this fraction of the duration."""
+MIN_DURATION = DynamicSettings().min_step / DynamicSettings().first_step
+"""Shortest run (s): its first step (``first_step`` of the duration) is the smallest allowed."""
 
 
-def time_law(case: LoadCase, duration: float | None) -> tuple[TimeLaw, float]:
-    """The case's time law and the run's duration (s); ``--duration`` overrides the end time."""
-    if duration is not None and not (math.isfinite(duration) and 0.0 < duration <= 1e6):
-        raise SceneError("<command line>", "--duration", duration, "must be a time in s, > 0")
+def time_law(case: LoadCase, duration: float | None, source: str) -> tuple[TimeLaw, float]:
+    """The case's time law and the run's duration (s); ``--duration`` overrides the end time.
+
+    ``source`` names the scene file in the error raised for a time law too short to run."""
+    if duration is not None and not (math.isfinite(duration) and MIN_DURATION <= duration <= 1e6):
+        raise SceneError("<command line>", "--duration", duration,
+                         f"must be a time in s from {MIN_DURATION:g} to 1e6 (the first time "
+                         "step of a shorter run falls below the integrator's smallest)")
     law = case.time_law
     if law is None:
         if duration is None:
@@ -39,7 +45,15 @@ def time_law(case: LoadCase, duration: float | None) -> tuple[TimeLaw, float]:
                              f"load case {case.name!r} has no time law (ramp, t0, t1): "
                              "give the run's duration in s")
         return TimeLaw("eq15", 0.0, DEFAULT_RAMP_FRACTION * duration), duration
-    return law, duration if duration is not None else law.duration
+    if duration is None:
+        duration = law.duration
+        if duration < MIN_DURATION:
+            field, value = ("end_time", law.end_time) if law.end_time is not None \
+                else ("t1", law.t1)
+            raise SceneError(source, f"load_cases.{case.name}.{field}", value,
+                             f"gives a run of {duration:g} s, shorter than {MIN_DURATION:g} s: "
+                             "its first time step would fall below the integrator's smallest")
+    return law, duration
 
 
 def damping_of(system, ratio: float | None, rayleigh: tuple[float, float] | None) -> Rayleigh:
@@ -75,7 +89,7 @@ def run_dynamic(scene: Scene, spec: ModelSpec, case: LoadCase, duration: float |
     """
     if not 0.0 <= rho_inf <= 1.0:
         raise SceneError("<command line>", "--rho-inf", rho_inf, "must be from 0 to 1")
-    law, end = time_law(case, duration)
+    law, end = time_law(case, duration, scene.source)
     system = modal_system(scene, spec)
     if MassModel(system).has_consistent:
         raise SceneError("<command line>", "--model", spec.id,
