@@ -8,7 +8,7 @@ from test_scene_errors import _base, _dump
 from geometry import SceneError, load_scene
 from geometry.loads import MAX_LOAD_SUBSTEPS
 from reducedmodels.core import SolverSettings
-from validation.cli import EXIT_INPUT, main
+from validation.cli import EXIT_INPUT, MAX_LOCAL_WORKERS, main
 
 
 def test_the_level_cap_is_the_solvers_sub_step_cap():
@@ -94,3 +94,15 @@ def test_a_duration_outside_the_integrators_range_is_refused(tmp_path, capsys, d
                  "--duration", duration]) == EXIT_INPUT
     err = capsys.readouterr().err
     assert "'--duration'" in err and str(float(duration)) in err, err
+
+
+@pytest.mark.parametrize("workers", [MAX_LOCAL_WORKERS + 1, 1024, 100_000, 2**63])
+def test_a_local_cluster_larger_than_the_cpu_count_is_refused(tmp_path, capsys, workers):
+    """--workers up to 1024 started that many Python processes on one machine (~100 MB
+    each): runaway memory. The local cluster is capped at the logical CPU count."""
+    with pytest.raises(SystemExit) as info:
+        main(["sweep", "slenderness", "--workers", str(workers), "--out", str(tmp_path)])
+    assert info.value.code == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert "--workers" in err and str(workers) in err and str(MAX_LOCAL_WORKERS) in err, err
+    assert not any(tmp_path.iterdir())

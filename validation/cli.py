@@ -27,6 +27,9 @@ EXIT_OK, EXIT_INPUT, EXIT_SOLVER, EXIT_OUTPUT = 0, 2, 3, 4
 COMMAND_LINE = "<command line>"
 MAX_REPEATS = 1000
 """Most timing repeats per load path (a median of more adds nothing but time)."""
+MAX_LOCAL_WORKERS = os.cpu_count() or 1
+"""Most worker processes of a local sweep cluster: each runs one single-threaded task, so more
+than the logical CPUs only multiplies memory (about 100 MB a process)."""
 
 
 def _int_in(low: int, high: int):
@@ -573,8 +576,9 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--scheduler", metavar="ADDRESS",
                    help="address of an existing Dask scheduler, e.g. tcp://HOST:8786 "
                         "(default: a local cluster)")
-    q.add_argument("--workers", type=_int_in(1, 1024), metavar="N",
-                   help="local cluster size (default: one single-threaded process per core)")
+    q.add_argument("--workers", type=_int_in(1, MAX_LOCAL_WORKERS), metavar="N",
+                   help=f"local cluster size, 1 to {MAX_LOCAL_WORKERS} (the logical CPUs; "
+                        "default: one single-threaded process per core)")
     q.add_argument("--batch", type=_int_in(1, 100_000), metavar="N",
                    help="points per task of a reduced model (default: the sweep's, 10)")
     q.add_argument("--no-cache", action="store_true",
