@@ -28,6 +28,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .magnitudes import SMALLEST_NORMAL
+
 MASS_KEYS = frozenset({"mass", "inertia", "center_of_mass", "outline", "depth"})
 """Fields of a ``[[bodies]]`` table that describe its mass."""
 
@@ -120,6 +122,9 @@ def _positive(fail: Fail, field_name: str, value: Any, allow_zero: bool = False)
         fail(field_name, value, "must be a finite number")
     if value < 0.0 or (value == 0.0 and not allow_zero):
         fail(field_name, value, "must be positive" if not allow_zero else "must not be negative")
+    if value != 0.0 and value < SMALLEST_NORMAL:
+        fail(field_name, value, f"is below the smallest normal double ({SMALLEST_NORMAL:g}): "
+             "masses and frequencies computed from it lose all precision or vanish")
     if value > 1e12:
         fail(field_name, value, "absurd magnitude (> 1e12)")
     return float(value)

@@ -106,3 +106,31 @@ def test_a_local_cluster_larger_than_the_cpu_count_is_refused(tmp_path, capsys, 
     err = capsys.readouterr().err
     assert "--workers" in err and str(workers) in err and str(MAX_LOCAL_WORKERS) in err, err
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("value", [1e-320, 5e-324, 2e-308])
+@pytest.mark.parametrize("field", ["material.density", "bodies.4.mass", "bodies.4.inertia"])
+def test_subnormal_mass_data_is_refused(tmp_path, field, value):
+    """A subnormal density gave masses that vanish: ``flexval modes`` crashed with a shape
+    mismatch (no eigenpairs); subnormal body masses and inertias are the same class."""
+    data = _base()
+    data["material"]["density"] = 1.2e-9
+    body = {"name": "4", "mass": 1e-6, "inertia": 1e-5, "center_of_mass": [20.0, 15.8]}
+    data["bodies"] = [body]
+    table, key = field.rsplit(".", 1)
+    (data["material"] if table == "material" else body)[key] = value
+    path = tmp_path / "mass.toml"
+    path.write_text(_dump(data))
+    with pytest.raises(SceneError) as info:
+        load_scene(path)
+    assert f"'{field}'" in str(info.value) and "smallest normal" in str(info.value)
+
+
+def test_the_mass_data_base_is_valid(tmp_path):
+    data = _base()
+    data["material"]["density"] = 1.2e-9
+    data["bodies"] = [{"name": "4", "mass": 1e-6, "inertia": 1e-5,
+                       "center_of_mass": [20.0, 15.8]}]
+    path = tmp_path / "mass.toml"
+    path.write_text(_dump(data))
+    assert load_scene(path).mechanism.inertia.bodies["4"].mass == 1e-6
