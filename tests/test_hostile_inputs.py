@@ -134,3 +134,28 @@ def test_the_mass_data_base_is_valid(tmp_path):
     path = tmp_path / "mass.toml"
     path.write_text(_dump(data))
     assert load_scene(path).mechanism.inertia.bodies["4"].mass == 1e-6
+
+
+@pytest.mark.parametrize("argv", [
+    ["info", "open_chain", "--json", ""],
+    ["run", "open_chain", "--model", "ee", "--load-case", "m+", "--json", ""],
+    ["converge", "open_chain", "--model", "dcmm", "--levels", "1:2", "--json", ""],
+    ["modes", "open_chain", "--model", "ee", "--density", "1.2e-9", "--json", ""],
+    ["modes", "open_chain", "--model", "ee", "--density", "1.2e-9", "--plot", ""],
+    ["sweep", "slenderness", "--out", ""]])
+def test_an_empty_output_path_is_refused_not_ignored(argv, tmp_path, monkeypatch, capsys):
+    """``--json ''`` was taken as 'no JSON' (the run went on and wrote nothing) and
+    ``sweep --out ''`` as the default folder sweeps/NAME: an empty path is an error."""
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == EXIT_INPUT
+    err = capsys.readouterr().err
+    option = argv[-2]
+    assert f"'{option}'" in err, err
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("density", ["1e-320", "5e-324", "0", "nan", "1"])
+def test_modes_density_option_is_range_checked(density, capsys):
+    assert main(["modes", "open_chain", "--model", "ee", "--density", density]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert "'--density'" in err and "Traceback" not in err, err

@@ -66,7 +66,7 @@ def _parse_models(texts, source: str, field: str) -> list:
 def _cmd_info(args: argparse.Namespace) -> int:
     from .info import format_info, scene_info
 
-    json_path = check_file(args.json, "--json") if args.json else None
+    json_path = check_file(args.json, "--json") if args.json is not None else None
     info = scene_info(load_scene(args.scene))
     print(format_info(info))
     if json_path:
@@ -91,7 +91,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .run import run_model
 
     _check_load_levels(args.levels)
-    json_path = check_file(args.json, "--json") if args.json else None
+    json_path = check_file(args.json, "--json") if args.json is not None else None
     scene = load_scene(args.scene)
     from reducedmodels.catalogue import FIELDS, families
 
@@ -236,8 +236,8 @@ def _cmd_modes(args: argparse.Namespace) -> int:
 
     scene = load_scene(args.scene)
     spec = parse_model(args.model, "<command line>", "--model")
-    json_path = check_file(args.json, "--json") if args.json else None
-    plot_path = check_figure_file(args.plot, "--plot") if args.plot else None
+    json_path = check_file(args.json, "--json") if args.json is not None else None
+    plot_path = check_figure_file(args.plot, "--plot") if args.plot is not None else None
     if args.density is not None:
         scene = with_density(scene, args.density)
     case = scene.load_case(args.load_case) if args.load_case else (
@@ -309,7 +309,7 @@ def _cmd_converge(args: argparse.Namespace) -> int:
         raise SceneError("<command line>", "--model", args.model,
                          f"convergence studies need a model with a resolution: {refinable}")
     resolutions = _parse_levels(args.levels or "{}:{}".format(*res.study), spec)
-    json_path = check_file(args.json, "--json") if args.json else None
+    json_path = check_file(args.json, "--json") if args.json is not None else None
     scene = load_scene(args.scene)
     cases = [scene.load_case(n) for n in args.load_case] if args.load_case else scene.load_cases
     out, status = [], EXIT_OK
@@ -388,7 +388,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     sweep = load_sweep(args.sweep)            # every point is checked before anything runs
     if args.batch is not None:
         sweep = dataclasses.replace(sweep, batch=args.batch)
-    out = check_folder(args.out or os.path.join("sweeps", safe_name(sweep.name)), "--out")
+    out = check_folder(args.out if args.out is not None
+                       else os.path.join("sweeps", safe_name(sweep.name)), "--out")
     invalid = len(sweep.points) - len(sweep.valid_points)
     print(f"sweep {sweep.name}: {len(sweep.points)} points ({invalid} invalid), "
           f"{len(sweep.models)} models + reference {sweep.reference.id}, "
