@@ -128,8 +128,10 @@ def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f:
 def _place_rows(poses: np.ndarray, rel: np.ndarray) -> np.ndarray:
     """Current positions p + R(theta) rel of points (m, 2), each carried by its own pose (m, 3), mm."""
     c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-    return np.column_stack([poses[:, 0] + (rel[:, 0] * c - rel[:, 1] * s),
-                            poses[:, 1] + (rel[:, 0] * s + rel[:, 1] * c)])
+    out = np.empty((len(rel), 2))              # (np.column_stack costs more on short arrays)
+    out[:, 0] = poses[:, 0] + (rel[:, 0] * c - rel[:, 1] * s)
+    out[:, 1] = poses[:, 1] + (rel[:, 0] * s + rel[:, 1] * c)
+    return out
 
 
 class DcmmConnector(Connector):

@@ -129,7 +129,9 @@ def polyline_fractions(points: np.ndarray) -> np.ndarray:
 
 def unit_vectors(angle: np.ndarray) -> np.ndarray:
     """(cos, sin) of each angle (rad), shape (m, 2)."""
-    return np.column_stack([np.cos(angle), np.sin(angle)])
+    out = np.empty((np.size(angle), 2))        # (np.column_stack costs more on short arrays)
+    out[:, 0], out[:, 1] = np.cos(angle), np.sin(angle)
+    return out
 
 
 def polyline_axes(points: np.ndarray) -> np.ndarray:
