@@ -21,6 +21,7 @@ from geometry import load_scene
 from reducedmodels import build_system, catalogue
 from reducedmodels.catalogue import parse_model
 from reducedmodels.continuation import limit_loads, solve_arclength
+from validation import figures
 from validation.cli import main
 from validation.failures import LIMIT_POINT, LIMIT_SETTINGS
 from validation.report import write_report
@@ -172,3 +173,26 @@ def test_converge_records_the_failure_and_carries_on(arch, tmp_path):
     assert [r["model"] for r in st["rows"]][0] == "dcmm:1"
     assert "dcmm:2" in [f["model"] for f in st["failures"]]
     assert len(st["rows"]) + len(st["failures"]) == 3
+
+
+def test_load_path_figure_draws_the_traced_branch(arch):
+    """The arc-length path through dcmm:2's limit point is kept and drawn (dashed, labelled)."""
+    _, data, _ = arch
+    res, = data.scenes
+    fail, = res.failures
+    paths = {m: res.paths[(m, "down")] for m in res.models if (m, "down") in res.paths}
+    curves = figures.load_path_curves(paths, res.traces("down"))
+    traced, = [c for c in curves if c["label"] == "dcmm:2 (arc length)"]
+    assert traced["style"]["ls"] == "--"
+    assert traced["style"]["color"] == figures.style("dcmm:2")["color"]
+    assert list(traced["load"]) == [abs(v) for v in fail.trace.load]
+    # the recorded limit load is this branch's own peak, refined by the parabola through the
+    # traced peak and its neighbours: at or above the traced maximum, by less than the load
+    # step that led to it; the branch passes the peak (its last load is lower)
+    assert fail.load == pytest.approx(limit_loads(fail.trace)[0], rel=1e-12)
+    k = int(traced["load"].argmax())
+    peak = traced["load"][k]
+    assert 0 <= fail.load - peak < peak - traced["load"][k - 1]
+    assert traced["load"][-1] < peak
+    # no other model failed: no other trace
+    assert [c["label"] for c in curves if "arc length" in c["label"]] == ["dcmm:2 (arc length)"]

@@ -5,15 +5,17 @@ Every command that runs several models (``report``, ``bench``, ``converge``,
 :class:`Failure` and carries on. When the model can be traced by arc length
 (capability ``arclength``) the path is searched for a limit point below full
 load: if there is one, the failure is that limit point (load control cannot
-pass it whatever the solver) and its load is given. Units: N or N mm.
+pass it whatever the solver) and its load is given; the arc-length path is kept
+with the failure (:attr:`Failure.trace`) so the report can draw the traced
+branch. Units: N or N mm.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, field, fields
 
 from geometry import LoadCase, Scene, SceneError
-from reducedmodels import SolverError, SolverSettings, build_system
+from reducedmodels import LoadPath, SolverError, SolverSettings, build_system
 from reducedmodels.catalogue import ARCLENGTH, ModelSpec
 from reducedmodels.continuation import limit_loads, solve_arclength
 
@@ -45,6 +47,10 @@ class Failure:
         :data:`LIMIT_POINT` or the solver's own reason.
     message : str
         The solver's full message.
+    trace : LoadPath or None
+        The arc-length path up to just past the limit point when ``reason``
+        is :data:`LIMIT_POINT` (its largest load is near ``load``), else None.
+        Not part of :meth:`to_dict` (results.json keeps the load-control path).
     """
 
     model: str
@@ -54,23 +60,26 @@ class Failure:
     unit: str
     reason: str
     message: str
+    trace: LoadPath | None = field(default=None, compare=False, repr=False)
 
     def summary(self) -> str:
         """E.g. ``fails at 78 % (limit point, 2.65 N)``."""
         return f"fails at {100 * self.factor:.0f} % ({self.reason}, {self.load:.3g} {self.unit})"
 
     def to_dict(self) -> dict:
-        """JSON-ready fields."""
-        return asdict(self)
+        """JSON-ready fields (all but ``trace``)."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "trace"}
 
 
-def first_limit_load(scene: Scene, spec: ModelSpec, case: LoadCase) -> float | None:
-    """Load (N or N mm) at the first limit point of ``case``'s path below full load, or None.
+def first_limit(scene: Scene, spec: ModelSpec, case: LoadCase
+                ) -> tuple[float, LoadPath] | None:
+    """The first limit point of ``case``'s path below full load: (load, arc-length path), or None.
 
     Arc-length continuation from rest with the step bounds of
     :data:`LIMIT_SETTINGS`, stopped just past the first local maximum of the
-    load magnitude; None for models without the ``arclength`` capability, or
-    when the path reaches full load (or fails) without one.
+    load magnitude; the load (N or N mm) is refined by the parabola through
+    the peak's points. None for models without the ``arclength`` capability,
+    or when the path reaches full load (or fails) without one.
     """
     if not spec.model_family.has(ARCLENGTH):
         return None
@@ -81,7 +90,7 @@ def first_limit_load(scene: Scene, spec: ModelSpec, case: LoadCase) -> float | N
     except SolverError:
         return None
     loads = limit_loads(lp)
-    return loads[0] if loads else None
+    return (loads[0], lp) if loads else None
 
 
 def failure_of(exc: SolverError | SceneError, scene: Scene, spec: ModelSpec,
@@ -95,7 +104,8 @@ def failure_of(exc: SolverError | SceneError, scene: Scene, spec: ModelSpec,
         return Failure(spec.id, case.name, 0.0, 0.0, case.unit, exc.reason, str(exc))
     reason = (exc.path.stats.get("failure") if exc.path is not None else None) or str(exc)
     load = exc.load_factor * case.magnitude
-    limit = first_limit_load(scene, spec, case)
-    if limit is not None and limit <= case.magnitude:
-        reason, load = LIMIT_POINT, limit
-    return Failure(spec.id, case.name, exc.load_factor, load, case.unit, reason, str(exc))
+    limit = first_limit(scene, spec, case)
+    trace = None
+    if limit is not None and limit[0] <= case.magnitude:
+        (load, trace), reason = limit, LIMIT_POINT
+    return Failure(spec.id, case.name, exc.load_factor, load, case.unit, reason, str(exc), trace)

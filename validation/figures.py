@@ -61,16 +61,37 @@ def _finish_loglog(fig, ax, xlabel: str, ylabel: str, title: str, path: Path) ->
     return _save(fig, path)
 
 
-def load_paths(scene: Scene, case_name: str, paths: dict[str, LoadPath], path: Path) -> str:
-    """Target displacement magnitude and target-body rotation versus load, all models."""
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
-    unit = None
+def load_path_curves(paths: dict[str, LoadPath], traces: dict[str, LoadPath] | None = None
+                     ) -> list[dict]:
+    """The curves of the load-path figure: each model's path, then its arc-length trace.
+
+    Each curve is ``{"label", "model", "load" (|load|, N or N mm), "displacement" (|d|, mm),
+    "rotation" (deg), "style"}``. A trace (the branch an arc-length search traced through
+    the model's limit point, see :attr:`validation.failures.Failure.trace`) is drawn dashed
+    in its model's colour and labelled ``"<model> (arc length)"``.
+    """
+    curves = []
     for model, lp in paths.items():
-        load = np.abs(lp.load)
-        unit = lp.load_unit
-        st = style(model)
-        a1.plot(load, lp.displacement, label=model, **st)
-        a2.plot(load, np.degrees(lp.rotation), label=model, **st)
+        curves.append(dict(label=model, model=model, load=np.abs(lp.load),
+                           displacement=np.asarray(lp.displacement),
+                           rotation=np.degrees(lp.rotation), style=style(model)))
+    for model, lp in (traces or {}).items():
+        st = dict(color=style(model).get("color"), lw=1.2, ls="--", marker=None)
+        curves.append(dict(label=f"{model} (arc length)", model=model, load=np.abs(lp.load),
+                           displacement=np.asarray(lp.displacement),
+                           rotation=np.degrees(lp.rotation), style=st))
+    return curves
+
+
+def load_paths(scene: Scene, case_name: str, paths: dict[str, LoadPath], path: Path,
+               traces: dict[str, LoadPath] | None = None) -> str:
+    """Target displacement magnitude and target-body rotation versus load, all models
+    (and the arc-length traces through limit points, see :func:`load_path_curves`)."""
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    unit = next((lp.load_unit for lp in paths.values()), None)
+    for c in load_path_curves(paths, traces):
+        a1.plot(c["load"], c["displacement"], label=c["label"], **c["style"])
+        a2.plot(c["load"], c["rotation"], label=c["label"], **c["style"])
     a1.set_xlabel(f"|load| ({unit})")
     a1.set_ylabel("target point displacement |d| (mm)")
     a2.set_xlabel(f"|load| ({unit})")

@@ -210,7 +210,8 @@ def _scene_section(res: SceneResults, out: Path, data: ReportData) -> list[str]:
                      f"L = {f.shape.length:.3f} mm" for f in mech.flexures) + ".", ""]
     if res.failures:
         L += ["**Failures** (the model's path up to its last converged load is kept in the "
-              "load-path figures and results.json):", ""]
+              "load-path figures and results.json; a path traced by arc length through a limit "
+              "point is drawn dashed in the load-path figure):", ""]
         L += [f"- `{f.model}` on `{f.load_case}` {f.summary()}: {f.message}"
               for f in res.failures] + [""]
     paper_note = (f"; the paper's {res.paper.percent_table} value in parentheses"
@@ -243,7 +244,8 @@ def _scene_section(res: SceneResults, out: Path, data: ReportData) -> list[str]:
     L += ["### Load paths", ""]
     for c in res.cases:
         paths = {m: res.paths[(m, c)] for m in res.models if (m, c) in res.paths}
-        fig = figures.load_paths(sc, c, paths, output_path(out, f"{name}_{c}_paths", ".png"))
+        fig = figures.load_paths(sc, c, paths, output_path(out, f"{name}_{c}_paths", ".png"),
+                                 res.traces(c))
         L += [f"![{name} {c}]({fig})", ""]
     rec = [m for m in (res.reference, PAPER_REFERENCE) if m and res.converged(m, res.cases[0])
            and res.paths[(m, res.cases[0])].poses]

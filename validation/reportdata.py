@@ -119,6 +119,11 @@ class SceneResults:
         return next((f for f in self.failures if f.model == model and f.load_case == case),
                     None)
 
+    def traces(self, case: str) -> dict[str, LoadPath]:
+        """{model: arc-length path through its limit point} of the models failing on ``case``."""
+        return {f.model: f.trace for f in self.failures
+                if f.load_case == case and f.trace is not None}
+
     def converged(self, model: str, case: str) -> LoadPath | None:
         """The path of ``model`` on ``case`` if it reached full load, else None."""
         lp = self.paths.get((model, case))

@@ -40,7 +40,7 @@ from reducedmodels import LoadPath, SolverError
 from reducedmodels.catalogue import ModelSpec, parse_model
 
 from .compare import errors
-from .failures import first_limit_load
+from .failures import first_limit
 from .outputs import output_path, write_json, write_text
 from .run import run_model
 
@@ -169,7 +169,8 @@ def _amplification(scene: Scene, spec: ModelSpec, case: LoadCase, factors: Seque
         if failure is not None:
             failure["factor"] = k
             if failure["kind"] == "solver":
-                failure["limit_load"] = first_limit_load(scene, spec, scale_case(case, k))
+                limit = first_limit(scene, spec, scale_case(case, k))
+                failure["limit_load"] = limit[0] if limit else None
             break
         first = lp if first is None else first
         reached = k
