@@ -125,6 +125,67 @@ def _frame_table(rows: list[FrameRow], cases: list[str]) -> list[str]:
     return lines
 
 
+def _bracket_lines(res: SceneResults) -> list[str]:
+    """Markdown: the continuum reference in plane stress and plane strain (a wide flexure
+    lies between), and whether each reduced model's error exceeds the bracket's width."""
+    rows = res.bracket_rows()
+    if not rows:
+        return _failure_lines(res.bracket.failures) if res.bracket else []
+    other = res.bracket.model
+    L = [f"### Plane-stress / plane-strain bracket (`{res.reference}` and `{other}`)", "",
+         "A flexure much wider than thick (b >> h) lies between plane stress and plane strain: "
+         "end-of-ramp target displacement |d| and rotation with both, and their relative "
+         "spread (percent of the reference's value).", "",
+         f"| case | disp. `{res.reference}` (mm) | disp. `{other}` (mm) | spread (%) | "
+         f"rotation `{res.reference}` (deg) | rotation `{other}` (deg) | spread (%) |",
+         "|---|---:|---:|---:|---:|---:|---:|"]
+    for c, b in rows.items():
+        L.append(f"| {c} | {b['disp']:.6g} | {b['disp_other']:.6g} | {b['disp_spread']:.3g} | "
+                 f"{math.degrees(b['rot']):.6g} | {math.degrees(b['rot_other']):.6g} | "
+                 f"{b['rot_spread']:.3g} |")
+    L += _failure_lines(res.bracket.failures)
+    L += ["", _bracket_verdict(res, rows), ""]
+    return L + [f"Computing the `{other}` paths takes {res.bracket.seconds():.3g} s (wall time of "
+                "its runs, the report's added cost when they are not cached).",
+                ""]
+
+
+def _bracket_verdict(res: SceneResults, rows: dict[str, dict[str, float]]) -> str:
+    """One sentence: is each reduced model's end |d| and rotation error (against the
+    reference) larger or smaller than the plane bracket's spread on the same case?"""
+    larger: dict[str, list[str]] = {}
+    smaller: dict[str, list[str]] = {}
+    for m, per_case in res.error_table(res.reference).items():
+        for c, e in per_case.items():
+            if c not in rows:
+                continue
+            for key, spread, what in (("end_disp", "disp_spread", "|d|"),
+                                      ("end_rot", "rot_spread", "rotation")):
+                side = larger if e[key] > rows[c][spread] else smaller
+                side.setdefault(m, []).append(f"{c} {what}")
+    against = f"(end |d| and rotation, against `{res.reference}`)"
+    if not larger and not smaller:
+        return "No reduced model reached full load on a case where both planes did."
+    if not smaller:
+        return (f"Every reduced model's error {against} is larger than the bracket's width: "
+                "the plane assumption does not explain the differences from the continuum.")
+    if not larger:
+        return (f"Every reduced model's error {against} is smaller than the bracket's width: "
+                "the plane assumption matters more than the choice among these models.")
+    parts = []
+    below = [f"`{m}`" for m in smaller if m not in larger]
+    above = [f"`{m}`" for m in larger if m not in smaller]
+    mixed = [f"`{m}` (larger on {', '.join(larger[m])})" for m in larger if m in smaller]
+    if below:
+        parts.append("smaller on every case: " + ", ".join(below))
+    if above:
+        parts.append("larger on every case: " + ", ".join(above))
+    if mixed:
+        parts.append("mixed: " + "; ".join(mixed))
+    return f"Reduced models' errors {against} against the bracket's width: " + "; ".join(
+        parts) + "."
+
+
 def _failure_lines(failures: list[Failure]) -> list[str]:
     return [f"- `{f.model}` on `{f.load_case}` {f.summary()}." for f in failures]
 
@@ -231,6 +292,7 @@ def _scene_section(res: SceneResults, out: Path, data: ReportData) -> list[str]:
     if res.has_reference():
         L += [f"### Errors against the continuum reference `{res.reference}`", ""]
         L += _metrics_table(res, res.reference) + [""]
+        L += _bracket_lines(res)
     L += strength.section(sc, res.paths, res.failures, res.models,
                           res.reference if res.has_reference() else PAPER_REFERENCE, out)
     if res.frequencies is not None:

@@ -39,6 +39,9 @@ PAPER_REFERENCE = "beam:100"
 BENCH_REFERENCE = "beam:400"
 #: option whose values the frame-sensitivity table compares (DCMM's measuring frame)
 FRAME_OPTION = "frame"
+#: option of the reference whose other value brackets it (a wide flexure, b >> h, lies
+#: between plane stress and plane strain)
+PLANE_OPTION = "plane"
 
 
 @dataclass
@@ -80,6 +83,24 @@ class FrameRow:
 
 
 @dataclass
+class PlaneBracket:
+    """The continuum reference with its other plane assumption, on every load case.
+
+    ``paths`` maps each load case to the path of ``model`` (the reference with
+    :data:`PLANE_OPTION` switched, e.g. ``continuum:1[plane=strain]``); a
+    failure is listed in ``failures`` instead.
+    """
+
+    model: str
+    paths: dict[str, LoadPath]
+    failures: list[Failure]
+
+    def seconds(self) -> float:
+        """Wall time of its runs (s): what the bracket adds to the report."""
+        return sum(lp.seconds for lp in self.paths.values())
+
+
+@dataclass
 class SceneResults:
     """Everything the report says about one scene (computed by :func:`compute_report`).
 
@@ -98,6 +119,7 @@ class SceneResults:
     bench_failures: list[Failure] = field(default_factory=list)
     convergence: list[ConvergenceStudy] = field(default_factory=list)
     frequencies: FrequencyTable | None = None
+    bracket: PlaneBracket | None = None
 
     @property
     def cases(self) -> list[str]:
@@ -139,6 +161,29 @@ class SceneResults:
                 lp, ref = self.converged(m, c), self.converged(reference, c)
                 if lp is not None and ref is not None:
                     out.setdefault(m, {})[c] = errors(lp, ref)
+        return out
+
+    def bracket_rows(self) -> dict[str, dict[str, float]]:
+        """{case: end |d| (mm) and rotation (rad) in both planes, and their spreads (%)}.
+
+        Keys ``disp``/``disp_other``/``rot``/``rot_other`` (reference, then the
+        bracket's other plane) and ``disp_spread``/``rot_spread``: the relative
+        difference |other - reference| / |reference| in percent, comparable with
+        the ``end_disp`` and ``end_rot`` errors. Cases where either path did not
+        reach full load are left out.
+        """
+        out: dict[str, dict[str, float]] = {}
+        if self.bracket is None or self.reference is None:
+            return out
+        for c in self.cases:
+            ref, other = self.converged(self.reference, c), self.bracket.paths.get(c)
+            if ref is None or other is None or not other.converged:
+                continue
+            d, d2 = float(ref.displacement[-1]), float(other.displacement[-1])
+            r, r2 = float(ref.rotation[-1]), float(other.rotation[-1])
+            out[c] = {"disp": d, "disp_other": d2, "rot": r, "rot_other": r2,
+                      "disp_spread": 100 * abs(d2 - d) / abs(d),
+                      "rot_spread": 100 * abs(r2 - r) / abs(r)}
         return out
 
     def has_reference(self) -> bool:
@@ -214,6 +259,22 @@ def _frame_rows(res: SceneResults, specs: list[ModelSpec], cache: ResultCache | 
     return rows
 
 
+def _plane_bracket(res: SceneResults, reference: ModelSpec, cache: ResultCache | None
+                   ) -> PlaneBracket | None:
+    """The reference with its other :data:`PLANE_OPTION` value on every case, or None
+    (a reference without that option)."""
+    opt = reference.model_family.option(PLANE_OPTION)
+    if opt is None:
+        return None
+    own = dict(reference.options).get(PLANE_OPTION, opt.default)
+    other = next(v for v in opt.allowed if v != own)
+    variant = reference.with_options(**{PLANE_OPTION: other})
+    paths, fails = run_campaign(res.scene, [variant], list(res.scene.load_cases), 1, cache)
+    failed = {f.load_case for f in fails}
+    return PlaneBracket(variant.id, {c: lp for (_, c), lp in paths.items() if c not in failed},
+                        fails)
+
+
 def compute_report(scene_names: list[str], models: list[str] | None = None, repeats: int = 3,
                    use_cache: bool = True, progress: bool = True, bench: bool = True,
                    converge: bool = True) -> ReportData:
@@ -240,6 +301,8 @@ def compute_report(scene_names: list[str], models: list[str] | None = None, repe
         res = SceneResults(sc, paths, failures, [s.id for s in specs], ref_id)
         res.frames = _frame_rows(res, specs, cache)
         res.frequencies = frequency_data(sc, res.models, ref_id or PAPER_REFERENCE)
+        if reference:
+            res.bracket = _plane_bracket(res, reference, cache)
         if bench:
             bref = reference or parse_model(BENCH_REFERENCE)
             res.bench_rows, res.bench_failures = runtime_vs_error(
