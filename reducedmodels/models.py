@@ -8,6 +8,7 @@ these runners, is registered in :mod:`reducedmodels.families`.
 
 from __future__ import annotations
 
+import math
 import time
 from typing import Any, Callable
 
@@ -21,6 +22,7 @@ from .core import SolverSettings, System, local_hessian
 from .inertia import with_weights
 from .loadpath import LoadPath
 from .recorder import record_stress, solve_path
+from .validity import MAX_LINEAR_ROTATION
 
 #: ``make(flexure, mechanism, spec, **options) -> Connector`` of one flexure
 ConnectorFactory = Callable[..., Any]
@@ -122,10 +124,11 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
     gravity (applied before the load case, as in every static run) and f the
     load case at full value, and reports the linearised target displacement
     J dq; without gravity it is proportional to the load. The validity monitor
-    does not judge it (``valid`` stays None): q0 + lambda dq is a linear
-    response, not a configuration, and its linearised rigid rotations
-    stretch chords by theta^2 / 2 times their lever arms, which the
-    connectors' stretch limits would read as strain.
+    judges it by its body rotations alone
+    (:data:`~reducedmodels.validity.MAX_LINEAR_ROTATION`): q0 + lambda dq is
+    a linear response, not a configuration, so the connectors' own stretch
+    limits do not apply to it (its linearised rigid rotations stretch chords
+    by theta^2 / 2, which is exactly what that rotation limit bounds).
     """
     t0 = time.perf_counter()
     loads = system.loads(case)
@@ -150,6 +153,19 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
                   stats={"unknowns": system.n_dofs, "newton_iterations": 0, "step_cuts": 0,
                          "substeps": 0},
                   settings={}, scene=scene, load_unit=case.unit)
+    bodies = list(system.body_index)
+    theta = np.array([system.pose_dofs(b)[2] for b in bodies], int)
+    lp.valid, lp.validity = [], []
+    for factor in lam:
+        turns = np.abs(dq_dead[theta] + factor * dq[theta])
+        k = int(np.argmax(turns)) if turns.size else 0
+        reason = None
+        if turns.size and turns[k] > MAX_LINEAR_ROTATION:
+            reason = (f"linear response: body {bodies[k]!r} turned "
+                      f"{math.degrees(turns[k]):.3g} deg (limit "
+                      f"{math.degrees(MAX_LINEAR_ROTATION):.3g} deg: linearised kinematics)")
+        lp.valid.append(reason is None)
+        lp.validity.append(reason)
     # section forces of the linear response: K0 dq on the undeformed centre lines
     rest = system.local_states(q0)
 

@@ -19,6 +19,8 @@ typed in:
   from its chord.
 * :data:`MAX_RELATIVE_ROTATION` bounds a DCMM sub-arc's relative rotation.
 * :data:`MIN_DET_F` marks continuum elements near inversion.
+* :data:`MAX_LINEAR_ROTATION` bounds the body rotations of a linear
+  response (``ee``), whose kinematics are linearised.
 * the PRBM is meaningful within the end rotations its table was fitted on
   (:func:`reducedmodels.prbm.fitted_rotation`).
 
@@ -61,6 +63,16 @@ one of its two bodies; the two frames' measures differ by (R(phi) - I) v,
 of size 2 sin(phi / 2) |v|. At phi = pi / 3 that difference is |v| itself:
 which frame is chosen changes the element's deformation by 100 %, so a
 linear compliance acting on it has no meaning left."""
+
+MAX_LINEAR_ROTATION = math.sqrt(2.0 * MAX_STRAIN)
+"""Largest body rotation of a linear response (the EE), rad (0.2, 11.5 deg).
+
+A linear response moves a point at distance r from a body's reference by
+r theta along the tangent instead of along the circle, so every segment of
+the body comes out stretched by sqrt(1 + theta^2) - 1 = theta^2 / 2: at
+theta = sqrt(2 MAX_STRAIN) the linearised kinematics alone produce the
+strain limit, and the point's own position is off by about theta / 2 = 10 %
+of its motion."""
 
 MIN_DET_F = 1.0 / math.sqrt(3.0)
 """Smallest area ratio det F of a continuum element (0.577): near inversion.

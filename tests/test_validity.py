@@ -94,10 +94,23 @@ def test_every_model_is_valid_at_the_paper_loads(scene_name, model):
         assert all(lp.valid), (case.name, lp.validity)
 
 
-def test_ee_is_not_judged():
+def test_ee_is_judged_by_its_linearised_rotations():
+    """The linear response is valid while every body turns less than sqrt(2 MAX_STRAIN)
+    (0.2 rad): the open chain's f- turns the target by 0.054 rad (valid at every
+    level), m+ by 0.957 rad (invalid from the level where the rotation, linear in the
+    load, passes 0.2 rad), and 1000 times f+ is invalid from its first loaded level."""
+    from reducedmodels.validity import MAX_LINEAR_ROTATION
+
     scene = load_scene("open_chain")
-    lp = run_reduced(scene.mechanism, parse_model("ee"), scene.load_case("f+"))
-    assert lp.valid is None and lp.validity is None
+    ee = parse_model("ee")
+    small = run_reduced(scene.mechanism, ee, scene.load_case("f-"))
+    assert all(small.valid) and not any(small.validity)
+    turned = run_reduced(scene.mechanism, ee, scene.load_case("m+"))
+    expected = [abs(r) <= MAX_LINEAR_ROTATION for r in turned.rotation]
+    assert turned.valid == expected and expected[1] and not expected[-1]
+    assert "body '4' turned" in turned.validity[-1]
+    far = run_reduced(scene.mechanism, ee, scaled(scene.load_case("f+"), 1000))
+    assert far.valid[0] and not any(far.valid[1:])
 
 
 def test_the_verdict_round_trips_through_json():
