@@ -3,6 +3,7 @@ table cell agrees with them (found by row and column), and every linked figure e
 
 import json
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -224,3 +225,22 @@ def test_a_failed_modal_analysis_is_a_row_of_the_table(monkeypatch, tmp_path):
     assert "| `dcmm:1` | fails (below) | — | — | — |" in text
     assert "- `dcmm:1`: modal analysis failed: equilibrium for the modal analysis: " \
         "no convergence" in text
+
+
+def test_findings_name_the_levels_a_model_leaves_its_validity(tmp_path):
+    """A twist that turns the tip by ~0.47 rad: the linear ee leaves its range (body
+    rotations above sqrt(2 MAX_STRAIN)) at the first level whose own rotation passes
+    the limit, found here from a direct run; beam:10 stays inside and gets no line."""
+    from reducedmodels.validity import MAX_LINEAR_ROTATION
+
+    scene_file = tmp_path / "tiny.toml"
+    scene_file.write_text(TINY.replace("value = 0.02", "value = 0.1"))
+    md = build_report([str(scene_file)], tmp_path / "out", ["beam:10", "ee"], repeats=1,
+                      use_cache=False, progress=False, bench=False, converge=False)
+    text = Path(md).read_text()
+    scene = load_scene(scene_file)
+    ee = run_model(scene, parse_model("ee"), scene.load_case("twist"))
+    first = next(k for k, r in enumerate(ee.rotation) if abs(r) > MAX_LINEAR_ROTATION)
+    assert (f"- `ee` on `twist` leaves its range of validity from {ee.load[first]:.4g} N mm "
+            f"({len(ee.load) - first} of {len(ee.load)} levels)") in text
+    assert "`beam:10` on `twist` leaves" not in text

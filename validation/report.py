@@ -190,11 +190,30 @@ def _failure_lines(failures: list[Failure]) -> list[str]:
     return [f"- `{f.model}` on `{f.load_case}` {f.summary()}." for f in failures]
 
 
+def _validity_lines(res: SceneResults) -> list[str]:
+    """One line per model and load case whose path leaves the model's range of meaning.
+
+    From the validity monitor's verdict per level (``LoadPath.valid``): the
+    first level judged invalid, its load and the reason, so that an error
+    figure computed there is read as what it is.
+    """
+    out = []
+    for (model, case), lp in sorted(res.paths.items()):
+        bad = [k for k, ok in enumerate(lp.valid or []) if ok is False]
+        if bad:
+            k = bad[0]
+            out.append(f"- `{model}` on `{case}` leaves its range of validity from "
+                       f"{lp.load[k]:.4g} {lp.load_unit} ({len(bad)} of {len(lp.valid)} "
+                       f"levels): {lp.validity[k]}.")
+    return out
+
+
 def _findings(res: SceneResults, reference: str) -> list[str]:
-    """Plain-words findings computed from the error and timing tables and the failures."""
+    """Plain-words findings computed from the error and timing tables, the failures and
+    the validity monitor."""
     table = res.error_table(reference)
     failed = {f.model for f in res.failures}
-    out = _failure_lines(res.failures)
+    out = _failure_lines(res.failures) + _validity_lines(res)
     rows = []
     for m, per_case in table.items():
         if m in failed or len(per_case) < len(res.cases):
