@@ -262,106 +262,146 @@ def _scene_name(rd: _Reader, value: Any) -> str:
     return value
 
 
-def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
-    """Build and check a Scene from parsed TOML ``data`` read from ``source``."""
-    rd = _Reader(source)
-    rd.known_keys(data, {"name", "description", "material", "section", "ground", "target",
-                         "flexures", "bodies", "pins", "load_cases", "request", "gravity"}, "")
-    name = _scene_name(rd, data.get("name", default_name))
+def _material(rd: _Reader, data: dict) -> tuple[Material, dict]:
+    """``[material]``: E (MPa) and nu, and the raw table (its density is read later)."""
     mat = rd.table(data, "material", "")
     rd.known_keys(mat, {"youngs_modulus", "poisson_ratio", "density"}, "material.")
     E = rd.number(mat, "youngs_modulus", "material.", positive=True)
     nu = rd.number(mat, "poisson_ratio", "material.", default=0.3)
     if not -1.0 < nu < 0.5:
         rd.fail("material.poisson_ratio", nu, "must be in (-1, 0.5)")
+    return Material(E, nu), mat
+
+
+def _section(rd: _Reader, data: dict) -> Section:
+    """``[section]``: the default depth b and thickness h of every flexure, mm."""
     sec = rd.table(data, "section", "")
     rd.known_keys(sec, {"depth", "thickness"}, "section.")
-    section = Section(rd.number(sec, "depth", "section.", positive=True),
-                      rd.number(sec, "thickness", "section.", positive=True))
+    return Section(rd.number(sec, "depth", "section.", positive=True),
+                   rd.number(sec, "thickness", "section.", positive=True))
+
+
+def _ground(rd: _Reader, data: dict) -> tuple[str, np.ndarray]:
+    """``[ground]``: its name and the points (mm) where it holds flexures."""
     ground_t = rd.table(data, "ground", "")
     rd.known_keys(ground_t, {"name", "points"}, "ground.")
     ground = rd.name(ground_t, "name", "ground.")
     gpts = ground_t.get("points")
     if not (isinstance(gpts, list) and gpts):
-        rd.fail("ground.points", gpts, "must list at least one point [x, y] where the ground holds a flexure")
-    ground_points = np.array([rd.point({"p": p}, "p", "ground.points.") for p in gpts])
+        rd.fail("ground.points", gpts, "must list at least one point [x, y] where the ground "
+                "holds a flexure")
+    return ground, np.array([rd.point({"p": p}, "p", "ground.points.") for p in gpts])
+
+
+def _target(rd: _Reader, data: dict) -> tuple[str, np.ndarray]:
+    """``[target]``: the target body and its tracing point, mm."""
     target_t = rd.table(data, "target", "")
     rd.known_keys(target_t, {"body", "point"}, "target.")
-    target_body = rd.name(target_t, "body", "target.")
-    target_point = rd.point(target_t, "point", "target.")
+    return rd.name(target_t, "body", "target."), rd.point(target_t, "point", "target.")
 
-    flex = data.get("flexures")
-    if not (isinstance(flex, list) and flex):
-        rd.fail("flexures", flex, "must be a non-empty array of tables [[flexures]]")
-    specs = [_flexure_spec(rd, f, k, section) for k, f in enumerate(flex)]
+
+def _bodies(rd: _Reader, data: dict, density: float | None, depth: float
+            ) -> tuple[dict[str, np.ndarray], dict]:
+    """``[[bodies]]``: known points of links (mm) and their mass data, by body name."""
     body_points, body_masses = {}, {}
-    density = parse_density(mat, rd.fail)
     for k, b in enumerate(rd.array(data, "bodies", "", "tables [[bodies]]")):
         b = rd.item_table(b, f"bodies[{k}]")
         bname = rd.name(b, "name", f"bodies[{k}].")
         rd.known_keys(b, {"name", "points", *MASS_KEYS}, f"bodies.{bname}.")
         if bname in body_points:
             rd.fail("bodies.name", bname, "duplicate [[bodies]] entry: list a body's points once")
-        rigid_mass = parse_body_mass(b, f"bodies.{bname}.", density, section.depth, rd.fail)
+        rigid_mass = parse_body_mass(b, f"bodies.{bname}.", density, depth, rd.fail)
         if rigid_mass is not None:
             body_masses[bname] = rigid_mass
         body_points[bname] = np.array([rd.point({"p": p}, "p", f"bodies.{bname}.points.")
                                        for p in rd.array(b, "points", f"bodies.{bname}.",
                                                          "points [x, y]")])
+    return body_points, body_masses
+
+
+def _mechanism(rd: _Reader, data: dict, source: str) -> Mechanism:
+    """The mechanism of a scene: material, flexures, bodies, pins, masses and gravity."""
+    material, mat = _material(rd, data)
+    section = _section(rd, data)
+    ground, ground_points = _ground(rd, data)
+    target_body, target_point = _target(rd, data)
+    flex = data.get("flexures")
+    if not (isinstance(flex, list) and flex):
+        rd.fail("flexures", flex, "must be a non-empty array of tables [[flexures]]")
+    specs = [_flexure_spec(rd, f, k, section) for k, f in enumerate(flex)]
+    density = parse_density(mat, rd.fail)
+    body_points, body_masses = _bodies(rd, data, density, section.depth)
     raw_pins = data.get("pins", [])
     if not isinstance(raw_pins, list):
         rd.fail("pins", raw_pins, "must be an array of tables [[pins]]")
     pins = [_pin_spec(rd, p, k) for k, p in enumerate(raw_pins)]
-    mech = assemble(specs, ground, ground_points, Material(E, nu), target_body, target_point,
+    mech = assemble(specs, ground, ground_points, material, target_body, target_point,
                     source=source, body_points=body_points, pin_specs=pins)
     for bname in body_masses:
         if bname not in mech.bodies or bname == mech.ground:
             rd.fail(f"bodies.{bname}.mass", bname, "mass data for the ground or for a body no "
                     f"flexure or pin holds; moving bodies are {mech.moving_bodies}")
-    mech = dataclasses.replace(mech, inertia=MassData(density, parse_gravity(data, rd.fail),
+    return dataclasses.replace(mech, inertia=MassData(density, parse_gravity(data, rd.fail),
                                                       body_masses))
 
-    cases = []
+
+def _load_case(rd: _Reader, c: Any, k: int, mech: Mechanism) -> LoadCase:
+    """One ``[[load_cases]]`` entry (a single load, or ``loads`` combined) on ``mech``."""
+    c = rd.item_table(c, f"load_cases[{k}]")
+    lname = rd.name(c, "name", f"load_cases[{k}].")
+    where = f"load_cases.{lname}."
+    levels = c.get("levels", DEFAULT_LEVELS)
+    if isinstance(levels, bool) or not isinstance(levels, int) or not 2 <= levels <= MAX_LOAD_SUBSTEPS:
+        rd.fail(f"{where}levels", levels,
+                f"must be an integer from 2 to {MAX_LOAD_SUBSTEPS} (each of the levels - 1 "
+                f"load increments takes at least one of the solver's {MAX_LOAD_SUBSTEPS} "
+                "sub-steps)")
+    target_body, target_point = mech.target_body, mech.target_point
+    if "loads" in c:
+        rd.known_keys(c, {"name", "levels", "loads", *TIME_LAW_KEYS}, where)
+        comps = tuple(_load_component(rd, rd.item_table(x, f"{where}loads[{i}]"),
+                                      f"{where}loads[{i}].", target_body, target_point,
+                                      _COMPONENT_KEYS)
+                      for i, x in enumerate(rd.array(c, "loads", where, "load tables")))
+        if not comps:
+            rd.fail(f"{where}loads", [], "must contain at least one load")
+    else:
+        comps = (_load_component(rd, c, where, target_body, target_point,
+                                 _COMPONENT_KEYS | {"name", "levels", *TIME_LAW_KEYS}),)
+    for comp in comps:
+        if comp.body not in mech.bodies:
+            rd.fail(f"{where}body", comp.body, f"unknown body; bodies are {list(mech.bodies)}")
+        if comp.body == mech.ground:
+            rd.fail(f"{where}body", comp.body, "a load on the ground does nothing")
+    return LoadCase(lname, comps, levels, parse_time_law(c, where, rd.fail))
+
+
+def _load_cases(rd: _Reader, data: dict, mech: Mechanism) -> list[LoadCase]:
+    """Every ``[[load_cases]]`` entry, names unique."""
     raw_cases = data.get("load_cases", [])
     if not isinstance(raw_cases, list) or not raw_cases:
         rd.fail("load_cases", raw_cases, "must be a non-empty array of tables [[load_cases]]")
+    cases = []
     for k, c in enumerate(raw_cases):
-        c = rd.item_table(c, f"load_cases[{k}]")
-        lname = rd.name(c, "name", f"load_cases[{k}].")
-        where = f"load_cases.{lname}."
-        levels = c.get("levels", DEFAULT_LEVELS)
-        if isinstance(levels, bool) or not isinstance(levels, int) or not 2 <= levels <= MAX_LOAD_SUBSTEPS:
-            rd.fail(f"{where}levels", levels,
-                    f"must be an integer from 2 to {MAX_LOAD_SUBSTEPS} (each of the levels - 1 "
-                    f"load increments takes at least one of the solver's {MAX_LOAD_SUBSTEPS} "
-                    "sub-steps)")
-        if "loads" in c:
-            rd.known_keys(c, {"name", "levels", "loads", *TIME_LAW_KEYS}, where)
-            comps = tuple(_load_component(rd, rd.item_table(x, f"{where}loads[{i}]"),
-                                          f"{where}loads[{i}].", target_body, target_point,
-                                          _COMPONENT_KEYS)
-                          for i, x in enumerate(rd.array(c, "loads", where, "load tables")))
-            if not comps:
-                rd.fail(f"{where}loads", [], "must contain at least one load")
-        else:
-            comps = (_load_component(rd, c, where, target_body, target_point,
-                                     _COMPONENT_KEYS | {"name", "levels", *TIME_LAW_KEYS}),)
-        for comp in comps:
-            if comp.body not in mech.bodies:
-                rd.fail(f"{where}body", comp.body, f"unknown body; bodies are {list(mech.bodies)}")
-            if comp.body == mech.ground:
-                rd.fail(f"{where}body", comp.body, "a load on the ground does nothing")
-        if any(lc.name == lname for lc in cases):
-            rd.fail("load_cases.name", lname, "duplicate load case name")
-        cases.append(LoadCase(lname, comps, levels, parse_time_law(c, where, rd.fail)))
+        case = _load_case(rd, c, k, mech)
+        if any(lc.name == case.name for lc in cases):
+            rd.fail("load_cases.name", case.name, "duplicate load case name")
+        cases.append(case)
+    return cases
 
-    loaded = {c.body for lc in cases for c in lc.components} | {target_body}
+
+def _refuse_dangling_bodies(rd: _Reader, mech: Mechanism, cases: list[LoadCase]) -> None:
+    """A body held by one flexure only, unloaded and not the target, does nothing."""
+    loaded = {c.body for lc in cases for c in lc.components} | {mech.target_body}
     links = Counter(b for link in (*mech.flexures, *mech.pins) for b in link.bodies)
     for b in mech.moving_bodies:
         if links[b] == 1 and b not in loaded:
             rd.fail("flexures", b, f"body {b!r} is dangling: held by one flexure, not loaded "
                     "and not the target")
 
+
+def _request(rd: _Reader, data: dict) -> tuple[tuple, list]:
+    """``[request]``: model ids (text, parsed by the model catalogue when used) and outputs."""
     req = rd.table(data, "request", "", required=False)
     rd.known_keys(req, {"models", "outputs"}, "request.")
     models = tuple(rd.array(req, "models", "request.", "model names"))
@@ -372,6 +412,25 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
     for o in outputs:
         if not isinstance(o, str) or o not in OUTPUTS:
             rd.fail("request.outputs", o, f"unknown output; expected some of {sorted(OUTPUTS)}")
+    return models, outputs
+
+
+def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
+    """Build and check a Scene from parsed TOML ``data`` read from ``source``.
+
+    In passes, each a function named after what it reads: the mechanism
+    (material, section, ground, target, flexures, bodies, pins, masses), the
+    load cases on it, the bodies they leave dangling, the request. Every
+    value is checked where it is read (:class:`SceneError` names the field).
+    """
+    rd = _Reader(source)
+    rd.known_keys(data, {"name", "description", "material", "section", "ground", "target",
+                         "flexures", "bodies", "pins", "load_cases", "request", "gravity"}, "")
+    name = _scene_name(rd, data.get("name", default_name))
+    mech = _mechanism(rd, data, source)
+    cases = _load_cases(rd, data, mech)
+    _refuse_dangling_bodies(rd, mech, cases)
+    models, outputs = _request(rd, data)
     return Scene(name, str(data.get("description", "")), mech, tuple(cases), models,
                  frozenset(outputs), source)
 
