@@ -84,15 +84,8 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _cmd_run(args: argparse.Namespace) -> int:
-    from reducedmodels import SolverError
-
-    from .cache import ResultCache, result_key
-    from .run import run_model
-
-    _check_load_levels(args.levels)
-    json_path = check_file(args.json, "--json") if args.json is not None else None
-    scene = load_scene(args.scene)
+def _run_request(args: argparse.Namespace, scene) -> tuple[list, list, frozenset]:
+    """The models, load cases and stress-field outputs ``flexval run`` is asked for, checked."""
     from reducedmodels.catalogue import FIELDS, families
 
     specs = _parse_models(args.model or [], "<command line>", "--model")
@@ -105,10 +98,6 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.max_load_factor is not None and not args.arclength:
         raise SceneError("<command line>", "--max-load-factor", args.max_load_factor,
                          "applies to --arclength traces only")
-    max_factor = 1.0 if args.max_load_factor is None else args.max_load_factor
-    if not (math.isfinite(max_factor) and 0.0 < max_factor <= 1e6):
-        raise SceneError("<command line>", "--max-load-factor", max_factor,
-                         "must be a positive number up to 1e6")
     if args.arclength:
         from .limits import check_arclength
 
@@ -119,6 +108,49 @@ def _cmd_run(args: argparse.Namespace) -> int:
         with_fields = [f.name for f in families() if f.has(FIELDS)]
         raise SceneError(scene.source, "request.outputs", sorted(fields),
                          f"VTU and PNG stress fields come from these models only: {with_fields}")
+    return specs, list(cases), frozenset(fields)
+
+
+def _run_each(specs, cases, run_one, row, scene, json_path) -> int:
+    """Run every (model, load case), print one row each, write the JSON; the exit code.
+
+    A solver failure is reported on stderr with the load reached, its partial
+    path is kept in the JSON, and the other runs go on (exit code 3 at the end).
+    """
+    from reducedmodels import SolverError
+
+    results, status = [], EXIT_OK
+    for spec in specs:
+        for case in cases:
+            try:
+                lp = run_one(spec, case)
+            except SolverError as exc:
+                print(f"flexval: solver failure: {exc}", file=sys.stderr)
+                if exc.path is not None:
+                    results.append(exc.path)
+                status = EXIT_SOLVER
+                continue
+            results.append(lp)
+            row(lp)
+    if json_path:
+        write_json(json_path, {"scene": scene.name, "results": [p.to_dict() for p in results]})
+    return status
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from reducedmodels.catalogue import FIELDS
+
+    from .cache import ResultCache, result_key
+    from .run import run_model
+
+    _check_load_levels(args.levels)
+    json_path = check_file(args.json, "--json") if args.json is not None else None
+    scene = load_scene(args.scene)
+    specs, cases, fields = _run_request(args, scene)
+    max_factor = 1.0 if args.max_load_factor is None else args.max_load_factor
+    if not (math.isfinite(max_factor) and 0.0 < max_factor <= 1e6):
+        raise SceneError("<command line>", "--max-load-factor", max_factor,
+                         "must be a positive number up to 1e6")
     if args.dynamic:
         return _run_dynamic(args, scene, specs, cases, json_path)
     out_dir = check_folder(args.out_dir, "--out-dir") if fields else None
@@ -127,92 +159,75 @@ def _cmd_run(args: argparse.Namespace) -> int:
     massless = inertia.massless_bodies(scene.mechanism.moving_bodies)
     if inertia.gravity is not None and massless:
         print(f"note: bodies without mass data are massless (no weight): {', '.join(massless)}")
-    results, status = [], EXIT_OK
+    record = {"record_poses": "poses" in scene.outputs, "record_shapes": "shape" in scene.outputs}
+
+    def run_one(spec, case):
+        extra = {}
+        if spec.model_family.has(FIELDS) and fields:
+            extra["vtu_dir"] = out_dir
+            if "png" in fields:
+                stem = f"{scene.name}_{case.name}_{spec.id.replace(':', '')}"
+                extra["png"] = output_path(out_dir, stem, ".png")
+        if args.arclength:                  # arc-length traces are not cached
+            from .limits import DEFAULT_STEPS, trace_arclength
+
+            return trace_arclength(scene, spec, case, max_factor,
+                                   args.levels - 1 if args.levels else DEFAULT_STEPS,
+                                   record_poses=record["record_poses"])
+        # field outputs need the solve
+        key = result_key(scene, spec.id, case.name, args.levels, record) \
+            if cache.enabled and not extra else None
+        lp = cache.get(key) if key else None
+        if lp is not None:
+            lp.stats["cached"] = True
+            return lp
+        lp = run_model(scene, spec, case, args.levels, **record, **extra)
+        if key:
+            cache.put(key, lp)
+        return lp
+
     w = max(14, *(len(sp.id) for sp in specs))
+
+    def row(lp) -> None:
+        print(f"{lp.model:<{w}} {lp.load_case:<6} {lp.load[-1]:>9.4g} {lp.load_unit:<2}"
+              f"{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} {lp.displacement[-1]:>10.4f} "
+              f"{math.degrees(lp.rotation[-1]):>9.3f} {_peak_column(lp)} "
+              f"{lp.stats.get('newton_iterations', 0):>6} {lp.seconds:>9.4f} "
+              f"{_valid_cell(lp):>7}")
+        note = _validity_note(lp)
+        if note:
+            print(note)
+        for point in lp.limit_points or []:
+            print(f"{'':<{w}} limit point: load {point['load']:.6g} {lp.load_unit}, "
+                  f"dx {point['dx']:.6g} mm, dy {point['dy']:.6g} mm, "
+                  f"rot {math.degrees(point['rotation']):.6g} deg")
+
     print(f"{'model':<{w}} {'case':<6} {'load':>11} {'dx mm':>10} {'dy mm':>10} {'|d| mm':>10} "
           f"{'rot deg':>9} {'peak MPa':>9} {'at':<12} {'iters':>6} {'seconds':>9} {'valid':>7}")
-    for spec in specs:
-        for case in cases:
-            extra = {}
-            if spec.model_family.has(FIELDS) and fields:
-                extra["vtu_dir"] = out_dir
-                if "png" in fields:
-                    stem = f"{scene.name}_{case.name}_{spec.id.replace(':', '')}"
-                    extra["png"] = output_path(out_dir, stem, ".png")
-            record = {"record_poses": "poses" in scene.outputs,
-                      "record_shapes": "shape" in scene.outputs}
-            # field outputs need the solve; arc-length traces are not cached
-            key = result_key(scene, spec.id, case.name, args.levels, record) \
-                if cache.enabled and not extra and not args.arclength else None
-            lp = cache.get(key) if key else None
-            try:
-                if lp is None and args.arclength:
-                    from .limits import DEFAULT_STEPS, trace_arclength
-
-                    lp = trace_arclength(scene, spec, case, max_factor,
-                                         args.levels - 1 if args.levels else DEFAULT_STEPS,
-                                         record_poses=record["record_poses"])
-                elif lp is None:
-                    lp = run_model(scene, spec, case, args.levels, **record, **extra)
-                    if key:
-                        cache.put(key, lp)
-                else:
-                    lp.stats["cached"] = True
-            except SolverError as exc:
-                print(f"flexval: solver failure: {exc}", file=sys.stderr)
-                if exc.path is not None:
-                    results.append(exc.path)
-                status = EXIT_SOLVER
-                continue
-            results.append(lp)
-            print(f"{lp.model:<{w}} {lp.load_case:<6} {lp.load[-1]:>9.4g} {lp.load_unit:<2}"
-                  f"{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} {lp.displacement[-1]:>10.4f} "
-                  f"{math.degrees(lp.rotation[-1]):>9.3f} {_peak_column(lp)} "
-                  f"{lp.stats.get('newton_iterations', 0):>6} {lp.seconds:>9.4f} "
-                  f"{_valid_cell(lp):>7}")
-            note = _validity_note(lp)
-            if note:
-                print(note)
-            for point in lp.limit_points or []:
-                print(f"{'':<{w}} limit point: load {point['load']:.6g} {lp.load_unit}, "
-                      f"dx {point['dx']:.6g} mm, dy {point['dy']:.6g} mm, "
-                      f"rot {math.degrees(point['rotation']):.6g} deg")
-    if json_path:
-        write_json(json_path, {"scene": scene.name, "results": [p.to_dict() for p in results]})
-    return status
+    return _run_each(specs, cases, run_one, row, scene, json_path)
 
 
 def _run_dynamic(args: argparse.Namespace, scene, specs, cases, json_path) -> int:
     """``run --dynamic``: one time history per model and load case (final values printed)."""
-    from reducedmodels import SolverError
-
     from .dynamic import run_dynamic
 
     massless = scene.mechanism.inertia.massless_bodies(scene.mechanism.moving_bodies)
     if massless:
         print(f"note: bodies without mass data (massless): {', '.join(massless)}")
-    results, status = [], EXIT_OK
+
+    def run_one(spec, case):
+        return run_dynamic(scene, spec, case, args.duration, args.damping_ratio,
+                           args.rayleigh, args.rho_inf, "poses" in scene.outputs)
+
+    def row(lp) -> None:
+        print(f"{lp.model:<14} {lp.load_case:<6} {lp.time[-1]:>9.4g} {lp.load[-1]:>9.4g} "
+              f"{lp.load_unit:<2}{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} "
+              f"{math.degrees(lp.rotation[-1]):>9.3f} {lp.stats['steps']:>6} "
+              f"{lp.stats['rejected_steps']:>8} {lp.seconds:>9.4f}")
+
     print(f"{'model':<14} {'case':<6} {'t s':>9} {'load':>11} {'dx mm':>10} {'dy mm':>10} "
           f"{'rot deg':>9} {'steps':>6} {'rejected':>8} {'seconds':>9}")
-    for spec in specs:
-        for case in cases:
-            try:
-                lp = run_dynamic(scene, spec, case, args.duration, args.damping_ratio,
-                                 args.rayleigh, args.rho_inf, "poses" in scene.outputs)
-            except SolverError as exc:
-                print(f"flexval: solver failure: {exc}", file=sys.stderr)
-                if exc.path is not None:
-                    results.append(exc.path)
-                status = EXIT_SOLVER
-                continue
-            results.append(lp)
-            print(f"{lp.model:<14} {lp.load_case:<6} {lp.time[-1]:>9.4g} {lp.load[-1]:>9.4g} "
-                  f"{lp.load_unit:<2}{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} "
-                  f"{math.degrees(lp.rotation[-1]):>9.3f} {lp.stats['steps']:>6} "
-                  f"{lp.stats['rejected_steps']:>8} {lp.seconds:>9.4f}")
-    if json_path:
-        write_json(json_path, {"scene": scene.name, "results": [p.to_dict() for p in results]})
-    return status
+    return _run_each(specs, cases, run_one, row, scene, json_path)
 
 
 def _valid_cell(lp) -> str:
