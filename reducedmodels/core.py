@@ -47,6 +47,21 @@ def local_hessian(connector: Connector, hessian: np.ndarray) -> np.ndarray | sp.
     return sp.csc_matrix((hessian, pattern), shape=(n, n))
 
 
+def local_hessian_product(connector: Connector, hessian: np.ndarray, x: np.ndarray
+                          ) -> np.ndarray:
+    """``local_hessian(connector, hessian) @ x`` without building the matrix.
+
+    For a connector with a :meth:`~Connector.hessian_pattern` the product is
+    one ``bincount`` over the pattern (a sparse matrix per call costs ten
+    times more on the small connectors of the reduced models).
+    """
+    pattern = connector.hessian_pattern()
+    if pattern is None:
+        return np.asarray(hessian) @ x
+    rows, cols = pattern
+    return np.bincount(rows, weights=hessian * x[cols], minlength=x.size)
+
+
 class SolverError(RuntimeError):
     """The solver could not reach the requested load.
 

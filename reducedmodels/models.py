@@ -18,7 +18,7 @@ from geometry import LoadCase, Mechanism, SceneError
 from geometry.kinematics import rigid_points
 
 from .catalogue import ModelSpec
-from .core import SolverSettings, System, local_hessian
+from .core import SolverSettings, System, local_hessian_product
 from .inertia import with_weights
 from .loadpath import LoadPath
 from .recorder import record_stress, solve_path
@@ -168,17 +168,23 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
         lp.validity.append(reason)
     # section forces of the linear response: K0 dq on the undeformed centre lines
     rest = system.local_states(q0)
+    hessians = [c.evaluate(*r)[2] for c, r in zip(system.connectors, rest)]
 
     def section_gradients(dq_: np.ndarray) -> list[np.ndarray]:
         moved = system.local_states(q0 + dq_)
-        return [local_hessian(c, c.evaluate(*r)[2]) @ (np.concatenate(m) - np.concatenate(r))
-                for c, r, m in zip(system.connectors, rest, moved)]
+        return [local_hessian_product(c, h, np.concatenate(m) - np.concatenate(r))
+                for c, h, r, m in zip(system.connectors, hessians, rest, moved)]
 
-    per_unit, of_weights = section_gradients(dq), section_gradients(dq_dead)
+    per_unit = section_gradients(dq)
     sections = {f.name: f.section for f in mech.flexures}
-    for factor in lam:
-        record_stress(lp, system.connectors, rest, sections, 1.0,
-                      [w + factor * g for w, g in zip(of_weights, per_unit)])
+    if has_weights:
+        of_weights = section_gradients(dq_dead)
+        for factor in lam:
+            record_stress(lp, system.connectors, rest, sections, 1.0,
+                          [w + factor * g for w, g in zip(of_weights, per_unit)])
+    else:                   # section forces proportional to the load
+        for factor in lam:
+            record_stress(lp, system.connectors, rest, sections, factor, per_unit)
     lp.seconds = time.perf_counter() - t0
     return lp
 

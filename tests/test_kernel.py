@@ -131,3 +131,21 @@ def test_arc_length_points_lie_on_the_constraint_in_equilibrium_past_the_limit()
         assert math.sqrt(arc_dot(system, d, d)) == pytest.approx(p.step, rel=1e-6)
         _, g, _ = system.assemble(p.state, loads, p.factor)
         assert system.residual(g, loads) < 1e-7
+
+
+@pytest.mark.parametrize("model", ["dcmm:2", "prbm", "beam:4", "ee"])
+def test_hessian_product_equals_the_assembled_local_hessian(model):
+    """local_hessian_product is the matrix-free form of local_hessian(...) @ x
+    (same pattern values; summation order only, so 1e-12 relative)."""
+    from geometry import load_scene
+    from reducedmodels.core import local_hessian, local_hessian_product
+    from reducedmodels.models import build_system
+
+    system = build_system(load_scene("closed_chain").mechanism, parse_model(model))
+    rng = np.random.default_rng(3)
+    for c, local in zip(system.connectors, system.local_states(system.initial_state())):
+        h = c.evaluate(*local)[2]
+        x = rng.standard_normal(6 + c.n_internal)
+        full = local_hessian(c, h) @ x
+        assert np.allclose(local_hessian_product(c, h, x), full,
+                           rtol=1e-12, atol=1e-12 * np.abs(full).max())
