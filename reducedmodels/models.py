@@ -180,11 +180,10 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
     if has_weights:
         of_weights = section_gradients(dq_dead)
         for factor in lam:
-            record_stress(lp, system.connectors, rest, sections, 1.0,
-                          [w + factor * g for w, g in zip(of_weights, per_unit)])
+            record_stress(lp, system.connectors, rest, sections,
+                          gradients=[w + factor * g for w, g in zip(of_weights, per_unit)])
     else:                   # section forces proportional to the load
-        for factor in lam:
-            record_stress(lp, system.connectors, rest, sections, factor, per_unit)
+        record_stress(lp, system.connectors, rest, sections, lam, per_unit)
     lp.seconds = time.perf_counter() - t0
     return lp
 

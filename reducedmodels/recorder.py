@@ -13,7 +13,7 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 import time
-from typing import Callable, Iterator
+from typing import Callable, Iterator, Sequence
 
 import numpy as np
 
@@ -135,8 +135,8 @@ class PathRecorder:
         return self.finish(), last
 
 
-def record_stress(path: LoadPath, connectors, states, sections: dict, scale: float = 1.0,
-                  gradients=None) -> None:
+def record_stress(path: LoadPath, connectors, states, sections: dict,
+                  scales: Sequence[float] = (1.0,), gradients=None) -> None:
     """Append each flexure's peak outer-fibre stress (MPa) and its place to ``path``.
 
     Connectors whose :meth:`~reducedmodels.connector.Connector.section_forces`
@@ -149,8 +149,10 @@ def record_stress(path: LoadPath, connectors, states, sections: dict, scale: flo
     connectors, states :
         The system's connectors and their local states at the level.
     sections : dict of flexure name -> Section
-    scale : float
-        Factor on the section forces (the load factor of a linear response).
+    scales : sequence of float
+        One level is appended per entry, with the section forces times it:
+        the load factors of a linear response, whose section forces are
+        computed once (default: one level, as they are).
     gradients : list, optional
         Each connector's local gradient if already known (see ``section_forces``).
     """
@@ -160,13 +162,16 @@ def record_stress(path: LoadPath, connectors, states, sections: dict, scale: flo
             *local, gradient=None if gradients is None else gradients[k])
         if forces is None:
             continue
-        sigma = abs(scale) * forces.fibre_stress(section)
-        peak = int(np.argmax(sigma))
+        unit = forces.fibre_stress(section)
+        peak = int(np.argmax(unit))
         if path.peak_stress is None:
             path.peak_stress, path.peak_stress_at, path.stress_profile = {}, {}, {}
-        path.peak_stress.setdefault(c.name, []).append(float(sigma[peak]))
-        path.peak_stress_at.setdefault(c.name, []).append(float(forces.at[peak]))
-        path.stress_profile[c.name] = {"at": forces.at.tolist(), "stress": sigma.tolist()}
+        path.peak_stress.setdefault(c.name, []).extend(float(abs(f) * unit[peak])
+                                                       for f in scales)
+        path.peak_stress_at.setdefault(c.name, []).extend(float(forces.at[peak])
+                                                          for _ in scales)
+        path.stress_profile[c.name] = {"at": forces.at.tolist(),
+                                       "stress": (abs(scales[-1]) * unit).tolist()}
 
 
 def solve_path(system: System, case: LoadCase, levels: int | None = None,
