@@ -78,6 +78,20 @@ class Connector(ABC):
         """Deformed centre line (or representative polyline) as points (m, 2), mm."""
 
     # --- optional, with defaults ----------------------------------------
+    @classmethod
+    def group(cls, connectors: Sequence["Connector"]) -> "ConnectorGroup":
+        """The evaluator of several connectors of this class at once (built once by the core).
+
+        The core evaluates each run of consecutive connectors of one class
+        through the group this returns. Default: a :class:`ConnectorGroup`,
+        which calls :meth:`evaluate` connector by connector. A class whose
+        connectors are cheap but many small array calls each (beam elements)
+        overrides it with one vectorised evaluation of the whole run; its
+        :meth:`evaluate` should then evaluate a group of one, so that there is
+        one implementation.
+        """
+        return ConnectorGroup(connectors)
+
     def initial_internal(self) -> np.ndarray:
         """Internal coordinates in the undeformed configuration (default: zeros)."""
         return np.zeros(self.n_internal)
@@ -186,6 +200,38 @@ class Connector(ABC):
         Default: None, the connector reports no section forces (a pin).
         """
         return None
+
+
+class ConnectorGroup:
+    """Connectors evaluated together: their energies summed, gradients and Hessians concatenated.
+
+    This default evaluates them one by one with :meth:`Connector.evaluate`;
+    a connector class may return a vectorised subclass from
+    :meth:`Connector.group`.
+
+    Parameters
+    ----------
+    connectors : sequence of Connector
+        The connectors, in the order their states are given.
+    """
+
+    def __init__(self, connectors: Sequence[Connector]):
+        self.connectors = tuple(connectors)
+
+    def evaluate(self, states: Sequence[LocalState]) -> tuple[float, np.ndarray, np.ndarray]:
+        """Total energy (N mm), concatenated gradients and concatenated Hessian values.
+
+        ``states`` holds each connector's (pose_a, pose_b, internal), in the
+        order of :attr:`connectors`. The gradients and (raveled) Hessians are
+        those :meth:`Connector.evaluate` returns, one after the other.
+        """
+        energy, grads, hessians = 0.0, [], []
+        for c, local in zip(self.connectors, states):
+            e, g, h = c.evaluate(*local)
+            energy += e
+            grads.append(g)
+            hessians.append(np.ravel(h))
+        return energy, np.concatenate(grads), np.concatenate(hessians)
 
 
 def overrides(connector: Connector, hook: str) -> bool:

@@ -27,7 +27,7 @@ from geometry import LoadCase, Mechanism
 from geometry.loads import MAX_LOAD_SUBSTEPS
 from geometry.kinematics import rigid_points
 
-from .connector import Connector, LocalState, overrides
+from .connector import Connector, ConnectorGroup, LocalState, overrides
 from .loadpath import LoadPath
 from .loads import Loads
 from .tangent import Tangent, TangentLayout
@@ -148,6 +148,7 @@ class System:
                             if c.n_internal and overrides(c, "predict_internal")]
         self._updaters = [k for k, c in enumerate(self.connectors)
                           if c.n_internal and overrides(c, "update_internal")]
+        self._groups = connector_groups(self.connectors)
         self._build_scatter()
 
     def _build_scatter(self) -> None:
@@ -235,17 +236,19 @@ class System:
                  ) -> tuple[float, np.ndarray, Tangent]:
         """Total potential (N mm), its gradient and the tangent at state q and load factor.
 
-        Every connector is evaluated once; the gradients and Hessian values
-        are scattered with the index maps of :meth:`_build_scatter` into the
+        Every connector is evaluated once, each run of consecutive connectors
+        of one class through its :meth:`~Connector.group` (one vectorised
+        call for beams); the gradients and Hessian values are scattered with the index maps of :meth:`_build_scatter` into the
         storage the :class:`~reducedmodels.tangent.TangentLayout` chose.
         """
         energy = 0.0
         grads, hessians = [], []
-        for c, local in zip(self.connectors, self.local_states(q)):
-            e, g, h = c.evaluate(*local)
+        states = self.local_states(q)
+        for group, run in self._groups:
+            e, g, h = group.evaluate(states[run])
             energy += e
             grads.append(g)
-            hessians.append(h.ravel())
+            hessians.append(h)
         n = self.n_dofs
         grad = (np.bincount(self._grad_dofs, weights=np.concatenate(grads)[self._grad_keep],
                             minlength=n) if grads else np.zeros(n))
@@ -352,6 +355,21 @@ class System:
         return np.where(self.is_rotation, v, v / self.size)
 
 
+
+
+def connector_groups(connectors: Sequence[Connector]) -> list[tuple[ConnectorGroup, slice]]:
+    """The runs of consecutive connectors of one class, each with its group and its slice.
+
+    Runs keep the connectors' order, so the concatenated gradients and
+    Hessians are the same as evaluated one by one.
+    """
+    groups, start = [], 0
+    for stop in range(1, len(connectors) + 1):
+        if stop == len(connectors) or type(connectors[stop]) is not type(connectors[start]):
+            run = slice(start, stop)
+            groups.append((type(connectors[start]).group(connectors[run]), run))
+            start = stop
+    return groups
 
 
 def lagrange_weights(factors: Sequence[float], factor: float) -> list[float]:
