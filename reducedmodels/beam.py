@@ -50,7 +50,7 @@ from typing import Sequence
 import numpy as np
 
 from geometry import Flexure, Mechanism
-from geometry.kinematics import body_point, rotate_xy
+from geometry.kinematics import rotate_xy
 
 from .connector import Connector, ConnectorGroup, LocalState
 from .validity import MAX_CHORD_TURN, MAX_STRAIN, rotation_reasons, stretch_reasons
@@ -227,6 +227,18 @@ def attach_to_bodies(grad: np.ndarray, hess: np.ndarray, elements: np.ndarray, s
     hess[elements, th, th] += geometric
 
 
+def end_node(pose: np.ndarray, rel: tuple[float, float]) -> tuple[float, float, float, float, float]:
+    """(x, y, theta, dx/dtheta) of a flexure's end node on a body at ``pose``, mm and rad.
+
+    The node is the body's material point at initial offset ``rel`` (mm) from
+    its reference point: x = p + R(theta) rel, theta_node = theta, and
+    dx/dtheta = J R(theta) rel. Plain floats: a few nodes per flexure.
+    """
+    angle = float(pose[2])
+    rx, ry = rotate_xy(angle, rel[0], rel[1])
+    return float(pose[0]) + rx, float(pose[1]) + ry, angle, -ry, rx
+
+
 class BeamGroup(ConnectorGroup):
     """Beam connectors evaluated together: all their elements in one vectorised call.
 
@@ -263,7 +275,7 @@ class BeamGroup(ConnectorGroup):
         self._dofs = np.concatenate([c._element_dofs + offset for c, offset
                                      in zip(self.connectors, local_start)]).ravel()
         # (slot of the pose in the local state, offset rel) of each end node, start then end
-        self._end_bodies = [(c._end_pose[k], (float(c._end_rel[k][0]), float(c._end_rel[k][1])))
+        self._end_bodies = [(c._end_pose[k], c._end_offsets[k])
                             for c in self.connectors for k in (0, 1)]
 
     def evaluate(self, states: Sequence[LocalState]) -> tuple[float, np.ndarray, np.ndarray]:
@@ -273,14 +285,8 @@ class BeamGroup(ConnectorGroup):
         internal forces conjugate to [pose_a, pose_b, internal] (N, N mm)
         and the values of its :meth:`~BeamConnector.hessian_pattern`.
         """
-        ends = []                               # (x, y, theta, dx/dtheta) of every end node
-        for (slot, (rx0, ry0)), local in zip(self._end_bodies,
-                                             (s for s in states for _ in (0, 1))):
-            pose = local[slot]
-            angle = float(pose[2])
-            rx, ry = rotate_xy(angle, rx0, ry0)
-            ends.append((float(pose[0]) + rx, float(pose[1]) + ry, angle, -ry, rx))
-        ends = np.array(ends)
+        ends = np.array([end_node(local[slot], rel) for (slot, rel), local
+                         in zip(self._end_bodies, (s for s in states for _ in (0, 1)))])
         x = np.empty((self._n_nodes, 2))
         theta = np.empty(self._n_nodes)
         inner = np.concatenate([s[2] for s in states]).reshape(-1, 3)
@@ -346,6 +352,7 @@ class BeamConnector(Connector):
         self._end_rel = np.array([
             self._nodes0[0] - mechanism.bodies[flexure.start_body].reference,
             self._nodes0[-1] - mechanism.bodies[flexure.end_body].reference])
+        self._end_offsets = tuple((float(rel[0]), float(rel[1])) for rel in self._end_rel)
         self._area, self._arc_length = flexure.section.area, flexure.shape.length
         self._element_dofs = self._element_dof_table()
         self._rows = np.repeat(self._element_dofs, 6, axis=1).ravel()
@@ -393,17 +400,16 @@ class BeamConnector(Connector):
         return np.tile([False, False, True], self.n_internal // 3)
 
     def _nodes(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
-        """Current node positions (N + 1, 2), rotations (N + 1,) and the end bodies' poses."""
-        poses = (np.asarray(pose_a, float), np.asarray(pose_b, float))
-        start, end = poses[self._end_pose[0]], poses[self._end_pose[1]]
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """Current node positions (N + 1, 2) and rotations (N + 1,), mm and rad."""
+        poses = (pose_a, pose_b)
         x = np.empty((self._n_nodes, 2))
         theta = np.empty(self._n_nodes)
         inner = np.asarray(internal, float).reshape(-1, 3)
         x[1:-1], theta[1:-1] = inner[:, :2], inner[:, 2]
-        x[0], theta[0] = body_point(start, self._end_rel[0])[0], start[2]
-        x[-1], theta[-1] = body_point(end, self._end_rel[1])[0], end[2]
-        return x, theta, (start, end)
+        for node, slot, rel in zip((0, -1), self._end_pose, self._end_offsets):
+            x[node, 0], x[node, 1], theta[node], _, _ = end_node(poses[slot], rel)
+        return x, theta
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         """Local (rows, cols) of the Hessian values :meth:`evaluate` returns (duplicates sum)."""
@@ -438,7 +444,7 @@ class BeamConnector(Connector):
         axial stiffness turns that O(h^2) error into forces far larger than
         the load (tens of Newton iterations on slender flexures).
         """
-        nodes = [self._nodes(*state)[:2] for state in states]
+        nodes = [self._nodes(*state) for state in states]
         chords = [np.diff(x, axis=0) for x, _ in nodes]
         angle_last = np.arctan2(chords[-1][:, 1], chords[-1][:, 0])
         length = np.zeros(len(self._l0))
@@ -449,7 +455,7 @@ class BeamConnector(Connector):
             turn += w * wrap_angle(np.arctan2(d[:, 1], d[:, 0]) - angle_last)
             theta += w * th
         poses = (pose_a, pose_b)
-        start, end = (body_point(np.asarray(poses[self._end_pose[k]], float), self._end_rel[k])[0]
+        start, end = (np.array(end_node(poses[self._end_pose[k]], self._end_offsets[k])[:2])
                       for k in (0, 1))
         return self._closed_chain(length, angle_last + turn, start, end, theta)
 
@@ -466,7 +472,7 @@ class BeamConnector(Connector):
         (turn)^2 / 2, which EA would turn into spurious forces.
         """
         x_old = self._nodes(*old)[0]
-        x_new, theta, _ = self._nodes(*new)
+        x_new, theta = self._nodes(*new)
         d_old, d_new = np.diff(x_old, axis=0), np.diff(x_new, axis=0)
         length = np.hypot(d_old[:, 0], d_old[:, 1])
         tangent = d_old / length[:, None]
@@ -502,7 +508,7 @@ class BeamConnector(Connector):
         See :mod:`reducedmodels.validity`: the first is material strain, the
         second an element too coarse for the curvature it carries.
         """
-        x, theta, _ = self._nodes(pose_a, pose_b, internal)
+        x, theta = self._nodes(pose_a, pose_b, internal)
         d = x[1:] - x[:-1]
         length = np.hypot(d[:, 0], d[:, 1])
         alpha = chord_rotation(self._chord0, d)
@@ -527,7 +533,7 @@ class BeamConnector(Connector):
         node's rotation. ``gradient`` (a linear response's K0 dq) gives the
         forces by statics of the end wrench instead, along the nodes.
         """
-        x, theta, _ = self._nodes(pose_a, pose_b, internal)
+        x, theta = self._nodes(pose_a, pose_b, internal)
         axes = unit_vectors(self._node_tangent0 + theta)
         if gradient is not None:
             slot = self._end_pose[1]
