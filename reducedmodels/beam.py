@@ -277,13 +277,14 @@ class BeamGroup(ConnectorGroup):
         # (slot of the pose in the local state, offset rel) of each end node, start then end
         self._end_bodies = [(c._end_pose[k], c._end_offsets[k])
                             for c in self.connectors for k in (0, 1)]
+        # each connector with its elements' and its nodes' slices
+        self._chains = [(c, slice(e, e + n - 1), slice(s, s + n)) for c, e, s, n
+                        in zip(self.connectors, element_start, node_start, n_nodes)]
 
-    def evaluate(self, states: Sequence[LocalState]) -> tuple[float, np.ndarray, np.ndarray]:
-        """Total strain energy (N mm), concatenated gradients and Hessian values.
+    def _nodes(self, states: Sequence[LocalState]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every flexure's node positions (n, 2) mm, rotations (n,) rad, end nodes' dx/dtheta.
 
-        Per connector, as :meth:`BeamConnector.evaluate` documents: the
-        internal forces conjugate to [pose_a, pose_b, internal] (N, N mm)
-        and the values of its :meth:`~BeamConnector.hessian_pattern`.
+        The last, (connectors, 2, 2) mm: at each flexure's start and end node.
         """
         ends = np.array([end_node(local[slot], rel) for (slot, rel), local
                          in zip(self._end_bodies, (s for s in states for _ in (0, 1)))])
@@ -292,10 +293,64 @@ class BeamGroup(ConnectorGroup):
         inner = np.concatenate([s[2] for s in states]).reshape(-1, 3)
         x[self._inner], theta[self._inner] = inner[:, :2], inner[:, 2]
         x[self._ends], theta[self._ends] = ends[:, :2], ends[:, 2]
+        return x, theta, ends[:, 3:].reshape(-1, 2, 2)
+
+    def predict_internal(self, past: Sequence[Sequence[LocalState]], weights: Sequence[float],
+                         poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+        """Concatenated interior nodes extrapolated in chord lengths and angles.
+
+        As :meth:`BeamConnector.predict_internal` documents, for every
+        flexure at once (the chains are closed flexure by flexure).
+        """
+        nodes = [self._nodes(states)[:2] for states in past]
+        chords = [x[self._second] - x[self._first] for x, _ in nodes]
+        angle_last = np.arctan2(chords[-1][:, 1], chords[-1][:, 0])
+        length = np.zeros(len(self._l0))
+        turn = np.zeros(len(self._l0))
+        theta = np.zeros(self._n_nodes)
+        for w, d, (_, th) in zip(weights, chords, nodes):
+            length += w * np.hypot(d[:, 0], d[:, 1])
+            turn += w * wrap_angle(np.arctan2(d[:, 1], d[:, 0]) - angle_last)
+            theta += w * th
+        angle = angle_last + turn
+        ends = np.array([end_node(pose[slot], rel)[:2] for (slot, rel), pose
+                         in zip(self._end_bodies, (p for p in poses for _ in (0, 1)))])
+        return np.concatenate([
+            c._closed_chain(length[e], angle[e], ends[2 * k], ends[2 * k + 1], theta[n])
+            for k, (c, e, n) in enumerate(self._chains)])
+
+    def update_internal(self, old: Sequence[LocalState], new: Sequence[LocalState]
+                        ) -> np.ndarray:
+        """Concatenated interior nodes after a Newton correction, chords turned, not sheared.
+
+        As :meth:`BeamConnector.update_internal` documents, for every flexure
+        at once (the chains are closed flexure by flexure).
+        """
+        x_old = self._nodes(old)[0]
+        x_new, theta, _ = self._nodes(new)
+        d_old = x_old[self._second] - x_old[self._first]
+        d_new = x_new[self._second] - x_new[self._first]
+        length = np.hypot(d_old[:, 0], d_old[:, 1])
+        tangent = d_old / length[:, None]
+        change = d_new - d_old
+        stretch = np.einsum("ij,ij->i", tangent, change)
+        turn = (tangent[:, 0] * change[:, 1] - tangent[:, 1] * change[:, 0]) / length
+        angle = np.arctan2(tangent[:, 1], tangent[:, 0]) + turn
+        return np.concatenate([
+            c._closed_chain(length[e] + stretch[e], angle[e], x_new[n.start], x_new[n.stop - 1],
+                            theta[n]) for c, e, n in self._chains])
+
+    def evaluate(self, states: Sequence[LocalState]) -> tuple[float, np.ndarray, np.ndarray]:
+        """Total strain energy (N mm), concatenated gradients and Hessian values.
+
+        Per connector, as :meth:`BeamConnector.evaluate` documents: the
+        internal forces conjugate to [pose_a, pose_b, internal] (N, N mm)
+        and the values of its :meth:`~BeamConnector.hessian_pattern`.
+        """
+        x, theta, tangents = self._nodes(states)
         energy, grad, hess = corotational_elements(
             x[self._first], x[self._second], theta[self._first], theta[self._second],
             self._chord0, self._l0, self._k_axial, self._k11, self._k12)
-        tangents = ends[:, 3:].reshape(-1, 2, 2)
         square = hess.reshape(-1, 6, 6)
         attach_to_bodies(grad, square, self._start_elements, 0, tangents[:, 0])
         attach_to_bodies(grad, square, self._end_elements, 3, tangents[:, 1])
@@ -444,20 +499,8 @@ class BeamConnector(Connector):
         axial stiffness turns that O(h^2) error into forces far larger than
         the load (tens of Newton iterations on slender flexures).
         """
-        nodes = [self._nodes(*state) for state in states]
-        chords = [np.diff(x, axis=0) for x, _ in nodes]
-        angle_last = np.arctan2(chords[-1][:, 1], chords[-1][:, 0])
-        length = np.zeros(len(self._l0))
-        turn = np.zeros(len(self._l0))
-        theta = np.zeros(self._n_nodes)
-        for w, d, (_, th) in zip(weights, chords, nodes):
-            length += w * np.hypot(d[:, 0], d[:, 1])
-            turn += w * wrap_angle(np.arctan2(d[:, 1], d[:, 0]) - angle_last)
-            theta += w * th
-        poses = (pose_a, pose_b)
-        start, end = (np.array(end_node(poses[self._end_pose[k]], self._end_offsets[k])[:2])
-                      for k in (0, 1))
-        return self._closed_chain(length, angle_last + turn, start, end, theta)
+        return self._alone.predict_internal([[state] for state in states], weights,
+                                            [(pose_a, pose_b)])
 
     def update_internal(self, old: LocalState, new: LocalState) -> np.ndarray:
         """Interior nodes after a Newton correction, with chords turned instead of sheared.
@@ -471,16 +514,7 @@ class BeamConnector(Connector):
         convergence, but a turning chord no longer comes out stretched by
         (turn)^2 / 2, which EA would turn into spurious forces.
         """
-        x_old = self._nodes(*old)[0]
-        x_new, theta = self._nodes(*new)
-        d_old, d_new = np.diff(x_old, axis=0), np.diff(x_new, axis=0)
-        length = np.hypot(d_old[:, 0], d_old[:, 1])
-        tangent = d_old / length[:, None]
-        change = d_new - d_old
-        stretch = np.einsum("ij,ij->i", tangent, change)
-        turn = (tangent[:, 0] * change[:, 1] - tangent[:, 1] * change[:, 0]) / length
-        angle = np.arctan2(tangent[:, 1], tangent[:, 0]) + turn
-        return self._closed_chain(length + stretch, angle, x_new[0], x_new[-1], theta)
+        return self._alone.update_internal([old], [new])
 
     def _closed_chain(self, length: np.ndarray, angle: np.ndarray, start: np.ndarray,
                       end: np.ndarray, theta: np.ndarray) -> np.ndarray:

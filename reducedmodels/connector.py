@@ -233,6 +233,27 @@ class ConnectorGroup:
             hessians.append(np.ravel(h))
         return energy, np.concatenate(grads), np.concatenate(hessians)
 
+    def predict_internal(self, past: Sequence[Sequence[LocalState]], weights: Sequence[float],
+                         poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+        """The connectors' predicted internal coordinates for the next load step, concatenated.
+
+        ``past`` holds, for each converged state (oldest first), the
+        connectors' local states; ``poses`` each connector's predicted
+        (pose_a, pose_b); see :meth:`Connector.predict_internal`.
+        """
+        return np.concatenate([c.predict_internal([states[k] for states in past], weights, *pose)
+                               for k, (c, pose) in enumerate(zip(self.connectors, poses))])
+
+    def update_internal(self, old: Sequence[LocalState], new: Sequence[LocalState]
+                        ) -> np.ndarray:
+        """The connectors' internal coordinates after a Newton correction, concatenated.
+
+        ``old`` and ``new`` hold each connector's local state before and
+        after the linear update (see :meth:`Connector.update_internal`).
+        """
+        return np.concatenate([c.update_internal(o, n)
+                               for c, o, n in zip(self.connectors, old, new)])
+
 
 def overrides(connector: Connector, hook: str) -> bool:
     """True if ``connector``'s class replaces the base class's default ``hook``.

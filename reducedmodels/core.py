@@ -142,13 +142,16 @@ class System:
         self.n_multipliers = sum(c.n_multipliers for c in self.connectors)
         #: residual weights: forces as is, moments per unit of mechanism size (N)
         self.force_scale = np.where(self.is_rotation, 1.0 / self.size, 1.0)
-        # connectors that predict or update their internal coordinates themselves
-        # (the defaults give what the core computes for every coordinate anyway)
-        self._predictors = [k for k, c in enumerate(self.connectors)
-                            if c.n_internal and overrides(c, "predict_internal")]
-        self._updaters = [k for k, c in enumerate(self.connectors)
-                          if c.n_internal and overrides(c, "update_internal")]
         self._groups = connector_groups(self.connectors)
+        # groups of connectors that predict or update their internal coordinates
+        # themselves, with those coordinates' global dofs (the defaults give what
+        # the core computes for every coordinate anyway)
+        self._predictors, self._updaters = (
+            [(group, run, np.concatenate([idx[6:] for idx in self._local_to_global[run]]))
+             for group, run in self._groups
+             if overrides(group.connectors[0], hook)
+             and sum(c.n_internal for c in group.connectors)]
+            for hook in ("predict_internal", "update_internal"))
         self._build_scatter()
 
     def _build_scatter(self) -> None:
@@ -290,9 +293,8 @@ class System:
         new = q + du
         if self._updaters:
             before, after = self.local_states(q), self.local_states(new)
-            for k in self._updaters:
-                new[self._local_to_global[k][6:]] = self.connectors[k].update_internal(
-                    before[k], after[k])
+            for group, run, internal in self._updaters:
+                new[internal] = group.update_internal(before[run], after[run])
         return new
 
     def predict(self, history: Sequence[tuple[np.ndarray, float]], factor: float) -> np.ndarray:
@@ -312,9 +314,9 @@ class System:
         if self._predictors:
             past = [self.local_states(q) for q, _ in history]
             now = self.local_states(guess)
-            for k in self._predictors:
-                guess[self._local_to_global[k][6:]] = self.connectors[k].predict_internal(
-                    [p[k] for p in past], weights, now[k][0], now[k][1])
+            for group, run, internal in self._predictors:
+                guess[internal] = group.predict_internal([p[run] for p in past], weights,
+                                                         [state[:2] for state in now[run]])
         return guess
 
     def validity(self, q: np.ndarray) -> list[str]:
