@@ -20,6 +20,7 @@ import statistics
 import time
 
 from geometry import MassData, load_scene
+from geometry.inertia import PLA_DENSITY
 from geometry.timelaw import TimeLaw
 from reducedmodels.catalogue import parse_model
 from reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
@@ -28,7 +29,6 @@ from reducedmodels.modes import natural_modes
 from reducedmodels.recorder import solve_path
 
 MODELS = ("dcmm:1", "dcmm:2", "prbm", "beam:20", "beam:100")
-PLA_DENSITY = 1.24e-9          # t/mm^3
 RAMP_PERIODS, HOLD_PERIODS = 40.0, 10.0
 
 

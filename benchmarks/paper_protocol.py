@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from geometry import LoadCase, MassData, Scene, load_scene
+from geometry.inertia import PLA_DENSITY
 from geometry.timelaw import TimeLaw
 from reducedmodels.catalogue import parse_model
 from reducedmodels.core import SolverError, System
@@ -49,7 +50,6 @@ from reducedmodels.recorder import solve_path
 from validation.compare import errors, paper_percent
 from validation.outputs import write_text
 
-PLA_DENSITY = 1.24e-9
 """t/mm^3: the flexures' density when the scene has no mass data."""
 RHO_INF = 0.9
 """Spectral radius at infinite frequency of the generalised-alpha scheme (as ``flexval run``)."""

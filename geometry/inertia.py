@@ -30,6 +30,9 @@ import numpy as np
 
 from .magnitudes import SMALLEST_NORMAL
 
+PLA_DENSITY = 1.24e-9
+"""Density of PLA, t/mm^3 (1240 kg/m^3): the default of studies on scenes without mass data."""
+
 MASS_KEYS = frozenset({"mass", "inertia", "center_of_mass", "outline", "depth"})
 """Fields of a ``[[bodies]]`` table that describe its mass."""
 

@@ -23,6 +23,7 @@ import numpy as np
 from scipy.sparse.linalg import ArpackError
 
 from geometry import LoadCase, Moment, Scene, SceneError
+from geometry.inertia import PLA_DENSITY
 from reducedmodels import SolverError
 from reducedmodels.catalogue import parse_model
 
@@ -30,7 +31,7 @@ from .failures import Failure
 from .modes import run_modes, with_density
 
 #: flexure density (t/mm^3) of a scene that gives none: PLA, as in the README's frequency table
-DEFAULT_DENSITY = 1.24e-9
+DEFAULT_DENSITY = PLA_DENSITY
 #: how many of the lowest natural frequencies the report tabulates
 MODE_COUNT = 4
 
