@@ -158,6 +158,25 @@ def _threshold_lines(ax, horizontal: bool = True) -> None:
         (ax.axhline if horizontal else ax.axvline)(t, color="grey", ls=style, lw=0.8)
 
 
+def _error_axes(ax, xlabel: str, ylabel: str) -> None:
+    """An error axis (percent, log scale) with the 1 % / 5 % threshold lines."""
+    _threshold_lines(ax)
+    ax.set_yscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+
+
+def _finish(fig, axs, path: Path) -> None:
+    """Legend on the first panel, layout, atomic save, figure closed."""
+    import matplotlib.pyplot as plt
+
+    axs[0][0].legend(fontsize=7)
+    fig.tight_layout()
+    _save(fig, path)
+    plt.close(fig)
+
+
 def _lines(sweep: Sweep, rows: list[dict], path: Path) -> None:
     import matplotlib.pyplot as plt
 
@@ -174,16 +193,10 @@ def _lines(sweep: Sweep, rows: list[dict], path: Path) -> None:
                 x, y = zip(*pts)
                 ax.plot(x, np.maximum(y, 1e-6), "o" if axis and axis.random else "o-",
                         ms=3, label=spec.id)
-        _threshold_lines(ax)
-        ax.set_yscale("log")
         ax.set_title(f"load case {case}")
-        ax.set_xlabel(axis.path if axis else "point")
-        ax.set_ylabel(f"{sweep.metric} error vs {sweep.reference.id} (%)")
-        ax.grid(alpha=0.3)
-    axs[0][0].legend(fontsize=7)
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
+        _error_axes(ax, axis.path if axis else "point",
+                    f"{sweep.metric} error vs {sweep.reference.id} (%)")
+    _finish(fig, axs, path)
 
 
 def _heatmaps(sweep: Sweep, metrics: dict, path: Path) -> None:
@@ -237,15 +250,8 @@ def _scatter(sweep: Sweep, metrics: dict, path: Path) -> None:
             if pts:
                 px, py = zip(*pts)
                 ax.plot(px, np.maximum(py, 1e-6), ".", ms=3, label=model)
-        _threshold_lines(ax)
-        ax.set_yscale("log")
-        ax.set_xlabel(a.path)
-        ax.set_ylabel(f"{sweep.metric} error (%)")
-        ax.grid(alpha=0.3)
-    axs[0][0].legend(fontsize=7)
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
+        _error_axes(ax, a.path, f"{sweep.metric} error (%)")
+    _finish(fig, axs, path)
 
 
 def _runtimes(sweep: Sweep, rows: list[dict], path: Path) -> None:
