@@ -18,13 +18,15 @@ built once, only the rotation coefficients change. Units: mm, N, N mm, rad.
 
 from __future__ import annotations
 
+from typing import Sequence
+
 import numpy as np
 import scipy.sparse as sp
 
 from geometry import Flexure, Mechanism
 from geometry.kinematics import rigid_points
 from geometry.mesh import FlexureMesh, mesh_flexure
-from reducedmodels.connector import Connector
+from reducedmodels.connector import Connector, LocalState
 from reducedmodels.inertia import MassPoints
 from reducedmodels.validity import MIN_DET_F, stretch_reasons
 from reducedmodels.sections import (SectionForces, polyline_axes, polyline_fractions,
@@ -32,6 +34,7 @@ from reducedmodels.sections import (SectionForces, polyline_axes, polyline_fract
 
 from .mass import node_jacobian, scalar_mass
 from .material import make_law
+from .polar import cross_sections, extrapolate, from_polar, to_polar
 from .solid import Solid
 
 
@@ -75,6 +78,7 @@ class ContinuumConnector(Connector):
         self._centre_fractions = polyline_fractions(self.mesh.nodes[self.mesh.centre_line])
         self.n_internal = 2 * self._free.size
         self._n = 6 + self.n_internal
+        self._sections = cross_sections(self.mesh)
         self._build_expansion(role)
 
     # --- the fixed index structure of T ------------------------------------
@@ -152,6 +156,21 @@ class ContinuumConnector(Connector):
         t, p, q = self._mixed
         hess = np.concatenate([ke[self._plain_src], ke[t] * coef[p] * coef[q], second])
         return energy, grad, hess
+
+    def predict_internal(self, states: Sequence[LocalState], weights: Sequence[float],
+                         pose_a: np.ndarray, pose_b: np.ndarray) -> np.ndarray:
+        """Interior nodes extrapolated section by section (mm; the load stepping's predictor).
+
+        Chord lengths and directions between the section centres, section
+        rotations and the nodes' offsets in their section's frame are
+        extrapolated with ``weights`` over the converged ``states``
+        (:mod:`.polar`), and the sections are rebuilt between the end faces
+        at the bodies' predicted poses ``pose_a``, ``pose_b``.
+        """
+        shape = extrapolate([to_polar(self.positions(*state), self._sections) for state in states],
+                            weights)
+        x = from_polar(shape, self._sections, self.positions(pose_a, pose_b, states[-1][2]))
+        return (x[self._free] - self.mesh.nodes[self._free]).ravel()
 
     def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
                  ) -> list[str]:
