@@ -31,9 +31,10 @@ The local energy is
 or, with ``shear=True``, the Timoshenko beam's condensed bending stiffness
 k_b = EI / (l0 (1 + phi)) [[4 + phi, 2 - phi], [2 - phi, 4 + phi]] with
 phi = 12 EI / (kappa G A l0^2), kappa = 5/6. Gradient and tangent are
-exact (material plus geometric parts), all elements are evaluated at once
-with numpy, and the Hessian is returned as the values of a fixed sparse
-pattern.
+exact (material plus geometric parts); the elements of all flexures are
+evaluated in one compiled call (:mod:`reducedmodels.beamkernel`), which adds
+them straight into the global gradient and tangent, and a connector's own
+Hessian is the values of a fixed sparse pattern.
 
 Accuracy: the elements bend over their chords, so an arc's bending length
 is the chord polygon's, shorter than the arc by ~(width/N)^2 / 24; end
@@ -45,7 +46,9 @@ Units: mm, N, MPa, N mm, rad.
 
 from __future__ import annotations
 
-from typing import Sequence
+import functools
+from types import ModuleType
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -62,14 +65,22 @@ SHEAR_CORRECTION = 5.0 / 6.0
 """Timoshenko shear coefficient kappa of a rectangular section."""
 
 
-def _tangent_layout() -> tuple[np.ndarray, np.ndarray]:
+@functools.cache
+def beam_kernels() -> ModuleType:
+    """:mod:`reducedmodels.beamkernel`, imported on first use (importing numba takes ~0.5 s)."""
+    from . import beamkernel
+
+    return beamkernel
+
+
+def tangent_layout() -> tuple[np.ndarray, np.ndarray]:
     """Where each entry of a row-major 6x6 element tangent comes from: (source, sign), (36,) each.
 
     In element coordinates [x1, y1, theta1, x2, y2, theta2] the tangent is,
     by node and dof kind, [[A, w, -A, w], [w^T, k11, -w^T, k12],
     [-A, -w, A, -w], [w^T, k12, -w^T, k11]] with A symmetric 2x2, so every
-    entry is +- one of the independent entries [Axx, Axy, Ayy, wx, wy, k11, k12].
-    (A gather, not a matrix product: small BLAS calls thrash under load.)
+    entry is +- one of the independent entries [Axx, Axy, Ayy, wx, wy, k11, k12]
+    (:func:`reducedmodels.beamkernel.element`).
     """
     source = np.empty((6, 6), dtype=np.intp)
     sign = np.ones((6, 6))
@@ -86,7 +97,7 @@ def _tangent_layout() -> tuple[np.ndarray, np.ndarray]:
     return source.ravel(), sign.ravel()
 
 
-_SOURCE, _SIGN = _tangent_layout()
+_SOURCE, _SIGN = tangent_layout()
 
 
 def wrap_angle(angle: np.ndarray) -> np.ndarray:
@@ -121,112 +132,6 @@ def chord_rotation(chord0: np.ndarray, d: np.ndarray) -> np.ndarray:
                       chord0[:, 0] * d[:, 0] + chord0[:, 1] * d[:, 1])
 
 
-def corotational_elements(x1: np.ndarray, x2: np.ndarray, theta1: np.ndarray,
-                          theta2: np.ndarray, chord0: np.ndarray, l0: np.ndarray,
-                          k_axial: np.ndarray, k11: np.ndarray, k12: np.ndarray
-                          ) -> tuple[float, np.ndarray, np.ndarray]:
-    """Energy, gradients and tangents of n corotational beam elements.
-
-    Element e joins its first node (x1[e], theta1[e]) to its second
-    (x2[e], theta2[e]); its coordinates are [x_1, y_1, theta_1, x_2, y_2,
-    theta_2]. (For a chain of nodes x, x1 = x[:-1] and x2 = x[1:].)
-
-    Parameters
-    ----------
-    x1, x2 : array (n, 2)
-        Current positions of the elements' first and second nodes, mm.
-    theta1, theta2 : array (n,)
-        Their rotation increments from the initial configuration, rad.
-    chord0 : array (n, 2)
-        Initial unit chord vectors.
-    l0 : array (n,)
-        Initial chord lengths, mm.
-    k_axial, k11, k12 : array (n,)
-        EA / l0 (N/mm) and the entries of k_b (N mm).
-
-    Returns
-    -------
-    energy : float
-        Total strain energy, N mm.
-    grad : array (n, 6)
-        Element internal forces (N, N, N mm per node).
-    hess : array (n, 36)
-        Element consistent tangents, row-major 6x6 each: Crisfield's
-        B^T D B + N z z^T / l + (M1 + M2) (r z^T + z r^T) / l^2 with
-        r = dl/dq, z = l dalpha/dq, written out entry by entry.
-
-    Notes
-    -----
-    With e = (c, s) the current chord direction and n = (-s, c) its normal,
-    node 1 carries the force f = -N e + V n with the shear V = (M1 + M2)/l,
-    node 2 carries -f, and the translational tangent block is
-    A = EA/l0 e e^T + (2 (k11 + k12)/l^2 + N/l) n n^T + (M1 + M2)/l^2 (e n^T + n e^T).
-    """
-    d = x2 - x1
-    length = np.hypot(d[:, 0], d[:, 1])
-    c, s = d[:, 0] / length, d[:, 1] / length
-    alpha = chord_rotation(chord0, d)
-    a1 = wrap_angle(theta1 - alpha)
-    a2 = wrap_angle(theta2 - alpha)
-    u = length - l0
-    axial = k_axial * u
-    m1 = k11 * a1 + k12 * a2
-    m2 = k12 * a1 + k11 * a2
-    energy = 0.5 * float(np.sum(axial * u + m1 * a1 + m2 * a2))
-
-    shear = (m1 + m2) / length
-    fx, fy = -axial * c - shear * s, -axial * s + shear * c
-    grad = np.empty((len(l0), 6))          # (filled through its transpose: np.column_stack
-    grad.T[:] = (fx, fy, m1, -fx, -fy, m2)  # costs 5-10 times more on short arrays)
-
-    # A in double-angle form: cos 2b = c^2 - s^2, sin 2b = 2 c s
-    k_normal = 2.0 * (k11 + k12) / length**2 + axial / length
-    k_cross = shear / length
-    k_rot = (k11 + k12) / length
-    cos2, sin2 = c * c - s * s, 2.0 * c * s
-    mean, half = 0.5 * (k_axial + k_normal), 0.5 * (k_axial - k_normal)
-    diagonal = half * cos2 - k_cross * sin2
-    entries = np.array([mean + diagonal, half * sin2 + k_cross * cos2, mean - diagonal,
-                        -k_rot * s, k_rot * c, k11, k12])                   # (7, n)
-    hess = np.empty((len(l0), 36))          # C order: callers reshape rows (6, 6) in place
-    np.multiply(entries[_SOURCE].T, _SIGN, out=hess)
-    return energy, grad, hess
-
-
-def attach_to_bodies(grad: np.ndarray, hess: np.ndarray, elements: np.ndarray, slot: int,
-                     tangent: np.ndarray) -> None:
-    """Transport end-node forces and tangents of some elements to rigid bodies' poses, in place.
-
-    Each such node is its body's material point x = p + R(theta) rel (rel:
-    its initial offset from the body's reference point, mm) and turns with
-    it: theta_node = theta. With T = d node / d pose (identity except
-    dx/dtheta = t = J R(theta) rel) the chain rule gives g <- T^T g and
-    K <- T^T K T + (g_xy . d^2x/dtheta^2) e_theta e_theta^T, where
-    d^2x/dtheta^2 = -R(theta) rel.
-
-    Parameters
-    ----------
-    grad : array (n, 6)
-        Element gradients; the node's rotation entries are updated.
-    hess : array (n, 6, 6)
-        Element tangents; the node's rotation rows and columns are updated.
-    elements : int array (m,)
-        The elements whose node is attached (distinct).
-    slot : int
-        First entry of that node in the element vector (0 or 3).
-    tangent : array (m, 2)
-        t = dx/dtheta of each attached node, mm.
-    """
-    t0, t1 = tangent[:, 0], tangent[:, 1]
-    x, y, th = slot, slot + 1, slot + 2
-    gx, gy = grad[elements, x], grad[elements, y]
-    geometric = -(gx * t1 - gy * t0)                    # g_xy . (-R rel), with R rel = -J t
-    grad[elements, th] += t0 * gx + t1 * gy
-    hess[elements, th, :] += t0[:, None] * hess[elements, x, :] + t1[:, None] * hess[elements, y, :]
-    hess[elements, :, th] += t0[:, None] * hess[elements, :, x] + t1[:, None] * hess[elements, :, y]
-    hess[elements, th, th] += geometric
-
-
 def end_node(pose: np.ndarray, rel: tuple[float, float]) -> tuple[float, float, float, float, float]:
     """(x, y, theta, dx/dtheta) of a flexure's end node on a body at ``pose``, mm and rad.
 
@@ -240,13 +145,15 @@ def end_node(pose: np.ndarray, rel: tuple[float, float]) -> tuple[float, float, 
 
 
 class BeamGroup(ConnectorGroup):
-    """Beam connectors evaluated together: all their elements in one vectorised call.
+    """Beam connectors evaluated together: all their elements in one compiled call.
 
-    The elements of every flexure of the run are laid end to end: one
-    corotational kernel call, one transport of the end nodes to their bodies
-    and one scatter of the gradients, instead of some forty small array
-    calls per flexure. The numbers are those of each flexure alone (the same
-    operations, element by element).
+    The elements of every flexure of the run are laid end to end and
+    evaluated by :func:`reducedmodels.beamkernel.assemble_elements`, which
+    also transports the end nodes to their bodies and adds the results where
+    they belong: into the concatenated local gradients and Hessian values
+    (:meth:`evaluate`), or straight into the System's gradient and tangent
+    storage (:meth:`assembler`). The numbers are those of each flexure
+    alone (the same operations, element by element).
 
     Parameters
     ----------
@@ -262,83 +169,45 @@ class BeamGroup(ConnectorGroup):
         self._n_nodes = int(sum(n_nodes))
         self._n_local = int(sum(6 + c.n_internal for c in self.connectors))
         self._first = np.concatenate([s + np.arange(n - 1) for s, n in zip(node_start, n_nodes)])
-        self._second = self._first + 1
-        self._inner = np.concatenate([s + np.arange(1, n - 1)
-                                      for s, n in zip(node_start, n_nodes)]).astype(np.intp)
-        self._ends = np.column_stack([node_start, node_start + np.array(n_nodes) - 1]).ravel()
-        element_start = node_start - np.arange(len(n_nodes))
-        self._start_elements = element_start
-        self._end_elements = element_start + np.array(n_nodes) - 2
+        ends = np.column_stack([node_start, node_start + np.array(n_nodes) - 1]).ravel()
+        self._chain_nodes = np.append(node_start, self._n_nodes).astype(np.int64)
         self._chord0, self._l0, self._k_axial, self._k11, self._k12 = (
             np.concatenate([getattr(c, name) for c in self.connectors])
             for name in ("_chord0", "_l0", "_k_axial", "_k11", "_k12"))
+        # the kernel's node tables in the concatenated local coordinates: where each node's
+        # (x, y, theta) or its body's pose is read, its offset on the body, whether attached
+        self._node_dof = np.concatenate([c._node_dofs[:, 0] + offset for c, offset
+                                         in zip(self.connectors, local_start)]).astype(np.int64)
+        self._node_rel = np.zeros((self._n_nodes, 2))
+        self._node_rel[ends] = [rel for c in self.connectors for rel in c._end_offsets]
+        self._attached = np.zeros(self._n_nodes, bool)
+        self._attached[ends] = True
         self._dofs = np.concatenate([c._element_dofs + offset for c, offset
-                                     in zip(self.connectors, local_start)]).ravel()
-        # (slot of the pose in the local state, offset rel) of each end node, start then end
-        self._end_bodies = [(c._end_pose[k], c._end_offsets[k])
-                            for c in self.connectors for k in (0, 1)]
-        # each connector with its elements' and its nodes' slices
-        self._chains = [(c, slice(e, e + n - 1), slice(s, s + n)) for c, e, s, n
-                        in zip(self.connectors, element_start, node_start, n_nodes)]
+                                     in zip(self.connectors, local_start)]).astype(np.int64)
 
-    def _nodes(self, states: Sequence[LocalState]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Every flexure's node positions (n, 2) mm, rotations (n,) rad, end nodes' dx/dtheta.
+    def _kernel(self, node_dof: np.ndarray, grad_slot: np.ndarray, tangent_slot: np.ndarray
+                ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
+        """``f(coordinates, grad, storage) -> energy``: the element kernel on these index maps."""
+        assemble_elements = beam_kernels().assemble_elements
+        fixed = (np.ascontiguousarray(node_dof, np.int64), self._node_rel, self._attached,
+                 self._first.astype(np.int64), self._chord0, self._l0, self._k_axial, self._k11,
+                 self._k12, _SOURCE.astype(np.int64), _SIGN,
+                 np.ascontiguousarray(grad_slot, np.int64),
+                 np.ascontiguousarray(tangent_slot, np.int64).reshape(-1, 36))
 
-        The last, (connectors, 2, 2) mm: at each flexure's start and end node.
+        def kernel(coordinates: np.ndarray, grad: np.ndarray, storage: np.ndarray) -> float:
+            return assemble_elements(coordinates, *fixed, grad, storage)
+
+        return kernel
+
+    def assembler(self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
+                  ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
+        """The compiled kernel adding every element into the System's gradient and tangent.
+
+        See :meth:`ConnectorGroup.assembler`; a node's (or its body's pose's)
+        three coordinates are consecutive in ``[q, ground pose]``.
         """
-        ends = np.array([end_node(local[slot], rel) for (slot, rel), local
-                         in zip(self._end_bodies, (s for s in states for _ in (0, 1)))])
-        x = np.empty((self._n_nodes, 2))
-        theta = np.empty(self._n_nodes)
-        inner = np.concatenate([s[2] for s in states]).reshape(-1, 3)
-        x[self._inner], theta[self._inner] = inner[:, :2], inner[:, 2]
-        x[self._ends], theta[self._ends] = ends[:, :2], ends[:, 2]
-        return x, theta, ends[:, 3:].reshape(-1, 2, 2)
-
-    def predict_internal(self, past: Sequence[Sequence[LocalState]], weights: Sequence[float],
-                         poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
-        """Concatenated interior nodes extrapolated in chord lengths and angles.
-
-        As :meth:`BeamConnector.predict_internal` documents, for every
-        flexure at once (the chains are closed flexure by flexure).
-        """
-        nodes = [self._nodes(states)[:2] for states in past]
-        chords = [x[self._second] - x[self._first] for x, _ in nodes]
-        angle_last = np.arctan2(chords[-1][:, 1], chords[-1][:, 0])
-        length = np.zeros(len(self._l0))
-        turn = np.zeros(len(self._l0))
-        theta = np.zeros(self._n_nodes)
-        for w, d, (_, th) in zip(weights, chords, nodes):
-            length += w * np.hypot(d[:, 0], d[:, 1])
-            turn += w * wrap_angle(np.arctan2(d[:, 1], d[:, 0]) - angle_last)
-            theta += w * th
-        angle = angle_last + turn
-        ends = np.array([end_node(pose[slot], rel)[:2] for (slot, rel), pose
-                         in zip(self._end_bodies, (p for p in poses for _ in (0, 1)))])
-        return np.concatenate([
-            c._closed_chain(length[e], angle[e], ends[2 * k], ends[2 * k + 1], theta[n])
-            for k, (c, e, n) in enumerate(self._chains)])
-
-    def update_internal(self, old: Sequence[LocalState], new: Sequence[LocalState]
-                        ) -> np.ndarray:
-        """Concatenated interior nodes after a Newton correction, chords turned, not sheared.
-
-        As :meth:`BeamConnector.update_internal` documents, for every flexure
-        at once (the chains are closed flexure by flexure).
-        """
-        x_old = self._nodes(old)[0]
-        x_new, theta, _ = self._nodes(new)
-        d_old = x_old[self._second] - x_old[self._first]
-        d_new = x_new[self._second] - x_new[self._first]
-        length = np.hypot(d_old[:, 0], d_old[:, 1])
-        tangent = d_old / length[:, None]
-        change = d_new - d_old
-        stretch = np.einsum("ij,ij->i", tangent, change)
-        turn = (tangent[:, 0] * change[:, 1] - tangent[:, 1] * change[:, 0]) / length
-        angle = np.arctan2(tangent[:, 1], tangent[:, 0]) + turn
-        return np.concatenate([
-            c._closed_chain(length[e] + stretch[e], angle[e], x_new[n.start], x_new[n.stop - 1],
-                            theta[n]) for c, e, n in self._chains])
+        return self._kernel(gather[self._node_dof], grad_dofs[self._dofs], hess_slots)
 
     def evaluate(self, states: Sequence[LocalState]) -> tuple[float, np.ndarray, np.ndarray]:
         """Total strain energy (N mm), concatenated gradients and Hessian values.
@@ -347,15 +216,39 @@ class BeamGroup(ConnectorGroup):
         internal forces conjugate to [pose_a, pose_b, internal] (N, N mm)
         and the values of its :meth:`~BeamConnector.hessian_pattern`.
         """
-        x, theta, tangents = self._nodes(states)
-        energy, grad, hess = corotational_elements(
-            x[self._first], x[self._second], theta[self._first], theta[self._second],
-            self._chord0, self._l0, self._k_axial, self._k11, self._k12)
-        square = hess.reshape(-1, 6, 6)
-        attach_to_bodies(grad, square, self._start_elements, 0, tangents[:, 0])
-        attach_to_bodies(grad, square, self._end_elements, 3, tangents[:, 1])
-        gradient = np.bincount(self._dofs, weights=grad.ravel(), minlength=self._n_local)
-        return energy, gradient, hess.ravel()
+        gradient, hessian = np.zeros(self._n_local), np.zeros(36 * len(self._l0))
+        kernel = self._kernel(self._node_dof, self._dofs, np.arange(hessian.size))
+        energy = kernel(_coordinates(states), gradient, hessian)
+        return energy, gradient, hessian
+
+    def predict_internal(self, past: Sequence[Sequence[LocalState]], weights: Sequence[float],
+                         poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+        """Concatenated interior nodes extrapolated in chord lengths and angles.
+
+        As :meth:`BeamConnector.predict_internal` documents, for every
+        flexure at once (:func:`reducedmodels.beamkernel.predicted_chains`).
+        """
+        history = np.array([_coordinates(states) for states in past])
+        predicted = _coordinates([(*pose, state[2]) for pose, state in zip(poses, past[-1])])
+        return beam_kernels().predicted_chains(history, np.asarray(weights, float), predicted,
+                                               self._node_dof, self._node_rel, self._attached,
+                                               self._chain_nodes)
+
+    def update_internal(self, old: Sequence[LocalState], new: Sequence[LocalState]
+                        ) -> np.ndarray:
+        """Concatenated interior nodes after a Newton correction, chords turned, not sheared.
+
+        As :meth:`BeamConnector.update_internal` documents, for every flexure
+        at once (:func:`reducedmodels.beamkernel.updated_chains`).
+        """
+        return beam_kernels().updated_chains(_coordinates(old), _coordinates(new),
+                                             self._node_dof, self._node_rel, self._attached,
+                                             self._chain_nodes)
+
+
+def _coordinates(states: Sequence[LocalState]) -> np.ndarray:
+    """The connectors' local coordinates [pose_a, pose_b, internal] laid end to end (float)."""
+    return np.concatenate([part for state in states for part in state]).astype(float, copy=False)
 
 
 class BeamConnector(Connector):
@@ -409,22 +302,28 @@ class BeamConnector(Connector):
             self._nodes0[-1] - mechanism.bodies[flexure.end_body].reference])
         self._end_offsets = tuple((float(rel[0]), float(rel[1])) for rel in self._end_rel)
         self._area, self._arc_length = flexure.section.area, flexure.shape.length
-        self._element_dofs = self._element_dof_table()
+        self._node_dofs = self._node_dof_table()
+        self._element_dofs = np.hstack([self._node_dofs[:-1], self._node_dofs[1:]])
         self._rows = np.repeat(self._element_dofs, 6, axis=1).ravel()
         self._cols = np.tile(self._element_dofs, (1, 6)).ravel()
-        self._alone = BeamGroup([self])
 
-    def _element_dof_table(self) -> np.ndarray:
-        """Local coordinate number of each element's six dofs, (N, 6).
+    @functools.cached_property
+    def _alone(self) -> BeamGroup:
+        """This connector as a group of one (its own evaluation; a System builds its groups)."""
+        return BeamGroup([self])
+
+    def _node_dof_table(self) -> np.ndarray:
+        """Local coordinate numbers of each node's (x, y, theta), (N + 1, 3).
 
         The end nodes take their body's pose slots (0..2 for pose_a, 3..5 for
-        pose_b) and are transported there by :func:`attach_to_bodies`.
+        pose_b): they are transported there by the element kernel
+        (:func:`reducedmodels.beamkernel.attach`).
         """
-        node_dofs = np.empty((self._n_nodes, 3), dtype=np.int32)
+        node_dofs = np.empty((self._n_nodes, 3), dtype=np.int64)
         node_dofs[0] = 3 * self._end_pose[0] + np.arange(3)
         node_dofs[-1] = 3 * self._end_pose[1] + np.arange(3)
         node_dofs[1:-1] = 6 + np.arange(self.n_internal).reshape(-1, 3)
-        return np.hstack([node_dofs[:-1], node_dofs[1:]])
+        return node_dofs
 
     def mass_points(self, density: float) -> MassPoints:
         """The flexure's mass (density in t/mm^3) lumped on the nodes (HRZ rule).
@@ -516,25 +415,6 @@ class BeamConnector(Connector):
         """
         return self._alone.update_internal([old], [new])
 
-    def _closed_chain(self, length: np.ndarray, angle: np.ndarray, start: np.ndarray,
-                      end: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        """Interior nodes of the chain of chords (length, angle) from ``start``, closed at ``end``.
-
-        The mismatch between the last node and ``end`` is spread along the
-        chain in proportion to arc length (a uniform stretch, the cheapest
-        in axial energy). Returns the internal coordinates (x, y, theta).
-        """
-        x = np.empty((len(length) + 1, 2))
-        x[0] = 0.0
-        np.cumsum(length * np.cos(angle), out=x[1:, 0])
-        np.cumsum(length * np.sin(angle), out=x[1:, 1])
-        x += start
-        share = np.concatenate([[0.0], np.cumsum(length)]) / length.sum()
-        x += share[:, None] * (end - x[-1])
-        internal = np.empty((len(length) - 1, 3))
-        internal[:, :2], internal[:, 2] = x[1:-1], theta[1:-1]
-        return internal.ravel()
-
     def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
                  ) -> list[str]:
         """Reasons: element stretch over MAX_STRAIN, end turns from the chord over MAX_CHORD_TURN.
@@ -574,8 +454,8 @@ class BeamConnector(Connector):
             return statics_section_forces(x, self._node_fractions,
                                           gradient[3 * slot:3 * slot + 3],
                                           (pose_a, pose_b)[slot], axes=axes)
-        grad = corotational_elements(x[:-1], x[1:], theta[:-1], theta[1:], self._chord0,
-                                     self._l0, self._k_axial, self._k11, self._k12)[1]
+        grad = beam_kernels().element_forces(x, theta, self._chord0, self._l0, self._k_axial,
+                                             self._k11, self._k12)
         # on the part towards the end body, from the part before: at an element's start
         # node the force that holds the element there, at its end node minus that force
         axial = np.concatenate([-np.einsum("ij,ij->i", grad[:, 0:2], axes[:-1]),

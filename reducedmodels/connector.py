@@ -17,7 +17,7 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
 
@@ -232,6 +232,23 @@ class ConnectorGroup:
             grads.append(g)
             hessians.append(np.ravel(h))
         return energy, np.concatenate(grads), np.concatenate(hessians)
+
+    def assembler(self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
+                  ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float] | None:
+        """A function that adds the group's gradient and tangent into the global arrays, or None.
+
+        The core calls it once, with the index maps of the concatenated local
+        coordinates: ``gather`` (their positions in the coordinates
+        ``[q, ground pose]``), ``grad_dofs`` (their global dofs, -1 for the
+        ground's) and ``hess_slots`` (where each concatenated Hessian value of
+        :meth:`evaluate` goes in the tangent storage, -1: dropped). The
+        function, called as ``f(coordinates, grad, storage)``, adds the
+        gradient (N, N mm) into ``grad`` and the Hessian values into
+        ``storage`` and returns the energy (N mm): what the core would do
+        with :meth:`evaluate`'s results, without building them.
+        Default: None, the core scatters :meth:`evaluate`'s results itself.
+        """
+        return None
 
     def predict_internal(self, past: Sequence[Sequence[LocalState]], weights: Sequence[float],
                          poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:

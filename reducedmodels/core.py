@@ -159,16 +159,22 @@ class System:
 
         * ``_gather[k]``: positions of connector k's local coordinates in
           ``[q, ground pose]`` (ground dofs read the fixed ground pose);
-        * ``_grad_dofs`` / ``_grad_keep``: global dof of every kept entry of the
-          concatenated local gradients (ground entries dropped);
-        * ``_hess_keep``: kept entries of the concatenated local Hessian values;
-          the tangent layout adds one diagonal slot per dof for the loads.
+        * ``_assemblers``: the groups that add their gradients and tangent
+          entries into the global arrays themselves
+          (:meth:`~reducedmodels.connector.ConnectorGroup.assembler`: beams'
+          compiled kernel), given these maps for their connectors;
+        * for the other groups, whose gradients and Hessian values are
+          concatenated: ``_grad_dofs`` / ``_grad_keep``, the global dof of
+          every kept entry of the gradients (ground entries dropped), and
+          ``_hess_keep`` / ``_hess_slots``, the kept entries of the Hessian
+          values and their places in the tangent storage;
+        * ``_diagonal_slots``: where each dof's diagonal entry is stored (the
+          loads add to it).
         """
         n = self.n_dofs
-        gathers, grad_idx, rows, cols, hess_keep = [], [], [], [], []
+        gathers, rows, cols, hess_keep = [], [], [], []
         for c, idx in zip(self.connectors, self._local_to_global):
             gathers.append(np.where(idx >= 0, idx, n + np.arange(idx.size) % 3))
-            grad_idx.append(idx)
             pattern = c.hessian_pattern()
             if pattern is None:
                 r, cc = np.repeat(idx, idx.size), np.tile(idx, idx.size)
@@ -180,13 +186,33 @@ class System:
         ground = self.reference[self.mechanism.ground]
         self._ground_pose = np.array([ground[0], ground[1], 0.0])
         self._gather = gathers
-        all_grad = np.concatenate(grad_idx) if grad_idx else np.zeros(0, int)
-        self._grad_keep = all_grad >= 0
-        self._grad_dofs = all_grad[self._grad_keep]
-        self._hess_keep = np.concatenate([*hess_keep, np.ones(n, bool)])
         diagonal = np.arange(n)
         self.layout = TangentLayout(n, np.concatenate([*rows, diagonal]),
                                     np.concatenate([*cols, diagonal]), self.n_multipliers)
+        # each connector's Hessian values -> storage slot (-1: a ground entry, dropped)
+        kept_slots = np.split(self.layout.slots[:self.layout.slots.size - n], np.cumsum([r.size for r in rows])[:-1])
+        hess_slots = []
+        for keep, kept in zip(hess_keep, kept_slots):
+            slots = np.full(keep.size, -1, np.int64)
+            slots[keep] = kept
+            hess_slots.append(slots)
+        self._diagonal_slots = self.layout.slots[-n:]
+        self._assemblers, self._generic = [], []
+        for group, run in self._groups:
+            assembler = group.assembler(np.concatenate(gathers[run]),
+                                        np.concatenate(self._local_to_global[run]),
+                                        np.concatenate(hess_slots[run]))
+            if assembler is None:
+                self._generic.append((group, run))
+            else:
+                self._assemblers.append(assembler)
+        members = [k for _, run in self._generic for k in range(run.start, run.stop)]
+        all_grad = np.concatenate([self._local_to_global[k] for k in members] or [np.zeros(0, int)])
+        self._grad_keep = all_grad >= 0
+        self._grad_dofs = all_grad[self._grad_keep]
+        all_slots = np.concatenate([hess_slots[k] for k in members] or [np.zeros(0, np.int64)])
+        self._hess_keep = all_slots >= 0
+        self._hess_slots = all_slots[self._hess_keep]
 
     def pose_dofs(self, body: str) -> np.ndarray:
         """Global dof numbers of a body's pose (all -1 for the ground)."""
@@ -240,25 +266,37 @@ class System:
         """Total potential (N mm), its gradient and the tangent at state q and load factor.
 
         Every connector is evaluated once, each run of consecutive connectors
-        of one class through its :meth:`~Connector.group` (one vectorised
-        call for beams); the gradients and Hessian values are scattered with the index maps of :meth:`_build_scatter` into the
+        of one class through its :meth:`~Connector.group`: a group with an
+        assembler (beams) adds into the global gradient and the tangent
+        storage itself; the others' gradients and Hessian values are
+        scattered with the index maps of :meth:`_build_scatter` into the
         storage the :class:`~reducedmodels.tangent.TangentLayout` chose.
         """
-        energy = 0.0
-        grads, hessians = [], []
-        states = self.local_states(q)
-        for group, run in self._groups:
-            e, g, h = group.evaluate(states[run])
-            energy += e
-            grads.append(g)
-            hessians.append(h)
         n = self.n_dofs
-        grad = (np.bincount(self._grad_dofs, weights=np.concatenate(grads)[self._grad_keep],
-                            minlength=n) if grads else np.zeros(n))
+        energy = 0.0
+        if self._generic:
+            grads, hessians = [], []
+            states = self.local_states(q)
+            for group, run in self._generic:
+                e, g, h = group.evaluate(states[run])
+                energy += e
+                grads.append(g)
+                hessians.append(h)
+            grad = np.bincount(self._grad_dofs, weights=np.concatenate(grads)[self._grad_keep],
+                               minlength=n)
+            storage = np.bincount(self._hess_slots,
+                                  weights=np.concatenate(hessians)[self._hess_keep],
+                                  minlength=self.layout.size)
+        else:
+            grad, storage = np.zeros(n), np.zeros(self.layout.size)
+        if self._assemblers:
+            coordinates = np.concatenate([q, self._ground_pose])
+            for assembler in self._assemblers:
+                energy += assembler(coordinates, grad, storage)
         diagonal = np.zeros(n)
         energy += loads.add_to(q, factor, grad, diagonal)
-        values = np.concatenate([*hessians, diagonal])
-        return energy, grad, self.layout.build(values[self._hess_keep])
+        storage[self._diagonal_slots] += diagonal
+        return energy, grad, self.layout.tangent(storage)
 
     def reaction(self, q: np.ndarray) -> np.ndarray:
         """Force (N) and moment (N mm, about the ground's reference point) the ground exerts."""

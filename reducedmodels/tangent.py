@@ -2,8 +2,9 @@
 
 A System's tangent has the same sparsity pattern at every Newton iteration,
 so where each connector's Hessian entry lands is worked out once
-(:class:`TangentLayout`); each assembly is then a single ``bincount`` of
-the entry values into the chosen storage:
+(:class:`TangentLayout`); each assembly adds the entry values into the
+chosen storage at those slots (one ``bincount``, or a compiled kernel that
+adds them as it computes them):
 
 * ``dense``  -- small systems (at most ``DENSE_LIMIT`` unknowns), LAPACK;
 * ``banded`` -- chains of beams and bodies: after a reverse Cuthill-McKee
@@ -21,6 +22,8 @@ Units: the tangent is in N/mm, N and N mm like the coordinates it pairs.
 
 from __future__ import annotations
 
+import functools
+from types import ModuleType
 from typing import Protocol
 
 import numpy as np
@@ -37,7 +40,17 @@ BAND_LIMIT = 64      # band storage beats SuperLU up to at least this half-bandw
                      # the continuum meshes: banded LU was 2x faster at b = 29, even at b = 61, 2x
                      # slower at b = 117; the banded Cholesky now used makes whole level-2 paths
                      # (b = 61 on both scenes) 1.6x faster than SuperLU; b = 117 is not measured
+NARROW_BAND = 8      # compiled banded Cholesky up to this half-bandwidth, LAPACK's above: at b = 5
+                     # (beam chains) the loop takes half of dpbtrf's time, at b = 29 three times it
 ROUND_OFF = 1e-12    # eigenvalues above -ROUND_OFF * |K| count as zero, not as negative
+
+
+@functools.cache
+def band_kernels() -> ModuleType:
+    """:mod:`reducedmodels.bandkernel`, imported on first use (importing numba takes ~0.5 s)."""
+    from . import bandkernel
+
+    return bandkernel
 
 
 class Tangent(Protocol):
@@ -113,7 +126,9 @@ class BandedTangent:
     One factorisation serves both the solves and the inertia: a banded
     Cholesky first (the usual, stable case: about a third of a banded LU's
     work, and it proves there is no negative eigenvalue), a banded LU with
-    pivoting only when the Cholesky meets a non-positive pivot.
+    pivoting only when the Cholesky meets a non-positive pivot. Up to
+    ``NARROW_BAND`` the Cholesky is the compiled loop of
+    :mod:`reducedmodels.bandkernel` (numba), above it LAPACK's.
     """
 
     def __init__(self, storage: np.ndarray, perm: np.ndarray, half_bandwidth: int):
@@ -125,7 +140,10 @@ class BandedTangent:
     def _factorise(self) -> None:
         if self._cholesky is None and self._lu is None:
             b = self.b
-            factor, info = lapack.dpbtrf(self.storage[b: 2 * b + 1], lower=0)
+            if b <= NARROW_BAND:
+                factor, info = band_kernels().band_cholesky(self.storage[b: 2 * b + 1], b)
+            else:
+                factor, info = lapack.dpbtrf(self.storage[b: 2 * b + 1], lower=0)
             if info == 0:
                 self._cholesky = factor
             else:
@@ -133,6 +151,9 @@ class BandedTangent:
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         self._factorise()
+        if self._cholesky is not None and self.b <= NARROW_BAND:
+            return band_kernels().band_cholesky_solve(self._cholesky,
+                                                      np.ascontiguousarray(rhs, float), self.perm)
         if self._cholesky is not None:
             x_perm, _ = lapack.dpbtrs(self._cholesky, rhs[self.perm], lower=0)
         else:
@@ -211,6 +232,13 @@ class TangentLayout:
     n_multipliers : int
         Lagrange multipliers among the unknowns (they make K a saddle point).
 
+    Attributes
+    ----------
+    slots : int array (k,)
+        Where the value of each (row, col) entry is added in the storage.
+    size : int
+        Length of the flat storage array :meth:`tangent` wraps.
+
     The storage is dense up to ``DENSE_LIMIT`` unknowns, else banded if the
     reordered half-bandwidth is at most ``BAND_LIMIT``, else sparse.
     """
@@ -220,7 +248,7 @@ class TangentLayout:
         self.n, self.n_multipliers = n, n_multipliers
         rows, cols = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
         if n <= DENSE_LIMIT:
-            self.kind, self._slot, self._size = "dense", rows * n + cols, n * n
+            self.kind, self.slots, self.size = "dense", rows * n + cols, n * n
             return
         graph = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
         perm = reverse_cuthill_mckee(graph, symmetric_mode=True).astype(np.int64)
@@ -230,20 +258,19 @@ class TangentLayout:
         b = int(np.abs(i - j).max(initial=0))
         if b <= BAND_LIMIT:
             self.kind, self.perm, self.b = "banded", perm, b
-            self._slot, self._size = j * (3 * b + 1) + (2 * b + i - j), (3 * b + 1) * n
+            self.slots, self.size = j * (3 * b + 1) + (2 * b + i - j), (3 * b + 1) * n
             return
         self.kind = "sparse"
         uniq, inverse = np.unique(cols * n + rows, return_inverse=True)
-        self._slot, self._size = inverse.ravel(), uniq.size
+        self.slots, self.size = inverse.ravel().astype(np.int64), uniq.size
         self._indices = (uniq % n).astype(np.int32)
         self._indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
 
-    def build(self, values: np.ndarray) -> Tangent:
-        """The tangent whose value slots hold ``values`` (same order as rows, cols)."""
-        data = np.bincount(self._slot, weights=values, minlength=self._size)
+    def tangent(self, storage: np.ndarray) -> Tangent:
+        """The tangent held in ``storage`` (size :attr:`size`, the values summed at :attr:`slots`)."""
         if self.kind == "dense":
-            return DenseTangent(data.reshape(self.n, self.n))
+            return DenseTangent(storage.reshape(self.n, self.n))
         if self.kind == "banded":     # column j contiguous: Fortran order, as LAPACK wants it
-            return BandedTangent(data.reshape(self.n, 3 * self.b + 1).T, self.perm, self.b)
-        matrix = sp.csc_matrix((data, self._indices, self._indptr), shape=(self.n, self.n))
+            return BandedTangent(storage.reshape(self.n, 3 * self.b + 1).T, self.perm, self.b)
+        matrix = sp.csc_matrix((storage, self._indices, self._indptr), shape=(self.n, self.n))
         return SparseTangent(matrix, self.n_multipliers)

@@ -1,0 +1,319 @@
+"""Compiled kernels of the corotational beam elements (numba, cached on disk).
+
+The one implementation of the element physics of :mod:`reducedmodels.beam`:
+:func:`assemble_elements` evaluates every element of a run of beam
+connectors, transports the end nodes to their bodies' poses and adds the
+gradients and tangent entries straight into the global gradient and the
+tangent's storage (the index maps come from :class:`reducedmodels.core.System`),
+and :func:`element_forces` gives the element end forces alone (section
+forces). One call per Newton iteration replaces some forty numpy calls and
+the scatter of the concatenated local Hessians, whose cost on a few hundred
+elements was interpreter overhead, not arithmetic.
+
+The functions are compiled by numba on first use and cached on disk next to
+this module (``__pycache__``): the first run of an installation pays the
+compilation (see README, "Speed"), later processes load the machine code.
+Floating-point semantics are numpy's (a zero-length chord gives inf/nan, which
+the Newton iteration reports as a non-finite residual), and no fast-math
+reassociation is allowed, so the numbers are those of the formulas in the
+order written.
+
+Units: mm, N, N mm, rad.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+_compiled = numba.njit(cache=True, error_model="numpy", nogil=True)
+
+TWO_PI = 2.0 * math.pi
+
+
+@_compiled
+def wrapped(angle: float) -> float:
+    """An angle (rad) brought into (-pi, pi], so that full turns carry no strain."""
+    return math.pi - (math.pi - angle) % TWO_PI
+
+
+@_compiled
+def element(x1: float, y1: float, x2: float, y2: float, theta1: float, theta2: float,
+            c0x: float, c0y: float, l0: float, k_axial: float, k11: float, k12: float,
+            grad: np.ndarray, entries: np.ndarray) -> float:
+    """Energy (N mm) of one corotational element; its gradient and tangent entries in place.
+
+    The element joins node 1 (x1, y1, theta1) to node 2 (x2, y2, theta2)
+    (mm, rad increments from the initial configuration); (c0x, c0y) is its
+    initial unit chord, l0 its initial length (mm), k_axial = EA/l0 (N/mm),
+    k11, k12 the entries of the local bending stiffness k_b (N mm).
+
+    ``grad`` (6,) receives the internal forces [f, M1, -f, M2] with
+    f = -N e + V n (e = (c, s) the current chord direction, n = (-s, c),
+    V = (M1 + M2)/l); ``entries`` (7,) the independent entries
+    [Axx, Axy, Ayy, wx, wy, k11, k12] of the consistent tangent (see
+    :func:`reducedmodels.beam.tangent_layout`): Crisfield's
+    B^T D B + N z z^T / l + (M1 + M2)(r z^T + z r^T) / l^2 with
+    A = EA/l0 e e^T + (2 (k11 + k12)/l^2 + N/l) n n^T + (M1 + M2)/l^2 (e n^T + n e^T),
+    written in double-angle form (cos 2b = c^2 - s^2, sin 2b = 2 c s).
+    """
+    dx, dy = x2 - x1, y2 - y1
+    length = math.hypot(dx, dy)
+    c, s = dx / length, dy / length
+    alpha = math.atan2(c0x * dy - c0y * dx, c0x * dx + c0y * dy)
+    a1 = wrapped(theta1 - alpha)
+    a2 = wrapped(theta2 - alpha)
+    u = length - l0
+    axial = k_axial * u
+    m1 = k11 * a1 + k12 * a2
+    m2 = k12 * a1 + k11 * a2
+    shear = (m1 + m2) / length
+    fx, fy = -axial * c - shear * s, -axial * s + shear * c
+    grad[0], grad[1], grad[2], grad[3], grad[4], grad[5] = fx, fy, m1, -fx, -fy, m2
+    k_normal = 2.0 * (k11 + k12) / (length * length) + axial / length
+    k_cross = shear / length
+    k_rot = (k11 + k12) / length
+    cos2, sin2 = c * c - s * s, 2.0 * c * s
+    mean, half = 0.5 * (k_axial + k_normal), 0.5 * (k_axial - k_normal)
+    diagonal = half * cos2 - k_cross * sin2
+    entries[0] = mean + diagonal
+    entries[1] = half * sin2 + k_cross * cos2
+    entries[2] = mean - diagonal
+    entries[3] = -k_rot * s
+    entries[4] = k_rot * c
+    entries[5] = k11
+    entries[6] = k12
+    return 0.5 * (axial * u + m1 * a1 + m2 * a2)
+
+
+@_compiled
+def attach(grad: np.ndarray, tangent: np.ndarray, slot: int, t0: float, t1: float) -> None:
+    """Transport one element node's force and tangent to its rigid body's pose, in place.
+
+    The node is the body's material point x = p + R(theta) rel and turns
+    with it. With T = d node / d pose (identity except dx/dtheta = t, mm)
+    the chain rule gives g <- T^T g and
+    K <- T^T K T + (g_xy . d^2x/dtheta^2) e_theta e_theta^T, where
+    d^2x/dtheta^2 = -R(theta) rel = J t. ``slot`` is the node's first entry
+    in the element vector (0 or 3); ``tangent`` is the row-major 6x6.
+    """
+    x, y, th = slot, slot + 1, slot + 2
+    gx, gy = grad[x], grad[y]
+    geometric = -(gx * t1 - gy * t0)
+    grad[th] += t0 * gx + t1 * gy
+    for j in range(6):
+        tangent[6 * th + j] += t0 * tangent[6 * x + j] + t1 * tangent[6 * y + j]
+    for i in range(6):
+        tangent[6 * i + th] += t0 * tangent[6 * i + x] + t1 * tangent[6 * i + y]
+    tangent[6 * th + th] += geometric
+
+
+@_compiled
+def place_nodes(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndarray,
+                attached: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Node positions (nodes, 2) mm, rotations (nodes,) rad and dx/dtheta (nodes, 2) mm.
+
+    A free node reads its (x, y, theta) at ``coordinates[node_dof]``; an
+    attached one is its body's material point x = p + R(theta) rel at the
+    pose read there, turns with it and moves by dx/dtheta = J R(theta) rel
+    (zero for a free node). See :func:`assemble_elements` for the tables.
+    """
+    n_nodes = node_dof.size
+    x = np.empty((n_nodes, 2))
+    theta = np.empty(n_nodes)
+    t = np.zeros((n_nodes, 2))
+    for k in range(n_nodes):
+        d = node_dof[k]
+        if attached[k]:
+            angle = coordinates[d + 2]
+            c, s = math.cos(angle), math.sin(angle)
+            rx = c * node_rel[k, 0] - s * node_rel[k, 1]
+            ry = s * node_rel[k, 0] + c * node_rel[k, 1]
+            x[k, 0], x[k, 1], theta[k] = coordinates[d] + rx, coordinates[d + 1] + ry, angle
+            t[k, 0], t[k, 1] = -ry, rx
+        else:
+            x[k, 0], x[k, 1], theta[k] = coordinates[d], coordinates[d + 1], coordinates[d + 2]
+    return x, theta, t
+
+
+@_compiled
+def assemble_elements(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndarray,
+                      attached: np.ndarray, first: np.ndarray, chord0: np.ndarray,
+                      l0: np.ndarray, k_axial: np.ndarray, k11: np.ndarray, k12: np.ndarray,
+                      source: np.ndarray, sign: np.ndarray, grad_slot: np.ndarray,
+                      tangent_slot: np.ndarray, grad_out: np.ndarray, tangent_out: np.ndarray
+                      ) -> float:
+    """Add every element's gradient and tangent into ``grad_out`` and ``tangent_out``; the energy.
+
+    Parameters
+    ----------
+    coordinates : array
+        The coordinates the nodes are read from (mm, rad).
+    node_dof : int array (nodes,)
+        Position in ``coordinates`` of each node's (x, y, theta), or of the
+        pose (x, y, theta) of the body an attached node belongs to.
+    node_rel : array (nodes, 2)
+        An attached node's initial offset from its body's reference point, mm.
+    attached : bool array (nodes,)
+        Whether the node is a material point of a rigid body (an end node).
+    first : int array (elements,)
+        Each element's first node; its second is the next one.
+    chord0, l0, k_axial, k11, k12 :
+        Initial unit chords (elements, 2), lengths (mm), EA/l0 (N/mm), k_b entries (N mm).
+    source, sign : arrays (36,)
+        Which of the seven independent entries each entry of the row-major
+        6x6 tangent is, and its sign.
+    grad_slot : int array (elements, 6)
+        Where each element coordinate's force is added in ``grad_out`` (-1: nowhere).
+    tangent_slot : int array (elements, 36)
+        Where each tangent entry is added in ``tangent_out`` (-1: nowhere).
+    """
+    x, theta, t = place_nodes(coordinates, node_dof, node_rel, attached)
+    energy = 0.0
+    grad = np.empty(6)
+    entries = np.empty(7)
+    tangent = np.empty(36)
+    for e in range(first.size):
+        i = first[e]
+        j = i + 1
+        energy += element(x[i, 0], x[i, 1], x[j, 0], x[j, 1], theta[i], theta[j], chord0[e, 0],
+                          chord0[e, 1], l0[e], k_axial[e], k11[e], k12[e], grad, entries)
+        for k in range(36):
+            tangent[k] = sign[k] * entries[source[k]]
+        if attached[i]:
+            attach(grad, tangent, 0, t[i, 0], t[i, 1])
+        if attached[j]:
+            attach(grad, tangent, 3, t[j, 0], t[j, 1])
+        for k in range(6):
+            slot = grad_slot[e, k]
+            if slot >= 0:
+                grad_out[slot] += grad[k]
+        for k in range(36):
+            slot = tangent_slot[e, k]
+            if slot >= 0:
+                tangent_out[slot] += tangent[k]
+    return energy
+
+
+@_compiled
+def element_forces(x: np.ndarray, theta: np.ndarray, chord0: np.ndarray, l0: np.ndarray,
+                   k_axial: np.ndarray, k11: np.ndarray, k12: np.ndarray) -> np.ndarray:
+    """Internal forces (elements, 6) of a chain of elements on nodes x (mm), theta (rad).
+
+    Element e joins node e to node e + 1; each row is [f, M1, -f, M2] in N
+    and N mm (see :func:`element`).
+    """
+    n = l0.size
+    out = np.empty((n, 6))
+    entries = np.empty(7)
+    for e in range(n):
+        element(x[e, 0], x[e, 1], x[e + 1, 0], x[e + 1, 1], theta[e], theta[e + 1],
+                chord0[e, 0], chord0[e, 1], l0[e], k_axial[e], k11[e], k12[e], out[e], entries)
+    return out
+
+
+@_compiled
+def close_chains(length: np.ndarray, angle: np.ndarray, x: np.ndarray, theta: np.ndarray,
+                 chain_nodes: np.ndarray) -> np.ndarray:
+    """Interior nodes (x, y, theta) of chains of chords (length mm, angle rad), concatenated.
+
+    Chain k holds the nodes ``chain_nodes[k]`` to ``chain_nodes[k + 1] - 1``
+    and the elements between them; it is built chord after chord from its
+    first node's position in ``x`` and closed at its last node's: the
+    mismatch is spread along the chain in proportion to arc length (a
+    uniform stretch, the cheapest in axial energy). The interior nodes take
+    their rotation from ``theta``.
+    """
+    n_chains = chain_nodes.size - 1
+    out = np.empty(3 * (chain_nodes[-1] - 2 * n_chains))
+    o = 0
+    for k in range(n_chains):
+        n0, n1 = chain_nodes[k], chain_nodes[k + 1]
+        e0, m = n0 - k, n1 - n0 - 1
+        px, py = np.empty(m + 1), np.empty(m + 1)
+        share = np.empty(m + 1)
+        px[0] = py[0] = share[0] = 0.0
+        for i in range(m):
+            px[i + 1] = px[i] + length[e0 + i] * math.cos(angle[e0 + i])
+            py[i + 1] = py[i] + length[e0 + i] * math.sin(angle[e0 + i])
+            share[i + 1] = share[i] + length[e0 + i]
+        gap_x = x[n1 - 1, 0] - (px[m] + x[n0, 0])
+        gap_y = x[n1 - 1, 1] - (py[m] + x[n0, 1])
+        for i in range(1, m):
+            f = share[i] / share[m]
+            out[o] = px[i] + x[n0, 0] + f * gap_x
+            out[o + 1] = py[i] + x[n0, 1] + f * gap_y
+            out[o + 2] = theta[n0 + i]
+            o += 3
+    return out
+
+
+@_compiled
+def updated_chains(old: np.ndarray, new: np.ndarray, node_dof: np.ndarray,
+                   node_rel: np.ndarray, attached: np.ndarray, chain_nodes: np.ndarray
+                   ) -> np.ndarray:
+    """Interior nodes after a Newton correction from ``old`` to ``new`` (linear), chords turned.
+
+    Each chord's change is split into its stretch (along the old chord) and
+    its turn (across it, over its length); the chains of chords with those
+    lengths and directions are closed between the end nodes of ``new``
+    (:func:`close_chains`). Tables as in :func:`assemble_elements`, chains
+    as in :func:`close_chains`; returns the interior nodes' (x, y, theta).
+    """
+    x_old = place_nodes(old, node_dof, node_rel, attached)[0]
+    x_new, theta, _ = place_nodes(new, node_dof, node_rel, attached)
+    n_chains = chain_nodes.size - 1
+    n_elements = chain_nodes[-1] - n_chains
+    length, angle = np.empty(n_elements), np.empty(n_elements)
+    for k in range(n_chains):
+        for i in range(chain_nodes[k], chain_nodes[k + 1] - 1):
+            e = i - k
+            dx, dy = x_old[i + 1, 0] - x_old[i, 0], x_old[i + 1, 1] - x_old[i, 1]
+            cx, cy = x_new[i + 1, 0] - x_new[i, 0] - dx, x_new[i + 1, 1] - x_new[i, 1] - dy
+            chord = math.hypot(dx, dy)
+            tx, ty = dx / chord, dy / chord
+            length[e] = chord + (tx * cx + ty * cy)
+            angle[e] = math.atan2(ty, tx) + (tx * cy - ty * cx) / chord
+    return close_chains(length, angle, x_new, theta, chain_nodes)
+
+
+@_compiled
+def predicted_chains(past: np.ndarray, weights: np.ndarray, poses: np.ndarray,
+                     node_dof: np.ndarray, node_rel: np.ndarray, attached: np.ndarray,
+                     chain_nodes: np.ndarray) -> np.ndarray:
+    """Interior nodes extrapolated in chord lengths and angles from converged states.
+
+    ``past`` (states, coordinates) holds the converged coordinates, oldest
+    first, ``weights`` their extrapolation weights, ``poses`` coordinates
+    whose body poses are the predicted ones. Each chord's length and its
+    turn from the last state's direction, and each node's rotation, are
+    extrapolated; the chains are closed between the end nodes at the
+    predicted poses (:func:`close_chains`).
+    """
+    n_chains = chain_nodes.size - 1
+    n_nodes = chain_nodes[-1]
+    n_elements = n_nodes - n_chains
+    last = place_nodes(past[past.shape[0] - 1], node_dof, node_rel, attached)[0]
+    angle_last = np.empty(n_elements)
+    for k in range(n_chains):
+        for i in range(chain_nodes[k], chain_nodes[k + 1] - 1):
+            angle_last[i - k] = math.atan2(last[i + 1, 1] - last[i, 1], last[i + 1, 0] - last[i, 0])
+    length, turn, theta = np.zeros(n_elements), np.zeros(n_elements), np.zeros(n_nodes)
+    for h in range(past.shape[0]):
+        w = weights[h]
+        x, th, _ = place_nodes(past[h], node_dof, node_rel, attached)
+        for k in range(n_chains):
+            for i in range(chain_nodes[k], chain_nodes[k + 1] - 1):
+                e = i - k
+                dx, dy = x[i + 1, 0] - x[i, 0], x[i + 1, 1] - x[i, 1]
+                length[e] += w * math.hypot(dx, dy)
+                turn[e] += w * wrapped(math.atan2(dy, dx) - angle_last[e])
+        for i in range(n_nodes):
+            theta[i] += w * th[i]
+    angle = np.empty(n_elements)
+    for e in range(n_elements):
+        angle[e] = angle_last[e] + turn[e]
+    ends = place_nodes(poses, node_dof, node_rel, attached)[0]
+    return close_chains(length, angle, ends, theta, chain_nodes)
