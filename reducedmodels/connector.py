@@ -104,6 +104,14 @@ class Connector(ABC):
         """
         return np.zeros(self.n_internal, dtype=bool)
 
+    update_above: float | None = None
+    """Scaled Newton correction above which the core applies :meth:`update_internal`.
+
+    None: :data:`reducedmodels.newton.NONLINEAR_UPDATE`, set for chords as
+    long as a fraction of the mechanism. Connectors whose coordinates are
+    much closer together turn far more for the same scaled correction and
+    set a lower value (a meshed flexure: 0, always)."""
+
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Local (rows, cols) of the Hessian values :meth:`evaluate` returns, fixed for life.
 

@@ -30,6 +30,7 @@ from geometry.kinematics import rigid_points
 from .connector import Connector, ConnectorGroup, LocalState, overrides
 from .loadpath import LoadPath
 from .loads import Loads
+from .newton import NONLINEAR_UPDATE
 from .tangent import Tangent, TangentLayout
 
 
@@ -152,6 +153,10 @@ class System:
              if overrides(group.connectors[0], hook)
              and sum(c.n_internal for c in group.connectors)]
             for hook in ("predict_internal", "update_internal"))
+        #: scaled Newton correction above which :meth:`update` applies the connectors' updates
+        self.update_threshold = min((c.update_above for group, _, _ in self._updaters
+                                     for c in group.connectors if c.update_above is not None),
+                                    default=NONLINEAR_UPDATE)
         self._build_scatter()
 
     def _build_scatter(self) -> None:

@@ -141,8 +141,9 @@ def solve_step(problem: StepProblem, q: np.ndarray, settings: "SolverSettings",
     step started), when an iterate moves a body more than ``max_excursion``
     times the step bounds away from it.
 
-    Corrections larger than ``NONLINEAR_UPDATE`` go through
-    :meth:`System.update` (the connectors' own nonlinear updates).
+    Corrections larger than ``system.update_threshold`` (``NONLINEAR_UPDATE``
+    unless a connector asks for less) go through :meth:`System.update` (the
+    connectors' own nonlinear updates).
     """
     system = problem.system
     res0, best, stalled, last_step, res = None, math.inf, 0, None, math.inf
@@ -175,7 +176,7 @@ def solve_step(problem: StepProblem, q: np.ndarray, settings: "SolverSettings",
         if not (math.isfinite(step) and math.isfinite(dfactor)):
             return NewtonResult(None, problem.factor, it, "singular tangent", None)
         step = max(step, abs(dfactor))
-        q = system.update(q, du) if step > NONLINEAR_UPDATE else q + du
+        q = system.update(q, du) if step > system.update_threshold else q + du
         problem.factor += dfactor
         contracting = last_step is not None and res <= CONTRACTION_EVIDENCE * res0
         if step <= settings.step_tol or (contracting and step * min(1.0, step / last_step)

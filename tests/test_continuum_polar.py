@@ -94,3 +94,52 @@ def test_a_flexure_turning_rigidly_is_predicted_exactly(start_on_ground):
     # extrapolating node positions (the default) misses by O(step^3) of the offsets (~1 mm)
     cartesian = sum(w * s[2] for w, s in zip(weights, states))
     assert np.abs(cartesian - exact[2]).max() > 1e-3
+
+
+def _rest(conn: ContinuumConnector) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rest state (pose_a, pose_b, internal) of a connector."""
+    refs = [conn.mesh.nodes[face[0]] - rel[0] for face, rel in zip(conn._face, conn._rel)]
+    return (np.array([*refs[0], 0.0]), np.array([*refs[1], 0.0]),
+            np.zeros(conn.n_internal))
+
+
+def test_the_newton_update_agrees_with_the_linear_one_to_first_order():
+    conn = connector(ARC, 0.3, 1, start_on_ground=False)
+    pose_a, pose_b, internal = _rest(conn)
+    X = conn.mesh.nodes[conn.free_nodes]
+    direction = (np.column_stack([np.sin(2.0 * X[:, 1]), X[:, 0] * X[:, 1]]).ravel(),
+                 np.array([0.3, -0.2, 0.5]), np.array([-0.1, 0.4, -0.3]))
+
+    def gap(eps: float) -> float:
+        """Largest distance between the nonlinear and the linear update of a correction eps."""
+        new = (pose_a + eps * direction[1], pose_b + eps * direction[2],
+               internal + eps * direction[0])
+        return float(np.abs(conn.update_internal((pose_a, pose_b, internal), new)
+                            - new[2]).max())
+
+    # second order: halving the correction quarters the gap (3.5-4.5 allows the
+    # third-order term, which is below 10 % of it at these sizes)
+    ratios = [gap(eps) / gap(eps / 2) for eps in (1e-2, 5e-3)]
+    assert all(3.5 < r < 4.5 for r in ratios), ratios
+    assert gap(1e-2) < 1e-2 * np.abs(direction[0]).max()
+
+
+def test_the_newton_update_turns_sections_by_finite_angles():
+    conn = connector(ARC, 0.3, 1)
+    pose_a, pose_b, internal = _rest(conn)
+    sections = cross_sections(conn.mesh)
+    X = conn.mesh.nodes
+    turn = 0.05 * np.sin(np.linspace(0.0, math.pi, sections.shape[0]))   # 0 at the faces
+    centre = X[sections[:, sections.shape[1] // 2]]
+    linear, exact = X.copy(), X.copy()
+    for k, nodes in enumerate(sections):
+        rel = X[nodes] - centre[k]
+        c, s = math.cos(turn[k]), math.sin(turn[k])
+        linear[nodes] = centre[k] + rel + turn[k] * np.column_stack([-rel[:, 1], rel[:, 0]])
+        exact[nodes] = centre[k] + rel @ np.array([[c, s], [-s, c]])
+    free = conn.free_nodes
+    new = (pose_a, pose_b, (linear[free] - X[free]).ravel())
+    updated = conn.update_internal((pose_a, pose_b, internal), new)
+    np.testing.assert_allclose(updated, (exact[free] - X[free]).ravel(), rtol=0, atol=1e-14)
+    # the linear update misses by turn^2 / 2 times the half thickness (0.15 mm)
+    assert np.abs(new[2] - updated).max() > 0.1 * 0.05**2 / 2 * 0.15
