@@ -26,6 +26,7 @@ from reducedmodels.sections import polyline_fractions
 
 from .connector import ContinuumConnector
 from .material import out_of_plane
+from .polar import nearest
 
 
 def fibre_stress_peak(conn: ContinuumConnector, pose_a: np.ndarray, pose_b: np.ndarray,
@@ -62,11 +63,10 @@ def fibre_stress_peak(conn: ContinuumConnector, pose_a: np.ndarray, pose_b: np.n
     solid = conn.solid
     X = np.asarray(solid.basis.global_coordinates()).transpose(1, 2, 0)       # (n_el, n_q, 2)
     # nearest centre-line vertex: the arc length and the tangent of each point
-    d2 = ((X[..., None, :] - line) ** 2).sum(axis=-1)                    # (n_el, n_q, m)
-    nearest = np.argmin(d2, axis=-1)
+    closest = nearest(X, line)                                           # (n_el, n_q)
     tangent = np.gradient(line, axis=0)
     tangent /= np.hypot(tangent[:, 0], tangent[:, 1])[:, None]
-    T = tangent[nearest]                                                 # (n_el, n_q, 2)
+    T = tangent[closest]                                                 # (n_el, n_q, 2)
     st = solid.state(conn.positions(pose_a, pose_b, internal))
     c33, _ = out_of_plane(conn.law, conn.plane, conn.material.youngs_modulus,
                           conn.material.poisson_ratio, st.C)
@@ -77,8 +77,7 @@ def fibre_stress_peak(conn: ContinuumConnector, pose_a: np.ndarray, pose_b: np.n
     fibre = np.einsum("...i,...ij,...j->...", t, sigma, t)
     # the peak is at a surface: L2-project onto the quad9 space and read it at the nodes
     nodal = np.abs(solid.basis.project(fibre)[solid.node_dofs])
-    s_node = fractions[np.argmin(((conn.mesh.nodes[:, None, :] - line) ** 2).sum(axis=-1),
-                                 axis=-1)]
+    s_node = fractions[nearest(conn.mesh.nodes, line)]
     inside = (s_node * length >= layer) & ((1.0 - s_node) * length >= layer)
     k = int(np.argmax(np.where(inside, nodal, -1.0)))
     return float(nodal[k]), float(s_node[k])

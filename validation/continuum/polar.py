@@ -47,6 +47,18 @@ class PolarShape(NamedTuple):
     offset: np.ndarray   # (n_sections, 2 n_t + 1, 2) node offsets in the section frame, mm
 
 
+def nearest(points: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+    """Index of the nearest of ``candidates`` (m, 2) to each of ``points`` (..., 2), mm.
+
+    Squared distances as |p|^2 - 2 p.c + |c|^2 (one matrix product instead
+    of an (n, m, 2) array of differences); their round-off, ~1e-16 of the
+    squared coordinates, is far below the squared spacing of mesh nodes.
+    """
+    flat = points.reshape(-1, 2)
+    d2 = np.einsum("ij,ij->i", candidates, candidates) - 2.0 * flat @ candidates.T
+    return np.argmin(d2, axis=1).reshape(points.shape[:-1])
+
+
 def cross_sections(mesh: FlexureMesh) -> np.ndarray:
     """Node indices of every cross-section (n_sections, 2 n_t + 1).
 
@@ -54,10 +66,10 @@ def cross_sections(mesh: FlexureMesh) -> np.ndarray:
     the centre line (looking along it) to its left, its centre node in the
     middle.
 
-    A node belongs to the centre-line node whose normal it lies on: the one
-    within half a thickness (plus a margin) with the smallest offset along
-    the centre line's tangent, which is zero to round-off for the section's
-    own nodes (radial lines of an arc, normals of a segment).
+    A node belongs to the centre-line node whose normal it lies on (radial
+    lines of an arc, normals of a segment), which is also the nearest
+    centre-line node. Every section must have 2 n_t + 1 nodes, its centre
+    node in the middle, and the first and last must be the end faces.
 
     Raises
     ------
@@ -69,11 +81,7 @@ def cross_sections(mesh: FlexureMesh) -> np.ndarray:
     tangent = np.gradient(centre, axis=0)
     tangent /= np.hypot(tangent[:, 0], tangent[:, 1])[:, None]
     normal = np.column_stack([-tangent[:, 1], tangent[:, 0]])
-    thickness = float(np.hypot(*(nodes[mesh.start_face[-1]] - nodes[mesh.start_face[0]])))
-    rel = nodes[:, None, :] - centre[None]                                  # (nodes, sections, 2)
-    along = np.abs(np.einsum("nsk,sk->ns", rel, tangent))
-    along[np.hypot(rel[..., 0], rel[..., 1]) > 0.75 * thickness] = np.inf
-    station = np.argmin(along, axis=1)
+    station = nearest(nodes, centre)
     across = np.einsum("nk,nk->n", nodes - centre[station], normal[station])
     width = 2 * mesh.n_t + 1
     if np.any(np.bincount(station, minlength=line.size) != width):
