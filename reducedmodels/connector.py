@@ -209,6 +209,34 @@ class Connector(ABC):
         """
         return None
 
+    def path_section_forces(self, states: Sequence[LocalState]) -> "SectionForces | None":
+        """The section forces of :meth:`section_forces` at several states, stacked.
+
+        The path recorder asks once per load path, for every converged level
+        at once, so that a connector can compute them in one vectorised pass
+        instead of one call per level.
+
+        Parameters
+        ----------
+        states : sequence of (pose_a, pose_b, internal)
+            k local states, internal coordinates in equilibrium.
+
+        Returns
+        -------
+        SectionForces or None
+            Normal force (N) and bending moment (N mm) as (k, m) arrays at the
+            model's m stations, which are the same at every state; None if
+            the connector reports no section forces. Default:
+            :meth:`section_forces` state by state.
+        """
+        forces = [self.section_forces(*state) for state in states]
+        if not forces or forces[0] is None:
+            return None
+        from .sections import SectionForces
+
+        return SectionForces(forces[0].at, np.array([f.axial for f in forces]),
+                             np.array([f.moment for f in forces]))
+
 
 class ConnectorGroup:
     """Connectors evaluated together: their energies summed, gradients and Hessians concatenated.

@@ -126,11 +126,11 @@ def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f:
 
 
 def _place_rows(poses: np.ndarray, rel: np.ndarray) -> np.ndarray:
-    """Current positions p + R(theta) rel of points (m, 2), each carried by its own pose (m, 3), mm."""
-    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
-    out = np.empty((len(rel), 2))              # (np.column_stack costs more on short arrays)
-    out[:, 0] = poses[:, 0] + (rel[:, 0] * c - rel[:, 1] * s)
-    out[:, 1] = poses[:, 1] + (rel[:, 0] * s + rel[:, 1] * c)
+    """Current positions p + R(theta) rel of points (..., m, 2), each carried by its own pose (..., m, 3), mm."""
+    c, s = np.cos(poses[..., 2]), np.sin(poses[..., 2])
+    out = np.empty((*poses.shape[:-1], 2))      # (np.stack costs more on short arrays)
+    out[..., 0] = poses[..., 0] + (rel[:, 0] * c - rel[:, 1] * s)
+    out[..., 1] = poses[..., 1] + (rel[:, 0] * s + rel[:, 1] * c)
     return out
 
 
@@ -190,7 +190,6 @@ class DcmmConnector(Connector):
         self._end_rel = [tuple((np.asarray(flexure.end_point_of(self.bodies[k]), float)
                                 - refs[-k]).tolist()) for k in (0, 1)]
         self._area, self._sub_lengths = flexure.section.area, np.array([p.length for p in parts])
-        self._forward = forward
         self._sub_arc_samples(parts, refs, forward)
 
     def mass_points(self, density: float) -> MassPoints:
@@ -235,6 +234,10 @@ class DcmmConnector(Connector):
                                             for k, sample in enumerate(self._samples)])
         self._sample_lead, self._sample_follow, self._sample_w, self._sample_tangent = (
             np.concatenate(column) for column in zip(*self._samples))
+        # stations from the flexure's first end, increasing (the fractions are distinct)
+        at = self._sample_fractions if forward else 1.0 - self._sample_fractions
+        self._station_order = np.argsort(at, kind="stable")
+        self._stations = at[self._station_order]
 
     def initial_internal(self) -> np.ndarray:
         """Cut-point bodies at rest: (x, y, 0) each."""
@@ -310,23 +313,41 @@ class DcmmConnector(Connector):
         rotations. ``gradient`` (a linear response's K0 dq) gives the
         flexure's end wrench instead, carried along every sub-arc.
         """
-        poses = np.concatenate([np.asarray(pose_a, float), np.asarray(internal, float),
-                                np.asarray(pose_b, float)]).reshape(-1, 3)   # chain order
+        if gradient is None:
+            forces = self.path_section_forces([(pose_a, pose_b, internal)])
+        else:
+            poses = self._chain_poses([(pose_a, pose_b, internal)])
+            forces = self._statics(poses, np.asarray(gradient, float)[None, None, 3:6],
+                                   poses[:, -1:])
+        return SectionForces(forces.at, forces.axial[0], forces.moment[0])
+
+    def path_section_forces(self, states) -> SectionForces:
+        """:meth:`section_forces` at k states (a load path), stacked (k, m), in one pass."""
+        poses = self._chain_poses(states)
+        wrenches = np.array([[sub_arc_energy(chain[k], chain[k + 1], *element)[1][3:6]
+                              for k, element in enumerate(self._elements)] for chain in poses])
+        return self._statics(poses, wrenches[:, self._sample_part],
+                             poses[:, self._sample_part + 1])
+
+    def _chain_poses(self, states) -> np.ndarray:
+        """The chain's poses (a, cuts, b) at each of k states, (k, n + 1, 3) (mm, rad)."""
+        return np.array([np.concatenate([np.asarray(pose_a, float), np.asarray(internal, float),
+                                         np.asarray(pose_b, float)])
+                         for pose_a, pose_b, internal in states]).reshape(len(states), -1, 3)
+
+    def _statics(self, poses: np.ndarray, wrenches: np.ndarray, end: np.ndarray) -> SectionForces:
+        """Section forces of the sub-arcs' wrenches (k, s or 1, 3) held at ``end`` (k, s or 1, 3).
+
+        Statics of each wrench (see :func:`~reducedmodels.sections.statics_section_forces`)
+        at every sample of every state at once; ``poses`` are the chain's (k, n + 1, 3).
+        """
         part, w = self._sample_part, self._sample_w
-        lead, follow = poses[part], poses[part + 1]
+        lead, follow = poses[:, part], poses[:, part + 1]
         pts = ((1.0 - w)[:, None] * _place_rows(lead, self._sample_lead)
                + w[:, None] * _place_rows(follow, self._sample_follow))
-        axes = unit_vectors(self._sample_tangent + (1.0 - w) * lead[:, 2] + w * follow[:, 2])
-        if gradient is None:
-            wrenches = np.array([sub_arc_energy(poses[k], poses[k + 1], *element)[1][3:6]
-                                 for k, element in enumerate(self._elements)])[part]
-            end = follow
-        else:
-            wrenches, end = np.asarray(gradient, float)[3:6][None], poses[-1][None]
-        # statics of each sub-arc's wrench (see statics_section_forces), all samples at once
-        r = end[:, :2] - pts
-        moment = -(wrenches[:, 2] + r[:, 0] * wrenches[:, 1] - r[:, 1] * wrenches[:, 0])
-        axial = axes[:, 0] * wrenches[:, 0] + axes[:, 1] * wrenches[:, 1]
-        at = self._sample_fractions if self._forward else 1.0 - self._sample_fractions
-        order = np.argsort(at, kind="stable")    # the fractions are distinct
-        return SectionForces(at[order], axial[order], moment[order])
+        axes = unit_vectors(self._sample_tangent + (1.0 - w) * lead[..., 2] + w * follow[..., 2])
+        r = end[..., :2] - pts
+        moment = -(wrenches[..., 2] + r[..., 0] * wrenches[..., 1] - r[..., 1] * wrenches[..., 0])
+        axial = axes[..., 0] * wrenches[..., 0] + axes[..., 1] * wrenches[..., 1]
+        order = self._station_order
+        return SectionForces(self._stations, axial[:, order], moment[:, order])

@@ -215,6 +215,10 @@ class Weighted(Connector):
         """The wrapped connector's (from its elastic forces: the weights are not section forces)."""
         return self.inner.section_forces(pose_a, pose_b, internal, gradient)
 
+    def path_section_forces(self, states):
+        """The wrapped connector's (from its elastic forces: the weights are not section forces)."""
+        return self.inner.path_section_forces(states)
+
     def mass_matrix(self, density, pose_a, pose_b, internal):
         """The wrapped connector's."""
         return self.inner.mass_matrix(density, pose_a, pose_b, internal)

@@ -366,18 +366,26 @@ class PrbmConnector(Connector):
                 + rotation_reasons("end rotation", np.array([turn]), self._fitted_rotation))
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
-        """Polyline end_a, R_a, R_2, R_b, end_b in the current configuration, (5, 2) mm.
+        """Polyline end_a, R_a, R_2, R_b, end_b in the current configuration, (5, 2) mm."""
+        return self._polylines([(pose_a, pose_b, internal)])[0]
 
-        Plain floats: stresses are recorded at every level, and five points
-        cost less as scalar algebra than as small numpy arrays.
-        """
-        (xa, ya, ta), (xb, yb, tb) = pose_a.tolist(), pose_b.tolist()
-        (eax, eay), (rax, ray) = rotate_xy(ta, *self._end_rel[0]), rotate_xy(ta, *self._r_a)
-        (ebx, eby), (rbx, rby) = rotate_xy(tb, *self._end_rel[1]), rotate_xy(tb, *self._r_b)
-        vhx, vhy = rotate_xy(float(internal[0]), *self._v_h)
+    def _polylines(self, states) -> np.ndarray:
+        """The polylines of :meth:`shape` at k local states, (k, 5, 2) mm."""
+        poses = np.array([[*pose_a, *pose_b, internal[0]] for pose_a, pose_b, internal in states])
+        xa, ya, ta, xb, yb, tb, ph = poses.T
+        ca, sa, cb, sb, ch, sh = np.cos(ta), np.sin(ta), np.cos(tb), np.sin(tb), np.cos(ph), np.sin(ph)
+
+        def turned(c, s, v):       # R(angle) v, as rotate_xy
+            return c * v[0] - s * v[1], s * v[0] + c * v[1]
+
+        (eax, eay), (rax, ray) = turned(ca, sa, self._end_rel[0]), turned(ca, sa, self._r_a)
+        (ebx, eby), (rbx, rby) = turned(cb, sb, self._end_rel[1]), turned(cb, sb, self._r_b)
+        vhx, vhy = turned(ch, sh, self._v_h)
         jax, jay = xa + rax, ya + ray
-        return np.array([[xa + eax, ya + eay], [jax, jay], [jax + vhx, jay + vhy],
-                         [xb + rbx, yb + rby], [xb + ebx, yb + eby]])
+        out = np.empty((len(states), 5, 2))
+        out[:, :, 0] = np.column_stack([xa + eax, jax, jax + vhx, xb + rbx, xb + ebx])
+        out[:, :, 1] = np.column_stack([ya + eay, jay, jay + vhy, yb + rby, yb + eby])
+        return out
 
     def section_forces(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray,
                        gradient: np.ndarray | None = None) -> SectionForces:
@@ -392,3 +400,10 @@ class PrbmConnector(Connector):
             gradient = self.evaluate(pose_a, pose_b, internal)[1]
         return statics_section_forces(self.shape(pose_a, pose_b, internal), self._fractions,
                                       gradient[3:6], pose_b, reverse=not self._forward)
+
+    def path_section_forces(self, states) -> SectionForces:
+        """:meth:`section_forces` at k states (a load path), stacked (k, m), in one pass."""
+        wrenches = np.array([self.evaluate(*state)[1][3:6] for state in states])
+        return statics_section_forces(self._polylines(states), self._fractions, wrenches,
+                                      np.array([state[1] for state in states]),
+                                      reverse=not self._forward)

@@ -46,7 +46,11 @@ class PathRecorder:
     Every point is checked by the validity monitor (:meth:`System.validity`):
     ``LoadPath.valid`` and ``LoadPath.validity`` say, per point, whether the
     state is inside every model's range of meaning and if not why; the run
-    goes on either way.
+    goes on either way. The monitor's verdicts and the section stresses are
+    computed when the path ends (:meth:`finish` or :meth:`failure`), for all
+    its points at once: a connector's section forces then take one
+    vectorised pass per path (:meth:`Connector.path_section_forces`)
+    instead of one call per level.
     """
 
     def __init__(self, system: System, case: LoadCase, model: str = "", scene: str = "",
@@ -68,6 +72,7 @@ class PathRecorder:
         self.path.stats = self.stats
         self.factors: list[float] = []
         self.sections = {f.name: f.section for f in system.mechanism.flexures}
+        self.states: list[np.ndarray] = []      # recorded states not yet judged and stressed
 
     def record(self, point: PathPoint) -> None:
         """Append one converged point."""
@@ -75,12 +80,9 @@ class PathRecorder:
         dx, dy, rot = system.target(q)
         lp.load.append(point.factor * self.case.magnitude)
         lp.dx.append(dx), lp.dy.append(dy), lp.rotation.append(rot)
-        reasons = system.validity(q)
-        lp.valid.append(not reasons)
-        lp.validity.append("; ".join(reasons) if reasons else None)
+        self.states.append(q)
         if lp.reactions is not None:
             lp.reactions.append(system.reaction(q).tolist())
-        record_stress(lp, system.connectors, system.local_states(q), self.sections)
         if lp.poses is not None:
             for b in system.mechanism.bodies:
                 lp.poses[b].append(system.pose(q, b).tolist())
@@ -98,14 +100,28 @@ class PathRecorder:
         self.stats.update(newton_iterations=counters.newton_iterations,
                           step_cuts=counters.step_cuts, substeps=counters.substeps)
 
+    def _judge(self) -> None:
+        """Validity verdicts and section stresses of the states recorded since the last call."""
+        system, lp = self.system, self.path
+        for q in self.states:
+            reasons = system.validity(q)
+            lp.valid.append(not reasons)
+            lp.validity.append("; ".join(reasons) if reasons else None)
+        if self.states:
+            record_path_stress(lp, system.connectors,
+                               [system.local_states(q) for q in self.states], self.sections)
+        self.states = []
+
     def finish(self) -> LoadPath:
         """The path of a successful trace (wall time from the recorder's creation)."""
+        self._judge()
         self.path.converged = True
         self.path.seconds = time.perf_counter() - self.t0
         return self.path
 
     def failure(self, exc: TraceFailure) -> SolverError:
         """The SolverError for a failed trace, carrying the path so far."""
+        self._judge()
         self._count(exc.counters)
         self.stats["failure"] = exc.reason
         self.path.converged = False
@@ -137,22 +153,23 @@ class PathRecorder:
 
 def record_stress(path: LoadPath, connectors, states, sections: dict,
                   scales: Sequence[float] = (1.0,), gradients=None) -> None:
-    """Append each flexure's peak outer-fibre stress (MPa) and its place to ``path``.
+    """Append each flexure's peak outer-fibre stress (MPa) at one state, scaled, to ``path``.
 
-    Connectors whose :meth:`~reducedmodels.connector.Connector.section_forces`
-    is None (pins) are skipped; the stress profile along each flexure is
-    kept for the last level only (``path.stress_profile``).
+    The linear response's form: one level is appended per entry of
+    ``scales``, with the section forces times it (the load factors of a
+    linear response, whose section forces are computed once). Connectors
+    whose :meth:`~reducedmodels.connector.Connector.section_forces` is None
+    (pins) are skipped; the stress profile is kept for the last level only
+    (``path.stress_profile``).
 
     Parameters
     ----------
     path : LoadPath
     connectors, states :
-        The system's connectors and their local states at the level.
+        The system's connectors and their local states.
     sections : dict of flexure name -> Section
     scales : sequence of float
-        One level is appended per entry, with the section forces times it:
-        the load factors of a linear response, whose section forces are
-        computed once (default: one level, as they are).
+        The factors of the levels to append.
     gradients : list, optional
         Each connector's local gradient if already known (see ``section_forces``).
     """
@@ -164,14 +181,48 @@ def record_stress(path: LoadPath, connectors, states, sections: dict,
             continue
         unit = forces.fibre_stress(section)
         peak = int(np.argmax(unit))
-        if path.peak_stress is None:
-            path.peak_stress, path.peak_stress_at, path.stress_profile = {}, {}, {}
-        path.peak_stress.setdefault(c.name, []).extend(float(abs(f) * unit[peak])
-                                                       for f in scales)
-        path.peak_stress_at.setdefault(c.name, []).extend(float(forces.at[peak])
-                                                          for _ in scales)
-        path.stress_profile[c.name] = {"at": forces.at.tolist(),
-                                       "stress": (abs(scales[-1]) * unit).tolist()}
+        _append_stress(path, c.name, [float(abs(f) * unit[peak]) for f in scales],
+                       [float(forces.at[peak])] * len(scales), forces.at,
+                       abs(scales[-1]) * unit)
+
+
+def record_path_stress(path: LoadPath, connectors, levels: Sequence[Sequence], sections: dict
+                       ) -> None:
+    """Append each flexure's peak outer-fibre stress (MPa) and its place at several levels.
+
+    Each connector's section forces at all the levels come from one call
+    of :meth:`~reducedmodels.connector.Connector.path_section_forces`;
+    connectors without section forces (pins) are skipped, and the stress
+    profile is kept for the last level (``path.stress_profile``).
+
+    Parameters
+    ----------
+    path : LoadPath
+    connectors :
+        The system's connectors.
+    levels : sequence of lists of local states
+        The connectors' local states at each level, in the order of the levels.
+    sections : dict of flexure name -> Section
+    """
+    for k, c in enumerate(connectors):
+        section = sections.get(c.name)
+        forces = None if section is None else c.path_section_forces([lv[k] for lv in levels])
+        if forces is None:
+            continue
+        unit = forces.fibre_stress(section)
+        peak = np.argmax(unit, axis=1)
+        _append_stress(path, c.name, unit[np.arange(len(peak)), peak].tolist(),
+                       forces.at[peak].tolist(), forces.at, unit[-1])
+
+
+def _append_stress(path: LoadPath, name: str, peaks: list[float], places: list[float],
+                   at: np.ndarray, profile: np.ndarray) -> None:
+    """Append one flexure's peak stresses (MPa) and places; its profile replaces the last one."""
+    if path.peak_stress is None:
+        path.peak_stress, path.peak_stress_at, path.stress_profile = {}, {}, {}
+    path.peak_stress.setdefault(name, []).extend(peaks)
+    path.peak_stress_at.setdefault(name, []).extend(places)
+    path.stress_profile[name] = {"at": at.tolist(), "stress": profile.tolist()}
 
 
 def solve_path(system: System, case: LoadCase, levels: int | None = None,

@@ -42,9 +42,11 @@ class SectionForces:
         Arc-length fraction of each station from the flexure's first end
         (the start of its centre line), 0..1, increasing (a polyline vertex
         appears twice, once per adjacent segment, when the axis turns there).
-    axial : array (m,)
-        Normal force N, N (tension positive).
-    moment : array (m,)
+    axial : array (m,) or (k, m)
+        Normal force N, N (tension positive); one row per state when the
+        forces of k states at the same stations are stacked (a whole load
+        path, see :meth:`reducedmodels.connector.Connector.path_section_forces`).
+    moment : array (m,) or (k, m)
         Bending moment M, N mm: the moment the part before the section
         exerts on the part towards the end body (counterclockwise positive).
     """
@@ -54,7 +56,7 @@ class SectionForces:
     moment: np.ndarray
 
     def fibre_stress(self, section: Section) -> np.ndarray:
-        """Outer-fibre normal stress |N|/A + |M| h/(2 I) at each station, MPa."""
+        """Outer-fibre normal stress |N|/A + |M| h/(2 I) at each station (and state), MPa."""
         return (np.abs(self.axial) / section.area
                 + np.abs(self.moment) * section.thickness / (2.0 * section.inertia))
 
@@ -70,25 +72,30 @@ def statics_section_forces(points: np.ndarray, fractions: np.ndarray, wrench: np
                            axes: np.ndarray | None = None) -> SectionForces:
     """Section forces along a displaced centre line from the wrench at its end body.
 
+    Every array may carry a leading axis of k states (a whole load path)
+    with the same stations: the forces come out stacked, (k, m).
+
     Parameters
     ----------
-    points : array (m, 2)
+    points : array (m, 2) or (k, m, 2)
         Current centre line as a polyline ending at the end body, mm.
     fractions : array (m,)
         Arc-length fraction of each point measured along the same direction, 0..1.
-    wrench : array (3,)
+    wrench : array (3,) or (k, 3)
         The connector's energy gradient on the end body's pose: the force
         (N, N) the end body exerts on the flexure and its moment (N mm) about
         the body's reference point, at equilibrium of the internal coordinates.
-    end_pose : array (3,)
+    end_pose : array (3,) or (k, 3)
         The end body's pose (mm, mm, rad).
     reverse : bool
         The polyline runs from the flexure's last end to its first: report
         fractions from the first end (1 - fraction) and stations in that order.
-    axes : array (m, 2), optional
+    axes : array (m, 2) or (k, m, 2), optional
         The sections' current unit axes at the points (towards the end
         body), where the model knows them (a curved centre line); default:
-        each straight segment's own axis.
+        each straight segment's own axis. Vertices that coincide with their
+        predecessor (in the first state: points of one rigid body coincide
+        in every state) have no axis and are left out.
 
     Returns
     -------
@@ -101,23 +108,24 @@ def statics_section_forces(points: np.ndarray, fractions: np.ndarray, wrench: np
     if axes is not None:
         x, t, at = points, np.asarray(axes, float), fractions
     else:
-        keep = np.concatenate([[True], np.any(np.diff(points, axis=0) != 0.0, axis=1)])
-        points, fractions = points[keep], fractions[keep]     # coincident vertices: no axis
-        seg = np.diff(points, axis=0)
-        axis = seg / np.hypot(seg[:, 0], seg[:, 1])[:, None]
-        x = np.concatenate([points[:-1], points[1:]])
-        t = np.concatenate([axis, axis])
+        first = points.reshape(-1, *points.shape[-2:])[0]
+        keep = np.concatenate([[True], np.any(np.diff(first, axis=0) != 0.0, axis=1)])
+        points, fractions = points[..., keep, :], fractions[keep]
+        seg = np.diff(points, axis=-2)
+        axis = seg / np.hypot(seg[..., 0], seg[..., 1])[..., None]
+        x = np.concatenate([points[..., :-1, :], points[..., 1:, :]], axis=-2)
+        t = np.concatenate([axis, axis], axis=-2)
         at = np.concatenate([fractions[:-1], fractions[1:]])
-    force = np.asarray(wrench[:2], float)
     wrench = np.asarray(wrench, float)
-    r = np.asarray(end_pose[:2], float) - x
+    force = wrench[..., :2]
+    r = np.asarray(end_pose, float)[..., None, :2] - x
     # the part beyond the section is held by the end body and by the part before it
-    moment = -(wrench[2] + r[:, 0] * force[1] - r[:, 1] * force[0])
-    axial = t @ force
+    moment = -(wrench[..., 2:3] + r[..., 0] * force[..., 1:2] - r[..., 1] * force[..., 0:1])
+    axial = np.matmul(t, force[..., None])[..., 0]
     if reverse:
         at = 1.0 - at
     order = np.argsort(at, kind="stable")
-    return SectionForces(at[order], axial[order], moment[order])
+    return SectionForces(at[order], axial[..., order], moment[..., order])
 
 
 def polyline_fractions(points: np.ndarray) -> np.ndarray:
@@ -128,9 +136,9 @@ def polyline_fractions(points: np.ndarray) -> np.ndarray:
 
 
 def unit_vectors(angle: np.ndarray) -> np.ndarray:
-    """(cos, sin) of each angle (rad), shape (m, 2)."""
-    out = np.empty((np.size(angle), 2))        # (np.column_stack costs more on short arrays)
-    out[:, 0], out[:, 1] = np.cos(angle), np.sin(angle)
+    """(cos, sin) of each angle (rad) of an array of shape (...), shape (..., 2)."""
+    out = np.empty((*np.shape(angle), 2))      # (np.column_stack costs more on short arrays)
+    out[..., 0], out[..., 1] = np.cos(angle), np.sin(angle)
     return out
 
 
