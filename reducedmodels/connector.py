@@ -161,6 +161,15 @@ class Connector(ABC):
         """
         return []
 
+    def path_validity(self, states: Sequence[LocalState]) -> list[list[str]]:
+        """:meth:`validity` at each of several states (a load path's levels).
+
+        The path recorder asks once per path, so that a connector can screen
+        all the states in one vectorised pass and name reasons only where
+        there are any. Default: :meth:`validity` state by state.
+        """
+        return [self.validity(*state) for state in states]
+
     # --- optional mass (reducedmodels.inertia) ---------------------------
     def mass_points(self, density: float) -> "MassPoints | None":
         """The connector's mass as point masses over its local coordinates.

@@ -32,7 +32,8 @@ from geometry.kinematics import rotate_xy
 from .connector import Connector
 from .inertia import MassPoints, chain_mass_points
 from .sections import SectionForces, unit_vectors
-from .validity import MAX_RELATIVE_ROTATION, MAX_STRAIN, rotation_reasons, stretch_reasons
+from .validity import (MAX_RELATIVE_ROTATION, MAX_STRAIN, SCREEN_MARGIN, rotation_reasons,
+                       stretch_reasons)
 
 SAMPLES_PER_SUB_ARC = 16
 """Segments of each displaced sub-arc at whose ends the section forces are reported."""
@@ -297,6 +298,23 @@ class DcmmConnector(Connector):
         return (stretch_reasons("sub-arc chord", np.array(chords), np.array(self._arc_lengths),
                                 one_sided=True)
                 + rotation_reasons("sub-arc", np.array(turns), MAX_RELATIVE_ROTATION))
+
+    def path_validity(self, states) -> list[list[str]]:
+        """:meth:`validity` at k states, screened in one vectorised pass.
+
+        Only states whose chord stretch or relative rotation comes within
+        :data:`~reducedmodels.validity.SCREEN_MARGIN` of its limit (or
+        beyond) are judged one by one.
+        """
+        poses = self._chain_poses(states)
+        ends = _place_rows(poses[:, [0, -1]], np.array(self._end_rel))
+        points = np.concatenate([ends[:, :1], poses[:, 1:-1, :2], ends[:, 1:]], axis=1)
+        d = np.diff(points, axis=1)
+        strain = (np.hypot(d[..., 0], d[..., 1]) / self._sub_lengths - 1.0).max(axis=1)
+        turn = np.abs(np.diff(poses[..., 2], axis=1)).max(axis=1)
+        near = ((strain > MAX_STRAIN - SCREEN_MARGIN)
+                | (turn > MAX_RELATIVE_ROTATION - SCREEN_MARGIN)).tolist()
+        return [self.validity(*state) if flag else [] for state, flag in zip(states, near)]
 
     def shape(self, pose_a, pose_b, internal) -> np.ndarray:
         """Polyline through the flexure ends and the cut points, mm."""

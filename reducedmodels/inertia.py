@@ -207,6 +207,10 @@ class Weighted(Connector):
         """The wrapped connector's."""
         return self.inner.validity(pose_a, pose_b, internal)
 
+    def path_validity(self, states) -> list[list[str]]:
+        """The wrapped connector's."""
+        return self.inner.path_validity(states)
+
     def mass_points(self, density: float) -> MassPoints | None:
         """The wrapped connector's."""
         return self.inner.mass_points(density)

@@ -98,7 +98,7 @@ from geometry.shapes import Shape, arc_semi_axes
 from .connector import Connector
 from .inertia import MassPoints, chain_mass_points
 from .sections import SectionForces, polyline_fractions, statics_section_forces
-from .validity import MAX_STRAIN, rotation_reasons, stretch_reasons
+from .validity import MAX_STRAIN, SCREEN_MARGIN, rotation_reasons, stretch_reasons
 
 TABLE_RESOURCE = "data/prbm_table.json"
 
@@ -364,6 +364,20 @@ class PrbmConnector(Connector):
         return (stretch_reasons("chord", np.array([chord]), np.array([self.length]),
                                 one_sided=True)
                 + rotation_reasons("end rotation", np.array([turn]), self._fitted_rotation))
+
+    def path_validity(self, states) -> list[list[str]]:
+        """:meth:`validity` at k states, screened in one vectorised pass.
+
+        Only states whose chord stretch or end rotation comes within
+        :data:`~reducedmodels.validity.SCREEN_MARGIN` of its limit (or
+        beyond) are judged one by one.
+        """
+        ends = self._polylines(states)[:, [0, -1]]
+        chord = np.hypot(*(ends[:, 1] - ends[:, 0]).T)
+        turn = np.abs(np.array([state[1][2] - state[0][2] for state in states]))
+        near = ((chord / self.length - 1.0 > MAX_STRAIN - SCREEN_MARGIN)
+                | (turn > self._fitted_rotation - SCREEN_MARGIN)).tolist()
+        return [self.validity(*state) if flag else [] for state, flag in zip(states, near)]
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Polyline end_a, R_a, R_2, R_b, end_b in the current configuration, (5, 2) mm."""

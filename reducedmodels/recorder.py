@@ -103,13 +103,12 @@ class PathRecorder:
     def _judge(self) -> None:
         """Validity verdicts and section stresses of the states recorded since the last call."""
         system, lp = self.system, self.path
-        for q in self.states:
-            reasons = system.validity(q)
+        levels = [system.local_states(q) for q in self.states]
+        for reasons in path_validity(system.connectors, levels):
             lp.valid.append(not reasons)
             lp.validity.append("; ".join(reasons) if reasons else None)
-        if self.states:
-            record_path_stress(lp, system.connectors,
-                               [system.local_states(q) for q in self.states], self.sections)
+        if levels:
+            record_path_stress(lp, system.connectors, levels, self.sections)
         self.states = []
 
     def finish(self) -> LoadPath:
@@ -149,6 +148,21 @@ class PathRecorder:
         except TraceFailure as exc:
             raise self.failure(exc) from None
         return self.finish(), last
+
+
+def path_validity(connectors, levels: Sequence[Sequence]) -> list[list[str]]:
+    """The validity monitor's reasons at each level, as :meth:`System.validity` gives them.
+
+    Each connector judges all the levels in one call
+    (:meth:`~reducedmodels.connector.Connector.path_validity`); each reason
+    is prefixed with the connector's name, connectors in order. ``levels``
+    holds the connectors' local states at each level.
+    """
+    reasons: list[list[str]] = [[] for _ in levels]
+    for k, c in enumerate(connectors):
+        for found, why in zip(reasons, c.path_validity([lv[k] for lv in levels])):
+            found.extend(f"{c.name}: {w}" for w in why)
+    return reasons
 
 
 def record_stress(path: LoadPath, connectors, states, sections: dict,

@@ -84,6 +84,17 @@ flexure material shares. (At det F <= 0 the element is inverted and the
 connector refuses the state outright.)"""
 
 
+SCREEN_MARGIN = 1e-9
+"""How close to a limit (in its own units) a vectorised screen sends a state to the exact check.
+
+A connector's :meth:`~reducedmodels.connector.Connector.path_validity`
+screens all the states of a path with array arithmetic, which may differ
+from its scalar :meth:`~reducedmodels.connector.Connector.validity` in the
+last bits (``np.hypot`` against ``math.dist``): states within this margin
+of a limit, and beyond it, are judged by the scalar check, so the verdicts
+are the scalar check's exactly."""
+
+
 def stretch_reasons(what: str, lengths: np.ndarray, reference: np.ndarray,
                     one_sided: bool = False) -> list[str]:
     """The worst stretch of ``lengths`` against ``reference`` (mm) beyond :data:`MAX_STRAIN`.

@@ -1,0 +1,113 @@
+"""A load path's validity verdicts and section forces, judged in one pass per connector.
+
+The path recorder asks each connector once per path
+(``Connector.path_validity``, ``Connector.path_section_forces``); the DCMM
+and PRBM answer with one vectorised pass. These tests hold the one-pass
+answers to the state-by-state ones (``validity``, ``section_forces``),
+exactly (to the last bit), along paths that cross the models' limits and
+at states placed on a limit to the last bit, where a screen in array
+arithmetic is most likely to disagree with the scalar check.
+"""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from builders import cantilever, tip_moment
+from geometry import Segment, load_scene
+from reducedmodels import LoadControl, build_system, trace
+from reducedmodels.catalogue import parse_model
+from reducedmodels.recorder import path_validity
+from reducedmodels.validity import MAX_RELATIVE_ROTATION, MAX_STRAIN
+
+MODELS = ["dcmm:1", "dcmm:3", "dcmm:2[frame=follower]", "prbm"]
+
+
+def overloaded_states(model: str, factor: float):
+    """The system of ``model`` on the open chain and its states along f- at ``factor`` times the load."""
+    scene = load_scene("open_chain")
+    case = next(c for c in scene.load_cases if c.name == "f-")
+    case = dataclasses.replace(case, components=tuple(
+        dataclasses.replace(c, value=c.value * factor) for c in case.components))
+    system = build_system(scene.mechanism, parse_model(model))
+    points = trace(system, system.loads(case), LoadControl(case.factors()))
+    return system, [system.local_states(p.state) for p in points]
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_one_pass_verdicts_and_forces_are_the_state_by_state_ones(model):
+    system, levels = overloaded_states(model, 30.0)
+    verdicts = path_validity(system.connectors, levels)
+    singles = [[f"{c.name}: {w}" for c, local in zip(system.connectors, lv)
+                for w in c.validity(*local)] for lv in levels]
+    assert verdicts == singles
+    assert any(verdicts) and not all(verdicts)      # the path crosses a limit
+    for k, c in enumerate(system.connectors):
+        states = [lv[k] for lv in levels]
+        stacked = c.path_section_forces(states)
+        for row, state in enumerate(states):
+            one = c.section_forces(*state)
+            assert np.array_equal(one.at, stacked.at)
+            assert np.array_equal(one.axial, stacked.axial[row])
+            assert np.array_equal(one.moment, stacked.moment[row])
+
+
+@pytest.mark.parametrize("model", ["dcmm:1", "dcmm:2"])
+def test_dcmm_screen_defers_to_the_exact_check_on_the_limits(model):
+    length = 10.0
+    mech = cantilever(Segment((0.0, 0.0), (length, 0.0)))
+    system = build_system(mech, parse_model(model))
+    c = system.connectors[0]
+    rest = system.local_states(system.initial_state())[0]
+    ground, _, internal = rest
+    n = len(internal) // 3 + 1
+    states = []
+    # every sub-arc turned by the rotation limit, to the last bit
+    for t in (np.nextafter(MAX_RELATIVE_ROTATION, 0.0), MAX_RELATIVE_ROTATION,
+              np.nextafter(MAX_RELATIVE_ROTATION, 4.0)):
+        cuts = internal.reshape(-1, 3).copy()
+        cuts[:, 2] = t * np.arange(1, n)
+        states.append((ground, np.array([length, 0.0, t * n]), cuts.ravel()))
+    # chords stretched to the strain limit, to the last bit, along the axis
+    for stretch in (MAX_STRAIN, np.nextafter(MAX_STRAIN, 0.0), np.nextafter(MAX_STRAIN, 1.0)):
+        scale = 1.0 + stretch
+        cuts = internal.reshape(-1, 3).copy()
+        cuts[:, 0] *= scale
+        states.append((ground, np.array([length * scale, 0.0, 0.0]), cuts.ravel()))
+    verdicts = c.path_validity(states)
+    assert verdicts == [c.validity(*s) for s in states]
+    assert any(verdicts) and not all(verdicts)
+
+
+def test_prbm_screen_defers_to_the_exact_check_on_the_limits():
+    length = 10.0
+    mech = cantilever(Segment((0.0, 0.0), (length, 0.0)))
+    system = build_system(mech, parse_model("prbm"))
+    c = system.connectors[0]
+    ground, _, internal = system.local_states(system.initial_state())[0]
+    limit = c._fitted_rotation
+    states = [(ground, np.array([length, 0.0, t]), internal)
+              for t in (np.nextafter(limit, 0.0), limit, np.nextafter(limit, 4.0))]
+    states += [(ground, np.array([length * (1.0 + s), 0.0, 0.0]), internal)
+               for s in (np.nextafter(MAX_STRAIN, 0.0), MAX_STRAIN, np.nextafter(MAX_STRAIN, 1.0))]
+    verdicts = c.path_validity(states)
+    assert verdicts == [c.validity(*s) for s in states]
+    assert any(verdicts) and not all(verdicts)
+
+
+def test_recorded_path_matches_the_state_by_state_judgement():
+    mech = cantilever(Segment((0.0, 0.0), (10.0, 0.0)))
+    moment = 1.5 * MAX_RELATIVE_ROTATION * 2100.0 * 0.1**3 / 12.0 / 10.0
+    system = build_system(mech, parse_model("dcmm:1"))
+    case = tip_moment(moment, levels=5)
+    from reducedmodels.recorder import solve_path
+
+    lp = solve_path(system, case)
+    states = [p.state for p in trace(system, system.loads(case), LoadControl(case.factors()))]
+    assert lp.validity == ["; ".join(r) if r else None for r in map(system.validity, states)]
+    c = system.connectors[0]
+    section = mech.flexures[0].section
+    for level, q in enumerate(states):
+        sigma, at = c.section_forces(*system.local_states(q)[0]).peak(section)
+        assert lp.peak_stress["f"][level] == sigma and lp.peak_stress_at["f"][level] == at
