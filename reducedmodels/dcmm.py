@@ -22,6 +22,7 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -135,6 +136,65 @@ def _place_rows(poses: np.ndarray, rel: np.ndarray) -> np.ndarray:
     return out
 
 
+_SAMPLE_FRACTIONS = np.linspace(0.0, 1.0, SAMPLES_PER_SUB_ARC + 1)
+"""Fraction w of each sample along its sub-arc, from its leading body's cut."""
+
+
+@dataclasses.dataclass(frozen=True)
+class _ChainLayout:
+    """The index arrays of a DCMM_n chain, the same for every flexure with the same n and direction.
+
+    Attributes
+    ----------
+    element_dofs : int array (n, 6)
+        Local coordinates of each sub-arc's two bodies: a -> 0..2, cut k -> 6 + 3k, b -> 3..5.
+    rows, cols : int arrays (36 n,)
+        Local (row, col) of each row-major 6x6 sub-arc Hessian entry.
+    is_rotation : bool array (3 (n - 1),)
+        Which internal coordinates are angles.
+    sample_part, sample_w : arrays (m,)
+        Sub-arc (chain order) and fraction along it of each sample, a cut sampled once.
+    station_order, stations : arrays (m,)
+        The order of the samples from the flexure's first end and their
+        arc-length fractions from it, increasing.
+    """
+
+    element_dofs: np.ndarray
+    rows: np.ndarray
+    cols: np.ndarray
+    is_rotation: np.ndarray
+    sample_part: np.ndarray
+    sample_w: np.ndarray
+    station_order: np.ndarray
+    stations: np.ndarray
+
+
+@functools.lru_cache(maxsize=64)
+def _chain_layout(n: int, forward: bool) -> _ChainLayout:
+    """The layout of a chain of n sub-arcs run from the flexure's start (``forward``) or end.
+
+    It depends on n and the direction only, so the flexures of a model
+    share it (computed once, like a module constant; the arrays are read-only).
+    """
+    slots = ([np.arange(0, 3)] + [np.arange(6 + 3 * k, 9 + 3 * k) for k in range(n - 1)]
+             + [np.arange(3, 6)])
+    element_dofs = np.array([np.concatenate([slots[k], slots[k + 1]]) for k in range(n)])
+    w = _SAMPLE_FRACTIONS
+    sample_w = np.concatenate([w] + [w[1:]] * (n - 1))
+    sample_part = np.concatenate([np.zeros(len(w), int)]
+                                 + [np.full(len(w) - 1, k) for k in range(1, n)])
+    fractions = np.concatenate([w / n] + [(k + w[1:]) / n for k in range(1, n)])
+    at = fractions if forward else 1.0 - fractions
+    order = np.argsort(at, kind="stable")    # the fractions are distinct
+    layout = _ChainLayout(element_dofs, np.repeat(element_dofs, 6, axis=1).ravel(),
+                          np.tile(element_dofs, (1, 6)).ravel(),
+                          np.tile([False, False, True], n - 1), sample_part, sample_w,
+                          order, at[order])
+    for array in dataclasses.astuple(layout):
+        array.flags.writeable = False
+    return layout
+
+
 class DcmmConnector(Connector):
     """DCMM_n model of one flexure (a :class:`~reducedmodels.connector.Connector`).
 
@@ -161,10 +221,12 @@ class DcmmConnector(Connector):
         self.n_internal = 3 * (n - 1)
         EI = flexure.bending_stiffness(mechanism.material)
         EA = flexure.axial_stiffness(mechanism.material)
-        parts = flexure.shape.split(n)
+        shape = flexure.shape
+        parts = shape.split(n)
         forward = flexure.start_body == self.bodies[0]   # chain runs start -> end
         if not forward:
             parts = parts[::-1]
+        self._layout = layout = _chain_layout(n, forward)
         # chain of reference points: body a, cuts (in chain order), body b
         cuts = [p.end_points[1] if forward else p.end_points[0] for p in parts[:-1]]
         refs = [mechanism.bodies[self.bodies[0]].reference, *cuts,
@@ -180,17 +242,10 @@ class DcmmConnector(Connector):
             self._elements.append((tuple((ell.center - refs[k]).tolist()),
                                    tuple((ell.center - refs[k + 1]).tolist()),
                                    tuple(map(tuple, ell.axes.tolist())), tuple((1.0 / c).tolist())))
-        # local slots of the chain bodies: a -> 0..2, cut k -> 6 + 3k, b -> 3..5
-        slots = ([np.arange(0, 3)] + [np.arange(6 + 3 * k, 9 + 3 * k) for k in range(n - 1)]
-                 + [np.arange(3, 6)])
-        self._element_dofs = np.array([np.concatenate([slots[k], slots[k + 1]])
-                                       for k in range(n)])
-        self._rows = np.repeat(self._element_dofs, 6, axis=1).ravel()
-        self._cols = np.tile(self._element_dofs, (1, 6)).ravel()
         # flexure ends' offsets from the end bodies' reference points, float pairs (mm)
-        self._end_rel = [tuple((np.asarray(flexure.end_point_of(self.bodies[k]), float)
-                                - refs[-k]).tolist()) for k in (0, 1)]
-        self._area, self._sub_lengths = flexure.section.area, np.array([p.length for p in parts])
+        ends = shape.end_points if forward else shape.end_points[::-1]     # body a's first
+        self._end_rel = [tuple((ends[k] - refs[-k]).tolist()) for k in (0, 1)]
+        self._area, self._sub_lengths = flexure.section.area, np.array(self._arc_lengths)
         self._sub_arc_samples(parts, refs, forward)
 
     def mass_points(self, density: float) -> MassPoints:
@@ -215,30 +270,25 @@ class DcmmConnector(Connector):
         The displaced sub-arc is the blend (1 - w) x_leading + w x_following
         of the point carried rigidly by each of its bodies, w the fraction
         along the sub-arc: it leaves the leading body's cut and reaches the
-        following body's.
+        following body's. A cut is shared by two sub-arcs and sampled once
+        (as the first point of the sub-arc after it is left out).
         """
-        w = np.linspace(0.0, 1.0, SAMPLES_PER_SUB_ARC + 1)
-        self._samples = []
+        w = _SAMPLE_FRACTIONS if forward else _SAMPLE_FRACTIONS[::-1]
+        lead, follow, tangent = [], [], []
         for k, part in enumerate(parts):
-            s = (w if forward else w[::-1]) * part.length
-            pts = part.point(s)
+            s = w * part.length
+            first = 0 if k == 0 else 1
+            pts = part.point(s)[first:]
+            lead.append(pts - refs[k])
+            follow.append(pts - refs[k + 1])
             # tangent towards body b, as an angle
-            tangent = part.tangent_angle(s) + (0.0 if forward else np.pi)
-            first = 0 if k == 0 else 1            # a cut is shared by two sub-arcs
-            self._samples.append((pts[first:] - refs[k], pts[first:] - refs[k + 1], w[first:],
-                                  tangent[first:]))
-        n = len(parts)
-        self._sample_fractions = np.concatenate(
-            [(k + sample[2]) / n for k, sample in enumerate(self._samples)])
-        # the same samples flattened over the sub-arcs, for one batched pass per level
-        self._sample_part = np.concatenate([np.full(len(sample[2]), k)
-                                            for k, sample in enumerate(self._samples)])
-        self._sample_lead, self._sample_follow, self._sample_w, self._sample_tangent = (
-            np.concatenate(column) for column in zip(*self._samples))
-        # stations from the flexure's first end, increasing (the fractions are distinct)
-        at = self._sample_fractions if forward else 1.0 - self._sample_fractions
-        self._station_order = np.argsort(at, kind="stable")
-        self._stations = at[self._station_order]
+            tangent.append((part.tangent_angle(s) + (0.0 if forward else np.pi))[first:])
+        if len(parts) == 1:
+            self._sample_lead, self._sample_follow, self._sample_tangent = (
+                lead[0], follow[0], tangent[0])
+        else:
+            self._sample_lead, self._sample_follow, self._sample_tangent = (
+                np.concatenate(lead), np.concatenate(follow), np.concatenate(tangent))
 
     def initial_internal(self) -> np.ndarray:
         """Cut-point bodies at rest: (x, y, 0) each."""
@@ -246,14 +296,14 @@ class DcmmConnector(Connector):
 
     def internal_is_rotation(self) -> np.ndarray:
         """Every third internal coordinate is an angle."""
-        return np.tile([False, False, True], len(self._cuts))
+        return self._layout.is_rotation
 
     def _chain(self, pose_a, pose_b, internal) -> list[np.ndarray]:
         return [pose_a, *internal.reshape(-1, 3), pose_b]
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         """Local (rows, cols) of the Hessian values :meth:`evaluate` returns: 36 per sub-arc."""
-        return self._rows, self._cols
+        return self._layout.rows, self._layout.cols
 
     def evaluate(self, pose_a, pose_b, internal):
         """Energy (N mm), gradient over [pose_a, pose_b, internal] and the Hessian values."""
@@ -265,7 +315,7 @@ class DcmmConnector(Connector):
             e, g, h = sub_arc_energy(chain[k], chain[k + 1], *element)
             energy += e
             grads.append(g), hessians.append(h)
-        gradient = np.bincount(self._element_dofs.ravel(), weights=np.concatenate(grads),
+        gradient = np.bincount(self._layout.element_dofs.ravel(), weights=np.concatenate(grads),
                                minlength=6 + self.n_internal)
         return energy, gradient, np.concatenate(hessians)
 
@@ -344,8 +394,8 @@ class DcmmConnector(Connector):
         poses = self._chain_poses(states)
         wrenches = np.array([[sub_arc_energy(chain[k], chain[k + 1], *element)[1][3:6]
                               for k, element in enumerate(self._elements)] for chain in poses])
-        return self._statics(poses, wrenches[:, self._sample_part],
-                             poses[:, self._sample_part + 1])
+        part = self._layout.sample_part
+        return self._statics(poses, wrenches[:, part], poses[:, part + 1])
 
     def _chain_poses(self, states) -> np.ndarray:
         """The chain's poses (a, cuts, b) at each of k states, (k, n + 1, 3) (mm, rad)."""
@@ -359,7 +409,7 @@ class DcmmConnector(Connector):
         Statics of each wrench (see :func:`~reducedmodels.sections.statics_section_forces`)
         at every sample of every state at once; ``poses`` are the chain's (k, n + 1, 3).
         """
-        part, w = self._sample_part, self._sample_w
+        part, w = self._layout.sample_part, self._layout.sample_w
         lead, follow = poses[:, part], poses[:, part + 1]
         pts = ((1.0 - w)[:, None] * _place_rows(lead, self._sample_lead)
                + w[:, None] * _place_rows(follow, self._sample_follow))
@@ -367,5 +417,5 @@ class DcmmConnector(Connector):
         r = end[..., :2] - pts
         moment = -(wrenches[..., 2] + r[..., 0] * wrenches[..., 1] - r[..., 1] * wrenches[..., 0])
         axial = axes[..., 0] * wrenches[..., 0] + axes[..., 1] * wrenches[..., 1]
-        order = self._station_order
-        return SectionForces(self._stations, axial[:, order], moment[:, order])
+        order = self._layout.station_order
+        return SectionForces(self._layout.stations, axial[:, order], moment[:, order])
