@@ -102,13 +102,14 @@ class PathRecorder:
 
     def _judge(self) -> None:
         """Validity verdicts and section stresses of the states recorded since the last call."""
+        if not self.states:
+            return
         system, lp = self.system, self.path
         levels = [system.local_states(q) for q in self.states]
         for reasons in path_validity(system.connectors, levels):
             lp.valid.append(not reasons)
             lp.validity.append("; ".join(reasons) if reasons else None)
-        if levels:
-            record_path_stress(lp, system.connectors, levels, self.sections)
+        record_path_stress(lp, system.connectors, levels, self.sections)
         self.states = []
 
     def finish(self) -> LoadPath:
