@@ -26,12 +26,13 @@ import scipy.sparse as sp
 from geometry import Flexure, Mechanism
 from geometry.kinematics import rigid_points
 from geometry.mesh import FlexureMesh, mesh_flexure
-from reducedmodels.connector import Connector, LocalState
+from reducedmodels.connector import Connector, ConnectorGroup, LocalState
 from reducedmodels.inertia import MassPoints
 from reducedmodels.validity import MIN_DET_F, stretch_reasons
 from reducedmodels.sections import (SectionForces, polyline_axes, polyline_fractions,
                                    statics_section_forces)
 
+from .group import ContinuumGroup
 from .mass import node_jacobian, scalar_mass
 from .material import make_law
 from .polar import cross_sections, extrapolate, from_polar, increment, to_polar
@@ -120,9 +121,20 @@ class ContinuumConnector(Connector):
         plain = (counts[r][t] == 1) & (counts[c][t] == 1)
         self._plain_src = t[plain]
         self._mixed = (t[~plain], p[~plain], q[~plain])
+        self._mixed_first = within[~plain] == 0    # both first expansions: coefficient 1
         rows = np.concatenate([exp_z[p[plain]], exp_z[p[~plain]], [2, 5]])
         cols = np.concatenate([exp_z[q[plain]], exp_z[q[~plain]], [2, 5]])
         self._rows, self._cols = rows, cols
+
+    @classmethod
+    def group(cls, connectors: Sequence["ContinuumConnector"]) -> ConnectorGroup:
+        """One :class:`.group.ContinuumGroup` when the flexures share law, plane and material
+        (the run's case: one stacked element kernel), else one by one."""
+        first = connectors[0]
+        key = (first.law, first.plane, first.material)
+        if all((c.law, c.plane, c.material) == key for c in connectors):
+            return ContinuumGroup(connectors)
+        return ConnectorGroup(connectors)
 
     @property
     def free_nodes(self) -> np.ndarray:

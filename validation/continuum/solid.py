@@ -43,52 +43,42 @@ class ElementState:
     CC: np.ndarray    # material tangent (2, 2, 2, 2), MPa
 
 
-class Solid:
-    """Quad9 hyperelastic solid of depth b.
+class ElementKernel:
+    """The nonlinear element computations over a set of quad9 elements (no scikit-fem objects).
 
     Parameters
     ----------
-    nodes : array (n_nodes, 2)
-        Reference node positions, mm.
     elements : array (n_el, 9)
-        Quad9 connectivity (Gmsh/meshio order, counterclockwise).
+        Quad9 connectivity into a node array of ``n_nodes`` nodes.
+    grad : array (n_el, n_q, 9, 2)
+        Reference shape-function gradients at the quadrature points, 1/mm.
+    weight : array (n_el, n_q)
+        Integration weights times the depth, mm^3.
     law : callable
         C -> (W, S, CC), see :mod:`.material`.
-    depth : float
-        Out-of-plane depth b, mm.
+    n_nodes : int
     """
 
-    def __init__(self, nodes: np.ndarray, elements: np.ndarray, law: Law, depth: float):
-        self.nodes = np.asarray(nodes, float)
-        self.elements = np.asarray(elements, np.int64)
-        self.law = law
-        self.depth = float(depth)
-        self.mesh = MeshQuad2(np.ascontiguousarray(self.nodes.T),
-                              np.ascontiguousarray(self.elements.T))
-        self.basis = CellBasis(self.mesh, ElementQuad2(), intorder=_QUADRATURE_ORDER)
-        # skfem renumbers nodes (vertices first); keep the mesh's own numbering
-        # and check that skfem's local basis order is the quad9 order
-        locs = self.basis.doflocs[:, self.basis.element_dofs].T        # (n_el, 9, 2)
-        if not np.allclose(locs, self.nodes[self.elements], rtol=0.0, atol=1e-12 * self.scale):
-            raise RuntimeError("skfem local node order differs from quad9 order")
-        self.node_dofs = np.empty(self.nodes.shape[0], np.int64)   # skfem dof of each node
-        self.node_dofs[self.elements] = self.basis.element_dofs.T
-        grads = np.stack([self.basis.basis[a][0].grad for a in range(9)])   # (9, 2, n_el, n_q)
-        self.grad = np.ascontiguousarray(grads.transpose(2, 3, 0, 1))       # (n_el, n_q, 9, 2)
-        self.weight = self.depth * self.basis.dx                            # (n_el, n_q), mm^3
-        n_el, n_q = self.weight.shape
+    def __init__(self, elements: np.ndarray, grad: np.ndarray, weight: np.ndarray, law: Law,
+                 n_nodes: int):
+        self.elements, self.grad, self.weight, self.law = elements, grad, weight, law
+        n_el, n_q = weight.shape
         self._grad_qb = np.ascontiguousarray(
-            self.grad.transpose(0, 1, 3, 2).reshape(n_el, 2 * n_q, 9))     # [(q, L), b]
-        edofs = (2 * self.elements[:, :, None] + np.arange(2)).reshape(n_el, 18)
+            grad.transpose(0, 1, 3, 2).reshape(n_el, 2 * n_q, 9))          # [(q, L), b]
+        edofs = (2 * elements[:, :, None] + np.arange(2)).reshape(n_el, 18)
         self.element_dofs = edofs
         self.rows = np.repeat(edofs, 18, axis=1).ravel()
         self.cols = np.tile(edofs, (1, 18)).ravel()
-        self.n_dofs = 2 * self.nodes.shape[0]
+        self.n_dofs = 2 * n_nodes
 
-    @property
-    def scale(self) -> float:
-        """Size of the mesh's bounding box, mm."""
-        return float(np.ptp(self.nodes, axis=0).max())
+    @classmethod
+    def stack(cls, kernels: "list[ElementKernel]") -> "ElementKernel":
+        """One kernel over the elements of all ``kernels`` (their nodes numbered one after the
+        other, in order); the first kernel's law serves all."""
+        offsets = np.cumsum([0] + [k.n_dofs // 2 for k in kernels])
+        return cls(np.concatenate([k.elements + o for k, o in zip(kernels, offsets)]),
+                   np.concatenate([k.grad for k in kernels]),
+                   np.concatenate([k.weight for k in kernels]), kernels[0].law, int(offsets[-1]))
 
     def deformation_gradient(self, x: np.ndarray) -> np.ndarray:
         """Deformation gradient F (n_el, n_q, 2, 2) at the quadrature points; x: node positions, mm."""
@@ -152,3 +142,60 @@ class Solid:
         Ke[:, 0::2, 0::2] += Kg
         Ke[:, 1::2, 1::2] += Kg
         return float(np.sum(st.W * self.weight)), forces, Ke
+
+
+class Solid:
+    """Quad9 hyperelastic solid of depth b.
+
+    Parameters
+    ----------
+    nodes : array (n_nodes, 2)
+        Reference node positions, mm.
+    elements : array (n_el, 9)
+        Quad9 connectivity (Gmsh/meshio order, counterclockwise).
+    law : callable
+        C -> (W, S, CC), see :mod:`.material`.
+    depth : float
+        Out-of-plane depth b, mm.
+    """
+
+    def __init__(self, nodes: np.ndarray, elements: np.ndarray, law: Law, depth: float):
+        self.nodes = np.asarray(nodes, float)
+        self.elements = np.asarray(elements, np.int64)
+        self.law = law
+        self.depth = float(depth)
+        self.mesh = MeshQuad2(np.ascontiguousarray(self.nodes.T),
+                              np.ascontiguousarray(self.elements.T))
+        self.basis = CellBasis(self.mesh, ElementQuad2(), intorder=_QUADRATURE_ORDER)
+        # skfem renumbers nodes (vertices first); keep the mesh's own numbering
+        # and check that skfem's local basis order is the quad9 order
+        locs = self.basis.doflocs[:, self.basis.element_dofs].T        # (n_el, 9, 2)
+        if not np.allclose(locs, self.nodes[self.elements], rtol=0.0, atol=1e-12 * self.scale):
+            raise RuntimeError("skfem local node order differs from quad9 order")
+        self.node_dofs = np.empty(self.nodes.shape[0], np.int64)   # skfem dof of each node
+        self.node_dofs[self.elements] = self.basis.element_dofs.T
+        grads = np.stack([self.basis.basis[a][0].grad for a in range(9)])   # (9, 2, n_el, n_q)
+        self.grad = np.ascontiguousarray(grads.transpose(2, 3, 0, 1))       # (n_el, n_q, 9, 2)
+        self.weight = self.depth * self.basis.dx                            # (n_el, n_q), mm^3
+        self.kernel = ElementKernel(self.elements, self.grad, self.weight, law,
+                                    self.nodes.shape[0])
+        self.element_dofs, self.rows, self.cols = (self.kernel.element_dofs, self.kernel.rows,
+                                                   self.kernel.cols)
+        self.n_dofs = self.kernel.n_dofs
+
+    @property
+    def scale(self) -> float:
+        """Size of the mesh's bounding box, mm."""
+        return float(np.ptp(self.nodes, axis=0).max())
+
+    def deformation_gradient(self, x: np.ndarray) -> np.ndarray:
+        """Deformation gradient F (n_el, n_q, 2, 2) at the quadrature points; x: node positions, mm."""
+        return self.kernel.deformation_gradient(x)
+
+    def state(self, x: np.ndarray) -> ElementState:
+        """Kinematics and stresses at the quadrature points (see :meth:`ElementKernel.state`)."""
+        return self.kernel.state(x)
+
+    def evaluate(self, x: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+        """Energy, nodal forces and element tangents (see :meth:`ElementKernel.evaluate`)."""
+        return self.kernel.evaluate(x)

@@ -1,0 +1,66 @@
+"""The continuum's group assembly (validation.continuum.group) against the per-connector chain rule.
+
+Reference: each ContinuumConnector's own gradient and Hessian over its local
+coordinates (checked by finite differences in tests/test_continuum.py),
+scattered densely into the global arrays. The closed chain has flexures
+sharing bodies and faces on the ground, so every index path is exercised.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from geometry import load_scene
+from reducedmodels.connector import ConnectorGroup
+from reducedmodels.core import local_hessian
+from validation.continuum import ContinuumConnector
+from validation.continuum.group import ContinuumGroup
+from validation.continuum.run import build_system
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _private_mesh_cache(tmp_path_factory):
+    """Meshes of these tests go to a temporary cache, not the user's."""
+    mp = pytest.MonkeyPatch()
+    mp.setenv("FLEXVAL_CACHE", str(tmp_path_factory.mktemp("flexval_cache")))
+    yield
+    mp.undo()
+
+
+@pytest.mark.parametrize("scene_name", ["closed_chain", "open_chain"])
+def test_group_assembly_equals_the_connectors_chain_rule(scene_name):
+    scene = load_scene(scene_name)
+    system = build_system(scene.mechanism, 0)
+    assert [type(group) for group, _ in system._groups][0] is ContinuumGroup
+    loads = system.loads(scene.load_case("f+"))
+    rng = np.random.default_rng(5)
+    q = system.initial_state() + 1e-3 * rng.standard_normal(system.n_dofs)
+    energy, grad, tangent = system.assemble(q, loads, 0.7)
+
+    n = system.n_dofs
+    ref_energy, ref_grad, ref_tangent = 0.0, np.zeros(n), np.zeros((n, n))
+    for conn, idx, local in zip(system.connectors, system._local_to_global, system.local_states(q)):
+        e, g, h = conn.evaluate(*local)
+        h = local_hessian(conn, h)
+        h = h.toarray() if hasattr(h, "toarray") else h
+        keep = idx >= 0
+        ref_energy += e
+        np.add.at(ref_grad, idx[keep], g[keep])
+        ref_tangent[np.ix_(idx[keep], idx[keep])] += h[np.ix_(keep, keep)]
+    diagonal = np.zeros(n)
+    ref_energy += loads.add_to(q, 0.7, ref_grad, diagonal)
+    ref_tangent[np.diag_indices(n)] += diagonal
+    # the same sums in another order: round-off only (1e-16 of the largest entries, 1e-13 allowed)
+    assert energy == pytest.approx(ref_energy, rel=1e-13)
+    np.testing.assert_allclose(grad, ref_grad, rtol=0, atol=1e-13 * np.abs(ref_grad).max())
+    np.testing.assert_allclose(tangent.toarray(), ref_tangent, rtol=0,
+                               atol=1e-13 * np.abs(ref_tangent).max())
+
+
+def test_flexures_of_different_laws_are_evaluated_one_by_one():
+    mech = load_scene("open_chain").mechanism
+    conns = [ContinuumConnector(f, mech, 0, law=law)
+             for f, law in zip(mech.flexures, ("svk", "neo-hookean", "svk"))]
+    assert type(ContinuumConnector.group(conns)) is ConnectorGroup
+    assert type(ContinuumConnector.group(conns[::2])) is ContinuumGroup

@@ -1,0 +1,146 @@
+"""All meshed flexures of a system evaluated and assembled together (the core's connector group).
+
+:class:`ContinuumGroup` stacks the element arrays of its connectors into one
+:class:`~.solid.ElementKernel`, so one Newton iteration makes one batched
+kernel call for every flexure, and its :meth:`~ContinuumGroup.assembler`
+adds the gradient and tangent straight into the core's global arrays
+(:meth:`reducedmodels.connector.ConnectorGroup.assembler`): every element
+entry goes to the storage slot of its nodal dofs' first expansion (a free
+coordinate, or an end face's body translation) in one ``bincount`` with
+slots worked out once; only the few entries of end-face nodes add their
+rotation terms separately. This is the chain rule of
+:class:`.connector.ContinuumConnector` (``g = T^T f``, ``H = T^T K T`` plus
+the faces' second derivatives) without building the per-connector Hessian
+values and concatenating them. Units: mm, N, N mm, rad.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Sequence
+
+import numpy as np
+
+from reducedmodels.connector import ConnectorGroup
+
+from .solid import ElementKernel
+
+
+class ContinuumGroup(ConnectorGroup):
+    """Meshed flexures of one law and plane assumption, evaluated as one solid.
+
+    Parameters
+    ----------
+    connectors : sequence of ContinuumConnector
+    """
+
+    def __init__(self, connectors: Sequence):
+        super().__init__(connectors)
+        self.kernel = ElementKernel.stack([c.solid.kernel for c in self.connectors])
+        offsets = np.cumsum([0] + [c.mesh.nodes.shape[0] for c in self.connectors])
+        self._nodes = np.vstack([c.mesh.nodes for c in self.connectors])
+        self._free = np.concatenate([c.free_nodes + o for c, o in zip(self.connectors, offsets)])
+        faces = [(c._face[s] + o, c._rel[s]) for c, o in zip(self.connectors, offsets)
+                 for s in (0, 1)]
+        self._face_nodes = np.concatenate([f for f, _ in faces])
+        self._face_rel = np.vstack([r for _, r in faces])
+        self._face_of = np.repeat(np.arange(len(faces)), [f.size for f, _ in faces])
+
+    def _face_arms(self, poses: np.ndarray) -> np.ndarray:
+        """R(theta) rel of every end-face node (mm) for the faces' body poses (n_faces, 3)."""
+        c, s = np.cos(poses[self._face_of, 2]), np.sin(poses[self._face_of, 2])
+        rx, ry = self._face_rel[:, 0], self._face_rel[:, 1]
+        return np.column_stack([c * rx - s * ry, s * rx + c * ry])
+
+    def assembler(self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
+                  ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
+        """The function adding every flexure's gradient and tangent into the global arrays.
+
+        See :meth:`reducedmodels.connector.ConnectorGroup.assembler` for the
+        arguments; ``hess_slots`` follows the order of each connector's
+        :meth:`~.connector.ContinuumConnector.hessian_pattern`.
+        """
+        n_faces = 2 * len(self.connectors)
+        pose_at, free_at, first_dof, theta_dof, slot_first = [], [], [], [], []
+        extra_src, extra_p, extra_q, extra_slot, second_slot = [], [], [], [], []
+        block = hess_block = entries = face_dofs = 0
+        unit = 2 * self._face_nodes.size        # coefficient index of "1" (not a face rotation)
+        for c in self.connectors:
+            local = slice(block, block + 6 + c.n_internal)
+            g_at, g_dof = gather[local], grad_dofs[local]
+            pose_at += [g_at[0:3], g_at[3:6]]
+            free_at.append(g_at[6:])
+            theta_dof += [g_dof[2], g_dof[5]]
+            # global dof of each nodal dof's first expansion (-1: the ground's)
+            nodal = np.empty(2 * c.mesh.nodes.shape[0], np.int64)
+            nodal[(2 * c.free_nodes[:, None] + np.arange(2)).ravel()] = g_dof[6:]
+            for s in (0, 1):
+                nodal[(2 * c._face[s][:, None] + np.arange(2)).ravel()] = np.tile(
+                    g_dof[3 * s:3 * s + 2], c._face[s].size)
+            first_dof.append(nodal)
+            # Hessian values of the pattern: [plain, mixed, second (2)]
+            slots = hess_slots[hess_block:hess_block + c._rows.size]
+            t_mixed, p_mixed, q_mixed = c._mixed
+            n_plain = c._plain_src.size
+            first = np.full(c.solid.rows.size, -1, np.int64)
+            first[c._plain_src] = slots[:n_plain]
+            is_first = c._mixed_first
+            first[t_mixed[is_first]] = slots[n_plain:n_plain + t_mixed.size][is_first]
+            slot_first.append(first)
+            coef_at = np.full(c._exp_z.size, unit)
+            for s in (0, 1):
+                coef_at[c._theta_pos[s]] = face_dofs + np.arange(c._theta_pos[s].size)
+                face_dofs += c._theta_pos[s].size
+            rest = ~is_first
+            extra_src.append(t_mixed[rest] + entries)
+            extra_p.append(coef_at[p_mixed[rest]])
+            extra_q.append(coef_at[q_mixed[rest]])
+            extra_slot.append(slots[n_plain:n_plain + t_mixed.size][rest])
+            second_slot.append(slots[-2:])
+            block += 6 + c.n_internal
+            hess_block += c._rows.size
+            entries += c.solid.rows.size
+        pose_at = np.array(pose_at)
+        free_at = np.concatenate(free_at)
+        first_dof = np.concatenate(first_dof)
+        theta_dof = np.array(theta_dof)
+        slot_first = np.concatenate(slot_first)
+        extra_src, extra_slot = np.concatenate(extra_src), np.concatenate(extra_slot)
+        extra_p, extra_q = np.concatenate(extra_p), np.concatenate(extra_q)
+        second_slot = np.concatenate(second_slot)
+        # dropped entries (the ground's) go to one spare slot past the range used
+        kept = slot_first >= 0
+        lo, hi = int(slot_first[kept].min()), int(slot_first[kept].max()) + 1
+        slot_first = np.where(kept, slot_first - lo, hi - lo)
+        grad_kept = np.flatnonzero(first_dof >= 0)
+        grad_kept_dof = first_dof[grad_kept]
+        theta_kept = np.flatnonzero(theta_dof >= 0)
+        extra_kept = extra_slot >= 0
+        extra_src, extra_p, extra_q = extra_src[extra_kept], extra_p[extra_kept], extra_q[extra_kept]
+        extra_slot = extra_slot[extra_kept]
+        second_kept = np.flatnonzero(second_slot >= 0)
+        nodes, free, face_nodes, face_of = self._nodes, self._free, self._face_nodes, self._face_of
+        kernel = self.kernel
+
+        def assemble(coordinates: np.ndarray, grad: np.ndarray, storage: np.ndarray) -> float:
+            poses = coordinates[pose_at]
+            arms = self._face_arms(poses)
+            x = nodes.copy()
+            x[free] += coordinates[free_at].reshape(-1, 2)
+            x[face_nodes] = poses[face_of, :2] + arms
+            energy, forces, Ke = kernel.evaluate(x)
+            grad += np.bincount(grad_kept_dof, weights=forces[grad_kept], minlength=grad.size)
+            f_face = forces.reshape(-1, 2)[face_nodes]
+            jac = np.column_stack([-arms[:, 1], arms[:, 0]])            # d x / d theta
+            moment = np.bincount(face_of, weights=np.einsum("ij,ij->i", f_face, jac),
+                                 minlength=n_faces)
+            np.add.at(grad, theta_dof[theta_kept], moment[theta_kept])   # bodies may repeat
+            values = Ke.ravel()
+            storage[lo:hi] += np.bincount(slot_first, weights=values, minlength=hi - lo + 1)[:-1]
+            coef = np.append(jac.ravel(), 1.0)
+            np.add.at(storage, extra_slot, values[extra_src] * coef[extra_p] * coef[extra_q])
+            second = np.bincount(face_of, weights=-np.einsum("ij,ij->i", f_face, arms),
+                                 minlength=n_faces)
+            np.add.at(storage, second_slot[second_kept], second[second_kept])
+            return energy
+
+        return assemble
