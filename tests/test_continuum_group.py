@@ -64,3 +64,16 @@ def test_flexures_of_different_laws_are_evaluated_one_by_one():
              for f, law in zip(mech.flexures, ("svk", "neo-hookean", "svk"))]
     assert type(ContinuumConnector.group(conns)) is ConnectorGroup
     assert type(ContinuumConnector.group(conns[::2])) is ContinuumGroup
+
+
+def test_section_forces_from_the_end_face_equal_those_from_the_whole_gradient():
+    scene = load_scene("closed_chain")
+    system = build_system(scene.mechanism, 0)
+    q = system.initial_state() + 1e-3 * np.random.default_rng(2).standard_normal(system.n_dofs)
+    for conn, local in zip(system.connectors, system.local_states(q)):
+        face = conn.section_forces(*local)                 # end-face elements only
+        full = conn.section_forces(*local, gradient=conn.evaluate(*local)[1])
+        # the same nodal forces summed in another order: round-off (1e-16), 1e-13 allowed
+        for name in ("axial", "moment"):
+            a, b = getattr(face, name), getattr(full, name)
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-13 * np.abs(b).max())

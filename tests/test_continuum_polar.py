@@ -16,7 +16,7 @@ import pytest
 from geometry import Arc, Material, Section, Segment
 from geometry.mechanism import FlexureSpec, assemble
 from validation.continuum import ContinuumConnector
-from validation.continuum.polar import cross_sections, from_polar, to_polar
+from validation.continuum.polar import cross_sections, from_polar, stack_sections, to_polar
 
 
 @pytest.fixture(autouse=True, scope="module")
@@ -58,7 +58,7 @@ def test_arc_sections_lie_on_radii_from_start_to_end_and_right_to_left(level):
 
 def test_polar_description_round_trips_a_deformed_segment():
     conn = connector(Segment((0.0, 0.0), (2.0, 0.5)), 0.25, 1)
-    sections = cross_sections(conn.mesh)
+    sections = stack_sections([cross_sections(conn.mesh)], [0])
     X = conn.mesh.nodes
     x = X + 0.05 * np.column_stack([np.sin(3.0 * X[:, 0]), np.cos(2.0 * X[:, 0] + X[:, 1])])
     np.testing.assert_allclose(from_polar(to_polar(x, sections), sections, x), x,

@@ -18,6 +18,7 @@ built once, only the rotation coefficients change. Units: mm, N, N mm, rad.
 
 from __future__ import annotations
 
+import functools
 from typing import Sequence
 
 import numpy as np
@@ -35,7 +36,7 @@ from reducedmodels.sections import (SectionForces, polyline_axes, polyline_fract
 from .group import ContinuumGroup
 from .mass import node_jacobian, scalar_mass
 from .material import make_law
-from .polar import cross_sections, extrapolate, from_polar, increment, to_polar
+from .polar import cross_sections
 from .solid import Solid
 
 
@@ -84,9 +85,12 @@ class ContinuumConnector(Connector):
         self._free = np.flatnonzero(role < 0)
         self._end_slot = self.bodies.index(flexure.end_body)
         self._centre_fractions = polyline_fractions(self.mesh.nodes[self.mesh.centre_line])
+        end_face = self._face[self._end_slot]
+        self._end_kernel = self.solid.kernel.subset(
+            np.flatnonzero(np.isin(self.mesh.elements, end_face).any(axis=1)))
         self.n_internal = 2 * self._free.size
         self._n = 6 + self.n_internal
-        self._sections = cross_sections(self.mesh)
+        self.sections = cross_sections(self.mesh)
         self._build_expansion(role)
 
     # --- the fixed index structure of T ------------------------------------
@@ -135,6 +139,11 @@ class ContinuumConnector(Connector):
         if all((c.law, c.plane, c.material) == key for c in connectors):
             return ContinuumGroup(connectors)
         return ConnectorGroup(connectors)
+
+    @functools.cached_property
+    def _alone(self) -> ContinuumGroup:
+        """A group of this connector alone: its predictor and Newton update."""
+        return ContinuumGroup([self])
 
     @property
     def free_nodes(self) -> np.ndarray:
@@ -186,10 +195,8 @@ class ContinuumConnector(Connector):
         (:mod:`.polar`), and the sections are rebuilt between the end faces
         at the bodies' predicted poses ``pose_a``, ``pose_b``.
         """
-        shape = extrapolate([to_polar(self.positions(*state), self._sections) for state in states],
-                            weights)
-        x = from_polar(shape, self._sections, self.positions(pose_a, pose_b, states[-1][2]))
-        return (x[self._free] - self.mesh.nodes[self._free]).ravel()
+        return self._alone.predict_internal([[state] for state in states], weights,
+                                            [(pose_a, pose_b)])
 
     def update_internal(self, old: LocalState, new: LocalState) -> np.ndarray:
         """Interior nodes after a Newton correction, turned section by section (mm).
@@ -203,16 +210,7 @@ class ContinuumConnector(Connector):
         longer comes out stretched by dphi^2 / 2, which the membrane
         stiffness would turn into forces far above the load.
         """
-        x_old, x_new = self.positions(*old), self.positions(*new)
-        dx = x_new - x_old
-        for s in (0, 1):
-            before, after = np.asarray(old[s], float), np.asarray(new[s], float)
-            arm = x_old[self._face[s]] - before[:2]
-            dx[self._face[s]] = after[:2] - before[:2] \
-                + (after[2] - before[2]) * np.column_stack([-arm[:, 1], arm[:, 0]])
-        base, change = to_polar(x_old, self._sections), increment(x_old, dx, self._sections)
-        x = from_polar(type(base)(*(a + d for a, d in zip(base, change))), self._sections, x_new)
-        return (x[self._free] - self.mesh.nodes[self._free]).ravel()
+        return self._alone.update_internal([old], [new])
 
     def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
                  ) -> list[str]:
@@ -270,9 +268,17 @@ class ContinuumConnector(Connector):
         raw peak stress, which is singular at the corners of the rigidly held
         end faces, it converges with the mesh at the rate of the reactions.
         """
-        if gradient is None:
-            gradient = self.evaluate(pose_a, pose_b, internal)[1]
         s = self._end_slot
+        pose = np.asarray((pose_a, pose_b)[s], float)
+        if gradient is not None:
+            wrench = gradient[3 * s:3 * s + 3]
+        else:      # the end face's nodal forces: only its elements contribute
+            x = self.positions(pose_a, pose_b, internal)
+            face = self._face[s]
+            f = self._end_kernel.forces(x).reshape(-1, 2)[face]
+            arm = x[face] - pose[:2]
+            wrench = np.array([f[:, 0].sum(), f[:, 1].sum(),
+                               np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0])])
         line = self.shape(pose_a, pose_b, internal)
-        return statics_section_forces(line, self._centre_fractions, gradient[3 * s:3 * s + 3],
-                                      (pose_a, pose_b)[s], axes=polyline_axes(line))
+        return statics_section_forces(line, self._centre_fractions, wrench, pose,
+                                      axes=polyline_axes(line))

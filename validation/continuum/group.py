@@ -20,8 +20,9 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from reducedmodels.connector import ConnectorGroup
+from reducedmodels.connector import ConnectorGroup, LocalState
 
+from .polar import PolarShape, extrapolate, from_polar, increment, stack_sections, to_polar
 from .solid import ElementKernel
 
 
@@ -44,6 +45,57 @@ class ContinuumGroup(ConnectorGroup):
         self._face_nodes = np.concatenate([f for f, _ in faces])
         self._face_rel = np.vstack([r for _, r in faces])
         self._face_of = np.repeat(np.arange(len(faces)), [f.size for f, _ in faces])
+        self._sections = stack_sections([c.sections for c in self.connectors], offsets[:-1])
+
+    def _positions(self, states: Sequence[LocalState]) -> tuple[np.ndarray, np.ndarray]:
+        """All mesh nodes' positions (n_nodes, 2) and the faces' poses (n_faces, 3) of the
+        connectors' local ``states`` (mm, rad)."""
+        poses = np.array([pose for state in states for pose in state[:2]], float)
+        x = self._nodes.copy()
+        x[self._free] += np.concatenate([state[2] for state in states]).reshape(-1, 2)
+        x[self._face_nodes] = poses[self._face_of, :2] + self._face_arms(poses)
+        return x, poses
+
+    def _internal(self, x: np.ndarray) -> np.ndarray:
+        """The concatenated internal coordinates (mm) of node positions x."""
+        return (x[self._free] - self._nodes[self._free]).ravel()
+
+    def predict_internal(self, past: Sequence[Sequence[LocalState]], weights: Sequence[float],
+                         poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+        """Interior nodes extrapolated section by section (mm; the load stepping's predictor).
+
+        Chord lengths and directions between the section centres, section
+        rotations and the nodes' offsets in their section's frame are
+        extrapolated with ``weights`` over the converged states ``past``
+        (:mod:`.polar`), and the sections are rebuilt between the end faces
+        at the bodies' predicted ``poses``.
+        """
+        shape = extrapolate([to_polar(self._positions(states)[0], self._sections)
+                             for states in past], weights)
+        ends = self._positions([(*pose, state[2]) for pose, state in zip(poses, past[-1])])[0]
+        return self._internal(from_polar(shape, self._sections, ends))
+
+    def update_internal(self, old: Sequence[LocalState], new: Sequence[LocalState]
+                        ) -> np.ndarray:
+        """Interior nodes after a Newton correction, turned section by section (mm).
+
+        ``new`` holds the linearly corrected states. The correction becomes
+        first-order changes of the chords, section rotations and offsets
+        (:func:`.polar.increment`; the end faces move with the linearised
+        motion of their bodies), applied as finite turns between the end
+        faces at the new poses. This agrees with the linear update to first
+        order, so Newton stays quadratic, but a section that turns by dphi no
+        longer comes out stretched by dphi^2 / 2, which the membrane
+        stiffness would turn into forces far above the load.
+        """
+        (x_old, before), (x_new, after) = self._positions(old), self._positions(new)
+        dx = x_new - x_old
+        arm = x_old[self._face_nodes] - before[self._face_of, :2]
+        turn = (after - before)[self._face_of]
+        dx[self._face_nodes] = turn[:, :2] + turn[:, 2:] * np.column_stack([-arm[:, 1], arm[:, 0]])
+        base, change = to_polar(x_old, self._sections), increment(x_old, dx, self._sections)
+        return self._internal(from_polar(PolarShape(*(a + d for a, d in zip(base, change))),
+                                         self._sections, x_new))
 
     def _face_arms(self, poses: np.ndarray) -> np.ndarray:
         """R(theta) rel of every end-face node (mm) for the faces' body poses (n_faces, 3)."""

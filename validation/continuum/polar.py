@@ -41,8 +41,8 @@ from geometry.mesh import FlexureMesh
 class PolarShape(NamedTuple):
     """A deformed mesh section by section (see the module docstring)."""
 
-    ell: np.ndarray      # (n_sections - 1,) chord lengths between section centres, mm
-    alpha: np.ndarray    # (n_sections - 1,) chord directions, rad
+    ell: np.ndarray      # (n_chords,) lengths of the chords between section centres, mm
+    alpha: np.ndarray    # (n_chords,) their directions, rad
     phi: np.ndarray      # (n_sections,) section rotations, rad
     offset: np.ndarray   # (n_sections, 2 n_t + 1, 2) node offsets in the section frame, mm
 
@@ -95,11 +95,52 @@ def cross_sections(mesh: FlexureMesh) -> np.ndarray:
     return sections
 
 
-def to_polar(x: np.ndarray, sections: np.ndarray) -> PolarShape:
+class SectionStack(NamedTuple):
+    """The cross-sections of one or several flexures whose nodes are numbered one after the other.
+
+    Attributes
+    ----------
+    nodes : int array (n_sections, 2 n_t + 1)
+        Node indices of every section (:func:`cross_sections`), flexure after flexure.
+    first, last : int arrays (n_flexures,)
+        Each flexure's first and last section (its end faces).
+    starts : int array (n_chords,)
+        The sections a chord starts from (all but the last of each flexure).
+    chord_flexure, section_flexure : int arrays
+        The flexure of each chord and of each section.
+    interior : int array
+        The sections that are not end faces.
+    """
+
+    nodes: np.ndarray
+    first: np.ndarray
+    last: np.ndarray
+    starts: np.ndarray
+    chord_flexure: np.ndarray
+    section_flexure: np.ndarray
+    interior: np.ndarray
+
+
+def stack_sections(parts: Sequence[np.ndarray], node_offsets: Sequence[int]) -> SectionStack:
+    """The :class:`SectionStack` of flexures with sections ``parts``, their nodes shifted by
+    ``node_offsets``."""
+    counts = np.array([p.shape[0] for p in parts])
+    last = np.cumsum(counts) - 1
+    first = last - counts + 1
+    section_flexure = np.repeat(np.arange(counts.size), counts)
+    is_end = np.zeros(counts.sum(), bool)
+    is_end[first] = is_end[last] = True
+    starts = np.setdiff1d(np.arange(counts.sum()), last)
+    return SectionStack(np.vstack([p + o for p, o in zip(parts, node_offsets)]), first, last,
+                        starts, section_flexure[starts], section_flexure,
+                        np.flatnonzero(~is_end))
+
+
+def to_polar(x: np.ndarray, stack: SectionStack) -> PolarShape:
     """The polar description of node positions x (n_nodes, 2), mm."""
-    xs = x[sections]
-    centre = xs[:, sections.shape[1] // 2]
-    chord = np.diff(centre, axis=0)
+    xs = x[stack.nodes]
+    centre = xs[:, stack.nodes.shape[1] // 2]
+    chord = centre[stack.starts + 1] - centre[stack.starts]
     across = xs[:, -1] - xs[:, 0]
     phi = np.arctan2(across[:, 1], across[:, 0])
     c, s = np.cos(phi)[:, None], np.sin(phi)[:, None]
@@ -109,12 +150,13 @@ def to_polar(x: np.ndarray, sections: np.ndarray) -> PolarShape:
                       phi, offset)
 
 
-def increment(x: np.ndarray, dx: np.ndarray, sections: np.ndarray) -> PolarShape:
+def increment(x: np.ndarray, dx: np.ndarray, stack: SectionStack) -> PolarShape:
     """First-order change of :func:`to_polar` of x (n_nodes, 2) when the nodes move by dx (mm)."""
-    xs, dxs = x[sections], dx[sections]
-    mid = sections.shape[1] // 2
+    xs, dxs = x[stack.nodes], dx[stack.nodes]
+    mid = stack.nodes.shape[1] // 2
     centre, dcentre = xs[:, mid], dxs[:, mid]
-    chord, dchord = np.diff(centre, axis=0), np.diff(dcentre, axis=0)
+    chord = centre[stack.starts + 1] - centre[stack.starts]
+    dchord = dcentre[stack.starts + 1] - dcentre[stack.starts]
     across, dacross = xs[:, -1] - xs[:, 0], dxs[:, -1] - dxs[:, 0]
     ell2 = np.einsum("ij,ij->i", chord, chord)
     dphi = (across[:, 0] * dacross[:, 1] - across[:, 1] * dacross[:, 0]) \
@@ -148,25 +190,37 @@ def extrapolate(shapes: Sequence[PolarShape], weights: Sequence[float]) -> Polar
                         for name in PolarShape._fields))
 
 
-def from_polar(shape: PolarShape, sections: np.ndarray, x_ends: np.ndarray) -> np.ndarray:
+def _chained(steps: np.ndarray, stack: SectionStack) -> np.ndarray:
+    """Running sums of per-chord ``steps`` along each flexure, 0 at its first section."""
+    total = np.cumsum(steps, axis=0)
+    before = np.concatenate([np.zeros((1,) + steps.shape[1:]), total])[
+        np.searchsorted(stack.starts, stack.first)]
+    out = np.zeros((stack.nodes.shape[0],) + steps.shape[1:])
+    out[stack.starts + 1] = total - before[stack.chord_flexure]
+    return out
+
+
+def from_polar(shape: PolarShape, stack: SectionStack, x_ends: np.ndarray) -> np.ndarray:
     """Node positions (n_nodes, 2) of ``shape`` between the end-face nodes given in ``x_ends``.
 
-    The section centres are chained from the start face's centre by the
+    The section centres are chained from each start face's centre by the
     chords; the mismatch with the end face's centre is spread along the
     chain in proportion to arc length. The end faces keep ``x_ends``'s
     positions (their bodies place them); only the interior sections are
     rebuilt.
     """
-    mid = sections.shape[1] // 2
-    start, end = x_ends[sections[0, mid]], x_ends[sections[-1, mid]]
+    mid = stack.nodes.shape[1] // 2
+    start, end = x_ends[stack.nodes[stack.first, mid]], x_ends[stack.nodes[stack.last, mid]]
     chords = shape.ell[:, None] * np.column_stack([np.cos(shape.alpha), np.sin(shape.alpha)])
-    centre = start + np.vstack([np.zeros(2), np.cumsum(chords, axis=0)])
-    arc = np.concatenate([[0.0], np.cumsum(shape.ell)])
-    centre += (end - centre[-1]) * (arc / arc[-1])[:, None]
-    c, s = np.cos(shape.phi)[:, None], np.sin(shape.phi)[:, None]
-    off = shape.offset
-    xs = centre[:, None] + np.stack([c * off[..., 0] - s * off[..., 1],
-                                     s * off[..., 0] + c * off[..., 1]], -1)
+    flexure = stack.section_flexure
+    centre = start[flexure] + _chained(chords, stack)
+    arc = _chained(shape.ell, stack)
+    centre += (end - centre[stack.last])[flexure] * (arc / arc[stack.last][flexure])[:, None]
+    inner = stack.interior
+    c, s = np.cos(shape.phi[inner])[:, None], np.sin(shape.phi[inner])[:, None]
+    off = shape.offset[inner]
+    xs = centre[inner, None] + np.stack([c * off[..., 0] - s * off[..., 1],
+                                         s * off[..., 0] + c * off[..., 1]], -1)
     x = x_ends.copy()
-    x[sections[1:-1].ravel()] = xs[1:-1].reshape(-1, 2)
+    x[stack.nodes[inner].ravel()] = xs.reshape(-1, 2)
     return x

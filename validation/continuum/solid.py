@@ -80,6 +80,11 @@ class ElementKernel:
                    np.concatenate([k.grad for k in kernels]),
                    np.concatenate([k.weight for k in kernels]), kernels[0].law, int(offsets[-1]))
 
+    def subset(self, elements: np.ndarray) -> "ElementKernel":
+        """The kernel of some of the elements (indices ``elements``), same node numbering."""
+        return ElementKernel(self.elements[elements], self.grad[elements], self.weight[elements],
+                             self.law, self.n_dofs // 2)
+
     def deformation_gradient(self, x: np.ndarray) -> np.ndarray:
         """Deformation gradient F (n_el, n_q, 2, 2) at the quadrature points; x: node positions, mm."""
         xe = x[self.elements]
@@ -108,6 +113,29 @@ class ElementKernel:
         W, S, CC = self.law(C)
         return ElementState(F, C, W, S, CC)
 
+    def _strain_operator(self, F: np.ndarray) -> np.ndarray:
+        """B[(q, v), (a, i)] (n_el, 3 n_q, 18): dE_v = B dx_(a, i), v = E11, E22, 2 E12."""
+        g0, g1 = self.grad[..., 0], self.grad[..., 1]                       # (n_el, n_q, 9)
+        n_el, n_q = self.weight.shape
+        B = np.empty((n_el, n_q, 3, 9, 2))
+        for i in (0, 1):
+            f0, f1 = F[..., i, 0, None], F[..., i, 1, None]
+            B[:, :, 0, :, i] = g0 * f0
+            B[:, :, 1, :, i] = g1 * f1
+            B[:, :, 2, :, i] = g1 * f0 + g0 * f1
+        return B.reshape(n_el, 3 * n_q, 18)
+
+    def _nodal_forces(self, B: np.ndarray, sw: np.ndarray) -> np.ndarray:
+        """Nodal forces (n_dofs,) in N, sum_q B^T S w, from the weighted Voigt stresses sw."""
+        fe = np.matmul(sw.reshape(sw.shape[0], 1, -1), B)
+        return np.bincount(self.element_dofs.ravel(), weights=fe.ravel(), minlength=self.n_dofs)
+
+    def forces(self, x: np.ndarray) -> np.ndarray:
+        """Nodal forces (n_dofs,) in N at node positions x (n_nodes, 2), mm (no tangent)."""
+        st = self.state(x)
+        return self._nodal_forces(self._strain_operator(st.F),
+                                  st.S[..., _VOIGT[0], _VOIGT[1]] * self.weight[..., None])
+
     def evaluate(self, x: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
         """Energy (N mm), nodal forces (n_dofs,) in N and element tangents (n_el, 18, 18) in N/mm.
 
@@ -115,20 +143,12 @@ class ElementKernel:
         (``Ke.ravel()``), duplicates to be summed.
         """
         st = self.state(x)
-        F, S, w = st.F, st.S, self.weight
+        S, w = st.S, self.weight
         g0, g1 = self.grad[..., 0], self.grad[..., 1]                       # (n_el, n_q, 9)
         n_el, n_q = w.shape
-        # B: the Green-strain operator, dE_v = B[v, (a, i)] dx_(a, i), v = E11, E22, 2 E12
-        B = np.empty((n_el, n_q, 3, 9, 2))
-        for i in (0, 1):
-            f0, f1 = F[..., i, 0, None], F[..., i, 1, None]
-            B[:, :, 0, :, i] = g0 * f0
-            B[:, :, 1, :, i] = g1 * f1
-            B[:, :, 2, :, i] = g1 * f0 + g0 * f1
-        B = B.reshape(n_el, 3 * n_q, 18)                                    # [(q, v), (a, i)]
+        B = self._strain_operator(st.F)                                     # [(q, v), (a, i)]
         sw = S[..., _VOIGT[0], _VOIGT[1]] * w[..., None]                    # (n_el, n_q, 3)
-        fe = np.matmul(sw.reshape(n_el, 1, 3 * n_q), B)                     # B^T S w, N
-        forces = np.bincount(self.element_dofs.ravel(), weights=fe.ravel(), minlength=self.n_dofs)
+        forces = self._nodal_forces(B, sw)
         # material part sum_q B^T D B w, D the Voigt form of CC
         D = st.CC[..., _VOIGT[0][:, None], _VOIGT[1][:, None], _VOIGT[0], _VOIGT[1]] \
             * w[..., None, None]
