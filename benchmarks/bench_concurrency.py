@@ -4,8 +4,12 @@ Runs one load path in a worker process alone, then in two worker processes
 started together, and reports each worker's median time and the slow-down
 (concurrent time / time alone; about 1 is ideal when the machine has a free
 core for each worker, and the issue's bar is 1.5). Each worker first runs
-the path once untimed (imports, mesh cache) and then times ``--repeats``
-runs, so the two timed phases overlap.
+the path once untimed (imports, mesh cache), reports that it is ready and
+waits; the parent starts the timed ``--repeats`` runs of all workers at
+once, so the timed phases overlap whatever each worker's start-up took.
+The time alone is measured before and after the pair and the smaller is
+used, so that a load that changes meanwhile does not pass for a slow-down.
+Times are wall seconds: measure on an otherwise idle machine.
 
 It does so twice: with flexval's thread control (the default cap of
 ``reducedmodels.threads``) and without it (``FLEXVAL_BLAS_THREADS=0``).
@@ -39,6 +43,8 @@ def worker(scene_name: str, case_name: str, model: str, repeats: int) -> None:
     scene = load_scene(scene_name)
     spec, case = parse_model(model, "<benchmark>", "--model"), scene.load_case(case_name)
     run_model(scene, spec, case)
+    print("ready", flush=True)
+    sys.stdin.readline()                  # the parent's "go": all workers start timing together
     times = []
     for _ in range(repeats):
         t0 = time.perf_counter()
@@ -56,8 +62,16 @@ def run_workers(count: int, args: argparse.Namespace, controlled: bool) -> list[
         env["FLEXVAL_BLAS_THREADS"] = "0"
     command = [sys.executable, __file__, "--worker", "--scene", args.scene, "--case", args.case,
                "--model", args.model, "--repeats", str(args.repeats)]
-    procs = [subprocess.Popen(command, env=env, stdout=subprocess.PIPE, text=True)
-             for _ in range(count)]
+    procs = [subprocess.Popen(command, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                              text=True) for _ in range(count)]
+    ready = [p.stdout.readline().strip() for p in procs]
+    if ready != ["ready"] * count:
+        for p in procs:
+            p.kill()
+        raise SystemExit(f"a worker failed before its timed runs: {ready}")
+    for p in procs:                       # start the timed runs of all workers at once
+        p.stdin.write("go\n")
+        p.stdin.flush()
     outputs = [p.communicate()[0] for p in procs]
     if any(p.returncode for p in procs):
         raise SystemExit(f"a worker failed: {outputs}")
@@ -79,8 +93,9 @@ def main() -> None:
           f"{os.cpu_count()} cores, load average before: {os.getloadavg()[0]:.1f}")
     print(f"{'thread control':<28}{'alone s':>9}{'two at once s':>16}{'slow-down':>11}")
     for controlled, label in ((True, "flexval default (1 thread)"), (False, "none (BLAS default)")):
-        alone = run_workers(1, args, controlled)[0]
+        before = run_workers(1, args, controlled)[0]
         pair = run_workers(2, args, controlled)
+        alone = min(before, run_workers(1, args, controlled)[0])
         print(f"{label:<28}{alone:>9.3f}{pair[0]:>8.3f}{pair[1]:>8.3f}{max(pair) / alone:>10.2f}x")
 
 
