@@ -246,3 +246,12 @@ def test_cantilever_geometry_extremes(tmp_path, client):
     assert closed["beam:40"]["end_disp_vec"] < 1.0
     assert closed["prbm"]["status"] == "model_invalid"
     assert "outside the fitted range" in closed["prbm"]["reason"]
+
+
+@pytest.mark.parametrize("name", ["open_chain_arcs", "slenderness", "arc_angle"])
+def test_builtin_sweeps_load(name):
+    """Each built-in sweep loads from a fresh checkout (the example's file once was ignored
+    by git), with every point valid."""
+    sweep = load_sweep(name)
+    assert sweep.name == name and sweep.points
+    assert len(sweep.valid_points) == len(sweep.points)
