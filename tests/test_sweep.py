@@ -2,6 +2,7 @@
 
 import dataclasses
 import textwrap
+from pathlib import Path
 
 import pyarrow.parquet as pq
 import pytest
@@ -11,8 +12,12 @@ from reducedmodels import parse_model
 from validation.cli import main
 from validation.compare import errors
 from validation.run import run_model
-from validation.sweep import load_sweep, results_store, run_sweep, write_outputs
+from validation.sweep import load_sweep, results_store, run_sweep, sweep_rows, write_outputs
 from validation.sweep import tasks as sweep_tasks
+
+SCENES = Path(__file__).parent / "scenes"
+DA_DEPPO_SCHMIDT = 8.97
+"""P R^2 / EI at the limit point of the 215 deg clamped-hinged arch (Da Deppo and Schmidt 1975)."""
 
 TINY = """
 name = "tiny"
@@ -191,6 +196,7 @@ def test_generated_invalid_points_are_reported_not_fatal(tmp_path, client):
     (("values = [0.09, 0.11]", "values = [0.09, -0.11]"), "section.thickness", "point 2"),
     (("values = [0.09, 0.11]", 'values = [0.09, "thin"]'), "axes[0].values", "thin"),
     (("combine", "combine"), "combine", "'diagonal'"),
+    (("batch = 2", 'batch = 2\noutputs = ["peak_stress", "stress"]'), "outputs", "'stress'"),
 ])
 def test_bad_sweep_files_exit_2_naming_the_field(tmp_path, capsys, edit, field, words):
     text = TINY.replace(*edit)
@@ -255,3 +261,128 @@ def test_builtin_sweeps_load(name):
     sweep = load_sweep(name)
     assert sweep.name == name and sweep.points
     assert len(sweep.valid_points) == len(sweep.points)
+
+
+def _peak(lp) -> float:
+    """The largest peak stress over the flexures at the last level (MPa), read directly."""
+    return max(v[-1] for v in lp.peak_stress.values())
+
+
+def test_peak_stress_rows_against_the_closed_form_and_the_reference(tmp_path, client):
+    sweep = load_sweep(_write(tmp_path, TINY))
+    assert sweep.outputs == ("peak_stress",)            # the default
+    run_sweep(sweep, tmp_path / "o", client, use_cache=False)
+    rows = sweep_rows(sweep, tmp_path / "o")
+    assert len(rows) == 4 * 3 * 2 and {r["load_unit"] for r in rows} == {"N", "N mm"}
+    for r in rows:
+        point = sweep.points[r["point"]]
+        assert r["peak_stress"] > 0 and r["peak_stress_flexure"] in ("e12", "e23", "e34")
+        assert 0.0 <= r["peak_stress_at"] <= 1.0
+        assert r["limit_load"] is None                    # not asked for
+        if r["load_case"] == "m+":
+            # a pure end moment M bends every section alike: 6 M / (b h^2) whatever E and
+            # whatever the model (measured spread ~1e-13 relative)
+            h = point.params["section.thickness"]
+            m = point.scene.load_case("m+").magnitude
+            assert r["peak_stress"] == pytest.approx(6.0 * m / (1.0 * h * h), rel=1e-9)
+            if r["model"] != "prbm":
+                assert abs(r["peak_stress_error"]) < 1e-7
+    # f+: the error is the models' own peak stresses compared, run here independently
+    p = sweep.points[1]
+    lc = p.scene.load_case("f+")
+    ref = _peak(run_model(p.scene, parse_model("prbm"), lc))
+    for model in ("ee", "dcmm:1"):
+        got = next(r for r in rows if r["point"] == 1 and r["model"] == model
+                   and r["load_case"] == "f+")
+        want = _peak(run_model(p.scene, parse_model(model), lc))
+        assert got["peak_stress"] == pytest.approx(want, rel=1e-9)
+        assert got["peak_stress_error"] == pytest.approx(100 * (want - ref) / ref, rel=1e-6)
+    files = write_outputs(sweep, rows, tmp_path / "o")
+    assert tmp_path / "o" / "stress.png" in files
+    text = (tmp_path / "o" / "summary.md").read_text()
+    assert "## Peak stress against `prbm`" in text and "## Limit loads" not in text
+
+
+def test_limit_loads_of_the_deep_arch(tmp_path, client):
+    """Da Deppo and Schmidt's arch (limit P R^2 / EI = 8.97, EI / R^2 = 1 N at E = 120 GPa)
+    under 10 N: below E = 120 GPa load control stops at the limit point, which the sweep
+    finds by arc length; the limit load is proportional to E; at 240 GPa 10 N is below it."""
+    text = f"""
+    base = "{SCENES / 'deep_arch.toml'}"
+    models = ["beam:10", "dcmm:2"]
+    reference = "beam:40"
+    outputs = ["errors", "limit_load"]
+
+    [[axes]]
+    path = "material.youngs_modulus"
+    values = [60000.0, 120000.0, 240000.0]
+    """
+    sweep = load_sweep(_write(tmp_path, text))
+    assert sweep.outputs == ("limit_load",)
+    run_sweep(sweep, tmp_path / "o", client, use_cache=False)
+    rows = {(r["point"], r["model"]): r for r in sweep_rows(sweep, tmp_path / "o")}
+    ref = rows[(1, "beam:40")]
+    assert ref["status"] == "solver_failure" and ref["load_unit"] == "N"
+    assert ref["limit_load"] == pytest.approx(DA_DEPPO_SCHMIDT, rel=5e-3)
+    assert ref["peak_stress"] is None                   # not asked for, and no full load
+    for model in ("beam:40", "beam:10", "dcmm:2"):
+        half, full, double = (rows[(i, model)] for i in range(3))
+        # the trace's parabola refinement is good to ~1e-5 (validation.failures)
+        assert half["limit_load"] == pytest.approx(full["limit_load"] / 2, rel=1e-4)
+        assert double["status"] == "ok" and double["limit_load"] is None
+        if model != "beam:40":
+            assert full["limit_load_error"] == pytest.approx(
+                100 * (full["limit_load"] - ref["limit_load"]) / ref["limit_load"], rel=1e-12)
+    # beam:10 overestimates the limit load by its discretisation error: 1.5 % (measured)
+    assert 0.5 < rows[(1, "beam:10")]["limit_load_error"] < 3.0
+    files = write_outputs(sweep, list(rows.values()), tmp_path / "o")
+    assert tmp_path / "o" / "limits.png" in files
+    summary = (tmp_path / "o" / "summary.md").read_text()
+    assert "## Limit loads against `beam:40`" in summary and "## Peak stress" not in summary
+    assert "limit point at 8.9" in summary
+
+
+def test_an_older_dataset_is_refused_and_other_code_versions_left_out(tmp_path, capsys):
+    text = TINY.replace('["ee", "dcmm:1"]', '["ee"]').replace('reference = "prbm"',
+                                                               'reference = "dcmm:1"')
+    sweep_file = _write(tmp_path, text)
+    sweep = load_sweep(sweep_file)
+    out = tmp_path / "o"
+    args = ["sweep", str(sweep_file), "--out", str(out), "--workers", "1", "--quiet"]
+    assert main(args) == 0
+    capsys.readouterr()
+    store = results_store(sweep, out)
+    rows = store.rows()
+    # rows stored by an earlier code version: other keys, left out of the summary
+    store.append([r | {"key": "old-" + r["key"], "end_rot": 1e3} for r in rows])
+    assert sweep_rows(sweep, out) == rows
+    assert main(args) == 0
+    assert f"{len(rows)} stored rows of an earlier code version" in capsys.readouterr().err
+    # a part without the peak-stress and limit-load columns (written before them)
+    old = pq.read_table(store.parts()[0]).drop_columns(["peak_stress", "limit_load"])
+    pq.write_table(old, out / "results" / "part-old.parquet")
+    summary = (out / "summary.md").stat().st_mtime_ns
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "results" in err and "peak_stress" in err and "another --out" in err
+    assert (out / "summary.md").stat().st_mtime_ns == summary
+
+
+def test_cli_sweep_on_an_existing_scheduler(tmp_path, capsys, client, monkeypatch):
+    """--scheduler ADDRESS: the tasks run on that cluster's workers, none is started."""
+    import validation.sweep
+
+    def no_local_cluster(*args, **kwargs):
+        raise AssertionError("a local cluster was started despite --scheduler")
+
+    monkeypatch.setattr(validation.sweep, "local_cluster", no_local_cluster)
+    text = TINY.replace('["ee", "dcmm:1"]', '["ee"]').replace('reference = "prbm"',
+                                                               'reference = "dcmm:1"')
+    sweep_file = _write(tmp_path, text)
+    address = client.scheduler.address
+    args = ["sweep", str(sweep_file), "--scheduler", address, "--out", str(tmp_path / "o"),
+            "--quiet"]
+    assert main(args) == 0
+    assert "4 tasks, 16 rows written (0 failed)" in capsys.readouterr().err
+    rows = sweep_rows(load_sweep(sweep_file), tmp_path / "o")
+    assert len(rows) == 16 and {r["status"] for r in rows} == {"ok"}

@@ -395,7 +395,8 @@ def _cmd_stress(args: argparse.Namespace) -> int:
 def _cmd_sweep(args: argparse.Namespace) -> int:
     import dataclasses
 
-    from .sweep import load_sweep, local_cluster, results_store, run_sweep, write_outputs
+    from .sweep import (load_sweep, local_cluster, results_store, run_sweep, sweep_rows,
+                        write_outputs)
 
     if args.scheduler and args.workers is not None:
         raise SceneError(COMMAND_LINE, "--workers", args.workers,
@@ -405,6 +406,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         sweep = dataclasses.replace(sweep, batch=args.batch)
     out = check_folder(args.out if args.out is not None
                        else os.path.join("sweeps", safe_name(sweep.name)), "--out")
+    results_store(sweep, out).check()         # a dataset of another format: refused up front
     invalid = len(sweep.points) - len(sweep.valid_points)
     print(f"sweep {sweep.name}: {len(sweep.points)} points ({invalid} invalid), "
           f"{len(sweep.models)} models + reference {sweep.reference.id}, "
@@ -433,10 +435,13 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     finally:
         if cluster is not None:
             cluster.close()
-    rows = results_store(sweep, out).rows()
+    rows = sweep_rows(sweep, out)
     write_outputs(sweep, rows, out, stats.seconds)
+    stale = len(results_store(sweep, out).keys()) - len(rows)
     print(f"{stats.tasks} tasks, {stats.rows_written} rows written ({stats.rows_failed} failed), "
-          f"{stats.rows_skipped} already present; {stats.seconds:.1f} s", file=sys.stderr)
+          f"{stats.rows_skipped} already present; {stats.seconds:.1f} s"
+          + (f"; {stale} stored rows of an earlier code version or outputs left out of the "
+             "summary" if stale else ""), file=sys.stderr)
     print((out / "summary.md").read_text(encoding="utf-8"))
     return EXIT_OK
 

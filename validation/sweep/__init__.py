@@ -6,9 +6,9 @@ keeps the rows, :mod:`.summary` writes the Markdown summary and figures,
 :mod:`.builtin` holds the built-in sweeps.
 """
 
-from .engine import SweepStats, local_cluster, results_store, run_sweep
+from .engine import SweepStats, current_keys, local_cluster, results_store, run_sweep, sweep_rows
 from .spec import Axis, Point, Sweep, load_sweep, parse_sweep
 from .summary import write_outputs
 
-__all__ = ["Axis", "Point", "Sweep", "SweepStats", "load_sweep", "local_cluster", "parse_sweep",
-           "results_store", "run_sweep", "write_outputs"]
+__all__ = ["Axis", "Point", "Sweep", "SweepStats", "current_keys", "load_sweep", "local_cluster",
+           "parse_sweep", "results_store", "run_sweep", "sweep_rows", "write_outputs"]

@@ -8,8 +8,10 @@ runs once per point in its own tasks; a model task receives the reference
 paths of its points from Dask.
 
 Resuming: every row's key hashes the point's scene, the model, the load
-case, the reference and the code version; a (point, model) pair whose rows
-are all stored already is not run again. A task that raises even after
+case, the reference, the code version and the optional outputs; a (point,
+model) pair whose rows are all stored already is not run again, and the
+summary reads only the rows of the current keys (:func:`current_keys`),
+never those a sweep left under an older code version. A task that raises even after
 Dask's retries (a worker that keeps dying) becomes rows with status
 ``error``: the sweep goes on.
 
@@ -58,6 +60,21 @@ def chunks(points: list[Point], size: int) -> Iterator[list[Point]]:
 def _batch_size(sweep: Sweep, spec: ModelSpec) -> int:
     """Points per task: one for a reference-class (costly) model, the sweep's batch otherwise."""
     return 1 if spec.model_family.has(REFERENCE) else sweep.batch
+
+
+def task_info(sweep: Sweep) -> TaskInfo:
+    """What every task of ``sweep`` shares (and its row keys hash)."""
+    return TaskInfo(sweep.name, sweep.reference.id, code_version(), sweep.outputs)
+
+
+def current_keys(sweep: Sweep) -> set[str]:
+    """The keys of every row ``sweep`` produces with the current code."""
+    info = task_info(sweep)
+    models = [sweep.reference.id, *(s.id for s in sweep.models)]
+    keys = {base_row(p, "-", "-", info)["key"] for p in sweep.points if p.scene is None}
+    keys.update(base_row(p, m, c, info)["key"] for p in sweep.valid_points for m in models
+                for c in sweep.load_cases)
+    return keys
 
 
 def local_cluster(workers: int | None = None):
@@ -109,7 +126,7 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, client, use_cache: bool = True,
     t0 = time.perf_counter()
     store = results_store(sweep, out_dir)
     done = store.keys()
-    info = TaskInfo(sweep.name, sweep.reference.id, code_version())
+    info = task_info(sweep)
     stats = SweepStats()
 
     invalid = [base_row(p, "-", "-", info) | {"status": "invalid_point", "reason": p.reason}
@@ -170,3 +187,8 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, client, use_cache: bool = True,
 def results_store(sweep: Sweep, out_dir: str | Path) -> ResultStore:
     """The Parquet store of ``sweep``'s results: the ``results`` folder of ``out_dir``."""
     return ResultStore(Path(out_dir) / "results", [a.path for a in sweep.axes])
+
+
+def sweep_rows(sweep: Sweep, out_dir: str | Path) -> list[dict]:
+    """The stored rows of ``sweep`` under the current code (see :func:`current_keys`)."""
+    return results_store(sweep, out_dir).rows(current_keys(sweep))

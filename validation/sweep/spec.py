@@ -12,6 +12,9 @@ A sweep file (TOML) names a base scene and the parameters to vary::
     linear_rotation = 0.3            # optional (rad): scale each load case so that the
                                      # linear (ee) end rotation is this at every point
     batch = 10                       # optional: points per task of a reduced model
+    outputs = ["peak_stress"]        # optional: besides errors and times (always there),
+                                     # "peak_stress" (default) and "limit_load" (an
+                                     # arc-length search on each run that stops early)
 
     [[axes]]
     path = "section.thickness"       # any numeric field of the scene, by path
@@ -67,9 +70,16 @@ SUMMARY_METRICS = ("worst",) + METRICS
 """``worst`` is max(end_disp_vec, end_rot): a model is as good as its worse end error."""
 DEFAULT_BATCH = 10
 """Points per task of a reduced model (continuum tasks are one point each)."""
+ALWAYS_OUTPUTS = ("errors", "times")
+"""Outputs of every row: the error metrics against the reference and the run time."""
+OPTIONAL_OUTPUTS = ("peak_stress", "limit_load")
+"""``peak_stress``: the largest outer-fibre stress at full load and its error against the
+reference's (free: every model records it); ``limit_load``: the first limit point of a run
+that stops below full load, found by arc length (costly: only on request)."""
+DEFAULT_OUTPUTS = ("peak_stress",)
 NAMED_ARRAYS = ("flexures", "load_cases", "bodies", "pins")
 _SWEEP_KEYS = {"name", "description", "base", "models", "reference", "load_cases", "combine",
-               "metric", "linear_rotation", "batch", "axes"}
+               "metric", "linear_rotation", "batch", "outputs", "axes"}
 _AXIS_KEYS = {"path", "values", "linspace", "logspace", "sample", "count", "seed",
               *{k for pair in SAMPLES.values() for k in pair}}
 
@@ -116,6 +126,8 @@ class Sweep:
     linear_rotation: float | None
     batch: int
     points: tuple[Point, ...]
+    outputs: tuple[str, ...] = DEFAULT_OUTPUTS
+    """The optional outputs asked for (a subset of :data:`OPTIONAL_OUTPUTS`, in that order)."""
 
     @property
     def valid_points(self) -> tuple[Point, ...]:
@@ -190,6 +202,17 @@ def _axis(source: str, k: int, a: Any) -> Axis:
             "normal": lambda: rng.normal(x1, x2, n),
             "lognormal": lambda: rng.lognormal(math.log(x1), x2, n)}[dist]()
     return Axis(path, tuple(float(v) for v in vals), True)
+
+
+def _outputs(source: str, value: Any) -> tuple[str, ...]:
+    """The optional outputs named in ``outputs`` (errors and times are always there)."""
+    known = ALWAYS_OUTPUTS + OPTIONAL_OUTPUTS
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        _fail(source, "outputs", value, f"must be a list of names from {list(known)}")
+    for v in value:
+        if v not in known:
+            _fail(source, "outputs", v, f"unknown output; expected one of {list(known)}")
+    return tuple(o for o in OPTIONAL_OUTPUTS if o in value)
 
 
 def _slot(data: dict, path: str, source: str, field: str) -> tuple[Any, Any]:
@@ -340,6 +363,7 @@ def parse_sweep(data: dict, source: str, folder: Path = Path("."),
     if rotation is not None:
         rotation = _number(source, "linear_rotation", rotation, positive=True)
     batch = _count(source, "batch", data.get("batch", DEFAULT_BATCH))
+    outputs = _outputs(source, data.get("outputs", list(DEFAULT_OUTPUTS)))
     raw_axes = data.get("axes", [])
     if not isinstance(raw_axes, list):
         _fail(source, "axes", raw_axes, "must be an array of tables [[axes]]")
@@ -368,7 +392,7 @@ def parse_sweep(data: dict, source: str, folder: Path = Path("."),
             scene = _normalise(scene, pdata, tuple(cases), rotation)
         points.append(Point(i, params, scene, digest(pdata)))
     return Sweep(name, str(data.get("description", "")), source, label, axes, combine, specs,
-                 reference, tuple(cases), metric, rotation, batch, tuple(points))
+                 reference, tuple(cases), metric, rotation, batch, tuple(points), outputs)
 
 
 def load_sweep(name_or_path: str | Path) -> Sweep:

@@ -6,8 +6,16 @@ leaves only whole parts; rerunning it reads the ``key`` column of every part
 and skips what is there. Failed runs are rows too (``status`` and
 ``reason``), with empty (null) errors: a Parquet file never holds a NaN.
 
+Every part of a dataset has the same schema (:func:`schema`). A folder
+whose parts have another one (written by an older flexval, before the
+peak-stress and limit-load columns, or by a sweep over other parameters) is
+refused with a :class:`SceneError` naming the folder and the differing
+columns, rather than mixed into a dataset that Parquet readers would
+silently truncate to the first part's columns.
+
 Units: errors in percent, times in s, ``load_reached`` as a fraction of the
-full load, parameters in their scene field's unit.
+full load, stresses in MPa, limit loads in ``load_unit`` (N or N mm),
+parameters in their scene field's unit.
 """
 
 from __future__ import annotations
@@ -19,6 +27,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from geometry import SceneError
 from geometry.files import atomic_path
 
 from ..compare import METRICS
@@ -35,7 +44,17 @@ _FIXED = [("key", pa.string()), ("sweep", pa.string()), ("point", pa.int64()),
           ("model", pa.string()), ("reference", pa.string()), ("load_case", pa.string()),
           ("status", pa.string()), ("reason", pa.string()), ("load_reached", pa.float64()),
           *[(m, pa.float64()) for m in METRICS], ("seconds", pa.float64()),
-          ("newton_iterations", pa.int64()), ("valid", pa.bool_()), ("validity", pa.string())]
+          ("newton_iterations", pa.int64()), ("valid", pa.bool_()), ("validity", pa.string()),
+          ("load_unit", pa.string()), ("peak_stress", pa.float64()),
+          ("peak_stress_flexure", pa.string()), ("peak_stress_at", pa.float64()),
+          ("peak_stress_error", pa.float64()), ("limit_load", pa.float64()),
+          ("limit_load_error", pa.float64())]
+"""The columns of every row besides the parameters. ``peak_stress``: the largest outer-fibre
+stress over the flexures at full load (MPa), on ``peak_stress_flexure`` at the fraction
+``peak_stress_at`` of its length from its first end; ``peak_stress_error``: (model -
+reference) / reference, percent. ``limit_load``: the first limit point below full load of a
+run that stopped there (N or N mm, ``load_unit``; asked for with ``outputs``);
+``limit_load_error``: against the reference's, percent."""
 
 
 def schema(paths: list[str]) -> pa.Schema:
@@ -60,8 +79,23 @@ class ResultStore:
         """The finished part files, sorted by name."""
         return sorted(self.folder.glob("part-*.parquet")) if self.folder.is_dir() else []
 
+    def check(self) -> None:
+        """Raise SceneError (field ``results``) if a stored part has another schema."""
+        for part in self.parts():
+            found = pq.read_schema(part)
+            if found.equals(self.schema, check_metadata=False):
+                continue
+            missing = [n for n in self.schema.names if n not in found.names]
+            extra = [n for n in found.names if n not in self.schema.names]
+            raise SceneError(str(self.folder), "results", part.name,
+                             "holds a sweep dataset of another format (missing columns "
+                             f"{missing or 'none'}, other columns {extra or 'none'}; written by "
+                             "an older flexval or for other parameters): choose another --out "
+                             "or remove this folder")
+
     def keys(self) -> set[str]:
-        """Keys of every row already stored."""
+        """Keys of every row already stored (after :meth:`check`)."""
+        self.check()
         out: set[str] = set()
         for part in self.parts():
             out.update(pq.read_table(part, columns=["key"]).column("key").to_pylist())
@@ -79,10 +113,14 @@ class ResultStore:
             pq.write_table(table, tmp)
         return final
 
-    def rows(self) -> list[dict]:
-        """Every stored row, sorted by point, model and load case."""
+    def rows(self, keys: set[str] | None = None) -> list[dict]:
+        """The stored rows (those whose key is in ``keys``, if given), sorted by point, model
+        and load case (after :meth:`check`)."""
+        self.check()
         tables = [pq.read_table(p, schema=self.schema) for p in self.parts()]
         if not tables:
             return []
         rows = pa.concat_tables(tables).to_pylist()
+        if keys is not None:
+            rows = [r for r in rows if r["key"] in keys]
         return sorted(rows, key=lambda r: (r["point"], r["model"], r["load_case"]))

@@ -2,21 +2,27 @@
 
 The summary metric of a (point, model) pair is the largest over the sweep's
 load cases of the sweep's ``metric`` (``worst`` = max(end_disp_vec,
-end_rot), percent); a pair with a failed case has none. ``summary.md`` holds
-only results that do not depend on the machine (errors, regions, failures);
-run times go to ``timings.md`` and ``runtime.png``.
+end_rot), percent); a pair with a failed case has none. The peak-stress
+metric is likewise the largest |peak stress error| over the load cases.
+``summary.md`` holds only results that do not depend on the machine
+(errors, peak stresses, limit loads, regions, failures); run times go to
+``timings.md`` and ``runtime.png``.
 
-Figures: one swept axis (or zipped axes, against the first) -> error lines;
-two axes on a grid -> one heat map per model with the 1 % and 5 % contours;
-otherwise the error against each parameter as scatter plots.
+Figures (``errors.png`` for the summary metric, ``stress.png`` for the
+peak-stress error): one swept axis (or zipped axes, against the first) ->
+lines; two axes on a grid -> one heat map per model with the 1 % and 5 %
+contours; otherwise the error against each parameter as scatter plots.
+``limits.png``: the limit loads found, against the first parameter.
 
-Units: errors in percent, times in s, parameters in their field's unit.
+Units: errors in percent, stresses in MPa, loads in N or N mm, times in s,
+parameters in their field's unit.
 """
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -28,6 +34,8 @@ THRESHOLDS = (1.0, 5.0)
 MAX_LISTED = 30
 """Failures and invalid points listed by name in the summary (the rest are counted)."""
 
+RowValue = Callable[[dict], "float | None"]
+
 
 def row_metric(row: dict, metric: str) -> float | None:
     """The summary metric of one row (percent), None when it has no errors."""
@@ -37,18 +45,31 @@ def row_metric(row: dict, metric: str) -> float | None:
     return row[metric]
 
 
-def point_metrics(sweep: Sweep, rows: list[dict]) -> dict[str, dict[int, float | None]]:
-    """{model: {point: worst metric over the load cases, or None}} of the compared models."""
+def stress_metric(row: dict) -> float | None:
+    """|peak stress error| of one row (percent), None when it has none."""
+    e = row["peak_stress_error"]
+    return None if e is None else abs(e)
+
+
+def point_values(sweep: Sweep, rows: list[dict], value: RowValue
+                 ) -> dict[str, dict[int, float | None]]:
+    """{model: {point: largest ``value`` over the load cases, or None if a case has none}}
+    of the compared models."""
     out: dict[str, dict[int, float | None]] = {s.id: {} for s in sweep.models}
     for r in rows:
         if r["model"] not in out:
             continue
-        v = row_metric(r, sweep.metric)
+        v = value(r)
         per = out[r["model"]]
         if r["point"] in per and per[r["point"]] is None:
             continue
         per[r["point"]] = None if v is None else max(v, per.get(r["point"]) or 0.0)
     return out
+
+
+def point_metrics(sweep: Sweep, rows: list[dict]) -> dict[str, dict[int, float | None]]:
+    """{model: {point: worst summary metric over the load cases, or None}}."""
+    return point_values(sweep, rows, lambda r: row_metric(r, sweep.metric))
 
 
 def _fmt(x: float | None) -> str:
@@ -75,6 +96,87 @@ def _ranges(sweep: Sweep, pts: list[int]) -> str:
     return "; ".join(spans)
 
 
+def _agreement(sweep: Sweep, metrics: dict[str, dict[int, float | None]]) -> list[str]:
+    """Table rows: per model, the points with a value, its median and largest, and the points
+    within each threshold with the span of each parameter over them."""
+    n_valid = len(sweep.valid_points)
+    lines = []
+    for model, per in metrics.items():
+        vals = [v for v in per.values() if v is not None]
+        cells = []
+        for t in THRESHOLDS:
+            inside = [i for i, v in per.items() if v is not None and v < t]
+            cells.append(f"{len(inside)}/{n_valid} {_ranges(sweep, inside)}".strip())
+        lines.append(f"| {model} | {len(vals)}/{n_valid} | "
+                     f"{_fmt(float(np.median(vals)) if vals else None)} | "
+                     f"{_fmt(max(vals) if vals else None)} | {cells[0]} | {cells[1]} |")
+    return lines
+
+
+def _per_point(sweep: Sweep, metrics: dict, first: tuple[str, dict] | None = None
+               ) -> list[str]:
+    """Per-point table of ``metrics`` (``first``: an extra leading column, name and values)."""
+    extra = [first[0]] if first else []
+    lines = ["| point | parameters | " + " | ".join(extra + list(metrics)) + " |",
+             "|---:|---|" + "---:|" * (len(extra) + len(metrics))]
+    for p in sweep.points:
+        cells = ([_fmt(first[1].get(p.index))] if first else []) + [
+            _fmt(metrics[m].get(p.index)) for m in metrics]
+        lines.append(f"| {p.index} | {_params(sweep, p.index)} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def _reference_peaks(sweep: Sweep, rows: list[dict]) -> dict[int, float]:
+    """{point: the reference's largest peak stress over the load cases (MPa)}."""
+    out: dict[int, float] = {}
+    for r in rows:
+        if r["model"] == sweep.reference.id and r["peak_stress"] is not None:
+            out[r["point"]] = max(r["peak_stress"], out.get(r["point"], 0.0))
+    return out
+
+
+def _stress_section(sweep: Sweep, rows: list[dict]) -> list[str]:
+    """Markdown: the peak stresses and their errors against the reference's."""
+    ref = sweep.reference.id
+    metrics = point_values(sweep, rows, stress_metric)
+    peaks = _reference_peaks(sweep, rows)
+    lines = ["", f"## Peak stress against `{ref}`", "",
+             "Largest outer-fibre normal stress |N|/A + |M| h/(2I) over the flexures at full "
+             "load, from each model's own section forces (MPa). Metric: |model - reference| / "
+             "reference (percent), the largest over the load cases at each point."]
+    if peaks:
+        lines.append(f"The reference's peak stress spans {min(peaks.values()):.4g} .. "
+                     f"{max(peaks.values()):.4g} MPa over the points.")
+    lines += ["", "| model | points with errors | median % | max % | within 1 % | within 5 % |",
+              "|---|---:|---:|---:|---|---|"] + _agreement(sweep, metrics)
+    if len(sweep.points) <= MAX_LISTED:
+        lines += ["", "Per point: the reference's peak stress (MPa) and each model's error (%).",
+                  ""] + _per_point(sweep, metrics, (f"{ref} MPa", peaks))
+    return lines
+
+
+def _limit_section(sweep: Sweep, rows: list[dict]) -> list[str]:
+    """Markdown: the limit loads found (runs that stopped at a limit point below full load)."""
+    lines = ["", f"## Limit loads against `{sweep.reference.id}`", "",
+             "Runs that stopped below full load were traced by arc length: the first limit "
+             "point's load, and its error against the reference's on the same point and case "
+             "(percent) where the reference has one too.", ""]
+    found = [r for r in rows if r["limit_load"] is not None]
+    if not found:
+        return lines + ["No run stopped at a limit point below full load."]
+    lines += ["| model | limit points | with the reference's | median |error| % | max |error| % |",
+              "|---|---:|---:|---:|---:|"]
+    for model in (sweep.reference.id, *(s.id for s in sweep.models)):
+        mine = [r for r in found if r["model"] == model]
+        errs = [abs(r["limit_load_error"]) for r in mine if r["limit_load_error"] is not None]
+        if mine:
+            paired = "–" if model == sweep.reference.id else str(len(errs))
+            lines.append(f"| {model} | {len(mine)} | {paired} | "
+                         f"{_fmt(float(np.median(errs)) if errs else None)} | "
+                         f"{_fmt(max(errs) if errs else None)} |")
+    return lines
+
+
 def format_summary(sweep: Sweep, rows: list[dict]) -> str:
     """The machine-independent Markdown summary of the sweep's rows."""
     metrics = point_metrics(sweep, rows)
@@ -93,22 +195,13 @@ def format_summary(sweep: Sweep, rows: list[dict]) -> str:
              "each parameter over those points.", "",
              "| model | points with errors | median % | max % | within 1 % | within 5 % |",
              "|---|---:|---:|---:|---|---|"]
-    for model, per in metrics.items():
-        vals = [v for v in per.values() if v is not None]
-        cells = []
-        for t in THRESHOLDS:
-            inside = [i for i, v in per.items() if v is not None and v < t]
-            cells.append(f"{len(inside)}/{n_valid} {_ranges(sweep, inside)}".strip())
-        lines.append(f"| {model} | {len(vals)}/{n_valid} | "
-                     f"{_fmt(float(np.median(vals)) if vals else None)} | "
-                     f"{_fmt(max(vals) if vals else None)} | {cells[0]} | {cells[1]} |")
+    lines += _agreement(sweep, metrics)
     if len(sweep.points) <= MAX_LISTED:
-        lines += ["", "## Per point", "",
-                  "| point | parameters | " + " | ".join(metrics) + " |",
-                  "|---:|---|" + "---:|" * len(metrics)]
-        for p in sweep.points:
-            lines.append(f"| {p.index} | {_params(sweep, p.index)} | "
-                         + " | ".join(_fmt(metrics[m].get(p.index)) for m in metrics) + " |")
+        lines += ["", "## Per point", ""] + _per_point(sweep, metrics)
+    if "peak_stress" in sweep.outputs:
+        lines += _stress_section(sweep, rows)
+    if "limit_load" in sweep.outputs:
+        lines += _limit_section(sweep, rows)
     failed = [r for r in rows if r["status"] != "ok"]
     lines += ["", "## Failures", ""]
     if not failed:
@@ -116,6 +209,8 @@ def format_summary(sweep: Sweep, rows: list[dict]) -> str:
     for r in failed[:MAX_LISTED]:
         reached = (f" (load reached {r['load_reached']:.3g})"
                    if r["load_reached"] is not None else "")
+        if r["limit_load"] is not None:
+            reached += f" (limit point at {r['limit_load']:.5g} {r['load_unit']})"
         lines.append(f"- point {r['point']} ({_params(sweep, r['point'])}), {r['model']}, "
                      f"{r['load_case']}: {r['status']}{reached}: {r['reason']}")
     if len(failed) > MAX_LISTED:
@@ -171,13 +266,15 @@ def _finish(fig, axs, path: Path) -> None:
     """Legend on the first panel, layout, atomic save, figure closed."""
     import matplotlib.pyplot as plt
 
-    axs[0][0].legend(fontsize=7)
+    if axs[0][0].get_legend_handles_labels()[0]:
+        axs[0][0].legend(fontsize=7)
     fig.tight_layout()
     _save(fig, path)
     plt.close(fig)
 
 
-def _lines(sweep: Sweep, rows: list[dict], path: Path) -> None:
+def _lines(sweep: Sweep, rows: list[dict], path: Path, value: RowValue, label: str) -> None:
+    """One panel per load case: ``value`` of each row (percent) against the first axis."""
     import matplotlib.pyplot as plt
 
     axis = sweep.axes[0] if sweep.axes else None
@@ -186,20 +283,20 @@ def _lines(sweep: Sweep, rows: list[dict], path: Path) -> None:
     for ax, case in zip(axs[0], cases):
         for spec in sweep.models:
             pts = sorted((_point(sweep, r["point"]).params.get(axis.path, 0.0) if axis else 0.0,
-                          row_metric(r, sweep.metric)) for r in rows
+                          value(r)) for r in rows
                          if r["model"] == spec.id and r["load_case"] == case
-                         and row_metric(r, sweep.metric) is not None)
+                         and value(r) is not None)
             if pts:
                 x, y = zip(*pts)
                 ax.plot(x, np.maximum(y, 1e-6), "o" if axis and axis.random else "o-",
                         ms=3, label=spec.id)
         ax.set_title(f"load case {case}")
-        _error_axes(ax, axis.path if axis else "point",
-                    f"{sweep.metric} error vs {sweep.reference.id} (%)")
+        _error_axes(ax, axis.path if axis else "point", f"{label} vs {sweep.reference.id} (%)")
     _finish(fig, axs, path)
 
 
-def _heatmaps(sweep: Sweep, metrics: dict, path: Path) -> None:
+def _heatmaps(sweep: Sweep, metrics: dict, path: Path, label: str) -> None:
+    """One heat map per model of its point metrics (percent) over the two grid axes."""
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
 
@@ -231,7 +328,7 @@ def _heatmaps(sweep: Sweep, metrics: dict, path: Path) -> None:
         ax.set_title(model)
         ax.set_xlabel(ax0.path)
         ax.set_ylabel(ax1.path)
-        fig.colorbar(mesh, ax=ax, label=f"{sweep.metric} % (contours 1, 5)")
+        fig.colorbar(mesh, ax=ax, label=f"{label} % (contours 1, 5)")
     for k in range(n, rws * cols):
         axs[k // cols][k % cols].axis("off")
     fig.tight_layout()
@@ -239,7 +336,8 @@ def _heatmaps(sweep: Sweep, metrics: dict, path: Path) -> None:
     plt.close(fig)
 
 
-def _scatter(sweep: Sweep, metrics: dict, path: Path) -> None:
+def _scatter(sweep: Sweep, metrics: dict, path: Path, label: str) -> None:
+    """The point metrics (percent) against each parameter."""
     import matplotlib.pyplot as plt
 
     fig, axs = plt.subplots(1, len(sweep.axes), figsize=(4.2 * len(sweep.axes), 3.4),
@@ -250,8 +348,45 @@ def _scatter(sweep: Sweep, metrics: dict, path: Path) -> None:
             if pts:
                 px, py = zip(*pts)
                 ax.plot(px, np.maximum(py, 1e-6), ".", ms=3, label=model)
-        _error_axes(ax, a.path, f"{sweep.metric} error (%)")
+        _error_axes(ax, a.path, f"{label} (%)")
     _finish(fig, axs, path)
+
+
+def _error_figure(sweep: Sweep, rows: list[dict], path: Path, value: RowValue,
+                  label: str) -> Path:
+    """Lines, heat maps or scatter plots (see the module docstring) of ``value`` (percent)."""
+    if len(sweep.axes) == 2 and sweep.combine == "grid" and not any(a.random for a in sweep.axes):
+        _heatmaps(sweep, point_values(sweep, rows, value), path, label)
+    elif len(sweep.axes) <= 1 or sweep.combine == "zip":
+        _lines(sweep, rows, path, value, label)
+    else:
+        _scatter(sweep, point_values(sweep, rows, value), path, label)
+    return path
+
+
+def _limits(sweep: Sweep, rows: list[dict], path: Path) -> Path:
+    """The limit loads found (N or N mm), per load case, against the first parameter."""
+    import matplotlib.pyplot as plt
+
+    axis = sweep.axes[0] if sweep.axes else None
+    cases = sweep.load_cases
+    fig, axs = plt.subplots(1, len(cases), figsize=(4.2 * len(cases), 3.4), squeeze=False)
+    for ax, case in zip(axs[0], cases):
+        unit = ""
+        for model in (sweep.reference.id, *(s.id for s in sweep.models)):
+            found = [r for r in rows if r["model"] == model and r["load_case"] == case
+                     and r["limit_load"] is not None]
+            if found:
+                unit = found[0]["load_unit"]
+                pts = sorted((_point(sweep, r["point"]).params.get(axis.path, 0.0)
+                              if axis else 0.0, r["limit_load"]) for r in found)
+                ax.plot(*zip(*pts), "o", ms=3, label=model)
+        ax.set_title(f"load case {case}")
+        ax.set_xlabel(axis.path if axis else "point")
+        ax.set_ylabel(f"first limit load ({unit})" if unit else "first limit load")
+        ax.grid(alpha=0.3)
+    _finish(fig, axs, path)
+    return path
 
 
 def _runtimes(sweep: Sweep, rows: list[dict], path: Path) -> None:
@@ -274,7 +409,8 @@ def _runtimes(sweep: Sweep, rows: list[dict], path: Path) -> None:
 
 def write_outputs(sweep: Sweep, rows: list[dict], out_dir: str | Path,
                   wall: float | None = None) -> list[Path]:
-    """Write summary.md, timings.md, errors.png and runtime.png into ``out_dir``."""
+    """Write summary.md, timings.md, errors.png, runtime.png, stress.png (with the
+    ``peak_stress`` output) and limits.png (when a limit load was found) into ``out_dir``."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -284,13 +420,13 @@ def write_outputs(sweep: Sweep, rows: list[dict], out_dir: str | Path,
     for name, text in (("summary.md", format_summary(sweep, rows)),
                        ("timings.md", format_timings(sweep, rows, wall))):
         written.append(write_text(out / name, text))
-    metrics = point_metrics(sweep, rows)
-    errors_png = out / "errors.png"
-    if len(sweep.axes) == 2 and sweep.combine == "grid" and not any(a.random for a in sweep.axes):
-        _heatmaps(sweep, metrics, errors_png)
-    elif len(sweep.axes) <= 1 or sweep.combine == "zip":
-        _lines(sweep, rows, errors_png)
-    else:
-        _scatter(sweep, metrics, errors_png)
+    written.append(_error_figure(sweep, rows, out / "errors.png",
+                                 lambda r: row_metric(r, sweep.metric), f"{sweep.metric} error"))
     _runtimes(sweep, rows, out / "runtime.png")
-    return written + [errors_png, out / "runtime.png"]
+    written.append(out / "runtime.png")
+    if "peak_stress" in sweep.outputs:
+        written.append(_error_figure(sweep, rows, out / "stress.png", stress_metric,
+                                     "|peak stress error|"))
+    if any(r["limit_load"] is not None for r in rows):
+        written.append(_limits(sweep, rows, out / "limits.png"))
+    return written

@@ -4,10 +4,16 @@ A task returns finished result rows (see :mod:`validation.sweep.store`),
 never raises for a model that fails: a SolverError, a model that refuses
 the geometry, an unexpected numerical exception or a non-finite result is a
 row with its status and reason. The reference task also returns its load
-paths, which the model tasks of the same points receive from Dask (the
-reference is computed once per point and shared).
+paths and limit loads, which the model tasks of the same points receive
+from Dask (the reference is computed once per point and shared).
 
-Units: errors in percent, times in s.
+A converged row carries its peak stress at full load
+(:func:`validation.strength.peak_at_full_load`); with the ``limit_load``
+output, a run that stops below full load is searched for its first limit
+point by arc length (:func:`validation.failures.first_limit`, as the
+report does), and the row carries that load.
+
+Units: errors in percent, times in s, stresses in MPa, loads in N or N mm.
 """
 
 from __future__ import annotations
@@ -17,28 +23,33 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from geometry import SceneError
+from geometry import LoadCase, SceneError
 from reducedmodels import LoadPath, ModelSpec, SolverError
 
 from ..cache import ResultCache, result_key
 from ..compare import METRICS, errors
+from ..failures import first_limit
 from ..run import run_model
+from ..strength import peak_at_full_load
 from .spec import Point
 from .store import PARAM_PREFIX
 
 
 @dataclass(frozen=True)
 class TaskInfo:
-    """What every row of a task shares: sweep name, reference id and code version."""
+    """What every row of a task shares: sweep name, reference id, code version and the
+    optional outputs asked for (see :data:`validation.sweep.spec.OPTIONAL_OUTPUTS`)."""
 
     sweep: str
     reference: str
     code: str
+    outputs: tuple[str, ...]
 
 
 def row_key(digest: str, model: str, case: str, info: TaskInfo) -> str:
-    """Key of one result row: the point's scene digest, model, case, reference and code."""
-    text = "|".join((digest, model, case, info.reference, info.code))
+    """Key of one result row: the point's scene digest, model, case, reference, code and
+    outputs (a row without a limit load is not the answer to a sweep that asks for one)."""
+    text = "|".join((digest, model, case, info.reference, info.code, ",".join(info.outputs)))
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
@@ -48,6 +59,9 @@ def base_row(point: Point, model: str, case: str, info: TaskInfo) -> dict:
            "point": point.index, "model": model, "reference": info.reference,
            "load_case": case, "status": "ok", "reason": None, "load_reached": None,
            "seconds": None, "newton_iterations": None, "valid": None, "validity": None,
+           "load_unit": point.scene.load_case(case).unit if point.scene is not None else None,
+           "peak_stress": None, "peak_stress_flexure": None, "peak_stress_at": None,
+           "peak_stress_error": None, "limit_load": None, "limit_load_error": None,
            **{m: None for m in METRICS}}
     row.update({PARAM_PREFIX + k: v for k, v in point.params.items()})
     return row
@@ -57,10 +71,10 @@ def _finite(lp: LoadPath) -> bool:
     return bool(np.all(np.isfinite(np.concatenate([lp.load, lp.dx, lp.dy, lp.rotation]))))
 
 
-def attempt(point: Point, spec: ModelSpec, case: str, row: dict,
+def attempt(point: Point, spec: ModelSpec, case: str, row: dict, info: TaskInfo,
             cache: ResultCache | None = None) -> LoadPath | None:
-    """Run ``spec`` on ``case`` of the point; fill ``row`` (status, reason, time); the path
-    or None."""
+    """Run ``spec`` on ``case`` of the point; fill ``row`` (status, reason, time, peak
+    stress, limit load if asked for); the path or None."""
     scene = point.scene
     lc = scene.load_case(case)
     key = result_key(scene, spec.id, case, None, {"sweep": True}) if cache else None
@@ -72,6 +86,8 @@ def attempt(point: Point, spec: ModelSpec, case: str, row: dict,
                 cache.put(key, lp)
     except SolverError as exc:
         row.update(status="solver_failure", reason=str(exc), load_reached=exc.load_factor)
+        if "limit_load" in info.outputs:
+            row["limit_load"] = _limit_load(point, spec, lc, row)
         return None
     except SceneError as exc:
         row.update(status="model_invalid", reason=f"{exc.field}: {exc.reason}")
@@ -87,44 +103,79 @@ def attempt(point: Point, spec: ModelSpec, case: str, row: dict,
     if lp.valid is not None:
         row["valid"] = all(lp.valid)
         row["validity"] = next((v for v in lp.validity or () if v), None)
+    peak = peak_at_full_load(lp)
+    if peak is not None:
+        row.update(peak_stress=peak["stress"], peak_stress_flexure=peak["flexure"],
+                   peak_stress_at=peak["at"])
     return lp
+
+
+def _limit_load(point: Point, spec: ModelSpec, case: LoadCase, row: dict) -> float | None:
+    """The first limit load below full load of ``spec`` on ``case`` (N or N mm), or None
+    when there is none (a failure of another kind, or a model that cannot be traced by arc
+    length); a search that itself fails adds its reason to ``row``."""
+    try:
+        limit = first_limit(point.scene, spec, case)
+    except (SceneError, ArithmeticError, ValueError, RuntimeError,
+            np.linalg.LinAlgError) as exc:
+        row["reason"] = f"{row['reason']}; limit-point search failed: {type(exc).__name__}: {exc}"
+        return None
+    return limit[0] if limit is not None and limit[0] <= case.magnitude else None
+
+
+def _relative(value: float | None, reference: float | None) -> float | None:
+    """(value - reference) / reference in percent, None if either is missing."""
+    if value is None or reference is None or reference == 0.0:
+        return None
+    return 100.0 * (value - reference) / reference
 
 
 def run_reference(points: list[Point], spec: ModelSpec, cases: tuple[str, ...],
                   info: TaskInfo, use_cache: bool = True) -> dict:
-    """The reference on every point and case: {"rows": [...], "paths": {(point, case): path}}.
+    """The reference on every point and case: {"rows": [...], "paths": {(point, case): path},
+    "limits": {(point, case): limit load}}.
 
     Converged reference paths are cached on the worker (:class:`ResultCache`),
     so a resumed sweep does not recompute a reference it already had.
     """
     cache = ResultCache(enabled=use_cache)
-    rows, paths = [], {}
+    rows, paths, limits = [], {}, {}
     for p in points:
         for case in cases:
             row = base_row(p, spec.id, case, info)
-            lp = attempt(p, spec, case, row, cache)
+            lp = attempt(p, spec, case, row, info, cache)
             if lp is not None:
                 paths[(p.index, case)] = lp
+            if row["limit_load"] is not None:
+                limits[(p.index, case)] = row["limit_load"]
             rows.append(row)
-    return {"rows": rows, "paths": paths}
+    return {"rows": rows, "paths": paths, "limits": limits}
 
 
 def run_model_batch(points: list[Point], spec: ModelSpec, cases: tuple[str, ...],
                     info: TaskInfo, references: list[dict]) -> list[dict]:
-    """Rows of ``spec`` on every point and case, with errors against the reference paths
-    found in ``references`` (results of :func:`run_reference`)."""
+    """Rows of ``spec`` on every point and case, with errors (of the paths, the peak stress
+    and the limit load) against the reference's, found in ``references`` (results of
+    :func:`run_reference`)."""
     ref_paths: dict = {}
+    ref_limits: dict = {}
     for r in references:
         ref_paths.update(r["paths"])
+        ref_limits.update(r["limits"])
     rows = []
     for p in points:
         for case in cases:
             row = base_row(p, spec.id, case, info)
-            lp = attempt(p, spec, case, row)
+            lp = attempt(p, spec, case, row, info)
             ref = ref_paths.get((p.index, case))
             if lp is not None and ref is not None:
                 row.update(errors(lp, ref))
+                ref_peak = peak_at_full_load(ref)
+                row["peak_stress_error"] = _relative(
+                    row["peak_stress"], ref_peak["stress"] if ref_peak else None)
             elif lp is not None:
                 row["reason"] = f"no errors: the reference {info.reference} failed here"
+            row["limit_load_error"] = _relative(row["limit_load"],
+                                                ref_limits.get((p.index, case)))
             rows.append(row)
     return rows
