@@ -1,28 +1,39 @@
 """Throughput of `flexval sweep` on Dask: 1 vs 2 workers, and Dask's overhead vs a plain loop.
 
-Run: ``python benchmarks/bench_sweep.py [--n 1000] [--continuum-n 10] [--batch 10]``.
+Run: ``python benchmarks/bench_sweep.py [--n 1000] [--continuum-n 10] [--batch N]
+[--cases f+]`` (about 4.5 minutes on the quiet 2-core machine with the defaults; the
+batch defaults to the engine's automatic choice, :func:`validation.sweep.engine.auto_batch`).
 
 The sweep: ``--n`` random variants of the open chain (flexure thickness h
 uniform in 0.08..0.12 mm, Young's modulus lognormal about 2100 MPa with
-sigma 0.05, the force of f+ uniform in 2..4 mN), zipped, load cases m+ and
-f+, the reduced models ee, dcmm:1, dcmm:2, prbm, beam:20 against beam:100.
-The same rows are computed three ways, each timed from submission to the
-last Parquet part written (point generation and cluster start-up excluded):
+sigma 0.05, the force of f+ uniform in 2..4 mN), zipped, load case f+
+(``--cases``), the reduced models ee, dcmm:1, dcmm:2, prbm, beam:20 against
+beam:100, with the default outputs (errors, times, peak stress). The same
+rows are computed three ways, each timed from submission to the last Parquet
+part written (point generation and cluster start-up excluded):
 
 - a plain loop in this process (the task functions called one after the other);
 - :func:`validation.sweep.run_sweep` on a LocalCluster of 1 worker process;
 - the same on 2 worker processes.
 
-Printed: runs (load paths) per second of each, Dask's overhead against the
-loop (1 worker; target < 20 %), the scaling efficiency from 1 to 2
-workers, T1 / (2 T2) (target >= 80 %), and the same on ``--continuum-n``
-points with continuum:0 as the reference. The load average is printed too:
-on a machine shared with other jobs, 2 workers cannot get 2 cores. So each
-configuration also prints its *busy fraction*: the seconds spent inside the
-models' runs (summed over the rows) over wall time x workers. Contention
-slows both alike, so the busy fractions show what Dask itself costs (idle
-workers, scheduling, result transfer, Parquet writes) even on a loaded
-machine.
+Printed for each: wall time, runs (load paths) per second, and the
+workers' *busy fraction*: the seconds Dask's task stream records inside the
+tasks, summed over the tasks, over wall time x workers (for the loop: the
+seconds inside the task functions over its wall time); for Dask also the
+CPU time of the driver process (scheduler, client, Parquet writes) against
+the work: on a machine with as many cores as workers it is taken from them. Then Dask's overhead
+against the loop on 1 worker (target < 20 %), Dask's cost per task (wall
+time not spent inside a task, over the tasks), and the scaling efficiency
+from 1 to 2 workers, T1 / (2 T2) (target >= 80 %). The same follows on
+``--continuum-n`` points with continuum:0 as the reference (no loop).
+
+On a machine shared with other jobs the wall times measure the neighbours as
+much as flexval (the load average is printed before each configuration):
+2 workers cannot get 2 cores. The busy fractions are the load-independent
+part: contention slows the tasks and the wall alike, so a busy fraction
+below 100 % is time the workers spent idle (scheduling, transfers, the
+driver writing parts, the tail of the last tasks), which is what Dask
+itself costs.
 """
 
 from __future__ import annotations
@@ -33,21 +44,20 @@ import shutil
 import tempfile
 import time
 
-from distributed import Client
+from distributed import Client, get_task_stream
 
-from validation.cache import code_version
 from validation.sweep import local_cluster, parse_sweep, results_store, run_sweep
-from validation.sweep.engine import chunks
-from validation.sweep.tasks import TaskInfo, run_model_batch, run_reference
+from validation.sweep.engine import auto_batch, chunks, task_info
+from validation.sweep.tasks import run_model_batch, run_reference
 
 MODELS = ["ee", "dcmm:1", "dcmm:2", "prbm", "beam:20"]
 
 
-def variants(n: int, reference: str, batch: int) -> dict:
+def variants(n: int, reference: str, batch: int | None, cases: list[str]) -> dict:
     """Sweep data of ``n`` random open-chain variants (zipped axes, seeds fixed)."""
     return {"name": f"bench_{n}", "base": "open_chain", "models": MODELS,
-            "reference": reference, "load_cases": ["m+", "f+"], "combine": "zip",
-            "batch": batch,
+            "reference": reference, "load_cases": cases, "combine": "zip",
+            **({"batch": batch} if batch else {}),
             "axes": [{"path": "section.thickness", "sample": "uniform", "low": 0.08,
                       "high": 0.12, "count": n, "seed": 1},
                      {"path": "material.youngs_modulus", "sample": "lognormal",
@@ -56,58 +66,81 @@ def variants(n: int, reference: str, batch: int) -> dict:
                       "high": 4e-3, "count": n, "seed": 3}]}
 
 
-def _busy(rows: list[dict]) -> float:
-    """Seconds spent inside the models' runs (the useful work of the rows)."""
-    return sum(r["seconds"] for r in rows if r["seconds"] is not None)
-
-
 def plain_loop(sweep) -> tuple[float, int, float]:
-    """Wall seconds, rows and model seconds of the same tasks called one after the other."""
-    info = TaskInfo(sweep.name, sweep.reference.id, code_version())
+    """Wall seconds, rows and seconds inside the task functions, called one after the other."""
+    info = task_info(sweep)
+    inside = 0.0
     t0 = time.perf_counter()
+    t = time.perf_counter()
     ref = run_reference(list(sweep.valid_points), sweep.reference, sweep.load_cases, info,
                         use_cache=False)
+    inside += time.perf_counter() - t
     rows = list(ref["rows"])
     for spec in sweep.models:
-        for chunk in chunks(list(sweep.valid_points), sweep.batch):
+        for chunk in chunks(list(sweep.valid_points), _batch(sweep, 1)):
+            t = time.perf_counter()
             rows += run_model_batch(chunk, spec, sweep.load_cases, info, [ref])
-    return time.perf_counter() - t0, len(rows), _busy(rows)
+            inside += time.perf_counter() - t
+    return time.perf_counter() - t0, len(rows), inside
 
 
-def on_dask(sweep, workers: int) -> tuple[float, int, int, float]:
-    """Wall seconds, rows, tasks and model seconds of run_sweep on a fresh LocalCluster."""
+def _batch(sweep, workers: int) -> int:
+    """Points per reduced-model task of ``sweep`` on ``workers`` workers."""
+    return sweep.batch or auto_batch(len(sweep.valid_points), workers)
+
+
+def _in_tasks(stream: list[dict]) -> float:
+    """Seconds the workers spent computing tasks (Dask's task stream, 'compute' intervals)."""
+    return sum(s["stop"] - s["start"] for task in stream for s in task["startstops"]
+               if s["action"] == "compute")
+
+
+def on_dask(sweep, workers: int) -> tuple[float, int, int, float, float]:
+    """Wall seconds, rows, tasks, seconds inside tasks, and the CPU seconds of this (driver)
+    process, which holds the scheduler and writes the parts, of run_sweep on a fresh
+    LocalCluster."""
     out = tempfile.mkdtemp(prefix="bench_sweep_")
     try:
         with local_cluster(workers) as cluster, Client(cluster) as client:
             client.wait_for_workers(workers)
-            stats = run_sweep(sweep, out, client, use_cache=False)
-        rows = results_store(sweep, out).rows()
-        return stats.seconds, stats.rows_written, stats.tasks, _busy(rows)
+            cpu = time.process_time()
+            with get_task_stream(client) as stream:
+                stats = run_sweep(sweep, out, client, use_cache=False)
+            cpu = time.process_time() - cpu
+        assert len(results_store(sweep, out).keys()) == stats.rows_written
+        return stats.seconds, stats.rows_written, stats.tasks, _in_tasks(stream.data), cpu
     finally:
         shutil.rmtree(out)
+
+
+def _line(label: str, wall: float, rows: int, busy: float, note: str = "") -> None:
+    print(f"  {label:<11}: {wall:8.2f} s {rows / wall:8.1f} runs/s  busy {100 * busy:5.1f} %"
+          f"{note}  (load average {os.getloadavg()[0]:.1f})", flush=True)
 
 
 def report(label: str, sweep, loop: bool) -> None:
     """Time the sweep the three ways (two without the loop) and print the ratios."""
     print(f"\n{label}: {len(sweep.valid_points)} points x ({len(sweep.models)} models + "
-          f"{sweep.reference.id}) x {len(sweep.load_cases)} cases; batch {sweep.batch}; "
-          f"load average {os.getloadavg()[0]:.2f}")
+          f"{sweep.reference.id}) x {len(sweep.load_cases)} case(s); points per task "
+          f"{_batch(sweep, 1)} (1 worker), {_batch(sweep, 2)} (2 workers); "
+          f"load average before {os.getloadavg()[0]:.1f}", flush=True)
     if loop:
-        t_loop, rows, busy = plain_loop(sweep)
-        print(f"  plain loop : {t_loop:8.2f} s  {rows / t_loop:8.1f} runs/s  "
-              f"busy {100 * busy / t_loop:5.1f} %")
-    t1, rows1, tasks, busy1 = on_dask(sweep, 1)
-    print(f"  dask 1 wkr : {t1:8.2f} s  {rows1 / t1:8.1f} runs/s  busy {100 * busy1 / t1:5.1f} %"
-          f"  ({tasks} tasks)")
-    t2, rows2, _, busy2 = on_dask(sweep, 2)
-    print(f"  dask 2 wkr : {t2:8.2f} s  {rows2 / t2:8.1f} runs/s  "
-          f"busy {100 * busy2 / (2 * t2):5.1f} %")
+        t_loop, rows, inside = plain_loop(sweep)
+        _line("plain loop", t_loop, rows, inside / t_loop)
+    t1, rows1, tasks, in1, cpu1 = on_dask(sweep, 1)
+    _line("dask 1 wkr", t1, rows1, in1 / t1,
+          f"  ({tasks} tasks; driver CPU {100 * cpu1 / in1:.1f} % of the work)")
+    t2, rows2, _, in2, cpu2 = on_dask(sweep, 2)
+    _line("dask 2 wkr", t2, rows2, in2 / (2 * t2),
+          f"  (driver CPU {100 * cpu2 / in2:.1f} % of the work)")
     if loop:
-        print(f"  Dask overhead vs loop (1 worker): {100 * (t1 / t_loop - 1):+.1f} % wall, "
-              f"{100 * (busy / t_loop - busy1 / t1):+.1f} points of busy fraction  "
-              f"({1e3 * (t1 - t_loop) / tasks:+.1f} ms per task)")
-    print(f"  scaling efficiency 1 -> 2 workers: {100 * t1 / (2 * t2):.0f} % wall, "
-          f"{100 * (busy2 / (2 * t2)) / (busy1 / t1):.0f} % of 1 worker's busy fraction")
+        print(f"  Dask overhead vs loop, 1 worker: {100 * (t1 / t_loop - 1):+.1f} % wall "
+              f"(measured under the load above); {1e3 * (t1 - in1) / tasks:.1f} ms per task "
+              f"outside the tasks = {100 * (t1 - in1) / in1:.1f} % of the work "
+              "(load-independent)")
+    print(f"  scaling efficiency 1 -> 2 workers: {100 * t1 / (2 * t2):.0f} % wall "
+          f"(measured under the load above); busy fraction {100 * in2 / (2 * t2):.1f} % "
+          f"with 2 workers vs {100 * in1 / t1:.1f} % with 1 (load-independent)", flush=True)
 
 
 def main() -> None:
@@ -115,16 +148,22 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=1000, help="variants (default 1000)")
     ap.add_argument("--continuum-n", type=int, default=10,
                     help="variants with the continuum:0 reference (default 10; 0: skip)")
-    ap.add_argument("--batch", type=int, default=10, help="points per reduced-model task")
+    ap.add_argument("--batch", type=int, default=None,
+                    help="points per reduced-model task (default: automatic)")
+    ap.add_argument("--cases", default="f+", help="load cases, comma-separated (default f+)")
+    ap.add_argument("--no-loop", action="store_true", help="skip the plain loop")
     args = ap.parse_args()
+    cases = args.cases.split(",")
     t0 = time.perf_counter()
-    sweep = parse_sweep(variants(args.n, "beam:100", args.batch), "<bench>")
+    sweep = parse_sweep(variants(args.n, "beam:100", args.batch, cases), "<bench>")
     print(f"{args.n} points generated and checked in {time.perf_counter() - t0:.1f} s; "
-          f"{os.cpu_count()} cores")
-    report("reduced models vs beam:100", sweep, loop=True)
+          f"{os.cpu_count()} cores", flush=True)
+    report("reduced models vs beam:100", sweep, loop=not args.no_loop)
     if args.continuum_n:
-        sub = parse_sweep(variants(args.continuum_n, "continuum:0", args.batch), "<bench>")
+        sub = parse_sweep(variants(args.continuum_n, "continuum:0", args.batch, cases),
+                          "<bench>")
         report("reduced models vs continuum:0", sub, loop=False)
+    print(f"\nbenchmark total {time.perf_counter() - t0:.0f} s")
 
 
 if __name__ == "__main__":

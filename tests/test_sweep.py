@@ -14,6 +14,7 @@ from validation.compare import errors
 from validation.run import run_model
 from validation.sweep import load_sweep, results_store, run_sweep, sweep_rows, write_outputs
 from validation.sweep import tasks as sweep_tasks
+from validation.sweep.engine import MAX_AUTO_BATCH, TASKS_PER_WORKER, auto_batch
 
 SCENES = Path(__file__).parent / "scenes"
 DA_DEPPO_SCHMIDT = 8.97
@@ -386,3 +387,14 @@ def test_cli_sweep_on_an_existing_scheduler(tmp_path, capsys, client, monkeypatc
     assert "4 tasks, 16 rows written (0 failed)" in capsys.readouterr().err
     rows = sweep_rows(load_sweep(sweep_file), tmp_path / "o")
     assert len(rows) == 16 and {r["status"] for r in rows} == {"ok"}
+
+
+@pytest.mark.parametrize("points, workers", [(1, 1), (6, 2), (30, 2), (200, 8), (1000, 2),
+                                             (100_000, 64)])
+def test_automatic_batches_keep_every_worker_fed(points, workers):
+    """At most 25 points a task (Dask's ~5 ms a task stays ~1 % of the work), and at least 4
+    tasks per worker and model where the points allow it within that cap."""
+    batch = auto_batch(points, workers)
+    assert 1 <= batch <= MAX_AUTO_BATCH
+    tasks = -(-points // batch)
+    assert tasks >= min(points, TASKS_PER_WORKER * workers) or batch == MAX_AUTO_BATCH

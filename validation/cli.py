@@ -601,7 +601,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"local cluster size, 1 to {MAX_LOCAL_WORKERS} (the logical CPUs; "
                         "default: one single-threaded process per core)")
     q.add_argument("--batch", type=_int_in(1, 100_000), metavar="N",
-                   help="points per task of a reduced model (default: the sweep's, 10)")
+                   help="points per task of a reduced model (default: the sweep's, or about "
+                        "4 tasks per worker and model, at most 25 points each)")
     q.add_argument("--no-cache", action="store_true",
                    help="recompute reference paths even if cached")
     q.add_argument("--quiet", action="store_true", help="no progress lines")

@@ -1,9 +1,10 @@
 """Run a sweep on a Dask cluster, appending rows to the Parquet store as tasks finish.
 
 Tasks are whole runs of one model on a batch of points (every load case of
-the sweep): :attr:`Sweep.batch` points per task for the reduced models, so
-the per-task cost of Dask stays small against the work, and one point per
-task for the costly reference-class models (the continuum). The reference
+the sweep): :attr:`Sweep.batch` points per task for the reduced models (by
+default :func:`auto_batch`), so the per-task cost of Dask stays small
+against the work, and one point per task for the costly reference-class
+models (the continuum). The reference
 runs once per point in its own tasks; a model task receives the reference
 paths of its points from Dask.
 
@@ -57,9 +58,29 @@ def chunks(points: list[Point], size: int) -> Iterator[list[Point]]:
         yield points[k:k + size]
 
 
-def _batch_size(sweep: Sweep, spec: ModelSpec) -> int:
-    """Points per task: one for a reference-class (costly) model, the sweep's batch otherwise."""
-    return 1 if spec.model_family.has(REFERENCE) else sweep.batch
+MAX_AUTO_BATCH = 25
+"""Most points per task of a reduced model chosen by :func:`auto_batch`. Dask costs about 5 ms
+per task (``benchmarks/bench_sweep.py``: wall time outside the tasks over the tasks, 4 to 15 ms
+on the loaded 2-core machine) against about 0.1 s of reduced-model work per open-chain point
+and load case: 25 points per task keep that cost near 1 % of the work (batch 5: 2.4 %,
+10: 1.8 %, 25: 0.7 % of one worker's time measured on 200 variants)."""
+TASKS_PER_WORKER = 4
+"""Fewest tasks per worker and model that :func:`auto_batch` aims at: the last tasks of a
+sweep leave workers idle, the less the smaller the tasks."""
+
+
+def auto_batch(points: int, workers: int) -> int:
+    """Points per reduced-model task when the sweep gives none: enough tasks for
+    :data:`TASKS_PER_WORKER` per worker and model, at most :data:`MAX_AUTO_BATCH` points each."""
+    return max(1, min(MAX_AUTO_BATCH, points // (TASKS_PER_WORKER * max(workers, 1))))
+
+
+def _batch_size(sweep: Sweep, spec: ModelSpec, workers: int) -> int:
+    """Points per task: one for a reference-class (costly) model; the sweep's batch, or
+    :func:`auto_batch` for ``workers``, otherwise."""
+    if spec.model_family.has(REFERENCE):
+        return 1
+    return sweep.batch or auto_batch(len(sweep.valid_points), workers)
 
 
 def task_info(sweep: Sweep) -> TaskInfo:
@@ -147,14 +168,15 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, client, use_cache: bool = True,
     ref_points = [p for p in sweep.valid_points if p.index in need_ref]
     tasks = {}
     ref_future = {}
-    for chunk in chunks(ref_points, _batch_size(sweep, sweep.reference)):
+    workers = sum(client.nthreads().values())
+    for chunk in chunks(ref_points, _batch_size(sweep, sweep.reference, workers)):
         fut = client.submit(run_reference, chunk, sweep.reference, sweep.load_cases, info,
                             use_cache, retries=RETRIES, pure=False)
         tasks[fut] = (chunk, sweep.reference.id)
         for p in chunk:
             ref_future[p.index] = fut
     for spec in sweep.models:
-        for chunk in chunks(todo[spec], _batch_size(sweep, spec)):
+        for chunk in chunks(todo[spec], _batch_size(sweep, spec, workers)):
             refs = list({id(ref_future[p.index]): ref_future[p.index] for p in chunk}.values())
             fut = client.submit(run_model_batch, chunk, spec, sweep.load_cases, info, refs,
                                 retries=RETRIES, pure=False)

@@ -12,6 +12,7 @@ A sweep file (TOML) names a base scene and the parameters to vary::
     linear_rotation = 0.3            # optional (rad): scale each load case so that the
                                      # linear (ee) end rotation is this at every point
     batch = 10                       # optional: points per task of a reduced model
+                                     # (default: automatic, see engine.auto_batch)
     outputs = ["peak_stress"]        # optional: besides errors and times (always there),
                                      # "peak_stress" (default) and "limit_load" (an
                                      # arc-length search on each run that stops early)
@@ -68,8 +69,6 @@ SAMPLES = {"uniform": ("low", "high"), "normal": ("mean", "std"),
            "lognormal": ("median", "sigma")}
 SUMMARY_METRICS = ("worst",) + METRICS
 """``worst`` is max(end_disp_vec, end_rot): a model is as good as its worse end error."""
-DEFAULT_BATCH = 10
-"""Points per task of a reduced model (continuum tasks are one point each)."""
 ALWAYS_OUTPUTS = ("errors", "times")
 """Outputs of every row: the error metrics against the reference and the run time."""
 OPTIONAL_OUTPUTS = ("peak_stress", "limit_load")
@@ -124,7 +123,7 @@ class Sweep:
     load_cases: tuple[str, ...]
     metric: str
     linear_rotation: float | None
-    batch: int
+    batch: int | None
     points: tuple[Point, ...]
     outputs: tuple[str, ...] = DEFAULT_OUTPUTS
     """The optional outputs asked for (a subset of :data:`OPTIONAL_OUTPUTS`, in that order)."""
@@ -362,7 +361,9 @@ def parse_sweep(data: dict, source: str, folder: Path = Path("."),
     rotation = data.get("linear_rotation")
     if rotation is not None:
         rotation = _number(source, "linear_rotation", rotation, positive=True)
-    batch = _count(source, "batch", data.get("batch", DEFAULT_BATCH))
+    batch = data.get("batch")
+    if batch is not None:
+        batch = _count(source, "batch", batch)
     outputs = _outputs(source, data.get("outputs", list(DEFAULT_OUTPUTS)))
     raw_axes = data.get("axes", [])
     if not isinstance(raw_axes, list):
