@@ -4,17 +4,16 @@ Tasks are whole runs of one model on a batch of points (every load case of
 the sweep): :attr:`Sweep.batch` points per task for the reduced models (by
 default :func:`auto_batch`), so the per-task cost of Dask stays small
 against the work, and one point per task for the costly reference-class
-models (the continuum). The reference
-runs once per point in its own tasks; a model task receives the reference
-paths of its points from Dask.
+models (the continuum). The reference runs once per point in its own
+tasks; a model task receives the reference paths of its points from Dask.
 
 Resuming: every row's key hashes the point's scene, the model, the load
 case, the reference, the code version and the optional outputs; a (point,
 model) pair whose rows are all stored already is not run again, and the
 summary reads only the rows of the current keys (:func:`current_keys`),
-never those a sweep left under an older code version. A task that raises even after
-Dask's retries (a worker that keeps dying) becomes rows with status
-``error``: the sweep goes on.
+never those a sweep left under an older code version. A task that raises
+even after Dask's retries (a worker that keeps dying) becomes rows with
+status ``error``: the sweep goes on.
 
 Units: times in s.
 """

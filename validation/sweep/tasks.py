@@ -7,8 +7,9 @@ row with its status and reason. The reference task also returns its load
 paths and limit loads, which the model tasks of the same points receive
 from Dask (the reference is computed once per point and shared).
 
-A converged row carries its peak stress at full load
-(:func:`validation.strength.peak_at_full_load`); with the ``limit_load``
+With the ``peak_stress`` output (the default), a converged row carries its
+peak stress at full load (:func:`validation.strength.peak_at_full_load`)
+and its error against the reference's; with the ``limit_load``
 output, a run that stops below full load is searched for its first limit
 point by arc length (:func:`validation.failures.first_limit`, as the
 report does), and the row carries that load.
@@ -103,7 +104,7 @@ def attempt(point: Point, spec: ModelSpec, case: str, row: dict, info: TaskInfo,
     if lp.valid is not None:
         row["valid"] = all(lp.valid)
         row["validity"] = next((v for v in lp.validity or () if v), None)
-    peak = peak_at_full_load(lp)
+    peak = peak_at_full_load(lp) if "peak_stress" in info.outputs else None
     if peak is not None:
         row.update(peak_stress=peak["stress"], peak_stress_flexure=peak["flexure"],
                    peak_stress_at=peak["at"])
@@ -170,7 +171,7 @@ def run_model_batch(points: list[Point], spec: ModelSpec, cases: tuple[str, ...]
             ref = ref_paths.get((p.index, case))
             if lp is not None and ref is not None:
                 row.update(errors(lp, ref))
-                ref_peak = peak_at_full_load(ref)
+                ref_peak = peak_at_full_load(ref) if row["peak_stress"] is not None else None
                 row["peak_stress_error"] = _relative(
                     row["peak_stress"], ref_peak["stress"] if ref_peak else None)
             elif lp is not None:
