@@ -252,7 +252,7 @@ class PrbmConnector(Connector):
         self.n_internal = 4
         self.n_multipliers = 2       # the closure multiplier mu
         shape = flexure.shape
-        _, _, _, length, width = shape_frame(shape)
+        length, width = shape.length, shape.width
         if params is None:
             params = table_parameters(width)
         elif not isinstance(params, PrbmParameters):
@@ -264,8 +264,10 @@ class PrbmConnector(Connector):
         self._k = tuple(self.stiffness.tolist())
         self.closure_scale = EI / length**3
         joints = joint_positions(shape, params)
-        if flexure.start_body != self.bodies[0]:
-            joints = joints[::-1]
+        ends = shape.end_points               # [start, end]
+        self._forward = flexure.start_body == self.bodies[0]
+        if not self._forward:
+            joints, ends = joints[::-1], ends[::-1]
         self.joints = joints                      # [R_a, R_2, R_b], chain order a -> b
         ref_a = mechanism.bodies[self.bodies[0]].reference
         ref_b = mechanism.bodies[self.bodies[1]].reference
@@ -274,13 +276,11 @@ class PrbmConnector(Connector):
         self._r_a, self._r_b, self._v_h, self._v_l = (
             tuple(v.tolist()) for v in (joints[0] - ref_a, joints[2] - ref_b,
                                          joints[1] - joints[0], joints[2] - joints[1]))
-        self._ends = np.array([flexure.end_point_of(self.bodies[0]),
-                               flexure.end_point_of(self.bodies[1])])
+        self._ends = ends                         # flexure end points on a and b
         self.length = length
         self._end_rel = [tuple((self._ends[k] - self._ref[k]).tolist()) for k in (0, 1)]
         self._fitted_rotation = fitted_rotation()
         self._area = flexure.section.area
-        self._forward = flexure.start_body == self.bodies[0]
         rest = np.array([*self._ends[:1], *joints, *self._ends[1:]])
         self._fractions = polyline_fractions(rest)
 
