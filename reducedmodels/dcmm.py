@@ -30,7 +30,7 @@ import numpy as np
 from geometry import Flexure, Mechanism
 from geometry.kinematics import rotate_xy
 
-from .connector import Connector
+from .connector import Connector, ConnectorGroup
 from .inertia import MassPoints, chain_mass_points
 from .sections import SectionForces, unit_vectors
 from .validity import (MAX_RELATIVE_ROTATION, MAX_STRAIN, SCREEN_MARGIN, rotation_reasons,
@@ -40,31 +40,13 @@ SAMPLES_PER_SUB_ARC = 16
 """Segments of each displaced sub-arc at whose ends the section forces are reported."""
 
 
-def _expansion() -> tuple[np.ndarray, np.ndarray]:
-    """Where each entry of a row-major 6x6 element Hessian comes from: (source, sign), (36,) each.
-
-    Every derivative of the element's measures u = (u1, u2, phi) with respect
-    to [x_L, y_L, theta_L, x_F, y_F, theta_F] has the form (a, b, c, -a, -b, d):
-    the followers' translations enter with the opposite sign of the
-    leader's. So the gradient and the Hessian are expansions of a 4-vector
-    and of a symmetric 4x4 matrix M over (x, y, theta_L, theta_F); ``source``
-    indexes M's upper triangle [M00, M01, M02, M03, M11, M12, M13, M22, M23, M33].
-    """
-    component = [0, 1, 2, 0, 1, 3]
-    sign = np.array([1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
-    index = {pair: k for k, pair in enumerate((i, j) for i in range(4) for j in range(i, 4))}
-    source = np.array([index[tuple(sorted((component[r], component[c])))]
-                       for r in range(6) for c in range(6)])
-    return source, np.outer(sign, sign).ravel()
-
-
-_SOURCE, _SIGN = _expansion()
-
-
 def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f: np.ndarray,
                    axes: np.ndarray, stiffness: np.ndarray
-                   ) -> tuple[float, np.ndarray, np.ndarray]:
+                   ) -> tuple[float, list[float], list[float]]:
     """Energy, gradient (6) and row-major Hessian (36) of one displaced compliance element.
+
+    Plain float lists: the connector (or a group of connectors) makes one
+    array of all its elements' values.
 
     Parameters
     ----------
@@ -82,10 +64,12 @@ def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f:
     With A = R(-theta_L), phi = theta_F - theta_L and d = x_F - x_L, the
     relative displacement in the leader frame is v = A d + R(phi) r_F - r_L and
     u = (Q^T v, phi). Each derivative du_i/d(coordinates) is (a, b, c, -a, -b, d)
-    (see :func:`_expansion`), so the Hessian is the expansion of the 4x4
-    M = sum_i k_i w_i w_i^T + (geometric part), w_i = (a, b, c, d). It is
-    written with scalars: this is the innermost loop of DCMM, and plain
-    float algebra beats small numpy arrays several times over.
+    -- the followers' translations enter with the opposite sign of the
+    leader's -- so the gradient and the Hessian are expansions of a 4-vector
+    and of the symmetric 4x4 M = sum_i k_i w_i w_i^T + (geometric part),
+    w_i = (a, b, c, d), over (x, y, theta_L, theta_F). It is written with
+    scalars: this is the innermost loop of DCMM, and plain float algebra
+    beats small numpy arrays several times over.
     """
     xl, yl, tl = pose_l.tolist()          # python floats: far faster scalar arithmetic
     xf, yf, tf = pose_f.tolist()
@@ -116,15 +100,19 @@ def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f:
     lam_x, lam_y = lx * sa + ly * ca, -lx * ca + ly * sa
     ka1, kb1, kc1, kd1 = k1 * a1, k1 * b1, k1 * c1, k1 * d1
     ka2, kb2, kc2, kd2 = k2 * a2, k2 * b2, k2 * c2, k2 * d2
-    upper = np.array([
-        ka1 * a1 + ka2 * a2, ka1 * b1 + ka2 * b2, ka1 * c1 + ka2 * c2 + lam_x,
-        ka1 * d1 + ka2 * d2,
-        kb1 * b1 + kb2 * b2, kb1 * c1 + kb2 * c2 + lam_y, kb1 * d1 + kb2 * d2,
-        kc1 * c1 + kc2 * c2 + k3 - (lx * adx + ly * ady) - lam_rr, kc1 * d1 + kc2 * d2 - k3 + lam_rr,
-        kd1 * d1 + kd2 * d2 + k3 - lam_rr,
-    ])
-    grad = np.array([g[0], g[1], g[2], -g[0], -g[1], g[3]])
-    return energy, grad, upper[_SOURCE] * _SIGN
+    m00, m01, m02, m03 = (ka1 * a1 + ka2 * a2, ka1 * b1 + ka2 * b2,
+                          ka1 * c1 + ka2 * c2 + lam_x, ka1 * d1 + ka2 * d2)
+    m11, m12, m13 = kb1 * b1 + kb2 * b2, kb1 * c1 + kb2 * c2 + lam_y, kb1 * d1 + kb2 * d2
+    m22 = kc1 * c1 + kc2 * c2 + k3 - (lx * adx + ly * ady) - lam_rr
+    m23, m33 = kc1 * d1 + kc2 * d2 - k3 + lam_rr, kd1 * d1 + kd2 * d2 + k3 - lam_rr
+    grad = [g[0], g[1], g[2], -g[0], -g[1], g[3]]
+    hessian = [m00, m01, m02, -m00, -m01, m03,          # rows x_L, y_L, theta_L,
+               m01, m11, m12, -m01, -m11, m13,          # x_F, y_F, theta_F
+               m02, m12, m22, -m02, -m12, m23,
+               -m00, -m01, -m02, m00, m01, -m03,
+               -m01, -m11, -m12, m01, m11, -m13,
+               m03, m13, m23, -m03, -m13, m33]
+    return energy, grad, hessian
 
 
 def _place_rows(poses: np.ndarray, rel: np.ndarray) -> np.ndarray:
@@ -148,6 +136,8 @@ class _ChainLayout:
     ----------
     element_dofs : int array (n, 6)
         Local coordinates of each sub-arc's two bodies: a -> 0..2, cut k -> 6 + 3k, b -> 3..5.
+    dof_lists : tuple of tuples of int
+        The same as plain ints, for the scalar evaluation.
     rows, cols : int arrays (36 n,)
         Local (row, col) of each row-major 6x6 sub-arc Hessian entry.
     is_rotation : bool array (3 (n - 1),)
@@ -160,6 +150,7 @@ class _ChainLayout:
     """
 
     element_dofs: np.ndarray
+    dof_lists: tuple
     rows: np.ndarray
     cols: np.ndarray
     is_rotation: np.ndarray
@@ -186,12 +177,13 @@ def _chain_layout(n: int, forward: bool) -> _ChainLayout:
     fractions = np.concatenate([w / n] + [(k + w[1:]) / n for k in range(1, n)])
     at = fractions if forward else 1.0 - fractions
     order = np.argsort(at, kind="stable")    # the fractions are distinct
-    layout = _ChainLayout(element_dofs, np.repeat(element_dofs, 6, axis=1).ravel(),
+    layout = _ChainLayout(element_dofs, tuple(map(tuple, element_dofs.tolist())), np.repeat(element_dofs, 6, axis=1).ravel(),
                           np.tile(element_dofs, (1, 6)).ravel(),
                           np.tile([False, False, True], n - 1), sample_part, sample_w,
                           order, at[order])
     for array in dataclasses.astuple(layout):
-        array.flags.writeable = False
+        if isinstance(array, np.ndarray):
+            array.flags.writeable = False
     return layout
 
 
@@ -305,19 +297,34 @@ class DcmmConnector(Connector):
         """Local (rows, cols) of the Hessian values :meth:`evaluate` returns: 36 per sub-arc."""
         return self._layout.rows, self._layout.cols
 
+    @classmethod
+    def group(cls, connectors) -> "DcmmGroup":
+        """The DCMM connectors of a run, evaluated into one array of each kind (:class:`DcmmGroup`)."""
+        return DcmmGroup(connectors)
+
     def evaluate(self, pose_a, pose_b, internal):
         """Energy (N mm), gradient over [pose_a, pose_b, internal] and the Hessian values."""
+        energy, gradient, hessian = self.terms(pose_a, pose_b, internal)
+        return energy, np.array(gradient), np.array(hessian)
+
+    def terms(self, pose_a, pose_b, internal) -> tuple[float, list[float], list[float]]:
+        """:meth:`evaluate`'s energy, gradient and Hessian values as plain float lists.
+
+        Each sub-arc's gradient is added onto its two bodies' coordinates in
+        the sub-arcs' order; the Hessian values are the sub-arcs' in turn
+        (see :meth:`hessian_pattern`).
+        """
         if len(self._elements) == 1:
             return sub_arc_energy(pose_a, pose_b, *self._elements[0])
         chain = self._chain(pose_a, pose_b, internal)
-        energy, grads, hessians = 0.0, [], []
-        for k, element in enumerate(self._elements):
+        energy, gradient, hessian = 0.0, [0.0] * (6 + self.n_internal), []
+        for k, (element, dofs) in enumerate(zip(self._elements, self._layout.dof_lists)):
             e, g, h = sub_arc_energy(chain[k], chain[k + 1], *element)
             energy += e
-            grads.append(g), hessians.append(h)
-        gradient = np.bincount(self._layout.element_dofs.ravel(), weights=np.concatenate(grads),
-                               minlength=6 + self.n_internal)
-        return energy, gradient, np.concatenate(hessians)
+            for dof, value in zip(dofs, g):
+                gradient[dof] += value
+            hessian += h
+        return energy, gradient, hessian
 
     def _points(self, pose_a, pose_b, internal) -> tuple[list, list[tuple[float, float]]]:
         """Chain poses and the polyline flexure end, cut points, flexure end (float pairs, mm).
@@ -419,3 +426,24 @@ class DcmmConnector(Connector):
         axial = axes[..., 0] * wrenches[..., 0] + axes[..., 1] * wrenches[..., 1]
         order = self._layout.station_order
         return SectionForces(self._layout.stations, axial[:, order], moment[:, order])
+
+
+class DcmmGroup(ConnectorGroup):
+    """DCMM connectors evaluated together (:meth:`DcmmConnector.group`).
+
+    The same values as :class:`~reducedmodels.connector.ConnectorGroup`'s
+    connector-by-connector evaluation, with one array of all the gradients
+    and one of all the Hessian values made from the connectors' float lists
+    (:meth:`DcmmConnector.terms`) instead of two small arrays per connector
+    concatenated.
+    """
+
+    def evaluate(self, states) -> tuple[float, np.ndarray, np.ndarray]:
+        """Total energy (N mm), concatenated gradients and concatenated Hessian values."""
+        energy, gradients, hessians = 0.0, [], []
+        for c, (pose_a, pose_b, internal) in zip(self.connectors, states):
+            e, g, h = c.terms(pose_a, pose_b, internal)
+            energy += e
+            gradients += g
+            hessians += h
+        return energy, np.array(gradients), np.array(hessians)
