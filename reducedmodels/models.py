@@ -133,8 +133,9 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
     t0 = time.perf_counter()
     loads = system.loads(case)
     q0 = system.initial_state()
-    _, g_unit, _ = system.assemble(q0, loads, 1.0)   # g = grad E(q0) - f = -f at rest
     _, g_zero, K0 = system.assemble(q0, loads, 0.0)
+    g_unit = g_zero.copy()                           # g = grad E(q0) - f = -f at rest
+    loads.add_to(q0, 1.0, g_unit, np.zeros_like(g_unit))
     dq = K0.solve(g_zero - g_unit)                   # per unit load factor
     # the weights, g = -w at rest and no load (without gravity g_zero is only round-off)
     has_weights = system.mechanism.inertia.gravity is not None
