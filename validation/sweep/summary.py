@@ -183,7 +183,8 @@ def format_summary(sweep: Sweep, rows: list[dict]) -> str:
     axes = "\n".join(f"- `{a.path}`: {len(a.values)} {'random ' if a.random else ''}values, "
                      f"{min(a.values):.4g} .. {max(a.values):.4g}" for a in sweep.axes)
     n_valid = len(sweep.valid_points)
-    lines = [f"# Sweep `{sweep.name}`", "", sweep.description, "",
+    intro = [sweep.description, ""] if sweep.description else []
+    lines = [f"# Sweep `{sweep.name}`", "", *intro,
              f"Base scene `{sweep.base}`; reference `{sweep.reference.id}`; load cases "
              f"{', '.join(sweep.load_cases)}; axes combined as a {sweep.combine}"
              + (f"; loads scaled to a linear end rotation of {sweep.linear_rotation:g} rad"
