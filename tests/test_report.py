@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from geometry import load_scene
-from reducedmodels import LoadPath, parse_model
+from reducedmodels import parse_model
 from validation.compare import errors
 from validation.report import build_report
+from validation.reportdata import read_results
 from validation.run import run_model
 
 TINY = """
@@ -63,9 +64,7 @@ def report(tmp_path_factory):
 
 def test_tables_match_results_json(report):
     text = report.read_text()
-    data = json.loads((report.parent / "results.json").read_text())
-    paths = {(r["model"], r["load_case"]): LoadPath.from_dict(r)
-             for r in data["scenes"]["tiny"]["results"]}
+    paths = read_results(report.parent)["tiny"]
     rows = re.findall(r"^\| (\S+) \| (up|twist) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| "
                       r"([\d.]+) \| ([\d.]+) \|$", text, flags=re.M)
     assert len(rows) == 3 * 2          # three models against beam:100, two cases
@@ -90,10 +89,11 @@ def test_results_json_holds_the_models_own_paths(report, tmp_path):
 
 
 def test_timing_table_cells_are_each_paths_seconds(report):
-    """Each cell of the timing table, found by its row (model) and column (case)."""
-    text = report.read_text().splitlines()
-    data = json.loads((report.parent / "results.json").read_text())
-    seconds = {(r["model"], r["load_case"]): r["seconds"] for r in data["scenes"]["tiny"]["results"]}
+    """Each cell of the timing table (in timings.md), found by its row (model) and column
+    (case), is the path's median time in timings.json."""
+    text = (report.parent / "timings.md").read_text().splitlines()
+    data = json.loads((report.parent / "timings.json").read_text())
+    seconds = {(r["model"], r["load_case"]): r["seconds"] for r in data["scenes"]["tiny"]["paths"]}
     start = next(k for k, line in enumerate(text) if "ours (s)" in line)
     header = [c.strip() for c in text[start].strip("|").split("|")]
     rows = {}
@@ -121,9 +121,7 @@ def test_linked_figures_exist(report):
 
 def test_peak_stress_table_matches_results_json(report):
     text = report.read_text()
-    data = json.loads((report.parent / "results.json").read_text())
-    paths = {(r["model"], r["load_case"]): LoadPath.from_dict(r)
-             for r in data["scenes"]["tiny"]["results"]}
+    paths = read_results(report.parent)["tiny"]
     section = text.split("### Peak stress")[1].split("###")[0]
     rows = re.findall(r"^\| `(\S+)` \| (.+) \|$", section, flags=re.M)
     assert [m for m, _ in rows] == ["beam:100", "beam:10", "dcmm:1", "ee"]

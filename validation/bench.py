@@ -41,17 +41,20 @@ def sweep_specs(reference: ModelSpec | None = None) -> list[ModelSpec]:
 
 def runtime_vs_error(scene: Scene, reference: ModelSpec, specs: list[ModelSpec],
                      repeats: int = 3, cache: ResultCache | None = None,
-                     progress: bool = True) -> tuple[list[dict], list[Failure]]:
+                     progress: bool = True, record_models: tuple[str, ...] = ()
+                     ) -> tuple[list[dict], list[Failure]]:
     """Rows {model, seconds, error, per_case} of the study, and the failures.
 
     A model that fails on some load case has no row (its error is not
-    defined); its failures are returned.
+    defined); its failures are returned. ``record_models`` are run recording
+    poses and shapes (as the report runs them, so that their cached paths serve
+    both).
     """
     cases = list(scene.load_cases)
     all_specs = [reference] + [s for s in specs if s.id != reference.id]
     bar = Progress(len(all_specs) * len(cases), enabled=progress)
     res, failures = run_campaign(
-        scene, all_specs, cases, repeats, cache, bar,
+        scene, all_specs, cases, repeats, cache, bar, record_models=record_models,
         repeats_for=lambda s: 1 if s.model_family.has(REFERENCE) else repeats)
     rows = []
     for spec in all_specs:
@@ -63,7 +66,7 @@ def runtime_vs_error(scene: Scene, reference: ModelSpec, specs: list[ModelSpec],
             if lp is None or ref is None or not lp.converged or not ref.converged:
                 ok = False
                 break
-            per_case[case.name] = errors(lp, ref)
+            per_case[case.name] = errors(lp, ref, scene.mechanism.size())
             secs.append(lp.seconds)
         if ok:
             rows.append({"model": spec.id, "seconds": sum(secs) / len(secs),

@@ -3,14 +3,23 @@
 Timing is wall-clock per whole load path (model build included), the median
 of ``repeats`` runs; the median and every sample are kept in the LoadPath's
 ``stats`` (``seconds_median``, ``seconds_samples``) and ``seconds`` holds the
-median.
+median. ``stats["cached"]`` says whether the path was read from the on-disk
+cache (its seconds are then those of the run that filled it).
+
+Independent runs can be computed ahead on several processes
+(:func:`prefetch`) into a :class:`RunMemo`; the campaigns then find them
+there, so their results and the order of every table are those of a serial
+run.
 """
 
 from __future__ import annotations
 
+import os
 import statistics
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
 from typing import Callable
 
 from geometry import LoadCase, Scene, SceneError
@@ -19,6 +28,14 @@ from reducedmodels import LoadPath, ModelSpec, SolverError
 from .cache import ResultCache, result_key
 from .failures import Failure, failure_of
 from .run import run_model
+
+
+def available_cores() -> int:
+    """CPU cores this process may run on (the default number of report workers)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:          # not on Linux
+        return os.cpu_count() or 1
 
 
 class Progress:
@@ -41,6 +58,88 @@ class Progress:
               end=end, file=sys.stderr, flush=True)
 
 
+def run_key(scene: Scene, spec: ModelSpec, case: LoadCase, repeats: int, record: bool) -> str:
+    """Cache key of one :func:`timed_run`."""
+    return result_key(scene, spec.id, case.name, None, {"record": record, "repeats": repeats})
+
+
+class RunMemo:
+    """The paths computed during one command, in memory, in front of a :class:`ResultCache`.
+
+    ``get``/``put`` as the cache's; a path :meth:`remember`-ed here (computed by a
+    worker of :func:`prefetch`) is found without touching the disk, also when the
+    disk cache is disabled.
+    """
+
+    def __init__(self, disk: ResultCache):
+        self.disk = disk
+        self.paths: dict[str, LoadPath] = {}
+
+    def remember(self, key: str, lp: LoadPath) -> None:
+        """Keep ``lp`` (returned by a worker's :func:`timed_run`) under ``key``."""
+        lp.stats.setdefault("cached", False)
+        self.paths[key] = lp
+
+    def get(self, key: str) -> LoadPath | None:
+        """The path under ``key``: from memory, else from the disk cache, else None."""
+        hit = self.paths.get(key)
+        return hit if hit is not None else self.disk.get(key)
+
+    def put(self, key: str, lp: LoadPath) -> None:
+        """Store ``lp`` in memory and in the disk cache."""
+        self.paths[key] = lp
+        self.disk.put(key, lp)
+
+
+@dataclass(frozen=True)
+class Job:
+    """One :func:`timed_run` to compute ahead (see :func:`prefetch`)."""
+
+    scene: Scene
+    spec: ModelSpec
+    case: LoadCase
+    repeats: int
+    record: bool
+
+    @property
+    def key(self) -> str:
+        """Its cache key."""
+        return run_key(self.scene, self.spec, self.case, self.repeats, self.record)
+
+
+def _run_job(job: Job, disk: ResultCache) -> LoadPath | None:
+    """A worker's :func:`timed_run` of ``job`` (None if it fails: the campaign then
+    reruns it in the main process, which records the failure)."""
+    try:
+        return timed_run(job.scene, job.spec, job.case, job.repeats, disk, job.record)
+    except (SolverError, SceneError):
+        return None
+
+
+def prefetch(jobs: list[Job], memo: RunMemo, workers: int, progress: bool = True) -> None:
+    """Compute ``jobs`` on ``workers`` processes into ``memo``, in the order listed
+    (put the longest first); duplicates are computed once, and a path in the disk
+    cache is read, not recomputed.
+
+    Nothing happens with fewer than two workers: the campaigns then run every
+    job themselves, one after the other.
+    """
+    todo: dict[str, Job] = {}
+    for job in jobs:
+        todo.setdefault(job.key, job)
+    if workers < 2 or len(todo) < 2:
+        return
+    bar = Progress(len(todo), enabled=progress)
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        futures = {pool.submit(_run_job, job, memo.disk): key for key, job in todo.items()}
+        for fut in as_completed(futures):
+            lp, job = fut.result(), todo[futures[fut]]
+            if lp is not None:
+                memo.remember(futures[fut], lp)
+            state = "FAILED" if lp is None else f"{lp.seconds:.3g} s"
+            bar.step(f"{job.scene.name} {job.spec.id} {job.case.name} {state}")
+
+
 def timed_run(scene: Scene, spec: ModelSpec, case: LoadCase, repeats: int = 1,
               cache: ResultCache | None = None, record: bool = False) -> LoadPath:
     """One model on one load case: cached, else run ``repeats`` times (median seconds).
@@ -48,11 +147,11 @@ def timed_run(scene: Scene, spec: ModelSpec, case: LoadCase, repeats: int = 1,
     ``record`` also records body poses and deformed shapes (for figures).
     Raises SolverError on failure (failures are not cached).
     """
-    key = result_key(scene, spec.id, case.name, None, {"record": record, "repeats": repeats})
+    key = run_key(scene, spec, case, repeats, record)
     if cache is not None:
         hit = cache.get(key)
         if hit is not None:
-            hit.stats["cached"] = True
+            hit.stats.setdefault("cached", True)
             return hit
     samples, lp = [], None
     for _ in range(max(1, repeats)):

@@ -353,7 +353,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
     out = check_folder(args.out, "--out")     # created only once the rest is known good
     path = build_report(scenes, out, models, repeats=args.repeats,
                         use_cache=not args.no_cache, progress=not args.quiet,
-                        bench=not args.no_bench, converge=not args.no_converge)
+                        bench=not args.no_bench, converge=not args.no_converge,
+                        workers=args.jobs)
     print(f"wrote {path}")
     return EXIT_OK
 
@@ -567,6 +568,11 @@ def build_parser() -> argparse.ArgumentParser:
     _campaign_options(q)
     q.add_argument("--no-bench", action="store_true", help="skip the runtime-vs-error study")
     q.add_argument("--no-converge", action="store_true", help="skip the mesh convergence study")
+    q.add_argument("--jobs", type=_int_in(1, MAX_LOCAL_WORKERS), default=MAX_LOCAL_WORKERS,
+                   metavar="N",
+                   help="processes computing the load paths and drawing the scenes, 1 to "
+                        f"{MAX_LOCAL_WORKERS} (default: one per core; results are the same, "
+                        "run times are measured N at a time)")
     q.set_defaults(func=_cmd_report)
 
     q = sub.add_parser("bench", help="runtime-versus-error study of every model on a scene")

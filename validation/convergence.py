@@ -19,9 +19,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Callable
 
 from geometry import LoadCase, Scene
-from reducedmodels import SolverError
+from reducedmodels import LoadPath, SolverError
 from reducedmodels.catalogue import ModelSpec
 
 from .failures import Failure, failure_of
@@ -63,13 +64,16 @@ def richardson(f1: float, f2: float, f3: float, ratio: float) -> dict:
 
 
 def study(scene: Scene, model: ModelSpec, resolutions: list[int], case: LoadCase,
-          levels: int | None = None, progress=None) -> ConvergenceStudy:
+          levels: int | None = None, progress=None,
+          run: Callable[[ModelSpec], LoadPath] | None = None) -> ConvergenceStudy:
     """Run ``model`` (its options kept) at each resolution (increasing) on ``case`` and
     analyse convergence.
 
     A resolution that fails is recorded in ``failures`` (no row) and the study
     carries on; the Richardson summary needs the three finest resolutions to
-    have converged.
+    have converged. ``run(spec)`` runs one resolution (default: :func:`run_model`
+    with ``levels``; the report passes its cached runner, so a path it has
+    already computed is not computed again).
     """
     refine = model.model_family.resolution
     ratios = {refine.ratio(a, b) for a, b in zip(resolutions, resolutions[1:])}
@@ -78,7 +82,7 @@ def study(scene: Scene, model: ModelSpec, resolutions: list[int], case: LoadCase
     for res in resolutions:
         spec = model.with_resolution(res)
         try:
-            lp = run_model(scene, spec, case, levels)
+            lp = run(spec) if run else run_model(scene, spec, case, levels)
         except SolverError as exc:
             st.failures.append(failure_of(exc, scene, spec, case))
             if progress:

@@ -181,7 +181,7 @@ def _times_bullet(data: ReportData) -> list[str]:
         return []
     return ["- **Run times.** Ours are static Newton solutions on one core path in Python, the "
             "paper's are dynamic quasi-static runs in a commercial multibody code: compare the "
-            "speed-up columns, not the seconds."]
+            "speed-up columns of [timings.md](timings.md), not the seconds."]
 
 
 def _failures_bullet(data: ReportData) -> list[str]:

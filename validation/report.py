@@ -7,28 +7,30 @@ followed by :func:`write_report`, whose renderers only format that data into
 failure) and ``gates.json`` (every error figure, the baseline of the CI
 accuracy gates). Every number in the text is filled in from the data: the
 tables against ``beam:100`` (with the paper's figures beside ours where the
-paper has the scene) and against the continuum reference, run times,
-failures ("fails at 84 % (limit point, 0.126 N)") wherever the model
+paper has the scene) and against the continuum reference, failures ("fails at 84 % (limit point, 0.126 N)") wherever the model
 appears, the natural frequencies at rest, the findings and the discussion.
+The run times are written apart (:mod:`validation.timings`), so that the
+report, results.json and gates.json are the same from one run of the same
+code to the next.
 """
 
 from __future__ import annotations
 
 import math
+import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from . import figures, frequencies, strength
-from .bench import write_bench
 from .failures import Failure
 from .outputs import output_path, write_json, write_text
 from .reportdata import (DEFAULT_MODELS, PAPER_REFERENCE, FrameRow, ReportData, SceneResults,
                          compute_report)
+from .timings import BUDGETS, TIMINGS_MD, write_timings
 
 __all__ = ["DEFAULT_MODELS", "PAPER_REFERENCE", "SceneResults", "build_report", "render_markdown",
            "write_report"]
 
-#: error budgets (percent, largest path displacement error) of the findings' cheapest-model lines
-BUDGETS = (1.0, 5.0)
 #: how many largest errors the findings list
 N_LARGEST = 3
 
@@ -78,35 +80,6 @@ def _metrics_table(res: SceneResults, reference: str) -> list[str]:
     return lines
 
 
-def _timing_table(res: SceneResults) -> list[str]:
-    """Markdown: our median seconds per load path beside the paper's, and the speed-ups."""
-    paper = res.paper.seconds if res.paper else {}
-    lines = ["| model | " + " | ".join(f"{c} ours (s) | {c} paper (s)" for c in res.cases)
-             + f" | speed-up vs {PAPER_REFERENCE}, ours | paper |",
-             "|---|" + "---:|" * (2 * len(res.cases) + 2)]
-
-    def mean_time(m: str, table: dict | None = None) -> float | None:
-        if table is not None:
-            vals = [table.get(m, {}).get(c) for c in res.cases]
-        else:
-            vals = [lp.seconds if (lp := res.converged(m, c)) else None for c in res.cases]
-        vals = [v for v in vals if v is not None]
-        return sum(vals) / len(vals) if vals else None
-
-    ref_ours, ref_paper = mean_time(PAPER_REFERENCE), mean_time(PAPER_REFERENCE, paper)
-    for m in res.models:
-        cells = []
-        for c in res.cases:
-            lp, fail = res.paths.get((m, c)), res.failure(m, c)
-            cells.append(fail.summary() if fail else f"{lp.seconds:.4f}" if lp else "–")
-            cells.append(_fmt(paper.get(m, {}).get(c), 2))
-        ours, pap = mean_time(m), mean_time(m, paper)
-        su = f"{ref_ours / ours:.3g}x" if ours and ref_ours else "–"
-        sp = f"{ref_paper / pap:.3g}x" if pap and ref_paper else "–"
-        lines.append(f"| {m} | " + " | ".join(cells) + f" | {su} | {sp} |")
-    return lines
-
-
 def _frame_table(rows: list[FrameRow], cases: list[str]) -> list[str]:
     """Markdown: end-of-ramp errors against beam:100 with each measuring frame (percent)."""
     lines = ["| model | frame | " + " | ".join(f"{c} disp | {c} rot" for c in cases) + " |",
@@ -144,10 +117,7 @@ def _bracket_lines(res: SceneResults) -> list[str]:
                  f"{math.degrees(b['rot']):.6g} | {math.degrees(b['rot_other']):.6g} | "
                  f"{b['rot_spread']:.3g} |")
     L += _failure_lines(res.bracket.failures)
-    L += ["", _bracket_verdict(res, rows), ""]
-    return L + [f"Computing the `{other}` paths takes {res.bracket.seconds():.3g} s (wall time of "
-                "its runs, the report's added cost when they are not cached).",
-                ""]
+    return L + ["", _bracket_verdict(res, rows), ""]
 
 
 def _bracket_verdict(res: SceneResults, rows: dict[str, dict[str, float]]) -> str:
@@ -211,31 +181,23 @@ def _validity_lines(res: SceneResults) -> list[str]:
 def _findings(res: SceneResults, reference: str) -> list[str]:
     """Plain-words findings computed from the error and timing tables, the failures and
     the validity monitor."""
-    table = res.error_table(reference)
     failed = {f.model for f in res.failures}
     out = _failure_lines(res.failures) + _validity_lines(res)
-    rows = []
-    for m, per_case in table.items():
-        if m in failed or len(per_case) < len(res.cases):
-            continue
-        worst_case = max(per_case, key=lambda c: per_case[c]["path_disp"])
-        secs = [res.paths[(m, c)].seconds for c in per_case]
-        rows.append((m, per_case[worst_case]["path_disp"], worst_case, sum(secs) / len(secs)))
+    rows = res.worst_errors(reference)
     if not rows:
         return out + [f"- No model could be compared with `{reference}` on every load case."]
-    rows.sort(key=lambda r: r[3])
-    note = " (models that fail on a load case are not candidates)" if failed else ""
+    note = " (models that fail on a load case are not counted)" if failed else ""
     for budget in BUDGETS:
-        ok = [r for r in rows if r[1] <= budget]
+        ok = sorted((r for r in rows if r[1] <= budget), key=lambda r: r[1])
         if ok:
-            m, e, _, s = ok[0]
-            out.append(f"- Cheapest model within {budget:g} % of `{reference}` on every load "
-                       f"case (largest path displacement error){note}: **{m}** ({e:.2f} %, "
-                       f"{s * 1e3:.1f} ms per load path).")
+            out.append(f"- Within {budget:g} % of `{reference}` on every load case (largest "
+                       f"path displacement error){note}: "
+                       + ", ".join(f"`{m}` ({e:.2f} %)" for m, e, _ in ok)
+                       + "; the cheapest of them is named in [timings.md](timings.md).")
         else:
             out.append(f"- No model stays within {budget:g} % of `{reference}` on every "
                        f"case{note}.")
-    for m, e, c, s in sorted(rows, key=lambda r: -r[1])[:N_LARGEST]:
+    for m, e, c in sorted(rows, key=lambda r: -r[1])[:N_LARGEST]:
         out.append(f"- Largest error: `{m}` on `{c}`, {e:.1f} % (path displacement).")
     return out
 
@@ -245,12 +207,12 @@ def _convergence_lines(res: SceneResults, out: Path) -> list[str]:
     name = res.scene.name
     for st in res.convergence:
         L += [f"### {st.family} convergence ({st.load_case})", "",
-              "| model | unknowns | seconds | disp. (mm) | rotation (deg) |",
-              "|---|---:|---:|---:|---:|"]
+              "| model | unknowns | disp. (mm) | rotation (deg) |",
+              "|---|---:|---:|---:|"]
         for r in st.rows:
-            L.append(f"| {r['model']} | {r['unknowns']} | {r['seconds']:.2f} | "
+            L.append(f"| {r['model']} | {r['unknowns']} | "
                      f"{r['displacement']:.6f} | {math.degrees(r['rotation']):.6f} |")
-        L += [f"| {f.model} | {f.summary()} | | | |" for f in st.failures]
+        L += [f"| {f.model} | {f.summary()} | | |" for f in st.failures]
         for key, s in st.summary.items():
             order = "n/a" if s["order"] is None else f"{s['order']:.2f}"
             gci = "n/a" if s["gci_percent"] is None else f"{s['gci_percent']:.3g} %"
@@ -271,7 +233,7 @@ def _levels_text(data: ReportData) -> str:
     return " or ".join(str(n) for n in levels)
 
 
-def _scene_section(res: SceneResults, out: Path, data: ReportData) -> list[str]:
+def _scene_section(res: SceneResults, out: Path) -> list[str]:
     """Markdown of one scene; draws its figures into ``out``."""
     from .drawing import plot_mechanism
 
@@ -318,10 +280,9 @@ def _scene_section(res: SceneResults, out: Path, data: ReportData) -> list[str]:
         L += frequencies.section(res.frequencies)
     seconds_note = f" ({res.paper.seconds_table})" if res.paper else ""
     L += [f"### Run times{seconds_note}", "",
-          f"Ours: median wall time of the whole load path ({_levels_text(data)} levels, model "
-          "build included) on this machine"
-          + ("; the paper's: RecurDyn quasi-static simulations." if res.paper else "."), ""]
-    L += _timing_table(res) + [""]
+          f"In [{TIMINGS_MD}]({TIMINGS_MD}), with the speed-ups"
+          + (" and the paper's" if res.paper else "")
+          + ": they change from run to run, the results above do not.", ""]
     L += ["### Load paths", ""]
     for c in res.cases:
         paths = {m: res.paths[(m, c)] for m in res.models if (m, c) in res.paths}
@@ -348,12 +309,10 @@ def _scene_section(res: SceneResults, out: Path, data: ReportData) -> list[str]:
                     f = figures.relative_rotations(sc, c, lp, png)
                     L += [f"![{c}]({f})", ""]
     if res.bench_rows or res.bench_failures:
-        md = write_bench(sc, res.bench_rows, res.bench_reference, out, res.bench_failures)
         L += ["### Runtime versus error", "",
-              f"Every model and resolution against `{res.bench_reference}`; details in "
-              f"[{md.name}]({md.name}).", ""]
-        L += _failure_lines(res.bench_failures)
-        L += ["", f"![runtime vs error]({md.with_suffix('.png').name})", ""]
+              f"Every model and resolution against `{res.bench_reference}`: in "
+              f"[{TIMINGS_MD}]({TIMINGS_MD}).", ""]
+        L += _failure_lines(res.bench_failures) + [""]
     L += _convergence_lines(res, out)
     ref = res.reference if res.has_reference() else PAPER_REFERENCE
     L += [f"### Findings ({name}, against `{ref}`)", ""]
@@ -382,30 +341,46 @@ def render_markdown(data: ReportData, out: Path) -> str:
              "max over levels of |d_ref|; **path rot** likewise. *End disp vec* and *end rot* "
              "are the metrics of the paper tables (see the discussion for how they compare "
              "with the paper's figures).",
-             f"- Timing: median of {data.repeats} runs per load path (reference models: one "
-             "run), wall clock.",
+             f"- Run times: in [{TIMINGS_MD}]({TIMINGS_MD}) with `timings.json`, apart from "
+             "the results (report.md, results.json and gates.json are the same from one run of "
+             "the same code to the next).",
              "- A model that fails on a load case is reported where it appears: how far it got "
              "(percent of the load), why (a limit point found by arc length, or the solver's "
              "reason) and the load.",
              f"- Tools: {data.versions}.", ""]
-    for res in data.scenes:
-        lines += _scene_section(res, out, data)
+    for section in _scene_sections(data, out):
+        lines += section
     lines += discussion(data)
     return "\n".join(lines) + "\n"
 
 
+def _scene_sections(data: ReportData, out: Path) -> list[list[str]]:
+    """Every scene's Markdown, drawn on ``data.workers`` processes when there are several
+    scenes (each draws its own figures, the report's slowest part after the models)."""
+    n = min(data.workers, len(data.scenes))
+    if n < 2:
+        return [_scene_section(res, out) for res in data.scenes]
+    with ProcessPoolExecutor(max_workers=n) as pool:
+        return list(pool.map(_scene_section, data.scenes, [out] * len(data.scenes)))
+
+
 def write_report(data: ReportData, out: Path) -> Path:
-    """Write ``report.md`` (with figures), ``results.json`` and ``gates.json`` into ``out``."""
+    """Write ``report.md`` (with figures), ``results.json`` and ``gates.json`` into ``out``,
+    then the run times (:func:`validation.timings.write_timings`)."""
+    t0 = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
     md = write_text(out / "report.md", render_markdown(data, out))
     write_json(out / "results.json", data.results())
     write_json(out / "gates.json", data.gates())
+    write_timings(data, out, time.perf_counter() - t0)
     return md
 
 
 def build_report(scene_names: list[str], out: Path, models: list[str] | None = None,
                  repeats: int = 3, use_cache: bool = True, progress: bool = True,
-                 bench: bool = True, converge: bool = True) -> Path:
-    """Compute everything, then write ``out/report.md``, its figures and JSON files."""
-    data = compute_report(scene_names, models, repeats, use_cache, progress, bench, converge)
+                 bench: bool = True, converge: bool = True, workers: int = 1) -> Path:
+    """Compute everything (on ``workers`` processes), then write ``out/report.md``, its
+    figures, JSON files and run times."""
+    data = compute_report(scene_names, models, repeats, use_cache, progress, bench, converge,
+                          workers)
     return write_report(data, out)

@@ -14,10 +14,13 @@ Units: mm, N, N mm, rad; errors in percent; times in s.
 
 from __future__ import annotations
 
+import json
 import platform
+import time
 from dataclasses import dataclass, field
 from functools import cached_property
 from importlib import metadata
+from pathlib import Path
 
 from geometry import Scene, load_scene
 from geometry.graph import independent_loops
@@ -26,7 +29,7 @@ from reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
 
 from .bench import runtime_vs_error, sweep_specs
 from .cache import ResultCache, code_version
-from .campaign import Progress, run_campaign
+from .campaign import Job, Progress, RunMemo, prefetch, run_campaign, timed_run
 from .compare import errors, paper_percent, paper_scene, paper_seconds
 from .convergence import ConvergenceStudy, study
 from .failures import Failure
@@ -160,8 +163,20 @@ class SceneResults:
             for c in self.cases:
                 lp, ref = self.converged(m, c), self.converged(reference, c)
                 if lp is not None and ref is not None:
-                    out.setdefault(m, {})[c] = errors(lp, ref)
+                    out.setdefault(m, {})[c] = errors(lp, ref, self.scene.mechanism.size())
         return out
+
+    def worst_errors(self, reference: str) -> list[tuple[str, float, str]]:
+        """(model, largest path displacement error in percent, its load case) of every
+        model that reached full load on every case, in the report's model order."""
+        failed = {f.model for f in self.failures}
+        rows = []
+        for m, per_case in self.error_table(reference).items():
+            if m in failed or len(per_case) < len(self.cases):
+                continue
+            worst_case = max(per_case, key=lambda c: per_case[c]["path_disp"])
+            rows.append((m, per_case[worst_case]["path_disp"], worst_case))
+        return rows
 
     def bracket_rows(self) -> dict[str, dict[str, float]]:
         """{case: end |d| (mm) and rotation (rad) in both planes, and their spreads (%)}.
@@ -201,6 +216,8 @@ class ReportData:
     repeats: int
     versions: str
     code: str
+    workers: int = 1
+    wall_seconds: dict[str, float] = field(default_factory=dict)
 
     @property
     def references(self) -> list[str]:
@@ -213,12 +230,71 @@ class ReportData:
                 for r in self.scenes}
 
     def results(self) -> dict:
-        """Every LoadPath, failure and bench row, JSON-ready."""
+        """Every LoadPath, failure and bench row, JSON-ready, without run times.
+
+        Each path is its :meth:`~reducedmodels.LoadPath.to_dict` without the
+        fields of :data:`LEFT_OUT` and the statistics of :data:`TIMING_STATS`;
+        bench rows lose their ``seconds``. The same code gives the same text,
+        whatever the machine's load (:func:`timings` holds the times).
+        """
         return {"code_version": self.code, "scenes": {
-            r.scene.name: {"results": [lp.to_dict() for lp in r.paths.values()],
+            r.scene.name: {"results": [_stable(lp) for lp in r.paths.values()],
                            "failures": [f.to_dict() for f in r.failures],
-                           "bench": r.bench_rows}
+                           "bench": [{k: v for k, v in row.items() if k != "seconds"}
+                                     for row in r.bench_rows]}
             for r in self.scenes}}
+
+    def timings(self) -> dict:
+        """Every run time of the report, JSON-ready (s): per path the median and its
+        samples and whether it came from the cache; the bench rows, the plane
+        bracket's and the convergence studies' runs; the report's wall times."""
+        scenes = {}
+        for r in self.scenes:
+            scenes[r.scene.name] = {
+                "paths": [{"model": lp.model, "load_case": lp.load_case, "seconds": lp.seconds,
+                           "samples": lp.stats.get("seconds_samples", [lp.seconds]),
+                           "cached": bool(lp.stats.get("cached", False))}
+                          for lp in r.paths.values()],
+                "bench": [{"model": row["model"], "seconds": row["seconds"]}
+                          for row in r.bench_rows],
+                "bracket": ({"model": r.bracket.model, "seconds": r.bracket.seconds()}
+                            if r.bracket else None),
+                "convergence": [{"family": st.family, "load_case": st.load_case,
+                                 "rows": [{"model": row["model"], "seconds": row["seconds"]}
+                                          for row in st.rows]}
+                                for st in r.convergence]}
+        return {"code_version": self.code, "repeats": self.repeats, "workers": self.workers,
+                "wall_seconds": self.wall_seconds, "scenes": scenes}
+
+
+#: LoadPath fields left out of results.json: the run time (in timings.json) and the
+#: per-level drawing data (deformed shapes, stress profiles along the flexures: drawn in
+#: the figures, kept in the result cache, recorded again by ``flexval run``)
+LEFT_OUT = ("seconds", "shapes", "stress_profile")
+#: solver statistics that are run times or cache state (in timings.json)
+TIMING_STATS = ("seconds_median", "seconds_samples", "cached")
+
+
+def _stable(lp: LoadPath) -> dict:
+    """``lp`` as results.json holds it (see :meth:`ReportData.results`)."""
+    d = {k: v for k, v in lp.to_dict().items() if k not in LEFT_OUT}
+    d["stats"] = {k: v for k, v in lp.stats.items() if k not in TIMING_STATS}
+    return d
+
+
+def read_results(folder: Path) -> dict[str, dict[tuple[str, str], LoadPath]]:
+    """The LoadPaths of a written report, {scene: {(model, case): path}}, from its
+    ``results.json`` with each path's seconds from ``timings.json`` (the fields of
+    :data:`LEFT_OUT` but ``seconds`` stay empty)."""
+    results = json.loads((folder / "results.json").read_text(encoding="utf-8"))["scenes"]
+    times = json.loads((folder / "timings.json").read_text(encoding="utf-8"))["scenes"]
+    out: dict[str, dict[tuple[str, str], LoadPath]] = {}
+    for scene, data in results.items():
+        secs = {(t["model"], t["load_case"]): t["seconds"] for t in times[scene]["paths"]}
+        out[scene] = {(r["model"], r["load_case"]): LoadPath.from_dict(
+                          {**r, "seconds": secs[(r["model"], r["load_case"])]})
+                      for r in data["results"]}
+    return out
 
 
 def versions() -> str:
@@ -232,16 +308,19 @@ def versions() -> str:
     return f"Python {platform.python_version()}; " + ", ".join(vs) + f"; flexval code {code_version()}"
 
 
-def _frame_rows(res: SceneResults, specs: list[ModelSpec], cache: ResultCache | None
-                ) -> list[FrameRow]:
+def _frame_variants(spec: ModelSpec) -> list[tuple[str, ModelSpec]]:
+    """(frame, variant) of a model with a measuring-frame option at its default, else []."""
+    opt = spec.model_family.option(FRAME_OPTION)
+    if opt is None or FRAME_OPTION in dict(spec.options):
+        return []
+    return [(frame, spec.with_options(**{FRAME_OPTION: frame})) for frame in opt.allowed]
+
+
+def _frame_rows(res: SceneResults, specs: list[ModelSpec], cache: RunMemo) -> list[FrameRow]:
     """Every model with a measuring-frame option (at its default) with each frame's value."""
     rows = []
     for spec in specs:
-        opt = spec.model_family.option(FRAME_OPTION)
-        if opt is None or FRAME_OPTION in dict(spec.options):
-            continue
-        for frame in opt.allowed:
-            variant = spec.with_options(**{FRAME_OPTION: frame})
+        for frame, variant in _frame_variants(spec):
             if variant.id == spec.id:
                 paths, fails = res.paths, res.failures
             else:
@@ -254,31 +333,93 @@ def _frame_rows(res: SceneResults, specs: list[ModelSpec], cache: ResultCache | 
                 fail = next((f for f in fails if f.model == variant.id and f.load_case == c),
                             None)
                 cells[c] = (None if ref is None else fail if fail is not None
-                            else errors(lp, ref) if lp is not None else None)
+                            else errors(lp, ref, res.scene.mechanism.size())
+                            if lp is not None else None)
             rows.append(FrameRow(spec.id, frame, cells))
     return rows
 
 
-def _plane_bracket(res: SceneResults, reference: ModelSpec, cache: ResultCache | None
-                   ) -> PlaneBracket | None:
-    """The reference with its other :data:`PLANE_OPTION` value on every case, or None
-    (a reference without that option)."""
+def _plane_variant(reference: ModelSpec) -> ModelSpec | None:
+    """The reference with its other :data:`PLANE_OPTION` value, or None (no such option)."""
     opt = reference.model_family.option(PLANE_OPTION)
     if opt is None:
         return None
     own = dict(reference.options).get(PLANE_OPTION, opt.default)
     other = next(v for v in opt.allowed if v != own)
-    variant = reference.with_options(**{PLANE_OPTION: other})
+    return reference.with_options(**{PLANE_OPTION: other})
+
+
+def _plane_bracket(res: SceneResults, reference: ModelSpec, cache: RunMemo
+                   ) -> PlaneBracket | None:
+    """The reference with its other :data:`PLANE_OPTION` value on every case, or None
+    (a reference without that option)."""
+    variant = _plane_variant(reference)
+    if variant is None:
+        return None
     paths, fails = run_campaign(res.scene, [variant], list(res.scene.load_cases), 1, cache)
     failed = {f.load_case for f in fails}
     return PlaneBracket(variant.id, {c: lp for (_, c), lp in paths.items() if c not in failed},
                         fails)
 
 
+def _convergence_specs(reference: ModelSpec) -> list[ModelSpec]:
+    """The reference's resolutions of the convergence study: its lowest to one above its own."""
+    low = reference.model_family.resolution.low
+    return [reference.with_resolution(n) for n in range(low, reference.resolution + 2)]
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """What :func:`compute_report` runs on every scene, and how."""
+
+    specs: list[ModelSpec]
+    reference: ModelSpec | None
+    bench_reference: ModelSpec | None
+    converge: bool
+    repeats: int
+
+    @property
+    def record(self) -> tuple[str, ...]:
+        """Models run recording poses and shapes (for the figures), in every study."""
+        return tuple(m for m in (PAPER_REFERENCE, self.reference and self.reference.id) if m)
+
+    def repeats_for(self, spec: ModelSpec) -> int:
+        """Timing repeats of ``spec``: one for a reference model (its runs are long)."""
+        return 1 if spec.model_family.has(REFERENCE) else self.repeats
+
+    def jobs(self, scene: Scene) -> list[Job]:
+        """Every load path the report computes on ``scene`` (with repeats), some twice."""
+        cases = list(scene.load_cases)
+        per_case = list(self.specs)
+        per_case += [v for s in self.specs for _, v in _frame_variants(s) if v.id != s.id]
+        if self.reference is not None and _plane_variant(self.reference) is not None:
+            per_case.append(_plane_variant(self.reference))
+        if self.bench_reference is not None:
+            per_case += [self.bench_reference] + sweep_specs(self.bench_reference)
+        runs = [(s, c) for s in per_case for c in cases]
+        if self.converge and self.reference is not None:
+            runs += [(s, cases[0]) for s in _convergence_specs(self.reference)]
+        return [Job(scene, s, c, self.repeats_for(s), s.id in self.record) for s, c in runs]
+
+
+def _longest_first(jobs: list[Job]) -> list[Job]:
+    """``jobs`` ordered for a process pool: the reference family's finest resolutions
+    first (a continuum level costs several times the one below; reduced models take
+    milliseconds), otherwise as listed."""
+    def cost(job: Job) -> tuple[int, int]:
+        fam = job.spec.model_family
+        return (1, job.spec.resolution) if fam.has(REFERENCE) else (0, 0)
+    return sorted(jobs, key=cost, reverse=True)
+
+
 def compute_report(scene_names: list[str], models: list[str] | None = None, repeats: int = 3,
                    use_cache: bool = True, progress: bool = True, bench: bool = True,
-                   converge: bool = True) -> ReportData:
+                   converge: bool = True, workers: int = 1) -> ReportData:
     """Run and compare everything the report shows (see the module docstring).
+
+    With ``workers`` > 1 every load path of every study is first computed on
+    that many processes (:func:`validation.campaign.prefetch`); the studies
+    then read them, so the results are those of a serial run.
 
     Raises
     ------
@@ -286,31 +427,38 @@ def compute_report(scene_names: list[str], models: list[str] | None = None, repe
         For a bad scene or model id (nothing is run). Solver failures are
         results, never raised.
     """
+    t0 = time.perf_counter()
     specs = [parse_model(m, "<report>", "models") for m in (models or DEFAULT_MODELS)]
     scenes = [load_scene(n) for n in scene_names]
-    cache = ResultCache(enabled=use_cache)
+    memo = RunMemo(ResultCache(enabled=use_cache))
     reference = next((s for s in specs if s.model_family.has(REFERENCE)), None)
     ref_id = reference.id if reference else None
+    plan = _Plan(specs, reference, (reference or parse_model(BENCH_REFERENCE)) if bench else None,
+                 converge, repeats)
+    prefetch(_longest_first([j for sc in scenes for j in plan.jobs(sc)]), memo, workers,
+             progress)
     bar = Progress(sum(len(specs) * len(s.load_cases) for s in scenes), enabled=progress)
     out: list[SceneResults] = []
     for sc in scenes:
-        record = tuple(m for m in (PAPER_REFERENCE, ref_id) if m)
-        paths, failures = run_campaign(
-            sc, specs, list(sc.load_cases), repeats, cache, bar, record_models=record,
-            repeats_for=lambda s: 1 if s.model_family.has(REFERENCE) else repeats)
+        paths, failures = run_campaign(sc, specs, list(sc.load_cases), repeats, memo, bar,
+                                       record_models=plan.record,
+                                       repeats_for=plan.repeats_for)
         res = SceneResults(sc, paths, failures, [s.id for s in specs], ref_id)
-        res.frames = _frame_rows(res, specs, cache)
+        res.frames = _frame_rows(res, specs, memo)
         res.frequencies = frequency_data(sc, res.models, ref_id or PAPER_REFERENCE)
         if reference:
-            res.bracket = _plane_bracket(res, reference, cache)
-        if bench:
-            bref = reference or parse_model(BENCH_REFERENCE)
+            res.bracket = _plane_bracket(res, reference, memo)
+        if plan.bench_reference is not None:
+            bref = plan.bench_reference
             res.bench_rows, res.bench_failures = runtime_vs_error(
-                sc, bref, sweep_specs(bref), repeats, cache, progress)
+                sc, bref, sweep_specs(bref), repeats, memo, progress, plan.record)
             res.bench_reference = bref.id
         if converge and reference:
-            low = reference.model_family.resolution.low
-            res.convergence.append(study(sc, reference, list(range(low, reference.resolution + 2)),
-                                         sc.load_cases[0]))
+            case = sc.load_cases[0]
+            res.convergence.append(study(
+                sc, reference, [s.resolution for s in _convergence_specs(reference)], case,
+                run=lambda spec, sc=sc, case=case: timed_run(
+                    sc, spec, case, 1, memo, record=spec.id in plan.record)))
         out.append(res)
-    return ReportData(out, [s.id for s in specs], ref_id, repeats, versions(), code_version())
+    return ReportData(out, [s.id for s in specs], ref_id, repeats, versions(), code_version(),
+                      workers, {"models": time.perf_counter() - t0})

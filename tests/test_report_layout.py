@@ -1,0 +1,110 @@
+"""The report's committed files change only when a result does.
+
+Run times live in timings.md / timings.json; report.md, results.json and
+gates.json hold results only. Checked by rendering one computed report twice,
+the second time with every run time of the data multiplied by an odd factor
+(as a loaded machine would): the result files must be byte-identical, the
+timings must differ. And computing the report on two worker processes gives
+the same files as computing it on one.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import re
+
+import pytest
+
+from validation.report import write_report
+from validation.reportdata import LEFT_OUT, TIMING_STATS, compute_report, read_results
+
+from test_report import TINY
+
+MODELS = ["continuum:0", "beam:100", "beam:10", "dcmm:1", "ee"]
+RESULT_FILES = ("report.md", "results.json", "gates.json")
+#: a time printed with its unit (0.0123 s, 4.5 ms) or a speed-up (12.4x): never in report.md
+TIMING = re.compile(r"\d\s*(s|ms)\b|\d(\.\d+)?x\b|\bseconds\b|\(s\)")
+
+
+def _scene(tmp_path_factory):
+    path = tmp_path_factory.mktemp("layout") / "tiny.toml"
+    path.write_text(TINY)
+    return str(path)
+
+
+@pytest.fixture(scope="module")
+def computed(tmp_path_factory):
+    scene = _scene(tmp_path_factory)
+    data = compute_report([scene], MODELS, repeats=2, use_cache=False, progress=False,
+                          bench=True, converge=True)
+    return scene, data
+
+
+def _slower(data, factor: float):
+    """``data`` with every run time multiplied by ``factor``."""
+    data = copy.deepcopy(data)
+    for res in data.scenes:
+        for lp in list(res.paths.values()) + (list(res.bracket.paths.values())
+                                               if res.bracket else []):
+            lp.seconds *= factor
+            lp.stats["seconds_samples"] = [s * factor for s in lp.stats["seconds_samples"]]
+        for row in res.bench_rows:
+            row["seconds"] *= factor
+        for st in res.convergence:
+            for row in st.rows:
+                row["seconds"] *= factor
+    data.wall_seconds = {k: v * factor for k, v in data.wall_seconds.items()}
+    return data
+
+
+def test_run_times_change_only_the_timings_files(computed, tmp_path):
+    _, data = computed
+    a, b = tmp_path / "a", tmp_path / "b"
+    write_report(data, a)
+    write_report(_slower(data, 7.3), b)
+    for name in RESULT_FILES:
+        assert (a / name).read_bytes() == (b / name).read_bytes(), name
+    assert (a / "timings.md").read_text() != (b / "timings.md").read_text()
+    times_a = json.loads((a / "timings.json").read_text())["scenes"]["tiny"]["paths"]
+    times_b = json.loads((b / "timings.json").read_text())["scenes"]["tiny"]["paths"]
+    for ta, tb in zip(times_a, times_b):
+        assert tb["seconds"] == pytest.approx(7.3 * ta["seconds"], rel=1e-12)
+
+
+def test_report_md_prints_no_run_time(computed, tmp_path):
+    _, data = computed
+    md = write_report(data, tmp_path).read_text()
+    assert not [m.group(0) for m in TIMING.finditer(md)]
+    assert "[timings.md](timings.md)" in md
+    # the pattern does find the run times where they are
+    assert TIMING.search((tmp_path / "timings.md").read_text())
+
+
+def test_results_json_holds_no_time_nor_drawing_data(computed, tmp_path):
+    _, data = computed
+    write_report(data, tmp_path)
+    results = json.loads((tmp_path / "results.json").read_text())["scenes"]["tiny"]
+    for r in results["results"]:
+        assert not set(LEFT_OUT) & set(r) and not set(TIMING_STATS) & set(r["stats"])
+    assert all("seconds" not in row for row in results["bench"]) and results["bench"]
+    # read back with the times of timings.json: the computed paths, less what is left out
+    back = read_results(tmp_path)["tiny"]
+    res, = data.scenes
+    assert set(back) == set(res.paths)
+    for key, lp in res.paths.items():
+        assert back[key].seconds == lp.seconds
+        assert (back[key].dx, back[key].rotation, back[key].poses) == (lp.dx, lp.rotation,
+                                                                       lp.poses)
+
+
+def test_two_workers_write_what_one_writes(computed, tmp_path):
+    """Paths computed ahead on two processes: the same results, tables and order."""
+    scene, data = computed
+    two = compute_report([scene], MODELS, repeats=2, use_cache=False, progress=False,
+                         bench=True, converge=True, workers=2)
+    assert two.workers == 2
+    write_report(data, tmp_path / "one")
+    write_report(two, tmp_path / "two")
+    for name in RESULT_FILES:
+        assert (tmp_path / "one" / name).read_bytes() == (tmp_path / "two" / name).read_bytes()

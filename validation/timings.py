@@ -1,0 +1,145 @@
+"""The validation report's run times, in their own files: ``timings.md`` and ``timings.json``.
+
+Everything of the report that depends on the machine, its load and the cache
+is written here, so that ``report.md``, ``results.json`` and ``gates.json``
+change only when a result does (two runs of the same code write them byte for
+byte the same). Here: the median wall time of every load path beside the
+paper's and the speed-ups against :data:`~validation.reportdata.PAPER_REFERENCE`,
+the cheapest model within each error budget of the findings, the cost of the
+plane-strain bracket and of each convergence run, the runtime-versus-error
+study (``bench_<scene>.md/.png/.json``) and the report's own wall time.
+
+Units: s (ms where stated); speed-ups are ratios of mean seconds.
+"""
+
+from __future__ import annotations
+
+import platform
+from pathlib import Path
+
+from .bench import write_bench
+from .campaign import available_cores
+from .outputs import write_json, write_text
+from .reportdata import PAPER_REFERENCE, ReportData, SceneResults
+
+#: file names of the run times, beside report.md
+TIMINGS_MD, TIMINGS_JSON = "timings.md", "timings.json"
+#: error budgets (percent, largest path displacement error) of the findings (which models
+#: stay within each) and of the cheapest-model lines here
+BUDGETS = (1.0, 5.0)
+
+
+def _fmt(v: float | None, digits: int = 2) -> str:
+    return "–" if v is None else f"{v:.{digits}f}"
+
+
+def timing_table(res: SceneResults) -> list[str]:
+    """Markdown: our median seconds per load path beside the paper's, and the speed-ups."""
+    paper = res.paper.seconds if res.paper else {}
+    lines = ["| model | " + " | ".join(f"{c} ours (s) | {c} paper (s)" for c in res.cases)
+             + f" | speed-up vs {PAPER_REFERENCE}, ours | paper |",
+             "|---|" + "---:|" * (2 * len(res.cases) + 2)]
+
+    def mean_time(m: str, table: dict | None = None) -> float | None:
+        if table is not None:
+            vals = [table.get(m, {}).get(c) for c in res.cases]
+        else:
+            vals = [lp.seconds if (lp := res.converged(m, c)) else None for c in res.cases]
+        vals = [v for v in vals if v is not None]
+        return sum(vals) / len(vals) if vals else None
+
+    ref_ours, ref_paper = mean_time(PAPER_REFERENCE), mean_time(PAPER_REFERENCE, paper)
+    for m in res.models:
+        cells = []
+        for c in res.cases:
+            lp, fail = res.paths.get((m, c)), res.failure(m, c)
+            cells.append(fail.summary() if fail else f"{lp.seconds:.4f}" if lp else "–")
+            cells.append(_fmt(paper.get(m, {}).get(c)))
+        ours, pap = mean_time(m), mean_time(m, paper)
+        su = f"{ref_ours / ours:.3g}x" if ours and ref_ours else "–"
+        sp = f"{ref_paper / pap:.3g}x" if pap and ref_paper else "–"
+        lines.append(f"| {m} | " + " | ".join(cells) + f" | {su} | {sp} |")
+    return lines
+
+
+def _cheapest_lines(res: SceneResults, reference: str) -> list[str]:
+    """The cheapest model (mean seconds per load path) within each of :data:`BUDGETS`."""
+    rows = res.worst_errors(reference)
+    out = []
+    for budget in BUDGETS:
+        ok = [(sum(res.paths[(m, c)].seconds for c in res.cases) / len(res.cases), m, e)
+              for m, e, _ in rows if e <= budget]
+        if ok:
+            s, m, e = min(ok)
+            out.append(f"- Cheapest model within {budget:g} % of `{reference}` on every load "
+                       f"case (largest path displacement error): **{m}** ({e:.2f} %, "
+                       f"{s * 1e3:.1f} ms per load path).")
+    return out
+
+
+def _convergence_lines(res: SceneResults) -> list[str]:
+    L = []
+    for st in res.convergence:
+        L += [f"{st.family} convergence ({st.load_case}), wall time of each run:", "",
+              "| model | unknowns | seconds |", "|---|---:|---:|"]
+        L += [f"| {r['model']} | {r['unknowns']} | {r['seconds']:.2f} |" for r in st.rows]
+        L += [""]
+    return L
+
+
+def _scene_lines(res: SceneResults, data: ReportData, out: Path) -> list[str]:
+    """Markdown of one scene's run times; writes its runtime-versus-error files."""
+    seconds_note = f" (the paper's {res.paper.seconds_table})" if res.paper else ""
+    levels = " or ".join(str(n) for n in sorted({lc.levels for lc in res.scene.load_cases}))
+    L = [f"## {res.scene.name}", "", f"### Run times{seconds_note}", "",
+         f"Ours: median wall time of the whole load path ({levels} levels, model build "
+         "included) on this machine"
+         + ("; the paper's: RecurDyn quasi-static simulations (compare the speed-up columns, "
+            "not the seconds)." if res.paper else "."), ""]
+    L += timing_table(res) + [""]
+    ref = res.reference if res.has_reference() else PAPER_REFERENCE
+    L += _cheapest_lines(res, ref)
+    if res.bracket and res.bracket.paths:
+        L += [f"- Computing the `{res.bracket.model}` paths (the plane bracket) takes "
+              f"{res.bracket.seconds():.3g} s (wall time of its runs, the report's added cost "
+              "when they are not cached)."]
+    L += [""] + _convergence_lines(res)
+    if res.bench_rows or res.bench_failures:
+        md = write_bench(res.scene, res.bench_rows, res.bench_reference, out,
+                         res.bench_failures)
+        L += ["### Runtime versus error", "",
+              f"Every model and resolution against `{res.bench_reference}`; details in "
+              f"[{md.name}]({md.name}).", "",
+              f"![runtime vs error]({md.with_suffix('.png').name})", ""]
+    return L
+
+
+def render_timings(data: ReportData, out: Path, render_seconds: float) -> str:
+    """The Markdown of ``timings.md`` (writing the runtime-versus-error files into ``out``).
+
+    ``render_seconds``: wall time of writing report.md, its figures and JSON files.
+    """
+    wall = data.wall_seconds.get("models")
+    total = f"{wall:.1f} s computing, " if wall is not None else ""
+    lines = ["# flexval validation report: run times", "",
+             "The run times of [report.md](report.md), apart from its results because they "
+             "change from run to run (machine, load, cache).", "",
+             f"- Ours: median of {data.repeats} runs per load path (reference models: one run), "
+             f"wall clock, on {data.workers} worker process(es) at a time "
+             f"({available_cores()} cores, {platform.machine()}, Python "
+             f"{platform.python_version()}). A path read from the result cache keeps the time "
+             "of the run that computed it (`cached` in timings.json).",
+             f"- This report: {total}{render_seconds:.1f} s writing report.md, its figures "
+             "and JSON files.", ""]
+    for res in data.scenes:
+        lines += _scene_lines(res, data, out)
+    return "\n".join(lines) + "\n"
+
+
+def write_timings(data: ReportData, out: Path, render_seconds: float) -> Path:
+    """Write ``timings.md`` (with the runtime-versus-error files) and ``timings.json``."""
+    md = write_text(out / TIMINGS_MD, render_timings(data, out, render_seconds))
+    write_json(out / TIMINGS_JSON, {**data.timings(),
+                                    "wall_seconds": {**data.wall_seconds,
+                                                     "render": render_seconds}})
+    return md
