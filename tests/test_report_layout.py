@@ -63,7 +63,9 @@ def test_run_times_change_only_the_timings_files(computed, tmp_path):
     a, b = tmp_path / "a", tmp_path / "b"
     write_report(data, a)
     write_report(_slower(data, 7.3), b)
-    for name in RESULT_FILES:
+    figures = [p.name for p in a.glob("*.png") if not p.name.startswith("bench_")]
+    assert len(figures) >= 8
+    for name in RESULT_FILES + tuple(figures):
         assert (a / name).read_bytes() == (b / name).read_bytes(), name
     assert (a / "timings.md").read_text() != (b / "timings.md").read_text()
     times_a = json.loads((a / "timings.json").read_text())["scenes"]["tiny"]["paths"]
@@ -105,6 +107,8 @@ def test_two_workers_write_what_one_writes(computed, tmp_path):
                          bench=True, converge=True, workers=2)
     assert two.workers == 2
     write_report(data, tmp_path / "one")
-    write_report(two, tmp_path / "two")
-    for name in RESULT_FILES:
+    write_report(two, tmp_path / "two")      # figures drawn on two processes too
+    figures = sorted(p.name for p in (tmp_path / "one").glob("*.png"))
+    assert figures == sorted(p.name for p in (tmp_path / "two").glob("*.png"))
+    for name in RESULT_FILES + tuple(f for f in figures if not f.startswith("bench_")):
         assert (tmp_path / "one" / name).read_bytes() == (tmp_path / "two" / name).read_bytes()

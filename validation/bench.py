@@ -9,6 +9,7 @@ the time is the mean over load cases of the median wall time per load path.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Callable
 
 from geometry import Scene
 from reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
@@ -17,6 +18,7 @@ from .cache import ResultCache
 from .campaign import Progress, run_campaign
 from .compare import errors
 from .failures import Failure
+from .figurejobs import draw_now
 from .outputs import output_path, write_json, write_text
 
 #: the reduced models of the study, every resolution of the paper's range and beyond
@@ -76,12 +78,13 @@ def runtime_vs_error(scene: Scene, reference: ModelSpec, specs: list[ModelSpec],
 
 
 def write_bench(scene: Scene, rows: list[dict], reference: str, out: Path,
-                failures: list[Failure] = ()) -> Path:
+                failures: list[Failure] = (), draw: Callable = draw_now) -> Path:
     """Table (Markdown), plot (PNG) and JSON of a runtime-versus-error study in ``out``.
 
     The files are ``bench_<scene>.md/.png/.json`` with the scene name made
     safe (:func:`validation.outputs.safe_name`); returns the Markdown path.
     ``failures`` are listed below the table (a model that fails has no row).
+    The plot is drawn with ``draw(fn, *args)`` (see :mod:`validation.figurejobs`).
     """
     from .figures import pareto_front, runtime_vs_error as plot
 
@@ -96,12 +99,12 @@ def write_bench(scene: Scene, rows: list[dict], reference: str, out: Path,
     for k, r in enumerate(rows):
         lines.append(f"| {r['model']} | {r['seconds']:.4f} | {r['error']:.3g} | "
                      f"{'yes' if k in front else ''} |")
-    png = plot(rows, f"{scene.name}: runtime vs error (reference {reference})",
-               output_path(out, stem, ".png"))
+    png = output_path(out, stem, ".png")
+    draw(plot, rows, f"{scene.name}: runtime vs error (reference {reference})", png)
     if failures:
         lines += ["", "Failures (no row above):", ""]
         lines += [f"- `{f.model}` on `{f.load_case}`: {f.summary()}" for f in failures]
-    lines += ["", f"![runtime vs error]({png})", ""]
+    lines += ["", f"![runtime vs error]({png.name})", ""]
     write_json(output_path(out, stem, ".json"), {"scene": scene.name, "reference": reference,
                                              "rows": rows,
                                              "failures": [f.to_dict() for f in failures]})

@@ -18,15 +18,16 @@ from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+from typing import Callable
 
 from . import figures, frequencies, strength
 from .failures import Failure
+from .figurejobs import Figures, draw_now
 from .outputs import output_path, write_json, write_text
 from .reportdata import (DEFAULT_MODELS, PAPER_REFERENCE, FrameRow, ReportData, SceneResults,
                          compute_report)
-from .timings import BUDGETS, TIMINGS_MD, write_timings
+from .timings import BUDGETS, TIMINGS_MD, write_benches, write_timings
 
 __all__ = ["DEFAULT_MODELS", "PAPER_REFERENCE", "SceneResults", "build_report", "render_markdown",
            "write_report"]
@@ -202,7 +203,7 @@ def _findings(res: SceneResults, reference: str) -> list[str]:
     return out
 
 
-def _convergence_lines(res: SceneResults, out: Path) -> list[str]:
+def _convergence_lines(res: SceneResults, out: Path, draw: Callable) -> list[str]:
     L = []
     name = res.scene.name
     for st in res.convergence:
@@ -219,11 +220,11 @@ def _convergence_lines(res: SceneResults, out: Path) -> list[str]:
             L.append(f"\n{key}: observed order {order}, Richardson value "
                      f"{s['extrapolated']:.6g}, GCI {gci}.")
         if st.rows:
-            fig = figures.convergence(
-                st.rows, {k: v["extrapolated"] for k, v in st.summary.items()},
-                f"{name} {st.load_case}: {st.family} convergence",
-                output_path(out, f"{name}_{st.load_case}_{st.family}_convergence", ".png"))
-            L += ["", f"![convergence]({fig})"]
+            png = output_path(out, f"{name}_{st.load_case}_{st.family}_convergence", ".png")
+            draw(figures.convergence, st.rows,
+                 {k: v["extrapolated"] for k, v in st.summary.items()},
+                 f"{name} {st.load_case}: {st.family} convergence", png)
+            L += ["", f"![convergence]({png.name})"]
         L += [""]
     return L
 
@@ -233,13 +234,13 @@ def _levels_text(data: ReportData) -> str:
     return " or ".join(str(n) for n in levels)
 
 
-def _scene_section(res: SceneResults, out: Path) -> list[str]:
-    """Markdown of one scene; draws its figures into ``out``."""
+def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
+    """Markdown of one scene; draws its figures into ``out`` with ``draw(fn, *args)``."""
     from .drawing import plot_mechanism
 
     sc, name = res.scene, res.scene.name
     mechanism_png = output_path(out, f"{name}_mechanism", ".png")
-    plot_mechanism(sc, mechanism_png)
+    draw(plot_mechanism, sc, mechanism_png)
     mech = sc.mechanism
     chain = ("an open chain" if res.loops == 0 else
              f"a closed chain ({res.loops} independent loop{'s' if res.loops > 1 else ''})")
@@ -275,7 +276,7 @@ def _scene_section(res: SceneResults, out: Path) -> list[str]:
         L += _metrics_table(res, res.reference) + [""]
         L += _bracket_lines(res)
     L += strength.section(sc, res.paths, res.failures, res.models,
-                          res.reference if res.has_reference() else PAPER_REFERENCE, out)
+                          res.reference if res.has_reference() else PAPER_REFERENCE, out, draw)
     if res.frequencies is not None:
         L += frequencies.section(res.frequencies)
     seconds_note = f" ({res.paper.seconds_table})" if res.paper else ""
@@ -286,9 +287,9 @@ def _scene_section(res: SceneResults, out: Path) -> list[str]:
     L += ["### Load paths", ""]
     for c in res.cases:
         paths = {m: res.paths[(m, c)] for m in res.models if (m, c) in res.paths}
-        fig = figures.load_paths(sc, c, paths, output_path(out, f"{name}_{c}_paths", ".png"),
-                                 res.traces(c))
-        L += [f"![{name} {c}]({fig})", ""]
+        png = output_path(out, f"{name}_{c}_paths", ".png")
+        draw(figures.load_paths, sc, c, paths, png, res.traces(c))
+        L += [f"![{name} {c}]({png.name})", ""]
     rec = [m for m in (res.reference, PAPER_REFERENCE) if m and res.converged(m, res.cases[0])
            and res.paths[(m, res.cases[0])].poses]
     if rec:
@@ -297,7 +298,8 @@ def _scene_section(res: SceneResults, out: Path) -> list[str]:
             lp = res.converged(rec[-1], c)
             if lp and lp.poses and lp.shapes:
                 png = output_path(out, f"{name}_{c}_deformed", ".png")
-                L += [f"![{c}]({figures.deformed(sc, c, lp, png)})", ""]
+                draw(figures.deformed, sc, c, lp, png)
+                L += [f"![{c}]({png.name})", ""]
         if res.loops > 0:
             fig_note = (f" (paper {res.paper.relative_rotations_figure})"
                         if res.paper and res.paper.relative_rotations_figure else "")
@@ -306,22 +308,23 @@ def _scene_section(res: SceneResults, out: Path) -> list[str]:
                 lp = res.converged(rec[-1], c)
                 if lp and lp.poses:
                     png = output_path(out, f"{name}_{c}_relrot", ".png")
-                    f = figures.relative_rotations(sc, c, lp, png)
-                    L += [f"![{c}]({f})", ""]
+                    draw(figures.relative_rotations, sc, c, lp, png)
+                    L += [f"![{c}]({png.name})", ""]
     if res.bench_rows or res.bench_failures:
         L += ["### Runtime versus error", "",
               f"Every model and resolution against `{res.bench_reference}`: in "
               f"[{TIMINGS_MD}]({TIMINGS_MD}).", ""]
         L += _failure_lines(res.bench_failures) + [""]
-    L += _convergence_lines(res, out)
+    L += _convergence_lines(res, out, draw)
     ref = res.reference if res.has_reference() else PAPER_REFERENCE
     L += [f"### Findings ({name}, against `{ref}`)", ""]
     L += _findings(res, ref) + [""]
     return L
 
 
-def render_markdown(data: ReportData, out: Path) -> str:
-    """The report's Markdown (drawing its figures into ``out``)."""
+def render_markdown(data: ReportData, out: Path, draw: Callable = draw_now) -> str:
+    """The report's Markdown, drawing its figures into ``out`` with ``draw(fn, *args)``
+    (default: at once; :meth:`validation.figurejobs.Figures.draw` on worker processes)."""
     from .discussion import discussion
 
     lines = ["# flexval validation report", "",
@@ -348,31 +351,25 @@ def render_markdown(data: ReportData, out: Path) -> str:
              "(percent of the load), why (a limit point found by arc length, or the solver's "
              "reason) and the load.",
              f"- Tools: {data.versions}.", ""]
-    for section in _scene_sections(data, out):
-        lines += section
+    for res in data.scenes:
+        lines += _scene_section(res, out, draw)
     lines += discussion(data)
     return "\n".join(lines) + "\n"
 
 
-def _scene_sections(data: ReportData, out: Path) -> list[list[str]]:
-    """Every scene's Markdown, drawn on ``data.workers`` processes when there are several
-    scenes (each draws its own figures, the report's slowest part after the models)."""
-    n = min(data.workers, len(data.scenes))
-    if n < 2:
-        return [_scene_section(res, out) for res in data.scenes]
-    with ProcessPoolExecutor(max_workers=n) as pool:
-        return list(pool.map(_scene_section, data.scenes, [out] * len(data.scenes)))
-
-
 def write_report(data: ReportData, out: Path) -> Path:
     """Write ``report.md`` (with figures), ``results.json`` and ``gates.json`` into ``out``,
-    then the run times (:func:`validation.timings.write_timings`)."""
+    and the run times (:mod:`validation.timings`); the figures are drawn on
+    ``data.workers`` processes while the text is written."""
     t0 = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
-    md = write_text(out / "report.md", render_markdown(data, out))
-    write_json(out / "results.json", data.results())
-    write_json(out / "gates.json", data.gates())
-    write_timings(data, out, time.perf_counter() - t0)
+    with Figures(data.workers) as figs:
+        md = write_text(out / "report.md", render_markdown(data, out, figs.draw))
+        write_json(out / "results.json", data.results())
+        write_json(out / "gates.json", data.gates())
+        benches = write_benches(data, out, figs.draw)
+        figs.wait()
+    write_timings(data, out, benches, time.perf_counter() - t0)
     return md
 
 

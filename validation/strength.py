@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Callable
 
 import matplotlib
 
@@ -30,6 +31,7 @@ from geometry import Scene  # noqa: E402
 from reducedmodels import LoadPath  # noqa: E402
 
 from .failures import LIMIT_POINT, Failure  # noqa: E402
+from .figurejobs import draw_now  # noqa: E402
 from .figures import _save, style  # noqa: E402
 from .outputs import output_path  # noqa: E402
 
@@ -186,8 +188,10 @@ def stress_profiles(scene: Scene, case_name: str, paths: dict[str, LoadPath], pa
 
 
 def section(scene: Scene, paths: dict[tuple[str, str], LoadPath], failures: list[Failure],
-            models: list[str], reference: str, out: Path) -> list[str]:
-    """The report's Markdown on peak stresses and limit loads of one scene (figures into ``out``)."""
+            models: list[str], reference: str, out: Path, draw: Callable = draw_now
+            ) -> list[str]:
+    """The report's Markdown on peak stresses and limit loads of one scene (figures into
+    ``out``, drawn with ``draw(fn, *args)``: see :mod:`validation.figurejobs`)."""
     cases = [c.name for c in scene.load_cases]
     name = scene.name
     lines = [f"### Peak stress against `{reference}`", "",
@@ -211,8 +215,9 @@ def section(scene: Scene, paths: dict[tuple[str, str], LoadPath], failures: list
     lines += fibre_table(scene, paths, reference, cases)
     for c in cases:
         full = {m: paths[(m, c)] for m in models if (m, c) in paths}
-        png = stress_profiles(scene, c, full, output_path(out, f"{name}_{c}_stress", ".png"))
-        lines += [f"![{name} {c} stress]({png})", ""]
+        png = output_path(out, f"{name}_{c}_stress", ".png")
+        draw(stress_profiles, scene, c, full, png)
+        lines += [f"![{name} {c} stress]({png.name})", ""]
     data = limit_load_data(failures, reference)
     if data:
         lines += [f"### Limit loads against `{reference}`", "",

@@ -16,9 +16,11 @@ from __future__ import annotations
 
 import platform
 from pathlib import Path
+from typing import Callable
 
 from .bench import write_bench
 from .campaign import available_cores
+from .figurejobs import draw_now
 from .outputs import write_json, write_text
 from .reportdata import PAPER_REFERENCE, ReportData, SceneResults
 
@@ -87,8 +89,8 @@ def _convergence_lines(res: SceneResults) -> list[str]:
     return L
 
 
-def _scene_lines(res: SceneResults, data: ReportData, out: Path) -> list[str]:
-    """Markdown of one scene's run times; writes its runtime-versus-error files."""
+def _scene_lines(res: SceneResults, bench_md: Path | None) -> list[str]:
+    """Markdown of one scene's run times (``bench_md``: its runtime-versus-error table)."""
     seconds_note = f" (the paper's {res.paper.seconds_table})" if res.paper else ""
     levels = " or ".join(str(n) for n in sorted({lc.levels for lc in res.scene.load_cases}))
     L = [f"## {res.scene.name}", "", f"### Run times{seconds_note}", "",
@@ -104,19 +106,27 @@ def _scene_lines(res: SceneResults, data: ReportData, out: Path) -> list[str]:
               f"{res.bracket.seconds():.3g} s (wall time of its runs, the report's added cost "
               "when they are not cached)."]
     L += [""] + _convergence_lines(res)
-    if res.bench_rows or res.bench_failures:
-        md = write_bench(res.scene, res.bench_rows, res.bench_reference, out,
-                         res.bench_failures)
+    if bench_md is not None:
         L += ["### Runtime versus error", "",
               f"Every model and resolution against `{res.bench_reference}`; details in "
-              f"[{md.name}]({md.name}).", "",
-              f"![runtime vs error]({md.with_suffix('.png').name})", ""]
+              f"[{bench_md.name}]({bench_md.name}).", "",
+              f"![runtime vs error]({bench_md.with_suffix('.png').name})", ""]
     return L
 
 
-def render_timings(data: ReportData, out: Path, render_seconds: float) -> str:
-    """The Markdown of ``timings.md`` (writing the runtime-versus-error files into ``out``).
+def write_benches(data: ReportData, out: Path, draw: Callable = draw_now
+                  ) -> dict[str, Path]:
+    """Each scene's runtime-versus-error files (:func:`validation.bench.write_bench`, the
+    plot drawn with ``draw``): {scene: its Markdown path}, for the scenes that have one."""
+    return {res.scene.name: write_bench(res.scene, res.bench_rows, res.bench_reference, out,
+                                        res.bench_failures, draw)
+            for res in data.scenes if res.bench_rows or res.bench_failures}
 
+
+def render_timings(data: ReportData, benches: dict[str, Path], render_seconds: float) -> str:
+    """The Markdown of ``timings.md``.
+
+    ``benches``: {scene: runtime-versus-error Markdown} (:func:`write_benches`);
     ``render_seconds``: wall time of writing report.md, its figures and JSON files.
     """
     wall = data.wall_seconds.get("models")
@@ -132,13 +142,14 @@ def render_timings(data: ReportData, out: Path, render_seconds: float) -> str:
              f"- This report: {total}{render_seconds:.1f} s writing report.md, its figures "
              "and JSON files.", ""]
     for res in data.scenes:
-        lines += _scene_lines(res, data, out)
+        lines += _scene_lines(res, benches.get(res.scene.name))
     return "\n".join(lines) + "\n"
 
 
-def write_timings(data: ReportData, out: Path, render_seconds: float) -> Path:
-    """Write ``timings.md`` (with the runtime-versus-error files) and ``timings.json``."""
-    md = write_text(out / TIMINGS_MD, render_timings(data, out, render_seconds))
+def write_timings(data: ReportData, out: Path, benches: dict[str, Path],
+                  render_seconds: float) -> Path:
+    """Write ``timings.md`` (linking the ``benches`` files) and ``timings.json`` into ``out``."""
+    md = write_text(out / TIMINGS_MD, render_timings(data, benches, render_seconds))
     write_json(out / TIMINGS_JSON, {**data.timings(),
                                     "wall_seconds": {**data.wall_seconds,
                                                      "render": render_seconds}})

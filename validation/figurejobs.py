@@ -1,0 +1,58 @@
+"""Draw the report's figures on worker processes while its text is written.
+
+Every figure function the report calls (:mod:`validation.figures`, the stress
+profiles, the mechanism drawing, the runtime-versus-error plot) writes the
+file it is given and nothing the text depends on: the text links to the path
+it chose. :class:`Figures` runs them on ``workers`` processes, or at once in
+this process with one worker; :meth:`Figures.wait` (also on leaving the
+``with`` block) waits for every figure and raises the first failure, e.g. an
+:class:`~validation.outputs.OutputError`, as the serial run would.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import Future, ProcessPoolExecutor
+from typing import Callable
+
+
+def draw_now(fn: Callable, *args, **kwargs) -> None:
+    """Draw a figure in this process (the serial ``draw``)."""
+    fn(*args, **kwargs)
+
+
+class Figures:
+    """Figure jobs of one report: ``draw(fn, *args)`` runs ``fn(*args)`` on a worker.
+
+    Parameters
+    ----------
+    workers : int
+        Processes drawing; 1 draws each figure at once in this process.
+    """
+
+    def __init__(self, workers: int = 1):
+        self.pool = ProcessPoolExecutor(max_workers=workers) if workers > 1 else None
+        self.pending: list[Future] = []
+
+    def draw(self, fn: Callable, *args, **kwargs) -> None:
+        """Draw ``fn(*args, **kwargs)`` (on a worker when there are several)."""
+        if self.pool is None:
+            fn(*args, **kwargs)
+        else:
+            self.pending.append(self.pool.submit(fn, *args, **kwargs))
+
+    def wait(self) -> None:
+        """Wait for every figure drawn so far; raise the first failure."""
+        pending, self.pending = self.pending, []
+        for fut in pending:
+            fut.result()
+
+    def __enter__(self) -> Figures:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        try:
+            if exc_type is None:
+                self.wait()
+        finally:
+            if self.pool is not None:
+                self.pool.shutdown(wait=True, cancel_futures=True)
