@@ -295,6 +295,21 @@ class ConnectorGroup:
         """
         return None
 
+    def path_validity(self, levels: Sequence[Sequence[LocalState]]) -> list[list[list[str]]]:
+        """Each connector's :meth:`Connector.path_validity`: reasons per connector, then per level.
+
+        ``levels`` holds, for each of k states (a load path's levels), the
+        connectors' local states in the order of :attr:`connectors`.
+        """
+        return [c.path_validity([states[j] for states in levels])
+                for j, c in enumerate(self.connectors)]
+
+    def path_section_forces(self, levels: Sequence[Sequence[LocalState]]
+                            ) -> list["SectionForces | None"]:
+        """Each connector's :meth:`Connector.path_section_forces` at k levels (as ``path_validity``)."""
+        return [c.path_section_forces([states[j] for states in levels])
+                for j, c in enumerate(self.connectors)]
+
     def predict_internal(self, past: Sequence[Sequence[LocalState]], weights: Sequence[float],
                          poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
         """The connectors' predicted internal coordinates for the next load step, concatenated.

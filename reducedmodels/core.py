@@ -242,6 +242,11 @@ class System:
         k = self.body_index[body]
         return q[3 * k:3 * k + 3]
 
+    @property
+    def groups(self) -> list[tuple[ConnectorGroup, slice]]:
+        """The runs of consecutive connectors of one class, each with its group (built once)."""
+        return self._groups
+
     def local_states(self, q: np.ndarray) -> list[LocalState]:
         """(pose_a, pose_b, internal) of every connector in state q."""
         extended = np.concatenate([q, self._ground_pose])

@@ -357,21 +357,8 @@ class DcmmConnector(Connector):
                 + rotation_reasons("sub-arc", np.array(turns), MAX_RELATIVE_ROTATION))
 
     def path_validity(self, states) -> list[list[str]]:
-        """:meth:`validity` at k states, screened in one vectorised pass.
-
-        Only states whose chord stretch or relative rotation comes within
-        :data:`~reducedmodels.validity.SCREEN_MARGIN` of its limit (or
-        beyond) are judged one by one.
-        """
-        poses = self._chain_poses(states)
-        ends = _place_rows(poses[:, [0, -1]], np.array(self._end_rel))
-        points = np.concatenate([ends[:, :1], poses[:, 1:-1, :2], ends[:, 1:]], axis=1)
-        d = np.diff(points, axis=1)
-        strain = (np.hypot(d[..., 0], d[..., 1]) / self._sub_lengths - 1.0).max(axis=1)
-        turn = np.abs(np.diff(poses[..., 2], axis=1)).max(axis=1)
-        near = ((strain > MAX_STRAIN - SCREEN_MARGIN)
-                | (turn > MAX_RELATIVE_ROTATION - SCREEN_MARGIN)).tolist()
-        return [self.validity(*state) if flag else [] for state, flag in zip(states, near)]
+        """:meth:`validity` at k states, screened in one vectorised pass (see :class:`DcmmGroup`)."""
+        return DcmmGroup([self]).path_validity([[state] for state in states])[0]
 
     def shape(self, pose_a, pose_b, internal) -> np.ndarray:
         """Polyline through the flexure ends and the cut points, mm."""
@@ -388,44 +375,90 @@ class DcmmConnector(Connector):
         rotations. ``gradient`` (a linear response's K0 dq) gives the
         flexure's end wrench instead, carried along every sub-arc.
         """
+        group, levels = DcmmGroup([self]), [[(pose_a, pose_b, internal)]]
         if gradient is None:
-            forces = self.path_section_forces([(pose_a, pose_b, internal)])
+            forces = group.path_section_forces(levels)[0]
         else:
-            poses = self._chain_poses([(pose_a, pose_b, internal)])
-            forces = self._statics(poses, np.asarray(gradient, float)[None, None, 3:6],
-                                   poses[:, -1:])
+            poses = group.stack().poses(levels)
+            forces = group.statics(poses, np.asarray(gradient, float)[None, None, 3:6],
+                                   poses[:, -1:])[0]
         return SectionForces(forces.at, forces.axial[0], forces.moment[0])
 
     def path_section_forces(self, states) -> SectionForces:
         """:meth:`section_forces` at k states (a load path), stacked (k, m), in one pass."""
-        poses = self._chain_poses(states)
-        wrenches = np.array([[sub_arc_energy(chain[k], chain[k + 1], *element)[1][3:6]
-                              for k, element in enumerate(self._elements)] for chain in poses])
-        part = self._layout.sample_part
-        return self._statics(poses, wrenches[:, part], poses[:, part + 1])
+        return DcmmGroup([self]).path_section_forces([[state] for state in states])[0]
 
-    def _chain_poses(self, states) -> np.ndarray:
-        """The chain's poses (a, cuts, b) at each of k states, (k, n + 1, 3) (mm, rad)."""
-        return np.array([np.concatenate([np.asarray(pose_a, float), np.asarray(internal, float),
-                                         np.asarray(pose_b, float)])
-                         for pose_a, pose_b, internal in states]).reshape(len(states), -1, 3)
 
-    def _statics(self, poses: np.ndarray, wrenches: np.ndarray, end: np.ndarray) -> SectionForces:
-        """Section forces of the sub-arcs' wrenches (k, s or 1, 3) held at ``end`` (k, s or 1, 3).
+@dataclasses.dataclass(frozen=True)
+class _Stack:
+    """The chain bodies, sub-arcs and samples of several DCMM connectors numbered in one stack.
 
-        Statics of each wrench (see :func:`~reducedmodels.sections.statics_section_forces`)
-        at every sample of every state at once; ``poses`` are the chain's (k, n + 1, 3).
-        """
-        part, w = self._layout.sample_part, self._layout.sample_w
-        lead, follow = poses[:, part], poses[:, part + 1]
-        pts = ((1.0 - w)[:, None] * _place_rows(lead, self._sample_lead)
-               + w[:, None] * _place_rows(follow, self._sample_follow))
-        axes = unit_vectors(self._sample_tangent + (1.0 - w) * lead[..., 2] + w * follow[..., 2])
-        r = end[..., :2] - pts
-        moment = -(wrenches[..., 2] + r[..., 0] * wrenches[..., 1] - r[..., 1] * wrenches[..., 0])
-        axial = axes[..., 0] * wrenches[..., 0] + axes[..., 1] * wrenches[..., 1]
-        order = self._layout.station_order
-        return SectionForces(self._layout.stations, axial[:, order], moment[:, order])
+    Attributes
+    ----------
+    first, last : int arrays (c,)
+        Each connector's end bodies a and b among the stacked chain bodies.
+    end_rel : float arrays (c, 2) each
+        Flexure ends' offsets from bodies a and b (mm).
+    sub_arc_body : int array (e,)
+        Each sub-arc's leading body (its following one is the next).
+    sub_arc_start : int array (c,)
+        Each connector's first sub-arc.
+    lengths : float array (e,)
+        Sub-arc lengths (mm).
+    elements : list of tuples
+        Each sub-arc's :func:`sub_arc_energy` parameters.
+    lead, sub_arc : int arrays (s,)
+        Each sample's leading body and sub-arc.
+    w, tangent : float arrays (s,)
+        Each sample's fraction along its sub-arc and initial section angle (rad).
+    rel_lead, rel_follow : float arrays (s, 2)
+        Each sample's offsets from its leading and following bodies (mm).
+    sample_start : int array (c + 1,)
+        Each connector's first sample (and the end).
+    """
+
+    first: np.ndarray
+    last: np.ndarray
+    end_rel: tuple
+    sub_arc_body: np.ndarray
+    sub_arc_start: np.ndarray
+    lengths: np.ndarray
+    elements: list
+    lead: np.ndarray
+    sub_arc: np.ndarray
+    w: np.ndarray
+    tangent: np.ndarray
+    rel_lead: np.ndarray
+    rel_follow: np.ndarray
+    sample_start: np.ndarray
+
+    @classmethod
+    def of(cls, connectors) -> "_Stack":
+        """The stack of ``connectors`` (DcmmConnector), in their order."""
+        sub_arcs = [len(c._elements) for c in connectors]
+        first = np.cumsum([0] + [n + 1 for n in sub_arcs[:-1]])
+        sub_arc_start = np.cumsum([0] + sub_arcs[:-1])
+        samples = [len(c._layout.sample_part) for c in connectors]
+        return cls(
+            first, first + np.array(sub_arcs),
+            (np.array([c._end_rel[0] for c in connectors]),
+             np.array([c._end_rel[1] for c in connectors])),
+            np.concatenate([f + np.arange(n) for f, n in zip(first, sub_arcs)]), sub_arc_start,
+            np.concatenate([c._sub_lengths for c in connectors]),
+            [element for c in connectors for element in c._elements],
+            np.concatenate([f + c._layout.sample_part for f, c in zip(first, connectors)]),
+            np.concatenate([e + c._layout.sample_part for e, c in zip(sub_arc_start, connectors)]),
+            np.concatenate([c._layout.sample_w for c in connectors]),
+            np.concatenate([c._sample_tangent for c in connectors]),
+            np.concatenate([c._sample_lead for c in connectors]),
+            np.concatenate([c._sample_follow for c in connectors]),
+            np.cumsum([0, *samples]))
+
+    def poses(self, levels) -> np.ndarray:
+        """The stacked chain bodies' poses at each of k levels, (k, bodies, 3) (mm, rad)."""
+        return np.array([np.concatenate([x for pose_a, pose_b, internal in states
+                                         for x in (pose_a, internal, pose_b)])
+                         for states in levels]).reshape(len(levels), -1, 3)
 
 
 class DcmmGroup(ConnectorGroup):
@@ -435,8 +468,14 @@ class DcmmGroup(ConnectorGroup):
     connector-by-connector evaluation, with one array of all the gradients
     and one of all the Hessian values made from the connectors' float lists
     (:meth:`DcmmConnector.terms`) instead of two small arrays per connector
-    concatenated.
+    concatenated. A load path's validity and section forces are computed
+    for all the connectors' sub-arcs and samples stacked (:class:`_Stack`),
+    in one set of array operations.
     """
+
+    def __init__(self, connectors):
+        super().__init__(connectors)
+        self._stack: _Stack | None = None
 
     def evaluate(self, states) -> tuple[float, np.ndarray, np.ndarray]:
         """Total energy (N mm), concatenated gradients and concatenated Hessian values."""
@@ -447,3 +486,68 @@ class DcmmGroup(ConnectorGroup):
             gradients += g
             hessians += h
         return energy, np.array(gradients), np.array(hessians)
+
+    def stack(self) -> _Stack:
+        """The connectors' stack (built on first use)."""
+        if self._stack is None:
+            self._stack = _Stack.of(self.connectors)
+        return self._stack
+
+    def path_validity(self, levels) -> list[list[list[str]]]:
+        """Each connector's :meth:`DcmmConnector.validity` at each level, screened in one pass.
+
+        Only (level, connector) pairs whose chord stretch or relative
+        rotation comes within :data:`~reducedmodels.validity.SCREEN_MARGIN`
+        of its limit (or beyond) are judged by the scalar check.
+        """
+        stack = self.stack()
+        poses = stack.poses(levels)
+        points = poses[..., :2].copy()
+        points[:, stack.first] = _place_rows(poses[:, stack.first], stack.end_rel[0])
+        points[:, stack.last] = _place_rows(poses[:, stack.last], stack.end_rel[1])
+        body = stack.sub_arc_body
+        d = points[:, body + 1] - points[:, body]
+        strain = np.maximum.reduceat(np.hypot(d[..., 0], d[..., 1]) / stack.lengths - 1.0,
+                                     stack.sub_arc_start, axis=1)
+        turn = np.maximum.reduceat(np.abs(poses[:, body + 1, 2] - poses[:, body, 2]),
+                                   stack.sub_arc_start, axis=1)
+        near = ((strain > MAX_STRAIN - SCREEN_MARGIN)
+                | (turn > MAX_RELATIVE_ROTATION - SCREEN_MARGIN)).T.tolist()
+        return [[c.validity(*states[j]) if flag else [] for states, flag in zip(levels, flags)]
+                for j, (c, flags) in enumerate(zip(self.connectors, near))]
+
+    def path_section_forces(self, levels) -> list[SectionForces]:
+        """Each connector's :meth:`DcmmConnector.section_forces` at k levels, stacked (k, m).
+
+        Each sub-arc's own wrench (its gradient on its following body's
+        pose) carried by statics to its samples, all at once.
+        """
+        stack = self.stack()
+        poses = stack.poses(levels)
+        body = stack.sub_arc_body.tolist()
+        wrenches = np.array([[sub_arc_energy(chain[b], chain[b + 1], *element)[1][3:6]
+                              for b, element in zip(body, stack.elements)] for chain in poses])
+        return self.statics(poses, wrenches[:, stack.sub_arc])
+
+    def statics(self, poses: np.ndarray, wrenches: np.ndarray, end: np.ndarray | None = None
+                ) -> list[SectionForces]:
+        """Section forces of wrenches (k, samples or 1, 3) at every sample, per connector.
+
+        Statics of each wrench (see :func:`~reducedmodels.sections.statics_section_forces`)
+        held at ``end`` (k, samples or 1, 3): by default each sample's
+        following body; ``poses`` are the stacked chain bodies' (k, bodies, 3).
+        """
+        stack = self.stack()
+        w = stack.w
+        lead, follow = poses[:, stack.lead], poses[:, stack.lead + 1]
+        pts = ((1.0 - w)[:, None] * _place_rows(lead, stack.rel_lead)
+               + w[:, None] * _place_rows(follow, stack.rel_follow))
+        axes = unit_vectors(stack.tangent + (1.0 - w) * lead[..., 2] + w * follow[..., 2])
+        r = (follow if end is None else end)[..., :2] - pts
+        moment = -(wrenches[..., 2] + r[..., 0] * wrenches[..., 1] - r[..., 1] * wrenches[..., 0])
+        axial = axes[..., 0] * wrenches[..., 0] + axes[..., 1] * wrenches[..., 1]
+        out = []
+        for c, start, stop in zip(self.connectors, stack.sample_start, stack.sample_start[1:]):
+            order = start + c._layout.station_order
+            out.append(SectionForces(c._layout.stations, axial[:, order], moment[:, order]))
+        return out

@@ -106,10 +106,10 @@ class PathRecorder:
             return
         system, lp = self.system, self.path
         levels = [system.local_states(q) for q in self.states]
-        for reasons in path_validity(system.connectors, levels):
+        for reasons in path_validity(system, levels):
             lp.valid.append(not reasons)
             lp.validity.append("; ".join(reasons) if reasons else None)
-        record_path_stress(lp, system.connectors, levels, self.sections)
+        record_path_stress(lp, system, levels, self.sections)
         self.states = []
 
     def finish(self) -> LoadPath:
@@ -151,18 +151,20 @@ class PathRecorder:
         return self.finish(), last
 
 
-def path_validity(connectors, levels: Sequence[Sequence]) -> list[list[str]]:
+def path_validity(system: System, levels: Sequence[Sequence]) -> list[list[str]]:
     """The validity monitor's reasons at each level, as :meth:`System.validity` gives them.
 
-    Each connector judges all the levels in one call
-    (:meth:`~reducedmodels.connector.Connector.path_validity`); each reason
-    is prefixed with the connector's name, connectors in order. ``levels``
-    holds the connectors' local states at each level.
+    Each group of connectors judges all the levels in one call
+    (:meth:`~reducedmodels.connector.ConnectorGroup.path_validity`); each
+    reason is prefixed with the connector's name, connectors in order.
+    ``levels`` holds the system's connectors' local states at each level.
     """
     reasons: list[list[str]] = [[] for _ in levels]
-    for k, c in enumerate(connectors):
-        for found, why in zip(reasons, c.path_validity([lv[k] for lv in levels])):
-            found.extend(f"{c.name}: {w}" for w in why)
+    for group, run in system.groups:
+        verdicts = group.path_validity([states[run] for states in levels])
+        for c, per_level in zip(group.connectors, verdicts):
+            for found, why in zip(reasons, per_level):
+                found.extend(f"{c.name}: {w}" for w in why)
     return reasons
 
 
@@ -201,33 +203,33 @@ def record_stress(path: LoadPath, connectors, states, sections: dict,
                        abs(scales[-1]) * unit)
 
 
-def record_path_stress(path: LoadPath, connectors, levels: Sequence[Sequence], sections: dict
-                       ) -> None:
+def record_path_stress(path: LoadPath, system: System, levels: Sequence[Sequence],
+                       sections: dict) -> None:
     """Append each flexure's peak outer-fibre stress (MPa) and its place at several levels.
 
-    Each connector's section forces at all the levels come from one call
-    of :meth:`~reducedmodels.connector.Connector.path_section_forces`;
+    The section forces of a group of connectors at all the levels come from
+    one call of :meth:`~reducedmodels.connector.ConnectorGroup.path_section_forces`;
     connectors without section forces (pins) are skipped, and the stress
     profile is kept for the last level (``path.stress_profile``).
 
     Parameters
     ----------
     path : LoadPath
-    connectors :
-        The system's connectors.
+    system : System
     levels : sequence of lists of local states
-        The connectors' local states at each level, in the order of the levels.
+        The system's connectors' local states at each level, in the order of the levels.
     sections : dict of flexure name -> Section
     """
-    for k, c in enumerate(connectors):
-        section = sections.get(c.name)
-        forces = None if section is None else c.path_section_forces([lv[k] for lv in levels])
-        if forces is None:
-            continue
-        unit = forces.fibre_stress(section)
-        peak = np.argmax(unit, axis=1)
-        _append_stress(path, c.name, unit[np.arange(len(peak)), peak].tolist(),
-                       forces.at[peak].tolist(), forces.at, unit[-1])
+    for group, run in system.groups:
+        stacked = group.path_section_forces([states[run] for states in levels])
+        for c, forces in zip(group.connectors, stacked):
+            section = sections.get(c.name)
+            if section is None or forces is None:
+                continue
+            unit = forces.fibre_stress(section)
+            peak = np.argmax(unit, axis=1)
+            _append_stress(path, c.name, unit[np.arange(len(peak)), peak].tolist(),
+                           forces.at[peak].tolist(), forces.at, unit[-1])
 
 
 def _append_stress(path: LoadPath, name: str, peaks: list[float], places: list[float],

@@ -38,19 +38,28 @@ def overloaded_states(model: str, factor: float):
 @pytest.mark.parametrize("model", MODELS)
 def test_one_pass_verdicts_and_forces_are_the_state_by_state_ones(model):
     system, levels = overloaded_states(model, 30.0)
-    verdicts = path_validity(system.connectors, levels)
+    verdicts = path_validity(system, levels)
     singles = [[f"{c.name}: {w}" for c, local in zip(system.connectors, lv)
                 for w in c.validity(*local)] for lv in levels]
     assert verdicts == singles
     assert any(verdicts) and not all(verdicts)      # the path crosses a limit
-    for k, c in enumerate(system.connectors):
+    for group, run in system.groups:           # all the group's connectors in one pass
+        for k, (c, stacked) in enumerate(zip(group.connectors, group.path_section_forces(
+                [lv[run] for lv in levels]))):
+            states = [lv[run][k] for lv in levels]
+            check_stacked(c, states, stacked)
+    for k, c in enumerate(system.connectors):     # each connector alone
         states = [lv[k] for lv in levels]
-        stacked = c.path_section_forces(states)
-        for row, state in enumerate(states):
-            one = c.section_forces(*state)
-            assert np.array_equal(one.at, stacked.at)
-            assert np.array_equal(one.axial, stacked.axial[row])
-            assert np.array_equal(one.moment, stacked.moment[row])
+        check_stacked(c, states, c.path_section_forces(states))
+
+
+def check_stacked(c, states, stacked):
+    """The connector's stacked forces are its state-by-state ones, bit for bit."""
+    for row, state in enumerate(states):
+        one = c.section_forces(*state)
+        assert np.array_equal(one.at, stacked.at)
+        assert np.array_equal(one.axial, stacked.axial[row])
+        assert np.array_equal(one.moment, stacked.moment[row])
 
 
 @pytest.mark.parametrize("model", ["dcmm:1", "dcmm:2"])
