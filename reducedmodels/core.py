@@ -195,7 +195,8 @@ class System:
         self.layout = TangentLayout(n, np.concatenate([*rows, diagonal]),
                                     np.concatenate([*cols, diagonal]), self.n_multipliers)
         # each connector's Hessian values -> storage slot (-1: a ground entry, dropped)
-        kept_slots = np.split(self.layout.slots[:self.layout.slots.size - n], np.cumsum([r.size for r in rows])[:-1])
+        kept = self.layout.slots[:self.layout.slots.size - n]
+        kept_slots = np.split(kept, np.cumsum([r.size for r in rows])[:-1])
         hess_slots = []
         for keep, kept in zip(hess_keep, kept_slots):
             slots = np.full(keep.size, -1, np.int64)

@@ -114,19 +114,20 @@ class DenseTangent:
 
 
 class BandedTangent:
-    """A tangent held in LAPACK general-band storage under a bandwidth-reducing permutation.
+    """A symmetric tangent held in LAPACK's upper band form under a bandwidth-reducing permutation.
 
-    ``storage`` is Fortran-ordered (3b + 1, n) with
-    ``storage[2b + i - j, j] = K[perm[i], perm[j]]`` for |i - j| <= b; the
-    top b rows are the room ``dgbtrf`` needs for its row interchanges, rows
-    b..2b are the upper band form ``dpbtrf`` reads. LAPACK is called
-    directly: the wrappers' copies and checks cost more than the
-    factorisation of a narrow band.
+    ``storage`` is Fortran-ordered (b + 1, n) with
+    ``storage[b + i - j, j] = K[perm[i], perm[j]]`` for 0 <= j - i <= b (the
+    diagonal is the last row): the form ``dpbtrf`` and ``eigvals_banded``
+    read, and half the entries of a general band, so an assembly writes
+    half as much. LAPACK is called directly: the wrappers' copies and checks
+    cost more than the factorisation of a narrow band.
 
     One factorisation serves both the solves and the inertia: a banded
     Cholesky first (the usual, stable case: about a third of a banded LU's
     work, and it proves there is no negative eigenvalue), a banded LU with
-    pivoting only when the Cholesky meets a non-positive pivot. Up to
+    pivoting (on the general band storage, mirrored from the upper band)
+    only when the Cholesky meets a non-positive pivot. Up to
     ``NARROW_BAND`` the Cholesky is the compiled loop of
     :mod:`reducedmodels.bandkernel` (numba), above it LAPACK's.
     """
@@ -141,13 +142,22 @@ class BandedTangent:
         if self._cholesky is None and self._lu is None:
             b = self.b
             if b <= NARROW_BAND:
-                factor, info = band_kernels().band_cholesky(self.storage[b: 2 * b + 1], b)
+                factor, info = band_kernels().band_cholesky(self.storage, b)
             else:
-                factor, info = lapack.dpbtrf(self.storage[b: 2 * b + 1], lower=0)
+                factor, info = lapack.dpbtrf(self.storage, lower=0)
             if info == 0:
                 self._cholesky = factor
             else:
-                self._lu = lapack.dgbtrf(self.storage, b, b)
+                self._lu = lapack.dgbtrf(self._general_band(), b, b)
+
+    def _general_band(self) -> np.ndarray:
+        """K in LAPACK general band storage (3b + 1, n), with the b rows dgbtrf works in."""
+        b, n = self.b, self.n
+        general = np.zeros((3 * b + 1, n), order="F")
+        general[b: 2 * b + 1] = self.storage
+        for k in range(1, b + 1):                      # K[j + k, j] = K[j, j + k]
+            general[2 * b + k, : n - k] = self.storage[b - k, k:]
+        return general
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         self._factorise()
@@ -171,23 +181,23 @@ class BandedTangent:
         Otherwise the count comes from banded bisection (``eigvals_banded``),
         exact but some 30 times slower; saddle-point systems always take it.
         """
-        b = self.b
-        upper = self.storage[b: 2 * b + 1]      # the upper band form (diagonal last)
+        upper = self.storage
         if not np.all(np.isfinite(upper)):
             return None
         self._factorise()
         if self._cholesky is not None:
             return 0
-        scale = np.abs(upper).max(initial=0.0) * (2 * b + 1)        # >= spectral radius
+        scale = np.abs(upper).max(initial=0.0) * (2 * self.b + 1)    # >= spectral radius
         negative = sla.eigvals_banded(upper, select="v", select_range=(-np.inf, -ROUND_OFF * scale),
                                       check_finite=False)
         return int(negative.size)
 
     def toarray(self) -> np.ndarray:
         dense = np.zeros((self.n, self.n))
-        for k in range(-self.b, self.b + 1):           # k = i - j
-            j = np.arange(max(0, -k), min(self.n, self.n - k))
-            dense[self.perm[j + k], self.perm[j]] = self.storage[2 * self.b + k, j]
+        for k in range(self.b + 1):                     # k = j - i
+            j = np.arange(k, self.n)
+            dense[self.perm[j - k], self.perm[j]] = self.storage[self.b - k, j]
+            dense[self.perm[j], self.perm[j - k]] = self.storage[self.b - k, j]
         return dense
 
 
@@ -235,7 +245,8 @@ class TangentLayout:
     Attributes
     ----------
     slots : int array (k,)
-        Where the value of each (row, col) entry is added in the storage.
+        Where the value of each (row, col) entry is added in the storage
+        (-1: nowhere; a symmetric band stores the upper triangle only).
     size : int
         Length of the flat storage array :meth:`tangent` wraps.
 
@@ -256,9 +267,10 @@ class TangentLayout:
         position[perm] = np.arange(n)
         i, j = position[rows], position[cols]
         b = int(np.abs(i - j).max(initial=0))
-        if b <= BAND_LIMIT:
+        if b <= BAND_LIMIT:        # the upper band only: the lower entries mirror it (slot -1)
             self.kind, self.perm, self.b = "banded", perm, b
-            self.slots, self.size = j * (3 * b + 1) + (2 * b + i - j), (3 * b + 1) * n
+            self.slots = np.where(i <= j, j * (b + 1) + (b + i - j), -1)
+            self.size = (b + 1) * n
             return
         self.kind = "sparse"
         uniq, inverse = np.unique(cols * n + rows, return_inverse=True)
@@ -271,6 +283,6 @@ class TangentLayout:
         if self.kind == "dense":
             return DenseTangent(storage.reshape(self.n, self.n))
         if self.kind == "banded":     # column j contiguous: Fortran order, as LAPACK wants it
-            return BandedTangent(storage.reshape(self.n, 3 * self.b + 1).T, self.perm, self.b)
+            return BandedTangent(storage.reshape(self.n, self.b + 1).T, self.perm, self.b)
         matrix = sp.csc_matrix((storage, self._indices, self._indptr), shape=(self.n, self.n))
         return SparseTangent(matrix, self.n_multipliers)

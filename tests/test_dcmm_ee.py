@@ -171,11 +171,11 @@ def test_every_tangent_storage_counts_the_inertia():
     ev = np.concatenate([-np.logspace(-3, 2, 3), np.logspace(-2, 3, 117)])
     A = (Q * ev) @ Q.T
     A = 0.5 * (A + A.T)
-    full = np.zeros((3 * 119 + 1, 120), order="F")   # LAPACK band storage, identity permutation
-    for k in range(-119, 120):
-        j = np.arange(max(0, -k), min(120, 120 - k))
-        full[2 * 119 + k, j] = A[j + k, j]
+    upper = np.zeros((119 + 1, 120), order="F")   # LAPACK upper band form, identity permutation
+    for k in range(120):                          # k = j - i
+        j = np.arange(k, 120)
+        upper[119 - k, j] = A[j - k, j]
     assert DenseTangent(A).negative_eigenvalues() == 3
-    assert BandedTangent(full, np.arange(120), 119).negative_eigenvalues() == 3
+    assert BandedTangent(upper, np.arange(120), 119).negative_eigenvalues() == 3
     assert SparseTangent(sp.csc_matrix(A), 0).negative_eigenvalues() == 3
     assert DenseTangent(np.diag(ev[3:])).negative_eigenvalues() == 0
