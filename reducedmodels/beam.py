@@ -100,11 +100,6 @@ def tangent_layout() -> tuple[np.ndarray, np.ndarray]:
 _SOURCE, _SIGN = tangent_layout()
 
 
-def wrap_angle(angle: np.ndarray) -> np.ndarray:
-    """Angles (rad) brought into (-pi, pi], so that full turns carry no strain."""
-    return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
-
-
 def bending_stiffness_terms(EI: float, l0: np.ndarray, shear_stiffness: float | None
                             ) -> tuple[np.ndarray, np.ndarray]:
     """Diagonal and off-diagonal entries of the local bending stiffness k_b, N mm.
@@ -121,15 +116,6 @@ def bending_stiffness_terms(EI: float, l0: np.ndarray, shear_stiffness: float | 
     phi = 0.0 if shear_stiffness is None else 12.0 * EI / (shear_stiffness * l0**2)
     scale = EI / (l0 * (1.0 + phi))
     return scale * (4.0 + phi), scale * (2.0 - phi)
-
-
-def chord_rotation(chord0: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """Rotation (rad, in (-pi, pi]) of each chord d (n, 2) from its initial unit chord (n, 2).
-
-    Taken with atan2 of the cross and dot products: robust for any magnitude.
-    """
-    return np.arctan2(chord0[:, 0] * d[:, 1] - chord0[:, 1] * d[:, 0],
-                      chord0[:, 0] * d[:, 0] + chord0[:, 1] * d[:, 1])
 
 
 def end_node(pose: np.ndarray, rel: tuple[float, float]) -> tuple[float, float, float, float, float]:
@@ -282,6 +268,10 @@ class BeamConnector(Connector):
         self._n_nodes = n_elements + 1
         self._nodes0 = flexure.shape.point(np.linspace(0.0, flexure.shape.length, n_elements + 1))
         self._node_fractions = np.linspace(0.0, 1.0, n_elements + 1)
+        # section forces at every element's start then end node, in arc-length order
+        at = np.concatenate([self._node_fractions[:-1], self._node_fractions[1:]])
+        self._section_order = np.argsort(at, kind="stable")
+        self._section_at = at[self._section_order]
         self._node_tangent0 = flexure.shape.tangent_angle(self._node_fractions
                                                           * flexure.shape.length)
         chord = np.diff(self._nodes0, axis=0)
@@ -423,11 +413,7 @@ class BeamConnector(Connector):
         second an element too coarse for the curvature it carries.
         """
         x, theta = self._nodes(pose_a, pose_b, internal)
-        d = x[1:] - x[:-1]
-        length = np.hypot(d[:, 0], d[:, 1])
-        alpha = chord_rotation(self._chord0, d)
-        turn = np.maximum(np.abs(wrap_angle(theta[:-1] - alpha)),
-                          np.abs(wrap_angle(theta[1:] - alpha)))
+        length, turn = beam_kernels().chord_measures(x, theta, self._chord0)
         if np.abs(length / self._l0 - 1.0).max() <= MAX_STRAIN and turn.max() <= MAX_CHORD_TURN:
             return []
         return (stretch_reasons("element", length, self._l0)
@@ -448,19 +434,14 @@ class BeamConnector(Connector):
         forces by statics of the end wrench instead, along the nodes.
         """
         x, theta = self._nodes(pose_a, pose_b, internal)
-        axes = unit_vectors(self._node_tangent0 + theta)
         if gradient is not None:
             slot = self._end_pose[1]
             return statics_section_forces(x, self._node_fractions,
                                           gradient[3 * slot:3 * slot + 3],
-                                          (pose_a, pose_b)[slot], axes=axes)
-        grad = beam_kernels().element_forces(x, theta, self._chord0, self._l0, self._k_axial,
-                                             self._k11, self._k12)
-        # on the part towards the end body, from the part before: at an element's start
-        # node the force that holds the element there, at its end node minus that force
-        axial = np.concatenate([-np.einsum("ij,ij->i", grad[:, 0:2], axes[:-1]),
-                                np.einsum("ij,ij->i", grad[:, 3:5], axes[1:])])
-        moment = np.concatenate([grad[:, 2], -grad[:, 5]])
-        at = np.concatenate([self._node_fractions[:-1], self._node_fractions[1:]])
-        order = np.argsort(at, kind="stable")
-        return SectionForces(at[order], axial[order], moment[order])
+                                          (pose_a, pose_b)[slot],
+                                          axes=unit_vectors(self._node_tangent0 + theta))
+        axial, moment = beam_kernels().section_resultants(
+            x, theta, self._node_tangent0, self._chord0, self._l0, self._k_axial, self._k11,
+            self._k12)
+        order = self._section_order
+        return SectionForces(self._section_at.copy(), axial[order], moment[order])

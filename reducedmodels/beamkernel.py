@@ -4,9 +4,9 @@ The one implementation of the element physics of :mod:`reducedmodels.beam`:
 :func:`assemble_elements` evaluates every element of a run of beam
 connectors, transports the end nodes to their bodies' poses and adds the
 gradients and tangent entries straight into the global gradient and the
-tangent's storage (the index maps come from :class:`reducedmodels.core.System`),
-and :func:`element_forces` gives the element end forces alone (section
-forces). One call per Newton iteration replaces some forty numpy calls and
+tangent's storage (the index maps come from :class:`reducedmodels.core.System`);
+the chord-wise predictor and Newton update, the section forces and the
+validity measures are here too. One call per Newton iteration replaces some forty numpy calls and
 the scatter of the concatenated local Hessians, whose cost on a few hundred
 elements was interpreter overhead, not arithmetic.
 
@@ -198,23 +198,6 @@ def assemble_elements(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: n
 
 
 @_compiled
-def element_forces(x: np.ndarray, theta: np.ndarray, chord0: np.ndarray, l0: np.ndarray,
-                   k_axial: np.ndarray, k11: np.ndarray, k12: np.ndarray) -> np.ndarray:
-    """Internal forces (elements, 6) of a chain of elements on nodes x (mm), theta (rad).
-
-    Element e joins node e to node e + 1; each row is [f, M1, -f, M2] in N
-    and N mm (see :func:`element`).
-    """
-    n = l0.size
-    out = np.empty((n, 6))
-    entries = np.empty(7)
-    for e in range(n):
-        element(x[e, 0], x[e, 1], x[e + 1, 0], x[e + 1, 1], theta[e], theta[e + 1],
-                chord0[e, 0], chord0[e, 1], l0[e], k_axial[e], k11[e], k12[e], out[e], entries)
-    return out
-
-
-@_compiled
 def close_chains(length: np.ndarray, angle: np.ndarray, x: np.ndarray, theta: np.ndarray,
                  chain_nodes: np.ndarray) -> np.ndarray:
     """Interior nodes (x, y, theta) of chains of chords (length mm, angle rad), concatenated.
@@ -317,3 +300,50 @@ def predicted_chains(past: np.ndarray, weights: np.ndarray, poses: np.ndarray,
         angle[e] = angle_last[e] + turn[e]
     ends = place_nodes(poses, node_dof, node_rel, attached)[0]
     return close_chains(length, angle, ends, theta, chain_nodes)
+
+
+@_compiled
+def section_resultants(x: np.ndarray, theta: np.ndarray, tangent0: np.ndarray,
+                       chord0: np.ndarray, l0: np.ndarray, k_axial: np.ndarray, k11: np.ndarray,
+                       k12: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Normal force (N) and bending moment (N mm) at both end nodes of every element of a chain.
+
+    Element e joins node e to node e + 1 (x mm, theta rad); ``tangent0``
+    is each node's initial tangent angle (rad), turned by the node's
+    rotation into its section axis. On the part towards the chain's end,
+    from the part before: at an element's start node the force that holds
+    the element there, at its end node minus that force. Returns
+    (elements' start nodes then end nodes) for both.
+    """
+    n = l0.size
+    axial, moment = np.empty(2 * n), np.empty(2 * n)
+    grad = np.empty(6)
+    entries = np.empty(7)
+    for e in range(n):
+        element(x[e, 0], x[e, 1], x[e + 1, 0], x[e + 1, 1], theta[e], theta[e + 1],
+                chord0[e, 0], chord0[e, 1], l0[e], k_axial[e], k11[e], k12[e], grad, entries)
+        start, end = tangent0[e] + theta[e], tangent0[e + 1] + theta[e + 1]
+        axial[e] = -(grad[0] * math.cos(start) + grad[1] * math.sin(start))
+        axial[n + e] = grad[3] * math.cos(end) + grad[4] * math.sin(end)
+        moment[e], moment[n + e] = grad[2], -grad[5]
+    return axial, moment
+
+
+@_compiled
+def chord_measures(x: np.ndarray, theta: np.ndarray, chord0: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Each element's chord length (mm) and the larger turn of its end nodes from the chord (rad).
+
+    The turn is |wrapped(theta_i - alpha)| at either end node, alpha the
+    chord's rotation from its initial direction ``chord0``: what a two-node
+    element must carry as bending (the validity monitor's measure).
+    """
+    n = chord0.shape[0]
+    length, turn = np.empty(n), np.empty(n)
+    for e in range(n):
+        dx, dy = x[e + 1, 0] - x[e, 0], x[e + 1, 1] - x[e, 1]
+        length[e] = math.hypot(dx, dy)
+        alpha = math.atan2(chord0[e, 0] * dy - chord0[e, 1] * dx,
+                           chord0[e, 0] * dx + chord0[e, 1] * dy)
+        turn[e] = max(abs(wrapped(theta[e] - alpha)), abs(wrapped(theta[e + 1] - alpha)))
+    return length, turn
