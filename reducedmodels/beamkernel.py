@@ -282,7 +282,8 @@ def predicted_chains(past: np.ndarray, weights: np.ndarray, poses: np.ndarray,
     angle_last = np.empty(n_elements)
     for k in range(n_chains):
         for i in range(chain_nodes[k], chain_nodes[k + 1] - 1):
-            angle_last[i - k] = math.atan2(last[i + 1, 1] - last[i, 1], last[i + 1, 0] - last[i, 0])
+            angle_last[i - k] = math.atan2(last[i + 1, 1] - last[i, 1],
+                                           last[i + 1, 0] - last[i, 0])
     length, turn, theta = np.zeros(n_elements), np.zeros(n_elements), np.zeros(n_nodes)
     for h in range(past.shape[0]):
         w = weights[h]

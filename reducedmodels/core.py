@@ -143,6 +143,8 @@ class System:
         self.n_multipliers = sum(c.n_multipliers for c in self.connectors)
         #: residual weights: forces as is, moments per unit of mechanism size (N)
         self.force_scale = np.where(self.is_rotation, 1.0 / self.size, 1.0)
+        #: what :meth:`scaled` divides by: the size for lengths, 1 for angles (mm or 1)
+        self._coordinate_scale = np.where(self.is_rotation, 1.0, self.size)
         self._groups = connector_groups(self.connectors)
         # groups of connectors that predict or update their internal coordinates
         # themselves, with those coordinates' global dofs (the defaults give what
@@ -192,8 +194,11 @@ class System:
         self._ground_pose = np.array([ground[0], ground[1], 0.0])
         self._gather = gathers
         diagonal = np.arange(n)
+        compiled = any(type(group).assembler is not ConnectorGroup.assembler
+                       for group, _ in self._groups)
         self.layout = TangentLayout(n, np.concatenate([*rows, diagonal]),
-                                    np.concatenate([*cols, diagonal]), self.n_multipliers)
+                                    np.concatenate([*cols, diagonal]), self.n_multipliers,
+                                    compiled)
         # each connector's Hessian values -> storage slot (-1: a ground entry, dropped)
         kept = self.layout.slots[:self.layout.slots.size - n]
         kept_slots = np.split(kept, np.cumsum([r.size for r in rows])[:-1])
@@ -213,7 +218,8 @@ class System:
             else:
                 self._assemblers.append(assembler)
         members = [k for _, run in self._generic for k in range(run.start, run.stop)]
-        all_grad = np.concatenate([self._local_to_global[k] for k in members] or [np.zeros(0, int)])
+        all_grad = np.concatenate([self._local_to_global[k] for k in members]
+                                  or [np.zeros(0, int)])
         self._grad_keep = all_grad >= 0
         self._grad_dofs = all_grad[self._grad_keep]
         all_slots = np.concatenate([hess_slots[k] for k in members] or [np.zeros(0, np.int64)])
@@ -399,11 +405,11 @@ class System:
 
     def residual(self, grad: np.ndarray, loads: Loads) -> float:
         """Largest out-of-balance force (moments per unit size) relative to the load scale."""
-        return float(np.abs(grad * self.force_scale).max(initial=0.0)) / loads.scale
+        return float(np.maximum.reduce(np.abs(grad * self.force_scale), initial=0.0)) / loads.scale
 
     def scaled(self, v: np.ndarray) -> np.ndarray:
         """Dimensionless version of a coordinate vector (lengths / size, angles as is)."""
-        return np.where(self.is_rotation, v, v / self.size)
+        return v / self._coordinate_scale
 
 
 

@@ -153,7 +153,7 @@ def solve_step(problem: StepProblem, q: np.ndarray, settings: "SolverSettings",
         except (ValueError, FloatingPointError) as exc:   # a connector refused the state
             return NewtonResult(None, problem.factor, it, f"invalid state ({exc})", None)
         res = problem.residual(g)
-        if not np.isfinite(res):
+        if not math.isfinite(res):
             return NewtonResult(None, problem.factor, it, "non-finite residual", None)
         if res <= settings.force_tol:
             return NewtonResult(q, problem.factor, it, "", K)
@@ -172,7 +172,7 @@ def solve_step(problem: StepProblem, q: np.ndarray, settings: "SolverSettings",
             return NewtonResult(None, problem.factor, it, f"singular tangent ({exc})", None)
         except StepRefused as exc:
             return NewtonResult(None, problem.factor, it, str(exc), None)
-        step = float(np.abs(system.scaled(du)).max(initial=0.0))
+        step = float(np.maximum.reduce(np.abs(system.scaled(du)), initial=0.0))
         if not (math.isfinite(step) and math.isfinite(dfactor)):
             return NewtonResult(None, problem.factor, it, "singular tangent", None)
         step = max(step, abs(dfactor))

@@ -6,7 +6,7 @@ so where each connector's Hessian entry lands is worked out once
 chosen storage at those slots (one ``bincount``, or a compiled kernel that
 adds them as it computes them):
 
-* ``dense``  -- small systems (at most ``DENSE_LIMIT`` unknowns), LAPACK;
+* ``dense``  -- small systems (at most ``DENSE_LIMIT`` unknowns; see ``NARROW_MIN``), LAPACK;
 * ``banded`` -- chains of beams and bodies: after a reverse Cuthill-McKee
   ordering their bandwidth is small whatever the number of elements, so a
   banded LU (LAPACK ``dgbtrf``) costs O(n b^2), and so does the inertia
@@ -42,6 +42,9 @@ BAND_LIMIT = 64      # band storage beats SuperLU up to at least this half-bandw
                      # (b = 61 on both scenes) 1.6x faster than SuperLU; b = 117 is not measured
 NARROW_BAND = 8      # compiled banded Cholesky up to this half-bandwidth, LAPACK's above: at b = 5
                      # (beam chains) the loop takes half of dpbtrf's time, at b = 29 three times it
+NARROW_MIN = 48      # a system that already runs compiled kernels takes a narrow band instead of
+                     # dense storage from this many unknowns (factor + solve at b = 5, n = 57:
+                     # 5 us instead of 15 us, n = 90: 8 instead of 36 us; n = 33: 6 against 9)
 ROUND_OFF = 1e-12    # eigenvalues above -ROUND_OFF * |K| count as zero, not as negative
 
 
@@ -241,6 +244,9 @@ class TangentLayout:
         Global row and column of every value slot (duplicates are summed).
     n_multipliers : int
         Lagrange multipliers among the unknowns (they make K a saddle point).
+    compiled : bool
+        The system already runs compiled kernels (numba is loaded), so a
+        narrow band may take the compiled Cholesky below ``DENSE_LIMIT``.
 
     Attributes
     ----------
@@ -250,15 +256,19 @@ class TangentLayout:
     size : int
         Length of the flat storage array :meth:`tangent` wraps.
 
-    The storage is dense up to ``DENSE_LIMIT`` unknowns, else banded if the
-    reordered half-bandwidth is at most ``BAND_LIMIT``, else sparse.
+    The storage is dense up to ``DENSE_LIMIT`` unknowns (for a compiled
+    system from ``NARROW_MIN`` on only if the band is wider than
+    ``NARROW_BAND``), else banded if the reordered half-bandwidth is at most
+    ``BAND_LIMIT``, else sparse.
     """
 
-    def __init__(self, n: int, rows: np.ndarray, cols: np.ndarray, n_multipliers: int = 0):
+    def __init__(self, n: int, rows: np.ndarray, cols: np.ndarray, n_multipliers: int = 0,
+                 compiled: bool = False):
         limit_threads()               # once per process: small banded systems want 1 BLAS thread
         self.n, self.n_multipliers = n, n_multipliers
         rows, cols = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
-        if n <= DENSE_LIMIT:
+        small = n <= DENSE_LIMIT
+        if small and not (compiled and n >= NARROW_MIN):
             self.kind, self.slots, self.size = "dense", rows * n + cols, n * n
             return
         graph = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
@@ -267,6 +277,9 @@ class TangentLayout:
         position[perm] = np.arange(n)
         i, j = position[rows], position[cols]
         b = int(np.abs(i - j).max(initial=0))
+        if small and b > NARROW_BAND:
+            self.kind, self.slots, self.size = "dense", rows * n + cols, n * n
+            return
         if b <= BAND_LIMIT:        # the upper band only: the lower entries mirror it (slot -1)
             self.kind, self.perm, self.b = "banded", perm, b
             self.slots = np.where(i <= j, j * (b + 1) + (b + i - j), -1)
@@ -279,7 +292,7 @@ class TangentLayout:
         self._indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
 
     def tangent(self, storage: np.ndarray) -> Tangent:
-        """The tangent held in ``storage`` (size :attr:`size`, the values summed at :attr:`slots`)."""
+        """The tangent held in ``storage`` (:attr:`size` values, summed at :attr:`slots`)."""
         if self.kind == "dense":
             return DenseTangent(storage.reshape(self.n, self.n))
         if self.kind == "banded":     # column j contiguous: Fortran order, as LAPACK wants it
