@@ -237,6 +237,11 @@ def _coordinates(states: Sequence[LocalState]) -> np.ndarray:
     return np.concatenate([part for state in states for part in state]).astype(float, copy=False)
 
 
+def _stacked(states: Sequence[LocalState]) -> np.ndarray:
+    """One connector's local coordinates at k states, (k, 6 + n_internal) float."""
+    return np.array([np.concatenate(state) for state in states], dtype=float)
+
+
 class BeamConnector(Connector):
     """Corotational beam model of one flexure with N elements (a :class:`~reducedmodels.connector.Connector`).
 
@@ -412,12 +417,18 @@ class BeamConnector(Connector):
         See :mod:`reducedmodels.validity`: the first is material strain, the
         second an element too coarse for the curvature it carries.
         """
-        x, theta = self._nodes(pose_a, pose_b, internal)
-        length, turn = beam_kernels().chord_measures(x, theta, self._chord0)
-        if np.abs(length / self._l0 - 1.0).max() <= MAX_STRAIN and turn.max() <= MAX_CHORD_TURN:
-            return []
-        return (stretch_reasons("element", length, self._l0)
-                + rotation_reasons("element", turn, MAX_CHORD_TURN))
+        return self.path_validity([(pose_a, pose_b, internal)])[0]
+
+    def path_validity(self, states: Sequence[LocalState]) -> list[list[str]]:
+        """:meth:`validity` at k states, measured in one compiled pass."""
+        group = self._alone
+        lengths, turns = beam_kernels().path_chord_measures(
+            _stacked(states), group._node_dof, group._node_rel, group._attached, self._chord0)
+        return [[] if (np.abs(length / self._l0 - 1.0).max() <= MAX_STRAIN
+                       and turn.max() <= MAX_CHORD_TURN)
+                else (stretch_reasons("element", length, self._l0)
+                      + rotation_reasons("element", turn, MAX_CHORD_TURN))
+                for length, turn in zip(lengths, turns)]
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed node positions (N + 1, 2), mm, from the flexure's start to its end."""
@@ -433,15 +444,21 @@ class BeamConnector(Connector):
         node's rotation. ``gradient`` (a linear response's K0 dq) gives the
         forces by statics of the end wrench instead, along the nodes.
         """
-        x, theta = self._nodes(pose_a, pose_b, internal)
         if gradient is not None:
+            x, theta = self._nodes(pose_a, pose_b, internal)
             slot = self._end_pose[1]
             return statics_section_forces(x, self._node_fractions,
                                           gradient[3 * slot:3 * slot + 3],
                                           (pose_a, pose_b)[slot],
                                           axes=unit_vectors(self._node_tangent0 + theta))
-        axial, moment = beam_kernels().section_resultants(
-            x, theta, self._node_tangent0, self._chord0, self._l0, self._k_axial, self._k11,
-            self._k12)
+        forces = self.path_section_forces([(pose_a, pose_b, internal)])
+        return SectionForces(forces.at, forces.axial[0], forces.moment[0])
+
+    def path_section_forces(self, states: Sequence[LocalState]) -> SectionForces:
+        """:meth:`section_forces` at k states (a load path), stacked (k, m), in one compiled pass."""
+        group = self._alone
+        axial, moment = beam_kernels().path_section_resultants(
+            _stacked(states), group._node_dof, group._node_rel, group._attached,
+            self._node_tangent0, self._chord0, self._l0, self._k_axial, self._k11, self._k12)
         order = self._section_order
-        return SectionForces(self._section_at.copy(), axial[order], moment[order])
+        return SectionForces(self._section_at.copy(), axial[:, order], moment[:, order])

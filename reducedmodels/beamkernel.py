@@ -348,3 +348,35 @@ def chord_measures(x: np.ndarray, theta: np.ndarray, chord0: np.ndarray
                            chord0[e, 0] * dx + chord0[e, 1] * dy)
         turn[e] = max(abs(wrapped(theta[e] - alpha)), abs(wrapped(theta[e + 1] - alpha)))
     return length, turn
+
+
+@_compiled
+def path_section_resultants(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndarray,
+                            attached: np.ndarray, tangent0: np.ndarray, chord0: np.ndarray,
+                            l0: np.ndarray, k_axial: np.ndarray, k11: np.ndarray,
+                            k12: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`section_resultants` of one chain at k states: (k, 2 elements) each, N and N mm.
+
+    ``coordinates`` (k, m) holds the chain's local coordinates at each state,
+    read through the node tables of :func:`assemble_elements`.
+    """
+    k, n = coordinates.shape[0], l0.size
+    axial, moment = np.empty((k, 2 * n)), np.empty((k, 2 * n))
+    for s in range(k):
+        x, theta, _ = place_nodes(coordinates[s], node_dof, node_rel, attached)
+        axial[s], moment[s] = section_resultants(x, theta, tangent0, chord0, l0, k_axial, k11,
+                                                 k12)
+    return axial, moment
+
+
+@_compiled
+def path_chord_measures(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndarray,
+                        attached: np.ndarray, chord0: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`chord_measures` of one chain at k states: (k, elements) each, mm and rad."""
+    k, n = coordinates.shape[0], chord0.shape[0]
+    length, turn = np.empty((k, n)), np.empty((k, n))
+    for s in range(k):
+        x, theta, _ = place_nodes(coordinates[s], node_dof, node_rel, attached)
+        length[s], turn[s] = chord_measures(x, theta, chord0)
+    return length, turn

@@ -387,3 +387,27 @@ def test_run_reduced_records_shapes_attached_to_the_bodies():
             rel = flex.end_point_of(body) - mech.bodies[body].reference
             R = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
             np.testing.assert_allclose(node, [x, y] + R @ rel, atol=1e-12)
+
+
+def test_path_hooks_judge_every_state_as_alone():
+    # the recorder asks for a path's section forces and validity in one call
+    # (one compiled pass over the states); each state's row must be exactly
+    # what the state alone gives, including states outside the valid range
+    rng = np.random.default_rng(5)
+    mech, flexure = parallel_pair(ARC, ("g", "t"))
+    conn = BeamConnector(flexure, mech, 7)
+    rest = [np.array([*mech.bodies[b].reference, 0.0]) for b in conn.bodies]
+    states = [(*rest, conn.initial_internal())]
+    for turn in (0.0, 2.5, -6.0):
+        q = deformed_state(conn, mech, turn, rng)
+        states.append((q[:3], q[3:6], q[6:]))
+    path = conn.path_section_forces(states)
+    assert path.axial.shape == path.moment.shape == (len(states), path.at.size)
+    for k, state in enumerate(states):
+        alone = conn.section_forces(*state)
+        np.testing.assert_array_equal(path.at, alone.at)
+        np.testing.assert_array_equal(path.axial[k], alone.axial)
+        np.testing.assert_array_equal(path.moment[k], alone.moment)
+    verdicts = conn.path_validity(states)
+    assert verdicts == [conn.validity(*state) for state in states]
+    assert any(verdicts) and not all(verdicts)
