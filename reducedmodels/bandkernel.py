@@ -82,3 +82,18 @@ def band_cholesky_solve(factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray) -
         for j in range(n):
             out[perm[j], column] = y[j]
     return out.reshape(rhs.shape)
+
+
+def warm_up() -> None:
+    """Compile, or load from the on-disk cache, the kernels for the argument types flexval uses.
+
+    A band as :class:`reducedmodels.tangent.BandedTangent` holds it (a
+    Fortran-ordered (b + 1, n) array) and one or several right-hand sides;
+    see :func:`reducedmodels.beamkernel.warm_up` for why.
+    """
+    band = np.zeros((2, 2), order="F")
+    band[1] = 1.0
+    factor, _ = band_cholesky(band, 1)
+    perm = np.arange(2, dtype=np.int64)
+    band_cholesky_solve(factor, np.ones(2), perm)
+    band_cholesky_solve(factor, np.ones((2, 2)), perm)

@@ -380,3 +380,32 @@ def path_chord_measures(coordinates: np.ndarray, node_dof: np.ndarray, node_rel:
         x, theta, _ = place_nodes(coordinates[s], node_dof, node_rel, attached)
         length[s], turn[s] = chord_measures(x, theta, chord0)
     return length, turn
+
+
+def warm_up() -> None:
+    """Compile, or load from the on-disk cache, every kernel for the argument types flexval uses.
+
+    Loading the machine code takes a noticeable fraction of a second per
+    process (importing numba included); the beam family calls this before a
+    path's clock starts, so that path times measure the paths. Two elements
+    between two bodies (one attached node each, one free node), the arrays
+    typed as :class:`reducedmodels.beam.BeamGroup` and the core pass them.
+    """
+    chain = np.array([0, 3, 6], np.int64)
+    rel = np.array([[1.0, 0.0], [0.0, 0.0], [0.0, 0.5]])
+    attached = np.array([True, False, True])
+    first = np.array([0, 1], np.int64)
+    chord0 = np.array([[1.0, 0.0], [0.0, 1.0]])
+    ones = np.ones(2)
+    source, sign = np.zeros(36, np.int64), np.ones(36)
+    grad_slot, tangent_slot = np.full((2, 6), -1, np.int64), np.full((2, 36), -1, np.int64)
+    coordinates = np.zeros(9)
+    assemble_elements(coordinates, chain, rel, attached, first, chord0, ones, ones, ones, ones,
+                      source, sign, grad_slot, tangent_slot, np.zeros(9), np.zeros(9))
+    chain_nodes = np.array([0, 3], np.int64)
+    updated_chains(coordinates, coordinates, chain, rel, attached, chain_nodes)
+    predicted_chains(np.zeros((3, 9)), ones[[0, 0, 0]], coordinates, chain, rel, attached,
+                     chain_nodes)
+    path_section_resultants(np.zeros((1, 9)), chain, rel, attached, np.zeros(3), chord0, ones,
+                            ones, ones, ones)
+    path_chord_measures(np.zeros((1, 9)), chain, rel, attached, chord0)

