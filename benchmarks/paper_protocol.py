@@ -50,7 +50,6 @@ from reducedmodels.recorder import solve_path
 from validation.compare import errors, paper_percent
 from validation.outputs import write_text
 
-"""t/mm^3: the flexures' density when the scene has no mass data."""
 RHO_INF = 0.9
 """Spectral radius at infinite frequency of the generalised-alpha scheme (as ``flexval run``)."""
 MATCH_POINTS = 2.0

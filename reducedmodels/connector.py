@@ -190,7 +190,20 @@ class Connector(ABC):
 
         Default None: the mass is that of :meth:`mass_points`. A connector
         that returns one (the continuum) has it used for the mass matrix,
-        while its ``mass_points`` still give its weight.
+        while its ``mass_points`` still give its weight; it must then give
+        its velocity-dependent inertia forces by :meth:`convective_forces`.
+        """
+        return None
+
+    def convective_forces(self, density: float, pose_a: np.ndarray, pose_b: np.ndarray,
+                          internal: np.ndarray, velocity: np.ndarray) -> "np.ndarray | None":
+        """Velocity-dependent inertia forces of a :meth:`mass_matrix` (N, N mm), local.
+
+        For a kinetic energy 1/2 v^T M(q) v they are M'(q) v - 1/2 d(v^T M v)/dq,
+        so that the equations of motion read M a + c = f. ``velocity`` holds
+        the local coordinates' rates (mm/s, rad/s). Default None: the
+        connector has no consistent mass (its mass points' convective forces
+        are the core's).
         """
         return None
 

@@ -203,7 +203,9 @@ def solve_dynamic(system: System, case: LoadCase, law: TimeLaw, duration: float,
     Every accepted step is recorded: ``time`` (s), ``load`` (lambda(t) times
     the case's value), the target's ``dx``, ``dy``, ``rotation`` and, on
     request, every body's pose. ``stats`` adds ``steps``, ``rejected_steps``
-    and the ``energy`` balance terms at the end (kinetic, N mm).
+    and the energy balance at the end (N mm): ``kinetic_energy`` and
+    ``potential_change``, the total potential (strain energy, weights and
+    the load case at the current factor) at the end minus at the start.
 
     Raises
     ------
@@ -251,6 +253,7 @@ def solve_dynamic(system: System, case: LoadCase, law: TimeLaw, duration: float,
     if first.state is None:
         raise fail(f"no initial equilibrium ({first.reason})", 0.0)
     q = first.state
+    potential_start = system.assemble(q, loads, law(0.0))[0]
     v = np.zeros(system.n_dofs) if initial_velocity is None else np.asarray(initial_velocity,
                                                                              float)
     a = np.zeros(system.n_dofs)
@@ -288,6 +291,7 @@ def solve_dynamic(system: System, case: LoadCase, law: TimeLaw, duration: float,
             h *= min(grow, max(0.5, 0.9 * (s.error_tol / max(error, 1e-300)) ** (1 / 3)))
         rejected = False
     stats["kinetic_energy"] = mass.kinetic_energy(q, v)
+    stats["potential_change"] = system.assemble(q, loads, law(t))[0] - potential_start
     path.stats = stats
     path.seconds = time.perf_counter() - t_start
     return path

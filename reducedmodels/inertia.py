@@ -4,15 +4,23 @@ Every mass in flexval is a *mass point*: a mass m (t) at a material point of a
 frame with coordinates (x, y, theta) (a rigid body's pose, a beam node, a
 DCMM cut body), at initial offset ``rel`` (mm) from the frame's origin, with
 its own rotary inertia J (t mm^2) about that point; or a point of a frame with
-translations only (a continuum node, no theta). The point is at
-x = p + R(theta) rel, so its kinetic energy 1/2 m |v_p + theta' k x R rel|^2 +
-1/2 J theta'^2 is exact at any rotation, and the mass matrix over the frame's
-(x, y, theta) is
+translations only (a continuum node, no theta). A point may also sit on a
+*link* hinged to its frame (a PRBM pseudo-link): the link turns by its own
+angle phi about the hinge at ``rel``, and the point lies at ``link_rel`` from
+the hinge. The point is at
+
+    x = p + R(theta) rel + R(phi) link_rel = p + r1 + r2
+
+(r2 = 0 without a link), so its kinetic energy 1/2 m |x'|^2 + 1/2 J psi'^2
+(psi = phi on a link, else theta) is exact at any rotation. With the
+Jacobian G = dx/d(x, y, theta, phi) = [I, k x r1, k x r2] the mass matrix is
+m G^T G plus J on psi; for a point without a link, over (x, y, theta),
 
     [[m, 0, -m r_y], [0, m, m r_x], [-m r_y, m r_x, J + m |rel|^2]],  r = R(theta) rel,
 
-with the convective force m theta'^2 r on the translations (the
-centripetal term of d/dt (R rel)). Its weight is the dead force m g at x.
+and the convective force is m G^T (-theta'^2 r1 - phi'^2 r2) (the
+centripetal terms of d/dt G; on the translations -m theta'^2 r1 - m phi'^2 r2).
+Its weight is the dead force m g at x.
 
 Where the masses come from:
 
@@ -57,17 +65,33 @@ class MassPoints(NamedTuple):
         Local indices of the (x, y, theta) coordinates of each point's frame;
         theta -1 for a frame without rotation (then ``rel`` is zero).
     rel : array (k, 2)
-        Initial offset of the point from the frame's origin, mm.
+        Initial offset of the point (or of its link's hinge) from the frame's origin, mm.
     mass : array (k,)
         t.
     rotary : array (k,)
-        Own rotary inertia about the point, t mm^2.
+        Own rotary inertia about the point, t mm^2 (it turns with the link if
+        there is one, else with the frame).
+    link : int array (k,), optional
+        Local index of the angle phi of the link the point sits on (rad,
+        measured from the initial configuration), -1 for none. Default: none.
+    link_rel : array (k, 2), optional
+        Initial offset of the point from its link's hinge, mm (zero without a link).
     """
 
     dofs: np.ndarray
     rel: np.ndarray
     mass: np.ndarray
     rotary: np.ndarray
+    link: np.ndarray | None = None
+    link_rel: np.ndarray | None = None
+
+    def complete(self) -> "MassPoints":
+        """The same points with ``link`` and ``link_rel`` filled in (-1 and zeros if absent)."""
+        k = self.mass.size
+        return self._replace(
+            link=np.full(k, -1) if self.link is None else np.asarray(self.link, int),
+            link_rel=np.zeros((k, 2)) if self.link_rel is None else np.asarray(self.link_rel,
+                                                                               float))
 
 
 def chain_mass_points(node_dofs: Sequence[Sequence[int]], node_rel: np.ndarray,
@@ -103,6 +127,77 @@ def chain_mass_points(node_dofs: Sequence[Sequence[int]], node_rel: np.ndarray,
                       mass, rotary)
 
 
+GAUSS_POINTS = 16
+"""Gauss-Legendre points per piece of flexure in :func:`piece_inertia`: exact for a
+straight piece (polynomial integrands of degree <= 4), and for a circular piece of
+angle phi the error falls like phi^32 / 32!, below round-off for phi <= 2 pi."""
+
+
+def piece_inertia(shape, s0: float, s1: float, line_density: float, origin: np.ndarray,
+                  weight=None) -> tuple[float, np.ndarray, float]:
+    """Mass, centre of mass and rotary inertia of a piece of flexure taken as rigid.
+
+    The centre line of ``shape`` between arc lengths ``s0`` and ``s1`` (mm),
+    of mass per length ``line_density`` (rho A, t/mm), optionally weighted by
+    ``weight(s)`` (a function of the arc length returning the share in
+    [0, 1] this piece carries), integrated by Gauss-Legendre quadrature
+    (:data:`GAUSS_POINTS`). The section's own rotary inertia rho I per length
+    (a fraction (h / L)^2 / 12 of the rest) is left out, as in Euler-Bernoulli
+    theory.
+
+    Returns
+    -------
+    mass : float
+        t.
+    rel : array (2,)
+        Centre of mass minus ``origin``, mm.
+    rotary : float
+        Rotary inertia about the centre of mass, t mm^2.
+    """
+    x, w = np.polynomial.legendre.leggauss(GAUSS_POINTS)
+    s = 0.5 * (s0 + s1) + 0.5 * (s1 - s0) * x
+    share = np.ones_like(s) if weight is None else np.asarray(weight(s), float)
+    dm = 0.5 * abs(s1 - s0) * w * share * line_density
+    points = shape.point(s)
+    mass = float(dm.sum())
+    centre = dm @ points / mass
+    rotary = float(dm @ ((points - centre) ** 2).sum(axis=1))
+    return mass, centre - np.asarray(origin, float), rotary
+
+
+def rigid_pieces(shape, forward: bool, bounds: np.ndarray, anchors: np.ndarray,
+                 line_density: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A flexure cut into consecutive pieces, each taken as rigid (:func:`piece_inertia`).
+
+    Parameters
+    ----------
+    shape : geometry.shapes.Shape
+        The flexure's centre line (arc length s from its start, mm).
+    forward : bool
+        Whether the chain order (body a to body b) runs from the shape's start.
+    bounds : array (m + 1,)
+        Arc lengths from body a's end (chain order, mm) where the m pieces meet,
+        from 0 to the flexure's length.
+    anchors : array (m, 2)
+        The point each piece's centre of mass is measured from (its body's
+        reference point or its link's hinge), mm.
+    line_density : float
+        rho A, t/mm.
+
+    Returns
+    -------
+    mass (m,) in t, centre of mass minus anchor (m, 2) in mm, rotary inertia
+    about the centre of mass (m,) in t mm^2.
+    """
+    length = shape.length
+    out = []
+    for (u0, u1), anchor in zip(zip(bounds[:-1], bounds[1:]), anchors):
+        s0, s1 = (u0, u1) if forward else (length - u1, length - u0)
+        out.append(piece_inertia(shape, s0, s1, line_density, anchor))
+    mass, rel, rotary = zip(*out)
+    return np.array(mass), np.array(rel), np.array(rotary)
+
+
 def _rotated(theta: np.ndarray, rel: np.ndarray) -> np.ndarray:
     c, s = np.cos(theta), np.sin(theta)
     return np.column_stack([c * rel[:, 0] - s * rel[:, 1], s * rel[:, 0] + c * rel[:, 1]])
@@ -112,31 +207,45 @@ def _angles(coords: np.ndarray, theta_dofs: np.ndarray) -> np.ndarray:
     return np.where(theta_dofs >= 0, coords[np.maximum(theta_dofs, 0)], 0.0)
 
 
+def _kinematics(coords: np.ndarray, points: MassPoints
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each point's coordinates (k, 4: x, y, theta, phi; -1 absent), the columns of its
+    Jacobian G (k, 4, 2) and its offsets r1, r2 (k, 2, 2) at ``coords``."""
+    full = points.complete()
+    dofs = np.column_stack([full.dofs, full.link])
+    r = np.stack([_rotated(_angles(coords, full.dofs[:, 2]), full.rel),
+                  _rotated(_angles(coords, full.link), full.link_rel)], axis=1)
+    columns = np.zeros((dofs.shape[0], 4, 2))
+    columns[:, 0, 0] = columns[:, 1, 1] = 1.0
+    columns[:, 2:, 0], columns[:, 2:, 1] = -r[:, :, 1], r[:, :, 0]        # k x r
+    return dofs, columns, r
+
+
 def weight_terms(coords: np.ndarray, points: MassPoints, gravity: np.ndarray
                  ) -> tuple[float, np.ndarray, np.ndarray]:
     """Potential of the weights (N mm), its gradient and the diagonal of its Hessian.
 
-    The potential of dead forces m g at x = p + R(theta) rel is
-    -sum m g . x (up to a constant; for frames without theta p may be a
-    displacement). Its only second derivatives are d^2/dtheta^2 =
-    m g . R(theta) rel, on the diagonal.
+    The potential of dead forces m g at x = p + r1 + r2 is -sum m g . x (up
+    to a constant; for frames without theta p may be a displacement). Its
+    gradient is -m G^T g, and its only second derivatives are
+    d^2/dtheta^2 = m g . r1 and d^2/dphi^2 = m g . r2, on the diagonal.
 
     Parameters
     ----------
     coords : array (n,)
-        The coordinates ``points.dofs`` index into.
+        The coordinates ``points.dofs`` (and ``points.link``) index into.
     """
     n = coords.size
-    d = points.dofs
-    rr = _rotated(_angles(coords, d[:, 2]), points.rel)
-    fx, fy = points.mass * gravity[0], points.mass * gravity[1]
-    energy = -float(np.sum(fx * (coords[d[:, 0]] + rr[:, 0]) + fy * (coords[d[:, 1]] + rr[:, 1])))
-    grad = np.bincount(d[:, 0], weights=-fx, minlength=n) + np.bincount(d[:, 1], weights=-fy,
-                                                                        minlength=n)
-    has_theta = d[:, 2] >= 0
-    t = d[has_theta, 2]
-    grad += np.bincount(t, weights=-(fy * rr[:, 0] - fx * rr[:, 1])[has_theta], minlength=n)
-    diagonal = np.bincount(t, weights=(fx * rr[:, 0] + fy * rr[:, 1])[has_theta], minlength=n)
+    dofs, columns, r = _kinematics(coords, points)
+    weight = points.mass[:, None] * np.asarray(gravity, float)[None]          # (k, 2), N
+    x = coords[dofs[:, 0]] + r[:, :, 0].sum(axis=1), coords[dofs[:, 1]] + r[:, :, 1].sum(axis=1)
+    energy = -float(np.sum(weight[:, 0] * x[0] + weight[:, 1] * x[1]))
+    present = dofs >= 0
+    forces = -np.einsum("kjc,kc->kj", columns, weight)
+    grad = np.bincount(dofs[present], weights=forces[present], minlength=n)
+    second = np.einsum("kjc,kc->kj", r, weight)                               # (k, 2): m g . r
+    turns = present[:, 2:]
+    diagonal = np.bincount(dofs[:, 2:][turns], weights=second[turns], minlength=n)
     return energy, grad, diagonal
 
 
@@ -159,7 +268,9 @@ class Weighted(Connector):
         pattern = inner.hessian_pattern()
         rows, cols = (pattern if pattern is not None
                       else (np.repeat(np.arange(n), n), np.tile(np.arange(n), n)))
-        self._theta = np.unique(points.dofs[points.dofs[:, 2] >= 0, 2])
+        full = points.complete()
+        turns = np.concatenate([full.dofs[:, 2], full.link])
+        self._theta = np.unique(turns[turns >= 0])
         self._rows = np.concatenate([rows, self._theta])
         self._cols = np.concatenate([cols, self._theta])
         #: the largest single weight (N): with no load case it scales the residual test
@@ -227,6 +338,10 @@ class Weighted(Connector):
         """The wrapped connector's."""
         return self.inner.mass_matrix(density, pose_a, pose_b, internal)
 
+    def convective_forces(self, density, pose_a, pose_b, internal, velocity):
+        """The wrapped connector's."""
+        return self.inner.convective_forces(density, pose_a, pose_b, internal, velocity)
+
 
 def connector_mass_points(connector: Connector, density: float | None) -> MassPoints | None:
     """The connector's mass points at ``density`` (t/mm^3); None without density or mass."""
@@ -245,7 +360,7 @@ def body_mass_points(mechanism: Mechanism, body: str, slot: int) -> MassPoints |
 
 def merge(points: Sequence[MassPoints | None]) -> MassPoints | None:
     """All given mass points in one table (None if there are none)."""
-    points = [p for p in points if p is not None and p.mass.size]
+    points = [p.complete() for p in points if p is not None and p.mass.size]
     if not points:
         return None
     return MassPoints(*(np.concatenate([getattr(p, f) for p in points])
@@ -309,30 +424,36 @@ class MassModel:
                 continue
             points = connector_mass_points(c, self.density)
             if points is not None:
+                points = points.complete()
                 gd = np.where(points.dofs >= 0, idx[np.maximum(points.dofs, 0)], -1)
-                tables.append(points._replace(dofs=gd))
+                gl = np.where(points.link >= 0, idx[np.maximum(points.link, 0)], -1)
+                tables.append(points._replace(dofs=gd, link=gl))
         for b in mech.moving_bodies:
             points = body_mass_points(mech, b, 0)
             if points is not None:
                 tables.append(points._replace(dofs=system.pose_dofs(b)[None]))
         self.n = system.n_dofs
         merged = merge(tables) or MassPoints(np.zeros((0, 3), int), np.zeros((0, 2)),
-                                             np.zeros(0), np.zeros(0))
-        moving = merged.dofs[:, 0] >= 0            # points on the ground never move
+                                             np.zeros(0), np.zeros(0)).complete()
+        # points on the ground never move (unless on a link hinged to it)
+        moving = (merged.dofs[:, 0] >= 0) | (merged.link >= 0)
         self.points = MassPoints(*(getattr(merged, f)[moving] for f in MassPoints._fields))
 
     def matrix(self, q: np.ndarray) -> sp.csr_matrix:
-        """Mass matrix M(q) (t, t mm, t mm^2) over all coordinates of the System."""
-        d, m, rel = self.points.dofs, self.points.mass, self.points.rel
-        rr = _rotated(_angles(q, d[:, 2]), rel)
-        has_theta = d[:, 2] >= 0
-        t = d[has_theta, 2]
-        rows = [d[:, 0], d[:, 1], t, d[has_theta, 0], t, d[has_theta, 1], t]
-        cols = [d[:, 0], d[:, 1], t, t, d[has_theta, 0], t, d[has_theta, 1]]
-        mt, rrt = m[has_theta], rr[has_theta]
-        theta_theta = (self.points.rotary + m * (rel**2).sum(axis=1))[has_theta]
-        vals = [m, m, theta_theta, -mt * rrt[:, 1], -mt * rrt[:, 1], mt * rrt[:, 0],
-                mt * rrt[:, 0]]
+        """Mass matrix M(q) (t, t mm, t mm^2) over all coordinates of the System.
+
+        Each point adds m G^T G over its (x, y, theta, phi) and its own rotary
+        inertia on phi (on a link) or theta (see the module docstring).
+        """
+        dofs, columns, _ = _kinematics(q, self.points)
+        m = self.points.mass
+        values = m[:, None, None] * np.einsum("kac,kbc->kab", columns, columns)
+        present = (dofs[:, :, None] >= 0) & (dofs[:, None, :] >= 0)
+        own = np.where(dofs[:, 3] >= 0, dofs[:, 3], dofs[:, 2])
+        spins = own >= 0
+        rows = [np.broadcast_to(dofs[:, :, None], values.shape)[present], own[spins]]
+        cols = [np.broadcast_to(dofs[:, None, :], values.shape)[present], own[spins]]
+        vals = [values[present], self.points.rotary[spins]]
         if self._consistent:
             states = self.system.local_states(q)
             for k in self._consistent:
@@ -345,29 +466,34 @@ class MassModel:
                              shape=(self.n, self.n))
 
     def convective(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Velocity-dependent inertia forces of the mass points (N): -sum m theta'^2 r.
+        """Velocity-dependent inertia forces (N, N mm): c(q, v) with M(q) a + c(q, v) = f.
 
-        A point's acceleration is a_p + theta'' k x r - theta'^2 r, so the
-        equations of motion are M(q) a + c(q, v) = f with c on the point's
-        translations (its theta row gets (k x r) . r = 0). Consistent
-        matrices (``mass_matrix`` connectors) are not covered.
+        A mass point's acceleration is G q'' + a_c with a_c = -theta'^2 r1 -
+        phi'^2 r2 (the derivative of G along the motion), so it adds
+        m G^T a_c; without a link only the translations get a term
+        ((k x r1) . r1 = 0). A ``mass_matrix`` connector adds its own
+        :meth:`~reducedmodels.connector.Connector.convective_forces`.
         """
-        d, m = self.points.dofs, self.points.mass
-        has_theta = d[:, 2] >= 0
-        rr = _rotated(_angles(q, d[:, 2]), self.points.rel)
-        omega2 = np.where(has_theta, v[np.maximum(d[:, 2], 0)], 0.0) ** 2
-        return (np.bincount(d[:, 0], weights=-m * omega2 * rr[:, 0], minlength=self.n)
-                + np.bincount(d[:, 1], weights=-m * omega2 * rr[:, 1], minlength=self.n))
+        dofs, columns, r = _kinematics(q, self.points)
+        rates = np.where(dofs[:, 2:] >= 0, v[np.maximum(dofs[:, 2:], 0)], 0.0) ** 2
+        a_c = -np.einsum("kj,kjc->kc", rates, r)
+        forces = self.points.mass[:, None] * np.einsum("kjc,kc->kj", columns, a_c)
+        present = dofs >= 0
+        total = np.bincount(dofs[present], weights=forces[present], minlength=self.n)
+        if self._consistent:
+            states = self.system.local_states(q)
+            for k in self._consistent:
+                idx = self.system._local_to_global[k]
+                local_v = np.where(idx >= 0, v[np.maximum(idx, 0)], 0.0)
+                c = self.system.connectors[k].convective_forces(self.density, *states[k],
+                                                                local_v)
+                keep = idx >= 0
+                total += np.bincount(idx[keep], weights=c[keep], minlength=self.n)
+        return total
 
     def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """1/2 v^T M(q) v, N mm (t mm^2/s^2)."""
         return 0.5 * float(v @ (self.matrix(q) @ v))
-
-    @property
-    def has_consistent(self) -> bool:
-        """True if some connector gives a consistent mass matrix (its convective terms are
-        not modelled: :meth:`convective` covers mass points only)."""
-        return bool(self._consistent)
 
     def massless(self) -> np.ndarray:
         """Boolean mask of the coordinates without mass (zero diagonal of M at rest)."""

@@ -96,7 +96,7 @@ from geometry.kinematics import rotate_xy
 from geometry.shapes import Shape, arc_semi_axes
 
 from .connector import Connector
-from .inertia import MassPoints, chain_mass_points
+from .inertia import MassPoints, rigid_pieces
 from .sections import SectionForces, polyline_fractions, statics_section_forces
 from .validity import MAX_STRAIN, SCREEN_MARGIN, rotation_reasons, stretch_reasons
 
@@ -281,19 +281,38 @@ class PrbmConnector(Connector):
         self._end_rel = [tuple((self._ends[k] - self._ref[k]).tolist()) for k in (0, 1)]
         self._fitted_rotation = fitted_rotation()
         self._area = flexure.section.area
+        self._shape = shape
         rest = np.array([*self._ends[:1], *joints, *self._ends[1:]])
         self._fractions = polyline_fractions(rest)
 
     def mass_points(self, density: float) -> MassPoints:
-        """The flexure's mass (density in t/mm^3) lumped on its end bodies.
+        """The flexure's mass (density in t/mm^3) on the chain's four rigid members.
 
-        Half at each end point with the HRZ rotary inertia m L^2 / 78 (the
-        mass of ``beam:1`` and ``dcmm:1``); the pseudo-links are massless,
-        so their two angles follow the end bodies quasi-statically (the
-        modal analysis condenses them).
+        Lumping rule: the flexure is cut where the undeformed polyline
+        end_a, R_a, R_2, R_b, end_b reaches each joint (by length fraction;
+        on a straight beam, at the joints themselves), and each piece rides
+        rigidly, with its exact mass, centre of mass and rotary inertia
+        (:func:`reducedmodels.inertia.rigid_pieces`), on the member that
+        spans it: end body a, link h (hinged at R_a, turning with phi_h),
+        link l (hinged at R_b, turning with phi_l), end body b. So the
+        pseudo-links' angles carry inertia and the chain moves as the rigid
+        members it is made of. On a clamped-free beam f1 comes out +0.02 %
+        from Euler-Bernoulli (the previous end-bodies-only HRZ lumping:
+        -32 %) and the self-weight sag is exact in the linear limit (the
+        symmetric chain matches the beam's compliance moments up to the
+        third); see the README's frequency comparison.
         """
-        return chain_mass_points([np.arange(3), np.arange(3, 6)], self._ends - self._ref,
-                                 np.array([self.length]), density * self._area)
+        bounds = self._fractions * self.length
+        hinges = np.array([self._ref[0], self.joints[0], self.joints[2], self._ref[1]])
+        mass, rel, rotary = rigid_pieces(self._shape, self._forward, bounds, hinges,
+                                         density * self._area)
+        on_link = np.array([0.0, 1.0, 1.0, 0.0])[:, None]
+        hinge_rel = np.array([[0.0, 0.0], self._r_a, self._r_b, [0.0, 0.0]])
+        return MassPoints(dofs=np.array([np.arange(3), np.arange(3), np.arange(3, 6),
+                                         np.arange(3, 6)]),
+                          rel=on_link * hinge_rel + (1.0 - on_link) * rel, mass=mass,
+                          rotary=rotary, link=np.array([-1, 6, 7, -1]),
+                          link_rel=on_link * rel)
 
     def internal_is_rotation(self) -> np.ndarray:
         """[True, True, False, False]: two link rotations, then the multiplier (mm)."""

@@ -18,7 +18,6 @@ from geometry import LoadCase, Scene, SceneError
 from geometry.timelaw import TimeLaw
 from reducedmodels.catalogue import ModelSpec
 from reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
-from reducedmodels.inertia import MassModel
 from reducedmodels.loadpath import LoadPath
 from reducedmodels.modes import natural_modes
 
@@ -83,7 +82,7 @@ def run_dynamic(scene: Scene, spec: ModelSpec, case: LoadCase, duration: float |
     Raises
     ------
     SceneError
-        Bad options, a massless body, or a model without dynamics (continuum).
+        Bad options or a massless body.
     reducedmodels.core.SolverError
         If the time stepping fails; carries the history so far.
     """
@@ -91,10 +90,6 @@ def run_dynamic(scene: Scene, spec: ModelSpec, case: LoadCase, duration: float |
         raise SceneError("<command line>", "--rho-inf", rho_inf, "must be from 0 to 1")
     law, end = time_law(case, duration, scene.source)
     system = modal_system(scene, spec)
-    if MassModel(system).has_consistent:
-        raise SceneError("<command line>", "--model", spec.id,
-                         "dynamic runs need lumped masses (the continuum's consistent mass "
-                         "has no convective terms yet); use it with flexval modes")
     lp = solve_dynamic(system, case, law, end, damping_of(system, damping_ratio, rayleigh),
                        DynamicSettings(rho_inf=rho_inf), model=spec.id, scene=scene.name,
                        record_poses=record_poses)

@@ -34,7 +34,7 @@ from reducedmodels.sections import (SectionForces, polyline_axes, polyline_fract
                                    statics_section_forces)
 
 from .group import ContinuumGroup
-from .mass import node_jacobian, scalar_mass
+from .mass import face_accelerations, node_jacobian, scalar_mass
 from .material import make_law
 from .polar import cross_sections
 from .solid import Solid
@@ -91,6 +91,7 @@ class ContinuumConnector(Connector):
         self.n_internal = 2 * self._free.size
         self._n = 6 + self.n_internal
         self.sections = cross_sections(self.mesh)
+        self._unit_mass = None                 # kron(scalar mass, I2), on first use
         self._build_expansion(role)
 
     # --- the fixed index structure of T ------------------------------------
@@ -244,14 +245,32 @@ class ContinuumConnector(Connector):
             rel[self._face[s]] = self._rel[s]
         return MassPoints(dofs, rel, lumped, np.zeros(lumped.size))
 
-    def mass_matrix(self, density: float, pose_a: np.ndarray, pose_b: np.ndarray,
-                    internal: np.ndarray) -> sp.csr_matrix:
-        """Consistent mass T^T M T (t, t mm, t mm^2) over [pose_a, pose_b, internal]."""
-        m = sp.kron(scalar_mass(self.solid), sp.identity(2), format="csr") * density
+    def _mass_kinematics(self, density: float, pose_a: np.ndarray, pose_b: np.ndarray
+                         ) -> tuple[sp.csr_matrix, list[np.ndarray], sp.csr_matrix]:
+        """The nodal consistent mass (t), the end faces' rotated offsets (mm) and T = dx/dq."""
+        if self._unit_mass is None:          # density-free, assembled once
+            self._unit_mass = sp.kron(scalar_mass(self.solid), sp.identity(2), format="csr")
         rotated = [rigid_points(np.asarray(p, float), r)[0] - np.asarray(p, float)[:2]
                    for p, r in zip((pose_a, pose_b), self._rel)]
         T = node_jacobian(self.mesh.nodes.shape[0], self._free, self._face, rotated)
+        return self._unit_mass * density, rotated, T
+
+    def mass_matrix(self, density: float, pose_a: np.ndarray, pose_b: np.ndarray,
+                    internal: np.ndarray) -> sp.csr_matrix:
+        """Consistent mass T^T M T (t, t mm, t mm^2) over [pose_a, pose_b, internal]."""
+        m, _, T = self._mass_kinematics(density, pose_a, pose_b)
         return (T.T @ m @ T).tocsr()
+
+    def convective_forces(self, density: float, pose_a: np.ndarray, pose_b: np.ndarray,
+                          internal: np.ndarray, velocity: np.ndarray) -> np.ndarray:
+        """T^T M a_c (N, N mm): the end faces' centripetal inertia (see :mod:`.mass`).
+
+        ``velocity`` holds the local coordinates' rates (mm/s, rad/s).
+        """
+        m, rotated, T = self._mass_kinematics(density, pose_a, pose_b)
+        a_c = face_accelerations(self.mesh.nodes.shape[0], self._face, rotated,
+                                 (float(velocity[2]), float(velocity[5])))
+        return T.T @ (m @ a_c)
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed centre line (nodes at mid-thickness, start to end), mm."""

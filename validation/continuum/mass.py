@@ -8,6 +8,13 @@ coordinates [pose_a, pose_b, internal] the mass is T^T M T with T = dx/dq at
 the current state. The weight of node a is (sum_b M_ab) g, the consistent
 load of a uniform body force.
 
+The inertia forces of the coordinates are T^T M x'' with
+x'' = T q'' + T' q' (Lagrange's equations for a kinetic energy
+1/2 x'^T M x' with M constant and x = x(q)): the mass T^T M T times q''
+plus the convective forces T^T M a_c, where a_c = T' q' is zero on the free
+nodes and the centripetal -theta_s'^2 R(theta_s) rel on the nodes of end
+face s.
+
 Units: t/mm^3 (density), t, mm.
 """
 
@@ -52,3 +59,17 @@ def node_jacobian(n_nodes: int, free: np.ndarray, faces: list[np.ndarray],
             vals += [np.ones(face.size), -r[:, 1] if i == 0 else r[:, 0]]
     return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                          shape=(2 * n_nodes, 6 + 2 * free.size))
+
+
+def face_accelerations(n_nodes: int, faces: list[np.ndarray], rotated: list[np.ndarray],
+                       rates: tuple[float, float]) -> np.ndarray:
+    """a_c = T' q' (2 n_nodes, mm/s^2): -omega_s^2 r on the nodes of end face s, 0 elsewhere.
+
+    ``rotated`` holds each face's current offsets r = R(theta_s) rel (mm) and
+    ``rates`` the two bodies' angular velocities omega_s (rad/s).
+    """
+    a = np.zeros(2 * n_nodes)
+    for face, r, omega in zip(faces, rotated, rates):
+        a[2 * face] = -omega**2 * r[:, 0]
+        a[2 * face + 1] = -omega**2 * r[:, 1]
+    return a
