@@ -129,21 +129,20 @@ def chain_mass_points(node_dofs: Sequence[Sequence[int]], node_rel: np.ndarray,
 
 GAUSS_POINTS = 16
 """Gauss-Legendre points per piece of flexure in :func:`piece_inertia`: exact for a
-straight piece (polynomial integrands of degree <= 4), and for a circular piece of
-angle phi the error falls like phi^32 / 32!, below round-off for phi <= 2 pi."""
+straight piece (polynomial integrands of degree <= 2), and for a circular piece of
+angle phi the error is of order (phi / 2)^32 / 32!, below round-off for phi <= 2 pi."""
 
 
-def piece_inertia(shape, s0: float, s1: float, line_density: float, origin: np.ndarray,
-                  weight=None) -> tuple[float, np.ndarray, float]:
+def piece_inertia(shape, s0: float, s1: float, line_density: float, origin: np.ndarray
+                  ) -> tuple[float, np.ndarray, float]:
     """Mass, centre of mass and rotary inertia of a piece of flexure taken as rigid.
 
     The centre line of ``shape`` between arc lengths ``s0`` and ``s1`` (mm),
-    of mass per length ``line_density`` (rho A, t/mm), optionally weighted by
-    ``weight(s)`` (a function of the arc length returning the share in
-    [0, 1] this piece carries), integrated by Gauss-Legendre quadrature
-    (:data:`GAUSS_POINTS`). The section's own rotary inertia rho I per length
-    (a fraction (h / L)^2 / 12 of the rest) is left out, as in Euler-Bernoulli
-    theory.
+    of mass per length ``line_density`` (rho A, t/mm), integrated by
+    Gauss-Legendre quadrature (:data:`GAUSS_POINTS`). The section's own
+    rotary inertia rho I per length (a fraction (h / L)^2 / 12 of the rest)
+    is left out, as in Euler-Bernoulli theory. A piece of zero length has
+    zero mass at the point s0.
 
     Returns
     -------
@@ -156,11 +155,10 @@ def piece_inertia(shape, s0: float, s1: float, line_density: float, origin: np.n
     """
     x, w = np.polynomial.legendre.leggauss(GAUSS_POINTS)
     s = 0.5 * (s0 + s1) + 0.5 * (s1 - s0) * x
-    share = np.ones_like(s) if weight is None else np.asarray(weight(s), float)
-    dm = 0.5 * abs(s1 - s0) * w * share * line_density
+    dm = 0.5 * abs(s1 - s0) * w * line_density
     points = shape.point(s)
     mass = float(dm.sum())
-    centre = dm @ points / mass
+    centre = dm @ points / mass if mass > 0.0 else points[0]
     rotary = float(dm @ ((points - centre) ** 2).sum(axis=1))
     return mass, centre - np.asarray(origin, float), rotary
 
