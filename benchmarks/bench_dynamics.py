@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/bench_dynamics.py [--repeats 3]``. Both built-in
 scenes with PLA flexures (density 1.24e-9 t/mm^3) and massless links, so
-the bodies carry the flexures' end masses; each load case ramped by the
+the bodies carry the flexures' end pieces; each load case ramped by the
 paper's Eq. 15 over 40 periods of the first natural mode and held for 10
 more, damping ratio 1 at the two lowest modes (the paper's "damping that
 minimises dynamic effects"), rho_inf = 0.9. Prints per model the first

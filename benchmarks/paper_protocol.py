@@ -17,7 +17,7 @@ static end state; the static errors are listed too.
 
 Masses: the scene's own mass data if it has any, else PLA flexures
 (density 1.24e-9 t/mm^3) with massless links (the bodies carry the
-flexures' end masses; ``reducedmodels.inertia``). Errors in percent:
+flexures' end pieces; ``reducedmodels.inertia``). Errors in percent:
 end-of-ramp displacement-vector error of the target point and rotation
 error of the target body (``validation.compare``'s ``end_disp_vec`` and
 ``end_rot``; the vector error is the metric that reproduces the paper's

@@ -9,8 +9,8 @@ limit point has a zero one) and M the mass matrix
 
 Coordinates without mass are of two kinds, both without inertia terms:
 Lagrange multipliers (pins, the PRBM closure) and massless internal
-coordinates (e.g. the PRBM's pseudo-link angles, or every flexure coordinate
-when the scene gives no density). Their rows are static equations,
+coordinates (e.g. every flexure coordinate when the scene gives no
+density). Their rows are static equations,
 K_sm x_m + K_ss x_s = 0. With K_ss = U diag(w) U^T split into its regular
 part (pseudo-inverse K_ss^+) and null space Z (the multipliers of
 constraints on massive coordinates), the massive coordinates must satisfy
