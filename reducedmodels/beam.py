@@ -67,9 +67,15 @@ SHEAR_CORRECTION = 5.0 / 6.0
 
 @functools.cache
 def beam_kernels() -> ModuleType:
-    """:mod:`reducedmodels.beamkernel`, imported on first use (importing numba takes ~0.5 s)."""
+    """:mod:`reducedmodels.beamkernel`, imported and loaded on first use (see its ``warm_up``).
+
+    A System of beams asks for it when it is built (:meth:`BeamGroup.assembler`),
+    so numba's import and the kernels' machine code (~0.5 s) are paid before
+    a path's clock starts, once per process.
+    """
     from . import beamkernel
 
+    beamkernel.warm_up()
     return beamkernel
 
 

@@ -55,8 +55,8 @@ def _trace_beams(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
     from .beam import beam_kernels
     from .tangent import band_kernels
 
-    beam_kernels().warm_up()
-    band_kernels().warm_up()
+    beam_kernels()
+    band_kernels()
     return trace_nonlinear(mechanism, spec, *args, **kwargs)
 
 

@@ -50,9 +50,14 @@ ROUND_OFF = 1e-12    # eigenvalues above -ROUND_OFF * |K| count as zero, not as 
 
 @functools.cache
 def band_kernels() -> ModuleType:
-    """:mod:`reducedmodels.bandkernel`, imported on first use (importing numba takes ~0.5 s)."""
+    """:mod:`reducedmodels.bandkernel`, imported and loaded on first use (see its ``warm_up``).
+
+    A layout that will use it asks for it when it is built, so that loading
+    it is not charged to a path's time.
+    """
     from . import bandkernel
 
+    bandkernel.warm_up()
     return bandkernel
 
 
@@ -282,6 +287,8 @@ class TangentLayout:
             return
         if b <= BAND_LIMIT:        # the upper band only: the lower entries mirror it (slot -1)
             self.kind, self.perm, self.b = "banded", perm, b
+            if b <= NARROW_BAND:
+                band_kernels()
             self.slots = np.where(i <= j, j * (b + 1) + (b + i - j), -1)
             self.size = (b + 1) * n
             return
