@@ -542,7 +542,7 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--density", type=float, metavar="RHO",
                    help="flexure density in t/mm^3 instead of the scene's material.density "
                         "(PLA: 1.24e-9), e.g. for the built-in scenes, whose links are then "
-                        "massless and carry the flexures' end masses")
+                        "massless and carry the flexure pieces each model lumps on them")
     q.set_defaults(func=_cmd_modes)
 
     q = sub.add_parser("converge", help="resolution study: order, Richardson value, GCI")

@@ -8,7 +8,8 @@ state, or the equilibrium under gravity if the scene has gravity), exactly as
 reference's mode of the same rank. The scene's mass data are used as given;
 a scene without a flexure density gets :data:`DEFAULT_DENSITY` (PLA), as
 ``flexval modes --density`` would, and its bodies without mass data stay
-massless (they then carry the flexures' end masses). A model whose modal
+massless (they then carry only the flexure pieces each model lumps on
+them: see the models' ``mass_points``). A model whose modal
 analysis fails (a massless moving body, no equilibrium, a singular mass
 matrix) is a :class:`~validation.failures.Failure` in the table.
 
@@ -142,7 +143,8 @@ def section(table: FrequencyTable) -> list[str]:
     density = (f"the scene's flexure density {table.density:g} t/mm³" if table.density_given
                else f"flexures of PLA ({table.density:g} t/mm³, the scene gives no density)")
     bodies = (f"; bodies without mass data ({', '.join(table.massless_bodies)}) are massless "
-              "and carry the flexures' end masses" if table.massless_bodies else "")
+              "and carry only the flexure pieces each model lumps on them"
+              if table.massless_bodies else "")
     state = ("the equilibrium under the scene's gravity" if table.gravity
              else "the undeformed state")
     lines = [f"### Natural frequencies against `{table.reference}`", "",
