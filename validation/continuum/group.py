@@ -1,17 +1,19 @@
 """All meshed flexures of a system evaluated and assembled together (the core's connector group).
 
-:class:`ContinuumGroup` stacks the element arrays of its connectors into one
-:class:`~.solid.ElementKernel`, so one Newton iteration makes one batched
-kernel call for every flexure, and its :meth:`~ContinuumGroup.assembler`
-adds the gradient and tangent straight into the core's global arrays
+:class:`ContinuumGroup` numbers the nodes of its connectors one after the
+other (:meth:`~.solid.ElementKernel.stack`) and its
+:meth:`~ContinuumGroup.assembler` adds the gradient and tangent straight
+into the core's global arrays
 (:meth:`reducedmodels.connector.ConnectorGroup.assembler`): every element
 entry goes to the storage slot of its nodal dofs' first expansion (a free
-coordinate, or an end face's body translation) in one ``bincount`` with
-slots worked out once; only the few entries of end-face nodes add their
-rotation terms separately. This is the chain rule of
+coordinate, or an end face's body translation) in one ``bincount`` per
+flexure with slots worked out once; only the few entries of end-face nodes
+add their rotation terms separately. This is the chain rule of
 :class:`.connector.ContinuumConnector` (``g = T^T f``, ``H = T^T K T`` plus
 the faces' second derivatives) without building the per-connector Hessian
-values and concatenating them. Units: mm, N, N mm, rad.
+values and concatenating them. The predictor and the Newton update of all
+flexures are one set of array operations (:mod:`.polar`).
+Units: mm, N, N mm, rad.
 """
 
 from __future__ import annotations
@@ -114,7 +116,7 @@ class ContinuumGroup(ConnectorGroup):
         n_faces = 2 * len(self.connectors)
         pose_at, free_at, first_dof, theta_dof, slot_first = [], [], [], [], []
         extra_src, extra_p, extra_q, extra_slot, second_slot = [], [], [], [], []
-        block = hess_block = entries = face_dofs = 0
+        block = hess_block = face_dofs = 0
         unit = 2 * self._face_nodes.size        # coefficient index of "1" (not a face rotation)
         for c in self.connectors:
             local = slice(block, block + 6 + c.n_internal)
@@ -143,35 +145,37 @@ class ContinuumGroup(ConnectorGroup):
                 coef_at[c._theta_pos[s]] = face_dofs + np.arange(c._theta_pos[s].size)
                 face_dofs += c._theta_pos[s].size
             rest = ~is_first
-            extra_src.append(t_mixed[rest] + entries)
+            extra_src.append(t_mixed[rest])
             extra_p.append(coef_at[p_mixed[rest]])
             extra_q.append(coef_at[q_mixed[rest]])
             extra_slot.append(slots[n_plain:n_plain + t_mixed.size][rest])
             second_slot.append(slots[-2:])
             block += 6 + c.n_internal
             hess_block += c._rows.size
-            entries += c.solid.rows.size
         pose_at = np.array(pose_at)
         free_at = np.concatenate(free_at)
         first_dof = np.concatenate(first_dof)
         theta_dof = np.array(theta_dof)
-        slot_first = np.concatenate(slot_first)
-        extra_src, extra_slot = np.concatenate(extra_src), np.concatenate(extra_slot)
-        extra_p, extra_q = np.concatenate(extra_p), np.concatenate(extra_q)
         second_slot = np.concatenate(second_slot)
-        # dropped entries (the ground's) go to one spare slot past the range used
-        kept = slot_first >= 0
-        lo, hi = int(slot_first[kept].min()), int(slot_first[kept].max()) + 1
-        slot_first = np.where(kept, slot_first - lo, hi - lo)
+        # one chunk of elements per flexure: its temporaries stay in cache (stacking
+        # all flexures into one call measured slower on the open chain) and its
+        # entries fall in a narrow range of the storage; dropped entries (the
+        # ground's) go to one spare slot past that range
+        chunks = []
+        start = np.cumsum([0] + [c.solid.elements.shape[0] for c in self.connectors])
+        for k, first in enumerate(slot_first):
+            kept = first >= 0
+            lo, hi = int(first[kept].min()), int(first[kept].max()) + 1
+            keep_extra = extra_slot[k] >= 0
+            chunks.append((self.kernel.subset(np.arange(start[k], start[k + 1])), lo, hi,
+                           np.where(kept, first - lo, hi - lo), extra_src[k][keep_extra],
+                           extra_p[k][keep_extra], extra_q[k][keep_extra],
+                           extra_slot[k][keep_extra]))
         grad_kept = np.flatnonzero(first_dof >= 0)
         grad_kept_dof = first_dof[grad_kept]
         theta_kept = np.flatnonzero(theta_dof >= 0)
-        extra_kept = extra_slot >= 0
-        extra_src, extra_p, extra_q = extra_src[extra_kept], extra_p[extra_kept], extra_q[extra_kept]
-        extra_slot = extra_slot[extra_kept]
         second_kept = np.flatnonzero(second_slot >= 0)
         nodes, free, face_nodes, face_of = self._nodes, self._free, self._face_nodes, self._face_of
-        kernel = self.kernel
 
         def assemble(coordinates: np.ndarray, grad: np.ndarray, storage: np.ndarray) -> float:
             poses = coordinates[pose_at]
@@ -179,17 +183,20 @@ class ContinuumGroup(ConnectorGroup):
             x = nodes.copy()
             x[free] += coordinates[free_at].reshape(-1, 2)
             x[face_nodes] = poses[face_of, :2] + arms
-            energy, forces, Ke = kernel.evaluate(x)
+            jac = np.column_stack([-arms[:, 1], arms[:, 0]])            # d x / d theta
+            coef = np.append(jac.ravel(), 1.0)
+            energy, forces = 0.0, 0.0
+            for kernel, lo, hi, slots, src, p, q, extra in chunks:
+                e, f, Ke = kernel.evaluate(x)
+                energy, forces = energy + e, forces + f
+                values = Ke.ravel()
+                storage[lo:hi] += np.bincount(slots, weights=values, minlength=hi - lo + 1)[:-1]
+                np.add.at(storage, extra, values[src] * coef[p] * coef[q])
             grad += np.bincount(grad_kept_dof, weights=forces[grad_kept], minlength=grad.size)
             f_face = forces.reshape(-1, 2)[face_nodes]
-            jac = np.column_stack([-arms[:, 1], arms[:, 0]])            # d x / d theta
             moment = np.bincount(face_of, weights=np.einsum("ij,ij->i", f_face, jac),
                                  minlength=n_faces)
             np.add.at(grad, theta_dof[theta_kept], moment[theta_kept])   # bodies may repeat
-            values = Ke.ravel()
-            storage[lo:hi] += np.bincount(slot_first, weights=values, minlength=hi - lo + 1)[:-1]
-            coef = np.append(jac.ravel(), 1.0)
-            np.add.at(storage, extra_slot, values[extra_src] * coef[extra_p] * coef[extra_q])
             second = np.bincount(face_of, weights=-np.einsum("ij,ij->i", f_face, arms),
                                  minlength=n_faces)
             np.add.at(storage, second_slot[second_kept], second[second_kept])
