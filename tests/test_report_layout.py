@@ -112,3 +112,12 @@ def test_two_workers_write_what_one_writes(computed, tmp_path):
     assert figures == sorted(p.name for p in (tmp_path / "two").glob("*.png"))
     for name in RESULT_FILES + tuple(f for f in figures if not f.startswith("bench_")):
         assert (tmp_path / "one" / name).read_bytes() == (tmp_path / "two" / name).read_bytes()
+
+
+def test_a_path_computed_in_this_run_is_not_called_cached(computed, tmp_path):
+    """beam:100 runs in the campaign and again (from memory) in the bench: computed once,
+    and timings.json says it was computed, not read from the disk cache."""
+    _, data = computed
+    write_report(data, tmp_path)
+    paths = json.loads((tmp_path / "timings.json").read_text())["scenes"]["tiny"]["paths"]
+    assert paths and not any(p["cached"] for p in paths)

@@ -76,7 +76,8 @@ class RunMemo:
         self.paths: dict[str, LoadPath] = {}
 
     def remember(self, key: str, lp: LoadPath) -> None:
-        """Keep ``lp`` (returned by a worker's :func:`timed_run`) under ``key``."""
+        """Keep ``lp`` (returned by a worker's :func:`timed_run`) under ``key``; unless it
+        came from the disk cache it is marked as computed by this command."""
         lp.stats.setdefault("cached", False)
         self.paths[key] = lp
 
@@ -86,9 +87,9 @@ class RunMemo:
         return hit if hit is not None else self.disk.get(key)
 
     def put(self, key: str, lp: LoadPath) -> None:
-        """Store ``lp`` in memory and in the disk cache."""
-        self.paths[key] = lp
+        """Store ``lp`` (just computed) in the disk cache and in memory."""
         self.disk.put(key, lp)
+        self.remember(key, lp)
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,12 @@
 :func:`compute_report` runs every requested model on every load case of each
 scene (cached), the measuring-frame variants, the runtime-versus-error and
 convergence studies, and returns a :class:`ReportData`; the renderers of
-:mod:`validation.report` only format it. A model that fails on a load case
+:mod:`validation.report` and :mod:`validation.timings` only format it. Every
+load path of every study is listed first (``_Plan.jobs``) and, with several
+workers, computed ahead on that many processes
+(:func:`validation.campaign.prefetch`); a path two studies share (the
+reference in the campaign, the bench and the convergence study) is computed
+once. A model that fails on a load case
 is a result (:class:`validation.failures.Failure`), kept beside the paths.
 Everything the report says about a scene comes from its data: the paper's
 figures attach to a scene by its name in ``validation/data/paper_results.toml``,
@@ -392,8 +397,8 @@ class _Plan:
         cases = list(scene.load_cases)
         per_case = list(self.specs)
         per_case += [v for s in self.specs for _, v in _frame_variants(s) if v.id != s.id]
-        if self.reference is not None and _plane_variant(self.reference) is not None:
-            per_case.append(_plane_variant(self.reference))
+        plane = _plane_variant(self.reference) if self.reference is not None else None
+        per_case += [plane] if plane is not None else []
         if self.bench_reference is not None:
             per_case += [self.bench_reference] + sweep_specs(self.bench_reference)
         runs = [(s, c) for s in per_case for c in cases]
