@@ -128,7 +128,8 @@ def test_peak_stress_table_matches_results_json(report):
     for model, cells in rows:
         for case, cell in zip(("up", "twist"), cells.split(" | ")):
             lp, ref = paths[(model, case)], paths[("beam:100", case)]
-            value, err = re.match(r"([\d.e+-]+) MPa at a@[\d.]+ \(([+-][\d.]+) %\)", cell).groups()
+            value, err = re.match(r"([\d.e+-]+) MPa(?: at a@[\d.]+|, uniform) \(([+-][\d.]+) %\)",
+                                  cell).groups()
             peak, ref_peak = lp.peak_stress["a"][-1], ref.peak_stress["a"][-1]
             assert float(value) == pytest.approx(peak, rel=5e-4)       # 4 significant digits
             assert float(err) == pytest.approx(100 * (peak - ref_peak) / ref_peak, abs=0.006)
@@ -242,3 +243,21 @@ def test_findings_name_the_levels_a_model_leaves_its_validity(tmp_path):
     assert (f"- `ee` on `twist` leaves its range of validity from {ee.load[first]:.4g} N mm "
             f"({len(ee.load) - first} of {len(ee.load)} levels)") in text
     assert "`beam:10` on `twist` leaves" not in text
+
+
+def test_peak_stress_in_a_uniform_field_has_no_place():
+    # Under the open chain's pure end moment every section carries the same moment: the
+    # peak's place is round-off, so the table says "uniform"; under f+ it names the place.
+    from geometry import load_scene
+    from reducedmodels.catalogue import parse_model
+    from validation.run import run_model
+    from validation.strength import peak_at_full_load, peak_stress_table
+
+    scene = load_scene("open_chain")
+    cases = {c.name: c for c in scene.load_cases}
+    bent = peak_at_full_load(run_model(scene, parse_model("dcmm:2"), cases["m+"]))
+    pulled = peak_at_full_load(run_model(scene, parse_model("dcmm:2"), cases["f+"]))
+    assert bent["uniform"] and not pulled["uniform"]
+    table = "\n".join(peak_stress_table({"dcmm:2": {"m+": bent, "f+": pulled}}, ["m+", "f+"]))
+    assert f"| `dcmm:2` | {bent['stress']:.4g} MPa, uniform | " in table
+    assert f"{pulled['stress']:.4g} MPa at {pulled['flexure']}@{pulled['at']:.2f}" in table
