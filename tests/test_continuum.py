@@ -33,13 +33,7 @@ from validation.continuum.solid import Solid
 E_MOD, NU = 2100.0, 0.35
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _private_mesh_cache(tmp_path_factory):
-    """Meshes of these tests go to a temporary cache, not the user's."""
-    mp = pytest.MonkeyPatch()
-    mp.setenv("FLEXVAL_CACHE", str(tmp_path_factory.mktemp("flexval_cache")))
-    yield
-    mp.undo()
+pytestmark = pytest.mark.usefixtures("private_mesh_cache")  # meshes go to a temporary cache
 
 
 def cantilever(shape, h: float, b: float = 1.0, nu: float = NU, start_on_ground: bool = True):

@@ -19,13 +19,7 @@ from validation.continuum.group import ContinuumGroup
 from validation.continuum.run import build_system
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _private_mesh_cache(tmp_path_factory):
-    """Meshes of these tests go to a temporary cache, not the user's."""
-    mp = pytest.MonkeyPatch()
-    mp.setenv("FLEXVAL_CACHE", str(tmp_path_factory.mktemp("flexval_cache")))
-    yield
-    mp.undo()
+pytestmark = pytest.mark.usefixtures("private_mesh_cache")  # meshes go to a temporary cache
 
 
 @pytest.mark.parametrize("scene_name", ["closed_chain", "open_chain"])

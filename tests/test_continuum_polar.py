@@ -19,13 +19,7 @@ from validation.continuum import ContinuumConnector
 from validation.continuum.polar import cross_sections, from_polar, stack_sections, to_polar
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _private_mesh_cache(tmp_path_factory):
-    """Meshes of these tests go to a temporary cache, not the user's."""
-    mp = pytest.MonkeyPatch()
-    mp.setenv("FLEXVAL_CACHE", str(tmp_path_factory.mktemp("flexval_cache")))
-    yield
-    mp.undo()
+pytestmark = pytest.mark.usefixtures("private_mesh_cache")  # meshes go to a temporary cache
 
 
 ARC = Arc((0.0, 0.0), 3.0, math.radians(60.0), math.radians(200.0))

@@ -202,14 +202,8 @@ class ContinuumConnector(Connector):
     def update_internal(self, old: LocalState, new: LocalState) -> np.ndarray:
         """Interior nodes after a Newton correction, turned section by section (mm).
 
-        ``new`` is the linearly corrected state. The correction becomes
-        first-order changes of the chords, section rotations and offsets
-        (:func:`.polar.increment`; the end faces move with the linearised
-        motion of their bodies), applied as finite turns between the end
-        faces at the new poses. This agrees with the linear update to first
-        order, so Newton stays quadratic, but a section that turns by dphi no
-        longer comes out stretched by dphi^2 / 2, which the membrane
-        stiffness would turn into forces far above the load.
+        ``new`` is the linearly corrected state; the rule (and why) is
+        :meth:`.group.ContinuumGroup.update_internal`'s, for this one flexure.
         """
         return self._alone.update_internal([old], [new])
 
