@@ -95,7 +95,7 @@ from geometry import Flexure, Mechanism
 from geometry.kinematics import rotate_xy
 from geometry.shapes import Shape, arc_semi_axes
 
-from .connector import Connector
+from .connector import Connector, ConnectorGroup
 from .inertia import MassPoints, rigid_pieces
 from .sections import SectionForces, polyline_fractions, statics_section_forces
 from .validity import MAX_STRAIN, SCREEN_MARGIN, rotation_reasons, stretch_reasons
@@ -322,27 +322,42 @@ class PrbmConnector(Connector):
         """Local (rows, cols) of the Hessian values :meth:`evaluate` returns (see _HESSIAN_PATTERN)."""
         return _HESSIAN_ROWS, _HESSIAN_COLS
 
+    @classmethod
+    def group(cls, connectors) -> "PrbmGroup":
+        """The PRBM connectors of a run, evaluated into one array of each kind (:class:`PrbmGroup`)."""
+        return PrbmGroup(connectors)
+
     def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
                  ) -> tuple[float, np.ndarray, np.ndarray]:
         """Lagrangian (N mm), gradient (10) and Hessian values over [pose_a, pose_b, internal].
 
-        Local order: [x_a, y_a, theta_a, x_b, y_b, theta_b, phi_h, phi_l, mu_x, mu_y].
+        Local order: [x_a, y_a, theta_a, x_b, y_b, theta_b, phi_h, phi_l, mu_x, mu_y];
+        the values of :meth:`terms` as arrays.
+        """
+        energy, gradient, hessian = self.terms(pose_a, pose_b, internal)
+        return energy, np.array(gradient), np.array(hessian)
+
+    def terms(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+              ) -> tuple[float, list[float], list[float]]:
+        """:meth:`evaluate`'s Lagrangian (N mm), gradient and Hessian values as plain float lists.
+
         With the gap g and its Jacobian G (identity on x_a, minus identity on
         x_b, J R(.) v on the four angles), the springs t = B q and the scale
         c: gradient B^T K t + c G^T mu (and c g on mu), Hessian B^T K B plus
         the curvature of the gap, c mu . d2(R v)/dangle2 = -c mu . R v, on the
         four angle diagonals, plus c G and c G^T in the mu rows and columns.
         Written with scalars (the innermost loop; small numpy arrays cost
-        more than the algebra).
+        more than the algebra), so that a group of connectors makes one array
+        of each kind (:class:`PrbmGroup`).
         """
         c = self.closure_scale
-        _, _, ta = pose_a.tolist()
-        _, _, tb = pose_b.tolist()
+        xa, ya, ta = pose_a.tolist()
+        xb, yb, tb = pose_b.tolist()
         ph, pl, mx, my = internal.tolist()
         (rax, ray), (rbx, rby) = rotate_xy(ta, *self._r_a), rotate_xy(tb, *self._r_b)
         (vhx, vhy), (vlx, vly) = rotate_xy(ph, *self._v_h), rotate_xy(pl, *self._v_l)
-        gx = pose_a[0] + rax + vhx + vlx - pose_b[0] - rbx
-        gy = pose_a[1] + ray + vhy + vly - pose_b[1] - rby
+        gx = xa + rax + vhx + vlx - xb - rbx
+        gy = ya + ray + vhy + vly - yb - rby
         # gap Jacobian columns on the angles: J R v = (-y, x)
         ga, gb, gh, gl = (-ray, rax), (rby, -rbx), (-vhy, vhx), (-vly, vlx)
         k1, k2, k3 = self._k
@@ -350,18 +365,18 @@ class PrbmConnector(Connector):
         f1, f2, f3 = k1 * t1, k2 * t2, k3 * t3
         cmx, cmy = c * mx, c * my
         energy = 0.5 * (f1 * t1 + f2 * t2 + f3 * t3) + cmx * gx + cmy * gy
-        grad = np.array([
+        grad = [
             cmx, cmy, -f1 + cmx * ga[0] + cmy * ga[1],
             -cmx, -cmy, f3 + cmx * gb[0] + cmy * gb[1],
             f1 - f2 + cmx * gh[0] + cmy * gh[1], f2 - f3 + cmx * gl[0] + cmy * gl[1],
-            c * gx, c * gy])
+            c * gx, c * gy]
         mixed = [c * ga[0], c * gb[0], c * gh[0], c * gl[0],
                  c * ga[1], c * gb[1], c * gh[1], c * gl[1]]
         values = [k1 - cmx * rax - cmy * ray, -k1, -k1, k1 + k2 - cmx * vhx - cmy * vhy,
                   -k2, -k2, k2 + k3 - cmx * vlx - cmy * vly, -k3, -k3,
                   k3 + cmx * rbx + cmy * rby,
                   c, -c, c, -c, *mixed, c, -c, c, -c, *mixed]
-        return energy, grad, np.array(values)
+        return energy, grad, values
 
     def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
                  ) -> list[str]:
@@ -436,7 +451,28 @@ class PrbmConnector(Connector):
 
     def path_section_forces(self, states) -> SectionForces:
         """:meth:`section_forces` at k states (a load path), stacked (k, m), in one pass."""
-        wrenches = np.array([self.evaluate(*state)[1][3:6] for state in states])
+        wrenches = np.array([self.terms(*state)[1][3:6] for state in states])
         return statics_section_forces(self._polylines(states), self._fractions, wrenches,
                                       np.array([state[1] for state in states]),
                                       reverse=not self._forward)
+
+
+class PrbmGroup(ConnectorGroup):
+    """PRBM connectors evaluated together (:meth:`PrbmConnector.group`).
+
+    The same values as :class:`~reducedmodels.connector.ConnectorGroup`'s
+    connector-by-connector evaluation, with one array of all the gradients
+    and one of all the Hessian values made from the connectors' float lists
+    (:meth:`PrbmConnector.terms`) instead of two small arrays per connector
+    concatenated.
+    """
+
+    def evaluate(self, states) -> tuple[float, np.ndarray, np.ndarray]:
+        """Total energy (N mm), concatenated gradients and concatenated Hessian values."""
+        energy, gradients, hessians = 0.0, [], []
+        for c, (pose_a, pose_b, internal) in zip(self.connectors, states):
+            e, g, h = c.terms(pose_a, pose_b, internal)
+            energy += e
+            gradients += g
+            hessians += h
+        return energy, np.array(gradients), np.array(hessians)
