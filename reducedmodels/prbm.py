@@ -278,7 +278,8 @@ class PrbmConnector(Connector):
                                          joints[1] - joints[0], joints[2] - joints[1]))
         self._ends = ends                         # flexure end points on a and b
         self.length = length
-        self._end_rel = [tuple((self._ends[k] - self._ref[k]).tolist()) for k in (0, 1)]
+        self._end_rel_a, self._end_rel_b = (tuple((self._ends[k] - self._ref[k]).tolist())
+                                            for k in (0, 1))
         self._fitted_rotation = fitted_rotation()
         self._area = flexure.section.area
         self._shape = shape
@@ -390,7 +391,7 @@ class PrbmConnector(Connector):
         :mod:`reducedmodels.validity`. (Plain floats: it runs at every level.)
         """
         (xa, ya, ta), (xb, yb, tb) = pose_a.tolist(), pose_b.tolist()
-        ea, eb = rotate_xy(ta, *self._end_rel[0]), rotate_xy(tb, *self._end_rel[1])
+        ea, eb = rotate_xy(ta, *self._end_rel_a), rotate_xy(tb, *self._end_rel_b)
         chord = math.hypot(xb + eb[0] - xa - ea[0], yb + eb[1] - ya - ea[1])
         turn = tb - ta
         if chord / self.length - 1.0 <= MAX_STRAIN and abs(turn) <= self._fitted_rotation:
@@ -400,40 +401,12 @@ class PrbmConnector(Connector):
                 + rotation_reasons("end rotation", np.array([turn]), self._fitted_rotation))
 
     def path_validity(self, states) -> list[list[str]]:
-        """:meth:`validity` at k states, screened in one vectorised pass.
-
-        Only states whose chord stretch or end rotation comes within
-        :data:`~reducedmodels.validity.SCREEN_MARGIN` of its limit (or
-        beyond) are judged one by one.
-        """
-        ends = self._polylines(states)[:, [0, -1]]
-        chord = np.hypot(*(ends[:, 1] - ends[:, 0]).T)
-        turn = np.abs(np.array([state[1][2] - state[0][2] for state in states]))
-        near = ((chord / self.length - 1.0 > MAX_STRAIN - SCREEN_MARGIN)
-                | (turn > self._fitted_rotation - SCREEN_MARGIN)).tolist()
-        return [self.validity(*state) if flag else [] for state, flag in zip(states, near)]
+        """:meth:`validity` at k states, screened in one vectorised pass (:meth:`PrbmGroup.path_validity`)."""
+        return PrbmGroup([self]).path_validity([[state] for state in states])[0]
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Polyline end_a, R_a, R_2, R_b, end_b in the current configuration, (5, 2) mm."""
-        return self._polylines([(pose_a, pose_b, internal)])[0]
-
-    def _polylines(self, states) -> np.ndarray:
-        """The polylines of :meth:`shape` at k local states, (k, 5, 2) mm."""
-        poses = np.array([[*pose_a, *pose_b, internal[0]] for pose_a, pose_b, internal in states])
-        xa, ya, ta, xb, yb, tb, ph = poses.T
-        ca, sa, cb, sb, ch, sh = np.cos(ta), np.sin(ta), np.cos(tb), np.sin(tb), np.cos(ph), np.sin(ph)
-
-        def turned(c, s, v):       # R(angle) v, as rotate_xy
-            return c * v[0] - s * v[1], s * v[0] + c * v[1]
-
-        (eax, eay), (rax, ray) = turned(ca, sa, self._end_rel[0]), turned(ca, sa, self._r_a)
-        (ebx, eby), (rbx, rby) = turned(cb, sb, self._end_rel[1]), turned(cb, sb, self._r_b)
-        vhx, vhy = turned(ch, sh, self._v_h)
-        jax, jay = xa + rax, ya + ray
-        out = np.empty((len(states), 5, 2))
-        out[:, :, 0] = np.column_stack([xa + eax, jax, jax + vhx, xb + rbx, xb + ebx])
-        out[:, :, 1] = np.column_stack([ya + eay, jay, jay + vhy, yb + rby, yb + eby])
-        return out
+        return PrbmGroup([self]).polylines([[(pose_a, pose_b, internal)]])[0, 0]
 
     def section_forces(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray,
                        gradient: np.ndarray | None = None) -> SectionForces:
@@ -451,10 +424,7 @@ class PrbmConnector(Connector):
 
     def path_section_forces(self, states) -> SectionForces:
         """:meth:`section_forces` at k states (a load path), stacked (k, m), in one pass."""
-        wrenches = np.array([self.terms(*state)[1][3:6] for state in states])
-        return statics_section_forces(self._polylines(states), self._fractions, wrenches,
-                                      np.array([state[1] for state in states]),
-                                      reverse=not self._forward)
+        return PrbmGroup([self]).path_section_forces([[state] for state in states])[0]
 
 
 class PrbmGroup(ConnectorGroup):
@@ -464,8 +434,17 @@ class PrbmGroup(ConnectorGroup):
     connector-by-connector evaluation, with one array of all the gradients
     and one of all the Hessian values made from the connectors' float lists
     (:meth:`PrbmConnector.terms`) instead of two small arrays per connector
-    concatenated.
+    concatenated. A load path's validity and section forces use the
+    polylines of all the connectors at all the levels, computed in one set
+    of array operations (:meth:`polylines`).
     """
+
+    def __init__(self, connectors):
+        super().__init__(connectors)
+        #: end offsets from bodies a and b, joint offsets R_a, R_b and link h, each (c, 2) mm
+        self._end_a, self._end_b, self._r_a, self._r_b, self._v_h = (
+            np.array([getattr(c, name) for c in self.connectors])
+            for name in ("_end_rel_a", "_end_rel_b", "_r_a", "_r_b", "_v_h"))
 
     def evaluate(self, states) -> tuple[float, np.ndarray, np.ndarray]:
         """Total energy (N mm), concatenated gradients and concatenated Hessian values."""
@@ -476,3 +455,59 @@ class PrbmGroup(ConnectorGroup):
             gradients += g
             hessians += h
         return energy, np.array(gradients), np.array(hessians)
+
+    def polylines(self, levels) -> np.ndarray:
+        """Each connector's polyline end_a, R_a, R_2, R_b, end_b at k levels, (k, c, 5, 2) mm.
+
+        ``levels`` holds, for each level, the connectors' local states in order.
+        """
+        poses = np.array([[[*pose_a, *pose_b, internal[0]] for pose_a, pose_b, internal in states]
+                          for states in levels]).reshape(len(levels), len(self.connectors), 7)
+        xa, ya, ta, xb, yb, tb, ph = np.moveaxis(poses, -1, 0)
+        ca, sa, cb, sb, ch, sh = np.cos(ta), np.sin(ta), np.cos(tb), np.sin(tb), np.cos(ph), np.sin(ph)
+
+        def turned(c, s, v):       # R(angle) v, as rotate_xy, for each connector's v (c, 2)
+            return c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]
+
+        (eax, eay), (rax, ray) = turned(ca, sa, self._end_a), turned(ca, sa, self._r_a)
+        (ebx, eby), (rbx, rby) = turned(cb, sb, self._end_b), turned(cb, sb, self._r_b)
+        vhx, vhy = turned(ch, sh, self._v_h)
+        jax, jay = xa + rax, ya + ray
+        out = np.empty((*xa.shape, 5, 2))
+        out[..., 0] = np.stack([xa + eax, jax, jax + vhx, xb + rbx, xb + ebx], axis=-1)
+        out[..., 1] = np.stack([ya + eay, jay, jay + vhy, yb + rby, yb + eby], axis=-1)
+        return out
+
+    def path_validity(self, levels) -> list[list[list[str]]]:
+        """Each connector's :meth:`PrbmConnector.validity` at each level, screened in one pass.
+
+        Only (level, connector) pairs whose chord stretch or end rotation
+        comes within :data:`~reducedmodels.validity.SCREEN_MARGIN` of its
+        limit (or beyond) are judged by the scalar check.
+        """
+        ends = self.polylines(levels)[:, :, [0, -1]]
+        chord = np.hypot(*np.moveaxis(ends[:, :, 1] - ends[:, :, 0], -1, 0))
+        turn = np.abs(np.array([[pose_b[2] - pose_a[2] for pose_a, pose_b, _ in states]
+                                for states in levels])).reshape(chord.shape)
+        length = np.array([c.length for c in self.connectors])
+        fitted = np.array([c._fitted_rotation for c in self.connectors])
+        near = ((chord / length - 1.0 > MAX_STRAIN - SCREEN_MARGIN)
+                | (turn > fitted - SCREEN_MARGIN)).T.tolist()
+        return [[c.validity(*states[j]) if flag else [] for states, flag in zip(levels, flags)]
+                for j, (c, flags) in enumerate(zip(self.connectors, near))]
+
+    def path_section_forces(self, levels) -> list[SectionForces]:
+        """Each connector's :meth:`PrbmConnector.section_forces` at k levels, stacked (k, m).
+
+        The polylines of all the connectors come from one :meth:`polylines`;
+        each connector's wrench is carried by statics along its own.
+        """
+        lines = self.polylines(levels)
+        out = []
+        for j, c in enumerate(self.connectors):
+            states = [level[j] for level in levels]
+            wrenches = np.array([c.terms(*state)[1][3:6] for state in states])
+            out.append(statics_section_forces(lines[:, j], c._fractions, wrenches,
+                                              np.array([state[1] for state in states]),
+                                              reverse=not c._forward))
+        return out
