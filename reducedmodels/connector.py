@@ -323,6 +323,17 @@ class ConnectorGroup:
         return [c.path_section_forces([states[j] for states in levels])
                 for j, c in enumerate(self.connectors)]
 
+    def section_forces(self, states: Sequence[LocalState], gradients: Sequence[np.ndarray]
+                       ) -> list["SectionForces | None"]:
+        """Each connector's :meth:`Connector.section_forces` at its state with a known gradient.
+
+        ``states`` and ``gradients`` hold each connector's local state and
+        local energy gradient (e.g. a linear response's K0 dq), in the order
+        of :attr:`connectors`. Default: connector by connector.
+        """
+        return [c.section_forces(*local, gradient=g)
+                for c, local, g in zip(self.connectors, states, gradients)]
+
     def predict_internal(self, past: Sequence[Sequence[LocalState]], weights: Sequence[float],
                          poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
         """The connectors' predicted internal coordinates for the next load step, concatenated.

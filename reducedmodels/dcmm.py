@@ -390,13 +390,10 @@ class DcmmConnector(Connector):
         rotations. ``gradient`` (a linear response's K0 dq) gives the
         flexure's end wrench instead, carried along every sub-arc.
         """
-        group, levels = DcmmGroup([self]), [[(pose_a, pose_b, internal)]]
-        if gradient is None:
-            forces = group.path_section_forces(levels)[0]
-        else:
-            poses = group.stack().poses(levels)
-            forces = group.statics(poses, np.asarray(gradient, float)[None, None, 3:6],
-                                   poses[:, -1:])[0]
+        group, state = DcmmGroup([self]), (pose_a, pose_b, internal)
+        if gradient is not None:
+            return group.section_forces([state], [gradient])[0]
+        forces = group.path_section_forces([[state]])[0]
         return SectionForces(forces.at, forces.axial[0], forces.moment[0])
 
     def path_section_forces(self, states) -> SectionForces:
@@ -543,6 +540,20 @@ class DcmmGroup(ConnectorGroup):
         wrenches = np.array([[sub_arc_energy(chain[b], chain[b + 1], *element)[1][3:6]
                               for b, element in zip(body, stack.elements)] for chain in poses])
         return self.statics(poses, wrenches[:, stack.sub_arc])
+
+    def section_forces(self, states, gradients) -> list[SectionForces]:
+        """Each connector's :meth:`DcmmConnector.section_forces` with a known gradient, in one pass.
+
+        Each connector's end wrench (its gradient on body b's pose) carried
+        along all its sub-arcs to its samples, every connector's samples at once.
+        """
+        stack = self.stack()
+        poses = stack.poses([states])
+        counts = np.diff(stack.sample_start)
+        wrenches = np.repeat(np.array([np.asarray(g, float)[3:6] for g in gradients]), counts,
+                             axis=0)
+        forces = self.statics(poses, wrenches[None], poses[:, np.repeat(stack.last, counts)])
+        return [SectionForces(f.at, f.axial[0], f.moment[0]) for f in forces]
 
     def statics(self, poses: np.ndarray, wrenches: np.ndarray, end: np.ndarray | None = None
                 ) -> list[SectionForces]:

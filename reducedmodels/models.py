@@ -176,15 +176,20 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
         return [local_hessian_product(c, h, np.concatenate(m) - np.concatenate(r))
                 for c, h, r, m in zip(system.connectors, hessians, rest, moved)]
 
+    def section_forces(gradients: list[np.ndarray]) -> list:
+        return [forces for group, run in system.groups
+                for forces in group.section_forces(rest[run], gradients[run])]
+
     per_unit = section_gradients(dq)
     sections = {f.name: f.section for f in mech.flexures}
     if has_weights:
         of_weights = section_gradients(dq_dead)
         for factor in lam:
-            record_stress(lp, system.connectors, rest, sections,
-                          gradients=[w + factor * g for w, g in zip(of_weights, per_unit)])
+            record_stress(lp, system.connectors,
+                          section_forces([w + factor * g for w, g in zip(of_weights, per_unit)]),
+                          sections)
     else:                   # section forces proportional to the load
-        record_stress(lp, system.connectors, rest, sections, lam, per_unit)
+        record_stress(lp, system.connectors, section_forces(per_unit), sections, lam)
     lp.seconds = time.perf_counter() - t0
     return lp
 

@@ -168,38 +168,34 @@ def path_validity(system: System, levels: Sequence[Sequence]) -> list[list[str]]
     return reasons
 
 
-def record_stress(path: LoadPath, connectors, states, sections: dict,
-                  scales: Sequence[float] = (1.0,), gradients=None) -> None:
+def record_stress(path: LoadPath, connectors, forces, sections: dict,
+                  scales: Sequence[float] = (1.0,)) -> None:
     """Append each flexure's peak outer-fibre stress (MPa) at one state, scaled, to ``path``.
 
     The linear response's form: one level is appended per entry of
     ``scales``, with the section forces times it (the load factors of a
     linear response, whose section forces are computed once). Connectors
-    whose :meth:`~reducedmodels.connector.Connector.section_forces` is None
-    (pins) are skipped; the stress profile is kept for the last level only
-    (``path.stress_profile``).
+    without section forces (None: pins) or without a section are skipped;
+    the stress profile is kept for the last level only (``path.stress_profile``).
 
     Parameters
     ----------
     path : LoadPath
-    connectors, states :
-        The system's connectors and their local states.
+    connectors, forces :
+        The system's connectors and their section forces (N, N mm) at the
+        state (:meth:`~reducedmodels.connector.ConnectorGroup.section_forces`).
     sections : dict of flexure name -> Section
     scales : sequence of float
         The factors of the levels to append.
-    gradients : list, optional
-        Each connector's local gradient if already known (see ``section_forces``).
     """
-    for k, (c, local) in enumerate(zip(connectors, states)):
+    for c, found in zip(connectors, forces):
         section = sections.get(c.name)
-        forces = None if section is None else c.section_forces(
-            *local, gradient=None if gradients is None else gradients[k])
-        if forces is None:
+        if section is None or found is None:
             continue
-        unit = forces.fibre_stress(section)
+        unit = found.fibre_stress(section)
         peak = int(np.argmax(unit))
         _append_stress(path, c.name, [float(abs(f) * unit[peak]) for f in scales],
-                       [float(forces.at[peak])] * len(scales), forces.at,
+                       [float(found.at[peak])] * len(scales), found.at,
                        abs(scales[-1]) * unit)
 
 

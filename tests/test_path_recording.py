@@ -53,6 +53,22 @@ def test_one_pass_verdicts_and_forces_are_the_state_by_state_ones(model):
         check_stacked(c, states, c.path_section_forces(states))
 
 
+@pytest.mark.parametrize("model", MODELS)
+def test_group_forces_of_given_gradients_are_each_connectors_own(model):
+    """A group's section forces from known gradients (the linear response's) are each connector's, bit for bit."""
+    system, levels = overloaded_states(model, 1.0)
+    states = levels[-1]
+    gradients = [c.evaluate(*local)[1] for c, local in zip(system.connectors, states)]
+    for group, run in system.groups:
+        together = group.section_forces(states[run], gradients[run])
+        for c, local, g, forces in zip(group.connectors, states[run], gradients[run], together):
+            alone = c.section_forces(*local, gradient=g)
+            assert np.array_equal(alone.at, forces.at)
+            assert np.array_equal(alone.axial, forces.axial)
+            assert np.array_equal(alone.moment, forces.moment)
+            assert np.ptp(alone.moment) > 0.0          # a load that bends the flexure
+
+
 def check_stacked(c, states, stacked):
     """The connector's stacked forces are its state-by-state ones, bit for bit."""
     for row, state in enumerate(states):
