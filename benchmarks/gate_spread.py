@@ -55,7 +55,8 @@ def spread(variant: tuple[float, float, float]) -> tuple[float, float, int]:
                     for m in (model, ref):
                         if (scene_name, m, case) not in paths:
                             paths[scene_name, m, case] = trace(scene, m, case, settings)
-                    got = errors(paths[scene_name, model, case], paths[scene_name, ref, case])
+                    got = errors(paths[scene_name, model, case], paths[scene_name, ref, case],
+                                 scene.mechanism.size())
                     for metric in GATED:
                         change = abs(got[metric] - was[metric])
                         worst_abs = max(worst_abs, change)

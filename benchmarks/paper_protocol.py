@@ -47,7 +47,7 @@ from reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
 from reducedmodels.models import build_system
 from reducedmodels.modes import natural_modes
 from reducedmodels.recorder import solve_path
-from validation.compare import errors, paper_percent
+from validation.compare import denominator, errors, paper_percent, scale_of
 from validation.outputs import write_text
 
 RHO_INF = 0.9
@@ -77,14 +77,17 @@ class EndState:
     failure: str | None = None
 
 
-def end_errors(model: EndState, ref: EndState) -> tuple[float, float]:
+def end_errors(model: EndState, ref: EndState, scale: dict[str, float]) -> tuple[float, float]:
     """Displacement-vector and rotation errors (percent) of ``model`` against ``ref``.
 
-    Same formulas as ``end_disp_vec`` and ``end_rot`` of :func:`validation.compare.errors`.
+    Same formulas as ``end_disp_vec`` and ``end_rot`` of :func:`validation.compare.errors`,
+    a reference value near zero measured against ``scale`` (``{"disp": mm, "rot": rad}``,
+    :func:`validation.compare.scale_of` of the reference's static path).
     """
     d_ref = math.hypot(ref.dx, ref.dy)
-    return (100.0 * math.hypot(model.dx - ref.dx, model.dy - ref.dy) / d_ref,
-            100.0 * abs(model.rotation - ref.rotation) / abs(ref.rotation))
+    return (100.0 * math.hypot(model.dx - ref.dx, model.dy - ref.dy)
+            / denominator(d_ref, scale["disp"]),
+            100.0 * abs(model.rotation - ref.rotation) / denominator(ref.rotation, scale["rot"]))
 
 
 def with_masses(scene: Scene) -> tuple[Scene, str]:
@@ -172,13 +175,22 @@ class Row:
 def rows(runs: dict[str, ModelRuns], reference: str, models: list[str]) -> list[Row]:
     """One :class:`Row` per model and grid cell (grid order, then model order)."""
     ref = runs[reference]
+    scale = reference_scale(runs, reference)
     out = []
     for p in ref.dynamic:
         for m in models:
             end = runs[m].dynamic[p]
-            out.append(Row(m, p, end_errors(end, ref.dynamic[p]), end_errors(end, ref.static),
-                           end_errors(end, runs[m].static)))
+            out.append(Row(m, p, end_errors(end, ref.dynamic[p], scale),
+                           end_errors(end, ref.static, scale),
+                           end_errors(end, runs[m].static, scale)))
     return out
+
+
+def reference_scale(runs: dict[str, ModelRuns], reference: str) -> dict[str, float]:
+    """The scales (mm, rad) every end state is measured against: those of the reference's
+    static path on the mechanism's size (:func:`validation.compare.scale_of`)."""
+    ref = runs[reference]
+    return scale_of(ref.static_path, ref.system.mechanism.size())
 
 
 def static_errors(runs: dict[str, ModelRuns], reference: str, models: list[str]
@@ -186,7 +198,8 @@ def static_errors(runs: dict[str, ModelRuns], reference: str, models: list[str]
     """Static end-of-ramp errors (disp vector, rot; percent) by model, via validation.compare."""
     out = {}
     for m in models:
-        e = errors(runs[m].static_path, runs[reference].static_path)
+        e = errors(runs[m].static_path, runs[reference].static_path,
+                   runs[reference].system.mechanism.size())
         out[m] = (e["end_disp_vec"], e["end_rot"])
     return out
 

@@ -71,6 +71,11 @@ def _path(scene_name: str, model: str, case: str):
     return _CACHE[key]
 
 
+def _size(scene_name: str) -> float:
+    """The scene's mechanism size (mm), which :func:`errors` measures near-zero values with."""
+    return load_scene(scene_name).mechanism.size()
+
+
 @pytest.mark.parametrize("scene_name,reference,case", list(_cases()))
 def test_no_error_figure_moved(scene_name, reference, case):
     base = _baseline()[scene_name][reference]
@@ -78,7 +83,7 @@ def test_no_error_figure_moved(scene_name, reference, case):
     for model, per_case in base.items():
         if case not in per_case:
             continue
-        got = errors(_path(scene_name, model, case), ref)
+        got = errors(_path(scene_name, model, case), ref, _size(scene_name))
         for metric in GATED:
             was = per_case[case][metric]
             assert abs(got[metric] - was) <= GATE_TOL, (
@@ -94,8 +99,10 @@ def test_fem_agrees_with_the_continuum_and_fem20_with_fem100(scene_name):
     are O((h/r)^2) ~ 0.2-1.5 % for these flexures; measured 0.008 % open, 0.34 %
     closed), and beam:20 is within its O(1/N^2) discretisation error of beam:100
     everywhere (measured at most 0.79 %, open chain f-)."""
-    e = errors(_path(scene_name, "beam:100", "f+"), _path(scene_name, "continuum:1", "f+"))
+    L = _size(scene_name)
+    e = errors(_path(scene_name, "beam:100", "f+"), _path(scene_name, "continuum:1", "f+"), L)
     assert e["end_disp_vec"] < 3.0 and e["end_rot"] < 3.0, e
     for case in load_scene(scene_name).load_cases:
-        e = errors(_path(scene_name, "beam:20", case.name), _path(scene_name, "beam:100", case.name))
+        e = errors(_path(scene_name, "beam:20", case.name), _path(scene_name, "beam:100", case.name),
+                   L)
         assert e["path_disp"] < 1.0 and e["path_rot"] < 1.0, (case.name, e)

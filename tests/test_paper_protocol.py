@@ -54,6 +54,7 @@ def test_end_errors_match_compare(protocol):
     scene, _ = protocol.with_masses(load_scene("open_chain"))
     runs, _ = protocol.run_protocol(scene, "f-", ["dcmm:1"], "dcmm:2", [])
     static = protocol.static_errors(runs, "dcmm:2", ["dcmm:1"])["dcmm:1"]
-    direct = protocol.end_errors(runs["dcmm:1"].static, runs["dcmm:2"].static)
+    direct = protocol.end_errors(runs["dcmm:1"].static, runs["dcmm:2"].static,
+                                 protocol.reference_scale(runs, "dcmm:2"))
     assert static == pytest.approx(direct, rel=1e-12)
     assert min(direct) > 1.0                    # dcmm:1 and dcmm:2 differ on f- (a real check)

@@ -68,8 +68,9 @@ def test_tables_match_results_json(report):
     rows = re.findall(r"^\| (\S+) \| (up|twist) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| "
                       r"([\d.]+) \| ([\d.]+) \|$", text, flags=re.M)
     assert len(rows) == 3 * 2          # three models against beam:100, two cases
+    size = load_scene(report.parent.parent / "tiny.toml").mechanism.size()
     for model, case, *vals in rows:
-        e = errors(paths[(model, case)], paths[("beam:100", case)])
+        e = errors(paths[(model, case)], paths[("beam:100", case)], size)
         expect = [e[k] for k in ("end_disp_vec", "end_disp", "end_rot", "path_disp", "path_rot")]
         for got, ref in zip(map(float, vals), expect):
             assert got == pytest.approx(ref, abs=0.006)   # printed with 2 decimals

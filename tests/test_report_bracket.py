@@ -68,7 +68,7 @@ def test_report_shows_the_bracket_and_compares_every_model_with_it(report):
     smaller = {m: [] for m in MODELS[1:]}
     for m in MODELS[1:]:
         for c in res.cases:
-            e = errors(res.paths[(m, c)], res.paths[(res.reference, c)])
+            e = errors(res.paths[(m, c)], res.paths[(res.reference, c)], res.scene.mechanism.size())
             for key, spread, what in (("end_disp", "disp_spread", "|d|"),
                                       ("end_rot", "rot_spread", "rotation")):
                 (larger if e[key] > rows[c][spread] else smaller)[m].append(f"{c} {what}")

@@ -75,7 +75,7 @@ def test_tiny_sweep_matches_a_plain_loop_and_resumes(tmp_path, client):
         for case in ("m+", "f+"):
             lc = p.scene.load_case(case)
             want = errors(run_model(p.scene, parse_model(model), lc),
-                          run_model(p.scene, parse_model("prbm"), lc))
+                          run_model(p.scene, parse_model("prbm"), lc), p.scene.mechanism.size())
             got = next(r for r in rows if r["point"] == 2 and r["model"] == model
                        and r["load_case"] == case)
             assert got["param:section.thickness"] == 0.11

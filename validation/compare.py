@@ -20,12 +20,15 @@ differ):
 
 A reference value near zero (a rotation that vanishes by symmetry, a target
 point on the centre of a rotation) would turn round-off into hundreds of
-percent. So when the mechanism's size L is given, each quantity has a stated
+percent. So each quantity has a stated
 scale taken from the other one along the reference path: for the rotation
 max_k |d_ref,k| / L (the rotation that moves a point at distance L by the
 target's largest displacement), for the displacement max_k |rot_ref,k| L. A
 reference value below :data:`NEAR_ZERO` times its scale is near zero, and the
-error is then reported in percent of the scale instead (:func:`scale_of`).
+error is then reported in percent of the scale instead (:func:`scale_of`,
+:func:`denominator`). The size is a required argument of :func:`errors`, so
+that every caller (report, bench, sweep, stress, benchmarks) applies the one
+rule.
 The paper's scenes are far from it: their smallest end value is the closed
 chain's rotation, 0.5 of its scale (end displacements: 0.56 and above). A
 shallow arch pressed 10 deg off its axis of symmetry still turns its crown by
@@ -78,27 +81,36 @@ def scale_of(ref: LoadPath, length: float) -> dict[str, float]:
     return {"disp": float(r.max()) * length, "rot": float(d.max()) / length}
 
 
-def _denominator(value: float, scale: float | None) -> float:
-    """|value|, or ``scale`` when |value| is near zero against it (never zero)."""
+def denominator(value: float, scale: float) -> float:
+    """What an error in ``value`` is measured against: |value|, or ``scale`` when
+    |value| is below :data:`NEAR_ZERO` times it (never zero).
+
+    ``value`` and ``scale`` in the same unit (mm for a displacement, rad for a
+    rotation); for quantities known only at the end of a ramp (e.g. a dynamic
+    run's end state) with the scale of the matching static path.
+    """
     v = abs(value)
-    if scale is not None and v < NEAR_ZERO * scale:
+    if v < NEAR_ZERO * scale:
         return scale
     return max(v, np.finfo(float).tiny)
 
 
-def errors(model: LoadPath, ref: LoadPath, length: float | None = None) -> dict[str, float]:
+def errors(model: LoadPath, ref: LoadPath, length: float) -> dict[str, float]:
     """All :data:`METRICS` of ``model`` against ``ref``, in percent.
 
-    ``length`` (mm) is the mechanism's size: with it, a reference value near zero
-    is replaced by its scale (:func:`scale_of`, :data:`NEAR_ZERO`); without it
-    every error is relative to the reference value itself.
+    ``length`` (mm) is the mechanism's size (:meth:`geometry.Mechanism.size`):
+    a reference value near zero is measured against its scale
+    (:func:`scale_of`, :data:`NEAR_ZERO`), every other one against itself.
 
     Raises
     ------
     ValueError
-        If the two paths are for different load cases, or the reference did not
-        reach full load.
+        If ``length`` is not a positive finite number, the two paths are for
+        different load cases, or the reference did not reach full load.
     """
+    if not (isinstance(length, (int, float, np.floating)) and 0 < length < np.inf):
+        raise ValueError(f"length must be the mechanism's size, a positive number of mm: "
+                         f"{length!r}")
     if model.load_case != ref.load_case:
         raise ValueError(f"load cases differ: {model.load_case!r} vs {ref.load_case!r}")
     if not ref.converged:
@@ -107,9 +119,9 @@ def errors(model: LoadPath, ref: LoadPath, length: float | None = None) -> dict[
     rx, ry, rr = (np.asarray(v) for v in (ref.dx, ref.dy, ref.rotation))
     d_ref = np.hypot(rx, ry)
     vec_err = np.hypot(dx - rx, dy - ry)
-    scale = scale_of(ref, length) if length is not None else {"disp": None, "rot": None}
-    end_d, path_d = (_denominator(v, scale["disp"]) for v in (d_ref[-1], d_ref.max()))
-    end_r, path_r = (_denominator(v, scale["rot"]) for v in (rr[-1], np.abs(rr).max()))
+    scale = scale_of(ref, length)
+    end_d, path_d = (denominator(v, scale["disp"]) for v in (d_ref[-1], d_ref.max()))
+    end_r, path_r = (denominator(v, scale["rot"]) for v in (rr[-1], np.abs(rr).max()))
     return {
         "end_disp": 100 * abs(np.hypot(dx[-1], dy[-1]) - d_ref[-1]) / end_d,
         "end_disp_vec": 100 * vec_err[-1] / end_d,

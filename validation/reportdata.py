@@ -187,10 +187,12 @@ class SceneResults:
         """{case: end |d| (mm) and rotation (rad) in both planes, and their spreads (%)}.
 
         Keys ``disp``/``disp_other``/``rot``/``rot_other`` (reference, then the
-        bracket's other plane) and ``disp_spread``/``rot_spread``: the relative
-        difference |other - reference| / |reference| in percent, comparable with
-        the ``end_disp`` and ``end_rot`` errors. Cases where either path did not
-        reach full load are left out.
+        bracket's other plane) and ``disp_spread``/``rot_spread``: the other
+        plane's ``end_disp`` and ``end_rot`` errors against the reference
+        (:func:`validation.compare.errors`, percent: |other - reference| /
+        |reference|, or of the scale where the reference is near zero), so they
+        compare with the models' errors by the same rule. Cases where either path
+        did not reach full load are left out.
         """
         out: dict[str, dict[str, float]] = {}
         if self.bracket is None or self.reference is None:
@@ -199,11 +201,11 @@ class SceneResults:
             ref, other = self.converged(self.reference, c), self.bracket.paths.get(c)
             if ref is None or other is None or not other.converged:
                 continue
-            d, d2 = float(ref.displacement[-1]), float(other.displacement[-1])
-            r, r2 = float(ref.rotation[-1]), float(other.rotation[-1])
-            out[c] = {"disp": d, "disp_other": d2, "rot": r, "rot_other": r2,
-                      "disp_spread": 100 * abs(d2 - d) / abs(d),
-                      "rot_spread": 100 * abs(r2 - r) / abs(r)}
+            e = errors(other, ref, self.scene.mechanism.size())
+            out[c] = {"disp": float(ref.displacement[-1]),
+                      "disp_other": float(other.displacement[-1]),
+                      "rot": float(ref.rotation[-1]), "rot_other": float(other.rotation[-1]),
+                      "disp_spread": float(e["end_disp"]), "rot_spread": float(e["end_rot"])}
         return out
 
     def has_reference(self) -> bool:

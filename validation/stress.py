@@ -178,7 +178,8 @@ def _amplification(scene: Scene, spec: ModelSpec, case: LoadCase, factors: Seque
         row = {"factor": k, "load": k * case.magnitude, "seconds": lp.seconds,
                "newton_iterations": lp.stats.get("newton_iterations", 0),
                "step_cuts": lp.stats.get("step_cuts", 0),
-               "errors": errors(lp, ref) if ref is not None else None,
+               "errors": (errors(lp, ref, scene.mechanism.size()) if ref is not None
+                          else None),
                "reference_failure": ref_failure["message"] if ref_failure else None}
         rows.append(row)
     return {"largest_factor": reached, "largest_load": reached * case.magnitude,

@@ -170,7 +170,7 @@ def run_model_batch(points: list[Point], spec: ModelSpec, cases: tuple[str, ...]
             lp = attempt(p, spec, case, row, info)
             ref = ref_paths.get((p.index, case))
             if lp is not None and ref is not None:
-                row.update(errors(lp, ref))
+                row.update(errors(lp, ref, p.scene.mechanism.size()))
                 ref_peak = peak_at_full_load(ref) if row["peak_stress"] is not None else None
                 row["peak_stress_error"] = _relative(
                     row["peak_stress"], ref_peak["stress"] if ref_peak else None)
