@@ -19,8 +19,12 @@ Three studies per model and load case:
     target displacements, transformed back, and the rotations must not change.
 
 Displacements are compared as vectors: relative differences are the
-largest over the path of |d - d_base| / max |d_base| (rotations alike).
-Errors against the reference are the percentages of
+largest over the path of |d - d_base| / max |d_base| (rotations alike), a
+maximum near zero measured against its scale instead (the rule of
+:func:`validation.compare.errors`: :func:`~validation.compare.scale_of` of
+the base path on the mechanism's size, :func:`~validation.compare.denominator`),
+so a rotation that vanishes by symmetry does not turn round-off into a
+failed invariance. Errors against the reference are the percentages of
 :func:`validation.compare.errors`.
 
 Units: mm, N, N mm, rad (the metre variant is internal to (c)).
@@ -39,7 +43,7 @@ from geometry import Force, LoadCase, Material, Mechanism, Scene, Section, rotat
 from reducedmodels import LoadPath, SolverError
 from reducedmodels.catalogue import ModelSpec, parse_model
 
-from .compare import errors
+from .compare import denominator, errors, scale_of
 from .failures import first_limit
 from .outputs import output_path, write_json, write_text
 from .run import run_model
@@ -114,19 +118,22 @@ def _attempt(run: Callable[[], LoadPath]) -> tuple[LoadPath | None, dict | None]
     return lp, None
 
 
-def _path_difference(a: LoadPath, b: LoadPath, turn: float = 0.0, length: float = 1.0
-                     ) -> dict[str, float]:
+def _path_difference(a: LoadPath, b: LoadPath, size: float, turn: float = 0.0,
+                     length: float = 1.0) -> dict[str, float]:
     """Largest relative differences of path ``b`` from ``a`` (same levels).
 
     ``b``'s displacements are turned back by ``-turn`` (rad) and divided by
     ``length`` first, so a rigidly moved or rescaled copy compares equal.
+    ``size`` (mm) is the mechanism's: a maximum of ``a`` near zero is replaced
+    by its scale (:func:`validation.compare.denominator`).
     """
     back = rotation(-turn) @ np.array([b.dx, b.dy]) / length
     da = np.array([a.dx, a.dy])
     ra, rb = np.asarray(a.rotation), np.asarray(b.rotation)
-    tiny = np.finfo(float).tiny
-    return {"disp_rel": float(np.hypot(*(back - da)).max() / max(np.hypot(*da).max(), tiny)),
-            "rot_rel": float(np.abs(rb - ra).max() / max(np.abs(ra).max(), tiny))}
+    scale = scale_of(a, size)
+    return {"disp_rel": float(np.hypot(*(back - da)).max()
+                              / denominator(np.hypot(*da).max(), scale["disp"])),
+            "rot_rel": float(np.abs(rb - ra).max() / denominator(np.abs(ra).max(), scale["rot"]))}
 
 
 class _Reference:
@@ -187,13 +194,15 @@ def _amplification(scene: Scene, spec: ModelSpec, case: LoadCase, factors: Seque
 
 
 def _step_count(scene: Scene, spec: ModelSpec, case: LoadCase, counts: Sequence[int]) -> dict:
-    """Study (b): end states with each number of levels and their largest relative spread."""
-    ends, failures = [], []
+    """Study (b): end states with each number of levels and their largest relative spread
+    (against the scales of the first path that converged where an end value is near zero)."""
+    ends, failures, scale = [], [], None
     for n in counts:
         lp, failure = _attempt(lambda: run_model(scene, spec, case, levels=n))
         if failure is not None:
             failures.append({"levels": n, **failure})
             continue
+        scale = scale or scale_of(lp, scene.mechanism.size())
         ends.append({"levels": n, "dx": lp.dx[-1], "dy": lp.dy[-1], "rotation": lp.rotation[-1],
                      "newton_iterations": lp.stats.get("newton_iterations", 0),
                      "seconds": lp.seconds})
@@ -201,10 +210,9 @@ def _step_count(scene: Scene, spec: ModelSpec, case: LoadCase, counts: Sequence[
     if len(ends) >= 2:
         d = np.array([[e["dx"], e["dy"]] for e in ends])
         r = np.array([e["rotation"] for e in ends])
-        tiny = np.finfo(float).tiny
         spread = np.hypot(*(d[:, None, :] - d[None, :, :]).transpose(2, 0, 1)).max()
-        out["disp_rel"] = float(spread / max(np.hypot(*d.T).max(), tiny))
-        out["rot_rel"] = float(np.ptp(r) / max(np.abs(r).max(), tiny))
+        out["disp_rel"] = float(spread / denominator(np.hypot(*d.T).max(), scale["disp"]))
+        out["rot_rel"] = float(np.ptp(r) / denominator(np.abs(r).max(), scale["rot"]))
     return out
 
 
@@ -221,8 +229,10 @@ def _invariance(scene: Scene, spec: ModelSpec, case: LoadCase, base: LoadPath | 
     metres, f2 = _attempt(lambda: run_model(dataclasses.replace(scene, mechanism=mech_m),
                                             spec, case_m))
     fails = [f["message"] for f in (f1, f2) if f is not None]
-    return {"rigid_motion": _path_difference(base, moved, turn=RIGID_ANGLE) if moved else None,
-            "metres": _path_difference(base, metres, length=METRE) if metres else None,
+    size = scene.mechanism.size()
+    return {"rigid_motion": (_path_difference(base, moved, size, turn=RIGID_ANGLE)
+                             if moved else None),
+            "metres": _path_difference(base, metres, size, length=METRE) if metres else None,
             "failure": "; ".join(fails) or None}
 
 
