@@ -166,6 +166,51 @@ def test_solver_failure_records_the_load_reached(tmp_path, client):
     assert 0.3 < row["load_reached"] < 0.4
     assert f"{100 * row['load_reached']:.2f} % of full load" in row["reason"]
     assert row["end_rot"] is None
+    # the peak stress is given at the path's last level, at or below the load reached: a pure
+    # end moment bends every section alike, 6 M / (b h^2) with M that level's moment
+    # (closed form; spread ~1e-13 measured)
+    scene = sweep.points[0].scene
+    section = scene.mechanism.flexures[0].section
+    assert 0.0 < row["peak_stress_load"] <= row["load_reached"]
+    m = row["peak_stress_load"] * scene.load_case("m+").magnitude
+    assert row["peak_stress"] == pytest.approx(6.0 * m / (section.depth * section.thickness**2),
+                                               rel=1e-9)
+    assert row["peak_stress_error"] is None        # errors compare full loads only
+    write_outputs(sweep, sweep_rows(sweep, tmp_path / "o"), tmp_path / "o")
+    summary = (tmp_path / "o" / "summary.md").read_text()
+    assert (f"(load reached {row['load_reached']:.3g}; peak stress {row['peak_stress']:.4g} "
+            f"MPa at load {row['peak_stress_load']:.3g})") in summary
+
+
+def test_a_reference_rotation_near_zero_is_measured_against_its_scale(tmp_path, client):
+    """The shallow arch pressed on its axis turns its crown by round-off in every model: the
+    sweep's rotation errors are those of validation.compare.errors with the mechanism's
+    size (about zero, against the rotation scale), not round-off over round-off."""
+    from test_compare_scale import _arch
+
+    scene, case, _ = _arch(tmp_path, -90.0, 0.1)
+    text = f"""
+    base = "{tmp_path / 'arch.toml'}"
+    models = ["dcmm:1"]
+    reference = "beam:20"
+
+    [[axes]]
+    path = "section.thickness"
+    values = [0.28, 0.3]
+    """
+    sweep = load_sweep(_write(tmp_path, text))
+    run_sweep(sweep, tmp_path / "o", client, use_cache=False)
+    rows = [r for r in sweep_rows(sweep, tmp_path / "o") if r["model"] == "dcmm:1"]
+    assert len(rows) == 2 and {r["status"] for r in rows} == {"ok"}
+    for r in rows:
+        p = sweep.points[r["point"]]
+        lp = run_model(p.scene, parse_model("dcmm:1"), p.scene.load_case("down"))
+        ref = run_model(p.scene, parse_model("beam:20"), p.scene.load_case("down"))
+        assert abs(lp.rotation[-1] - ref.rotation[-1]) > 0.01 * abs(ref.rotation[-1])
+        want = errors(lp, ref, p.scene.mechanism.size())
+        assert r["end_rot"] < 1e-9 and r["path_rot"] < 1e-9
+        for metric, value in want.items():
+            assert r[metric] == pytest.approx(value, rel=1e-9, abs=1e-20)
 
 
 def test_generated_invalid_points_are_reported_not_fatal(tmp_path, client):
@@ -278,7 +323,7 @@ def test_peak_stress_rows_against_the_closed_form_and_the_reference(tmp_path, cl
     for r in rows:
         point = sweep.points[r["point"]]
         assert r["peak_stress"] > 0 and r["peak_stress_flexure"] in ("e12", "e23", "e34")
-        assert 0.0 <= r["peak_stress_at"] <= 1.0
+        assert 0.0 <= r["peak_stress_at"] <= 1.0 and r["peak_stress_load"] == 1.0
         assert r["limit_load"] is None                    # not asked for
         if r["load_case"] == "m+":
             # a pure end moment M bends every section alike: 6 M / (b h^2) whatever E and

@@ -8,13 +8,13 @@ and skips what is there. Failed runs are rows too (``status`` and
 
 Every part of a dataset has the same schema (:func:`schema`). A folder
 whose parts have another one (written by an older flexval, before the
-peak-stress and limit-load columns, or by a sweep over other parameters) is
+peak-stress, limit-load or peak-stress load columns, or by a sweep over other parameters) is
 refused with a :class:`SceneError` naming the folder and the differing
 columns, rather than mixed into a dataset that Parquet readers would
 silently truncate to the first part's columns.
 
-Units: errors in percent, times in s, ``load_reached`` as a fraction of the
-full load, stresses in MPa, limit loads in ``load_unit`` (N or N mm),
+Units: errors in percent, times in s, ``load_reached`` and ``peak_stress_load`` as
+fractions of the full load, stresses in MPa, limit loads in ``load_unit`` (N or N mm),
 parameters in their scene field's unit.
 """
 
@@ -47,12 +47,14 @@ _FIXED = [("key", pa.string()), ("sweep", pa.string()), ("point", pa.int64()),
           ("newton_iterations", pa.int64()), ("valid", pa.bool_()), ("validity", pa.string()),
           ("load_unit", pa.string()), ("peak_stress", pa.float64()),
           ("peak_stress_flexure", pa.string()), ("peak_stress_at", pa.float64()),
-          ("peak_stress_error", pa.float64()), ("limit_load", pa.float64()),
+          ("peak_stress_load", pa.float64()), ("peak_stress_error", pa.float64()), ("limit_load", pa.float64()),
           ("limit_load_error", pa.float64())]
 """The columns of every row besides the parameters. ``peak_stress``: the largest outer-fibre
-stress over the flexures at full load (MPa), on ``peak_stress_flexure`` at the fraction
-``peak_stress_at`` of its length from its first end; ``peak_stress_error``: (model -
-reference) / reference, percent. ``limit_load``: the first limit point below full load of a
+stress over the flexures (MPa) at the load ``peak_stress_load`` (fraction of full load: 1
+for a converged row; for a ``solver_failure``, the last recorded level of the path, at or
+below ``load_reached``), on ``peak_stress_flexure`` at the fraction ``peak_stress_at`` of
+its length from its first end; ``peak_stress_error``: (model - reference) / reference at
+full load (converged rows only), percent. ``limit_load``: the first limit point below full load of a
 run that stopped there (N or N mm, ``load_unit``; asked for with ``outputs``);
 ``limit_load_error``: against the reference's, percent."""
 

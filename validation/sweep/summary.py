@@ -127,10 +127,11 @@ def _per_point(sweep: Sweep, metrics: dict, first: tuple[str, dict] | None = Non
 
 
 def _reference_peaks(sweep: Sweep, rows: list[dict]) -> dict[int, float]:
-    """{point: the reference's largest peak stress over the load cases (MPa)}."""
+    """{point: the reference's largest peak stress at full load over the load cases (MPa)}."""
     out: dict[int, float] = {}
     for r in rows:
-        if r["model"] == sweep.reference.id and r["peak_stress"] is not None:
+        if (r["model"] == sweep.reference.id and r["status"] == "ok"
+                and r["peak_stress"] is not None):
             out[r["point"]] = max(r["peak_stress"], out.get(r["point"], 0.0))
     return out
 
@@ -208,7 +209,10 @@ def format_summary(sweep: Sweep, rows: list[dict]) -> str:
     if not failed:
         lines.append("None: every run reached full load.")
     for r in failed[:MAX_LISTED]:
-        reached = (f" (load reached {r['load_reached']:.3g})"
+        reached = (f" (load reached {r['load_reached']:.3g}"
+                   + (f"; peak stress {r['peak_stress']:.4g} MPa at load "
+                      f"{r['peak_stress_load']:.3g}" if r["peak_stress"] is not None else "")
+                   + ")"
                    if r["load_reached"] is not None else "")
         if r["limit_load"] is not None:
             reached += f" (limit point at {r['limit_load']:.5g} {r['load_unit']})"

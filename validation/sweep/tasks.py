@@ -7,9 +7,11 @@ row with its status and reason. The reference task also returns its load
 paths and limit loads, which the model tasks of the same points receive
 from Dask (the reference is computed once per point and shared).
 
-With the ``peak_stress`` output (the default), a converged row carries its
-peak stress at full load (:func:`validation.strength.peak_at_full_load`)
-and its error against the reference's; with the ``limit_load``
+With the ``peak_stress`` output (the default), a row carries its peak stress
+at the last level its path recorded (:func:`validation.strength.peak_at_full_load`
+of the path so far) and that level's load (``peak_stress_load``: 1 for a
+converged row, at or below ``load_reached`` for a solver failure), and a
+converged row its error against the reference's at full load; with the ``limit_load``
 output, a run that stops below full load is searched for its first limit
 point by arc length (:func:`validation.failures.first_limit`, as the
 report does), and the row carries that load.
@@ -62,7 +64,7 @@ def base_row(point: Point, model: str, case: str, info: TaskInfo) -> dict:
            "seconds": None, "newton_iterations": None, "valid": None, "validity": None,
            "load_unit": point.scene.load_case(case).unit if point.scene is not None else None,
            "peak_stress": None, "peak_stress_flexure": None, "peak_stress_at": None,
-           "peak_stress_error": None, "limit_load": None, "limit_load_error": None,
+           "peak_stress_load": None, "peak_stress_error": None, "limit_load": None, "limit_load_error": None,
            **{m: None for m in METRICS}}
     row.update({PARAM_PREFIX + k: v for k, v in point.params.items()})
     return row
@@ -87,6 +89,8 @@ def attempt(point: Point, spec: ModelSpec, case: str, row: dict, info: TaskInfo,
                 cache.put(key, lp)
     except SolverError as exc:
         row.update(status="solver_failure", reason=str(exc), load_reached=exc.load_factor)
+        if exc.path is not None and exc.path.load:
+            _peak(exc.path, lc, row, info)
         if "limit_load" in info.outputs:
             row["limit_load"] = _limit_load(point, spec, lc, row)
         return None
@@ -104,11 +108,19 @@ def attempt(point: Point, spec: ModelSpec, case: str, row: dict, info: TaskInfo,
     if lp.valid is not None:
         row["valid"] = all(lp.valid)
         row["validity"] = next((v for v in lp.validity or () if v), None)
+    _peak(lp, lc, row, info)
+    return lp
+
+
+def _peak(lp: LoadPath, case: LoadCase, row: dict, info: TaskInfo) -> None:
+    """Fill ``row``'s peak stress (MPa), its flexure and place at the last level of ``lp``,
+    and that level's load as a fraction of ``case``'s full load, when the sweep asks for
+    it and the model gives one."""
     peak = peak_at_full_load(lp) if "peak_stress" in info.outputs else None
     if peak is not None:
+        reached = 1.0 if lp.converged else abs(lp.load[-1]) / case.magnitude
         row.update(peak_stress=peak["stress"], peak_stress_flexure=peak["flexure"],
-                   peak_stress_at=peak["at"])
-    return lp
+                   peak_stress_at=peak["at"], peak_stress_load=reached)
 
 
 def _limit_load(point: Point, spec: ModelSpec, case: LoadCase, row: dict) -> float | None:
