@@ -388,6 +388,16 @@ def test_limit_loads_of_the_deep_arch(tmp_path, client):
     summary = (tmp_path / "o" / "summary.md").read_text()
     assert "## Limit loads against `beam:40`" in summary and "## Peak stress" not in summary
     assert "limit point at 8.9" in summary
+    # a later summary without limit loads (nor peak stresses) removes the figures an earlier
+    # run left, and nothing else: a file of the user's and the other outputs stay
+    (tmp_path / "o" / "stress.png").write_bytes(b"an earlier run's")
+    (tmp_path / "o" / "mine.png").write_bytes(b"the user's")
+    files = write_outputs(sweep, [r | {"limit_load": None, "limit_load_error": None}
+                                  for r in rows.values()], tmp_path / "o")
+    assert not (tmp_path / "o" / "limits.png").exists()
+    assert not (tmp_path / "o" / "stress.png").exists()
+    assert (tmp_path / "o" / "mine.png").read_bytes() == b"the user's"
+    assert all(f.is_file() for f in files) and (tmp_path / "o" / "results").is_dir()
 
 
 def test_an_older_dataset_is_refused_and_other_code_versions_left_out(tmp_path, capsys):

@@ -412,10 +412,18 @@ def _runtimes(sweep: Sweep, rows: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
+#: figures a sweep writes only sometimes (see :func:`write_outputs`)
+OPTIONAL_FIGURES = ("stress.png", "limits.png")
+
+
 def write_outputs(sweep: Sweep, rows: list[dict], out_dir: str | Path,
                   wall: float | None = None) -> list[Path]:
     """Write summary.md, timings.md, errors.png, runtime.png, stress.png (with the
-    ``peak_stress`` output) and limits.png (when a limit load was found) into ``out_dir``."""
+    ``peak_stress`` output) and limits.png (when a limit load was found) into ``out_dir``.
+
+    An optional figure (:data:`OPTIONAL_FIGURES`) that this call does not write is
+    removed if an earlier run left it there, so every figure in the folder is this
+    summary's; no other file is touched."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -434,4 +442,8 @@ def write_outputs(sweep: Sweep, rows: list[dict], out_dir: str | Path,
                                      "|peak stress error|"))
     if any(r["limit_load"] is not None for r in rows):
         written.append(_limits(sweep, rows, out / "limits.png"))
+    for name in OPTIONAL_FIGURES:
+        stale = out / name
+        if stale not in written and stale.is_file():
+            stale.unlink()
     return written
