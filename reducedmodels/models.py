@@ -156,14 +156,15 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
                   settings={}, scene=scene, load_unit=case.unit)
     bodies = list(system.body_index)
     theta = np.array([system.pose_dofs(b)[2] for b in bodies], int)
+    # every level's body rotations at once, (levels, bodies) rad
+    turns = np.abs(dq_dead[theta][None, :] + lam[:, None] * dq[theta][None, :])
+    largest = np.argmax(turns, axis=1).tolist() if theta.size else [0] * len(lam)
     lp.valid, lp.validity = [], []
-    for factor in lam:
-        turns = np.abs(dq_dead[theta] + factor * dq[theta])
-        k = int(np.argmax(turns)) if turns.size else 0
+    for row, k in zip(turns, largest):
         reason = None
-        if turns.size and turns[k] > MAX_LINEAR_ROTATION:
+        if theta.size and row[k] > MAX_LINEAR_ROTATION:
             reason = (f"linear response: body {bodies[k]!r} turned "
-                      f"{math.degrees(turns[k]):.3g} deg (limit "
+                      f"{math.degrees(row[k]):.3g} deg (limit "
                       f"{math.degrees(MAX_LINEAR_ROTATION):.3g} deg: linearised kinematics)")
         lp.valid.append(reason is None)
         lp.validity.append(reason)
