@@ -19,7 +19,7 @@ venv: $(STAMP)
 report: $(STAMP)
 	$(BIN)/flexval info open_chain
 	$(BIN)/flexval info closed_chain
-	$(BIN)/flexval report --out reports/paper
+	$(BIN)/flexval report --out reports/paper --protocol reports/dynamics/protocol.json
 
 test: $(STAMP)
 	$(BIN)/python -m pytest

@@ -26,7 +26,9 @@ error of the target body (``validation.compare``'s ``end_disp_vec`` and
 Run: ``python benchmarks/paper_protocol.py [--ramps 2 4 8 12 16 24 32]
 [--ratios 0.05 0.2 1]
 [--out reports/dynamics]``. Writes ``protocol.md`` (results; stable for a given
-grid) and ``timings.md`` (wall times: machine-dependent) atomically.
+grid), ``protocol.json`` (the same results for ``flexval report --protocol``, with
+the code version; format in :mod:`validation.protocolsection`) and
+``timings.md`` (wall times: machine-dependent) atomically.
 """
 
 from __future__ import annotations
@@ -47,8 +49,10 @@ from reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
 from reducedmodels.models import build_system
 from reducedmodels.modes import natural_modes
 from reducedmodels.recorder import solve_path
+from validation.cache import code_version
 from validation.compare import denominator, errors, paper_percent, scale_of
-from validation.outputs import write_text
+from validation.outputs import write_json, write_text
+from validation.protocolsection import PROTOCOL_FORMAT
 
 RHO_INF = 0.9
 """Spectral radius at infinite frequency of the generalised-alpha scheme (as ``flexval run``)."""
@@ -294,6 +298,34 @@ def protocol_markdown(scene: str, case: str, reference: str, masses: str, period
     return "\n".join(lines)
 
 
+def _errs(pair: tuple[float, float]) -> dict[str, float]:
+    return {"disp": pair[0], "rot": pair[1]}
+
+
+def protocol_document(scene: str, case: str, reference: str, masses: str, period: float,
+                      runs: dict[str, ModelRuns], table: list[Row],
+                      static: dict[str, tuple[float, float]],
+                      paper: dict[str, tuple[float, float]]) -> dict:
+    """The results as the ``protocol.json`` document (errors in percent, NaN for a failed
+    run; no timings), tagged with the code version that computed them."""
+    failures = {(m, p): e.failure for m, r in runs.items() for p, e in r.dynamic.items()}
+    return {
+        "format": PROTOCOL_FORMAT, "code_version": code_version(),
+        "scene": scene, "case": case, "reference": reference, "masses": masses,
+        "rho_inf": RHO_INF, "match_points": MATCH_POINTS, "period_s": period,
+        "table": "protocol.md",
+        "frequencies_hz": {m: list(r.frequencies) for m, r in runs.items()},
+        "static": {m: _errs(e) for m, e in static.items()},
+        "paper": {m: _errs(e) for m, e in paper.items()},
+        "cells": [{"model": r.model, "ramp_periods": r.protocol.ramp_periods,
+                   "ramp_s": r.protocol.ramp_periods * period,
+                   "damping_ratio": r.protocol.damping_ratio,
+                   **_errs(r.same_protocol),
+                   "against_static": _errs(r.against_static), "lag": _errs(r.lag),
+                   "failure": failures[(r.model, r.protocol)]} for r in table],
+    }
+
+
 def timings_markdown(runs: dict[str, ModelRuns], period: float, total: float) -> str:
     """Wall times of every run (machine- and load-dependent)."""
     lines = ["# Timings of `benchmarks/paper_protocol.py`", "",
@@ -332,8 +364,9 @@ def main() -> None:
              for m, v in paper_percent(args.scene).items()
              if m in args.models and args.case in v}
     args.out.mkdir(parents=True, exist_ok=True)
-    write_text(args.out / "protocol.md", protocol_markdown(
-        args.scene, args.case, args.reference, masses, period, runs, table, static, paper))
+    results = (args.scene, args.case, args.reference, masses, period, runs, table, static, paper)
+    write_text(args.out / "protocol.md", protocol_markdown(*results))
+    write_json(args.out / "protocol.json", protocol_document(*results))
     write_text(args.out / "timings.md",
                timings_markdown(runs, period, time.perf_counter() - start))
     print((args.out / "protocol.md").read_text())

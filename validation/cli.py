@@ -17,6 +17,7 @@ import math
 import os
 import sys
 import warnings
+from pathlib import Path
 
 from geometry import SceneError, load_scene
 
@@ -354,7 +355,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
     path = build_report(scenes, out, models, repeats=args.repeats,
                         use_cache=not args.no_cache, progress=not args.quiet,
                         bench=not args.no_bench, converge=not args.no_converge,
-                        workers=args.jobs)
+                        workers=args.jobs,
+                        protocol=Path(args.protocol) if args.protocol else None)
     print(f"wrote {path}")
     return EXIT_OK
 
@@ -568,6 +570,10 @@ def build_parser() -> argparse.ArgumentParser:
     _campaign_options(q)
     q.add_argument("--no-bench", action="store_true", help="skip the runtime-vs-error study")
     q.add_argument("--no-converge", action="store_true", help="skip the mesh convergence study")
+    q.add_argument("--protocol", metavar="PATH",
+                   help="protocol.json of benchmarks/paper_protocol.py, summarised in the "
+                        "report's dynamics section (default: none; a missing or stale file is "
+                        "said so in the report, never an error)")
     q.add_argument("--jobs", type=_int_in(1, MAX_LOCAL_WORKERS), default=MAX_LOCAL_WORKERS,
                    metavar="N",
                    help="processes computing the load paths and drawing the scenes, 1 to "

@@ -25,6 +25,7 @@ from . import figures, frequencies, strength
 from .failures import Failure
 from .figurejobs import Figures, draw_now
 from .outputs import output_path, write_json, write_text
+from .protocolsection import PROTOCOL_SCENE, protocol_section
 from .reportdata import (DEFAULT_MODELS, PAPER_REFERENCE, FrameRow, ReportData, SceneResults,
                          compute_report)
 from .timings import BUDGETS, TIMINGS_MD, write_benches, write_timings
@@ -322,9 +323,12 @@ def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
     return L
 
 
-def render_markdown(data: ReportData, out: Path, draw: Callable = draw_now) -> str:
+def render_markdown(data: ReportData, out: Path, draw: Callable = draw_now,
+                    protocol: Path | None = None) -> str:
     """The report's Markdown, drawing its figures into ``out`` with ``draw(fn, *args)``
-    (default: at once; :meth:`validation.figurejobs.Figures.draw` on worker processes)."""
+    (default: at once; :meth:`validation.figurejobs.Figures.draw` on worker processes);
+    ``protocol`` is the ``protocol.json`` of ``benchmarks/paper_protocol.py`` (None: not given),
+    summarised in its own section when the scenes include the open chain."""
     from .discussion import discussion
 
     lines = ["# flexval validation report", "",
@@ -353,18 +357,21 @@ def render_markdown(data: ReportData, out: Path, draw: Callable = draw_now) -> s
              f"- Tools: {data.versions}.", ""]
     for res in data.scenes:
         lines += _scene_section(res, out, draw)
+    if any(res.scene.name == PROTOCOL_SCENE for res in data.scenes):
+        lines += protocol_section(protocol, out, data.code)
     lines += discussion(data)
     return "\n".join(lines) + "\n"
 
 
-def write_report(data: ReportData, out: Path) -> Path:
+def write_report(data: ReportData, out: Path, protocol: Path | None = None) -> Path:
     """Write ``report.md`` (with figures), ``results.json`` and ``gates.json`` into ``out``,
     and the run times (:mod:`validation.timings`); the figures are drawn on
-    ``data.workers`` processes while the text is written."""
+    ``data.workers`` processes while the text is written. ``protocol``: as in
+    :func:`render_markdown`."""
     t0 = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
     with Figures(data.workers) as figs:
-        md = write_text(out / "report.md", render_markdown(data, out, figs.draw))
+        md = write_text(out / "report.md", render_markdown(data, out, figs.draw, protocol))
         write_json(out / "results.json", data.results())
         write_json(out / "gates.json", data.gates())
         benches = write_benches(data, out, figs.draw)
@@ -375,9 +382,10 @@ def write_report(data: ReportData, out: Path) -> Path:
 
 def build_report(scene_names: list[str], out: Path, models: list[str] | None = None,
                  repeats: int = 3, use_cache: bool = True, progress: bool = True,
-                 bench: bool = True, converge: bool = True, workers: int = 1) -> Path:
+                 bench: bool = True, converge: bool = True, workers: int = 1,
+                 protocol: Path | None = None) -> Path:
     """Compute everything (on ``workers`` processes), then write ``out/report.md``, its
-    figures, JSON files and run times."""
+    figures, JSON files and run times; ``protocol``: as in :func:`render_markdown`."""
     data = compute_report(scene_names, models, repeats, use_cache, progress, bench, converge,
                           workers)
-    return write_report(data, out)
+    return write_report(data, out, protocol)
