@@ -30,7 +30,6 @@ reference run under the same protocol (null for a failed run).
 from __future__ import annotations
 
 import json
-import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
