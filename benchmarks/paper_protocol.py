@@ -302,15 +302,16 @@ def _errs(pair: tuple[float, float]) -> dict[str, float]:
     return {"disp": pair[0], "rot": pair[1]}
 
 
-def protocol_document(scene: str, case: str, reference: str, masses: str, period: float,
-                      runs: dict[str, ModelRuns], table: list[Row],
+def protocol_document(code: str, scene: str, case: str, reference: str, masses: str,
+                      period: float, runs: dict[str, ModelRuns], table: list[Row],
                       static: dict[str, tuple[float, float]],
                       paper: dict[str, tuple[float, float]]) -> dict:
     """The results as the ``protocol.json`` document (errors in percent, NaN for a failed
-    run; no timings), tagged with the code version that computed them."""
+    run; no timings), tagged with ``code``, the code version that computed them
+    (:func:`validation.cache.code_version`, taken when the run started)."""
     failures = {(m, p): e.failure for m, r in runs.items() for p, e in r.dynamic.items()}
     return {
-        "format": PROTOCOL_FORMAT, "code_version": code_version(),
+        "format": PROTOCOL_FORMAT, "code_version": code,
         "scene": scene, "case": case, "reference": reference, "masses": masses,
         "rho_inf": RHO_INF, "match_points": MATCH_POINTS, "period_s": period,
         "table": "protocol.md",
@@ -355,6 +356,7 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=Path("reports/dynamics"))
     args = ap.parse_args()
     start = time.perf_counter()
+    code = code_version()               # the code the results come from, not the code at the end
     scene, masses = with_masses(load_scene(args.scene))
     grid = [Protocol(t, z) for t in args.ramps for z in args.ratios]
     runs, period = run_protocol(scene, args.case, args.models, args.reference, grid)
@@ -366,7 +368,7 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     results = (args.scene, args.case, args.reference, masses, period, runs, table, static, paper)
     write_text(args.out / "protocol.md", protocol_markdown(*results))
-    write_json(args.out / "protocol.json", protocol_document(*results))
+    write_json(args.out / "protocol.json", protocol_document(code, *results))
     write_text(args.out / "timings.md",
                timings_markdown(runs, period, time.perf_counter() - start))
     print((args.out / "protocol.md").read_text())

@@ -4,17 +4,25 @@ A very slow (40 first periods), critically damped (ratio 1) Eq. 15 ramp must
 end at the static end state within 0.1 % (the quasi-static limit the issue
 asks of dynamic runs); the script's end-of-ramp error must equal
 ``validation.compare.errors``' ``end_disp_vec`` and ``end_rot`` on static paths.
+Its ``protocol.json`` is strict JSON (a failed run's errors are null), carries
+the code version and reads back through the report's reader with the table's
+numbers.
 """
 
 from __future__ import annotations
 
 import importlib.util
+import json
+import math
 import sys
 from pathlib import Path
 
 import pytest
 
 from geometry import load_scene
+from validation.cache import code_version
+from validation.outputs import write_json
+from validation.protocolsection import protocol_section, read_protocol
 
 SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "paper_protocol.py"
 
@@ -32,7 +40,14 @@ QUASI_STATIC = 0.1
 """%: the issue's bound on a slow damped ramp's distance from the static path."""
 
 
-def test_slow_damped_ramp_reproduces_the_static_end(protocol):
+def _strict(path):
+    """``path``'s JSON, refusing NaN and Infinity (strict JSON)."""
+    def refuse(name):
+        raise ValueError(name)
+    return json.loads(path.read_text(), parse_constant=refuse)
+
+
+def test_slow_damped_ramp_reproduces_the_static_end(protocol, tmp_path):
     scene, masses = protocol.with_masses(load_scene("open_chain"))
     assert "massless links" in masses          # the built-in scene has no mass data
     cell = protocol.Protocol(ramp_periods=40.0, damping_ratio=1.0)
@@ -48,6 +63,21 @@ def test_slow_damped_ramp_reproduces_the_static_end(protocol):
     text = protocol.protocol_markdown("open_chain", "f-", "dcmm:1", masses, period, runs,
                                       [row], {}, {})
     assert text.count("\n| dcmm:1 | 40 |") == 1
+    path = write_json(tmp_path / "protocol.json", protocol.protocol_document(
+        code_version(), "open_chain", "f-", "dcmm:1", masses, period, runs, [row],
+        {"dcmm:1": (0.0, 0.0)}, {"dcmm:1": (19.3, 13.5)}))
+    doc, why = read_protocol(path)
+    assert why is None and doc == _strict(path)
+    assert doc["code_version"] == code_version()
+    (cell,) = doc["cells"]
+    assert (cell["disp"], cell["rot"]) == row.same_protocol
+    assert (cell["lag"]["disp"], cell["lag"]["rot"]) == row.lag
+    assert cell["ramp_s"] == pytest.approx(40.0 * period, rel=1e-15)
+    assert cell["failure"] is None
+    assert doc["frequencies_hz"]["dcmm:1"] == list(runs["dcmm:1"].frequencies)
+    assert "wall" not in path.read_text() and "seconds" not in path.read_text()
+    section = "\n".join(protocol_section(path, tmp_path, code_version()))
+    assert "closest ramp 40 T1" in section and "**not reproduced**" in section
 
 
 def test_end_errors_match_compare(protocol):
@@ -58,3 +88,20 @@ def test_end_errors_match_compare(protocol):
                                  protocol.reference_scale(runs, "dcmm:2"))
     assert static == pytest.approx(direct, rel=1e-12)
     assert min(direct) > 1.0                    # dcmm:1 and dcmm:2 differ on f- (a real check)
+
+
+def test_a_failed_run_is_null_in_the_json(protocol, tmp_path):
+    cell = protocol.Protocol(ramp_periods=2.0, damping_ratio=0.05)
+    end = protocol.EndState(1.0, 1.0, 0.1)
+    failed = protocol.EndState(math.nan, math.nan, math.nan, failure="no convergence at 40 %")
+    runs = {"ref": protocol.ModelRuns(None, (1.0, 2.0), end, None, {cell: end}),
+            "m": protocol.ModelRuns(None, (1.0, 2.0), end, None, {cell: failed})}
+    table = protocol.rows(runs, "ref", ["m"])
+    path = write_json(tmp_path / "protocol.json", protocol.protocol_document(
+        "abc", "open_chain", "f-", "ref", "none", 0.1, runs, table, {"m": (0.0, 0.0)},
+        {"m": (10.0, 8.0)}))
+    (entry,) = _strict(path)["cells"]
+    assert entry["disp"] is None and entry["failure"] == "no convergence at 40 %"
+    section = "\n".join(protocol_section(path, tmp_path, "abc"))
+    assert "every run failed; not reproduced" in section
+    assert "- 1 of 1 runs failed" in section

@@ -262,3 +262,31 @@ def test_peak_stress_in_a_uniform_field_has_no_place():
     table = "\n".join(peak_stress_table({"dcmm:2": {"m+": bent, "f+": pulled}}, ["m+", "f+"]))
     assert f"| `dcmm:2` | {bent['stress']:.4g} MPa, uniform | " in table
     assert f"{pulled['stress']:.4g} MPa at {pulled['flexure']}@{pulled['at']:.2f}" in table
+
+
+PROTOCOL_HEADING = "## Dynamics: the paper's protocol (open chain f−)"
+
+
+def test_protocol_section_sits_before_the_discussion_of_an_open_chain_report(builtin_report,
+                                                                             tmp_path):
+    """Without --protocol the section says how to include it; with a protocol.json of this
+    code version it renders it, links the table next to it and calls nothing stale."""
+    from test_protocol_section import _document
+    from validation.outputs import write_json
+    from validation.report import render_markdown
+
+    data, md = builtin_report
+    text = md.read_text()
+    assert text.count(PROTOCOL_HEADING) == 1
+    assert text.index("\n## closed_chain\n") < text.index(PROTOCOL_HEADING) < text.index(
+        "\n## Discussion\n")
+    assert "Not included in this report (no `--protocol` file)" in text
+    path = tmp_path / "dynamics" / "protocol.json"
+    path.parent.mkdir()
+    write_json(path, _document(code=data.code))
+    out = tmp_path / "paper"
+    section = render_markdown(data, out, lambda *args: None, path).split(PROTOCOL_HEADING)[1]
+    section = section.split("\n## ")[0]
+    assert "- **beam:20** (paper 10.7 % disp" in section
+    assert "[../dynamics/protocol.md](../dynamics/protocol.md)" in section
+    assert "Stale" not in section

@@ -83,6 +83,11 @@ def test_report_md_prints_no_run_time(computed, tmp_path):
     assert TIMING.search((tmp_path / "timings.md").read_text())
 
 
+def test_no_protocol_section_without_the_open_chain(computed, tmp_path):
+    _, data = computed
+    assert "## Dynamics" not in write_report(data, tmp_path).read_text()
+
+
 def test_results_json_holds_no_time_nor_drawing_data(computed, tmp_path):
     _, data = computed
     write_report(data, tmp_path)
