@@ -96,7 +96,8 @@ def test_a_failed_run_is_null_in_the_json(protocol, tmp_path):
     failed = protocol.EndState(math.nan, math.nan, math.nan, failure="no convergence at 40 %")
     runs = {"ref": protocol.ModelRuns(None, (1.0, 2.0), end, None, {cell: end}),
             "m": protocol.ModelRuns(None, (1.0, 2.0), end, None, {cell: failed})}
-    table = protocol.rows(runs, "ref", ["m"])
+    nan = (math.nan, math.nan)                  # what end_errors gives a failed run
+    table = [protocol.Row("m", cell, nan, nan, nan)]
     path = write_json(tmp_path / "protocol.json", protocol.protocol_document(
         "abc", "open_chain", "f-", "ref", "none", 0.1, runs, table, {"m": (0.0, 0.0)},
         {"m": (10.0, 8.0)}))
