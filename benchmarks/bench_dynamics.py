@@ -1,6 +1,7 @@
 """Speed of the dynamic runs: wall time per simulated second, and what it buys.
 
-Run: ``python benchmarks/bench_dynamics.py [--repeats 3]``. Both built-in
+Run: ``python benchmarks/bench_dynamics.py [--repeats 3] [--models ...]
+[--scenes ...] [--cases ...]`` (``--models continuum:0`` for the continuum). Both built-in
 scenes with PLA flexures (density 1.24e-9 t/mm^3) and massless links, so
 the bodies carry the flexures' end pieces; each load case ramped by the
 paper's Eq. 15 over 40 periods of the first natural mode and held for 10
@@ -19,6 +20,7 @@ import dataclasses
 import statistics
 import time
 
+import validation  # noqa: F401  (registers the continuum family: --models continuum:0)
 from geometry import MassData, load_scene
 from geometry.inertia import PLA_DENSITY
 from geometry.timelaw import TimeLaw
@@ -36,13 +38,17 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--models", nargs="*", default=list(MODELS))
+    ap.add_argument("--scenes", nargs="*", default=["open_chain", "closed_chain"])
+    ap.add_argument("--cases", nargs="*", help="load cases (default: every case of a scene)")
     args = ap.parse_args()
     print(f"{'scene':<13} {'case':<5} {'model':<9} {'f1 Hz':>8} {'sim s':>8} {'wall/sim':>9} "
           f"{'steps':>6} {'rejected':>8} {'newton':>7} {'rot end':>10} {'vs static':>10}")
-    for name in ("open_chain", "closed_chain"):
+    for name in args.scenes:
         scene = load_scene(name)
         mech = dataclasses.replace(scene.mechanism, inertia=MassData(density=PLA_DENSITY))
         for case in scene.load_cases:
+            if args.cases and case.name not in args.cases:
+                continue
             for m in args.models:
                 system = build_system(mech, parse_model(m))
                 f = natural_modes(system, count=2).frequencies_hz

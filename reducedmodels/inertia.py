@@ -477,7 +477,10 @@ class MassModel:
         a_c = -np.einsum("kj,kjc->kc", rates, r)
         forces = self.points.mass[:, None] * np.einsum("kjc,kc->kj", columns, a_c)
         present = dofs >= 0
-        total = np.bincount(dofs[present], weights=forces[present], minlength=self.n)
+        # astype: numpy's bincount gives int64 zeros for an empty input even with
+        # weights (no lumped mass points: every mass in a consistent matrix)
+        total = np.bincount(dofs[present], weights=forces[present],
+                            minlength=self.n).astype(float, copy=False)
         if self._consistent:
             states = self.system.local_states(q)
             for k in self._consistent:
