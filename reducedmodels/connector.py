@@ -356,6 +356,28 @@ class ConnectorGroup:
                                for c, o, n in zip(self.connectors, old, new)])
 
 
+class FloatTermsGroup(ConnectorGroup):
+    """A group of small connectors that give their terms as plain float lists.
+
+    Their ``terms(pose_a, pose_b, internal)`` returns (energy in N mm, the
+    gradient as a list of floats, the raveled Hessian as a list of floats);
+    the group joins them into one gradient array and one Hessian array per
+    assembly. For connectors of a few coordinates (DCMM sub-arcs, PRBM) two
+    small arrays per connector and their concatenation cost more than the
+    arithmetic.
+    """
+
+    def evaluate(self, states: Sequence[LocalState]) -> tuple[float, np.ndarray, np.ndarray]:
+        """Total energy (N mm), concatenated gradients and concatenated Hessian values."""
+        energy, gradients, hessians = 0.0, [], []
+        for c, (pose_a, pose_b, internal) in zip(self.connectors, states):
+            e, g, h = c.terms(pose_a, pose_b, internal)
+            energy += e
+            gradients += g
+            hessians += h
+        return energy, np.array(gradients), np.array(hessians)
+
+
 def overrides(connector: Connector, hook: str) -> bool:
     """True if ``connector``'s class replaces the base class's default ``hook``.
 

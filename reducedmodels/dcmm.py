@@ -30,7 +30,7 @@ import numpy as np
 from geometry import Flexure, Mechanism
 from geometry.kinematics import rotate_xy
 
-from .connector import Connector, ConnectorGroup
+from .connector import Connector, FloatTermsGroup
 from .inertia import MassPoints, rigid_pieces
 from .sections import SectionForces, unit_vectors
 from .validity import (MAX_RELATIVE_ROTATION, MAX_STRAIN, SCREEN_MARGIN, rotation_reasons,
@@ -218,7 +218,7 @@ class DcmmConnector(Connector):
         forward = flexure.start_body == self.bodies[0]   # chain runs start -> end
         if not forward:
             parts = parts[::-1]
-        self._layout = layout = _chain_layout(n, forward)
+        self._layout = _chain_layout(n, forward)
         # chain of reference points: body a, cuts (in chain order), body b
         cuts = [p.end_points[1] if forward else p.end_points[0] for p in parts[:-1]]
         refs = [mechanism.bodies[self.bodies[0]].reference, *cuts,
@@ -473,7 +473,7 @@ class _Stack:
                          for states in levels]).reshape(len(levels), -1, 3)
 
 
-class DcmmGroup(ConnectorGroup):
+class DcmmGroup(FloatTermsGroup):
     """DCMM connectors evaluated together (:meth:`DcmmConnector.group`).
 
     The same values as :class:`~reducedmodels.connector.ConnectorGroup`'s
@@ -488,16 +488,6 @@ class DcmmGroup(ConnectorGroup):
     def __init__(self, connectors):
         super().__init__(connectors)
         self._stack: _Stack | None = None
-
-    def evaluate(self, states) -> tuple[float, np.ndarray, np.ndarray]:
-        """Total energy (N mm), concatenated gradients and concatenated Hessian values."""
-        energy, gradients, hessians = 0.0, [], []
-        for c, (pose_a, pose_b, internal) in zip(self.connectors, states):
-            e, g, h = c.terms(pose_a, pose_b, internal)
-            energy += e
-            gradients += g
-            hessians += h
-        return energy, np.array(gradients), np.array(hessians)
 
     def stack(self) -> _Stack:
         """The connectors' stack (built on first use)."""

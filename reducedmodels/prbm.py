@@ -95,7 +95,7 @@ from geometry import Flexure, Mechanism
 from geometry.kinematics import rotate_xy
 from geometry.shapes import Shape, arc_semi_axes
 
-from .connector import Connector, ConnectorGroup
+from .connector import Connector, FloatTermsGroup
 from .inertia import MassPoints, rigid_pieces
 from .sections import SectionForces, polyline_fractions, statics_section_forces
 from .validity import MAX_STRAIN, SCREEN_MARGIN, rotation_reasons, stretch_reasons
@@ -427,7 +427,7 @@ class PrbmConnector(Connector):
         return PrbmGroup([self]).path_section_forces([[state] for state in states])[0]
 
 
-class PrbmGroup(ConnectorGroup):
+class PrbmGroup(FloatTermsGroup):
     """PRBM connectors evaluated together (:meth:`PrbmConnector.group`).
 
     The same values as :class:`~reducedmodels.connector.ConnectorGroup`'s
@@ -445,16 +445,6 @@ class PrbmGroup(ConnectorGroup):
         self._end_a, self._end_b, self._r_a, self._r_b, self._v_h = (
             np.array([getattr(c, name) for c in self.connectors])
             for name in ("_end_rel_a", "_end_rel_b", "_r_a", "_r_b", "_v_h"))
-
-    def evaluate(self, states) -> tuple[float, np.ndarray, np.ndarray]:
-        """Total energy (N mm), concatenated gradients and concatenated Hessian values."""
-        energy, gradients, hessians = 0.0, [], []
-        for c, (pose_a, pose_b, internal) in zip(self.connectors, states):
-            e, g, h = c.terms(pose_a, pose_b, internal)
-            energy += e
-            gradients += g
-            hessians += h
-        return energy, np.array(gradients), np.array(hessians)
 
     def polylines(self, levels) -> np.ndarray:
         """Each connector's polyline end_a, R_a, R_2, R_b, end_b at k levels, (k, c, 5, 2) mm.
