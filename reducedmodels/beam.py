@@ -152,6 +152,8 @@ class BeamGroup(ConnectorGroup):
     connectors : sequence of BeamConnector
     """
 
+    compiled = True
+
     def __init__(self, connectors: Sequence["BeamConnector"]):
         super().__init__(connectors)
         n_nodes = [c._n_nodes for c in self.connectors]

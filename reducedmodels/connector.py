@@ -17,6 +17,7 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from operator import itemgetter
 from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
@@ -273,6 +274,10 @@ class ConnectorGroup:
         The connectors, in the order their states are given.
     """
 
+    compiled: bool = False
+    """True if :meth:`assembler` runs compiled kernels (numba is then loaded, and the core's
+    tangent layout may use the compiled banded factorisation too)."""
+
     def __init__(self, connectors: Sequence[Connector]):
         self.connectors = tuple(connectors)
 
@@ -359,23 +364,43 @@ class ConnectorGroup:
 class FloatTermsGroup(ConnectorGroup):
     """A group of small connectors that give their terms as plain float lists.
 
-    Their ``terms(pose_a, pose_b, internal)`` returns (energy in N mm, the
-    gradient as a list of floats, the raveled Hessian as a list of floats);
-    the group joins them into one gradient array and one Hessian array per
-    assembly. For connectors of a few coordinates (DCMM sub-arcs, PRBM) two
-    small arrays per connector and their concatenation cost more than the
-    arithmetic.
+    Their ``terms(local)`` takes the local coordinates
+    [pose_a, pose_b, internal] as a sequence of floats and returns (energy in
+    N mm, the gradient as a list of floats, the Hessian values of
+    :meth:`Connector.hessian_pattern` as a list of floats). The group's
+    :meth:`assembler` reads every connector's coordinates straight from one
+    list of the System's coordinates and adds all the gradients and Hessian
+    values into the global arrays with one ``bincount`` of each kind. For
+    connectors of a few coordinates (DCMM sub-arcs, PRBM chains) small numpy
+    arrays per connector, and the per-connector local states, cost more than
+    the arithmetic. The values are those of the connector-by-connector
+    evaluation, summed in the same order.
     """
 
-    def evaluate(self, states: Sequence[LocalState]) -> tuple[float, np.ndarray, np.ndarray]:
-        """Total energy (N mm), concatenated gradients and concatenated Hessian values."""
-        energy, gradients, hessians = 0.0, [], []
-        for c, (pose_a, pose_b, internal) in zip(self.connectors, states):
-            e, g, h = c.terms(pose_a, pose_b, internal)
-            energy += e
-            gradients += g
-            hessians += h
-        return energy, np.array(gradients), np.array(hessians)
+    def assembler(self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
+                  ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
+        """The function adding the connectors' ``terms`` into the global gradient and tangent storage."""
+        bounds = np.cumsum([0] + [6 + c.n_internal for c in self.connectors]).tolist()
+        readers = [(c.terms, itemgetter(*gather[start:stop].tolist()))
+                   for c, start, stop in zip(self.connectors, bounds, bounds[1:])]
+        grad_keep = np.flatnonzero(grad_dofs >= 0)
+        dofs = grad_dofs[grad_keep]
+        hess_keep = np.flatnonzero(hess_slots >= 0)
+        slots = hess_slots[hess_keep]
+
+        def add(coordinates: np.ndarray, grad: np.ndarray, storage: np.ndarray) -> float:
+            x = coordinates.tolist()
+            energy, gradients, hessians = 0.0, [], []
+            for terms, read in readers:
+                e, g, h = terms(read(x))
+                energy += e
+                gradients += g
+                hessians += h
+            grad += np.bincount(dofs, np.array(gradients)[grad_keep], grad.size)
+            storage += np.bincount(slots, np.array(hessians)[hess_keep], storage.size)
+            return energy
+
+        return add
 
 
 def overrides(connector: Connector, hook: str) -> bool:

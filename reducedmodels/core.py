@@ -169,7 +169,8 @@ class System:
         * ``_assemblers``: the groups that add their gradients and tangent
           entries into the global arrays themselves
           (:meth:`~reducedmodels.connector.ConnectorGroup.assembler`: beams'
-          compiled kernel), given these maps for their connectors;
+          compiled kernel, DCMM's and PRBM's float lists), given these maps
+          for their connectors;
         * for the other groups, whose gradients and Hessian values are
           concatenated: ``_grad_dofs`` / ``_grad_keep``, the global dof of
           every kept entry of the gradients (ground entries dropped), and
@@ -194,8 +195,7 @@ class System:
         self._ground_pose = np.array([ground[0], ground[1], 0.0])
         self._gather = gathers
         diagonal = np.arange(n)
-        compiled = any(type(group).assembler is not ConnectorGroup.assembler
-                       for group, _ in self._groups)
+        compiled = any(group.compiled for group, _ in self._groups)
         self.layout = TangentLayout(n, np.concatenate([*rows, diagonal]),
                                     np.concatenate([*cols, diagonal]), self.n_multipliers,
                                     compiled)

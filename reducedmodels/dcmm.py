@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from operator import itemgetter
 
 import numpy as np
 
@@ -40,8 +41,8 @@ SAMPLES_PER_SUB_ARC = 16
 """Segments of each displaced sub-arc at whose ends the section forces are reported."""
 
 
-def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f: np.ndarray,
-                   axes: np.ndarray, stiffness: np.ndarray
+def sub_arc_energy(xl: float, yl: float, tl: float, xf: float, yf: float, tf: float,
+                   r_l: tuple, r_f: tuple, axes: tuple, stiffness: tuple
                    ) -> tuple[float, list[float], list[float]]:
     """Energy, gradient (6) and row-major Hessian (36) of one displaced compliance element.
 
@@ -50,7 +51,7 @@ def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f:
 
     Parameters
     ----------
-    pose_l, pose_f : array (3,)
+    xl, yl, tl, xf, yf, tf : float
         Poses of the leading and following bodies (mm, mm, rad).
     r_l, r_f : pair of float
         Initial offsets of the centre of elasticity from each body's reference point, mm.
@@ -71,8 +72,6 @@ def sub_arc_energy(pose_l: np.ndarray, pose_f: np.ndarray, r_l: np.ndarray, r_f:
     scalars: this is the innermost loop of DCMM, and plain float algebra
     beats small numpy arrays several times over.
     """
-    xl, yl, tl = pose_l.tolist()          # python floats: far faster scalar arithmetic
-    xf, yf, tf = pose_f.tolist()
     ca, sa = math.cos(tl), math.sin(tl)          # A = R(-tl) = [[ca, sa], [-sa, ca]]
     phi = tf - tl
     dx, dy = xf - xl, yf - yl
@@ -138,6 +137,8 @@ class _ChainLayout:
         Local coordinates of each sub-arc's two bodies: a -> 0..2, cut k -> 6 + 3k, b -> 3..5.
     dof_lists : tuple of tuples of int
         The same as plain ints, for the scalar evaluation.
+    readers : tuple of callables
+        Each sub-arc's ``itemgetter`` of its two bodies' coordinates from the local ones.
     rows, cols : int arrays (36 n,)
         Local (row, col) of each row-major 6x6 sub-arc Hessian entry.
     is_rotation : bool array (3 (n - 1),)
@@ -151,6 +152,7 @@ class _ChainLayout:
 
     element_dofs: np.ndarray
     dof_lists: tuple
+    readers: tuple
     rows: np.ndarray
     cols: np.ndarray
     is_rotation: np.ndarray
@@ -177,7 +179,9 @@ def _chain_layout(n: int, forward: bool) -> _ChainLayout:
     fractions = np.concatenate([w / n] + [(k + w[1:]) / n for k in range(1, n)])
     at = fractions if forward else 1.0 - fractions
     order = np.argsort(at, kind="stable")    # the fractions are distinct
-    layout = _ChainLayout(element_dofs, tuple(map(tuple, element_dofs.tolist())), np.repeat(element_dofs, 6, axis=1).ravel(),
+    dof_lists = tuple(map(tuple, element_dofs.tolist()))
+    layout = _ChainLayout(element_dofs, dof_lists, tuple(itemgetter(*d) for d in dof_lists),
+                          np.repeat(element_dofs, 6, axis=1).ravel(),
                           np.tile(element_dofs, (1, 6)).ravel(),
                           np.tile([False, False, True], n - 1), sample_part, sample_w,
                           order, at[order])
@@ -305,9 +309,6 @@ class DcmmConnector(Connector):
         """Every third internal coordinate is an angle."""
         return self._layout.is_rotation
 
-    def _chain(self, pose_a, pose_b, internal) -> list[np.ndarray]:
-        return [pose_a, *internal.reshape(-1, 3), pose_b]
-
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         """Local (rows, cols) of the Hessian values :meth:`evaluate` returns: 36 per sub-arc."""
         return self._layout.rows, self._layout.cols
@@ -319,22 +320,23 @@ class DcmmConnector(Connector):
 
     def evaluate(self, pose_a, pose_b, internal):
         """Energy (N mm), gradient over [pose_a, pose_b, internal] and the Hessian values."""
-        energy, gradient, hessian = self.terms(pose_a, pose_b, internal)
+        energy, gradient, hessian = self.terms(np.concatenate([pose_a, pose_b, internal]).tolist())
         return energy, np.array(gradient), np.array(hessian)
 
-    def terms(self, pose_a, pose_b, internal) -> tuple[float, list[float], list[float]]:
+    def terms(self, local) -> tuple[float, list[float], list[float]]:
         """:meth:`evaluate`'s energy, gradient and Hessian values as plain float lists.
 
-        Each sub-arc's gradient is added onto its two bodies' coordinates in
-        the sub-arcs' order; the Hessian values are the sub-arcs' in turn
-        (see :meth:`hessian_pattern`).
+        ``local`` holds the local coordinates [pose_a, pose_b, internal] as
+        floats. Each sub-arc's gradient is added onto its two bodies'
+        coordinates in the sub-arcs' order; the Hessian values are the
+        sub-arcs' in turn (see :meth:`hessian_pattern`).
         """
         if len(self._elements) == 1:
-            return sub_arc_energy(pose_a, pose_b, *self._elements[0])
-        chain = self._chain(pose_a, pose_b, internal)
+            return sub_arc_energy(*local, *self._elements[0])
         energy, gradient, hessian = 0.0, [0.0] * (6 + self.n_internal), []
-        for k, (element, dofs) in enumerate(zip(self._elements, self._layout.dof_lists)):
-            e, g, h = sub_arc_energy(chain[k], chain[k + 1], *element)
+        for element, read, dofs in zip(self._elements, self._layout.readers,
+                                       self._layout.dof_lists):
+            e, g, h = sub_arc_energy(*read(local), *element)
             energy += e
             for dof, value in zip(dofs, g):
                 gradient[dof] += value
@@ -527,8 +529,9 @@ class DcmmGroup(FloatTermsGroup):
         stack = self.stack()
         poses = stack.poses(levels)
         body = stack.sub_arc_body.tolist()
-        wrenches = np.array([[sub_arc_energy(chain[b], chain[b + 1], *element)[1][3:6]
-                              for b, element in zip(body, stack.elements)] for chain in poses])
+        wrenches = np.array([[sub_arc_energy(*chain[b], *chain[b + 1], *element)[1][3:6]
+                              for b, element in zip(body, stack.elements)]
+                             for chain in poses.tolist()])
         return self.statics(poses, wrenches[:, stack.sub_arc])
 
     def section_forces(self, states, gradients) -> list[SectionForces]:

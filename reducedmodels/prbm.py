@@ -335,26 +335,24 @@ class PrbmConnector(Connector):
         Local order: [x_a, y_a, theta_a, x_b, y_b, theta_b, phi_h, phi_l, mu_x, mu_y];
         the values of :meth:`terms` as arrays.
         """
-        energy, gradient, hessian = self.terms(pose_a, pose_b, internal)
+        energy, gradient, hessian = self.terms(np.concatenate([pose_a, pose_b, internal]).tolist())
         return energy, np.array(gradient), np.array(hessian)
 
-    def terms(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-              ) -> tuple[float, list[float], list[float]]:
+    def terms(self, local) -> tuple[float, list[float], list[float]]:
         """:meth:`evaluate`'s Lagrangian (N mm), gradient and Hessian values as plain float lists.
 
-        With the gap g and its Jacobian G (identity on x_a, minus identity on
+        ``local`` holds the local coordinates (the order of :meth:`evaluate`)
+        as floats. With the gap g and its Jacobian G (identity on x_a, minus identity on
         x_b, J R(.) v on the four angles), the springs t = B q and the scale
         c: gradient B^T K t + c G^T mu (and c g on mu), Hessian B^T K B plus
         the curvature of the gap, c mu . d2(R v)/dangle2 = -c mu . R v, on the
         four angle diagonals, plus c G and c G^T in the mu rows and columns.
         Written with scalars (the innermost loop; small numpy arrays cost
-        more than the algebra), so that a group of connectors makes one array
-        of each kind (:class:`PrbmGroup`).
+        more than the algebra), so that a group of connectors adds them into
+        the System's arrays at once (:class:`PrbmGroup`).
         """
         c = self.closure_scale
-        xa, ya, ta = pose_a.tolist()
-        xb, yb, tb = pose_b.tolist()
-        ph, pl, mx, my = internal.tolist()
+        xa, ya, ta, xb, yb, tb, ph, pl, mx, my = local
         (rax, ray), (rbx, rby) = rotate_xy(ta, *self._r_a), rotate_xy(tb, *self._r_b)
         (vhx, vhy), (vlx, vly) = rotate_xy(ph, *self._v_h), rotate_xy(pl, *self._v_l)
         gx = xa + rax + vhx + vlx - xb - rbx
@@ -496,7 +494,8 @@ class PrbmGroup(FloatTermsGroup):
         out = []
         for j, c in enumerate(self.connectors):
             states = [level[j] for level in levels]
-            wrenches = np.array([c.terms(*state)[1][3:6] for state in states])
+            wrenches = np.array([c.terms(np.concatenate(state).tolist())[1][3:6]
+                                 for state in states])
             out.append(statics_section_forces(lines[:, j], c._fractions, wrenches,
                                               np.array([state[1] for state in states]),
                                               reverse=not c._forward))
