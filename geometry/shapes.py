@@ -71,6 +71,16 @@ def arc_semi_axes(width: float) -> tuple[float, float]:
     return float(np.sqrt(a2)), float(np.sqrt(max(b2, 0.0)))
 
 
+def _directions(angle: np.ndarray) -> np.ndarray:
+    """Unit vectors (cos, sin) of angles (rad) of any shape, shape (..., 2).
+
+    (``np.stack`` costs more than the trigonometry on the short arrays of a flexure.)
+    """
+    out = np.empty((*np.shape(angle), 2))
+    out[..., 0], out[..., 1] = np.cos(angle), np.sin(angle)
+    return out
+
+
 @dataclass(frozen=True)
 class Ellipse:
     """Ellipse of elasticity of a flexure (paper Eqs. 1-5).
@@ -200,8 +210,10 @@ class Arc:
     def point(self, s: np.ndarray | float) -> np.ndarray:
         """Point(s) at arc length s (mm) from the start, shape (..., 2), mm."""
         phi = self._polar(s)
-        c = np.asarray(self.center, dtype=float)
-        return c + self.radius * np.stack([np.cos(phi), np.sin(phi)], axis=-1)
+        out = _directions(phi)
+        out *= self.radius
+        out += self.center
+        return out
 
     def tangent_angle(self, s: np.ndarray | float) -> np.ndarray:
         """Direction of the unit tangent (increasing s) at s, rad."""
@@ -209,8 +221,7 @@ class Arc:
 
     def tangent(self, s: np.ndarray | float) -> np.ndarray:
         """Unit tangent(s) at arc length s, shape (..., 2)."""
-        t = self.tangent_angle(s)
-        return np.stack([np.cos(t), np.sin(t)], axis=-1)
+        return _directions(self.tangent_angle(s))
 
     @property
     def end_points(self) -> np.ndarray:
@@ -256,7 +267,7 @@ class Arc:
             center=center,
             a=self.length * a,
             b=self.length * b,
-            axes=np.column_stack([e1, e2]),
+            axes=np.array([[e1[0], e2[0]], [e1[1], e2[1]]]),
         )
 
     def closes_on_itself(self, thickness: float) -> bool:
@@ -319,8 +330,7 @@ class Segment:
 
     def tangent(self, s: np.ndarray | float) -> np.ndarray:
         """Unit tangent(s), shape (..., 2)."""
-        t = self.tangent_angle(s)
-        return np.stack([np.cos(t), np.sin(t)], axis=-1)
+        return _directions(self.tangent_angle(s))
 
     @property
     def end_points(self) -> np.ndarray:
@@ -346,7 +356,7 @@ class Segment:
             center=np.asarray(self.point(0.5 * L)),
             a=L / np.sqrt(12.0),
             b=0.0,
-            axes=np.column_stack([e1, e2]),
+            axes=np.array([[e1[0], e2[0]], [e1[1], e2[1]]]),
         )
 
     def symmetry_frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

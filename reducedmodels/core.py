@@ -25,7 +25,7 @@ import scipy.sparse as sp
 
 from geometry import LoadCase, Mechanism
 from geometry.loads import MAX_LOAD_SUBSTEPS
-from geometry.kinematics import rigid_points
+from geometry.kinematics import rotate_xy
 
 from .connector import Connector, ConnectorGroup, LocalState, overrides
 from .loadpath import LoadPath
@@ -332,11 +332,11 @@ class System:
     def target(self, q: np.ndarray) -> tuple[float, float, float]:
         """Target point displacement (dx, dy) in mm and target body rotation in rad."""
         mech = self.mechanism
-        pose = self.pose(q, mech.target_body)
-        rel = mech.target_point - self.reference[mech.target_body]
-        x, _, _ = rigid_points(pose, rel[None])
-        d = x[0] - mech.target_point
-        return float(d[0]), float(d[1]), float(pose[2])
+        x, y, theta = self.pose(q, mech.target_body).tolist()     # floats: once per level
+        rel = (mech.target_point - self.reference[mech.target_body]).tolist()
+        rx, ry = rotate_xy(theta, *rel)
+        tx, ty = mech.target_point.tolist()
+        return (x + rx) - tx, (y + ry) - ty, theta
 
     def update(self, q: np.ndarray, du: np.ndarray) -> np.ndarray:
         """State after the Newton correction du: q + du, or a connector's own update.

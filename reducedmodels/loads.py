@@ -79,13 +79,19 @@ class Loads:
         return cls(np.array(fd, int).reshape(-1, 3), forces, np.array(fr).reshape(-1, 2),
                    np.array(md, int), moments, scale)
 
+    def __post_init__(self) -> None:
+        # the loads on moving bodies as plain numbers, read at every assembly
+        self._points = [(ix, iy, it, fx, fy, rx, ry) for (ix, iy, it), (fx, fy), (rx, ry)
+                        in zip(self.dofs.tolist(), self.forces.tolist(), self.rels.tolist())
+                        if ix >= 0]
+        self._moments = [(dof, m) for dof, m in zip(self.moment_dofs.tolist(),
+                                                     self.moments.tolist()) if dof >= 0]
+
     def point_terms(self, q: np.ndarray) -> Iterator[tuple[int, int, int, float, float, float,
                                                            float]]:
         """Per force on a moving body: its dofs (ix, iy, it), F (N) and R(theta) rel (mm)."""
-        for (ix, iy, it), (fx, fy), (rx, ry) in zip(self.dofs.tolist(), self.forces.tolist(),
-                                                    self.rels.tolist()):
-            if ix >= 0:
-                yield (ix, iy, it, fx, fy, *rotate_xy(q[it], rx, ry))
+        for ix, iy, it, fx, fy, rx, ry in self._points:
+            yield (ix, iy, it, fx, fy, *rotate_xy(q[it], rx, ry))
 
     def add_to(self, q: np.ndarray, factor: float, grad: np.ndarray, diagonal: np.ndarray
                ) -> float:
@@ -100,10 +106,9 @@ class Loads:
             grad[iy] -= factor * fy
             grad[it] -= factor * (fy * rrx - fx * rry)              # F . dx/dtheta
             diagonal[it] += factor * (fx * rrx + fy * rry)          # -F . d2x/dtheta2
-        for dof, m in zip(self.moment_dofs.tolist(), self.moments.tolist()):
-            if dof >= 0:
-                energy -= factor * m * q[dof]
-                grad[dof] -= factor * m
+        for dof, m in self._moments:
+            energy -= factor * m * q[dof]
+            grad[dof] -= factor * m
         return energy
 
     def vector(self, q: np.ndarray) -> np.ndarray:
@@ -117,7 +122,6 @@ class Loads:
             f[ix] += fx
             f[iy] += fy
             f[it] += fy * rrx - fx * rry
-        for dof, m in zip(self.moment_dofs.tolist(), self.moments.tolist()):
-            if dof >= 0:
-                f[dof] += m
+        for dof, m in self._moments:
+            f[dof] += m
         return f

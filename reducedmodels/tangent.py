@@ -23,6 +23,7 @@ Units: the tangent is in N/mm, N and N mm like the coordinates it pairs.
 from __future__ import annotations
 
 import functools
+import math
 from types import ModuleType
 from typing import Protocol
 
@@ -88,34 +89,62 @@ class DenseTangent:
     As for band storage, one factorisation serves the solves and the
     inertia: LAPACK's Cholesky (``dpotrf``, called directly: numpy's
     ``solve`` spends 20 times longer in its checks than in the arithmetic of
-    a 9 x 9 system), an LU (``dgesv``) and the eigenvalues only when K is
-    not positive definite.
+    a 9 x 9 system) and, when K is not positive definite, a symmetric
+    indefinite LDL^T (Bunch-Kaufman, ``dsytrf``), whose block-diagonal D has
+    K's inertia (Sylvester). A saddle-point tangent (Lagrange multipliers:
+    ``indefinite``) goes straight to the LDL^T.
     """
 
-    def __init__(self, matrix: np.ndarray):
+    def __init__(self, matrix: np.ndarray, indefinite: bool = False):
         self.matrix, self.n = matrix, matrix.shape[0]
         self._cholesky = None       # upper Cholesky factor, when K is positive definite
-        self._positive = None       # whether dpotrf succeeded (None: not tried yet)
+        self._ldl = None            # (ldu, ipiv, info) of dsytrf, when it is not
+        self._positive = False if indefinite else None   # dpotrf succeeded (None: not tried)
 
-    def _factorise(self) -> bool:
+    def _factorise(self) -> None:
         if self._positive is None:
             factor, info = lapack.dpotrf(self.matrix)
             self._positive = info == 0
             self._cholesky = factor if self._positive else None
-        return self._positive
+        if not self._positive and self._ldl is None:
+            self._ldl = lapack.dsytrf(self.matrix)
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
-        if self._factorise():
+        self._factorise()
+        if self._positive:
             return lapack.dpotrs(self._cholesky, rhs)[0]
-        return np.linalg.solve(self.matrix, rhs)
+        ldu, ipiv, info = self._ldl
+        if info > 0:
+            raise np.linalg.LinAlgError(f"singular tangent (zero pivot {info})")
+        return lapack.dsytrs(ldu, ipiv, rhs)[0]
 
     def negative_eigenvalues(self) -> int | None:
-        if not np.all(np.isfinite(self.matrix)):
+        """Zero when the Cholesky succeeded, else the negative eigenvalues of LDL^T's D.
+
+        D's 1 x 1 blocks and 2 x 2 blocks (rows k, k + 1 of the upper
+        factorisation, marked by ipiv[k] = ipiv[k + 1] < 0) give its
+        eigenvalues directly; those below -ROUND_OFF times the largest in
+        size count. (Plain floats: at most ``DENSE_LIMIT`` of them.)
+        """
+        if not np.isfinite(self.matrix).all():
             return None
-        if self._factorise():
+        self._factorise()
+        if self._positive:
             return 0
-        ev = np.linalg.eigvalsh(self.matrix)
-        return int(np.sum(ev < -ROUND_OFF * np.abs(ev).max(initial=0.0)))
+        ldu, ipiv, _ = self._ldl
+        d, off, pivots = ldu.diagonal().tolist(), ldu.diagonal(1).tolist(), ipiv.tolist()
+        eigenvalues, k = [], 0
+        while k < self.n:
+            if pivots[k] < 0:           # the first row of a 2 x 2 block
+                a, b, c = d[k], off[k], d[k + 1]
+                mid, radius = 0.5 * (a + c), math.hypot(0.5 * (a - c), b)
+                eigenvalues += (mid - radius, mid + radius)
+                k += 2
+            else:
+                eigenvalues.append(d[k])
+                k += 1
+        limit = -ROUND_OFF * max(map(abs, eigenvalues), default=0.0)
+        return sum(value < limit for value in eigenvalues)
 
     def toarray(self) -> np.ndarray:
         return self.matrix
@@ -301,7 +330,7 @@ class TangentLayout:
     def tangent(self, storage: np.ndarray) -> Tangent:
         """The tangent held in ``storage`` (:attr:`size` values, summed at :attr:`slots`)."""
         if self.kind == "dense":
-            return DenseTangent(storage.reshape(self.n, self.n))
+            return DenseTangent(storage.reshape(self.n, self.n), self.n_multipliers > 0)
         if self.kind == "banded":     # column j contiguous: Fortran order, as LAPACK wants it
             return BandedTangent(storage.reshape(self.n, self.b + 1).T, self.perm, self.b)
         matrix = sp.csc_matrix((storage, self._indices, self._indptr), shape=(self.n, self.n))
