@@ -349,3 +349,19 @@ def test_gradient_and_hessian_match_finite_differences(law, plane, start_on_grou
         np.testing.assert_allclose((gp - gm) / (2 * step), H @ v, rtol=0,
                                    atol=1e-6 * np.abs(H @ v).max())
     np.testing.assert_allclose(H, H.T, rtol=0, atol=1e-12 * np.abs(H).max())
+
+
+@pytest.mark.parametrize("plane", ["stress", "strain"])
+def test_svk_tangent_blocks_equal_the_general_contraction(plane):
+    # the closed form against Law.tangent_blocks' contraction of the law's own CC over random
+    # deformation gradients and weights: the same sums in another order, round-off only
+    # (1e-16 of the largest block entry; 1e-13 allowed)
+    from validation.continuum.material import Law
+
+    law = make_law("svk", plane, E_MOD, NU)
+    rng = np.random.default_rng(11)
+    F = np.eye(2) + 0.3 * rng.standard_normal((5, 9, 2, 2))
+    weight = rng.uniform(0.1, 2.0, (5, 9))
+    _, _, CC = law(np.einsum("...mi,...mj->...ij", F, F))
+    closed, general = law.tangent_blocks(F, CC, weight), Law.tangent_blocks(law, F, CC, weight)
+    np.testing.assert_allclose(closed, general, rtol=0, atol=1e-13 * np.abs(general).max())

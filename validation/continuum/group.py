@@ -25,7 +25,7 @@ import numpy as np
 from reducedmodels.connector import ConnectorGroup, LocalState
 
 from .polar import PolarShape, extrapolate, from_polar, increment, stack_sections, to_polar
-from .solid import ElementKernel
+from .solid import BLOCK_ENTRY, BLOCK_MIRROR, ElementKernel
 
 
 class ContinuumGroup(ConnectorGroup):
@@ -105,6 +105,38 @@ class ContinuumGroup(ConnectorGroup):
         rx, ry = self._face_rel[:, 0], self._face_rel[:, 1]
         return np.column_stack([c * rx - s * ry, s * rx + c * ry])
 
+    @staticmethod
+    def _block_slots(first: np.ndarray, src: np.ndarray, p: np.ndarray, q: np.ndarray,
+                     slot: np.ndarray, unit: int) -> tuple[np.ndarray, ...]:
+        """The storage slots of one flexure's tangent blocks (:meth:`.solid.ElementKernel.evaluate`).
+
+        ``first`` (n_el, 324) holds the slot of every element-matrix entry's
+        first expansion (-1: none); ``src`` (flat entry indices, element by
+        element), ``p``, ``q`` (coefficient indices) and ``slot`` its further
+        expansions. A value of the (0, 1) block stands for two entries, (a x,
+        b y) and its mirror (b y, a x): it goes to whichever of their slots is
+        kept (the other is in the band's lower triangle, or the ground's), and
+        to both (as a further expansion with coefficient ``unit``) when both are.
+        Returns the slots (n_el * 243,) of the values and the further
+        expansions (value indices, p, q, slots).
+        """
+        n_el = first.shape[0]
+        slots = first[:, BLOCK_ENTRY]
+        mirrored = np.flatnonzero(BLOCK_MIRROR >= 0)
+        own, other = slots[:, mirrored], first[:, BLOCK_MIRROR[mirrored]]
+        both = (own >= 0) & (other >= 0)
+        slots[:, mirrored] = np.where(own >= 0, own, other)
+        value_of = np.empty(first.shape[1], np.int64)            # entry -> value within an element
+        value_of[BLOCK_ENTRY] = np.arange(BLOCK_ENTRY.size)
+        value_of[BLOCK_MIRROR[mirrored]] = mirrored
+        per_el = BLOCK_ENTRY.size
+        twice = (np.arange(n_el)[:, None] * per_el + mirrored)[both]
+        src = np.concatenate([src // first.shape[1] * per_el + value_of[src % first.shape[1]],
+                              twice])
+        unit_at = np.full(twice.size, unit)
+        return (slots.ravel(), src, np.concatenate([p, unit_at]), np.concatenate([q, unit_at]),
+                np.concatenate([slot, other[both]]))
+
     def assembler(self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
                   ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
         """The function adding every flexure's gradient and tangent into the global arrays.
@@ -145,10 +177,11 @@ class ContinuumGroup(ConnectorGroup):
                 coef_at[c._theta_pos[s]] = face_dofs + np.arange(c._theta_pos[s].size)
                 face_dofs += c._theta_pos[s].size
             rest = ~is_first
-            extra_src.append(t_mixed[rest])
-            extra_p.append(coef_at[p_mixed[rest]])
-            extra_q.append(coef_at[q_mixed[rest]])
-            extra_slot.append(slots[n_plain:n_plain + t_mixed.size][rest])
+            keep = slots[n_plain:n_plain + t_mixed.size] >= 0
+            extra_src.append(t_mixed[rest & keep])
+            extra_p.append(coef_at[p_mixed[rest & keep]])
+            extra_q.append(coef_at[q_mixed[rest & keep]])
+            extra_slot.append(slots[n_plain:n_plain + t_mixed.size][rest & keep])
             second_slot.append(slots[-2:])
             block += 6 + c.n_internal
             hess_block += c._rows.size
@@ -160,17 +193,18 @@ class ContinuumGroup(ConnectorGroup):
         # one chunk of elements per flexure: its temporaries stay in cache (stacking
         # all flexures into one call measured slower on the open chain) and its
         # entries fall in a narrow range of the storage; dropped entries (the
-        # ground's) go to one spare slot past that range
+        # ground's, the lower triangle's) go to one spare slot past that range
         chunks = []
         start = np.cumsum([0] + [c.solid.elements.shape[0] for c in self.connectors])
         for k, first in enumerate(slot_first):
-            kept = first >= 0
-            lo, hi = int(first[kept].min()), int(first[kept].max()) + 1
-            keep_extra = extra_slot[k] >= 0
+            n_el = start[k + 1] - start[k]
+            slots, src, p, q, extra = self._block_slots(first.reshape(n_el, -1), extra_src[k],
+                                                        extra_p[k], extra_q[k], extra_slot[k],
+                                                        unit)
+            kept = slots >= 0
+            lo, hi = int(slots[kept].min()), int(slots[kept].max()) + 1
             chunks.append((self.kernel.subset(np.arange(start[k], start[k + 1])), lo, hi,
-                           np.where(kept, first - lo, hi - lo), extra_src[k][keep_extra],
-                           extra_p[k][keep_extra], extra_q[k][keep_extra],
-                           extra_slot[k][keep_extra]))
+                           np.where(kept, slots - lo, hi - lo), src, p, q, extra))
         grad_kept = np.flatnonzero(first_dof >= 0)
         grad_kept_dof = first_dof[grad_kept]
         theta_kept = np.flatnonzero(theta_dof >= 0)
@@ -187,9 +221,9 @@ class ContinuumGroup(ConnectorGroup):
             coef = np.append(jac.ravel(), 1.0)
             energy, forces = 0.0, 0.0
             for kernel, lo, hi, slots, src, p, q, extra in chunks:
-                e, f, Ke = kernel.evaluate(x)
+                e, f, blocks = kernel.evaluate(x)
                 energy, forces = energy + e, forces + f
-                values = Ke.ravel()
+                values = blocks.ravel()
                 storage[lo:hi] += np.bincount(slots, weights=values, minlength=hi - lo + 1)[:-1]
                 np.add.at(storage, extra, values[src] * coef[p] * coef[q])
             grad += np.bincount(grad_kept_dof, weights=forces[grad_kept], minlength=grad.size)

@@ -15,25 +15,28 @@ shape (..., 2, 2, 2, 2), with both minor and major symmetries).
   vectorised Newton solve at every point, and condenses the tangent:
   CC = CC_3D - lam^2 / (lam + 2 mu C33) C^-1 (x) C^-1.
 
-Lame constants come from the 3D E and nu (:func:`lame`). Units: MPa.
+Lame constants come from the 3D E and nu (:func:`lame`).
+
+A law is a :class:`Law` object: called with C it gives (W, S, CC), and its
+:meth:`Law.tangent_blocks` contracts CC with the deformation gradient into
+the blocks of the element tangent (:mod:`.solid`); the Saint Venant-Kirchhoff
+law, whose CC is constant, does that in closed form. Units: MPa.
 """
 
 from __future__ import annotations
 
-from functools import partial
-from typing import Callable
+from abc import ABC, abstractmethod
 
 import numpy as np
 
 LAWS = ("svk", "neo-hookean")
 PLANES = ("stress", "strain")
 
-Law = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
-"""C (..., 2, 2) -> (W (...), S (..., 2, 2), CC (..., 2, 2, 2, 2))."""
-
 _I2 = np.eye(2)
 _SYM = 0.5 * (np.einsum("ik,jl->ijkl", _I2, _I2) + np.einsum("il,jk->ijkl", _I2, _I2))
 _IXI = np.einsum("ij,kl->ijkl", _I2, _I2)
+BLOCK_ROWS, BLOCK_COLS = np.array([0, 0, 1]), np.array([0, 1, 1])
+"""The (i, k) pairs of the tangent blocks, in the order of :meth:`Law.tangent_blocks`."""
 
 
 def lame(youngs_modulus: float, poisson_ratio: float) -> tuple[float, float]:
@@ -54,8 +57,11 @@ def svk(C: np.ndarray, lam: float, mu: float) -> tuple[np.ndarray, np.ndarray, n
     """
     E = 0.5 * (C - _I2)
     tr = E[..., 0, 0] + E[..., 1, 1]
-    W = 0.5 * lam * tr**2 + mu * np.einsum("...ij,...ij->...", E, E)
-    S = lam * tr[..., None, None] * _I2 + 2.0 * mu * E
+    W = 0.5 * lam * tr**2 + mu * (E[..., 0, 0]**2 + E[..., 0, 1]**2
+                                  + E[..., 1, 0]**2 + E[..., 1, 1]**2)
+    S = 2.0 * mu * E                  # + lam tr I, added on the diagonal (keeps C's layout)
+    S[..., 0, 0] += lam * tr
+    S[..., 1, 1] += lam * tr
     CC = np.broadcast_to(lam * _IXI + 2.0 * mu * _SYM, C.shape[:-2] + (2, 2, 2, 2))
     return W, S, CC
 
@@ -112,6 +118,87 @@ def neo_hookean(C: np.ndarray, lam: float, mu: float, plane: str = "stress"
     return W, S, CC
 
 
+class Law(ABC):
+    """A hyperelastic law: C -> (W, S, CC) (see the module docstring), in MPa.
+
+    Parameters
+    ----------
+    lam, mu : float
+        Its Lame constants, MPa (which ones: see the subclasses).
+    """
+
+    def __init__(self, lam: float, mu: float):
+        self.lam, self.mu = float(lam), float(mu)
+
+    @abstractmethod
+    def __call__(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """W (...), S (..., 2, 2) and CC (..., 2, 2, 2, 2) at C (..., 2, 2)."""
+
+    def tangent_blocks(self, F: np.ndarray, CC: np.ndarray, weight: np.ndarray) -> np.ndarray:
+        """The material part of the first elasticity tensor, weighted, as 2 x 2 blocks (MPa mm^3).
+
+        ``A[..., J, c, L] = weight * sum_MN F_iM F_kN CC_MJNL`` for the pairs
+        c = (i, k) of ``BLOCK_ROWS``, ``BLOCK_COLS``, i.e. (0, 0), (0, 1),
+        (1, 1) (the pair (1, 0) is the transpose of (0, 1)); F is (..., 2, 2),
+        CC as :meth:`__call__` gives it, ``weight`` (...) the integration
+        weights (mm^3). Shape (..., 2, 3, 2).
+        """
+        shape = F.shape[:-2]
+        pairs = (F[..., BLOCK_ROWS, :, None] * F[..., BLOCK_COLS, None, :]
+                 * weight[..., None, None, None]).reshape(shape + (3, 4))        # c, (M, N)
+        by_mn = CC.transpose(*range(len(shape)), -4, -2, -3, -1).reshape(shape + (4, 4))
+        blocks = np.matmul(pairs, by_mn).reshape(shape + (3, 2, 2))          # c, J, L
+        return np.ascontiguousarray(np.swapaxes(blocks, -3, -2))
+
+
+class SvkLaw(Law):
+    """Saint Venant-Kirchhoff with the in-plane constants lam' and mu (see :func:`svk`)."""
+
+    def __call__(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return svk(C, self.lam, self.mu)
+
+    def tangent_blocks(self, F: np.ndarray, CC: np.ndarray, weight: np.ndarray) -> np.ndarray:
+        """:meth:`Law.tangent_blocks` in closed form (CC is constant, ``CC`` is not read).
+
+        With CC_MJNL = lam d_MJ d_NL + mu (d_MN d_JL + d_ML d_JN) the block
+        of (i, k) is ``lam F_iJ F_kL + mu F_kJ F_iL + mu (F F^T)_ik d_JL``
+        times the weight: a few products per point instead of the general
+        contraction (which the tests check it against). Computed component
+        by component into an array whose components are contiguous (the
+        result is a transposed view of it).
+        """
+        lam, mu = self.lam, self.mu
+        f = [[F[..., i, J] for J in (0, 1)] for i in (0, 1)]
+        wf = [[weight * f[i][J] for J in (0, 1)] for i in (0, 1)]
+        shape = F.shape[:-2]
+        blocks = np.empty((2, 3, 2) + shape)                                # [J, c, L, ...]
+        for c, (i, k) in enumerate(zip(BLOCK_ROWS, BLOCK_COLS)):
+            gram = mu * (wf[i][0] * f[k][0] + wf[i][1] * f[k][1])            # mu (F F^T)_ik w
+            for J in (0, 1):
+                for L in (0, 1):
+                    value = lam * wf[i][J] * f[k][L] + mu * wf[k][J] * f[i][L]
+                    blocks[J, c, L] = value + gram if J == L else value
+        return np.moveaxis(blocks, (0, 1, 2), (-3, -2, -1))
+
+
+class NeoHookeanLaw(Law):
+    """Compressible neo-Hookean with the 3D lam and mu (see :func:`neo_hookean`).
+
+    Parameters
+    ----------
+    lam, mu : float
+        3D Lame constants, MPa.
+    plane : {'stress', 'strain'}
+    """
+
+    def __init__(self, lam: float, mu: float, plane: str):
+        super().__init__(lam, mu)
+        self.plane = plane
+
+    def __call__(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return neo_hookean(C, self.lam, self.mu, self.plane)
+
+
 def make_law(name: str, plane: str, youngs_modulus: float, poisson_ratio: float) -> Law:
     """The law ``name`` ('svk' or 'neo-hookean') for ``plane`` ('stress' or 'strain')."""
     if name not in LAWS:
@@ -120,9 +207,8 @@ def make_law(name: str, plane: str, youngs_modulus: float, poisson_ratio: float)
         raise ValueError(f"unknown plane assumption {plane!r}; expected one of {PLANES}")
     lam, mu = lame(youngs_modulus, poisson_ratio)
     if name == "svk":
-        return partial(svk, lam=2.0 * lam * mu / (lam + 2.0 * mu) if plane == "stress" else lam,
-                       mu=mu)
-    return partial(neo_hookean, lam=lam, mu=mu, plane=plane)
+        return SvkLaw(2.0 * lam * mu / (lam + 2.0 * mu) if plane == "stress" else lam, mu)
+    return NeoHookeanLaw(lam, mu, plane)
 
 
 def out_of_plane(name: str, plane: str, youngs_modulus: float, poisson_ratio: float,
