@@ -24,7 +24,7 @@ import numpy as np
 
 from reducedmodels.connector import ConnectorGroup, LocalState
 
-from .polar import PolarShape, extrapolate, from_polar, increment, stack_sections, to_polar
+from .polar import PolarShape, advanced, extrapolate, interior, stack_sections, to_polar
 from .solid import BLOCK_ENTRY, BLOCK_MIRROR, ElementKernel
 
 
@@ -48,6 +48,19 @@ class ContinuumGroup(ConnectorGroup):
         self._face_rel = np.vstack([r for _, r in faces])
         self._face_of = np.repeat(np.arange(len(faces)), [f.size for f, _ in faces])
         self._sections = stack_sections([c.sections for c in self.connectors], offsets[:-1])
+        sections = self._sections
+        mid = sections.nodes.shape[1] // 2
+        at_face = np.full(self._nodes.shape[0], -1)
+        at_face[self._face_nodes] = np.arange(self._face_nodes.size)
+        self._face_centres = (at_face[sections.nodes[sections.first, mid]],
+                              at_face[sections.nodes[sections.last, mid]])
+        # the interior sections' nodes, flattened, are the free nodes in another order
+        inner = sections.nodes[sections.interior].ravel()
+        position = np.full(self._nodes.shape[0], -1)
+        position[inner] = np.arange(inner.size)
+        self._free_in_interior = position[self._free]
+        if inner.size != self._free.size or np.any(self._free_in_interior < 0):
+            raise RuntimeError("the interior sections are not the free nodes")
 
     def _positions(self, states: Sequence[LocalState]) -> tuple[np.ndarray, np.ndarray]:
         """All mesh nodes' positions (n_nodes, 2) and the faces' poses (n_faces, 3) of the
@@ -58,9 +71,16 @@ class ContinuumGroup(ConnectorGroup):
         x[self._face_nodes] = poses[self._face_of, :2] + self._face_arms(poses)
         return x, poses
 
-    def _internal(self, x: np.ndarray) -> np.ndarray:
-        """The concatenated internal coordinates (mm) of node positions x."""
-        return (x[self._free] - self._nodes[self._free]).ravel()
+    def _face_centres_at(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (mm) of every flexure's start and end face centres for the faces' poses."""
+        start, end = self._face_centres
+        x = poses[self._face_of[start], :2] + self._face_arms(poses, start)
+        return x, poses[self._face_of[end], :2] + self._face_arms(poses, end)
+
+    def _internal_of(self, shape: PolarShape, poses: np.ndarray) -> np.ndarray:
+        """The internal coordinates (mm) of ``shape`` rebuilt between the faces at ``poses``."""
+        xs = interior(shape, self._sections, *self._face_centres_at(poses))
+        return (xs.reshape(-1, 2)[self._free_in_interior] - self._nodes[self._free]).ravel()
 
     def predict_internal(self, past: Sequence[Sequence[LocalState]], weights: Sequence[float],
                          poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
@@ -74,8 +94,7 @@ class ContinuumGroup(ConnectorGroup):
         """
         shape = extrapolate([to_polar(self._positions(states)[0], self._sections)
                              for states in past], weights)
-        ends = self._positions([(*pose, state[2]) for pose, state in zip(poses, past[-1])])[0]
-        return self._internal(from_polar(shape, self._sections, ends))
+        return self._internal_of(shape, np.array([p for pose in poses for p in pose], float))
 
     def update_internal(self, old: Sequence[LocalState], new: Sequence[LocalState]
                         ) -> np.ndarray:
@@ -83,26 +102,30 @@ class ContinuumGroup(ConnectorGroup):
 
         ``new`` holds the linearly corrected states. The correction becomes
         first-order changes of the chords, section rotations and offsets
-        (:func:`.polar.increment`; the end faces move with the linearised
+        (:func:`.polar.advanced`; the end faces move with the linearised
         motion of their bodies), applied as finite turns between the end
         faces at the new poses. This agrees with the linear update to first
         order, so Newton stays quadratic, but a section that turns by dphi no
         longer comes out stretched by dphi^2 / 2, which the membrane
         stiffness would turn into forces far above the load.
         """
-        (x_old, before), (x_new, after) = self._positions(old), self._positions(new)
-        dx = x_new - x_old
+        x_old, before = self._positions(old)
+        after = np.array([pose for state in new for pose in state[:2]], float)
+        dx = np.empty_like(x_old)
+        dx[self._free] = (np.concatenate([state[2] for state in new])
+                          - np.concatenate([state[2] for state in old])).reshape(-1, 2)
         arm = x_old[self._face_nodes] - before[self._face_of, :2]
         turn = (after - before)[self._face_of]
         dx[self._face_nodes] = turn[:, :2] + turn[:, 2:] * np.column_stack([-arm[:, 1], arm[:, 0]])
-        base, change = to_polar(x_old, self._sections), increment(x_old, dx, self._sections)
-        return self._internal(from_polar(PolarShape(*(a + d for a, d in zip(base, change))),
-                                         self._sections, x_new))
+        return self._internal_of(advanced(x_old, dx, self._sections), after)
 
-    def _face_arms(self, poses: np.ndarray) -> np.ndarray:
-        """R(theta) rel of every end-face node (mm) for the faces' body poses (n_faces, 3)."""
-        c, s = np.cos(poses[self._face_of, 2]), np.sin(poses[self._face_of, 2])
-        rx, ry = self._face_rel[:, 0], self._face_rel[:, 1]
+    def _face_arms(self, poses: np.ndarray, nodes: np.ndarray | slice = slice(None)
+                   ) -> np.ndarray:
+        """R(theta) rel of the end-face ``nodes`` (indices into the face nodes; all by default),
+        mm, for the faces' body poses (n_faces, 3)."""
+        face_of = self._face_of[nodes]
+        c, s = np.cos(poses[face_of, 2]), np.sin(poses[face_of, 2])
+        rx, ry = self._face_rel[nodes, 0], self._face_rel[nodes, 1]
         return np.column_stack([c * rx - s * ry, s * rx + c * ry])
 
     @staticmethod
