@@ -249,10 +249,10 @@ class Arc:
         r sin(gamma) / gamma from the centre (paper Eqs. 1-2).
         """
         gamma = 0.5 * self.width
-        e2 = np.array([np.cos(self.axis), np.sin(self.axis)])
-        e1 = np.array([e2[1], -e2[0]])
-        oc = self.radius * np.sin(gamma) / gamma
-        return np.asarray(self.center, dtype=float) + oc * e2, e1, e2
+        c, s = math.cos(self.axis), math.sin(self.axis)       # floats: a few numbers
+        oc = self.radius * math.sin(gamma) / gamma
+        return (np.array([self.center[0] + oc * c, self.center[1] + oc * s]),
+                np.array([s, -c]), np.array([c, s]))
 
     def ellipse(self, bending_stiffness: float) -> Ellipse:
         """Ellipse of elasticity for bending stiffness EI (N mm^2), Eqs. 1-4.

@@ -223,27 +223,32 @@ class DcmmConnector(Connector):
         if not forward:
             parts = parts[::-1]
         self._layout = _chain_layout(n, forward)
-        # chain of reference points: body a, cuts (in chain order), body b
-        cuts = [p.end_points[1] if forward else p.end_points[0] for p in parts[:-1]]
-        refs = [mechanism.bodies[self.bodies[0]].reference, *cuts,
-                mechanism.bodies[self.bodies[1]].reference]
+        # chain of reference points: body a, cuts (in chain order), body b (float pairs, mm)
+        cuts = [(p.end_points[1] if forward else p.end_points[0]).tolist() for p in parts[:-1]]
+        refs = [mechanism.bodies[self.bodies[0]].reference.tolist(), *cuts,
+                mechanism.bodies[self.bodies[1]].reference.tolist()]
         self._cuts = np.array(cuts).reshape(-1, 2)
         self._arc_lengths = [p.length for p in parts]               # chain order, mm
         self._elements = []
-        for k, part in enumerate(parts):
+        for (lx, ly), (fx, fy), part in zip(refs, refs[1:], parts):
             ell = part.ellipse(EI)
-            c = ell.compliance().diagonal().copy()
+            w = ell.weight
+            compliance = [w * ell.b**2, w * ell.a**2, w]            # Ellipse.compliance()
             if ell.b == 0.0:
-                c[0] = part.length / EA
-            self._elements.append((tuple((ell.center - refs[k]).tolist()),
-                                   tuple((ell.center - refs[k + 1]).tolist()),
-                                   tuple(map(tuple, ell.axes.tolist())), tuple((1.0 / c).tolist())))
+                compliance[0] = part.length / EA
+            cx, cy = ell.center.tolist()
+            self._elements.append(((cx - lx, cy - ly), (cx - fx, cy - fy),
+                                   tuple(map(tuple, ell.axes.tolist())),
+                                   tuple(1.0 / c for c in compliance)))
         # flexure ends' offsets from the end bodies' reference points, float pairs (mm)
-        ends = shape.end_points if forward else shape.end_points[::-1]     # body a's first
-        self._end_rel = [tuple((ends[k] - refs[-k]).tolist()) for k in (0, 1)]
+        ends = shape.end_points.tolist()
+        if not forward:
+            ends = ends[::-1]                                              # body a's first
+        self._end_rel = [(ex - rx, ey - ry)
+                         for (ex, ey), (rx, ry) in zip(ends, (refs[0], refs[-1]))]
         self._area, self._sub_lengths = flexure.section.area, np.array(self._arc_lengths)
         self._centre_line, self._refs, self._forward = shape, np.array(refs), forward
-        self._sub_arc_samples(parts, refs, forward)
+        self._sub_arc_samples(parts, self._refs, forward)
 
     def mass_points(self, density: float) -> MassPoints:
         """The flexure's mass (density in t/mm^3) on the chain's bodies, as rigid pieces.
@@ -478,13 +483,10 @@ class _Stack:
 class DcmmGroup(FloatTermsGroup):
     """DCMM connectors evaluated together (:meth:`DcmmConnector.group`).
 
-    The same values as :class:`~reducedmodels.connector.ConnectorGroup`'s
-    connector-by-connector evaluation, with one array of all the gradients
-    and one of all the Hessian values made from the connectors' float lists
-    (:meth:`DcmmConnector.terms`) instead of two small arrays per connector
-    concatenated. A load path's validity and section forces are computed
-    for all the connectors' sub-arcs and samples stacked (:class:`_Stack`),
-    in one set of array operations.
+    Assembled from :meth:`DcmmConnector.terms` (see the base class). A load
+    path's validity and section forces are computed for all the connectors'
+    sub-arcs and samples stacked (:class:`_Stack`), in one set of array
+    operations.
     """
 
     def __init__(self, connectors):

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -18,19 +18,22 @@ from geometry import LoadCase, Mechanism, SceneError
 from geometry.kinematics import rigid_points
 
 from .catalogue import ModelSpec
-from .core import SolverSettings, System, local_hessian_product
+from .connector import Connector
+from .core import SolverSettings, System, connector_groups, local_hessian_product
 from .inertia import with_weights
 from .loadpath import LoadPath
+from .loads import Loads
 from .recorder import record_stress, solve_path
+from .tangent import TangentLayout
 from .validity import MAX_LINEAR_ROTATION
 
 #: ``make(flexure, mechanism, spec, **options) -> Connector`` of one flexure
 ConnectorFactory = Callable[..., Any]
 
 
-def connector_system(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFactory,
-                     settings: SolverSettings | None, options: dict) -> System:
-    """The System of ``mechanism`` with every flexure a ``make(...)`` connector.
+def flexure_connectors(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFactory,
+                       options: dict) -> list:
+    """The connectors a System of ``mechanism`` joins: one ``make(...)`` per flexure, pins, weights.
 
     Pins (``mechanism.pins``) are added as exact Lagrange-multiplier joints
     (:class:`reducedmodels.joints.PinConnector`) whatever the model. With
@@ -54,7 +57,20 @@ def connector_system(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFacto
         from .joints import pin_connectors
 
         conns += pin_connectors(mechanism)
-    return System(mechanism, with_weights(mechanism, conns), settings or SolverSettings())
+    return with_weights(mechanism, conns)
+
+
+def connector_system(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFactory,
+                     settings: SolverSettings | None, options: dict) -> System:
+    """The System of ``mechanism`` joining its :func:`flexure_connectors` (``make`` per flexure).
+
+    Raises
+    ------
+    SceneError
+        If the model cannot represent a flexure.
+    """
+    return System(mechanism, flexure_connectors(mechanism, spec, make, options),
+                  settings or SolverSettings())
 
 
 def build_system(mechanism: Mechanism, spec: ModelSpec,
@@ -117,6 +133,12 @@ def trace_linear(mechanism: Mechanism, spec: ModelSpec, case: LoadCase,
 
 def solve_linear(system: System, case: LoadCase, levels: int | None = None, model: str = "ee",
                  scene: str = "") -> LoadPath:
+    """:func:`linear_response` of a System's connectors."""
+    return linear_response(system.mechanism, system.connectors, case, levels, model, scene)
+
+
+def linear_response(mechanism: Mechanism, connectors: Sequence[Connector], case: LoadCase,
+                    levels: int | None = None, model: str = "ee", scene: str = "") -> LoadPath:
     """Linear response at the undeformed configuration (the EE prediction).
 
     Solves K0 dq = w + lambda f with the elastic tangent K0 at rest (no load
@@ -129,21 +151,75 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
     a linear response, not a configuration, so the connectors' own stretch
     limits do not apply to it (its linearised rigid rotations stretch chords
     by theta^2 / 2, which is exactly what that rotation limit bounds).
+
+    One evaluation of each connector at rest and one factorisation: the
+    connectors are numbered as a :class:`~reducedmodels.core.System` numbers
+    them (the moving bodies' poses, then each connector's internal
+    coordinates in turn) and assembled the same way, but without the index
+    maps, groups and solver state a System builds for many Newton
+    assemblies (on the paper's scenes they cost more than the response).
     """
     t0 = time.perf_counter()
-    loads = system.loads(case)
-    q0 = system.initial_state()
-    _, g_zero, K0 = system.assemble(q0, loads, 0.0)
+    ground = mechanism.ground
+    bodies = mechanism.moving_bodies
+    first = {b: 3 * k for k, b in enumerate(bodies)}
+
+    def pose_dofs(body: str) -> np.ndarray:
+        return np.full(3, -1) if body == ground else np.arange(first[body], first[body] + 3)
+
+    n = 3 * len(bodies)
+    reference = {b: mechanism.bodies[b].reference for b in mechanism.bodies}
+    poses = {b: [*reference[b].tolist(), 0.0] for b in mechanism.bodies}      # at rest
+    first[ground] = None
+    # each connector's local coordinates at rest, their global dofs (-1: the ground's) and
+    # their places in q extended by the ground's pose, all connectors' end to end
+    rest, dofs, places, patterns, start = [], [], [], [], 0
+    for c in connectors:
+        ends = [(-1, -1, -1) if first[b] is None else range(first[b], first[b] + 3)
+                for b in c.bodies]
+        rest.append((np.array(poses[c.bodies[0]]), np.array(poses[c.bodies[1]]),
+                     c.initial_internal()))
+        dofs += [*ends[0], *ends[1], *range(n, n + c.n_internal)]
+        pattern = c.hessian_pattern()
+        m = 6 + c.n_internal
+        patterns.append((np.repeat(np.arange(m), m), np.tile(np.arange(m), m))
+                        if pattern is None else pattern)
+        places.append(start)
+        start += m
+        n += c.n_internal
+    dofs = np.array(dofs)
+    gather = np.where(dofs >= 0, dofs, n + np.arange(dofs.size) % 3)
+    bounds = [*places[1:], start]
+    # energy gradient and Hessian at rest, scattered as System.assemble does
+    terms = [c.evaluate(*r) for c, r in zip(connectors, rest)]
+    local_rows = np.concatenate([rows + k for (rows, _), k in zip(patterns, places)])
+    local_cols = np.concatenate([cols + k for (_, cols), k in zip(patterns, places)])
+    hessians = np.concatenate([np.ravel(h) for _, _, h in terms])
+    rows, cols = dofs[local_rows], dofs[local_cols]
+    keep = (rows >= 0) & (cols >= 0)
+    diagonal = np.arange(n)
+    layout = TangentLayout(n, np.concatenate([rows[keep], diagonal]),
+                           np.concatenate([cols[keep], diagonal]),
+                           sum(c.n_multipliers for c in connectors))
+    K0 = layout.tangent(np.bincount(layout.slots[:layout.slots.size - n],
+                                    weights=hessians[keep], minlength=layout.size))
+    moving = dofs >= 0
+    g_zero = np.bincount(dofs[moving], weights=np.concatenate([g for _, g, _ in terms])[moving],
+                         minlength=n)
+    at_rest = np.concatenate([r for state in rest for r in state])   # the local coordinates
+    q0 = np.zeros(n)
+    q0[:3 * len(bodies)] = [x for b in bodies for x in poses[b]]
+    q0[dofs[moving]] = at_rest[moving]                # and the internal coordinates
+    loads = Loads.of_case(case, pose_dofs, reference, mechanism.size())
     g_unit = g_zero.copy()                           # g = grad E(q0) - f = -f at rest
     loads.add_to(q0, 1.0, g_unit, np.zeros_like(g_unit))
     dq = K0.solve(g_zero - g_unit)                   # per unit load factor
     # the weights, g = -w at rest and no load (without gravity g_zero is only round-off)
-    has_weights = system.mechanism.inertia.gravity is not None
+    has_weights = mechanism.inertia.gravity is not None
     dq_dead = K0.solve(-g_zero) if has_weights else np.zeros_like(dq)
-    mech = system.mechanism
-    tdofs = system.pose_dofs(mech.target_body)
-    rel = mech.target_point - system.reference[mech.target_body]
-    _, jac, _ = rigid_points(np.array([*system.reference[mech.target_body], 0.0]), rel[None])
+    tdofs = pose_dofs(mechanism.target_body)
+    rel = mechanism.target_point - reference[mechanism.target_body]
+    _, jac, _ = rigid_points(np.array([*reference[mechanism.target_body], 0.0]), rel[None])
     unit, dead = jac[0] @ dq[tdofs], jac[0] @ dq_dead[tdofs]
     rot, dead_rot = float(dq[tdofs[2]]), float(dq_dead[tdofs[2]])
     lam = case.factors(levels)
@@ -151,11 +227,10 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
                   dx=list(dead[0] + lam * unit[0]), dy=list(dead[1] + lam * unit[1]),
                   rotation=list(dead_rot + lam * rot),
                   seconds=0.0, converged=True,
-                  stats={"unknowns": system.n_dofs, "newton_iterations": 0, "step_cuts": 0,
+                  stats={"unknowns": n, "newton_iterations": 0, "step_cuts": 0,
                          "substeps": 0},
                   settings={}, scene=scene, load_unit=case.unit)
-    bodies = list(system.body_index)
-    theta = np.array([system.pose_dofs(b)[2] for b in bodies], int)
+    theta = np.arange(2, 3 * len(bodies), 3)
     # every level's body rotations at once, (levels, bodies) rad
     turns = np.abs(dq_dead[theta][None, :] + lam[:, None] * dq[theta][None, :])
     largest = np.argmax(turns, axis=1).tolist() if theta.size else [0] * len(lam)
@@ -169,28 +244,28 @@ def solve_linear(system: System, case: LoadCase, levels: int | None = None, mode
         lp.valid.append(reason is None)
         lp.validity.append(reason)
     # section forces of the linear response: K0 dq on the undeformed centre lines
-    rest = system.local_states(q0)
-    hessians = [c.evaluate(*r)[2] for c, r in zip(system.connectors, rest)]
+    groups = connector_groups(connectors)
+    ground_pose = poses[ground]
 
     def section_gradients(dq_: np.ndarray) -> list[np.ndarray]:
-        moved = system.local_states(q0 + dq_)
-        return [local_hessian_product(c, h, np.concatenate(m) - np.concatenate(r))
-                for c, h, r, m in zip(system.connectors, hessians, rest, moved)]
+        moved = np.concatenate([q0 + dq_, ground_pose])[gather] - at_rest
+        products = np.bincount(local_rows, weights=hessians * moved[local_cols], minlength=start)
+        return np.split(products, bounds[:-1])
 
     def section_forces(gradients: list[np.ndarray]) -> list:
-        return [forces for group, run in system.groups
+        return [forces for group, run in groups
                 for forces in group.section_forces(rest[run], gradients[run])]
 
     per_unit = section_gradients(dq)
-    sections = {f.name: f.section for f in mech.flexures}
+    sections = {f.name: f.section for f in mechanism.flexures}
     if has_weights:
         of_weights = section_gradients(dq_dead)
         for factor in lam:
-            record_stress(lp, system.connectors,
+            record_stress(lp, connectors,
                           section_forces([w + factor * g for w, g in zip(of_weights, per_unit)]),
                           sections)
     else:                   # section forces proportional to the load
-        record_stress(lp, system.connectors, section_forces(per_unit), sections, lam)
+        record_stress(lp, connectors, section_forces(per_unit), sections, lam)
     lp.seconds = time.perf_counter() - t0
     return lp
 

@@ -428,13 +428,10 @@ class PrbmConnector(Connector):
 class PrbmGroup(FloatTermsGroup):
     """PRBM connectors evaluated together (:meth:`PrbmConnector.group`).
 
-    The same values as :class:`~reducedmodels.connector.ConnectorGroup`'s
-    connector-by-connector evaluation, with one array of all the gradients
-    and one of all the Hessian values made from the connectors' float lists
-    (:meth:`PrbmConnector.terms`) instead of two small arrays per connector
-    concatenated. A load path's validity and section forces use the
-    polylines of all the connectors at all the levels, computed in one set
-    of array operations (:meth:`polylines`).
+    Assembled from :meth:`PrbmConnector.terms` (see the base class). A load
+    path's validity and section forces use the polylines of all the
+    connectors at all the levels, computed in one set of array operations
+    (:meth:`polylines`).
     """
 
     def __init__(self, connectors):

@@ -296,3 +296,34 @@ def test_cli_bad_pin_exit_code_2_and_nothing_written(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "pins.pb.bodies" in err and "Traceback" not in err
     assert not out.exists()
+
+
+def test_linear_response_numbers_and_assembles_as_the_system():
+    """ee's linear response (reducedmodels.models.linear_response, built without a System)
+    on the pinned four-bar with gravity: multipliers after the poses, weights as dead
+    loads. Its levels must be the System's own K0^-1 (w + lambda f) at rest, from
+    System.assemble and Loads.vector, carried to the target point (J dq, rotations
+    linearised); both are one LU of the same matrix, so round-off only (1e-10)."""
+    import dataclasses
+
+    from geometry.inertia import MassData
+
+    scene = fourbar_scene()
+    mech = dataclasses.replace(scene.mechanism, inertia=MassData(
+        density=1.2e-9, gravity=np.array([0.0, -9810.0])))
+    case = scene.load_case("fx")
+    lp = run_reduced(mech, parse_model("ee"), case)
+    system = build_system(mech, parse_model("ee"))
+    assert system.n_multipliers == 4 and lp.stats["unknowns"] == system.n_dofs
+    q0, loads = system.initial_state(), system.loads(case)
+    _, g0, K = system.assemble(q0, loads, 0.0)
+    unit, dead = K.solve(loads.vector(q0)), K.solve(-g0)
+    dofs = system.pose_dofs(mech.target_body)
+    rx, ry = mech.target_point - system.reference[mech.target_body]
+    for lam, dx, dy, rot in zip(case.factors(), lp.dx, lp.dy, lp.rotation):
+        d = (dead + lam * unit)[dofs]
+        scale = np.abs(unit[dofs]).max()
+        assert abs(dx - (d[0] - ry * d[2])) <= 1e-10 * scale * max(abs(rx), abs(ry))
+        assert abs(dy - (d[1] + rx * d[2])) <= 1e-10 * scale * max(abs(rx), abs(ry))
+        assert abs(rot - d[2]) <= 1e-10 * scale
+    assert abs(lp.dy[0]) > 0.0             # the weights alone move it at zero load
