@@ -42,9 +42,9 @@ SAMPLES_PER_SUB_ARC = 16
 
 
 def sub_arc_energy(xl: float, yl: float, tl: float, xf: float, yf: float, tf: float,
-                   r_l: tuple, r_f: tuple, axes: tuple, stiffness: tuple
+                   r_l: tuple, r_f: tuple, axes: tuple, stiffness: tuple, hessian: bool = True
                    ) -> tuple[float, list[float], list[float]]:
-    """Energy, gradient (6) and row-major Hessian (36) of one displaced compliance element.
+    """Energy, gradient (6) and row-major Hessian (36, or none) of one displaced compliance element.
 
     Plain float lists: the connector (or a group of connectors) makes one
     array of all its elements' values.
@@ -59,6 +59,9 @@ def sub_arc_energy(xl: float, yl: float, tl: float, xf: float, yf: float, tf: fl
         Ellipse axes e1, e2 as columns (initial configuration).
     stiffness : triple of float
         Inverse of the diagonal compliance, (N/mm, N/mm, N mm).
+    hessian : bool
+        False: the energy and gradient only (the Hessian list is empty), for
+        the section forces.
 
     Notes
     -----
@@ -93,6 +96,9 @@ def sub_arc_energy(xl: float, yl: float, tl: float, xf: float, yf: float, tf: fl
     a2, b2, c2, d2 = (q12 * ex + q22 * nx, q12 * ey + q22 * ny, q12 * et + q22 * nt,
                       q12 * ef + q22 * nf)
     g = (f1 * a1 + f2 * a2, f1 * b1 + f2 * b2, f1 * c1 + f2 * c2 - m, f1 * d1 + f2 * d2 + m)
+    grad = [g[0], g[1], g[2], -g[0], -g[1], g[3]]
+    if not hessian:
+        return energy, grad, []
     # geometric part: lambda = Q K u (translation force in the leader frame)
     lx, ly = q11 * f1 + q12 * f2, q21 * f1 + q22 * f2
     lam_rr = lx * rrx + ly * rry
@@ -104,14 +110,12 @@ def sub_arc_energy(xl: float, yl: float, tl: float, xf: float, yf: float, tf: fl
     m11, m12, m13 = kb1 * b1 + kb2 * b2, kb1 * c1 + kb2 * c2 + lam_y, kb1 * d1 + kb2 * d2
     m22 = kc1 * c1 + kc2 * c2 + k3 - (lx * adx + ly * ady) - lam_rr
     m23, m33 = kc1 * d1 + kc2 * d2 - k3 + lam_rr, kd1 * d1 + kd2 * d2 + k3 - lam_rr
-    grad = [g[0], g[1], g[2], -g[0], -g[1], g[3]]
-    hessian = [m00, m01, m02, -m00, -m01, m03,          # rows x_L, y_L, theta_L,
-               m01, m11, m12, -m01, -m11, m13,          # x_F, y_F, theta_F
-               m02, m12, m22, -m02, -m12, m23,
-               -m00, -m01, -m02, m00, m01, -m03,
-               -m01, -m11, -m12, m01, m11, -m13,
-               m03, m13, m23, -m03, -m13, m33]
-    return energy, grad, hessian
+    return energy, grad, [m00, m01, m02, -m00, -m01, m03,          # rows x_L, y_L, theta_L,
+                          m01, m11, m12, -m01, -m11, m13,          # x_F, y_F, theta_F
+                          m02, m12, m22, -m02, -m12, m23,
+                          -m00, -m01, -m02, m00, m01, -m03,
+                          -m01, -m11, -m12, m01, m11, -m13,
+                          m03, m13, m23, -m03, -m13, m33]
 
 
 def _place_rows(poses: np.ndarray, rel: np.ndarray) -> np.ndarray:
@@ -531,7 +535,7 @@ class DcmmGroup(FloatTermsGroup):
         stack = self.stack()
         poses = stack.poses(levels)
         body = stack.sub_arc_body.tolist()
-        wrenches = np.array([[sub_arc_energy(*chain[b], *chain[b + 1], *element)[1][3:6]
+        wrenches = np.array([[sub_arc_energy(*chain[b], *chain[b + 1], *element, False)[1][3:6]
                               for b, element in zip(body, stack.elements)]
                              for chain in poses.tolist()])
         return self.statics(poses, wrenches[:, stack.sub_arc])

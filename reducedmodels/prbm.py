@@ -338,11 +338,12 @@ class PrbmConnector(Connector):
         energy, gradient, hessian = self.terms(np.concatenate([pose_a, pose_b, internal]).tolist())
         return energy, np.array(gradient), np.array(hessian)
 
-    def terms(self, local) -> tuple[float, list[float], list[float]]:
+    def terms(self, local, hessian: bool = True) -> tuple[float, list[float], list[float]]:
         """:meth:`evaluate`'s Lagrangian (N mm), gradient and Hessian values as plain float lists.
 
         ``local`` holds the local coordinates (the order of :meth:`evaluate`)
-        as floats. With the gap g and its Jacobian G (identity on x_a, minus identity on
+        as floats; ``hessian`` False leaves the Hessian list empty (for the
+        section forces). With the gap g and its Jacobian G (identity on x_a, minus identity on
         x_b, J R(.) v on the four angles), the springs t = B q and the scale
         c: gradient B^T K t + c G^T mu (and c g on mu), Hessian B^T K B plus
         the curvature of the gap, c mu . d2(R v)/dangle2 = -c mu . R v, on the
@@ -369,6 +370,8 @@ class PrbmConnector(Connector):
             -cmx, -cmy, f3 + cmx * gb[0] + cmy * gb[1],
             f1 - f2 + cmx * gh[0] + cmy * gh[1], f2 - f3 + cmx * gl[0] + cmy * gl[1],
             c * gx, c * gy]
+        if not hessian:
+            return energy, grad, []
         mixed = [c * ga[0], c * gb[0], c * gh[0], c * gl[0],
                  c * ga[1], c * gb[1], c * gh[1], c * gl[1]]
         values = [k1 - cmx * rax - cmy * ray, -k1, -k1, k1 + k2 - cmx * vhx - cmy * vhy,
@@ -491,7 +494,7 @@ class PrbmGroup(FloatTermsGroup):
         out = []
         for j, c in enumerate(self.connectors):
             states = [level[j] for level in levels]
-            wrenches = np.array([c.terms(np.concatenate(state).tolist())[1][3:6]
+            wrenches = np.array([c.terms(np.concatenate(state).tolist(), False)[1][3:6]
                                  for state in states])
             out.append(statics_section_forces(lines[:, j], c._fractions, wrenches,
                                               np.array([state[1] for state in states]),
