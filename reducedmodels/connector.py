@@ -379,7 +379,7 @@ class FloatTermsGroup(ConnectorGroup):
 
     def assembler(self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
                   ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
-        """The function adding the connectors' ``terms`` into the global gradient and tangent storage."""
+        """The function adding the connectors' ``terms`` into the global gradient and tangent."""
         bounds = np.cumsum([0] + [6 + c.n_internal for c in self.connectors]).tolist()
         readers = [(c.terms, itemgetter(*gather[start:stop].tolist()))
                    for c, start, stop in zip(self.connectors, bounds, bounds[1:])]

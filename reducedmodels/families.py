@@ -7,14 +7,11 @@ its family is built.
 
 from __future__ import annotations
 
-import time
-
 from geometry import Flexure, LoadCase, Mechanism
 
 from .catalogue import ARCLENGTH, LINEAR, Family, ModelSpec, Option, Resolution, register
 from .core import SolverSettings, System
-from .loadpath import LoadPath
-from .models import connector_system, flexure_connectors, linear_response, trace_nonlinear
+from .models import connector_system, trace_nonlinear
 
 #: largest N of ``beam:N`` and ``dcmm:N`` (a guard against typos, far beyond any use)
 MAX_ELEMENTS = 100_000
@@ -65,15 +62,20 @@ def _trace_beams(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
 
 def _trace_ee(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int | None = None,
               scene: str = "", record_poses: bool = False, record_shapes: bool = False,
-              record_reactions: bool = False, **options) -> LoadPath:
-    """The linear response of dcmm:1's connectors, built without a System (wall time includes the build).
+              record_reactions: bool = False, **options):
+    """The linear response of dcmm:1's connectors, without a System (wall time includes the build).
 
-    The same numbers as :func:`reducedmodels.models.trace_linear` on the
-    family's System (tests/test_dcmm_ee.py), without building the index maps
-    and solver state a System keeps for Newton iterations. The ``record_*``
+    :func:`reducedmodels.models.linear_response` of the family's connectors:
+    the numbers of :func:`reducedmodels.models.trace_linear` on its System
+    (tests/test_joints.py), without the index maps and solver state a System
+    builds for Newton iterations. The ``record_*``
     flags are accepted for a uniform runner signature and ignored (no
     deformed configuration).
     """
+    import time
+
+    from .models import flexure_connectors, linear_response
+
     t0 = time.perf_counter()
     connectors = flexure_connectors(mechanism, spec, _ee, {**spec.kwargs, **options})
     lp = linear_response(mechanism, connectors, case, levels, spec.id, scene)
