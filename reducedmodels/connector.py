@@ -383,10 +383,11 @@ class FloatTermsGroup(ConnectorGroup):
         bounds = np.cumsum([0] + [6 + c.n_internal for c in self.connectors]).tolist()
         readers = [(c.terms, itemgetter(*gather[start:stop].tolist()))
                    for c, start, stop in zip(self.connectors, bounds, bounds[1:])]
-        grad_keep = np.flatnonzero(grad_dofs >= 0)
-        dofs = grad_dofs[grad_keep]
-        hess_keep = np.flatnonzero(hess_slots >= 0)
-        slots = hess_slots[hess_keep]
+        n = int(grad_dofs.max(initial=-1)) + 1
+        # the ground's entries (-1) are summed past the end and never read
+        dofs = np.where(grad_dofs >= 0, grad_dofs, n)
+        size = int(hess_slots.max(initial=-1)) + 1
+        slots = np.where(hess_slots >= 0, hess_slots, size)
 
         def add(coordinates: np.ndarray, grad: np.ndarray, storage: np.ndarray) -> float:
             x = coordinates.tolist()
@@ -396,8 +397,8 @@ class FloatTermsGroup(ConnectorGroup):
                 energy += e
                 gradients += g
                 hessians += h
-            grad += np.bincount(dofs, np.array(gradients)[grad_keep], grad.size)
-            storage += np.bincount(slots, np.array(hessians)[hess_keep], storage.size)
+            grad[:n] += np.bincount(dofs, gradients, n + 1)[:n]
+            storage[:size] += np.bincount(slots, hessians, size + 1)[:size]
             return energy
 
         return add

@@ -164,7 +164,8 @@ def path_validity(system: System, levels: Sequence[Sequence]) -> list[list[str]]
         verdicts = group.path_validity([states[run] for states in levels])
         for c, per_level in zip(group.connectors, verdicts):
             for found, why in zip(reasons, per_level):
-                found.extend(f"{c.name}: {w}" for w in why)
+                if why:
+                    found.extend(f"{c.name}: {w}" for w in why)
     return reasons
 
 
