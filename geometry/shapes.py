@@ -225,8 +225,10 @@ class Arc:
 
     @property
     def end_points(self) -> np.ndarray:
-        """Start and end points, shape (2, 2), mm."""
-        return self.point(np.array([0.0, self.length]))
+        """Start and end points, shape (2, 2), mm (:meth:`point` at 0 and the length, on floats)."""
+        (cx, cy), r = self.center, self.radius
+        return np.array([[cx + r * math.cos(phi), cy + r * math.sin(phi)]
+                         for phi in (self.start_angle, self.start_angle + self.length / r)])
 
     def split(self, n: int) -> list["Arc"]:
         """The arc cut into n equal sub-arcs, from start to end."""

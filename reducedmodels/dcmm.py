@@ -118,12 +118,18 @@ def sub_arc_energy(xl: float, yl: float, tl: float, xf: float, yf: float, tf: fl
                           m03, m13, m23, -m03, -m13, m33]
 
 
-def _place_rows(poses: np.ndarray, rel: np.ndarray) -> np.ndarray:
-    """Current positions p + R(theta) rel of points (..., m, 2), each carried by its own pose (..., m, 3), mm."""
-    c, s = np.cos(poses[..., 2]), np.sin(poses[..., 2])
-    out = np.empty((*poses.shape[:-1], 2))      # (np.stack costs more on short arrays)
-    out[..., 0] = poses[..., 0] + (rel[:, 0] * c - rel[:, 1] * s)
-    out[..., 1] = poses[..., 1] + (rel[:, 0] * s + rel[:, 1] * c)
+def _place_rows(poses: np.ndarray, rel: np.ndarray, body: np.ndarray) -> np.ndarray:
+    """Current positions p + R(theta) rel of points (m, 2), point j carried by body ``body[j]``.
+
+    ``poses`` (k, bodies, 3) are the chain bodies' poses at k states; the
+    result is (k, m, 2), mm. The rotations' cosines and sines are taken per
+    body, then spread to the points (a path has a few bodies, hundreds of points).
+    """
+    theta = poses[..., 2]
+    c, s = np.cos(theta)[:, body], np.sin(theta)[:, body]
+    out = np.empty((*c.shape, 2))      # (np.stack costs more on short arrays)
+    out[..., 0] = poses[:, body, 0] + (rel[:, 0] * c - rel[:, 1] * s)
+    out[..., 1] = poses[:, body, 1] + (rel[:, 0] * s + rel[:, 1] * c)
     return out
 
 
@@ -513,8 +519,8 @@ class DcmmGroup(FloatTermsGroup):
         stack = self.stack()
         poses = stack.poses(levels)
         points = poses[..., :2].copy()
-        points[:, stack.first] = _place_rows(poses[:, stack.first], stack.end_rel[0])
-        points[:, stack.last] = _place_rows(poses[:, stack.last], stack.end_rel[1])
+        points[:, stack.first] = _place_rows(poses, stack.end_rel[0], stack.first)
+        points[:, stack.last] = _place_rows(poses, stack.end_rel[1], stack.last)
         body = stack.sub_arc_body
         d = points[:, body + 1] - points[:, body]
         strain = np.maximum.reduceat(np.hypot(d[..., 0], d[..., 1]) / stack.lengths - 1.0,
@@ -565,8 +571,8 @@ class DcmmGroup(FloatTermsGroup):
         stack = self.stack()
         w = stack.w
         lead, follow = poses[:, stack.lead], poses[:, stack.lead + 1]
-        pts = ((1.0 - w)[:, None] * _place_rows(lead, stack.rel_lead)
-               + w[:, None] * _place_rows(follow, stack.rel_follow))
+        pts = ((1.0 - w)[:, None] * _place_rows(poses, stack.rel_lead, stack.lead)
+               + w[:, None] * _place_rows(poses, stack.rel_follow, stack.lead + 1))
         axes = unit_vectors(stack.tangent + (1.0 - w) * lead[..., 2] + w * follow[..., 2])
         r = (follow if end is None else end)[..., :2] - pts
         moment = -(wrenches[..., 2] + r[..., 0] * wrenches[..., 1] - r[..., 1] * wrenches[..., 0])
