@@ -89,14 +89,24 @@ def sub_arc_energy(xl: float, yl: float, tl: float, xf: float, yf: float, tf: fl
     energy = 0.5 * (f1 * u1 + f2 * u2 + m * phi)
     # dv/d(x_L, y_L, theta_L, theta_F); dv/d(x_F, y_F) = -dv/d(x_L, y_L)
     # dv_x = (-ca, -sa, ady + rry, -rry), dv_y = (sa, -ca, -adx - rrx, rrx)
-    ex, ey, et, ef = -ca, -sa, ady + rry, -rry
-    nx, ny, nt, nf = sa, -ca, -adx - rrx, rrx
-    a1, b1, c1, d1 = (q11 * ex + q21 * nx, q11 * ey + q21 * ny, q11 * et + q21 * nt,
-                      q11 * ef + q21 * nf)
-    a2, b2, c2, d2 = (q12 * ex + q22 * nx, q12 * ey + q22 * ny, q12 * et + q22 * nt,
-                      q12 * ef + q22 * nf)
-    g = (f1 * a1 + f2 * a2, f1 * b1 + f2 * b2, f1 * c1 + f2 * c2 - m, f1 * d1 + f2 * d2 + m)
-    grad = [g[0], g[1], g[2], -g[0], -g[1], g[3]]
+    ex = -ca
+    ey = -sa
+    et = ady + rry
+    ef = -rry
+    nx = sa
+    ny = -ca
+    nt = -adx - rrx
+    nf = rrx
+    a1 = q11 * ex + q21 * nx
+    b1 = q11 * ey + q21 * ny
+    c1 = q11 * et + q21 * nt
+    d1 = q11 * ef + q21 * nf
+    a2 = q12 * ex + q22 * nx
+    b2 = q12 * ey + q22 * ny
+    c2 = q12 * et + q22 * nt
+    d2 = q12 * ef + q22 * nf
+    gx, gy = f1 * a1 + f2 * a2, f1 * b1 + f2 * b2
+    grad = [gx, gy, f1 * c1 + f2 * c2 - m, -gx, -gy, f1 * d1 + f2 * d2 + m]
     if not hessian:
         return energy, grad, []
     # geometric part: lambda = Q K u (translation force in the leader frame)
