@@ -328,7 +328,9 @@ class DcmmConnector(Connector):
 
     def initial_internal(self) -> np.ndarray:
         """Cut-point bodies at rest: (x, y, 0) each."""
-        return np.column_stack([self._cuts, np.zeros(len(self._cuts))]).ravel()
+        rest = np.zeros((len(self._cuts), 3))
+        rest[:, :2] = self._cuts
+        return rest.ravel()
 
     def internal_is_rotation(self) -> np.ndarray:
         """Every third internal coordinate is an angle."""
@@ -478,15 +480,16 @@ class _Stack:
         first = np.cumsum([0] + [n + 1 for n in sub_arcs[:-1]])
         sub_arc_start = np.cumsum([0] + sub_arcs[:-1])
         samples = [len(c._layout.sample_part) for c in connectors]
+        part = np.concatenate([c._layout.sample_part for c in connectors])   # within each chain
         return cls(
             first, first + np.array(sub_arcs),
             (np.array([c._end_rel[0] for c in connectors]),
              np.array([c._end_rel[1] for c in connectors])),
-            np.concatenate([f + np.arange(n) for f, n in zip(first, sub_arcs)]), sub_arc_start,
+            np.array([f + k for f, n in zip(first.tolist(), sub_arcs) for k in range(n)]),
+            sub_arc_start,
             np.concatenate([c._sub_lengths for c in connectors]),
             [element for c in connectors for element in c._elements],
-            np.concatenate([f + c._layout.sample_part for f, c in zip(first, connectors)]),
-            np.concatenate([e + c._layout.sample_part for e, c in zip(sub_arc_start, connectors)]),
+            np.repeat(first, samples) + part, np.repeat(sub_arc_start, samples) + part,
             np.concatenate([c._layout.sample_w for c in connectors]),
             np.concatenate([c._sample_tangent for c in connectors]),
             np.concatenate([c._sample_lead for c in connectors]),

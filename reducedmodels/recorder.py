@@ -195,7 +195,8 @@ def record_stress(path: LoadPath, connectors, forces, sections: dict,
             continue
         unit = found.fibre_stress(section)
         peak = int(np.argmax(unit))
-        _append_stress(path, c.name, [float(abs(f) * unit[peak]) for f in scales],
+        top = float(unit[peak])                 # plain floats: one product per level
+        _append_stress(path, c.name, [abs(f) * top for f in np.asarray(scales, float).tolist()],
                        [float(found.at[peak])] * len(scales), found.at,
                        abs(scales[-1]) * unit)
 
