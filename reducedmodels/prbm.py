@@ -449,7 +449,8 @@ class PrbmGroup(FloatTermsGroup):
 
         ``levels`` holds, for each level, the connectors' local states in order.
         """
-        poses = np.array([[[*pose_a, *pose_b, internal[0]] for pose_a, pose_b, internal in states]
+        poses = np.array([np.concatenate([x for pose_a, pose_b, internal in states
+                                          for x in (pose_a, pose_b, internal[:1])])
                           for states in levels]).reshape(len(levels), len(self.connectors), 7)
         xa, ya, ta, xb, yb, tb, ph = np.moveaxis(poses, -1, 0)
         ca, sa, cb, sb, ch, sh = np.cos(ta), np.sin(ta), np.cos(tb), np.sin(tb), np.cos(ph), np.sin(ph)
@@ -461,9 +462,10 @@ class PrbmGroup(FloatTermsGroup):
         (ebx, eby), (rbx, rby) = turned(cb, sb, self._end_b), turned(cb, sb, self._r_b)
         vhx, vhy = turned(ch, sh, self._v_h)
         jax, jay = xa + rax, ya + ray
-        out = np.empty((*xa.shape, 5, 2))
-        out[..., 0] = np.stack([xa + eax, jax, jax + vhx, xb + rbx, xb + ebx], axis=-1)
-        out[..., 1] = np.stack([ya + eay, jay, jay + vhy, yb + rby, yb + eby], axis=-1)
+        out = np.empty((*xa.shape, 5, 2))       # (np.stack costs more on these short arrays)
+        for k, (x, y) in enumerate(((xa + eax, ya + eay), (jax, jay), (jax + vhx, jay + vhy),
+                                    (xb + rbx, yb + rby), (xb + ebx, yb + eby))):
+            out[..., k, 0], out[..., k, 1] = x, y
         return out
 
     def path_validity(self, levels) -> list[list[list[str]]]:
