@@ -352,22 +352,31 @@ class System:
                 new[internal] = group.update_internal(before[run], after[run])
         return new
 
-    def predict(self, history: Sequence[tuple[np.ndarray, float]], factor: float) -> np.ndarray:
-        """Predicted state at ``factor`` from up to three converged (state, factor) pairs.
+    @property
+    def predicts_internal(self) -> bool:
+        """True if some connector predicts its own internal coordinates (see :meth:`predict`)."""
+        return bool(self._predictors)
+
+    def predict(self, history: Sequence[tuple[np.ndarray, float]], factor: float,
+                past: Sequence[list[LocalState]] | None = None) -> np.ndarray:
+        """Predicted state at ``factor`` from converged (state, factor) pairs, oldest first.
 
         Coordinates are extrapolated by the Lagrange polynomial through the
-        history (quadratic from three states: an O(h^3) error where the
-        secant's is O(h^2)); connectors then predict their own internal
+        history (degree one less than the states: from k states an O(h^k)
+        error, where the secant's is O(h^2)); connectors then predict their own internal
         coordinates (:meth:`Connector.predict_internal`, given their local
         states along the history, the weights and their bodies' predicted
         poses): nearly inextensible flexures extrapolated node by node in
         Cartesian coordinates come out stretched, and Newton then spends
-        iterations pulling the stretch back out.
+        iterations pulling the stretch back out. ``past``, if given, holds
+        :meth:`local_states` of each state of the history (a caller that
+        predicts many times from one history computes them once).
         """
         weights = lagrange_weights([lam for _, lam in history], factor)
         guess = sum(w * q for w, (q, _) in zip(weights, history))
         if self._predictors:
-            past = [self.local_states(q) for q, _ in history]
+            if past is None:
+                past = [self.local_states(q) for q, _ in history]
             now = self.local_states(guess)
             for group, run, internal in self._predictors:
                 guess[internal] = group.predict_internal([p[run] for p in past], weights,

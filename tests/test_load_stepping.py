@@ -19,6 +19,7 @@ from geometry import load_scene
 from reducedmodels import LoadControl, build_system, trace
 from reducedmodels.catalogue import parse_model
 from reducedmodels.core import SolverSettings
+from reducedmodels.tracer import PREDICTOR_STATES
 
 
 class RecordingControl(LoadControl):
@@ -69,3 +70,44 @@ def test_pre_cut_path_reaches_the_finely_stepped_states():
     _, fine_points, _ = soft_stretch("dcmm:1", fine)
     for p, f in zip(points, fine_points, strict=True):
         assert np.max(np.abs(system.scaled(p.state - f.state))) <= 1e-9
+
+
+def test_first_substep_starts_on_the_linear_solution():
+    """The first sub-step's predictor is the solution of the linearised problem, K^-1 f dfactor.
+
+    At a load factor of 1e-7 the path is linear to O(1e-14) of the full
+    load, below the residual tolerance (1e-10 of it): Newton accepts the
+    prediction without a correction. From the rest state (what the
+    extrapolation of one state gives) it needs at least one.
+    """
+    scene = load_scene("open_chain")
+    system = build_system(scene.mechanism, parse_model("dcmm:1"))
+    loads = system.loads(scene.load_case("f+"))
+    points = list(trace(system, loads, LoadControl([0.0, 1e-7])))
+    assert points[1].iterations == 0
+    assert np.max(np.abs(system.scaled(points[1].state - points[0].state))) > 1e-9
+
+
+@pytest.mark.parametrize("model", ["dcmm:1", "beam:20"])
+def test_predictor_reproduces_a_polynomial_path_of_its_degree(model):
+    """From PREDICTOR_STATES states on a polynomial path of one degree less, the prediction is exact.
+
+    Body poses follow a quartic in the load factor (internal coordinates of
+    beams follow the bodies' end nodes through their own chord-wise
+    predictor, so only the poses are compared); unevenly spaced factors as
+    after a step cut. Agreement to round-off (1e-12 scaled).
+    """
+    scene = load_scene("open_chain")
+    system = build_system(scene.mechanism, parse_model(model))
+    q0 = system.initial_state()
+    rng = np.random.default_rng(7)
+    coefficients = 1e-3 * rng.standard_normal((PREDICTOR_STATES, q0.size))
+
+    def state(factor):
+        return q0 + sum(c * factor**k for k, c in enumerate(coefficients))
+
+    factors = [0.1, 0.2, 0.25, 0.275, 0.3][-PREDICTOR_STATES:]
+    predicted = system.predict([(state(f), f) for f in factors], 0.35)
+    poses = slice(0, 3 * len(system.body_index))
+    error = system.scaled(predicted - state(0.35))[poses]
+    assert np.max(np.abs(error)) <= 1e-12
