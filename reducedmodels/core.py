@@ -358,7 +358,8 @@ class System:
         return bool(self._predictors)
 
     def predict(self, history: Sequence[tuple[np.ndarray, float]], factor: float,
-                past: Sequence[list[LocalState]] | None = None) -> np.ndarray:
+                past: Sequence[list[LocalState]] | None = None,
+                slope: np.ndarray | None = None) -> np.ndarray:
         """Predicted state at ``factor`` from converged (state, factor) pairs, oldest first.
 
         Coordinates are extrapolated by the Lagrange polynomial through the
@@ -371,9 +372,21 @@ class System:
         iterations pulling the stretch back out. ``past``, if given, holds
         :meth:`local_states` of each state of the history (a caller that
         predicts many times from one history computes them once).
+
+        ``slope``, if given, is dq/dfactor at the last state (mm, rad per
+        unit factor; K^-1 f from its tangent): the polynomial then matches
+        it too, one degree higher (Hermite), and the connectors' own
+        predictors, which extrapolate the states alone, still take their
+        weights from the states alone.
         """
-        weights = lagrange_weights([lam for _, lam in history], factor)
-        guess = sum(w * q for w, (q, _) in zip(weights, history))
+        factors = [lam for _, lam in history]
+        weights = lagrange_weights(factors, factor)
+        if slope is None:
+            guess = sum(w * q for w, (q, _) in zip(weights, history))
+        else:
+            weights_with_slope, slope_weight = hermite_weights(factors, factor)
+            guess = sum(w * q for w, (q, _) in zip(weights_with_slope, history))
+            guess += slope_weight * slope
         if self._predictors:
             if past is None:
                 past = [self.local_states(q) for q, _ in history]
@@ -436,6 +449,23 @@ def connector_groups(connectors: Sequence[Connector]) -> list[tuple[ConnectorGro
             groups.append((type(connectors[start]).group(connectors[run]), run))
             start = stop
     return groups
+
+
+def hermite_weights(factors: Sequence[float], factor: float) -> tuple[np.ndarray, float]:
+    """Weights of the polynomial through values at ``factors`` and the slope at the last one.
+
+    Returns (one weight per value, the slope's weight): the polynomial of
+    degree len(factors) evaluated at ``factor`` is sum(w_i q_i) + w_s q'.
+    Solved in the factor offset from the last one over the history's span,
+    so that the small system stays well conditioned.
+    """
+    last = factors[-1]
+    span = max((abs(f - last) for f in factors[:-1]), default=1.0)
+    powers = np.arange(len(factors) + 1)
+    conditions = np.array([((f - last) / span) ** powers for f in factors]
+                          + [np.where(powers == 1, 1.0, 0.0)])
+    weights = np.linalg.solve(conditions.T, ((factor - last) / span) ** powers)
+    return weights[:-1], float(weights[-1]) * span
 
 
 def lagrange_weights(factors: Sequence[float], factor: float) -> list[float]:
