@@ -375,11 +375,9 @@ class System:
 
         ``slope``, if given, is dq/dfactor at the last state (mm, rad per
         unit factor; K^-1 f from its tangent): the polynomial then matches
-        it too, one degree higher (Hermite). The connectors' own predictors
-        take it as one more state, ``SLOPE_STEP`` of the history's span
-        along the slope, weighted so that its difference from the last state
-        enters with the slope's weight (a forward difference of whatever
-        they extrapolate: chord lengths and angles, polar coordinates).
+        it too, one degree higher (Hermite), and the connectors' own
+        predictors, which extrapolate the states alone, still take their
+        weights from the states alone.
         """
         factors = [lam for _, lam in history]
         weights = lagrange_weights(factors, factor)
@@ -392,11 +390,6 @@ class System:
         if self._predictors:
             if past is None:
                 past = [self.local_states(q) for q, _ in history]
-            if slope is not None:
-                step = SLOPE_STEP * max((abs(f - factors[-1]) for f in factors[:-1]), default=1.0)
-                weights = [*weights_with_slope[:-1], weights_with_slope[-1] - slope_weight / step,
-                           slope_weight / step]
-                past = [*past, self.local_states(history[-1][0] + step * slope)]
             now = self.local_states(guess)
             for group, run, internal in self._predictors:
                 guess[internal] = group.predict_internal([p[run] for p in past], weights,
@@ -456,15 +449,6 @@ def connector_groups(connectors: Sequence[Connector]) -> list[tuple[ConnectorGro
             groups.append((type(connectors[start]).group(connectors[run]), run))
             start = stop
     return groups
-
-
-SLOPE_STEP = 1e-5
-"""Step along the slope, relative to the predictor history's span of load factors, of the
-state that carries the slope into the connectors' own predictors (:meth:`System.predict`).
-
-A forward difference: its truncation error is of this order relative to the slope's
-term, its round-off 1e-16 / SLOPE_STEP. Newton iterations over the 36 reduced paths of
-the built-in scenes: 1467, 1389, 1373, 1394 with 1e-3, 1e-4, 1e-5, 1e-6."""
 
 
 def hermite_weights(factors: Sequence[float], factor: float) -> tuple[np.ndarray, float]:
