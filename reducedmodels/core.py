@@ -17,6 +17,7 @@ Units: mm, N, N mm, rad.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -451,21 +452,38 @@ def connector_groups(connectors: Sequence[Connector]) -> list[tuple[ConnectorGro
     return groups
 
 
-def hermite_weights(factors: Sequence[float], factor: float) -> tuple[np.ndarray, float]:
+def hermite_weights(factors: Sequence[float], factor: float) -> tuple[list[float], float]:
     """Weights of the polynomial through values at ``factors`` and the slope at the last one.
 
     Returns (one weight per value, the slope's weight): the polynomial of
     degree len(factors) evaluated at ``factor`` is sum(w_i q_i) + w_s q'.
-    Solved in the factor offset from the last one over the history's span,
-    so that the small system stays well conditioned.
+    It is the Lagrange polynomial through the values plus c w(x), with
+    w(x) = prod(x - x_j) vanishing at every factor and c set by the slope at
+    the last factor m: w_i = L_i(x) - w(x) L_i'(x_m) / w'(x_m) and
+    w_s = w(x) / w'(x_m), where L_i'(x_m) / w'(x_m) = 1 / ((x_m - x_i) d_i)
+    for i != m (d_i = prod over j != i of (x_i - x_j); w'(x_m) = d_m) and
+    sum over j != m of 1 / (x_m - x_j), over d_m, for i = m. Closed form in
+    floats: a linear solve would cost as much as a Newton iteration of a
+    small model.
     """
-    last = factors[-1]
-    span = max((abs(f - last) for f in factors[:-1]), default=1.0)
-    powers = np.arange(len(factors) + 1)
-    conditions = np.array([((f - last) / span) ** powers for f in factors]
-                          + [np.where(powers == 1, 1.0, 0.0)])
-    weights = np.linalg.solve(conditions.T, ((factor - last) / span) ** powers)
-    return weights[:-1], float(weights[-1]) * span
+    m = len(factors) - 1
+    last = factors[m]
+    node = 1.0                                   # w(x)
+    for f in factors:
+        node *= factor - f
+    weights, spread = [], []
+    for i, fi in enumerate(factors):
+        basis, d = 1.0, 1.0
+        for j, fj in enumerate(factors):
+            if j != i:
+                basis *= factor - fj
+                d *= fi - fj
+        weights.append(basis / d)
+        spread.append(d)
+    for i, fi in enumerate(factors[:m]):
+        weights[i] -= node / ((last - fi) * spread[i])
+    weights[m] -= node * sum(1.0 / (last - f) for f in factors[:m]) / spread[m]
+    return weights, node / spread[m]
 
 
 def lagrange_weights(factors: Sequence[float], factor: float) -> list[float]:
