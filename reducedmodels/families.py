@@ -1,17 +1,22 @@
 """The reduced model families of the paper, registered in the model catalogue.
 
 ``beam:N``, ``dcmm:N``, ``prbm`` and ``ee`` (see :mod:`reducedmodels.catalogue`
-for the id syntax). Each connector module is imported only when a model of
-its family is built.
+for the id syntax). Registering them imports no solver code: the multibody
+core (scipy) is imported when a model of a family runs or builds a system,
+each connector module only when a model of its family is built, so commands
+that only read the catalogue (``flexval --help``, ``flexval info``) start fast.
 """
 
 from __future__ import annotations
 
-from geometry import Flexure, LoadCase, Mechanism
+from typing import TYPE_CHECKING
 
 from .catalogue import ARCLENGTH, LINEAR, Family, ModelSpec, Option, Resolution, register
-from .core import SolverSettings, System
-from .models import connector_system, trace_nonlinear
+
+if TYPE_CHECKING:
+    from geometry import Flexure, LoadCase, Mechanism
+
+    from .core import SolverSettings, System
 
 #: largest N of ``beam:N`` and ``dcmm:N`` (a guard against typos, far beyond any use)
 MAX_ELEMENTS = 100_000
@@ -46,6 +51,13 @@ def _prbm(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
     return PrbmConnector(flexure, mechanism, **options)
 
 
+def _trace_nonlinear(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
+    """:func:`reducedmodels.models.trace_nonlinear` (imported here: see the module text)."""
+    from .models import trace_nonlinear
+
+    return trace_nonlinear(mechanism, spec, *args, **kwargs)
+
+
 def _trace_beams(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
     """:func:`trace_nonlinear` once the compiled beam kernels are loaded (outside the path's time).
 
@@ -57,7 +69,7 @@ def _trace_beams(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
 
     beam_kernels()
     band_kernels()
-    return trace_nonlinear(mechanism, spec, *args, **kwargs)
+    return _trace_nonlinear(mechanism, spec, *args, **kwargs)
 
 
 def _trace_ee(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int | None = None,
@@ -87,6 +99,8 @@ def _system_of(make):
     """``Family.system`` of a family whose flexures are ``make`` connectors."""
     def system(mechanism: Mechanism, spec: ModelSpec, settings: SolverSettings | None = None,
                **options) -> System:
+        from .models import connector_system
+
         return connector_system(mechanism, spec, make, settings, options)
     return system
 
@@ -101,12 +115,12 @@ BEAM = register(Family(
 
 PRBM = register(Family(
     "prbm", "symmetric 3R pseudo-rigid-body chain per flexure, exact in the linear limit",
-    trace_nonlinear, None, (), frozenset({ARCLENGTH}), _system_of(_prbm)))
+    _trace_nonlinear, None, (), frozenset({ARCLENGTH}), _system_of(_prbm)))
 
 DCMM = register(Family(
     "dcmm", "Displaced Compliance Matrix Method: each arc cut into N sub-arcs, each a diagonal "
     "compliance at its centre of elasticity",
-    trace_nonlinear,
+    _trace_nonlinear,
     Resolution("N", "sub-arcs per flexure", 1, 1, MAX_ELEMENTS, True, (1, 8)),
     (FRAME,), frozenset({ARCLENGTH}), _system_of(_dcmm)))
 

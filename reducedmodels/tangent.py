@@ -31,8 +31,6 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg import lapack
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
-from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from .threads import limit_threads
 
@@ -245,6 +243,8 @@ class SparseTangent:
         self.matrix, self.n, self.n_multipliers = matrix, matrix.shape[0], n_multipliers
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
+        import scipy.sparse.linalg as spla     # SuperLU: only wide bands (a process start-up cost)
+
         return spla.splu(self.matrix).solve(rhs)
 
     def negative_eigenvalues(self) -> int | None:
@@ -255,6 +255,8 @@ class SparseTangent:
         """
         if self.n_multipliers:
             return None
+        import scipy.sparse.linalg as spla
+
         try:
             lu = spla.splu(self.matrix, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                            options={"SymmetricMode": True})
@@ -305,6 +307,8 @@ class TangentLayout:
         if small and not (compiled and n >= NARROW_MIN):
             self.kind, self.slots, self.size = "dense", rows * n + cols, n * n
             return
+        from scipy.sparse.csgraph import reverse_cuthill_mckee  # not for dense storage: start-up
+
         graph = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
         perm = reverse_cuthill_mckee(graph, symmetric_mode=True).astype(np.int64)
         position = np.empty(n, np.int64)
