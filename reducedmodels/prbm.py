@@ -89,7 +89,6 @@ from importlib import resources
 from typing import Mapping
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from geometry import Flexure, Mechanism
 from geometry.kinematics import rotate_xy
@@ -98,6 +97,7 @@ from geometry.shapes import Shape, arc_semi_axes
 from .connector import Connector, FloatTermsGroup
 from .inertia import MassPoints, rigid_pieces
 from .sections import SectionForces, polyline_fractions, statics_section_forces
+from .spline import NotAKnotSpline
 from .validity import MAX_STRAIN, SCREEN_MARGIN, rotation_reasons, stretch_reasons
 
 TABLE_RESOURCE = "data/prbm_table.json"
@@ -162,10 +162,10 @@ def load_table() -> dict:
 
 
 @lru_cache(maxsize=1)
-def _rho_spline() -> tuple[CubicSpline, float]:
+def _rho_spline() -> tuple[NotAKnotSpline, float]:
     rows = load_table()["table"]
     widths = np.radians([row["width_deg"] for row in rows])
-    return CubicSpline(widths, [row["rho"] for row in rows]), float(widths[-1])
+    return NotAKnotSpline(widths, [row["rho"] for row in rows]), float(widths[-1])
 
 
 def table_parameters(width: float) -> PrbmParameters:
