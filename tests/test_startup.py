@@ -1,0 +1,87 @@
+"""What each ``flexval`` command imports: heavy libraries only where they are used.
+
+Every ``flexval`` call pays for the modules it imports before it does any
+work (numpy about 60 ms, scipy's linear algebra 100 ms, scikit-fem 30 ms,
+numba 150 ms, matplotlib, pyvista, Dask, pyarrow more). These tests run a
+command in a fresh interpreter and check ``sys.modules`` afterwards, so a
+module-level import that drags a heavy library into a command that does not
+need it fails here instead of slowing every call unnoticed
+(``benchmarks/bench_process.py`` measures the times themselves).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+_PROBE = """
+import contextlib, io, json, sys
+from validation.cli import main
+with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+    try:
+        status = main(sys.argv[1:])
+    except SystemExit as exc:
+        status = exc.code
+print(json.dumps({"status": status, "modules": sorted(sys.modules)}))
+"""
+
+PLOTTING = {"matplotlib", "pyvista", "vtk", "meshio"}
+DISTRIBUTED = {"dask", "distributed", "pyarrow"}
+COMPILED = {"numba", "llvmlite"}
+MESHING = {"gmsh"}
+CONTINUUM = {"skfem", "validation.continuum.solid"}
+SOLVERS = {"scipy", "reducedmodels.core"}
+RARE_SCIPY = {"scipy.interpolate", "scipy.optimize", "scipy.integrate", "scipy.spatial",
+              "scipy.special", "scipy.stats"}
+"""scipy parts no ``run`` of a static load path uses."""
+
+
+def _imports(argv: list[str], cache: Path) -> set[str]:
+    """Top-level packages and listed modules a fresh ``flexval ARGV`` imported (exit code 0)."""
+    env = {**os.environ, "FLEXVAL_CACHE": str(cache), "OPENBLAS_NUM_THREADS": "1"}
+    proc = subprocess.run([sys.executable, "-c", _PROBE, *argv], cwd=ROOT, env=env,
+                          capture_output=True, text=True, check=True)
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert out["status"] in (0, None), (argv, proc.stderr)
+    return set(out["modules"])
+
+
+def _loaded(modules: set[str], names: set[str]) -> set[str]:
+    return {n for n in names if n in modules}
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["run", "--help"], ["info", "closed_chain"]])
+def test_commands_that_only_read_scenes_load_no_solver(argv, tmp_path):
+    modules = _imports(argv, tmp_path)
+    heavy = SOLVERS | CONTINUUM | COMPILED | MESHING | PLOTTING | DISTRIBUTED
+    assert _loaded(modules, heavy) == set()
+
+
+@pytest.mark.parametrize("model", ["dcmm:1", "ee", "prbm"])
+def test_small_models_load_only_the_core(model, tmp_path):
+    modules = _imports(["run", "closed_chain", "--model", model, "--load-case", "f+"], tmp_path)
+    assert "reducedmodels.core" in modules          # the probe did run the model
+    heavy = CONTINUUM | COMPILED | MESHING | PLOTTING | DISTRIBUTED | RARE_SCIPY
+    assert _loaded(modules, heavy | {"scipy.sparse.linalg", "scipy.sparse.csgraph"}) == set()
+
+
+def test_beam_loads_its_compiled_kernels_only(tmp_path):
+    modules = _imports(["run", "closed_chain", "--model", "beam:5", "--load-case", "f+"],
+                       tmp_path)
+    assert "numba" in modules
+    assert _loaded(modules, CONTINUUM | MESHING | PLOTTING | DISTRIBUTED | RARE_SCIPY) == set()
+
+
+def test_continuum_with_cached_meshes_loads_no_mesher(tmp_path):
+    argv = ["run", "closed_chain", "--model", "continuum:0", "--load-case", "f+", "--levels", "2"]
+    assert "gmsh" in _imports(argv, tmp_path)       # the first run meshes (and caches)
+    modules = _imports(argv, tmp_path)
+    assert "skfem" in modules
+    assert _loaded(modules, COMPILED | MESHING | PLOTTING | DISTRIBUTED | RARE_SCIPY) == set()
