@@ -6,7 +6,10 @@ numba 150 ms, matplotlib, pyvista, Dask, pyarrow more). These tests run a
 command in a fresh interpreter and check ``sys.modules`` afterwards, so a
 module-level import that drags a heavy library into a command that does not
 need it fails here instead of slowing every call unnoticed
-(``benchmarks/bench_process.py`` measures the times themselves).
+(``benchmarks/bench_process.py`` measures the times themselves). The end of
+the process (``validation.process.end_process``, no interpreter teardown) is
+checked for what a normal exit guarantees: the status, complete output and
+files, exit handlers run, C output flushed, running threads waited for.
 """
 
 from __future__ import annotations
@@ -85,3 +88,47 @@ def test_continuum_with_cached_meshes_loads_no_mesher(tmp_path):
     modules = _imports(argv, tmp_path)
     assert "skfem" in modules
     assert _loaded(modules, COMPILED | MESHING | PLOTTING | DISTRIBUTED | RARE_SCIPY) == set()
+
+
+# -- the end of a flexval process (validation.process.end_process) ---------------------------
+
+def _program(code: str, tmp_path: Path, *argv: str) -> subprocess.CompletedProcess:
+    """Run ``code`` as a program whose command line is ``argv`` (output piped and buffered)."""
+    env = {**os.environ, "FLEXVAL_CACHE": str(tmp_path / "cache"), "OPENBLAS_NUM_THREADS": "1"}
+    env.pop("PYTHONUNBUFFERED", None)           # it would unbuffer C's stdout too
+    return subprocess.run([sys.executable, "-c", code, *argv], cwd=ROOT, env=env,
+                          capture_output=True, text=True)
+
+
+def test_the_program_ends_with_its_status_output_and_files_complete(tmp_path):
+    out = tmp_path / "paths.json"
+    proc = _program("from validation.cli import main; main()", tmp_path, "run", "closed_chain",
+                    "--model", "ee", "--model", "dcmm:1", "--json", str(out))
+    assert proc.returncode == 0, proc.stderr
+    rows = [line.split()[0] for line in proc.stdout.splitlines()[1:] if line[:1] not in " "]
+    assert rows == ["ee", "ee", "dcmm:1", "dcmm:1"]
+    assert len(json.loads(out.read_text())["results"]) == 4
+    bad = _program("from validation.cli import main; main()", tmp_path, "run", "closed_chain",
+                   "--model", "nonsense")
+    assert bad.returncode == 2 and "'nonsense'" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_exit_handlers_run_and_c_output_is_flushed(tmp_path):
+    """What a normal exit does that can be seen: atexit handlers, C stdio buffers written."""
+    code = ("import atexit, ctypes; atexit.register(print, 'handler ran'); "
+            "ctypes.CDLL(None).printf(b'from C\\n'); "
+            "from validation.cli import main; main(); print('not reached')")
+    proc = _program(code, tmp_path, "info", "closed_chain")
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert "closed_chain" in lines[0] and "not reached" not in lines
+    assert "handler ran" in lines and "from C" in lines
+
+
+def test_main_returns_while_another_thread_runs(tmp_path):
+    """A normal exit waits for running threads, so ``main`` leaves the exit to the program."""
+    code = ("import threading; from validation.cli import main; done = threading.Event(); "
+            "threading.Thread(target=done.wait).start(); "
+            "status = main(); print('returned', status); done.set()")
+    proc = _program(code, tmp_path, "info", "closed_chain")
+    assert proc.returncode == 0 and proc.stdout.rstrip().endswith("returned 0")

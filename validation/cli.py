@@ -628,11 +628,23 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``flexval`` console script; returns the exit code."""
+    """Entry point of the ``flexval`` console script; returns the exit code.
+
+    ``argv`` None (the console script, ``python -m validation.cli``): the
+    arguments are the process's own, and so is the process: once the command
+    is done, :func:`validation.process.end_process` ends it without the
+    interpreter's teardown (a fifth of a small model's whole run). Called
+    from Python with a list of arguments, ``main`` returns.
+    """
     args = build_parser().parse_args(argv)
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning
-        return _dispatch(args)
+        status = _dispatch(args)
+    if argv is None:
+        from .process import end_process
+
+        end_process(status)
+    return status
 
 
 def _dispatch(args: argparse.Namespace) -> int:
