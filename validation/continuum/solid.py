@@ -86,10 +86,7 @@ class ElementKernel:
         self._grad_aq = np.ascontiguousarray(
             grad.transpose(0, 2, 1, 3).reshape(n_el, 9, 2 * n_q))          # [a, (q, J)]
         self._grad_lb = np.ascontiguousarray(grad.transpose(0, 1, 3, 2))    # [q, L, b]
-        edofs = (2 * elements[:, :, None] + np.arange(2)).reshape(n_el, 18)
-        self.element_dofs = edofs
-        self.rows = np.repeat(edofs, 18, axis=1).ravel()
-        self.cols = np.tile(edofs, (1, 18)).ravel()
+        self.element_dofs = (2 * elements[:, :, None] + np.arange(2)).reshape(n_el, 18)
         self.n_dofs = 2 * n_nodes
 
     @classmethod
@@ -229,8 +226,9 @@ class Solid:
         self.weight = self.depth * self.basis.dx                            # (n_el, n_q), mm^3
         self.kernel = ElementKernel(self.elements, self.grad, self.weight, law,
                                     self.nodes.shape[0])
-        self.element_dofs, self.rows, self.cols = (self.kernel.element_dofs, self.kernel.rows,
-                                                   self.kernel.cols)
+        self.element_dofs = edofs = self.kernel.element_dofs
+        self.rows = np.repeat(edofs, 18, axis=1).ravel()          # COO pattern of evaluate()
+        self.cols = np.tile(edofs, (1, 18)).ravel()
         self.n_dofs = self.kernel.n_dofs
 
     @property
