@@ -8,6 +8,12 @@ of the factorisation time. These loops do the same arithmetic in the same
 order without the calls. :class:`reducedmodels.tangent.BandedTangent` uses
 them up to ``NARROW_BAND`` and LAPACK above, where its vectorised BLAS wins.
 
+The half-bandwidth b is given as the length of a tuple (:func:`band_token`):
+numba compiles one machine code per b, in which the loops over the band have
+a known trip count and are unrolled. On a chain (b = 5, n = 1197) that made
+the factorisation 2.7 times faster than the same loops with b a run-time
+value (18 against 49 us, fastest of 3000 on a loaded machine).
+
 Storage is LAPACK's upper band form: the entry K[i, j], i <= j <= i + b, of
 a symmetric K is ``band[b + i - j, j]``.
 
@@ -16,6 +22,7 @@ Units: whatever the matrix's (N/mm, N, N mm for a tangent).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numba
@@ -24,76 +31,109 @@ import numpy as np
 _compiled = numba.njit(cache=True, error_model="numpy", nogil=True)
 
 
+@functools.cache
+def band_token(b: int) -> tuple[int, ...]:
+    """The argument that selects the kernels compiled for half-bandwidth b: b + 1 zeros."""
+    return (0,) * (b + 1)
+
+
 @_compiled
-def band_cholesky(band: np.ndarray, b: int) -> tuple[np.ndarray, int]:
+def band_cholesky(band: np.ndarray, token: tuple) -> tuple[np.ndarray, int]:
     """Upper Cholesky factor U (K = U^T U) of a positive definite band matrix; and a status.
 
-    ``band`` (at least b + 1 rows, n) holds K in upper band form (rows 0..b);
-    it is not modified. Returns the factor as ``factor[j, b + i - j] =
-    U[i, j]`` (each column contiguous) and 0, or, when a pivot is not
-    positive (K is not positive definite), the partial factor and the
-    1-based column where it failed (LAPACK's ``info``).
+    ``band`` (b + 1, n) holds K in upper band form, b = ``len(token) - 1``
+    (:func:`band_token`); it is not modified. Returns the factor as
+    ``factor[j, b + i - j] = U[i, j]`` (each column contiguous) and 0, or,
+    when a pivot is not positive (K is not positive definite), the partial
+    factor and the 1-based column where it failed (LAPACK's ``info``).
+
+    Column by column (the "up-looking" order): U[i, j] = (K[i, j] -
+    sum_k U[k, i] U[k, j]) / U[i, i], k ascending, the division done as a
+    product with 1 / U[i, i]; the same operations in the same order as the
+    right-looking rank-one updates of ``dpbtf2``, so the same rounding, but
+    each entry summed in a register.
     """
+    b = len(token) - 1
     n = band.shape[1]
-    factor = np.empty((n, b + 1))
-    for j in range(n):
-        for r in range(b + 1):
-            factor[j, r] = band[r, j]
-    for j in range(n):
-        pivot = factor[j, b]
-        if not pivot > 0.0:
-            return factor, j + 1
-        pivot = math.sqrt(pivot)
-        factor[j, b] = pivot
-        width = min(b, n - 1 - j)
-        scale = 1.0 / pivot
-        for p in range(1, width + 1):
-            factor[j + p, b - p] *= scale
-        for q in range(1, width + 1):          # rank-one update of the trailing block
-            x_q = factor[j + q, b - q]
-            for p in range(1, q + 1):
-                factor[j + q, b - q + p] -= factor[j + p, b - p] * x_q
+    factor = np.zeros((n, b + 1))
+    inverse = np.empty(n)                      # 1 / U[i, i]
+    for c in range(n):
+        if c >= b:                             # a full column: trip counts known, unrolled
+            for r in range(b):                 # U[c - b + r, c]
+                total = band[r, c]
+                i = c - b + r
+                for s in range(r):             # k = c - b + s
+                    total -= factor[i, b + s - r] * factor[c, s]
+                factor[c, r] = total * inverse[i]
+            total = band[b, c]
+            for s in range(b):
+                total -= factor[c, s] * factor[c, s]
+        else:                                  # the first b columns are shorter
+            for i in range(c):
+                total = band[b + i - c, c]
+                for k in range(max(0, i - b), i):
+                    total -= factor[i, b + k - i] * factor[c, b + k - c]
+                factor[c, b + i - c] = total * inverse[i]
+            total = band[b, c]
+            for k in range(c):
+                total -= factor[c, b + k - c] * factor[c, b + k - c]
+        if not total > 0.0:
+            return factor, c + 1
+        pivot = math.sqrt(total)
+        factor[c, b] = pivot
+        inverse[c] = 1.0 / pivot
     return factor, 0
 
 
 @_compiled
-def band_cholesky_solve(factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray) -> np.ndarray:
+def band_cholesky_solve(factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray, token: tuple
+                        ) -> np.ndarray:
     """x with K x = rhs, K = P^T U^T U P (``factor`` of :func:`band_cholesky`, ``perm`` P).
 
     The band holds K's rows and columns in the order ``perm``: the solution
     comes back in the original order. ``rhs`` is (n,) or (n, k).
     """
-    n, width = factor.shape
-    b = width - 1
+    b = len(token) - 1
+    n = factor.shape[0]
     flat = rhs.reshape(n, -1)
     out = np.empty_like(flat)
     y = np.empty(n)
     for column in range(flat.shape[1]):
         for j in range(n):                     # U^T y = P rhs
             total = flat[perm[j], column]
-            for i in range(max(0, j - b), j):
-                total -= factor[j, b + i - j] * y[i]
+            if j >= b:
+                for s in range(b):
+                    total -= factor[j, s] * y[j - b + s]
+            else:
+                for i in range(j):
+                    total -= factor[j, b + i - j] * y[i]
             y[j] = total / factor[j, b]
         for j in range(n - 1, -1, -1):         # U (P x) = y
             total = y[j]
-            for k in range(j + 1, min(n, j + b + 1)):
-                total -= factor[k, b + j - k] * y[k]
+            if j + b < n:
+                for s in range(1, b + 1):
+                    total -= factor[j + s, b - s] * y[j + s]
+            else:
+                for k in range(j + 1, n):
+                    total -= factor[k, b + j - k] * y[k]
             y[j] = total / factor[j, b]
         for j in range(n):
             out[perm[j], column] = y[j]
     return out.reshape(rhs.shape)
 
 
-def warm_up() -> None:
-    """Compile, or load from the on-disk cache, the kernels for the argument types flexval uses.
+def warm_up(b: int) -> None:
+    """Compile, or load from the on-disk cache, the kernels of half-bandwidth b.
 
     A band as :class:`reducedmodels.tangent.BandedTangent` holds it (a
     Fortran-ordered (b + 1, n) array) and one or several right-hand sides;
     see :func:`reducedmodels.beamkernel.warm_up` for why.
     """
-    band = np.zeros((2, 2), order="F")
-    band[1] = 1.0
-    factor, _ = band_cholesky(band, 1)
-    perm = np.arange(2, dtype=np.int64)
-    band_cholesky_solve(factor, np.ones(2), perm)
-    band_cholesky_solve(factor, np.ones((2, 2)), perm)
+    n = b + 2
+    band = np.zeros((b + 1, n), order="F")
+    band[b] = 1.0
+    token = band_token(b)
+    factor, _ = band_cholesky(band, token)
+    perm = np.arange(n, dtype=np.int64)
+    band_cholesky_solve(factor, np.ones(n), perm, token)
+    band_cholesky_solve(factor, np.ones((n, 2)), perm, token)

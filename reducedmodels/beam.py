@@ -64,6 +64,13 @@ from .inertia import MassPoints, chain_mass_points
 SHEAR_CORRECTION = 5.0 / 6.0
 """Timoshenko shear coefficient kappa of a rectangular section."""
 
+NODE_COORDINATES = 3
+"""A node's coordinates (x, y, theta)."""
+
+CHAIN_HALF_BANDWIDTH = 2 * NODE_COORDINATES - 1
+"""Half-bandwidth of the tangent of a chain of two-node elements numbered node after node
+(an element couples its two nodes' coordinates): the band flexures' tangents take."""
+
 
 @functools.cache
 def beam_kernels() -> ModuleType:

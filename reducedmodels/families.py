@@ -64,11 +64,11 @@ def _trace_beams(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
     Loading them (numba's import and machine code) is a per-process cost
     like importing scipy, not part of the model's time.
     """
-    from .beam import beam_kernels
+    from .beam import CHAIN_HALF_BANDWIDTH, beam_kernels
     from .tangent import band_kernels
 
     beam_kernels()
-    band_kernels()
+    band_kernels(CHAIN_HALF_BANDWIDTH)
     return _trace_nonlinear(mechanism, spec, *args, **kwargs)
 
 

@@ -48,15 +48,15 @@ ROUND_OFF = 1e-12    # eigenvalues above -ROUND_OFF * |K| count as zero, not as 
 
 
 @functools.cache
-def band_kernels() -> ModuleType:
-    """:mod:`reducedmodels.bandkernel`, imported and loaded on first use (see its ``warm_up``).
+def band_kernels(b: int) -> ModuleType:
+    """:mod:`reducedmodels.bandkernel` with its kernels of half-bandwidth b loaded (see ``warm_up``).
 
-    A layout that will use it asks for it when it is built, so that loading
-    it is not charged to a path's time.
+    A layout that will use them asks for them when it is built, so that
+    loading them is not charged to a path's time.
     """
     from . import bandkernel
 
-    bandkernel.warm_up()
+    bandkernel.warm_up(b)
     return bandkernel
 
 
@@ -177,7 +177,8 @@ class BandedTangent:
         if self._cholesky is None and self._lu is None:
             b = self.b
             if b <= NARROW_BAND:
-                factor, info = band_kernels().band_cholesky(self.storage, b)
+                kernels = band_kernels(b)
+                factor, info = kernels.band_cholesky(self.storage, kernels.band_token(b))
             else:
                 factor, info = lapack.dpbtrf(self.storage, lower=0)
             if info == 0:
@@ -197,8 +198,9 @@ class BandedTangent:
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         self._factorise()
         if self._cholesky is not None and self.b <= NARROW_BAND:
-            return band_kernels().band_cholesky_solve(self._cholesky,
-                                                      np.ascontiguousarray(rhs, float), self.perm)
+            kernels = band_kernels(self.b)
+            return kernels.band_cholesky_solve(self._cholesky, np.ascontiguousarray(rhs, float),
+                                               self.perm, kernels.band_token(self.b))
         if self._cholesky is not None:
             x_perm, _ = lapack.dpbtrs(self._cholesky, rhs[self.perm], lower=0)
         else:
@@ -321,7 +323,7 @@ class TangentLayout:
         if b <= BAND_LIMIT:        # the upper band only: the lower entries mirror it (slot -1)
             self.kind, self.perm, self.b = "banded", perm, b
             if b <= NARROW_BAND:
-                band_kernels()
+                band_kernels(b)
             self.slots = np.where(i <= j, j * (b + 1) + (b + i - j), -1)
             self.size = (b + 1) * n
             return

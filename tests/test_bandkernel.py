@@ -1,0 +1,74 @@
+"""The compiled narrow-band Cholesky kernels against LAPACK and dense linear algebra.
+
+Every half-bandwidth up to ``NARROW_BAND`` has its own machine code (the
+band's width is a compile-time constant), so every one is checked: the
+factor against LAPACK's ``dpbtrf`` (the same operations in the same order:
+equal to round-off), the solve against a dense solve of the permuted
+system, and the failure column of an indefinite matrix against
+``dpbtrf``'s ``info``.
+"""
+
+import numpy as np
+import pytest
+from scipy.linalg import lapack
+
+from reducedmodels.tangent import NARROW_BAND, BandedTangent, band_kernels
+
+N = 23                  # more columns than any band is wide: full and short columns both occur
+
+
+def random_band(b: int, rng: np.random.Generator, shift: float) -> np.ndarray:
+    """A symmetric band matrix (N, N) of half-bandwidth b with ``shift`` added to the diagonal."""
+    dense = rng.normal(size=(N, N))
+    dense = dense + dense.T
+    rows, cols = np.indices((N, N))
+    dense[np.abs(rows - cols) > b] = 0.0
+    return dense + shift * np.eye(N)
+
+
+def upper_band(dense: np.ndarray, b: int) -> np.ndarray:
+    """LAPACK's upper band form (b + 1, N), Fortran order, of a symmetric matrix."""
+    band = np.zeros((b + 1, N), order="F")
+    for k in range(b + 1):
+        j = np.arange(k, N)
+        band[b - k, j] = dense[j - k, j]
+    return band
+
+
+@pytest.mark.parametrize("b", range(NARROW_BAND + 1))
+def test_factor_and_solve_agree_with_lapack_and_a_dense_solve(b):
+    rng = np.random.default_rng(b)
+    dense = random_band(b, rng, 4.0 * (b + 1))          # diagonally dominant: positive definite
+    band = upper_band(dense, b)
+    kernels = band_kernels(b)
+    factor, info = kernels.band_cholesky(band, kernels.band_token(b))
+    reference, ref_info = lapack.dpbtrf(band, lower=0)
+    assert info == ref_info == 0
+    for j in range(N):                                 # factor[j, b + i - j] = U[i, j]
+        rows = slice(max(0, b - j), b + 1)
+        np.testing.assert_allclose(factor[j, rows], reference[rows, j], rtol=1e-14, atol=1e-14)
+    perm = rng.permutation(N)
+    matrix = np.empty((N, N))
+    matrix[np.ix_(perm, perm)] = dense                 # the band holds K[perm][:, perm]
+    rhs = rng.normal(size=(N, 2))
+    tangent = BandedTangent(band, perm.astype(np.int64), b)
+    np.testing.assert_allclose(tangent.solve(rhs), np.linalg.solve(matrix, rhs), rtol=1e-12)
+    np.testing.assert_allclose(tangent.solve(rhs[:, 0]), np.linalg.solve(matrix, rhs[:, 0]),
+                               rtol=1e-12)
+    assert tangent.negative_eigenvalues() == 0
+
+
+@pytest.mark.parametrize("b", range(1, NARROW_BAND + 1))
+def test_an_indefinite_band_fails_at_lapacks_column_and_is_solved_by_lu(b):
+    rng = np.random.default_rng(100 + b)
+    dense = random_band(b, rng, 4.0 * (b + 1))
+    dense[N // 2, N // 2] = -1.0                       # one negative pivot half way
+    band = upper_band(dense, b)
+    kernels = band_kernels(b)
+    _, info = kernels.band_cholesky(band, kernels.band_token(b))
+    assert info == lapack.dpbtrf(band, lower=0)[1] > 0
+    perm = np.arange(N, dtype=np.int64)
+    rhs = rng.normal(size=N)
+    tangent = BandedTangent(band, perm, b)
+    np.testing.assert_allclose(tangent.solve(rhs), np.linalg.solve(dense, rhs), rtol=1e-10)
+    assert tangent.negative_eigenvalues() == np.sum(np.linalg.eigvalsh(dense) < 0.0)
