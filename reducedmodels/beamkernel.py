@@ -35,8 +35,15 @@ TWO_PI = 2.0 * math.pi
 
 @_compiled
 def wrapped(angle: float) -> float:
-    """An angle (rad) brought into (-pi, pi], so that full turns carry no strain."""
-    return math.pi - (math.pi - angle) % TWO_PI
+    """An angle (rad) brought into (-pi, pi], so that full turns carry no strain.
+
+    pi - (pi - angle) mod 2 pi; the remainder (a library call) only when
+    pi - angle is outside [0, 2 pi), where it changes it: the same number.
+    """
+    turned = math.pi - angle
+    if 0.0 <= turned < TWO_PI:
+        return math.pi - turned
+    return math.pi - turned % TWO_PI
 
 
 @_compiled
@@ -180,20 +187,26 @@ def assemble_elements(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: n
         j = i + 1
         energy += element(x[i, 0], x[i, 1], x[j, 0], x[j, 1], theta[i], theta[j], chord0[e, 0],
                           chord0[e, 1], l0[e], k_axial[e], k11[e], k12[e], grad, entries)
-        for k in range(36):
-            tangent[k] = sign[k] * entries[source[k]]
-        if attached[i]:
-            attach(grad, tangent, 0, t[i, 0], t[i, 1])
-        if attached[j]:
-            attach(grad, tangent, 3, t[j, 0], t[j, 1])
+        if attached[i] or attached[j]:          # an end element: transported to its bodies
+            for k in range(36):
+                tangent[k] = sign[k] * entries[source[k]]
+            if attached[i]:
+                attach(grad, tangent, 0, t[i, 0], t[i, 1])
+            if attached[j]:
+                attach(grad, tangent, 3, t[j, 0], t[j, 1])
+            for k in range(36):
+                slot = tangent_slot[e, k]
+                if slot >= 0:
+                    tangent_out[slot] += tangent[k]
+        else:                                   # an interior one: added from its seven entries
+            for k in range(36):
+                slot = tangent_slot[e, k]
+                if slot >= 0:
+                    tangent_out[slot] += sign[k] * entries[source[k]]
         for k in range(6):
             slot = grad_slot[e, k]
             if slot >= 0:
                 grad_out[slot] += grad[k]
-        for k in range(36):
-            slot = tangent_slot[e, k]
-            if slot >= 0:
-                tangent_out[slot] += tangent[k]
     return energy
 
 

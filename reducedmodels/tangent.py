@@ -199,8 +199,14 @@ class BandedTangent:
         self._factorise()
         if self._cholesky is not None and self.b <= NARROW_BAND:
             kernels = band_kernels(self.b)
-            return kernels.band_cholesky_solve(self._cholesky, np.ascontiguousarray(rhs, float),
-                                               self.perm, kernels.band_token(self.b))
+            token = kernels.band_token(self.b)
+            rhs = np.asfortranarray(rhs, float)
+            x = np.empty_like(rhs, order="F")
+            columns, out = rhs.reshape(self.n, -1, order="F"), x.reshape(self.n, -1, order="F")
+            for k in range(columns.shape[1]):            # views, each column contiguous
+                kernels.band_cholesky_solve(self._cholesky, columns[:, k], self.perm, token,
+                                            out[:, k])
+            return x
         if self._cholesky is not None:
             x_perm, _ = lapack.dpbtrs(self._cholesky, rhs[self.perm], lower=0)
         else:

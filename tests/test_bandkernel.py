@@ -44,9 +44,10 @@ def test_factor_and_solve_agree_with_lapack_and_a_dense_solve(b):
     factor, info = kernels.band_cholesky(band, kernels.band_token(b))
     reference, ref_info = lapack.dpbtrf(band, lower=0)
     assert info == ref_info == 0
-    for j in range(N):                                 # factor[j, b + i - j] = U[i, j]
-        rows = slice(max(0, b - j), b + 1)
+    for j in range(N):                 # factor[j, b + i - j] = U[i, j], factor[j, b] = 1 / U[j, j]
+        rows = slice(max(0, b - j), b)
         np.testing.assert_allclose(factor[j, rows], reference[rows, j], rtol=1e-14, atol=1e-14)
+        assert factor[j, b] == pytest.approx(1.0 / reference[b, j], rel=1e-14)
     perm = rng.permutation(N)
     matrix = np.empty((N, N))
     matrix[np.ix_(perm, perm)] = dense                 # the band holds K[perm][:, perm]
