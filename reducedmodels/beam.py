@@ -210,6 +210,33 @@ class BeamGroup(ConnectorGroup):
         """
         return self._kernel(gather[self._node_dof], grad_dofs[self._dofs], hess_slots)
 
+    def predictor(self, gather: np.ndarray
+                  ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]:
+        """:meth:`predict_internal` on the global coordinates (see :meth:`ConnectorGroup.predictor`).
+
+        The kernel reads the nodes through the global node table
+        ``gather[node table]``, as the assembler does.
+        """
+        predicted_chains = beam_kernels().predicted_chains
+        fixed = (np.ascontiguousarray(gather[self._node_dof], np.int64), self._node_rel,
+                 self._attached, self._chain_nodes)
+
+        def predict(past: np.ndarray, weights: np.ndarray, guess: np.ndarray) -> np.ndarray:
+            return predicted_chains(past, weights, guess, *fixed)
+
+        return predict
+
+    def updater(self, gather: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        """:meth:`update_internal` on the global coordinates (see :meth:`ConnectorGroup.updater`)."""
+        updated_chains = beam_kernels().updated_chains
+        fixed = (np.ascontiguousarray(gather[self._node_dof], np.int64), self._node_rel,
+                 self._attached, self._chain_nodes)
+
+        def update(old: np.ndarray, new: np.ndarray) -> np.ndarray:
+            return updated_chains(old, new, *fixed)
+
+        return update
+
     def evaluate(self, states: Sequence[LocalState]) -> tuple[float, np.ndarray, np.ndarray]:
         """Total strain energy (N mm), concatenated gradients and Hessian values.
 

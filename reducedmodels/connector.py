@@ -313,6 +313,27 @@ class ConnectorGroup:
         """
         return None
 
+    def predictor(self, gather: np.ndarray
+                  ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None:
+        """:meth:`predict_internal` as a function of global coordinates, or None.
+
+        Called once with ``gather`` as for :meth:`assembler`; the function,
+        called as ``f(past, weights, guess)`` with ``past`` (k, m) the
+        converged coordinates ``[q, ground pose]`` (oldest first), their
+        extrapolation weights (k,) and ``guess`` the coordinates whose poses
+        are the predicted ones, returns what :meth:`predict_internal` would,
+        without the local states. Default: None (the core builds them).
+        """
+        return None
+
+    def updater(self, gather: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray] | None:
+        """:meth:`update_internal` as a function of global coordinates, or None.
+
+        As :meth:`predictor`: ``f(old, new)`` with the coordinates
+        ``[q, ground pose]`` before and after the linear update.
+        """
+        return None
+
     def path_validity(self, levels: Sequence[Sequence[LocalState]]) -> list[list[list[str]]]:
         """Each connector's :meth:`Connector.path_validity`: reasons per connector, then per level.
 

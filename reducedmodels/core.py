@@ -178,7 +178,11 @@ class System:
           ``_hess_keep`` / ``_hess_slots``, the kept entries of the Hessian
           values and their places in the tangent storage;
         * ``_diagonal_slots``: where each dof's diagonal entry is stored (the
-          loads add to it).
+          loads add to it);
+        * ``_predictors`` / ``_updaters`` get the group's function of the
+          global coordinates (:meth:`~reducedmodels.connector.ConnectorGroup.predictor`,
+          :meth:`~reducedmodels.connector.ConnectorGroup.updater`) as a fourth
+          entry, None where the group has none.
         """
         n = self.n_dofs
         gathers, rows, cols, hess_keep = [], [], [], []
@@ -218,6 +222,11 @@ class System:
                 self._generic.append((group, run))
             else:
                 self._assemblers.append(assembler)
+        # predictors and updaters with a function of the global coordinates use it (or None)
+        self._predictors = [(group, run, internal, group.predictor(np.concatenate(gathers[run])))
+                            for group, run, internal in self._predictors]
+        self._updaters = [(group, run, internal, group.updater(np.concatenate(gathers[run])))
+                          for group, run, internal in self._updaters]
         members = [k for _, run in self._generic for k in range(run.start, run.stop)]
         all_grad = np.concatenate([self._local_to_global[k] for k in members]
                                   or [np.zeros(0, int)])
@@ -255,9 +264,13 @@ class System:
         """The runs of consecutive connectors of one class, each with its group (built once)."""
         return self._groups
 
+    def extended(self, q: np.ndarray) -> np.ndarray:
+        """The coordinates ``[q, ground pose]`` the connectors' gather maps read (a new array)."""
+        return np.concatenate([q, self._ground_pose])
+
     def local_states(self, q: np.ndarray) -> list[LocalState]:
         """(pose_a, pose_b, internal) of every connector in state q."""
-        extended = np.concatenate([q, self._ground_pose])
+        extended = self.extended(q)
         out = []
         for gather in self._gather:
             local = extended[gather]
@@ -308,7 +321,7 @@ class System:
         else:
             grad, storage = np.zeros(n), np.zeros(self.layout.size)
         if self._assemblers:
-            coordinates = np.concatenate([q, self._ground_pose])
+            coordinates = self.extended(q)
             for assembler in self._assemblers:
                 energy += assembler(coordinates, grad, storage)
         diagonal = np.zeros(n)
@@ -348,9 +361,15 @@ class System:
         """
         new = q + du
         if self._updaters:
-            before, after = self.local_states(q), self.local_states(new)
-            for group, run, internal in self._updaters:
-                new[internal] = group.update_internal(before[run], after[run])
+            extended = self.extended(q), self.extended(new)
+            local = None
+            for group, run, internal, update in self._updaters:
+                if update is not None:
+                    new[internal] = update(*extended)
+                    continue
+                if local is None:        # from q + du, as the updates before this one found it
+                    local = self.local_states(q), self.local_states(extended[1][:q.size])
+                new[internal] = group.update_internal(local[0][run], local[1][run])
         return new
 
     @property
@@ -372,7 +391,9 @@ class System:
         Cartesian coordinates come out stretched, and Newton then spends
         iterations pulling the stretch back out. ``past``, if given, holds
         :meth:`local_states` of each state of the history (a caller that
-        predicts many times from one history computes them once).
+        predicts many times from one history computes them once; a group
+        with its own :meth:`~reducedmodels.connector.ConnectorGroup.predictor`
+        reads the states' global coordinates instead).
 
         ``slope``, if given, is dq/dfactor at the last state (mm, rad per
         unit factor; K^-1 f from its tangent): the polynomial then matches
@@ -389,10 +410,18 @@ class System:
             guess = sum(w * q for w, (q, _) in zip(weights_with_slope, history))
             guess += slope_weight * slope
         if self._predictors:
-            if past is None:
-                past = [self.local_states(q) for q, _ in history]
-            now = self.local_states(guess)
-            for group, run, internal in self._predictors:
+            poses = self.extended(guess)
+            coordinates, now = None, None
+            for group, run, internal, predict in self._predictors:
+                if predict is not None:
+                    if coordinates is None:
+                        coordinates = np.array([self.extended(q) for q, _ in history])
+                    guess[internal] = predict(coordinates, np.asarray(weights, float), poses)
+                    continue
+                if now is None:          # the guess as the predictions before this one found it
+                    if past is None:
+                        past = [self.local_states(q) for q, _ in history]
+                    now = self.local_states(poses[:guess.size])
                 guess[internal] = group.predict_internal([p[run] for p in past], weights,
                                                          [state[:2] for state in now[run]])
         return guess
