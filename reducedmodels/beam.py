@@ -169,7 +169,8 @@ class BeamGroup(ConnectorGroup):
                                                       for c in self.connectors])[:-1]])
         self._n_nodes = int(sum(n_nodes))
         self._n_local = int(sum(6 + c.n_internal for c in self.connectors))
-        self._first = np.concatenate([s + np.arange(n - 1) for s, n in zip(node_start, n_nodes)])
+        self._first = np.concatenate([s + np.arange(n - 1)
+                                      for s, n in zip(node_start, n_nodes)]).astype(np.int64)
         ends = np.column_stack([node_start, node_start + np.array(n_nodes) - 1]).ravel()
         self._chain_nodes = np.append(node_start, self._n_nodes).astype(np.int64)
         self._chord0, self._l0, self._k_axial, self._k11, self._k12 = (
@@ -185,13 +186,23 @@ class BeamGroup(ConnectorGroup):
         self._attached[ends] = True
         self._dofs = np.concatenate([c._element_dofs + offset for c, offset
                                      in zip(self.connectors, local_start)]).astype(np.int64)
+        # the end pass's tables: each node's initial tangent angle, each connector's first
+        # element, and where its section stations (arc-length order) are among every
+        # element's start node then every element's end node
+        self._tangent0 = np.concatenate([c._node_tangent0 for c in self.connectors])
+        n_elements = [n - 1 for n in n_nodes]
+        self._element_start = np.concatenate([[0], np.cumsum(n_elements)[:-1]]).astype(np.intp)
+        total = int(sum(n_elements))
+        self._section_index = [np.concatenate([e0 + np.arange(n), total + e0 + np.arange(n)])
+                               [c._section_order] for c, e0, n
+                               in zip(self.connectors, self._element_start, n_elements)]
 
     def _kernel(self, node_dof: np.ndarray, grad_slot: np.ndarray, tangent_slot: np.ndarray
                 ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
         """``f(coordinates, grad, storage) -> energy``: the element kernel on these index maps."""
         assemble_elements = beam_kernels().assemble_elements
         fixed = (np.ascontiguousarray(node_dof, np.int64), self._node_rel, self._attached,
-                 self._first.astype(np.int64), self._chord0, self._l0, self._k_axial, self._k11,
+                 self._first, self._chord0, self._l0, self._k_axial, self._k11,
                  self._k12, _SOURCE.astype(np.int64), _SIGN,
                  np.ascontiguousarray(grad_slot, np.int64),
                  np.ascontiguousarray(tangent_slot, np.int64).reshape(-1, 36))
@@ -249,6 +260,34 @@ class BeamGroup(ConnectorGroup):
         energy = kernel(_coordinates(states), gradient, hessian)
         return energy, gradient, hessian
 
+    def path_validity(self, levels: Sequence[Sequence[LocalState]]) -> list[list[list[str]]]:
+        """Each connector's :meth:`BeamConnector.validity` at each level, measured in one compiled pass.
+
+        Reasons are worded only for the (connector, level) pairs found invalid.
+        """
+        lengths, turns = beam_kernels().path_chord_measures(
+            _levels(levels), self._node_dof, self._node_rel, self._attached, self._first,
+            self._chord0)
+        strain = np.maximum.reduceat(np.abs(lengths / self._l0 - 1.0), self._element_start, axis=1)
+        turn = np.maximum.reduceat(turns, self._element_start, axis=1)
+        valid = ((strain <= MAX_STRAIN) & (turn <= MAX_CHORD_TURN)).T.tolist()
+        ends = [*self._element_start[1:], lengths.shape[1]]
+        return [[[] if ok else (stretch_reasons("element", length[e0:e1], c._l0)
+                                + rotation_reasons("element", turn_e[e0:e1], MAX_CHORD_TURN))
+                 for ok, length, turn_e in zip(flags, lengths, turns)]
+                for c, flags, e0, e1 in zip(self.connectors, valid, self._element_start, ends)]
+
+    def path_section_forces(self, levels: Sequence[Sequence[LocalState]]) -> list[SectionForces]:
+        """Each connector's :meth:`BeamConnector.section_forces` at k levels, stacked (k, m).
+
+        Every element's end forces at every level in one compiled pass.
+        """
+        axial, moment = beam_kernels().path_section_resultants(
+            _levels(levels), self._node_dof, self._node_rel, self._attached, self._first,
+            self._tangent0, self._chord0, self._l0, self._k_axial, self._k11, self._k12)
+        return [SectionForces(c._section_at.copy(), axial[:, index], moment[:, index])
+                for c, index in zip(self.connectors, self._section_index)]
+
     def predict_internal(self, past: Sequence[Sequence[LocalState]], weights: Sequence[float],
                          poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
         """Concatenated interior nodes extrapolated in chord lengths and angles.
@@ -279,9 +318,9 @@ def _coordinates(states: Sequence[LocalState]) -> np.ndarray:
     return np.concatenate([part for state in states for part in state]).astype(float, copy=False)
 
 
-def _stacked(states: Sequence[LocalState]) -> np.ndarray:
-    """One connector's local coordinates at k states, (k, 6 + n_internal) float."""
-    return np.array([np.concatenate(state) for state in states], dtype=float)
+def _levels(levels: Sequence[Sequence[LocalState]]) -> np.ndarray:
+    """The connectors' local coordinates laid end to end at k levels, (k, m) float."""
+    return np.array([_coordinates(states) for states in levels], dtype=float)
 
 
 class BeamConnector(Connector):
@@ -462,15 +501,8 @@ class BeamConnector(Connector):
         return self.path_validity([(pose_a, pose_b, internal)])[0]
 
     def path_validity(self, states: Sequence[LocalState]) -> list[list[str]]:
-        """:meth:`validity` at k states, measured in one compiled pass."""
-        group = self._alone
-        lengths, turns = beam_kernels().path_chord_measures(
-            _stacked(states), group._node_dof, group._node_rel, group._attached, self._chord0)
-        return [[] if (np.abs(length / self._l0 - 1.0).max() <= MAX_STRAIN
-                       and turn.max() <= MAX_CHORD_TURN)
-                else (stretch_reasons("element", length, self._l0)
-                      + rotation_reasons("element", turn, MAX_CHORD_TURN))
-                for length, turn in zip(lengths, turns)]
+        """:meth:`validity` at k states, measured in one compiled pass (:meth:`BeamGroup.path_validity`)."""
+        return self._alone.path_validity([[state] for state in states])[0]
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed node positions (N + 1, 2), mm, from the flexure's start to its end."""
@@ -498,9 +530,4 @@ class BeamConnector(Connector):
 
     def path_section_forces(self, states: Sequence[LocalState]) -> SectionForces:
         """:meth:`section_forces` at k states (a load path), stacked (k, m), in one compiled pass."""
-        group = self._alone
-        axial, moment = beam_kernels().path_section_resultants(
-            _stacked(states), group._node_dof, group._node_rel, group._attached,
-            self._node_tangent0, self._chord0, self._l0, self._k_axial, self._k11, self._k12)
-        order = self._section_order
-        return SectionForces(self._section_at.copy(), axial[:, order], moment[:, order])
+        return self._alone.path_section_forces([[state] for state in states])[0]

@@ -317,81 +317,65 @@ def predicted_chains(past: np.ndarray, weights: np.ndarray, poses: np.ndarray,
 
 
 @_compiled
-def section_resultants(x: np.ndarray, theta: np.ndarray, tangent0: np.ndarray,
-                       chord0: np.ndarray, l0: np.ndarray, k_axial: np.ndarray, k11: np.ndarray,
-                       k12: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Normal force (N) and bending moment (N mm) at both end nodes of every element of a chain.
+def path_section_resultants(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndarray,
+                            attached: np.ndarray, first: np.ndarray, tangent0: np.ndarray,
+                            chord0: np.ndarray, l0: np.ndarray, k_axial: np.ndarray,
+                            k11: np.ndarray, k12: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Normal force (N) and bending moment (N mm) at both end nodes of every element, at k states.
 
-    Element e joins node e to node e + 1 (x mm, theta rad); ``tangent0``
-    is each node's initial tangent angle (rad), turned by the node's
-    rotation into its section axis. On the part towards the chain's end,
-    from the part before: at an element's start node the force that holds
-    the element there, at its end node minus that force. Returns
-    (elements' start nodes then end nodes) for both.
+    ``coordinates`` (k, m) holds the coordinates at each state, read through
+    the node tables of :func:`assemble_elements` (element e joins node
+    ``first[e]`` to the next); ``tangent0`` is each node's initial tangent
+    angle (rad), turned by the node's rotation into its section axis. On the
+    part towards the chain's end, from the part before: at an element's
+    start node the force that holds the element there, at its end node minus
+    that force. Returns (k, 2 elements) each: every element's start node,
+    then every element's end node.
     """
-    n = l0.size
-    axial, moment = np.empty(2 * n), np.empty(2 * n)
+    k, n = coordinates.shape[0], first.size
+    axial, moment = np.empty((k, 2 * n)), np.empty((k, 2 * n))
     grad = np.empty(6)
     entries = np.empty(7)
-    for e in range(n):
-        element(x[e, 0], x[e, 1], x[e + 1, 0], x[e + 1, 1], theta[e], theta[e + 1],
-                chord0[e, 0], chord0[e, 1], l0[e], k_axial[e], k11[e], k12[e], grad, entries)
-        start, end = tangent0[e] + theta[e], tangent0[e + 1] + theta[e + 1]
-        axial[e] = -(grad[0] * math.cos(start) + grad[1] * math.sin(start))
-        axial[n + e] = grad[3] * math.cos(end) + grad[4] * math.sin(end)
-        moment[e], moment[n + e] = grad[2], -grad[5]
-    return axial, moment
-
-
-@_compiled
-def chord_measures(x: np.ndarray, theta: np.ndarray, chord0: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """Each element's chord length (mm) and the larger turn of its end nodes from the chord (rad).
-
-    The turn is |wrapped(theta_i - alpha)| at either end node, alpha the
-    chord's rotation from its initial direction ``chord0``: what a two-node
-    element must carry as bending (the validity monitor's measure).
-    """
-    n = chord0.shape[0]
-    length, turn = np.empty(n), np.empty(n)
-    for e in range(n):
-        dx, dy = x[e + 1, 0] - x[e, 0], x[e + 1, 1] - x[e, 1]
-        length[e] = math.hypot(dx, dy)
-        alpha = math.atan2(chord0[e, 0] * dy - chord0[e, 1] * dx,
-                           chord0[e, 0] * dx + chord0[e, 1] * dy)
-        turn[e] = max(abs(wrapped(theta[e] - alpha)), abs(wrapped(theta[e + 1] - alpha)))
-    return length, turn
-
-
-@_compiled
-def path_section_resultants(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndarray,
-                            attached: np.ndarray, tangent0: np.ndarray, chord0: np.ndarray,
-                            l0: np.ndarray, k_axial: np.ndarray, k11: np.ndarray,
-                            k12: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`section_resultants` of one chain at k states: (k, 2 elements) each, N and N mm.
-
-    ``coordinates`` (k, m) holds the chain's local coordinates at each state,
-    read through the node tables of :func:`assemble_elements`.
-    """
-    k, n = coordinates.shape[0], l0.size
-    axial, moment = np.empty((k, 2 * n)), np.empty((k, 2 * n))
-    for s in range(k):
-        x, theta, _ = place_nodes(coordinates[s], node_dof, node_rel, attached)
-        axial[s], moment[s] = section_resultants(x, theta, tangent0, chord0, l0, k_axial, k11,
-                                                 k12)
+    cos_axis, sin_axis = np.empty(node_dof.size), np.empty(node_dof.size)
+    for state in range(k):
+        x, theta, _ = place_nodes(coordinates[state], node_dof, node_rel, attached)
+        for i in range(node_dof.size):         # each node's axis, shared by its two elements
+            axis = tangent0[i] + theta[i]
+            cos_axis[i], sin_axis[i] = math.cos(axis), math.sin(axis)
+        for e in range(n):
+            i = first[e]
+            j = i + 1
+            element(x[i, 0], x[i, 1], x[j, 0], x[j, 1], theta[i], theta[j], chord0[e, 0],
+                    chord0[e, 1], l0[e], k_axial[e], k11[e], k12[e], grad, entries)
+            axial[state, e] = -(grad[0] * cos_axis[i] + grad[1] * sin_axis[i])
+            axial[state, n + e] = grad[3] * cos_axis[j] + grad[4] * sin_axis[j]
+            moment[state, e], moment[state, n + e] = grad[2], -grad[5]
     return axial, moment
 
 
 @_compiled
 def path_chord_measures(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndarray,
-                        attached: np.ndarray, chord0: np.ndarray
+                        attached: np.ndarray, first: np.ndarray, chord0: np.ndarray
                         ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`chord_measures` of one chain at k states: (k, elements) each, mm and rad."""
-    k, n = coordinates.shape[0], chord0.shape[0]
+    """Each element's chord length (mm) and the larger turn of its end nodes from the chord (rad).
+
+    At k states, (k, elements) each; tables as in :func:`path_section_resultants`.
+    The turn is |wrapped(theta_i - alpha)| at either end node, alpha the
+    chord's rotation from its initial direction ``chord0``: what a two-node
+    element must carry as bending (the validity monitor's measure).
+    """
+    k, n = coordinates.shape[0], first.size
     length, turn = np.empty((k, n)), np.empty((k, n))
-    for s in range(k):
-        x, theta, _ = place_nodes(coordinates[s], node_dof, node_rel, attached)
-        length[s], turn[s] = chord_measures(x, theta, chord0)
+    for state in range(k):
+        x, theta, _ = place_nodes(coordinates[state], node_dof, node_rel, attached)
+        for e in range(n):
+            i = first[e]
+            dx, dy = x[i + 1, 0] - x[i, 0], x[i + 1, 1] - x[i, 1]
+            length[state, e] = math.hypot(dx, dy)
+            alpha = math.atan2(chord0[e, 0] * dy - chord0[e, 1] * dx,
+                               chord0[e, 0] * dx + chord0[e, 1] * dy)
+            turn[state, e] = max(abs(wrapped(theta[i] - alpha)),
+                                 abs(wrapped(theta[i + 1] - alpha)))
     return length, turn
 
 
@@ -419,6 +403,6 @@ def warm_up() -> None:
     updated_chains(coordinates, coordinates, chain, rel, attached, chain_nodes)
     predicted_chains(np.zeros((3, 9)), ones[[0, 0, 0]], coordinates, chain, rel, attached,
                      chain_nodes)
-    path_section_resultants(np.zeros((1, 9)), chain, rel, attached, np.zeros(3), chord0, ones,
-                            ones, ones, ones)
-    path_chord_measures(np.zeros((1, 9)), chain, rel, attached, chord0)
+    path_section_resultants(np.zeros((1, 9)), chain, rel, attached, first, np.zeros(3), chord0,
+                            ones, ones, ones, ones)
+    path_chord_measures(np.zeros((1, 9)), chain, rel, attached, first, chord0)
