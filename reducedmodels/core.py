@@ -326,7 +326,8 @@ class System:
                 energy += assembler(coordinates, grad, storage)
         diagonal = np.zeros(n)
         energy += loads.add_to(q, factor, grad, diagonal)
-        storage[self._diagonal_slots] += diagonal
+        loaded = diagonal.nonzero()[0]             # the few loaded bodies' rotations
+        storage[self._diagonal_slots[loaded]] += diagonal[loaded]
         return energy, grad, self.layout.tangent(storage)
 
     def reaction(self, q: np.ndarray) -> np.ndarray:

@@ -202,10 +202,11 @@ class BandedTangent:
             token = kernels.band_token(self.b)
             rhs = np.asfortranarray(rhs, float)
             x = np.empty_like(rhs, order="F")
-            columns, out = rhs.reshape(self.n, -1, order="F"), x.reshape(self.n, -1, order="F")
-            for k in range(columns.shape[1]):            # views, each column contiguous
-                kernels.band_cholesky_solve(self._cholesky, columns[:, k], self.perm, token,
-                                            out[:, k])
+            if rhs.ndim == 1:
+                kernels.band_cholesky_solve(self._cholesky, rhs, self.perm, token, x)
+                return x
+            for k in range(rhs.shape[1]):                # each column contiguous
+                kernels.band_cholesky_solve(self._cholesky, rhs[:, k], self.perm, token, x[:, k])
             return x
         if self._cholesky is not None:
             x_perm, _ = lapack.dpbtrs(self._cholesky, rhs[self.perm], lower=0)
