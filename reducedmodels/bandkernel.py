@@ -1,4 +1,4 @@
-"""Compiled banded Cholesky factorisation and solve for narrow bands (numba, cached on disk).
+"""Compiled banded Cholesky (and LU) factorisation and solve for narrow bands (numba, cached on disk).
 
 LAPACK's banded Cholesky (``dpbtrf``) treats a band narrower than its block
 size column by column with one BLAS call each (``dscal``, ``dsyr``); on the
@@ -123,6 +123,97 @@ def band_cholesky_solve(factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray, t
         out[perm[j]] = y[j]
 
 
+@_compiled
+def band_lu(band: np.ndarray, token: tuple) -> tuple[np.ndarray, np.ndarray, int]:
+    """LU factors with partial pivoting of a symmetric band matrix (``dgbtf2``'s algorithm).
+
+    For the tangents whose Cholesky meets a non-positive pivot (an iterate
+    where K is indefinite). ``band`` (b + 1, n) holds K in upper band form,
+    b = ``len(token) - 1``. Returns the factors with column j contiguous,
+    ``lu[j, 2 b + i - j]`` for i - j in [-2 b, b] (U, with the fill-in of
+    the row interchanges, above and on the diagonal; the multipliers of L
+    below), the row interchanges (row j was swapped with ``pivots[j]``) and
+    0, or the 1-based column of the first zero pivot (LAPACK's ``info``).
+    Right-looking: scale the column below the pivot by 1 / pivot, rank-one
+    update of the columns the pivot row reaches.
+    """
+    b = len(token) - 1
+    n = band.shape[1]
+    d = 2 * b                                  # the diagonal's row
+    lu = np.zeros((n, 3 * b + 1))
+    for j in range(n):                         # K[i, j] for |i - j| <= b, K symmetric
+        for i in range(max(0, j - b), j + 1):
+            lu[j, d + i - j] = band[b + i - j, j]
+        for i in range(j + 1, min(n, j + b + 1)):
+            lu[j, d + i - j] = band[b + j - i, i]
+    pivots = np.empty(n, np.int64)
+    info = 0
+    reach = 0                                  # last column the pivot rows reach so far
+    for j in range(n):
+        below = min(b, n - 1 - j)
+        jp, largest = 0, abs(lu[j, d])         # the first largest |entry| on and below the diagonal
+        for p in range(1, below + 1):
+            if abs(lu[j, d + p]) > largest:
+                jp, largest = p, abs(lu[j, d + p])
+        pivots[j] = j + jp
+        if lu[j, d + jp] == 0.0:
+            if info == 0:
+                info = j + 1
+            continue
+        reach = max(reach, min(j + b + jp, n - 1))
+        if jp != 0:
+            for c in range(j, reach + 1):
+                upper, lower = d + j - c, d + j + jp - c
+                lu[c, upper], lu[c, lower] = lu[c, lower], lu[c, upper]
+        if below == b:                         # a full column: trip counts known, unrolled
+            _eliminate(lu, j, reach, d, b)
+        elif below > 0:
+            _eliminate(lu, j, reach, d, below)
+    return lu, pivots, info
+
+
+@_compiled
+def _eliminate(lu: np.ndarray, j: int, reach: int, d: int, below: int) -> None:
+    """:func:`band_lu`'s step j: the ``below`` multipliers, and the update of columns j + 1..reach."""
+    scale = 1.0 / lu[j, d]
+    for p in range(1, below + 1):
+        lu[j, d + p] *= scale
+    for c in range(j + 1, reach + 1):
+        y = lu[c, d + j - c]
+        if y != 0.0:
+            for p in range(1, below + 1):
+                lu[c, d + j + p - c] -= lu[j, d + p] * y
+
+
+@_compiled
+def band_lu_solve(lu: np.ndarray, pivots: np.ndarray, rhs: np.ndarray, perm: np.ndarray,
+                  token: tuple, out: np.ndarray) -> None:
+    """x with K x = rhs into ``out`` from :func:`band_lu`'s factors of K's band in the order ``perm``.
+
+    ``rhs`` and ``out`` are contiguous (n,); L's row interchanges and
+    multipliers, then U column by column (``dgbtrs``).
+    """
+    b = len(token) - 1
+    n = lu.shape[0]
+    d = 2 * b
+    y = np.empty(n)
+    for j in range(n):
+        y[j] = rhs[perm[j]]
+    for j in range(n - 1):
+        swap = pivots[j]
+        if swap != j:
+            y[j], y[swap] = y[swap], y[j]
+        for p in range(1, min(b, n - 1 - j) + 1):
+            y[j + p] -= lu[j, d + p] * y[j]
+    for j in range(n - 1, -1, -1):
+        if y[j] != 0.0:
+            y[j] = y[j] / lu[j, d]
+            for i in range(max(0, j - d), j):
+                y[i] -= y[j] * lu[j, d + i - j]
+    for j in range(n):
+        out[perm[j]] = y[j]
+
+
 def warm_up(b: int) -> None:
     """Compile, or load from the on-disk cache, the kernels of half-bandwidth b.
 
@@ -134,5 +225,8 @@ def warm_up(b: int) -> None:
     band = np.zeros((b + 1, n), order="F")
     band[b] = 1.0
     token = band_token(b)
+    perm = np.arange(n, dtype=np.int64)
     factor, _ = band_cholesky(band, token)
-    band_cholesky_solve(factor, np.ones(n), np.arange(n, dtype=np.int64), token, np.empty(n))
+    band_cholesky_solve(factor, np.ones(n), perm, token, np.empty(n))
+    lu, pivots, _ = band_lu(band, token)
+    band_lu_solve(lu, pivots, np.ones(n), perm, token, np.empty(n))

@@ -163,7 +163,7 @@ class BandedTangent:
     work, and it proves there is no negative eigenvalue), a banded LU with
     pivoting (on the general band storage, mirrored from the upper band)
     only when the Cholesky meets a non-positive pivot. Up to
-    ``NARROW_BAND`` the Cholesky is the compiled loop of
+    ``NARROW_BAND`` both are the compiled loops of
     :mod:`reducedmodels.bandkernel` (numba), above it LAPACK's.
     """
 
@@ -171,7 +171,7 @@ class BandedTangent:
         self.storage, self.perm, self.b = storage, perm, half_bandwidth
         self.n = storage.shape[1]
         self._cholesky = None       # upper Cholesky factor in band form, when K is positive definite
-        self._lu = None             # (lu, piv, info) of dgbtrf, when it is not
+        self._lu = None             # (lu, pivots, info) of a banded LU, when it is not
 
     def _factorise(self) -> None:
         if self._cholesky is None and self._lu is None:
@@ -179,12 +179,14 @@ class BandedTangent:
             if b <= NARROW_BAND:
                 kernels = band_kernels(b)
                 factor, info = kernels.band_cholesky(self.storage, kernels.band_token(b))
+                if info:
+                    self._lu = kernels.band_lu(self.storage, kernels.band_token(b))
             else:
                 factor, info = lapack.dpbtrf(self.storage, lower=0)
+                if info:
+                    self._lu = lapack.dgbtrf(self._general_band(), b, b)
             if info == 0:
                 self._cholesky = factor
-            else:
-                self._lu = lapack.dgbtrf(self._general_band(), b, b)
 
     def _general_band(self) -> np.ndarray:
         """K in LAPACK general band storage (3b + 1, n), with the b rows dgbtrf works in."""
@@ -197,26 +199,35 @@ class BandedTangent:
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         self._factorise()
-        if self._cholesky is not None and self.b <= NARROW_BAND:
-            kernels = band_kernels(self.b)
-            token = kernels.band_token(self.b)
-            rhs = np.asfortranarray(rhs, float)
-            x = np.empty_like(rhs, order="F")
-            if rhs.ndim == 1:
-                kernels.band_cholesky_solve(self._cholesky, rhs, self.perm, token, x)
-                return x
-            for k in range(rhs.shape[1]):                # each column contiguous
-                kernels.band_cholesky_solve(self._cholesky, rhs[:, k], self.perm, token, x[:, k])
-            return x
+        if self._lu is not None and self._lu[2] > 0:
+            raise np.linalg.LinAlgError(f"singular tangent (zero pivot {self._lu[2]})")
+        if self.b <= NARROW_BAND:
+            return self._narrow_solve(rhs)
         if self._cholesky is not None:
             x_perm, _ = lapack.dpbtrs(self._cholesky, rhs[self.perm], lower=0)
         else:
-            lu, piv, info = self._lu
-            if info > 0:
-                raise np.linalg.LinAlgError(f"singular tangent (zero pivot {info})")
+            lu, piv, _ = self._lu
             x_perm, _ = lapack.dgbtrs(lu, self.b, self.b, rhs[self.perm], piv)
         x = np.empty_like(x_perm)
         x[self.perm] = x_perm
+        return x
+
+    def _narrow_solve(self, rhs: np.ndarray) -> np.ndarray:
+        """:meth:`solve` with the compiled kernels' factors (one call per right-hand side)."""
+        kernels = band_kernels(self.b)
+        if self._cholesky is not None:
+            solve = functools.partial(kernels.band_cholesky_solve, self._cholesky)
+        else:
+            lu, pivots, _ = self._lu
+            solve = functools.partial(kernels.band_lu_solve, lu, pivots)
+        token = kernels.band_token(self.b)
+        rhs = np.asfortranarray(rhs, float)
+        x = np.empty_like(rhs, order="F")
+        if rhs.ndim == 1:
+            solve(rhs, self.perm, token, x)
+            return x
+        for k in range(rhs.shape[1]):                    # each column contiguous
+            solve(rhs[:, k], self.perm, token, x[:, k])
         return x
 
     def negative_eigenvalues(self) -> int | None:

@@ -73,3 +73,22 @@ def test_an_indefinite_band_fails_at_lapacks_column_and_is_solved_by_lu(b):
     tangent = BandedTangent(band, perm, b)
     np.testing.assert_allclose(tangent.solve(rhs), np.linalg.solve(dense, rhs), rtol=1e-10)
     assert tangent.negative_eigenvalues() == np.sum(np.linalg.eigvalsh(dense) < 0.0)
+
+
+@pytest.mark.parametrize("b", range(1, NARROW_BAND + 1))
+def test_the_banded_lu_agrees_with_lapacks_dgbtrf(b):
+    """Same algorithm (dgbtf2: partial pivoting, right-looking): same pivots, factors to round-off."""
+    rng = np.random.default_rng(200 + b)
+    dense = random_band(b, rng, 0.0)                   # indefinite: row interchanges happen
+    band = upper_band(dense, b)
+    kernels = band_kernels(b)
+    lu, pivots, info = kernels.band_lu(band, kernels.band_token(b))
+    general = np.zeros((3 * b + 1, N), order="F")      # LAPACK general band: A[i, j] at 2b + i - j
+    for i in range(N):
+        for j in range(max(0, i - b), min(N, i + b + 1)):
+            general[2 * b + i - j, j] = dense[i, j]
+    reference, ref_pivots, ref_info = lapack.dgbtrf(general, b, b)
+    assert info == ref_info == 0
+    np.testing.assert_array_equal(pivots, ref_pivots)
+    for j in range(N):
+        np.testing.assert_allclose(lu[j], reference[:, j], rtol=1e-12, atol=1e-12)
