@@ -142,6 +142,12 @@ def band_lu(band: np.ndarray, token: tuple) -> tuple[np.ndarray, np.ndarray, int
     d = 2 * b                                  # the diagonal's row
     lu = np.zeros((n, 3 * b + 1))
     for j in range(n):                         # K[i, j] for |i - j| <= b, K symmetric
+        if b <= j < n - b:                     # trip counts known, unrolled
+            for r in range(b + 1):             # i = j - b + r
+                lu[j, b + r] = band[r, j]
+            for p in range(1, b + 1):          # i = j + p
+                lu[j, d + p] = band[b - p, j + p]
+            continue
         for i in range(max(0, j - b), j + 1):
             lu[j, d + i - j] = band[b + i - j, j]
         for i in range(j + 1, min(n, j + b + 1)):
@@ -166,23 +172,24 @@ def band_lu(band: np.ndarray, token: tuple) -> tuple[np.ndarray, np.ndarray, int
                 upper, lower = d + j - c, d + j + jp - c
                 lu[c, upper], lu[c, lower] = lu[c, lower], lu[c, upper]
         if below == b:                         # a full column: trip counts known, unrolled
-            _eliminate(lu, j, reach, d, b)
-        elif below > 0:
-            _eliminate(lu, j, reach, d, below)
-    return lu, pivots, info
-
-
-@_compiled
-def _eliminate(lu: np.ndarray, j: int, reach: int, d: int, below: int) -> None:
-    """:func:`band_lu`'s step j: the ``below`` multipliers, and the update of columns j + 1..reach."""
-    scale = 1.0 / lu[j, d]
-    for p in range(1, below + 1):
-        lu[j, d + p] *= scale
-    for c in range(j + 1, reach + 1):
-        y = lu[c, d + j - c]
-        if y != 0.0:
+            scale = 1.0 / lu[j, d]
+            for p in range(1, b + 1):
+                lu[j, d + p] *= scale
+            for c in range(j + 1, reach + 1):
+                y = lu[c, d + j - c]
+                if y != 0.0:
+                    for p in range(1, b + 1):
+                        lu[c, d + j + p - c] -= lu[j, d + p] * y
+        elif below > 0:                        # the last b columns: the same, shorter
+            scale = 1.0 / lu[j, d]
             for p in range(1, below + 1):
-                lu[c, d + j + p - c] -= lu[j, d + p] * y
+                lu[j, d + p] *= scale
+            for c in range(j + 1, reach + 1):
+                y = lu[c, d + j - c]
+                if y != 0.0:
+                    for p in range(1, below + 1):
+                        lu[c, d + j + p - c] -= lu[j, d + p] * y
+    return lu, pivots, info
 
 
 @_compiled

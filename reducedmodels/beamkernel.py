@@ -298,6 +298,7 @@ def predicted_chains(past: np.ndarray, weights: np.ndarray, poses: np.ndarray,
             angle_last[i - k] = math.atan2(last[i + 1, 1] - last[i, 1],
                                            last[i + 1, 0] - last[i, 0])
     length, turn, theta = np.zeros(n_elements), np.zeros(n_elements), np.zeros(n_nodes)
+    newest = past.shape[0] - 1
     for h in range(past.shape[0]):
         w = weights[h]
         x, th, _ = place_nodes(past[h], node_dof, node_rel, attached)
@@ -306,7 +307,9 @@ def predicted_chains(past: np.ndarray, weights: np.ndarray, poses: np.ndarray,
                 e = i - k
                 dx, dy = x[i + 1, 0] - x[i, 0], x[i + 1, 1] - x[i, 1]
                 length[e] += w * math.hypot(dx, dy)
-                turn[e] += w * wrapped(math.atan2(dy, dx) - angle_last[e])
+                # the last state's own direction is angle_last[e]: its turn is wrapped(0) = 0
+                direction = angle_last[e] if h == newest else math.atan2(dy, dx)
+                turn[e] += w * wrapped(direction - angle_last[e])
         for i in range(n_nodes):
             theta[i] += w * th[i]
     angle = np.empty(n_elements)

@@ -439,9 +439,10 @@ class System:
     def motion_ratio(self, q0: np.ndarray, q1: np.ndarray) -> float:
         """Largest body motion from q0 to q1 over the settings' step bounds (> 1: too far)."""
         s = self.settings
-        dq = np.abs(q1 - q0)[: 3 * len(self.body_index)].reshape(-1, 3)
-        if dq.size == 0:
+        poses = 3 * len(self.body_index)         # the bodies' coordinates come first
+        if poses == 0:
             return 0.0
+        dq = np.abs(q1[:poses] - q0[:poses]).reshape(-1, 3)
         return float(max(dq[:, 2].max() / s.max_rotation_step,
                          np.hypot(dq[:, 0], dq[:, 1]).max()
                          / (s.max_translation_step * self.size)))
