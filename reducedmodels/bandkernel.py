@@ -1,4 +1,4 @@
-"""Compiled banded Cholesky (and LU) factorisation and solve for narrow bands (numba, cached on disk).
+"""Compiled banded Cholesky and LU factorisations and solves of narrow bands (numba, on-disk cache).
 
 LAPACK's banded Cholesky (``dpbtrf``) treats a band narrower than its block
 size column by column with one BLAS call each (``dscal``, ``dsyr``); on the
@@ -86,7 +86,7 @@ def band_cholesky(band: np.ndarray, token: tuple) -> tuple[np.ndarray, int]:
 @_compiled
 def band_cholesky_solve(factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray, token: tuple,
                         out: np.ndarray) -> None:
-    """x with K x = rhs into ``out``, K = P^T U^T U P (``factor`` of :func:`band_cholesky`, P ``perm``).
+    """x with K x = rhs into ``out``, K = P^T U^T U P (:func:`band_cholesky`'s factor, P ``perm``).
 
     The band holds K's rows and columns in the order ``perm``: the solution
     comes back in the original order. ``rhs`` and ``out`` are contiguous
@@ -195,7 +195,7 @@ def band_lu(band: np.ndarray, token: tuple) -> tuple[np.ndarray, np.ndarray, int
 @_compiled
 def band_lu_solve(lu: np.ndarray, pivots: np.ndarray, rhs: np.ndarray, perm: np.ndarray,
                   token: tuple, out: np.ndarray) -> None:
-    """x with K x = rhs into ``out`` from :func:`band_lu`'s factors of K's band in the order ``perm``.
+    """x with K x = rhs into ``out``, from :func:`band_lu`'s factors of K ordered by ``perm``.
 
     ``rhs`` and ``out`` are contiguous (n,); L's row interchanges and
     multipliers, then U column by column (``dgbtrs``).

@@ -223,7 +223,7 @@ class BeamGroup(ConnectorGroup):
 
     def predictor(self, gather: np.ndarray
                   ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]:
-        """:meth:`predict_internal` on the global coordinates (see :meth:`ConnectorGroup.predictor`).
+        """:meth:`predict_internal` on global coordinates (:meth:`ConnectorGroup.predictor`).
 
         The kernel reads the nodes through the global node table
         ``gather[node table]``, as the assembler does.
@@ -238,7 +238,7 @@ class BeamGroup(ConnectorGroup):
         return predict
 
     def updater(self, gather: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-        """:meth:`update_internal` on the global coordinates (see :meth:`ConnectorGroup.updater`)."""
+        """:meth:`update_internal` on global coordinates (:meth:`ConnectorGroup.updater`)."""
         updated_chains = beam_kernels().updated_chains
         fixed = (np.ascontiguousarray(gather[self._node_dof], np.int64), self._node_rel,
                  self._attached, self._chain_nodes)
@@ -261,7 +261,7 @@ class BeamGroup(ConnectorGroup):
         return energy, gradient, hessian
 
     def path_validity(self, levels: Sequence[Sequence[LocalState]]) -> list[list[list[str]]]:
-        """Each connector's :meth:`BeamConnector.validity` at each level, measured in one compiled pass.
+        """Each connector's :meth:`BeamConnector.validity` at each level, in one compiled pass.
 
         Reasons are worded only for the (connector, level) pairs found invalid.
         """
@@ -501,7 +501,7 @@ class BeamConnector(Connector):
         return self.path_validity([(pose_a, pose_b, internal)])[0]
 
     def path_validity(self, states: Sequence[LocalState]) -> list[list[str]]:
-        """:meth:`validity` at k states, measured in one compiled pass (:meth:`BeamGroup.path_validity`)."""
+        """:meth:`validity` at k states, in one compiled pass (:meth:`BeamGroup.path_validity`)."""
         return self._alone.path_validity([[state] for state in states])[0]
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:

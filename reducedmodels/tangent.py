@@ -49,7 +49,7 @@ ROUND_OFF = 1e-12    # eigenvalues above -ROUND_OFF * |K| count as zero, not as 
 
 @functools.cache
 def band_kernels(b: int) -> ModuleType:
-    """:mod:`reducedmodels.bandkernel` with its kernels of half-bandwidth b loaded (see ``warm_up``).
+    """:mod:`reducedmodels.bandkernel`, its kernels of half-bandwidth b loaded (see ``warm_up``).
 
     A layout that will use them asks for them when it is built, so that
     loading them is not charged to a path's time.

@@ -77,7 +77,7 @@ def test_an_indefinite_band_fails_at_lapacks_column_and_is_solved_by_lu(b):
 
 @pytest.mark.parametrize("b", range(1, NARROW_BAND + 1))
 def test_the_banded_lu_agrees_with_lapacks_dgbtrf(b):
-    """Same algorithm (dgbtf2: partial pivoting, right-looking): same pivots, factors to round-off."""
+    """dgbtf2's algorithm (partial pivoting, right-looking): same pivots, factors to round-off."""
     rng = np.random.default_rng(200 + b)
     dense = random_band(b, rng, 0.0)                   # indefinite: row interchanges happen
     band = upper_band(dense, b)
