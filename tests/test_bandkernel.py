@@ -1,20 +1,24 @@
-"""The compiled narrow-band Cholesky kernels against LAPACK and dense linear algebra.
+"""The compiled narrow-band Cholesky and LU kernels against LAPACK and dense linear algebra.
 
-Every half-bandwidth up to ``NARROW_BAND`` has its own machine code (the
-band's width is a compile-time constant), so every one is checked: the
-factor against LAPACK's ``dpbtrf`` (the same operations in the same order:
-equal to round-off), the solve against a dense solve of the permuted
-system, and the failure column of an indefinite matrix against
-``dpbtrf``'s ``info``.
+Every half-bandwidth has its own machine code (the band's width is a
+compile-time constant); the smallest, the beam chains' and the largest
+compiled ones are checked (each costs a compilation on a cold cache): the
+Cholesky factor against LAPACK's ``dpbtrf`` (the same operations in the
+same order: equal to round-off; the diagonal is stored as reciprocals), the
+solves against dense solves of the permuted system, the failure column of
+an indefinite matrix against ``dpbtrf``'s ``info``, and the LU of an
+indefinite band against ``dgbtrf`` (same pivots, factors to round-off).
 """
 
 import numpy as np
 import pytest
 from scipy.linalg import lapack
 
+from reducedmodels.beam import CHAIN_HALF_BANDWIDTH
 from reducedmodels.tangent import NARROW_BAND, BandedTangent, band_kernels
 
 N = 23                  # more columns than any band is wide: full and short columns both occur
+WIDTHS = sorted({1, 2, CHAIN_HALF_BANDWIDTH, NARROW_BAND})
 
 
 def random_band(b: int, rng: np.random.Generator, shift: float) -> np.ndarray:
@@ -35,7 +39,7 @@ def upper_band(dense: np.ndarray, b: int) -> np.ndarray:
     return band
 
 
-@pytest.mark.parametrize("b", range(NARROW_BAND + 1))
+@pytest.mark.parametrize("b", [0, *WIDTHS])
 def test_factor_and_solve_agree_with_lapack_and_a_dense_solve(b):
     rng = np.random.default_rng(b)
     dense = random_band(b, rng, 4.0 * (b + 1))          # diagonally dominant: positive definite
@@ -59,7 +63,7 @@ def test_factor_and_solve_agree_with_lapack_and_a_dense_solve(b):
     assert tangent.negative_eigenvalues() == 0
 
 
-@pytest.mark.parametrize("b", range(1, NARROW_BAND + 1))
+@pytest.mark.parametrize("b", WIDTHS)
 def test_an_indefinite_band_fails_at_lapacks_column_and_is_solved_by_lu(b):
     rng = np.random.default_rng(100 + b)
     dense = random_band(b, rng, 4.0 * (b + 1))
@@ -75,7 +79,7 @@ def test_an_indefinite_band_fails_at_lapacks_column_and_is_solved_by_lu(b):
     assert tangent.negative_eigenvalues() == np.sum(np.linalg.eigvalsh(dense) < 0.0)
 
 
-@pytest.mark.parametrize("b", range(1, NARROW_BAND + 1))
+@pytest.mark.parametrize("b", WIDTHS)
 def test_the_banded_lu_agrees_with_lapacks_dgbtrf(b):
     """dgbtf2's algorithm (partial pivoting, right-looking): same pivots, factors to round-off."""
     rng = np.random.default_rng(200 + b)
