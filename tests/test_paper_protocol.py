@@ -20,6 +20,7 @@ from pathlib import Path
 import pytest
 
 from geometry import load_scene
+from reducedmodels.dynamics import DynamicSettings
 from validation.cache import code_version
 from validation.outputs import write_json
 from validation.protocolsection import protocol_section, read_protocol
@@ -69,6 +70,7 @@ def test_slow_damped_ramp_reproduces_the_static_end(protocol, tmp_path):
     doc, why = read_protocol(path)
     assert why is None and doc == _strict(path)
     assert doc["code_version"] == code_version()
+    assert doc["error_tol"] == DynamicSettings().error_tol     # what run_protocol used
     (cell,) = doc["cells"]
     assert (cell["disp"], cell["rot"]) == row.same_protocol
     assert (cell["lag"]["disp"], cell["lag"]["rot"]) == row.lag
