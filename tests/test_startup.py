@@ -132,3 +132,14 @@ def test_main_returns_while_another_thread_runs(tmp_path):
             "status = main(); print('returned', status); done.set()")
     proc = _program(code, tmp_path, "info", "closed_chain")
     assert proc.returncode == 0 and proc.stdout.rstrip().endswith("returned 0")
+
+
+def test_a_profiled_run_keeps_its_profile(tmp_path):
+    """``python -m cProfile -o FILE -m validation.cli ...`` writes FILE after the program."""
+    env = {**os.environ, "FLEXVAL_CACHE": str(tmp_path / "cache")}
+    stats = tmp_path / "cli.prof"
+    proc = subprocess.run([sys.executable, "-m", "cProfile", "-o", str(stats), "-m",
+                           "validation.cli", "info", "closed_chain"], cwd=ROOT, env=env,
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert stats.stat().st_size > 0

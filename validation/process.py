@@ -28,10 +28,13 @@ def end_process(status: int) -> None:
 
     Returns, leaving the caller to exit normally, when that is not safe: on
     a system other than POSIX, while another thread runs (a normal exit waits
-    for it) or when the output cannot be flushed (e.g. a closed pipe: the
-    normal exit reports that).
+    for it), under a profiler, tracer or debugger (``python -m cProfile``,
+    coverage: they write their results after the program returns), with
+    ``python -i`` (the prompt comes after the program), or when the output
+    cannot be flushed (e.g. a closed pipe: the normal exit reports that).
     """
-    if os.name != "posix" or threading.active_count() > 1 or not _flushed():
+    if (os.name != "posix" or threading.active_count() > 1 or sys.flags.inspect
+            or sys.gettrace() is not None or sys.getprofile() is not None or not _flushed()):
         return
     atexit._run_exitfuncs()       # noqa: SLF001  (CPython's exit handlers; no public runner)
     _flushed()
