@@ -131,7 +131,7 @@ class ContinuumGroup(ConnectorGroup):
     @staticmethod
     def _block_slots(first: np.ndarray, src: np.ndarray, p: np.ndarray, q: np.ndarray,
                      slot: np.ndarray, unit: int) -> tuple[np.ndarray, ...]:
-        """The storage slots of one flexure's tangent blocks (:meth:`.solid.ElementKernel.evaluate`).
+        """The storage slots of one flexure's tangent blocks (``ElementKernel.evaluate``).
 
         ``first`` (n_el, 324) holds the slot of every element-matrix entry's
         first expansion (-1: none); ``src`` (flat entry indices, element by

@@ -177,7 +177,7 @@ def to_polar(x: np.ndarray, stack: SectionStack) -> PolarShape:
 
 
 def advanced(x: np.ndarray, dx: np.ndarray, stack: SectionStack) -> PolarShape:
-    """:func:`to_polar` of x (n_nodes, 2) plus its first-order change when the nodes move by dx (mm).
+    """:func:`to_polar` of x (n_nodes, 2) plus its first-order change for node moves dx (mm).
 
     The section geometry is worked out once for both.
     """

@@ -139,7 +139,7 @@ class ElementKernel:
         return ElementState(F, C, W, S, CC)
 
     def _nodal_forces(self, F: np.ndarray, sw: np.ndarray) -> np.ndarray:
-        """Nodal forces (n_dofs,) in N, sum_q dN_a/dX_J P_iJ w, from F and the weighted stress sw."""
+        """Nodal forces (n_dofs,) in N, sum_q dN_a/dX_J P_iJ w, from F and weighted stresses sw."""
         n_el, n_q = self.weight.shape
         pw = np.empty((n_el, n_q, 2, 2))                                    # P^T w: [J, i]
         for i in (0, 1):
