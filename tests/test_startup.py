@@ -143,3 +143,19 @@ def test_a_profiled_run_keeps_its_profile(tmp_path):
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert stats.stat().st_size > 0
+
+
+def test_a_reader_that_leaves_early_costs_only_the_rest_of_the_output(tmp_path):
+    """``flexval run ... | head -1``: no BrokenPipeError traceback, the files and status intact."""
+    out = tmp_path / "paths.json"
+    env = {**os.environ, "FLEXVAL_CACHE": str(tmp_path / "cache"), "OPENBLAS_NUM_THREADS": "1",
+           "PYTHONUNBUFFERED": "1"}      # each row written when printed, as on a terminal
+    proc = subprocess.Popen([sys.executable, "-m", "validation.cli", "run", "closed_chain",
+                             "--model", "ee", "--model", "dcmm:1", "--json", str(out)], cwd=ROOT,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().split()[0] == "model"
+    proc.stdout.close()                          # the reader leaves after the first line
+    stderr = proc.stderr.read()
+    assert proc.wait() == 0, stderr
+    assert "Traceback" not in stderr and "BrokenPipe" not in stderr
+    assert len(json.loads(out.read_text())["results"]) == 4

@@ -633,10 +633,15 @@ def main(argv: list[str] | None = None) -> int:
     ``argv`` None (the console script, ``python -m validation.cli``): the
     arguments are the process's own, and so is the process: once the command
     is done, :func:`validation.process.end_process` ends it without the
-    interpreter's teardown (a fifth of a small model's whole run). Called
-    from Python with a list of arguments, ``main`` returns.
+    interpreter's teardown (a fifth of a small model's whole run), and a
+    reader that closes the output pipe early only discards the rest of the
+    output. Called from Python with a list of arguments, ``main`` returns.
     """
     args = build_parser().parse_args(argv)
+    if argv is None:
+        from .process import discard_output_when_reader_leaves
+
+        discard_output_when_reader_leaves()
     with warnings.catch_warnings():
         warnings.showwarning = _show_warning
         status = _dispatch(args)

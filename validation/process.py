@@ -13,6 +13,12 @@ normal exit does that can be observed -- the exit handlers run (coverage
 data, temporary folders' finalizers), Python's and the C library's output
 buffers are flushed -- and then ends the process at once with the status.
 (mypy's command line ends the same way, for the same reason.)
+
+A reader that stops early (``flexval run ... | head -1``) closes the pipe
+under the process's standard output. :func:`discard_output_when_reader_leaves`
+makes the rest of the output go nowhere instead of raising
+``BrokenPipeError`` in the middle of a command: the command still finishes
+its work (its files are written) and exits with its own status.
 """
 
 from __future__ import annotations
@@ -21,6 +27,42 @@ import atexit
 import os
 import sys
 import threading
+
+
+class _PipeSafeStream:
+    """A text stream that sends its output to the null device once its pipe is broken."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._discard()
+            return len(text)
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._discard()
+
+    def _discard(self) -> None:
+        """Point the stream's file descriptor at the null device; buffered text goes there too."""
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, self._stream.fileno())
+        os.close(null)
+        self._stream.flush()
+
+    def __getattr__(self, name: str):
+        return getattr(self._stream, name)
+
+
+def discard_output_when_reader_leaves() -> None:
+    """Make ``sys.stdout`` go to the null device, not raise, when its reader closes the pipe."""
+    if sys.stdout is not None and not isinstance(sys.stdout, _PipeSafeStream):
+        sys.stdout = _PipeSafeStream(sys.stdout)
 
 
 def end_process(status: int) -> None:
