@@ -51,8 +51,29 @@ def _prbm(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
     return PrbmConnector(flexure, mechanism, **options)
 
 
+_CONNECTOR_MODULES = {"beam": ".beam", "dcmm": ".dcmm", "ee": ".dcmm", "prbm": ".prbm"}
+"""The module of each family's connectors (imported by its factory above)."""
+
+
+def _load_solver(spec: ModelSpec) -> None:
+    """Import the code a run of ``spec`` executes and cap the BLAS threads, before its clock starts.
+
+    Both are per-process costs, like importing scipy, not the model's: left
+    inside the timed build, they made a process's first ``dcmm:1``, ``prbm``
+    or ``ee`` run print 22-27 ms for a path its second run does in 1-6 ms.
+    """
+    from importlib import import_module
+
+    from .threads import limit_threads
+
+    import_module(_CONNECTOR_MODULES[spec.family], __package__)
+    import_module(".models", __package__)           # the core and scipy.linalg with it
+    limit_threads()
+
+
 def _trace_nonlinear(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
     """:func:`reducedmodels.models.trace_nonlinear` (imported here: see the module text)."""
+    _load_solver(spec)
     from .models import trace_nonlinear
 
     return trace_nonlinear(mechanism, spec, *args, **kwargs)
@@ -86,6 +107,7 @@ def _trace_ee(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int
     """
     import time
 
+    _load_solver(spec)
     from .models import flexure_connectors, linear_response
 
     t0 = time.perf_counter()

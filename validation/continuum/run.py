@@ -24,6 +24,7 @@ from geometry import LoadCase, Mechanism
 from geometry.mesh import ASPECT_RATIO, ELEMENT_ORDER, MESH_VERSION
 from reducedmodels import LoadControl, LoadPath, PathRecorder, SolverSettings, System, trace
 from reducedmodels.inertia import with_weights
+from reducedmodels.threads import limit_threads
 
 from .connector import ContinuumConnector
 from .family import DEFAULT_LEVEL
@@ -78,6 +79,7 @@ def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None
     reducedmodels.SolverError
         If the path cannot be followed to full load.
     """
+    limit_threads()         # a per-process cost (threadpoolctl's library scan), not the model's
     t0 = time.perf_counter()
     level = DEFAULT_LEVEL if level is None else int(level)
     system = build_system(mechanism, level, law, plane)
