@@ -378,6 +378,15 @@ class System:
         """True if some connector predicts its own internal coordinates (see :meth:`predict`)."""
         return bool(self._predictors)
 
+    @property
+    def predicts_from_local_states(self) -> bool:
+        """True if some group predicts its internal coordinates from the history's local states.
+
+        (A group with its own ``predictor`` reads global coordinates; a
+        caller keeps the history's :meth:`local_states` only for the others.)
+        """
+        return any(predict is None for *_, predict in self._predictors)
+
     def predict(self, history: Sequence[tuple[np.ndarray, float]], factor: float,
                 past: Sequence[list[LocalState]] | None = None,
                 slope: np.ndarray | None = None) -> np.ndarray:

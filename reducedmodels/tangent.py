@@ -257,15 +257,24 @@ class BandedTangent:
 
 
 class SparseTangent:
-    """A tangent held as a CSC matrix (SuperLU)."""
+    """A tangent held as a CSC matrix (SuperLU).
+
+    The LU is made on the first solve and kept: one tangent may be solved
+    with more than once (the Newton correction, then the load stepping's
+    linearised prediction K^-1 f from the same tangent), as the dense and
+    banded tangents do with their factors.
+    """
 
     def __init__(self, matrix: sp.csc_matrix, n_multipliers: int):
         self.matrix, self.n, self.n_multipliers = matrix, matrix.shape[0], n_multipliers
+        self._lu = None
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
-        import scipy.sparse.linalg as spla     # SuperLU: only wide bands (a process start-up cost)
+        if self._lu is None:
+            import scipy.sparse.linalg as spla     # SuperLU: only wide bands (a start-up cost)
 
-        return spla.splu(self.matrix).solve(rhs)
+            self._lu = spla.splu(self.matrix)
+        return self._lu.solve(rhs)
 
     def negative_eigenvalues(self) -> int | None:
         """Signs of the pivots of a symmetric-mode LU with diagonal pivoting (an LDL^T).

@@ -251,7 +251,7 @@ class LoadControl(Stepping):
         self.q, self.factor = point.state, point.factor
         self.history = [(self.q, self.factor)]   # converged (state, factor) for the predictor
         # their connectors' local states, kept when the predictor uses them
-        self.past = [system.local_states(self.q)] if system.predicts_internal else None
+        self.past = [system.local_states(self.q)] if system.predicts_from_local_states else None
         self.slope = self._slope(point.tangent)
         f = self.factors
         self.spacing = f[1] - f[0] if len(f) > 1 else 1.0
