@@ -213,6 +213,7 @@ class System:
             slots[keep] = kept
             hess_slots.append(slots)
         self._diagonal_slots = self.layout.slots[-n:]
+        self._diagonal_slot_list = self._diagonal_slots.tolist()   # read one by one per assembly
         self._assemblers, self._generic = [], []
         for group, run in self._groups:
             assembler = group.assembler(np.concatenate(gathers[run]),
@@ -326,8 +327,9 @@ class System:
                 energy += assembler(coordinates, grad, storage)
         diagonal = np.zeros(n)
         energy += loads.add_to(q, factor, grad, diagonal)
-        loaded = diagonal.nonzero()[0]             # the few loaded bodies' rotations
-        storage[self._diagonal_slots[loaded]] += diagonal[loaded]
+        for dof in loads.diagonal_dofs:            # the few loaded bodies' rotations
+            if diagonal[dof]:
+                storage[self._diagonal_slot_list[dof]] += diagonal[dof]
         return energy, grad, self.layout.tangent(storage)
 
     def reaction(self, q: np.ndarray) -> np.ndarray:
@@ -449,12 +451,12 @@ class System:
         """Largest body motion from q0 to q1 over the settings' step bounds (> 1: too far)."""
         s = self.settings
         poses = 3 * len(self.body_index)         # the bodies' coordinates come first
-        if poses == 0:
-            return 0.0
-        dq = np.abs(q1[:poses] - q0[:poses]).reshape(-1, 3)
-        return float(max(dq[:, 2].max() / s.max_rotation_step,
-                         np.hypot(dq[:, 0], dq[:, 1]).max()
-                         / (s.max_translation_step * self.size)))
+        # plain floats: a mechanism has a few bodies, and numpy calls cost more than the sums
+        dq = (q1[:poses] - q0[:poses]).tolist()
+        rotation = max(map(abs, dq[2::3]), default=0.0)
+        translation = max(map(math.hypot, dq[0::3], dq[1::3]), default=0.0)
+        return max(rotation / s.max_rotation_step,
+                   translation / (s.max_translation_step * self.size))
 
     def unstable(self, tangent: Tangent | None) -> bool:
         """True if the tangent has more negative eigenvalues than the system has multipliers.

@@ -86,6 +86,8 @@ class Loads:
                         if ix >= 0]
         self._moments = [(dof, m) for dof, m in zip(self.moment_dofs.tolist(),
                                                      self.moments.tolist()) if dof >= 0]
+        #: the rotation dofs whose tangent diagonal :meth:`add_to` may change (each once)
+        self.diagonal_dofs = list(dict.fromkeys(it for _, _, it, *_ in self._points))
 
     def point_terms(self, q: np.ndarray) -> Iterator[tuple[int, int, int, float, float, float,
                                                            float]]:
