@@ -391,7 +391,7 @@ class FloatTermsGroup(ConnectorGroup):
     :meth:`Connector.hessian_pattern` as a list of floats). The group's
     :meth:`assembler` reads every connector's coordinates straight from one
     list of the System's coordinates and adds all the gradients and Hessian
-    values into the global arrays with one ``bincount`` of each kind. For
+    values into the global arrays with one ``bincount``. For
     connectors of a few coordinates (DCMM sub-arcs, PRBM chains) small numpy
     arrays per connector, and the per-connector local states, cost more than
     the arithmetic. The values are those of the connector-by-connector
@@ -401,25 +401,35 @@ class FloatTermsGroup(ConnectorGroup):
     def assembler(self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
                   ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
         """The function adding the connectors' ``terms`` into the global gradient and tangent."""
-        bounds = np.cumsum([0] + [6 + c.n_internal for c in self.connectors]).tolist()
+        sizes = [6 + c.n_internal for c in self.connectors]
+        bounds = np.cumsum([0] + sizes).tolist()
         readers = [(c.terms, itemgetter(*gather[start:stop].tolist()))
                    for c, start, stop in zip(self.connectors, bounds, bounds[1:])]
         n = int(grad_dofs.max(initial=-1)) + 1
-        # the ground's entries (-1) are summed past the end and never read
-        dofs = np.where(grad_dofs >= 0, grad_dofs, n)
         size = int(hess_slots.max(initial=-1)) + 1
-        slots = np.where(hess_slots >= 0, hess_slots, size)
+        # one bincount over [gradient | Hessian] bins, each connector's gradient then its
+        # Hessian values, as terms gives them; the ground's entries (-1) go to a bin per
+        # kind past its end and are never read
+        dofs = np.where(grad_dofs >= 0, grad_dofs, n)
+        slots = np.where(hess_slots >= 0, hess_slots, size) + n + 1
+        counts = [m * m if c.hessian_pattern() is None else c.hessian_pattern()[0].size
+                  for c, m in zip(self.connectors, sizes)]
+        hess_bounds = np.cumsum([0] + counts).tolist()
+        index = np.concatenate([part for k in range(len(sizes)) for part in (
+            dofs[bounds[k]:bounds[k + 1]], slots[hess_bounds[k]:hess_bounds[k + 1]])]
+                               or [np.zeros(0, np.int64)])
 
         def add(coordinates: np.ndarray, grad: np.ndarray, storage: np.ndarray) -> float:
             x = coordinates.tolist()
-            energy, gradients, hessians = 0.0, [], []
+            energy, values = 0.0, []
             for terms, read in readers:
                 e, g, h = terms(read(x))
                 energy += e
-                gradients += g
-                hessians += h
-            grad[:n] += np.bincount(dofs, gradients, n + 1)[:n]
-            storage[:size] += np.bincount(slots, hessians, size + 1)[:size]
+                values += g
+                values += h
+            total = np.bincount(index, values, n + size + 2)
+            grad[:n] += total[:n]
+            storage[:size] += total[n + 1:n + 1 + size]
             return energy
 
         return add
