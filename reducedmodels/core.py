@@ -131,14 +131,19 @@ class System:
         self.body_index = {b: k for k, b in enumerate(mech.moving_bodies)}
         self.reference = {b: mech.bodies[b].reference for b in mech.bodies}
         n = 3 * len(self.body_index)
-        self._local_to_global = []
+        # every connector's global dofs [pose_a, pose_b, internal] in one array (ground: -1),
+        # built from plain lists; connector k's are _all_dofs[_bounds[k]:_bounds[k + 1]]
+        pose = {b: [3 * k, 3 * k + 1, 3 * k + 2] for b, k in self.body_index.items()}
+        pose[mech.ground] = [-1, -1, -1]
+        dofs, self._bounds = [], [0]
         rot_mask = [np.tile([False, False, True], len(self.body_index))]
         for c in self.connectors:
-            idx = np.concatenate([self.pose_dofs(c.bodies[0]), self.pose_dofs(c.bodies[1]),
-                                  n + np.arange(c.n_internal)])
-            self._local_to_global.append(idx)
+            dofs += pose[c.bodies[0]] + pose[c.bodies[1]] + list(range(n, n + c.n_internal))
+            self._bounds.append(len(dofs))
             rot_mask.append(np.asarray(c.internal_is_rotation(), bool))
             n += c.n_internal
+        self._all_dofs = np.array(dofs, np.int64)
+        self._local_to_global = self._split(self._all_dofs, self._bounds)
         self.n_dofs = n
         self.is_rotation = np.concatenate(rot_mask)
         self.n_multipliers = sum(c.n_multipliers for c in self.connectors)
@@ -184,10 +189,12 @@ class System:
           :meth:`~reducedmodels.connector.ConnectorGroup.updater`) as a fourth
           entry, None where the group has none.
         """
-        n = self.n_dofs
-        gathers, rows, cols, hess_keep = [], [], [], []
+        n, bounds = self.n_dofs, self._bounds
+        local = np.arange(self._all_dofs.size) - np.repeat(bounds[:-1], np.diff(bounds))
+        all_gather = np.where(self._all_dofs >= 0, self._all_dofs, n + local % 3)
+        gathers = self._split(all_gather, bounds)
+        rows, cols, hess_keep, hess_bounds = [], [], [], [0]
         for c, idx in zip(self.connectors, self._local_to_global):
-            gathers.append(np.where(idx >= 0, idx, n + np.arange(idx.size) % 3))
             pattern = c.hessian_pattern()
             if pattern is None:
                 r, cc = np.repeat(idx, idx.size), np.tile(idx, idx.size)
@@ -196,6 +203,7 @@ class System:
                 r, cc = idx[lr], idx[lc]
             keep = (r >= 0) & (cc >= 0)
             rows.append(r[keep]), cols.append(cc[keep]), hess_keep.append(keep)
+            hess_bounds.append(hess_bounds[-1] + keep.size)
         ground = self.reference[self.mechanism.ground]
         self._ground_pose = np.array([ground[0], ground[1], 0.0])
         self._gather = gathers
@@ -204,38 +212,45 @@ class System:
         self.layout = TangentLayout(n, np.concatenate([*rows, diagonal]),
                                     np.concatenate([*cols, diagonal]), self.n_multipliers,
                                     compiled)
-        # each connector's Hessian values -> storage slot (-1: a ground entry, dropped)
-        kept = self.layout.slots[:self.layout.slots.size - n]
-        kept_slots = np.split(kept, np.cumsum([r.size for r in rows])[:-1])
-        hess_slots = []
-        for keep, kept in zip(hess_keep, kept_slots):
-            slots = np.full(keep.size, -1, np.int64)
-            slots[keep] = kept
-            hess_slots.append(slots)
+        # each Hessian value -> storage slot (-1: a ground entry, dropped)
+        keep = np.concatenate(hess_keep or [np.zeros(0, bool)])
+        all_slots = np.full(keep.size, -1, np.int64)
+        all_slots[keep] = self.layout.slots[:self.layout.slots.size - n]
         self._diagonal_slots = self.layout.slots[-n:]
         self._diagonal_slot_list = self._diagonal_slots.tolist()   # read one by one per assembly
+
+        def of_run(values: np.ndarray, offsets: list[int], run: slice) -> np.ndarray:
+            """The entries of a run of consecutive connectors (a view)."""
+            return values[offsets[run.start]:offsets[run.stop]]
+
         self._assemblers, self._generic = [], []
         for group, run in self._groups:
-            assembler = group.assembler(np.concatenate(gathers[run]),
-                                        np.concatenate(self._local_to_global[run]),
-                                        np.concatenate(hess_slots[run]))
+            assembler = group.assembler(of_run(all_gather, bounds, run),
+                                        of_run(self._all_dofs, bounds, run),
+                                        of_run(all_slots, hess_bounds, run))
             if assembler is None:
                 self._generic.append((group, run))
             else:
                 self._assemblers.append(assembler)
         # predictors and updaters with a function of the global coordinates use it (or None)
-        self._predictors = [(group, run, internal, group.predictor(np.concatenate(gathers[run])))
+        self._predictors = [(group, run, internal,
+                             group.predictor(of_run(all_gather, bounds, run)))
                             for group, run, internal in self._predictors]
-        self._updaters = [(group, run, internal, group.updater(np.concatenate(gathers[run])))
+        self._updaters = [(group, run, internal, group.updater(of_run(all_gather, bounds, run)))
                           for group, run, internal in self._updaters]
-        members = [k for _, run in self._generic for k in range(run.start, run.stop)]
-        all_grad = np.concatenate([self._local_to_global[k] for k in members]
+        all_grad = np.concatenate([of_run(self._all_dofs, bounds, run) for _, run in self._generic]
                                   or [np.zeros(0, int)])
         self._grad_keep = all_grad >= 0
         self._grad_dofs = all_grad[self._grad_keep]
-        all_slots = np.concatenate([hess_slots[k] for k in members] or [np.zeros(0, np.int64)])
-        self._hess_keep = all_slots >= 0
-        self._hess_slots = all_slots[self._hess_keep]
+        generic_slots = np.concatenate([of_run(all_slots, hess_bounds, run)
+                                        for _, run in self._generic] or [np.zeros(0, np.int64)])
+        self._hess_keep = generic_slots >= 0
+        self._hess_slots = generic_slots[self._hess_keep]
+
+    @staticmethod
+    def _split(values: np.ndarray, bounds: list[int]) -> list[np.ndarray]:
+        """``values[bounds[k]:bounds[k + 1]]`` for every k (views)."""
+        return [values[start:stop] for start, stop in zip(bounds, bounds[1:])]
 
     def pose_dofs(self, body: str) -> np.ndarray:
         """Global dof numbers of a body's pose (all -1 for the ground)."""
