@@ -197,3 +197,17 @@ def test_continuum_fibre_stress_of_a_thick_arc_is_the_curved_beam_value():
         ratios.append(fibre["stress"] / straight)
     assert abs(ratios[2] - ratios[1]) < abs(ratios[1] - ratios[0])
     assert ratios[2] == pytest.approx(curved_beam_factor(R, h), rel=5e-3)
+
+
+def test_a_quantity_converged_to_round_off_gets_no_observed_order():
+    """Changes of 1e-8 of the value are the solver's tolerance: no order is computed from them."""
+    from validation.convergence import ROUND_OFF_CHANGE, order_text
+
+    exact = richardson(3.0, 3.0 + 4.8e-8, 3.0 + 7.2e-8, 2.0)       # m+'s uniform peak stress
+    assert exact["order"] is None and exact["extrapolated"] == 3.0 + 7.2e-8
+    assert order_text(exact).startswith("n/a (converged to round-off")
+    converging = richardson(14.715042, 14.718397, 14.719104, 2.0)     # m+ displacement, levels 0-2
+    assert converging["order"] == pytest.approx(2.246, abs=1e-3)
+    assert abs(14.719104 - 14.718397) > 10 * ROUND_OFF_CHANGE * 14.719104
+    assert order_text(converging) == f"{converging['order']:.2f}"
+    assert order_text(richardson(1.0, 2.0, 1.5, 2.0)) == "n/a (the changes do not shrink monotonically)"

@@ -216,9 +216,8 @@ def _convergence_lines(res: SceneResults, out: Path, draw: Callable) -> list[str
                      f"{r['displacement']:.6f} | {math.degrees(r['rotation']):.6f} |")
         L += [f"| {f.model} | {f.summary()} | | |" for f in st.failures]
         for key, s in st.summary.items():
-            order = "n/a" if s["order"] is None else f"{s['order']:.2f}"
             gci = "n/a" if s["gci_percent"] is None else f"{s['gci_percent']:.3g} %"
-            L.append(f"\n{key}: observed order {order}, Richardson value "
+            L.append(f"\n{key}: observed order {order_text(s)}, Richardson value "
                      f"{s['extrapolated']:.6g}, GCI {gci}.")
         if st.rows:
             png = output_path(out, f"{name}_{st.load_case}_{st.family}_convergence", ".png")
