@@ -211,3 +211,20 @@ def test_a_quantity_converged_to_round_off_gets_no_observed_order():
     assert abs(14.719104 - 14.718397) > 10 * ROUND_OFF_CHANGE * 14.719104
     assert order_text(converging) == f"{converging['order']:.2f}"
     assert order_text(richardson(1.0, 2.0, 1.5, 2.0)) == "n/a (the changes do not shrink monotonically)"
+
+
+def test_the_report_and_the_cli_print_why_there_is_no_order(tmp_path):
+    """Both printers of a convergence study say "converged to round-off" instead of an order."""
+    from types import SimpleNamespace
+
+    from validation.convergence import ConvergenceStudy, format_study
+    from validation.report import _convergence_lines
+
+    st = ConvergenceStudy("continuum", "m+", 2.0)
+    st.summary = {"peak_stress": richardson(3.0, 3.0 + 4.8e-8, 3.0 + 7.2e-8, 2.0),
+                  "displacement": richardson(14.715042, 14.718397, 14.719104, 2.0)}
+    res = SimpleNamespace(scene=SimpleNamespace(name="open_chain"), convergence=[st])
+    report = "\n".join(_convergence_lines(res, tmp_path, draw=None))
+    assert "peak_stress: observed order n/a (converged to round-off" in report
+    assert "displacement: observed order 2.25," in report
+    assert "peak_stress: observed order n/a (converged to round-off" in format_study(st)

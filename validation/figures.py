@@ -56,7 +56,8 @@ def _finish_loglog(fig, ax, xlabel: str, ylabel: str, title: str, path: Path) ->
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
+    if ax.get_legend_handles_labels()[0]:      # nothing to plot (e.g. every run failed): no legend
+        ax.legend(fontsize=8)
     ax.set_title(title)
     return _save(fig, path)
 

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Callable
 
 from . import figures, frequencies, strength
+from .convergence import order_text
 from .failures import Failure
 from .figurejobs import Figures, draw_now
 from .outputs import output_path, write_json, write_text
