@@ -3,7 +3,9 @@
 Checks against geometry known independently of the module: the sections of
 an arc mesh lie on its radii, the polar description round-trips, and a
 deformed flexure turning rigidly at a constant rate is predicted exactly
-(where extrapolating node positions misses by the third power of the step).
+(where extrapolating node positions misses by the third power of the step),
+from two states or from one state and the path's slope, whose polar form is
+the derivative of the polar description (central differences).
 """
 
 from __future__ import annotations
@@ -16,7 +18,10 @@ import pytest
 from geometry import Arc, Material, Section, Segment
 from geometry.mechanism import FlexureSpec, assemble
 from validation.continuum import ContinuumConnector
-from validation.continuum.polar import cross_sections, from_polar, stack_sections, to_polar
+from reducedmodels.core import hermite_weights
+from validation.continuum.group import ContinuumGroup
+from validation.continuum.polar import (cross_sections, first_order_change, from_polar,
+                                        stack_sections, to_polar)
 
 
 pytestmark = pytest.mark.usefixtures("private_mesh_cache")  # meshes go to a temporary cache
@@ -59,35 +64,100 @@ def test_polar_description_round_trips_a_deformed_segment():
                                rtol=0, atol=1e-14)
 
 
+def test_the_first_order_change_is_the_derivative_of_the_polar_description():
+    conn = connector(ARC, 0.3, 1)
+    sections = stack_sections([cross_sections(conn.mesh)], [0])
+    X = conn.mesh.nodes
+    x = X + 0.05 * np.column_stack([np.sin(3.0 * X[:, 0]), np.cos(2.0 * X[:, 0] + X[:, 1])])
+    dx = np.column_stack([np.cos(X[:, 1]), X[:, 0] * X[:, 1]])
+    change = first_order_change(x, dx, sections)
+
+    def gaps(h: float) -> list[float]:
+        """Largest mismatch of each polar field's central difference (mm, rad)."""
+        plus, minus = to_polar(x + h * dx, sections), to_polar(x - h * dx, sections)
+        return [float(np.abs(exact - (p - m) / (2 * h)).max())
+                for exact, p, m in zip(change, plus, minus)]
+
+    # second order: halving h quarters every mismatch (3.5-4.5 allows the next
+    # term; at these h round-off, ~1e-16 / h of the short chords' angles, is
+    # 100 times smaller), so the change is the derivative, not an approximation
+    ratios = [a / b for a, b in zip(gaps(1e-4), gaps(5e-5))]
+    assert all(3.5 < r < 4.5 for r in ratios), ratios
+    assert max(gaps(1e-4)) < 1e-7
+
+
+def _turning(conn: ContinuumConnector, rate: float):
+    """The flexure of ``conn``, deformed, with both bodies turning about a pivot at ``rate``.
+
+    Returns ``state(factor)`` -> (pose_a, pose_b, internal) after turning by
+    rate * factor rad, and ``slope(factor)``, its derivative per unit factor.
+    """
+    X = conn.mesh.nodes
+    bent = X + 0.02 * np.column_stack([X[:, 1] ** 2, -X[:, 0] * X[:, 1]])   # a deformed shape
+    pivot = np.array([0.5, -1.0])
+    refs = [X[face[0]] - rel[0] for face, rel in zip(conn._face, conn._rel)]
+
+    def rotation(factor: float) -> np.ndarray:
+        c, s = math.cos(rate * factor), math.sin(rate * factor)
+        return np.array([[c, -s], [s, c]])
+
+    def state(factor: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        rot = rotation(factor)
+        poses = [np.array([*(pivot + (ref - pivot) @ rot.T), rate * factor]) for ref in refs]
+        x = pivot + (bent - pivot) @ rot.T
+        return poses[0], poses[1], (x[conn.free_nodes] - X[conn.free_nodes]).ravel()
+
+    def slope(factor: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        def turn_rate(points: np.ndarray) -> np.ndarray:     # d/dfactor of points turning
+            rel = points - pivot
+            return rate * np.column_stack([-rel[:, 1], rel[:, 0]])
+        rot = rotation(factor)
+        poses = [np.array([*turn_rate((pivot + (ref - pivot) @ rot.T)[None])[0], rate])
+                 for ref in refs]
+        x = pivot + (bent[conn.free_nodes] - pivot) @ rot.T
+        return poses[0], poses[1], turn_rate(x).ravel()
+
+    return state, slope
+
+
 @pytest.mark.parametrize("start_on_ground", [True, False])
 def test_a_flexure_turning_rigidly_is_predicted_exactly(start_on_ground):
     conn = connector(ARC, 0.3, 1, start_on_ground)
-    X = conn.mesh.nodes
-    bent = X + 0.02 * np.column_stack([X[:, 1] ** 2, -X[:, 0] * X[:, 1]])   # a deformed shape
-    pivot, step = np.array([0.5, -1.0]), 0.2                                # rad per state
-
-    def turned(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The deformed flexure and both bodies turned by k steps about the pivot."""
-        c, s = math.cos(k * step), math.sin(k * step)
-        rot = np.array([[c, -s], [s, c]])
-        x = pivot + (bent - pivot) @ rot.T
-        poses = []
-        for face, rel in zip(conn._face, conn._rel):       # body reference = face node - rel
-            ref = X[face[0]] - rel[0]
-            poses.append(np.array([*(pivot + (ref - pivot) @ rot.T), k * step]))
-        # the bodies hold the faces of the undeformed mesh: make the bent shape agree there
-        x[conn._face[0]] = conn.positions(*poses, np.zeros(conn.n_internal))[conn._face[0]]
-        x[conn._face[1]] = conn.positions(*poses, np.zeros(conn.n_internal))[conn._face[1]]
-        return poses[0], poses[1], (x[conn.free_nodes] - X[conn.free_nodes]).ravel()
-
-    states = [turned(k) for k in range(3)]
+    state, _ = _turning(conn, 0.2)                    # rad per unit factor
+    states = [state(k) for k in range(3)]
     weights = [1.0, -3.0, 3.0]                        # Lagrange through 0, 1, 2 at 3
-    exact = turned(3)
+    exact = state(3)
     predicted = conn.predict_internal(states, weights, exact[0], exact[1])
     np.testing.assert_allclose(predicted, exact[2], rtol=0, atol=1e-12)
     # extrapolating node positions (the default) misses by O(step^3) of the offsets (~1 mm)
     cartesian = sum(w * s[2] for w, s in zip(weights, states))
     assert np.abs(cartesian - exact[2]).max() > 1e-3
+
+
+@pytest.mark.parametrize("start_on_ground", [True, False])
+def test_with_the_slope_one_state_predicts_a_rigid_turn_exactly(start_on_ground):
+    conn = connector(ARC, 0.3, 1, start_on_ground)
+    state, slope = _turning(conn, 0.2)
+    group = ContinuumGroup([conn])
+    remember, predict = group.predictor(np.arange(6 + conn.n_internal))  # coordinates = local
+    memories = np.array([remember(np.concatenate(state(1.0)))])
+    exact = state(2.5)
+    guess = np.concatenate([exact[0], exact[1], np.zeros(conn.n_internal)])
+    weights, slope_weight = hermite_weights([1.0], 2.5)         # 1 and 1.5: a straight line
+    predicted = predict(memories, np.asarray(weights), guess, np.concatenate(slope(1.0)),
+                        slope_weight)
+    # the turn is linear in the polar variables: exact to round-off
+    np.testing.assert_allclose(predicted, exact[2], rtol=0, atol=1e-12)
+    # without the slope one state predicts no motion at all
+    still = predict(memories, np.ones(1), guess)
+    assert np.abs(still - exact[2]).max() > 0.1
+    # and without the slope the predictor is the group's predict_internal
+    states = [state(k) for k in range(3)]
+    lagrange = np.array([1.0, -3.0, 3.0])
+    np.testing.assert_allclose(
+        predict(np.array([remember(np.concatenate(s)) for s in states]), lagrange, guess),
+        group.predict_internal([[s] for s in states], lagrange, [(exact[0], exact[1])]),
+        rtol=0, atol=1e-13)
 
 
 def _rest(conn: ContinuumConnector) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

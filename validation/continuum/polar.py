@@ -182,6 +182,20 @@ def advanced(x: np.ndarray, dx: np.ndarray, stack: SectionStack) -> PolarShape:
     The section geometry is worked out once for both.
     """
     fr = _frames(x, stack)
+    return PolarShape(*(a + d for a, d in zip(_polar(fr), _change(fr, dx, stack))))
+
+
+def first_order_change(x: np.ndarray, dx: np.ndarray, stack: SectionStack) -> PolarShape:
+    """The first-order change of :func:`to_polar` at x (n_nodes, 2) for node moves dx (mm).
+
+    Linear in dx: lengths and offsets in mm, angles in rad, per unit of dx.
+    The load stepping's predictor maps the path's slope through it.
+    """
+    return _change(_frames(x, stack), dx, stack)
+
+
+def _change(fr: _Frames, dx: np.ndarray, stack: SectionStack) -> PolarShape:
+    """First-order change of the polar shape with section geometry ``fr`` for node moves dx."""
     dxs = dx[stack.nodes]
     mid = stack.nodes.shape[1] // 2
     dcentre = dxs[:, mid]
@@ -195,10 +209,9 @@ def advanced(x: np.ndarray, dx: np.ndarray, stack: SectionStack) -> PolarShape:
     # d(R(-phi) rel) = R(-phi) (d rel - dphi k x rel)
     d0 = dxs[..., 0] - dcentre[:, None, 0] + dphi[:, None] * rel[..., 1]
     d1 = dxs[..., 1] - dcentre[:, None, 1] - dphi[:, None] * rel[..., 0]
-    change = PolarShape(np.einsum("ij,ij->i", chord, dchord) / np.sqrt(ell2),
-                        (chord[:, 0] * dchord[:, 1] - chord[:, 1] * dchord[:, 0]) / ell2,
-                        dphi, np.stack([c * d0 + s * d1, c * d1 - s * d0], -1))
-    return PolarShape(*(a + d for a, d in zip(_polar(fr), change)))
+    return PolarShape(np.einsum("ij,ij->i", chord, dchord) / np.sqrt(ell2),
+                      (chord[:, 0] * dchord[:, 1] - chord[:, 1] * dchord[:, 0]) / ell2,
+                      dphi, np.stack([c * d0 + s * d1, c * d1 - s * d0], -1))
 
 
 def _near(angle: np.ndarray, reference: np.ndarray) -> np.ndarray:
