@@ -139,7 +139,7 @@ class System:
         place = {**pose, mech.ground: [total, total + 1, total + 2]}
         pose[mech.ground] = [-1, -1, -1]
         dofs, places, self._bounds = [], [], [0]
-        rot_mask = [np.tile([False, False, True], len(self.body_index))]
+        rot_mask = [np.array([False, False, True] * len(self.body_index))]
         for c in self.connectors:
             internal = list(range(n, n + c.n_internal))
             a, b = c.bodies
@@ -529,10 +529,17 @@ class System:
         """Largest body motion from q0 to q1 over the settings' step bounds (> 1: too far)."""
         s = self.settings
         poses = 3 * len(self.body_index)         # the bodies' coordinates come first
-        # plain floats: a mechanism has a few bodies, and numpy calls cost more than the sums
-        dq = (q1[:poses] - q0[:poses]).tolist()
-        rotation = max(map(abs, dq[2::3]), default=0.0)
-        translation = max(map(math.hypot, dq[0::3], dq[1::3]), default=0.0)
+        # plain floats in one loop: a mechanism has a few bodies, and numpy calls (or
+        # list slices and maps) cost more than the sums
+        before, after = q0[:poses].tolist(), q1[:poses].tolist()
+        rotation = translation = 0.0
+        for k in range(0, poses, 3):
+            turn = abs(after[k + 2] - before[k + 2])
+            shift = math.hypot(after[k] - before[k], after[k + 1] - before[k + 1])
+            if turn > rotation:
+                rotation = turn
+            if shift > translation:
+                translation = shift
         return max(rotation / s.max_rotation_step,
                    translation / (s.max_translation_step * self.size))
 

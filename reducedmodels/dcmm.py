@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import itertools
 import math
 from types import ModuleType
 from typing import Callable
@@ -456,7 +457,8 @@ class DcmmGroup(ConnectorGroup):
         """
         assemble_sub_arcs = dcmm_kernels().assemble_sub_arcs
         # each sub-arc's bodies' coordinates among the connectors' concatenated local ones
-        starts = np.cumsum([0] + [6 + c.n_internal for c in self.connectors[:-1]]).tolist()
+        starts = list(itertools.accumulate((6 + c.n_internal for c in self.connectors[:-1]),
+                                           initial=0))
         dofs = np.concatenate([c._layout.element_dofs + start
                                for c, start in zip(self.connectors, starts)])
         fixed = (np.ascontiguousarray(gather[dofs[:, 0]], np.int64),

@@ -146,8 +146,12 @@ def solve_step(problem: StepProblem, q: np.ndarray, settings: "SolverSettings",
     connectors' own nonlinear updates).
     """
     system = problem.system
+    # the settings read at every iteration, as locals
+    force_tol, step_tol, error_tol = settings.force_tol, settings.step_tol, settings.error_tol
+    max_iterations, max_stall = settings.max_iterations, settings.max_stall
+    update_threshold = system.update_threshold
     res0, best, stalled, last_step, res = None, math.inf, 0, None, math.inf
-    for it in range(settings.max_iterations + 1):
+    for it in range(max_iterations + 1):
         try:
             g, K = problem.assemble(q)
         except (ValueError, FloatingPointError) as exc:   # a connector refused the state
@@ -155,16 +159,16 @@ def solve_step(problem: StepProblem, q: np.ndarray, settings: "SolverSettings",
         res = problem.residual(g)
         if not math.isfinite(res):
             return NewtonResult(None, problem.factor, it, "non-finite residual", None)
-        if res <= settings.force_tol:
+        if res <= force_tol:
             return NewtonResult(q, problem.factor, it, "", K)
         res0 = res if res0 is None else res0
         if res > DIVERGENCE * max(res0, 1.0):
             return NewtonResult(None, problem.factor, it, f"diverging residual {res:.3g}", None)
         best, stalled = (res, 0) if res < best else (best, stalled + 1)
-        if stalled >= settings.max_stall:
+        if stalled >= max_stall:
             return NewtonResult(None, problem.factor, it, f"stalled (no lower residual in "
                                 f"{stalled} iterations, best {best:.3g})", None)
-        if it == settings.max_iterations:
+        if it == max_iterations:
             break
         try:
             du, dfactor = problem.correction(q, g, K)
@@ -176,11 +180,10 @@ def solve_step(problem: StepProblem, q: np.ndarray, settings: "SolverSettings",
         if not (math.isfinite(step) and math.isfinite(dfactor)):
             return NewtonResult(None, problem.factor, it, "singular tangent", None)
         step = max(step, abs(dfactor))
-        q = system.update(q, du) if step > system.update_threshold else q + du
+        q = system.update(q, du) if step > update_threshold else q + du
         problem.factor += dfactor
         contracting = last_step is not None and res <= CONTRACTION_EVIDENCE * res0
-        if step <= settings.step_tol or (contracting and step * min(1.0, step / last_step)
-                                         <= settings.error_tol):
+        if step <= step_tol or (contracting and step * min(1.0, step / last_step) <= error_tol):
             return NewtonResult(q, problem.factor, it + 1, "", K)
         last_step = step
         if (origin is not None and step > EXCURSION_CHECK

@@ -127,8 +127,7 @@ class PrbmParameters:
     kappa2: float
 
     def __post_init__(self) -> None:
-        vals = np.array([self.x1, self.y1, self.y2, self.kappa1, self.kappa2])
-        if not np.all(np.isfinite(vals)):
+        if not all(map(math.isfinite, (self.x1, self.y1, self.y2, self.kappa1, self.kappa2))):
             raise ValueError(f"prbm: parameters must be finite, got {self}")
         if self.kappa1 <= 0.0 or self.kappa2 <= 0.0:
             raise ValueError(f"prbm: joint stiffnesses must be > 0, got kappa1={self.kappa1}, "
@@ -150,9 +149,9 @@ class PrbmParameters:
         """
         if not 0.0 < rho < 1.0:
             raise ValueError(f"prbm: rho must lie in (0, 1), got {rho}")
-        a, b = arc_semi_axes(width)
-        return cls(x1=a / np.sqrt(rho), y1=-b * np.sqrt((1.0 - rho) / rho),
-                   y2=b * np.sqrt(rho / (1.0 - rho)), kappa1=2.0 / rho, kappa2=1.0 / (1.0 - rho))
+        a, b = arc_semi_axes(width)          # floats (math.sqrt rounds as np.sqrt does)
+        return cls(x1=a / math.sqrt(rho), y1=-b * math.sqrt((1.0 - rho) / rho),
+                   y2=b * math.sqrt(rho / (1.0 - rho)), kappa1=2.0 / rho, kappa2=1.0 / (1.0 - rho))
 
 
 @lru_cache(maxsize=1)
@@ -279,7 +278,9 @@ class PrbmConnector(Connector):
                       else PrbmParameters(**params))
         self.params = params
         EI = flexure.bending_stiffness(mechanism.material)
-        self.stiffness = np.array([params.kappa1, params.kappa2, params.kappa1]) * EI / length
+        stiffness = [params.kappa1 * EI / length, params.kappa2 * EI / length,
+                     params.kappa1 * EI / length]
+        self.stiffness = np.array(stiffness)
         self.closure_scale = EI / length**3
         joints = joint_positions(shape, params)
         ends = shape.end_points               # [start, end]
@@ -287,25 +288,44 @@ class PrbmConnector(Connector):
         if not self._forward:
             joints, ends = joints[::-1], ends[::-1]
         self.joints = joints                      # [R_a, R_2, R_b], chain order a -> b
-        ref_a = mechanism.bodies[self.bodies[0]].reference
-        ref_b = mechanism.bodies[self.bodies[1]].reference
-        self._ref = np.array([ref_a, ref_b])
-        # joint offsets from the body references and link vectors, as float pairs (mm)
-        self._r_a, self._r_b, self._v_h, self._v_l = (
-            tuple(v.tolist()) for v in (joints[0] - ref_a, joints[2] - ref_b,
-                                         joints[1] - joints[0], joints[2] - joints[1]))
+        self._ref = np.array([mechanism.bodies[b].reference for b in self.bodies])
         self._ends = ends                         # flexure end points on a and b
         self.length = length
-        self._end_rel_a, self._end_rel_b = (tuple((self._ends[k] - self._ref[k]).tolist())
-                                            for k in (0, 1))
+        # joint offsets from the body references, link vectors and the flexure ends' offsets,
+        # as float pairs (mm; plain floats: a few numbers)
+        (ra, r2, rb), (ea, eb), (fa, fb) = joints.tolist(), ends.tolist(), self._ref.tolist()
+        self._r_a, self._r_b = (ra[0] - fa[0], ra[1] - fa[1]), (rb[0] - fb[0], rb[1] - fb[1])
+        self._v_h, self._v_l = (r2[0] - ra[0], r2[1] - ra[1]), (rb[0] - r2[0], rb[1] - r2[1])
+        self._end_rel_a = (ea[0] - fa[0], ea[1] - fa[1])
+        self._end_rel_b = (eb[0] - fb[0], eb[1] - fb[1])
         # the parameters of reducedmodels.prbmkernel.chain
         self._parameters = np.array([*self._r_a, *self._r_b, *self._v_h, *self._v_l,
-                                     *self.stiffness.tolist(), self.closure_scale])
+                                     *stiffness, self.closure_scale])
         self._fitted_rotation = fitted_rotation()
         self._area = flexure.section.area
         self._shape = shape
-        self._rest = np.array([*self._ends[:1], *joints, *self._ends[1:]])   # polyline, mm
+        self._rest = np.array([ea, ra, r2, rb, eb])   # polyline, mm
         self._fractions = polyline_fractions(self._rest)
+        self._stations = self._station_order()
+
+    def _station_order(self) -> tuple[np.ndarray, np.ndarray]:
+        """Arc-length fractions of the section-force stations from the flexure's first end and
+        their places among the polyline's segment ends, in increasing order.
+
+        The stations are both ends of each polyline segment (places k and 4 + k
+        of segment k in :func:`reducedmodels.prbmkernel.chain_statics`); a
+        segment of zero length at rest (two points of one rigid member that
+        coincide) has none. Plain floats: five points.
+        """
+        rest, fractions = self._rest.tolist(), self._fractions.tolist()
+        kept = [k for k in range(len(rest) - 1) if rest[k] != rest[k + 1]]
+        where = kept + [4 + k for k in kept]
+        at = [fractions[k] for k in kept] + [fractions[k + 1] for k in kept]
+        if not self._forward:
+            at = [1.0 - a for a in at]
+        order = sorted(range(len(at)), key=at.__getitem__)          # stable, as argsort's
+        return (np.array([at[k] for k in order]),
+                np.array([where[k] for k in order], np.int64))
 
     def mass_points(self, density: float) -> MassPoints:
         """The flexure's mass (density in t/mm^3) on the chain's four rigid members.
@@ -536,12 +556,6 @@ class PrbmGroup(ConnectorGroup):
         """
         out = []
         for j, c in enumerate(self.connectors):
-            kept = np.flatnonzero(np.any(np.diff(c._rest, axis=0) != 0.0, axis=1))
-            where = np.concatenate([kept, 4 + kept])
-            at = np.concatenate([c._fractions[kept], c._fractions[kept + 1]])
-            if not c._forward:
-                at = 1.0 - at
-            order = np.argsort(at, kind="stable")
-            out.append(SectionForces(at[order], axial[:, j, where[order]],
-                                     moment[:, j, where[order]]))
+            at, where = c._stations
+            out.append(SectionForces(at, axial[:, j, where], moment[:, j, where]))
         return out
