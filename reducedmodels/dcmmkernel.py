@@ -184,12 +184,17 @@ def sample_statics(poses: np.ndarray, wrenches: np.ndarray, wrench_of: np.ndarra
     states, samples = poses.shape[0], order.size
     axial = np.empty((states, samples))
     moment = np.empty((states, samples))
+    # each body's rotation, cosine and sine at each state, once (a body carries many samples)
+    turns = np.empty((poses.shape[1], 3))
     for s in range(states):
+        for body in range(poses.shape[1]):
+            t = poses[s, body, 2]
+            turns[body, 0], turns[body, 1], turns[body, 2] = t, math.cos(t), math.sin(t)
         for j in range(samples):
             i = order[j]
             a, b, wi = lead[i], lead[i] + 1, w[i]
-            ta, tb = poses[s, a, 2], poses[s, b, 2]
-            ca, sa, cb, sb = math.cos(ta), math.sin(ta), math.cos(tb), math.sin(tb)
+            ta, ca, sa = turns[a, 0], turns[a, 1], turns[a, 2]
+            tb, cb, sb = turns[b, 0], turns[b, 1], turns[b, 2]
             px = ((1.0 - wi) * (poses[s, a, 0] + (ca * rel[i, 0] - sa * rel[i, 1]))
                   + wi * (poses[s, b, 0] + (cb * rel[i, 2] - sb * rel[i, 3])))
             py = ((1.0 - wi) * (poses[s, a, 1] + (sa * rel[i, 0] + ca * rel[i, 1]))
