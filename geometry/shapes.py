@@ -26,6 +26,7 @@ _K = np.arange(2, 18)
 _FACT = np.array([math.factorial(n) for n in range(2 * int(_K[-1]) + 3)], float)
 _A2_SERIES = -((-1.0) ** _K) * 4.0 ** (_K - 1) / (2.0 * _FACT[2 * _K + 1])
 _B2_SERIES = (-1.0) ** _K * 4.0 ** (_K - 1) * (_K - 1) / _FACT[2 * _K + 2]
+_POWERS = 2 * _K - 2           # the power of gamma in each term of the series
 
 
 def arc_semi_axes(width: float) -> tuple[float, float]:
@@ -62,13 +63,13 @@ def arc_semi_axes(width: float) -> tuple[float, float]:
     """
     g = 0.5 * width
     if g <= _SERIES_TOP:                      # the k = 1 term of a^2 is 1/12
-        powers = g ** (2 * _K - 2)
+        powers = g ** _POWERS
         a2 = 1.0 / 12.0 + float(_A2_SERIES @ powers)
         b2 = float(_B2_SERIES @ powers)
     else:
-        a2 = (1.0 - np.sin(2.0 * g) / (2.0 * g)) / (8.0 * g**2)
-        b2 = (0.5 + np.sin(2.0 * g) / (4.0 * g) - (np.sin(g) / g) ** 2) / (4.0 * g**2)
-    return float(np.sqrt(a2)), float(np.sqrt(max(b2, 0.0)))
+        a2 = float((1.0 - np.sin(2.0 * g) / (2.0 * g)) / (8.0 * g**2))
+        b2 = float((0.5 + np.sin(2.0 * g) / (4.0 * g) - (np.sin(g) / g) ** 2) / (4.0 * g**2))
+    return math.sqrt(a2), math.sqrt(max(b2, 0.0))       # rounded as np.sqrt rounds
 
 
 def _directions(angle: np.ndarray) -> np.ndarray:

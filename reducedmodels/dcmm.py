@@ -88,6 +88,8 @@ class _ChainLayout:
         Which internal coordinates are angles.
     sample_part, sample_w : arrays (m,)
         Sub-arc (chain order) and fraction along it of each sample, a cut sampled once.
+    sample_ends : int64 array (m, 2)
+        Each sample's sub-arc's leading and following body in the chain (a: 0, cuts, b: n).
     sample_at : array (m,)
         Each sample's arc-length fraction from the flexure's start, in chain order.
     station_order, stations : arrays (m,)
@@ -104,6 +106,7 @@ class _ChainLayout:
     is_rotation: np.ndarray
     sample_part: np.ndarray
     sample_w: np.ndarray
+    sample_ends: np.ndarray
     sample_at: np.ndarray
     station_order: np.ndarray
     stations: np.ndarray
@@ -132,6 +135,7 @@ def _chain_layout(n: int, forward: bool) -> _ChainLayout:
                           np.repeat(element_dofs, 6, axis=1).ravel(),
                           np.tile(element_dofs, (1, 6)).ravel(),
                           np.tile([False, False, True], n - 1), sample_part, sample_w,
+                          np.stack([sample_part, sample_part + 1], 1).astype(np.int64),
                           at, order, at[order])
     for array in dataclasses.astuple(layout):
         if isinstance(array, np.ndarray):
@@ -203,10 +207,10 @@ class DcmmConnector(Connector):
         # its section's direction towards body b (rad)
         s = shape.length * layout.sample_at
         points = shape.point(s)
-        self._sample_rel = np.empty((len(points), 4))
-        self._sample_rel[:, :2] = points - self._refs[layout.sample_part]
-        self._sample_rel[:, 2:] = points - self._refs[layout.sample_part + 1]
-        self._sample_tangent = shape.tangent_angle(s) + (0.0 if forward else np.pi)
+        self._sample_rel = (points[:, None] - self._refs[layout.sample_ends]).reshape(-1, 4)
+        self._sample_tangent = shape.tangent_angle(s)
+        if not forward:
+            self._sample_tangent += np.pi
 
     def mass_points(self, density: float) -> MassPoints:
         """The flexure's mass (density in t/mm^3) on the chain's bodies, as rigid pieces.

@@ -154,19 +154,16 @@ class DenseTangent:
         if self._positive:
             return 0
         ldu, ipiv, _ = self._ldl
-        d, off, pivots = ldu.diagonal().tolist(), ldu.diagonal(1).tolist(), ipiv.tolist()
-        eigenvalues, k = [], 0
-        while k < self.n:
-            if pivots[k] < 0:           # the first row of a 2 x 2 block
-                a, b, c = d[k], off[k], d[k + 1]
+        eigenvalues = ldu.diagonal().tolist()          # D's 1 x 1 blocks, and the 2 x 2 ones':
+        blocks = [k for k, p in enumerate(ipiv.tolist()) if p < 0][0::2]   # first rows
+        if blocks:
+            off = ldu.diagonal(1).tolist()
+            for k in blocks:
+                a, b, c = eigenvalues[k], off[k], eigenvalues[k + 1]
                 mid, radius = 0.5 * (a + c), math.hypot(0.5 * (a - c), b)
-                eigenvalues += (mid - radius, mid + radius)
-                k += 2
-            else:
-                eigenvalues.append(d[k])
-                k += 1
+                eigenvalues[k], eigenvalues[k + 1] = mid - radius, mid + radius
         limit = -ROUND_OFF * max(map(abs, eigenvalues), default=0.0)
-        return sum(value < limit for value in eigenvalues)
+        return len([value for value in eigenvalues if value < limit])
 
     def toarray(self) -> np.ndarray:
         return self.matrix
