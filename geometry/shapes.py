@@ -270,7 +270,7 @@ class Arc:
             center=center,
             a=self.length * a,
             b=self.length * b,
-            axes=np.array([[e1[0], e2[0]], [e1[1], e2[1]]]),
+            axes=np.array([e1, e2]).T,          # columns e1, e2
         )
 
     def closes_on_itself(self, thickness: float) -> bool:

@@ -26,7 +26,7 @@ import functools
 import itertools
 import math
 from types import ModuleType
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -339,6 +339,64 @@ class DcmmConnector(Connector):
         return DcmmGroup([self]).path_section_forces([[state] for state in states])[0]
 
 
+class _StackTables(NamedTuple):
+    """The integer tables of a :class:`_Stack` (and its sample fractions); see there."""
+
+    first: np.ndarray
+    sub_arc_body: np.ndarray
+    sub_arc_start: np.ndarray
+    lead: np.ndarray
+    follow: np.ndarray
+    sub_arc: np.ndarray
+    last: np.ndarray
+    connector: np.ndarray
+    w: np.ndarray
+    order: np.ndarray
+    sample_start: list
+    pose_order: list
+
+
+@functools.lru_cache(maxsize=64)
+def _stack_tables(chains: tuple[tuple[int, bool], ...]) -> _StackTables:
+    """The tables of a stack of chains given as (sub-arcs, runs forward) each, in order.
+
+    They depend on these numbers only (not on the geometry), so the systems
+    of a model share them, like :func:`_chain_layout` (the arrays are read-only).
+    """
+    first, sub_arc_start, sub_arc_body, sample_start = [], [0], [], [0]
+    lead, sub_arc, order, last, connector, w, pose_order = [], [], [], [], [], [], []
+    body = start = 0
+    for j, (n, forward) in enumerate(chains):
+        layout = _chain_layout(n, forward)
+        first.append(body)
+        sub_arc_body += range(body, body + n)
+        part, count = layout.sample_part, layout.sample_part.size
+        lead.append(part + body)
+        sub_arc.append(part + sub_arc_start[-1])
+        order.append(layout.station_order + sample_start[-1])
+        w.append(layout.sample_w)
+        last += [body + n] * count
+        connector += [j] * count
+        sub_arc_start.append(sub_arc_start[-1] + n)
+        sample_start.append(sample_start[-1] + count)
+        body += n + 1
+        m = 6 + 3 * (n - 1)                  # [pose_a, pose_b, internal] -> a, internal, b
+        pose_order += [*range(start, start + 3), *range(start + 6, start + m),
+                       *range(start + 3, start + 6)]
+        start += m
+    lead = np.concatenate(lead).astype(np.int64)
+    tables = _StackTables(
+        np.array(first, np.int64), np.array(sub_arc_body, np.int64),
+        np.array(sub_arc_start, np.int64), lead, lead + 1,
+        np.concatenate(sub_arc).astype(np.int64), np.array(last, np.int64),
+        np.array(connector, np.int64), np.concatenate(w),
+        np.concatenate(order).astype(np.int64), sample_start, pose_order)
+    for array in tables:
+        if isinstance(array, np.ndarray):
+            array.flags.writeable = False
+    return tables
+
+
 @dataclasses.dataclass(frozen=True)
 class _Stack:
     """The chain bodies, sub-arcs and samples of several DCMM connectors numbered in one stack.
@@ -374,6 +432,9 @@ class _Stack:
         The samples in station order, connector by connector.
     sample_start : list of int (c + 1,)
         Each connector's first sample (and the end).
+    pose_order : list of int
+        The connectors' local coordinates [pose_a, pose_b, internal], laid
+        end to end, in the stack's order of chain bodies (a, cuts, b).
     """
 
     first: np.ndarray
@@ -392,39 +453,21 @@ class _Stack:
     tangent: np.ndarray
     order: np.ndarray
     sample_start: list
+    pose_order: list
 
     @classmethod
     def of(cls, connectors) -> "_Stack":
         """The stack of ``connectors`` (DcmmConnector), in their order."""
-        first, sub_arc_start, sub_arc_body, sample_start = [], [0], [], [0]
-        lead, sub_arc, order, last, connector = [], [], [], [], []
-        body = 0
-        for j, c in enumerate(connectors):
-            n, layout = len(c._parameters), c._layout
-            first.append(body)
-            sub_arc_body += range(body, body + n)
-            part, count = layout.sample_part, layout.sample_part.size
-            lead.append(part + body)
-            sub_arc.append(part + sub_arc_start[-1])
-            order.append(layout.station_order + sample_start[-1])
-            last += [body + n] * count
-            connector += [j] * count
-            sub_arc_start.append(sub_arc_start[-1] + n)
-            sample_start.append(sample_start[-1] + count)
-            body += n + 1
-        lead = np.concatenate(lead).astype(np.int64)
-        w = np.concatenate([c._layout.sample_w for c in connectors])
-        rel = np.concatenate([c._sample_rel for c in connectors])
+        tables = _stack_tables(tuple((len(c._parameters), c._forward) for c in connectors))
         return cls(
-            np.array(first, np.int64),
-            np.array([(*c._end_rel[0], *c._end_rel[1]) for c in connectors]),
-            np.array(sub_arc_body, np.int64), np.array(sub_arc_start, np.int64),
+            tables.first, np.array([(*c._end_rel[0], *c._end_rel[1]) for c in connectors]),
+            tables.sub_arc_body, tables.sub_arc_start,
             np.concatenate([c._sub_lengths for c in connectors]),
             np.concatenate([c._parameters for c in connectors]),
-            lead, lead + 1, np.concatenate(sub_arc).astype(np.int64),
-            np.array(last, np.int64), np.array(connector, np.int64), w, rel,
-            np.concatenate([c._sample_tangent for c in connectors]),
-            np.concatenate(order).astype(np.int64), sample_start)
+            tables.lead, tables.follow, tables.sub_arc, tables.last, tables.connector,
+            tables.w, np.concatenate([c._sample_rel for c in connectors]),
+            np.concatenate([c._sample_tangent for c in connectors]), tables.order,
+            tables.sample_start, tables.pose_order)
 
     @staticmethod
     def poses(levels) -> np.ndarray:
@@ -491,14 +534,7 @@ class DcmmGroup(ConnectorGroup):
         chain of poses by one gather; local states are made only for the
         pairs the screen sends to the scalar check.
         """
-        order = []
-        start = 0
-        for c in self.connectors:               # [pose_a, pose_b, internal] -> a, internal, b
-            m = 6 + c.n_internal
-            order += [*range(start, start + 3), *range(start + 6, start + m),
-                      *range(start + 3, start + 6)]
-            start += m
-        poses = coordinates[:, order].reshape(len(coordinates), -1, 3)
+        poses = coordinates[:, self.stack().pose_order].reshape(len(coordinates), -1, 3)
         return (self._verdicts(poses, lambda: self.local_levels(coordinates)),
                 self._forces(poses))
 

@@ -74,8 +74,9 @@ class Loads:
                 mv.append(comp.value)
         forces = np.array(ff).reshape(-1, 2)
         moments = np.array(mv, float)
-        scale = max([float(np.abs(forces).max(initial=0.0)),
-                     float(np.abs(moments).max(initial=0.0)) / size, 1e-300])
+        # plain floats: a load case has a few components
+        scale = max([max(map(abs, forces.ravel().tolist()), default=0.0),
+                     max(map(abs, moments.tolist()), default=0.0) / size, 1e-300])
         return cls(np.array(fd, int).reshape(-1, 3), forces, np.array(fr).reshape(-1, 2),
                    np.array(md, int), moments, scale)
 
