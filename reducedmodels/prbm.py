@@ -203,7 +203,7 @@ def joint_positions(shape: Shape, params: PrbmParameters) -> np.ndarray:
     """Initial joints [R_start, R_2, R_end] of the chain for ``shape``, shape (3, 2), mm."""
     center, e1, e2, length, _ = shape_frame(shape)
     local = np.array([[params.x1, params.y1], [0.0, params.y2], [-params.x1, params.y1]])
-    return center + length * local @ np.column_stack([e1, e2]).T
+    return center + length * local @ np.array([e1, e2])       # rows e1, e2
 
 
 @cache

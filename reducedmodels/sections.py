@@ -130,7 +130,8 @@ def statics_section_forces(points: np.ndarray, fractions: np.ndarray, wrench: np
 
 def polyline_fractions(points: np.ndarray) -> np.ndarray:
     """Cumulative length fraction (0..1) of the vertices of a polyline (m, 2)."""
-    seg = np.hypot(*np.diff(np.asarray(points, float), axis=0).T)
+    points = np.asarray(points, float)
+    seg = np.hypot(*(points[1:] - points[:-1]).T)
     length = np.concatenate([[0.0], np.cumsum(seg)])
     return length / length[-1]
 

@@ -13,6 +13,8 @@ PRBM paid for one table look-up.
 
 from __future__ import annotations
 
+import bisect
+
 import numpy as np
 
 
@@ -57,13 +59,14 @@ class NotAKnotSpline:
         s = solve_banded((1, 1), band, rhs)
         # piece i: y[i] + s[i] u + c2[i] u^2 + c3[i] u^3, u = x - x[i]
         t = (s[:-1] + s[1:] - 2 * slope) / dx
-        self._x = x
-        self._coefficients = np.stack((y[:-1], s[:-1], (slope - s[:-1]) / dx - t, t / dx), 1)
+        # the knots and each piece's coefficients, as floats (read by every call)
+        self._knots = x.tolist()
+        self._pieces = np.stack((y[:-1], s[:-1], (slope - s[:-1]) / dx - t, t / dx), 1).tolist()
 
     def __call__(self, x: float) -> float:
         """The spline at ``x``; outside the knots, the end piece's cubic continued."""
-        i = int(np.searchsorted(self._x, x, side="right")) - 1
-        i = min(max(i, 0), self._x.size - 2)
-        u = float(x) - float(self._x[i])
-        c0, c1, c2, c3 = (float(c) for c in self._coefficients[i])
+        i = bisect.bisect_right(self._knots, x) - 1      # np.searchsorted's "right" side
+        i = min(max(i, 0), len(self._knots) - 2)
+        u = float(x) - self._knots[i]
+        c0, c1, c2, c3 = self._pieces[i]
         return c0 + c1 * u + c2 * (u * u) + c3 * (u * u * u)
