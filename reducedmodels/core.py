@@ -130,6 +130,9 @@ class System:
         self.size = mech.size()
         self.body_index = {b: k for k, b in enumerate(mech.moving_bodies)}
         self.reference = {b: mech.bodies[b].reference for b in mech.bodies}
+        #: the target point's offset from its body's reference point and its place at rest (mm)
+        self._target_offsets = ((mech.target_point - self.reference[mech.target_body]).tolist(),
+                                mech.target_point.tolist())
         n = 3 * len(self.body_index)
         total = n + sum(c.n_internal for c in self.connectors)
         # every connector's global dofs [pose_a, pose_b, internal] in one array (ground: -1),
@@ -400,11 +403,9 @@ class System:
     # --- outputs ---------------------------------------------------------
     def target(self, q: np.ndarray) -> tuple[float, float, float]:
         """Target point displacement (dx, dy) in mm and target body rotation in rad."""
-        mech = self.mechanism
-        x, y, theta = self.pose(q, mech.target_body).tolist()     # floats: once per level
-        rel = (mech.target_point - self.reference[mech.target_body]).tolist()
-        rx, ry = rotate_xy(theta, *rel)
-        tx, ty = mech.target_point.tolist()
+        x, y, theta = self.pose(q, self.mechanism.target_body).tolist()   # floats: once per level
+        (rel_x, rel_y), (tx, ty) = self._target_offsets
+        rx, ry = rotate_xy(theta, rel_x, rel_y)
         return (x + rx) - tx, (y + ry) - ty, theta
 
     def update(self, q: np.ndarray, du: np.ndarray) -> np.ndarray:

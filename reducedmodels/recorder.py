@@ -61,6 +61,7 @@ class PathRecorder:
                  limit_points: bool = False):
         self.t0 = time.perf_counter()
         self.system, self.case, self.model = system, case, model
+        self.magnitude = case.magnitude          # the full load (N or N mm), read at every level
         self.path = LoadPath(
             model=model, load_case=case.name, load=[], dx=[], dy=[], rotation=[], seconds=0.0,
             settings=settings or {}, scene=scene, load_unit=case.unit,
@@ -80,7 +81,7 @@ class PathRecorder:
         """Append one converged point."""
         system, lp, q = self.system, self.path, point.state
         dx, dy, rot = system.target(q)
-        lp.load.append(point.factor * self.case.magnitude)
+        lp.load.append(point.factor * self.magnitude)
         lp.dx.append(dx), lp.dy.append(dy), lp.rotation.append(rot)
         self.states.append(q)
         if lp.reactions is not None:
@@ -229,9 +230,8 @@ def record_path_stress(path: LoadPath, forces: Sequence[tuple[Connector, Section
         if section is None or stacked is None:
             continue
         unit = stacked.fibre_stress(section)
-        peak = np.argmax(unit, axis=1)
-        _append_stress(path, c.name, unit[np.arange(len(peak)), peak].tolist(),
-                       stacked.at[peak].tolist(), stacked.at, unit[-1])
+        _append_stress(path, c.name, unit.max(axis=1).tolist(),
+                       stacked.at[unit.argmax(axis=1)].tolist(), stacked.at, unit[-1])
 
 
 def _append_stress(path: LoadPath, name: str, peaks: list[float], places: list[float],

@@ -325,17 +325,22 @@ class LoadControl(Stepping):
         return self.step >= self.min_step
 
     def advance(self, verdict: Verdict) -> float | None:
-        """Take the state; report it at the requested factor once that is reached."""
+        """Take the state; report it at the requested factor once that is reached.
+
+        What the predictor keeps of the state (history, slope) is computed
+        only if the path goes on after it.
+        """
         self.q, self.factor = verdict.state, verdict.factor
-        self.slope = self._slope(verdict.tangent) if self.system.predicts_with_slope else None
-        self.history = [*self.history[1 - PREDICTOR_STATES:], (self.q, self.factor)]
-        if self.past is not None:
-            self.past = [*self.past[1 - PREDICTOR_STATES:], self.system.remembered(self.q)]
         if verdict.fast:
             self.step = min(2.0 * self.step, self.spacing)
-        if self.factor < self.target - 1e-14 * self.spacing:
-            return None
-        reached, self.target = self.target, next(self.targets, None)
+        reached = None
+        if not self.factor < self.target - 1e-14 * self.spacing:
+            reached, self.target = self.target, next(self.targets, None)
+        if self.target is not None:
+            self.slope = self._slope(verdict.tangent) if self.system.predicts_with_slope else None
+            self.history = [*self.history[1 - PREDICTOR_STATES:], (self.q, self.factor)]
+            if self.past is not None:
+                self.past = [*self.past[1 - PREDICTOR_STATES:], self.system.remembered(self.q)]
         return reached
 
     def step_size(self) -> float:
