@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import itertools
 import math
 from types import ModuleType
 from typing import Callable, NamedTuple
@@ -340,7 +339,14 @@ class DcmmConnector(Connector):
 
 
 class _StackTables(NamedTuple):
-    """The integer tables of a :class:`_Stack` (and its sample fractions); see there."""
+    """The integer tables of a :class:`_Stack` (and its sample fractions); see there.
+
+    Also, for the connectors' local coordinates laid end to end: each
+    sub-arc's two bodies' coordinates (``element_dofs``, (e, 6)) and the
+    (rows, cols) of the connectors' Hessian values (``hessian_rows``,
+    ``hessian_cols``: :meth:`DcmmConnector.hessian_pattern` shifted to each
+    connector's first coordinate).
+    """
 
     first: np.ndarray
     sub_arc_body: np.ndarray
@@ -354,6 +360,9 @@ class _StackTables(NamedTuple):
     order: np.ndarray
     sample_start: list
     pose_order: list
+    element_dofs: np.ndarray
+    hessian_rows: np.ndarray
+    hessian_cols: np.ndarray
 
 
 @functools.lru_cache(maxsize=64)
@@ -365,6 +374,7 @@ def _stack_tables(chains: tuple[tuple[int, bool], ...]) -> _StackTables:
     """
     first, sub_arc_start, sub_arc_body, sample_start = [], [0], [], [0]
     lead, sub_arc, order, last, connector, w, pose_order = [], [], [], [], [], [], []
+    element_dofs, rows, cols = [], [], []
     body = start = 0
     for j, (n, forward) in enumerate(chains):
         layout = _chain_layout(n, forward)
@@ -383,6 +393,9 @@ def _stack_tables(chains: tuple[tuple[int, bool], ...]) -> _StackTables:
         m = 6 + 3 * (n - 1)                  # [pose_a, pose_b, internal] -> a, internal, b
         pose_order += [*range(start, start + 3), *range(start + 6, start + m),
                        *range(start + 3, start + 6)]
+        element_dofs.append(layout.element_dofs + start)
+        rows.append(layout.rows + start)
+        cols.append(layout.cols + start)
         start += m
     lead = np.concatenate(lead).astype(np.int64)
     tables = _StackTables(
@@ -390,7 +403,9 @@ def _stack_tables(chains: tuple[tuple[int, bool], ...]) -> _StackTables:
         np.array(sub_arc_start, np.int64), lead, lead + 1,
         np.concatenate(sub_arc).astype(np.int64), np.array(last, np.int64),
         np.array(connector, np.int64), np.concatenate(w),
-        np.concatenate(order).astype(np.int64), sample_start, pose_order)
+        np.concatenate(order).astype(np.int64), sample_start, pose_order,
+        np.concatenate(element_dofs), np.concatenate(rows).astype(np.int64),
+        np.concatenate(cols).astype(np.int64))
     for array in tables:
         if isinstance(array, np.ndarray):
             array.flags.writeable = False
@@ -456,9 +471,8 @@ class _Stack:
     pose_order: list
 
     @classmethod
-    def of(cls, connectors) -> "_Stack":
-        """The stack of ``connectors`` (DcmmConnector), in their order."""
-        tables = _stack_tables(tuple((len(c._parameters), c._forward) for c in connectors))
+    def of(cls, connectors, tables: _StackTables) -> "_Stack":
+        """The stack of ``connectors`` (DcmmConnector), in their order, with their tables."""
         return cls(
             tables.first, np.array([(*c._end_rel[0], *c._end_rel[1]) for c in connectors]),
             tables.sub_arc_body, tables.sub_arc_start,
@@ -493,6 +507,12 @@ class DcmmGroup(ConnectorGroup):
     def __init__(self, connectors):
         super().__init__(connectors)
         self._stack: _Stack | None = None
+        self._tables = _stack_tables(tuple((len(c._parameters), c._forward)
+                                           for c in self.connectors))
+
+    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """(rows, cols) of the connectors' Hessian values laid end to end (see the base class)."""
+        return self._tables.hessian_rows, self._tables.hessian_cols
 
     def assembler(self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
                   ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
@@ -503,11 +523,7 @@ class DcmmGroup(ConnectorGroup):
         values are the sub-arcs' 36 in turn.
         """
         assemble_sub_arcs = dcmm_kernels().assemble_sub_arcs
-        # each sub-arc's bodies' coordinates among the connectors' concatenated local ones
-        starts = list(itertools.accumulate((6 + c.n_internal for c in self.connectors[:-1]),
-                                           initial=0))
-        dofs = np.concatenate([c._layout.element_dofs + start
-                               for c, start in zip(self.connectors, starts)])
+        dofs = self._tables.element_dofs    # each sub-arc's bodies among the local coordinates
         fixed = (np.ascontiguousarray(gather[dofs[:, 0]], np.int64),
                  np.ascontiguousarray(gather[dofs[:, 3]], np.int64),
                  np.concatenate([c._parameters for c in self.connectors]),
@@ -522,7 +538,7 @@ class DcmmGroup(ConnectorGroup):
     def stack(self) -> _Stack:
         """The connectors' stack (built on first use)."""
         if self._stack is None:
-            self._stack = _Stack.of(self.connectors)
+            self._stack = _Stack.of(self.connectors, self._tables)
         return self._stack
 
     def path_end_pass(self, coordinates: np.ndarray
