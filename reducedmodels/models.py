@@ -249,7 +249,7 @@ def linear_response(mechanism: Mechanism, connectors: Sequence[Connector], case:
     def section_gradients(dq_: np.ndarray) -> list[np.ndarray]:
         moved = np.concatenate([q0 + dq_, ground_pose])[gather] - at_rest
         products = np.bincount(local_rows, weights=hessians * moved[local_cols], minlength=start)
-        return np.split(products, bounds[:-1])
+        return [products[a:b] for a, b in zip(places, bounds)]   # each connector's
 
     def section_forces(gradients: list[np.ndarray]) -> list:
         return [forces for group, run in groups
