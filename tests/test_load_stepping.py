@@ -141,3 +141,22 @@ def test_predictor_with_the_slope_reproduces_a_polynomial_path_one_degree_higher
     assert np.max(np.abs(system.scaled(with_slope - exact))) <= 1e-11
     without = system.predict(history, 0.35)
     assert np.max(np.abs(system.scaled(without - exact))) > 1e-8
+
+
+@pytest.mark.parametrize("scene, model", [("open_chain", "dcmm:2"), ("closed_chain", "prbm")])
+def test_motion_ratio_is_the_largest_body_motion_over_the_bounds(scene, model):
+    """System.motion_ratio (a float loop over the bodies) against its definition in numpy:
+    max(|d theta| / max_rotation_step, |d(x, y)| / (max_translation_step size)) over the
+    moving bodies, internal coordinates ignored, on random motions of every size and
+    direction; to 2e-16 relative (math.hypot and numpy's hypot may round differently)."""
+    system = build_system(load_scene(scene).mechanism, parse_model(model))
+    s, bodies = system.settings, len(system.body_index)
+    rng = np.random.default_rng(3)
+    q0 = system.initial_state()
+    for scale in (1e-6, 1e-2, 1.0, 30.0):
+        q1 = q0 + rng.normal(0.0, scale, q0.size)
+        d = (q1[:3 * bodies] - q0[:3 * bodies]).reshape(-1, 3)
+        expected = max(np.abs(d[:, 2]).max() / s.max_rotation_step,
+                       np.hypot(d[:, 0], d[:, 1]).max() / (s.max_translation_step * system.size))
+        assert system.motion_ratio(q0, q1) == pytest.approx(expected, rel=2e-16)
+        assert system.motion_ratio(q1, q1) == 0.0
