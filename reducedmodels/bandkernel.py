@@ -47,15 +47,29 @@ def band_cholesky(band: np.ndarray, token: tuple) -> tuple[np.ndarray, int]:
     with the reciprocals ``factor[j, b] = 1 / U[j, j]`` on the diagonal, and
     0; or, when a pivot is not positive (K is not positive definite), the
     partial factor and the 1-based column where it failed (LAPACK's ``info``).
+    See :func:`factor_columns`.
+    """
+    no_rhs = np.empty(0)
+    return factor_columns(band, token, no_rhs, np.empty(0, np.int64), no_rhs)
+
+
+@kernel
+def factor_columns(band: np.ndarray, token: tuple, rhs: np.ndarray, perm: np.ndarray,
+                   y: np.ndarray) -> tuple[np.ndarray, int]:
+    """:func:`band_cholesky`, and with a right-hand side (``rhs.size`` > 0) U^T y = P rhs too.
 
     Column by column (the "up-looking" order): U[i, j] = (K[i, j] -
     sum_k U[k, i] U[k, j]) / U[i, i], k ascending, the division done as a
     product with 1 / U[i, i]; the same operations in the same order as the
     right-looking rank-one updates of ``dpbtf2``, so the same rounding, but
-    each entry summed in a register.
+    each entry summed in a register. Column j of U is all the forward
+    substitution's unknown j needs (:func:`forward_unknown`): taken there,
+    its chain of dependent operations overlaps the factorisation's instead
+    of following it in a second pass (the same operations, the same numbers).
     """
     b = len(token) - 1
     n = band.shape[1]
+    forward = rhs.size > 0
     factor = np.zeros((n, b + 1))
     for c in range(n):
         if c >= b:                             # a full column: trip counts known, unrolled
@@ -80,7 +94,29 @@ def band_cholesky(band: np.ndarray, token: tuple) -> tuple[np.ndarray, int]:
         if not total > 0.0:
             return factor, c + 1
         factor[c, b] = 1.0 / math.sqrt(total)
+        if forward:
+            forward_unknown(factor, rhs, perm, y, c, token)
     return factor, 0
+
+
+@kernel
+def forward_unknown(factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray, y: np.ndarray,
+                    j: int, token: tuple) -> None:
+    """Unknown j of U^T y = P rhs, from column j of U and the unknowns before it (in place).
+
+    Each unknown is a sum times a stored 1 / U[j, j]: a product, where a
+    division would put its latency on the chain from one unknown to the
+    next (the solve took 1.7 times as long).
+    """
+    b = len(token) - 1
+    total = rhs[perm[j]]
+    if j >= b:                                 # a full row: unrolled
+        for s in range(b):
+            total -= factor[j, s] * y[j - b + s]
+    else:                                      # the first b rows are shorter
+        for i in range(j):
+            total -= factor[j, b + i - j] * y[i]
+    y[j] = total * factor[j, b]
 
 
 @kernel
@@ -90,26 +126,23 @@ def band_cholesky_solve(factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray, t
 
     The band holds K's rows and columns in the order ``perm``: the solution
     comes back in the original order. ``rhs`` and ``out`` are contiguous
-    (n,) (several right-hand sides: one call per column). Each unknown is a
-    sum times a stored 1 / U[j, j]: a product, where a division would put
-    its latency on the chain from one unknown to the next (the solve took
-    1.7 times as long).
+    (n,) (several right-hand sides: one call per column).
     """
-    b = len(token) - 1
     n = factor.shape[0]
     y = np.empty(n)
+    for j in range(n):                         # U^T y = P rhs
+        forward_unknown(factor, rhs, perm, y, j, token)
+    backward_solve(factor, y, perm, token, out)
+
+
+@kernel
+def backward_solve(factor: np.ndarray, y: np.ndarray, perm: np.ndarray, token: tuple,
+                   out: np.ndarray) -> None:
+    """x with U P x = y into ``out`` (``y`` overwritten): the second half of a Cholesky solve."""
+    b = len(token) - 1
+    n = factor.shape[0]
     head = min(b, n)
-    for j in range(head):                      # U^T y = P rhs, the short rows first
-        total = rhs[perm[j]]
-        for i in range(j):
-            total -= factor[j, b + i - j] * y[i]
-        y[j] = total * factor[j, b]
-    for j in range(head, n):
-        total = rhs[perm[j]]
-        for s in range(b):
-            total -= factor[j, s] * y[j - b + s]
-        y[j] = total * factor[j, b]
-    for j in range(n - 1, n - 1 - head, -1):   # U (P x) = y, the short rows first
+    for j in range(n - 1, n - 1 - head, -1):   # the short rows first
         total = y[j]
         for k in range(j + 1, n):
             total -= factor[k, b + j - k] * y[k]
@@ -132,12 +165,15 @@ def band_factor_solve(band: np.ndarray, rhs: np.ndarray, perm: np.ndarray, token
     undefined when the status is not 0). A Newton correction is the first
     solve with each tangent: one call instead of two saves a dispatch and
     its Python around it, which on a short chain (90 unknowns) cost more
-    than the arithmetic.
+    than the arithmetic; and the forward substitution runs inside the
+    factorisation (:func:`factor_columns`).
     """
-    factor, info = band_cholesky(band, token)
-    out = np.empty(band.shape[1])
+    n = band.shape[1]
+    y = np.empty(n)
+    factor, info = factor_columns(band, token, rhs, perm, y)
+    out = np.empty(n)
     if info == 0:
-        band_cholesky_solve(factor, rhs, perm, token, out)
+        backward_solve(factor, y, perm, token, out)
     return factor, info, out
 
 
