@@ -355,6 +355,19 @@ def _starts(counts: Sequence[int]) -> list[int]:
     return starts
 
 
+def evenly_spaced(stop: float, n: int) -> np.ndarray:
+    """``numpy.linspace(0.0, stop, n + 1)`` (n >= 1), the same numbers at a fraction of the calls.
+
+    linspace's own arithmetic, k * (stop / n) with the last value set to
+    ``stop``; its generality (dtypes, axes, array bounds) cost more than the
+    values on a flexure's few hundred nodes. Units: those of ``stop``.
+    """
+    values = np.arange(n + 1, dtype=float)
+    values *= stop / n
+    values[-1] = stop
+    return values
+
+
 def _block_pattern(element_dofs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(rows, cols) of every element's row-major 6 x 6 block, from its coordinates (elements, 6)."""
     return (np.repeat(element_dofs, 6, axis=1).ravel(),
@@ -419,33 +432,33 @@ class BeamConnector(Connector):
         self.bodies = tuple(flexure.bodies)
         self.n_internal = 3 * (n_elements - 1)
         self._n_nodes = n_elements + 1
-        self._nodes0 = flexure.shape.point(np.linspace(0.0, flexure.shape.length, n_elements + 1))
-        self._node_fractions = np.linspace(0.0, 1.0, n_elements + 1)
+        length = flexure.shape.length
+        self._nodes0 = flexure.shape.point(evenly_spaced(length, n_elements))
+        self._node_fractions = evenly_spaced(1.0, n_elements)
         # section forces at every element's start then end node, in arc-length order
         at = np.concatenate([self._node_fractions[:-1], self._node_fractions[1:]])
         self._section_order = np.argsort(at, kind="stable")
         self._section_at = at[self._section_order]
-        self._node_tangent0 = flexure.shape.tangent_angle(self._node_fractions
-                                                          * flexure.shape.length)
+        self._node_tangent0 = flexure.shape.tangent_angle(self._node_fractions * length)
         chord = self._nodes0[1:] - self._nodes0[:-1]
         l0 = np.hypot(chord[:, 0], chord[:, 1])
         self._l0 = l0
         self._chord0 = chord / l0[:, None]
         material = mechanism.material
         self._k_axial = flexure.axial_stiffness(material) / l0
-        self._flexibility = l0 / flexure.bending_stiffness(material)   # 1/(N mm)
+        bending = flexure.bending_stiffness(material)
+        self._flexibility = l0 / bending   # 1/(N mm)
         shear_stiffness = (SHEAR_CORRECTION * material.shear_modulus * flexure.section.area
                            if shear else None)
-        self._k11, self._k12 = bending_stiffness_terms(flexure.bending_stiffness(material), l0,
-                                                       shear_stiffness)
+        self._k11, self._k12 = bending_stiffness_terms(bending, l0, shear_stiffness)
         # which pose (0: pose_a, 1: pose_b) carries the start node and the end node
         self._end_pose = (self.bodies.index(flexure.start_body),
                           self.bodies.index(flexure.end_body))
         self._end_rel = np.array([
             self._nodes0[0] - mechanism.bodies[flexure.start_body].reference,
             self._nodes0[-1] - mechanism.bodies[flexure.end_body].reference])
-        self._end_offsets = tuple((float(rel[0]), float(rel[1])) for rel in self._end_rel)
-        self._area, self._arc_length = flexure.section.area, flexure.shape.length
+        self._end_offsets = tuple(map(tuple, self._end_rel.tolist()))
+        self._area, self._arc_length = flexure.section.area, length
 
     @functools.cached_property
     def _alone(self) -> BeamGroup:

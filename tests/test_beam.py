@@ -18,7 +18,7 @@ from geometry import Arc, Force, LoadCase, Material, Moment, Section, Segment, l
 from geometry.mechanism import FlexureSpec, assemble
 from reducedmodels.catalogue import parse_model
 from reducedmodels import LoadControl, build_system, run_reduced, trace
-from reducedmodels.beam import BeamConnector, beam_kernels
+from reducedmodels.beam import BeamConnector, beam_kernels, evenly_spaced
 from reducedmodels.core import hermite_weights, lagrange_weights, local_hessian
 from reducedmodels.tracer import PREDICTOR_STATES
 
@@ -544,3 +544,13 @@ def test_path_hooks_judge_every_state_as_alone():
     verdicts = conn.path_validity(states)
     assert verdicts == [conn.validity(*state) for state in states]
     assert any(verdicts) and not all(verdicts)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 7, 10, 100, 999, 2000])
+@pytest.mark.parametrize("stop", [1.0, 12.345, np.pi, 40.0 / 3.0])
+def test_evenly_spaced_is_linspace_bit_for_bit(n, stop):
+    """The nodes' arc lengths and fractions are numpy.linspace's numbers exactly (node positions,
+    chords and every result built on them unchanged)."""
+    expected = np.linspace(0.0, stop, n + 1)
+    got = evenly_spaced(stop, n)
+    assert got.dtype == expected.dtype and np.array_equal(got, expected)
