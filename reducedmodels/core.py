@@ -382,8 +382,9 @@ class System:
         diagonal = self._load_diagonal           # zero between assemblies
         energy += loads.add_to(q, factor, grad, diagonal)
         for dof in loads.diagonal_dofs:            # the few loaded bodies' rotations
-            if diagonal[dof]:
-                storage[self._diagonal_slot_list[dof]] += diagonal[dof]
+            value = diagonal[dof]
+            if value:
+                storage[self._diagonal_slot_list[dof]] += value
                 diagonal[dof] = 0.0
         return energy, grad, storage
 

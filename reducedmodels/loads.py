@@ -18,13 +18,13 @@ Units: mm, N, N mm, rad.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Callable, Mapping
 
 import numpy as np
 
 from geometry import Force, LoadCase, Moment
-from geometry.kinematics import rotate_xy
 
 
 @dataclass
@@ -100,7 +100,9 @@ class Loads:
         """
         energy, factor, item = 0.0, float(factor), q.item
         for ix, iy, it, fx, fy, rx, ry in self._points:
-            rrx, rry = rotate_xy(item(it), rx, ry)                  # R(theta) rel
+            theta = item(it)
+            c, s = math.cos(theta), math.sin(theta)
+            rrx, rry = c * rx - s * ry, s * rx + c * ry             # R(theta) rel (rotate_xy)
             energy -= factor * (fx * (item(ix) + rrx) + fy * (item(iy) + rry))
             grad[ix] -= factor * fx
             grad[iy] -= factor * fy
