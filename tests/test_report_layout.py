@@ -16,6 +16,7 @@ import re
 
 import pytest
 
+from validation.peers import PeerRow
 from validation.report import write_report
 from validation.reportdata import LEFT_OUT, TIMING_STATS, compute_report, read_results
 
@@ -72,6 +73,30 @@ def test_run_times_change_only_the_timings_files(computed, tmp_path):
     times_b = json.loads((b / "timings.json").read_text())["scenes"]["tiny"]["paths"]
     for ta, tb in zip(times_a, times_b):
         assert tb["seconds"] == pytest.approx(7.3 * ta["seconds"], rel=1e-12)
+
+
+def test_the_opensees_comparison_goes_to_the_run_times_only(computed, tmp_path):
+    _, data = computed
+    write_report(data, tmp_path / "without")
+    timed = copy.deepcopy(data)
+    fast, slow = (0.004, 0.005, 0.006), (0.05, 0.06, 0.07)
+    timed.scenes[0].peers = [PeerRow("F", 1, fast, slow, fast, slow, fast, slow, 1e-4),
+                             PeerRow("G", None)]
+    write_report(timed, tmp_path / "with")
+    for name in RESULT_FILES:
+        assert ((tmp_path / "without" / name).read_bytes()
+                == (tmp_path / "with" / name).read_bytes()), name
+    md = (tmp_path / "with" / "timings.md").read_text()
+    assert "### beam:100 against OpenSeesPy" in md
+    assert "| F | 5.0 | 60.0 | 1 | 12.00x | 12.00x | 0.0001 |" in md      # medians: 60 / 5
+    assert "| G | – | – | > 32 | OpenSees did not converge |" in md
+    peers = json.loads((tmp_path / "with" / "timings.json").read_text())["scenes"]["tiny"]["peers"]
+    assert peers[0]["ratio"] == pytest.approx(12.0) and peers[1] == {"load_case": "G",
+                                                                    "substeps": None}
+    timed.scenes[0].peers = "OpenSeesPy is missing or does not load (no module)"
+    write_report(timed, tmp_path / "missing")
+    assert ("Not timed: OpenSeesPy is missing or does not load (no module)."
+            in (tmp_path / "missing" / "timings.md").read_text())
 
 
 def test_report_md_prints_no_run_time(computed, tmp_path):

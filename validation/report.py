@@ -383,9 +383,10 @@ def write_report(data: ReportData, out: Path, protocol: Path | None = None) -> P
 def build_report(scene_names: list[str], out: Path, models: list[str] | None = None,
                  repeats: int = 3, use_cache: bool = True, progress: bool = True,
                  bench: bool = True, converge: bool = True, workers: int = 1,
-                 protocol: Path | None = None) -> Path:
+                 protocol: Path | None = None, peers: bool = False) -> Path:
     """Compute everything (on ``workers`` processes), then write ``out/report.md``, its
-    figures, JSON files and run times; ``protocol``: as in :func:`render_markdown`."""
+    figures, JSON files and run times; ``protocol``: as in :func:`render_markdown`;
+    ``peers``: time beam:100 against OpenSeesPy too (:func:`compute_report`)."""
     data = compute_report(scene_names, models, repeats, use_cache, progress, bench, converge,
-                          workers)
+                          workers, peers)
     return write_report(data, out, protocol)

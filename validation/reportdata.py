@@ -38,6 +38,7 @@ from .campaign import Job, Progress, RunMemo, prefetch, run_campaign, timed_run
 from .compare import errors, paper_percent, paper_scene, paper_seconds
 from .convergence import ConvergenceStudy, study
 from .failures import Failure
+from .peers import PeerRow, PeerUnavailable, compare_with_opensees
 from .frequencies import FrequencyTable, frequency_data
 
 DEFAULT_MODELS = ("continuum", "beam:100", "beam:20", "prbm", "dcmm:1", "dcmm:2", "dcmm:3", "ee")
@@ -128,6 +129,7 @@ class SceneResults:
     convergence: list[ConvergenceStudy] = field(default_factory=list)
     frequencies: FrequencyTable | None = None
     bracket: PlaneBracket | None = None
+    peers: list[PeerRow] | str | None = None   # the OpenSees comparison, why not, or not asked
 
     @property
     def cases(self) -> list[str]:
@@ -269,7 +271,9 @@ class ReportData:
                 "convergence": [{"family": st.family, "load_case": st.load_case,
                                  "rows": [{"model": row["model"], "seconds": row["seconds"]}
                                           for row in st.rows]}
-                                for st in r.convergence]}
+                                for st in r.convergence],
+                "peers": (r.peers if isinstance(r.peers, str) or r.peers is None
+                          else [row.to_dict() for row in r.peers])}
         return {"code_version": self.code, "repeats": self.repeats, "workers": self.workers,
                 "wall_seconds": self.wall_seconds, "scenes": scenes}
 
@@ -421,8 +425,13 @@ def _longest_first(jobs: list[Job]) -> list[Job]:
 
 def compute_report(scene_names: list[str], models: list[str] | None = None, repeats: int = 3,
                    use_cache: bool = True, progress: bool = True, bench: bool = True,
-                   converge: bool = True, workers: int = 1) -> ReportData:
+                   converge: bool = True, workers: int = 1, peers: bool = False) -> ReportData:
     """Run and compare everything the report shows (see the module docstring).
+
+    With ``peers``, :data:`PAPER_REFERENCE` is also timed against OpenSeesPy
+    on every load case (:func:`validation.peers.compare_with_opensees`, in
+    this process once everything else is computed, ``repeats`` times each);
+    where OpenSeesPy is missing the run times say so.
 
     With ``workers`` > 1 every load path of every study is first computed on
     that many processes (:func:`validation.campaign.prefetch`); the studies
@@ -467,5 +476,15 @@ def compute_report(scene_names: list[str], models: list[str] | None = None, repe
                 run=lambda spec, sc=sc, case=case: timed_run(
                     sc, spec, case, 1, memo, record=spec.id in plan.record)))
         out.append(res)
+    wall = {"models": time.perf_counter() - t0}
+    if peers:
+        t1 = time.perf_counter()
+        n = parse_model(PAPER_REFERENCE).resolution
+        for res in out:
+            try:
+                res.peers = compare_with_opensees(res.scene, n, repeats)
+            except PeerUnavailable as exc:
+                res.peers = str(exc)
+        wall["peers"] = time.perf_counter() - t1
     return ReportData(out, [s.id for s in specs], ref_id, repeats, versions(), code_version(),
-                      workers, {"models": time.perf_counter() - t0})
+                      workers, wall)

@@ -6,7 +6,8 @@ change only when a result does (two runs of the same code write them byte for
 byte the same). Here: the median wall time of every load path beside the
 paper's and the speed-ups against :data:`~validation.reportdata.PAPER_REFERENCE`,
 the cheapest model within each error budget of the findings, the cost of the
-plane-strain bracket and of each convergence run, the runtime-versus-error
+plane-strain bracket and of each convergence run, the comparison with
+OpenSeesPy (:mod:`validation.peers`, when asked), the runtime-versus-error
 study (``bench_<scene>.md/.png/.json``) and the report's own wall time.
 
 Units: s (ms where stated); speed-ups are ratios of mean seconds.
@@ -15,6 +16,7 @@ Units: s (ms where stated); speed-ups are ratios of mean seconds.
 from __future__ import annotations
 
 import platform
+import statistics
 from pathlib import Path
 from typing import Callable
 
@@ -22,6 +24,7 @@ from .bench import write_bench
 from .campaign import available_cores
 from .figurejobs import draw_now
 from .outputs import write_json, write_text
+from .peers import AGREEMENT_BAR, SUBSTEP_CHOICES, geometric_mean
 from .reportdata import PAPER_REFERENCE, ReportData, SceneResults
 
 #: file names of the run times, beside report.md
@@ -89,6 +92,39 @@ def _convergence_lines(res: SceneResults) -> list[str]:
     return L
 
 
+def _peer_lines(res: SceneResults) -> list[str]:
+    """Markdown: :data:`PAPER_REFERENCE` against OpenSeesPy (:mod:`validation.peers`), or why not."""
+    if res.peers is None:
+        return []
+    title = f"### {PAPER_REFERENCE} against OpenSeesPy"
+    if isinstance(res.peers, str):
+        return [title, "", f"Not timed: {res.peers}.", ""]
+    L = [title, "",
+         "The same mechanism in OpenSeesPy (corotational `elasticBeamColumn`, the same "
+         "elements per flexure, rigid bodies as very stiff corotational spokes, load control "
+         "with the fewest sub-steps per level that converge), timed in this process after "
+         "everything else (`validation/peers.py`, `benchmarks/bench_peers.py`). Interleaved: "
+         "the two codes alternate, each run with the other's caches; back to back: all of "
+         "one code's runs, then the other's. Median wall times, model build included; "
+         f"agreement of the end values (the bar: {AGREEMENT_BAR} %).", "",
+         "| case | ours (ms) | OpenSees (ms) | sub-steps | OpenSees / ours | back to back | "
+         "agreement (%) |", "|---|---:|---:|---:|---:|---:|---:|"]
+    timed = [r for r in res.peers if r.substeps is not None]
+    for r in res.peers:
+        if r.substeps is None:
+            L.append(f"| {r.case} | – | – | > {SUBSTEP_CHOICES[-1]} | OpenSees did not "
+                     "converge | – | – |")
+            continue
+        L.append(f"| {r.case} | {1e3 * statistics.median(r.ours):.1f} | "
+                 f"{1e3 * statistics.median(r.theirs):.1f} | {r.substeps} | {r.ratio:.2f}x | "
+                 f"{r.b2b_ratio:.2f}x | {r.agreement:.4f} |")
+    if timed:
+        L += ["", f"- Geometric mean OpenSees / ours: "
+              f"{geometric_mean([r.ratio for r in timed]):.2f}x interleaved, "
+              f"{geometric_mean([r.b2b_ratio for r in timed]):.2f}x back to back."]
+    return L + [""]
+
+
 def _scene_lines(res: SceneResults, bench_md: Path | None) -> list[str]:
     """Markdown of one scene's run times (``bench_md``: its runtime-versus-error table)."""
     seconds_note = f" (the paper's {res.paper.seconds_table})" if res.paper else ""
@@ -105,7 +141,7 @@ def _scene_lines(res: SceneResults, bench_md: Path | None) -> list[str]:
         L += [f"- Computing the `{res.bracket.model}` paths (the plane bracket) takes "
               f"{res.bracket.seconds():.3g} s (wall time of its runs, the report's added cost "
               "when they are not cached)."]
-    L += [""] + _convergence_lines(res)
+    L += [""] + _peer_lines(res) + _convergence_lines(res)
     if bench_md is not None:
         L += ["### Runtime versus error", "",
               f"Every model and resolution against `{res.bench_reference}`; details in "
@@ -129,8 +165,9 @@ def render_timings(data: ReportData, benches: dict[str, Path], render_seconds: f
     ``benches``: {scene: runtime-versus-error Markdown} (:func:`write_benches`);
     ``render_seconds``: wall time of writing report.md, its figures and JSON files.
     """
-    wall = data.wall_seconds.get("models")
+    wall, peers = data.wall_seconds.get("models"), data.wall_seconds.get("peers")
     total = f"{wall:.1f} s computing, " if wall is not None else ""
+    total += f"{peers:.1f} s timing OpenSeesPy, " if peers is not None else ""
     lines = ["# flexval validation report: run times", "",
              "The run times of [report.md](report.md), apart from its results because they "
              "change from run to run (machine, load, cache).", "",
