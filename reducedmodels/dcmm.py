@@ -339,13 +339,39 @@ class DcmmConnector(Connector):
 
 
 class _StackTables(NamedTuple):
-    """The integer tables of a :class:`_Stack` (and its sample fractions); see there.
+    """The numbering of the chain bodies, sub-arcs and samples of DCMM connectors in one stack.
 
-    Also, for the connectors' local coordinates laid end to end: each
-    sub-arc's two bodies' coordinates (``element_dofs``, (e, 6)) and the
-    (rows, cols) of the connectors' Hessian values (``hessian_rows``,
-    ``hessian_cols``: :meth:`DcmmConnector.hessian_pattern` shifted to each
-    connector's first coordinate).
+    It depends only on each connector's number of sub-arcs and direction
+    (:func:`_stack_tables`); :class:`_Stack` adds the connectors' geometry.
+
+    Attributes
+    ----------
+    first : int64 array (c,)
+        Each connector's end body a among the stacked chain bodies.
+    sub_arc_body : int64 array (e,)
+        Each sub-arc's leading body (its following one is the next).
+    sub_arc_start : int64 array (c + 1,)
+        Each connector's first sub-arc (and the end).
+    lead, follow, sub_arc, last : int64 arrays (s,)
+        Each sample's leading and following bodies, its sub-arc and its
+        connector's body b.
+    connector : int64 array (s,)
+        Each sample's connector.
+    w : float array (s,)
+        Each sample's fraction along its sub-arc.
+    order : int64 array (s,)
+        The samples in station order, connector by connector.
+    sample_start : list of int (c + 1,)
+        Each connector's first sample (and the end).
+    pose_order : list of int
+        The connectors' local coordinates [pose_a, pose_b, internal], laid
+        end to end, in the stack's order of chain bodies (a, cuts, b).
+    element_dofs : int64 array (e, 6)
+        Each sub-arc's two bodies' coordinates among those local coordinates.
+    hessian_rows, hessian_cols : int64 arrays
+        The connectors' Hessian values' places among them
+        (:meth:`DcmmConnector.hessian_pattern` shifted to each connector's
+        first coordinate).
     """
 
     first: np.ndarray
@@ -414,74 +440,41 @@ def _stack_tables(chains: tuple[tuple[int, bool], ...]) -> _StackTables:
 
 @dataclasses.dataclass(frozen=True)
 class _Stack:
-    """The chain bodies, sub-arcs and samples of several DCMM connectors numbered in one stack.
+    """Several DCMM connectors in one stack: its numbering and the connectors' geometry.
 
-    The tables the end-of-path kernels read (:mod:`reducedmodels.dcmmkernel`).
+    What the end-of-path kernels read (:mod:`reducedmodels.dcmmkernel`).
 
     Attributes
     ----------
-    first : int64 array (c,)
-        Each connector's end body a among the stacked chain bodies.
+    tables : _StackTables
+        The numbering of the stack's chain bodies, sub-arcs and samples.
     end_rel : float array (c, 4)
         Flexure ends' offsets from bodies a and b (mm).
-    sub_arc_body : int64 array (e,)
-        Each sub-arc's leading body (its following one is the next).
-    sub_arc_start : int64 array (c + 1,)
-        Each connector's first sub-arc (and the end).
     lengths : float array (e,)
         Sub-arc lengths (mm).
     parameters : float array (e, PARAMETERS)
         Each sub-arc's :func:`reducedmodels.dcmmkernel.sub_arc` parameters.
-    lead, follow, sub_arc, last : int64 arrays (s,)
-        Each sample's leading and following bodies, its sub-arc and its
-        connector's body b.
-    connector : int64 array (s,)
-        Each sample's connector.
-    w : float array (s,)
-        Each sample's fraction along its sub-arc.
     rel : float array (s, 4)
         Each sample's offsets from its leading and following bodies (mm).
     tangent : float array (s,)
         Each sample's section direction at rest (rad, towards body b).
-    order : int64 array (s,)
-        The samples in station order, connector by connector.
-    sample_start : list of int (c + 1,)
-        Each connector's first sample (and the end).
-    pose_order : list of int
-        The connectors' local coordinates [pose_a, pose_b, internal], laid
-        end to end, in the stack's order of chain bodies (a, cuts, b).
     """
 
-    first: np.ndarray
+    tables: _StackTables
     end_rel: np.ndarray
-    sub_arc_body: np.ndarray
-    sub_arc_start: np.ndarray
     lengths: np.ndarray
     parameters: np.ndarray
-    lead: np.ndarray
-    follow: np.ndarray
-    sub_arc: np.ndarray
-    last: np.ndarray
-    connector: np.ndarray
-    w: np.ndarray
     rel: np.ndarray
     tangent: np.ndarray
-    order: np.ndarray
-    sample_start: list
-    pose_order: list
 
     @classmethod
     def of(cls, connectors, tables: _StackTables) -> "_Stack":
         """The stack of ``connectors`` (DcmmConnector), in their order, with their tables."""
-        return cls(
-            tables.first, np.array([(*c._end_rel[0], *c._end_rel[1]) for c in connectors]),
-            tables.sub_arc_body, tables.sub_arc_start,
-            np.concatenate([c._sub_lengths for c in connectors]),
-            np.concatenate([c._parameters for c in connectors]),
-            tables.lead, tables.follow, tables.sub_arc, tables.last, tables.connector,
-            tables.w, np.concatenate([c._sample_rel for c in connectors]),
-            np.concatenate([c._sample_tangent for c in connectors]), tables.order,
-            tables.sample_start, tables.pose_order)
+        return cls(tables, np.array([(*c._end_rel[0], *c._end_rel[1]) for c in connectors]),
+                   np.concatenate([c._sub_lengths for c in connectors]),
+                   np.concatenate([c._parameters for c in connectors]),
+                   np.concatenate([c._sample_rel for c in connectors]),
+                   np.concatenate([c._sample_tangent for c in connectors]))
 
     @staticmethod
     def poses(levels) -> np.ndarray:
@@ -550,7 +543,7 @@ class DcmmGroup(ConnectorGroup):
         chain of poses by one gather; local states are made only for the
         pairs the screen sends to the scalar check.
         """
-        poses = coordinates[:, self.stack().pose_order].reshape(len(coordinates), -1, 3)
+        poses = coordinates[:, self._tables.pose_order].reshape(len(coordinates), -1, 3)
         return (self._verdicts(poses, lambda: self.local_levels(coordinates)),
                 self._forces(poses))
 
@@ -568,10 +561,10 @@ class DcmmGroup(ConnectorGroup):
     def _verdicts(self, poses: np.ndarray, levels_of: Callable[[], list]
                   ) -> list[list[list[str]]]:
         """:meth:`path_validity` from the stacked poses; ``levels_of()`` gives the local states."""
-        stack = self.stack()
+        stack, tables = self.stack(), self._tables
         strain, turn = dcmm_kernels().chain_measures(
-            poses, stack.first, stack.end_rel, stack.sub_arc_body, stack.lengths,
-            stack.sub_arc_start)
+            poses, tables.first, stack.end_rel, tables.sub_arc_body, stack.lengths,
+            tables.sub_arc_start)
         near = ((strain > MAX_STRAIN - SCREEN_MARGIN)
                 | (turn > MAX_RELATIVE_ROTATION - SCREEN_MARGIN)).T.tolist()
         levels = levels_of() if any(map(any, near)) else [None] * len(poses)
@@ -589,12 +582,12 @@ class DcmmGroup(ConnectorGroup):
 
     def _forces(self, poses: np.ndarray) -> list[SectionForces]:
         """:meth:`path_section_forces` from the stacked poses (k, bodies, 3)."""
-        stack = self.stack()
+        stack, tables = self.stack(), self._tables
         kernels = dcmm_kernels()
-        wrenches = kernels.sub_arc_wrenches(poses, stack.sub_arc_body, stack.parameters)
+        wrenches = kernels.sub_arc_wrenches(poses, tables.sub_arc_body, stack.parameters)
         return self._split(*kernels.sample_statics(
-            poses, wrenches, stack.sub_arc, stack.follow, stack.lead, stack.w, stack.rel,
-            stack.tangent, stack.order))
+            poses, wrenches, tables.sub_arc, tables.follow, tables.lead, tables.w, stack.rel,
+            stack.tangent, tables.order))
 
     def section_forces(self, states, gradients) -> list[SectionForces]:
         """Each connector's :meth:`DcmmConnector.section_forces` with a known gradient, in one pass.
@@ -603,15 +596,15 @@ class DcmmGroup(ConnectorGroup):
         along all its sub-arcs to its samples, every connector's samples in
         one compiled call.
         """
-        stack = self.stack()
+        stack, tables = self.stack(), self._tables
         wrenches = np.array([np.asarray(g, float)[3:6] for g in gradients])[None]
         axial, moment = dcmm_kernels().sample_statics(
-            stack.poses([states]), wrenches, stack.connector, stack.last, stack.lead, stack.w,
-            stack.rel, stack.tangent, stack.order)
+            stack.poses([states]), wrenches, tables.connector, tables.last, tables.lead,
+            tables.w, stack.rel, stack.tangent, tables.order)
         return self._split(axial[0], moment[0])
 
     def _split(self, axial: np.ndarray, moment: np.ndarray) -> list[SectionForces]:
         """Each connector's section forces from the stack's (..., samples) in station order."""
-        bounds = self.stack().sample_start
+        bounds = self._tables.sample_start
         return [SectionForces(c._layout.stations, axial[..., start:stop], moment[..., start:stop])
                 for c, start, stop in zip(self.connectors, bounds, bounds[1:])]

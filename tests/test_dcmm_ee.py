@@ -78,8 +78,8 @@ def test_path_wrenches_are_the_assembled_gradient_on_the_follower():
     states = [(a + rng.normal(0.0, 0.3, 3), b + rng.normal(0.0, 0.3, 3), i)
               for a, b, i in system.local_states(system.initial_state())]
     stack = group.stack()
-    wrenches = dcmm_kernels().sub_arc_wrenches(stack.poses([states]), stack.sub_arc_body,
-                                                stack.parameters)[0]
+    wrenches = dcmm_kernels().sub_arc_wrenches(stack.poses([states]),
+                                                stack.tables.sub_arc_body, stack.parameters)[0]
     for c, state, wrench in zip(group.connectors, states, wrenches):
         assert np.array_equal(wrench, c.evaluate(*state)[1][3:6])
 
@@ -102,10 +102,12 @@ def test_end_pass_measures_and_statics_against_direct_numpy_forms():
     stack = group.stack()
     kernels = dcmm_kernels()
     poses = stack.poses(levels)
-    strain, turn = kernels.chain_measures(poses, stack.first, stack.end_rel, stack.sub_arc_body,
-                                          stack.lengths, stack.sub_arc_start)
+    tables = stack.tables
+    strain, turn = kernels.chain_measures(poses, tables.first, stack.end_rel,
+                                          tables.sub_arc_body, stack.lengths,
+                                          tables.sub_arc_start)
     forces = group.path_section_forces(levels)
-    wrenches = kernels.sub_arc_wrenches(poses, stack.sub_arc_body, stack.parameters)
+    wrenches = kernels.sub_arc_wrenches(poses, tables.sub_arc_body, stack.parameters)
 
     def place(pose, rel):
         c, s = math.cos(pose[2]), math.sin(pose[2])
@@ -120,17 +122,17 @@ def test_end_pass_measures_and_statics_against_direct_numpy_forms():
             assert strain[k, j] == pytest.approx(np.max(chords / c._sub_lengths - 1.0),
                                                  rel=1e-12, abs=1e-15)
             assert turn[k, j] == pytest.approx(np.max(np.abs(np.diff(chain[:, 2]))), rel=1e-12)
-            start = stack.sample_start[j]
-            for i in range(start, stack.sample_start[j + 1]):
-                e, w = stack.sub_arc[i], stack.w[i]
-                local = e - stack.sub_arc_start[j]
+            start = tables.sample_start[j]
+            for i in range(start, tables.sample_start[j + 1]):
+                e, w = tables.sub_arc[i], tables.w[i]
+                local = e - tables.sub_arc_start[j]
                 lead, follow = chain[local], chain[local + 1]
                 point = ((1.0 - w) * place(lead, c._sample_rel[i - start, :2])
                          + w * place(follow, c._sample_rel[i - start, 2:]))
                 axis = c._sample_tangent[i - start] + (1.0 - w) * lead[2] + w * follow[2]
                 fx, fy, m = wrenches[k, e]
                 r = follow[:2] - point
-                station = np.flatnonzero(stack.order == i)[0] - start
+                station = np.flatnonzero(tables.order == i)[0] - start
                 scale = np.abs(forces[j].moment[k]).max()
                 assert forces[j].moment[k, station] == pytest.approx(
                     -(m + r[0] * fy - r[1] * fx), abs=1e-12 * scale)
