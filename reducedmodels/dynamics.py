@@ -196,7 +196,7 @@ class DynamicStep(StepProblem):
             M = sp.csr_matrix((values, (rows, cols)), shape=(system.n_dofs, system.n_dofs))
             r += M @ (a + alpha * v)
             k = sp.csc_matrix(layout.tangent(effective).toarray())
-            return r, _SparseEffectiveTangent(sp.csc_matrix(k + c_mass * M))
+            return r, _SparseEffectiveTangent((k + c_mass * M).tocsc())   # no copy if CSC
         kept = slots >= 0                    # a symmetric band: the upper mirror holds the value
         mass = np.bincount(slots[kept], weights=values[kept], minlength=layout.size)
         r += layout.product(mass, a + alpha * v)
