@@ -26,7 +26,7 @@ venv: $(STAMP)
 report: $(PEERS)
 	$(BIN)/flexval info open_chain
 	$(BIN)/flexval info closed_chain
-	$(BIN)/flexval report --out reports/paper --protocol reports/dynamics/protocol.json
+	$(BIN)/flexval report --out reports/paper --protocol reports/dynamics/protocol.json --peers
 
 test: $(STAMP)
 	$(BIN)/python -m pytest

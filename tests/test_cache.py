@@ -248,7 +248,7 @@ def test_two_reports_share_an_empty_cache(tmp_path):
     cache = tmp_path / "cache"
     outs = [tmp_path / f"out{k}" for k in range(2)]
     argv = ["-m", "validation.cli", "report", "open_chain", "--model", "ee", "--model", "dcmm:1",
-            "--model", "prbm", "--repeats", "1", "--no-bench", "--no-converge", "--no-peers", "--quiet"]
+            "--model", "prbm", "--repeats", "1", "--no-bench", "--no-converge", "--quiet"]
     procs = [_spawn(argv + ["--out", str(o)], cache) for o in outs]
     for p in procs:
         _, err = p.communicate(timeout=600)

@@ -56,6 +56,39 @@ def test_agreement_is_the_larger_relative_gap_of_displacement_and_rotation():
     assert agreement((3.0, 4.0, 0.5), (3.0, 4.0, 0.51)) == pytest.approx(2.0)     # 0.01 / 0.5
 
 
-def test_a_case_opensees_cannot_follow_has_no_times():
-    row = PeerRow("f-", None)
-    assert row.to_dict() == {"load_case": "f-", "substeps": None}
+def test_a_case_opensees_cannot_follow_has_no_times_but_a_reason():
+    row = PeerRow("f-", None, reason="OpenSees failed (See stderr output)")
+    assert row.to_dict() == {"load_case": "f-", "substeps": None,
+                             "reason": "OpenSees failed (See stderr output)"}
+
+
+def test_an_opensees_error_is_a_row_not_a_crash(monkeypatch):
+    ops = _opensees_or_skip()
+    import validation.peers as peers
+
+    def broken(*args):
+        raise ops.OpenSeesError("See stderr output")
+
+    monkeypatch.setattr(peers, "fewest_substeps", broken)
+    rows = compare_with_opensees(load_scene("open_chain"), n=2, repeats=1)
+    assert [r.reason for r in rows] == ["OpenSees failed (See stderr output)"] * len(rows)
+
+
+def test_report_with_peers_says_when_opensees_is_missing(tmp_path, monkeypatch):
+    """``flexval report --peers`` reaches the run times, and a missing peer is said there."""
+    import validation.peers as peers
+    from test_report import TINY
+    from validation.cli import main
+
+    def missing():
+        raise PeerUnavailable("OpenSeesPy is missing or does not load (test)")
+
+    monkeypatch.setattr(peers, "opensees", missing)
+    scene = tmp_path / "tiny.toml"
+    scene.write_text(TINY)
+    out = tmp_path / "out"
+    assert main(["report", str(scene), "--out", str(out), "--model", "ee", "--repeats", "1",
+                 "--no-bench", "--no-converge", "--no-cache", "--quiet", "--jobs", "1",
+                 "--peers"]) == 0
+    assert ("Not timed: OpenSeesPy is missing or does not load (test)."
+            in (out / "timings.md").read_text())

@@ -149,7 +149,7 @@ def test_rendering_runs_no_model(arch, tmp_path, monkeypatch):
 
 def test_report_from_the_command_line_exits_0(arch, tmp_path):
     path, _, _ = arch
-    args = ["report", str(path), "--out", str(tmp_path), "--no-bench", "--no-converge", "--no-peers",
+    args = ["report", str(path), "--out", str(tmp_path), "--no-bench", "--no-converge",
             "--no-cache", "--quiet", "--repeats", "1"]
     for m in MODELS:
         args += ["--model", m]

@@ -358,7 +358,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
                         bench=not args.no_bench, converge=not args.no_converge,
                         workers=args.jobs,
                         protocol=Path(args.protocol) if args.protocol else None,
-                        peers=not args.no_peers)
+                        peers=args.peers)
     print(f"wrote {path}")
     return EXIT_OK
 
@@ -576,9 +576,9 @@ def build_parser() -> argparse.ArgumentParser:
     _campaign_options(q)
     q.add_argument("--no-bench", action="store_true", help="skip the runtime-vs-error study")
     q.add_argument("--no-converge", action="store_true", help="skip the mesh convergence study")
-    q.add_argument("--no-peers", action="store_true",
-                   help="skip timing beam:100 against OpenSeesPy (optional extra [peers]; "
-                        "without it the run times say it is missing)")
+    q.add_argument("--peers", action="store_true",
+                   help="also time beam:100 against OpenSeesPy on every load case, in the run "
+                        "times (optional extra [peers]; without it they say it is missing)")
     q.add_argument("--protocol", metavar="PATH",
                    help="protocol.json of benchmarks/paper_protocol.py, summarised in the "
                         "report's dynamics section (default: none; a missing or stale file is "

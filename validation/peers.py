@@ -4,8 +4,8 @@ Both solve the same mechanism with N two-node corotational Euler-Bernoulli
 elements per flexure, nodes on the centre line at arc lengths k L / N, along
 the same load levels, in one process; :func:`compare_with_opensees` gives
 both wall times (model build included), their ratio and how far apart the
-end values are. ``benchmarks/bench_peers.py`` prints it; ``flexval report``
-puts it in the report's run times (``timings.md``).
+end values are. ``benchmarks/bench_peers.py`` prints it; ``flexval report
+--peers`` puts it in the report's run times (``timings.md``).
 
 The OpenSees model: ``elasticBeamColumn`` elements with a ``Corotational``
 transformation for the flexures (A = b h, Iz = b h^3 / 12, E of the scene);
@@ -181,8 +181,9 @@ def agreement(a: tuple[float, float, float], b: tuple[float, float, float]) -> f
 class PeerRow:
     """One load case timed with flexval ``beam:N`` and OpenSees (seconds per run).
 
-    ``substeps`` is None when OpenSees did not converge with up to
-    ``SUBSTEP_CHOICES[-1]`` sub-steps per level (then there are no times).
+    ``substeps`` is None when OpenSees could not follow the case (then
+    there are no times, and ``reason`` says why: no convergence with up to
+    ``SUBSTEP_CHOICES[-1]`` sub-steps per level, or OpenSees' own error).
     ``ours``/``theirs`` are wall times of the interleaved runs, ``*_cpu``
     their process CPU times, ``*_b2b`` wall times of the back-to-back runs;
     ``agreement`` in per cent (:func:`agreement`).
@@ -197,6 +198,7 @@ class PeerRow:
     ours_b2b: tuple[float, ...] = ()
     theirs_b2b: tuple[float, ...] = ()
     agreement: float = float("nan")
+    reason: str = ""
 
     @property
     def ratio(self) -> float:
@@ -216,7 +218,9 @@ class PeerRow:
     def to_dict(self) -> dict:
         """JSON-ready (seconds; the ratios included)."""
         out = {"load_case": self.case, "substeps": self.substeps}
-        if self.substeps is not None:
+        if self.substeps is None:
+            out["reason"] = self.reason
+        else:
             out.update(flexval=list(self.ours), opensees=list(self.theirs),
                        flexval_cpu=list(self.ours_cpu), opensees_cpu=list(self.theirs_cpu),
                        flexval_b2b=list(self.ours_b2b), opensees_b2b=list(self.theirs_b2b),
@@ -277,9 +281,13 @@ def compare_with_opensees(scene: Scene, n: int = 100, repeats: int = 5) -> list[
     spec = parse_model(f"beam:{n}", "<peers>", "n")
     rows = []
     for case in scene.load_cases:
-        k = fewest_substeps(ops, mech, case, n)
-        rows.append(PeerRow(case.name, None) if k is None
-                    else _time_case(ops, mech, spec, case, n, k, repeats))
+        try:
+            k = fewest_substeps(ops, mech, case, n)
+            rows.append(PeerRow(case.name, None, reason="OpenSees did not converge with up to "
+                                f"{SUBSTEP_CHOICES[-1]} sub-steps per level") if k is None
+                        else _time_case(ops, mech, spec, case, n, k, repeats))
+        except ops.OpenSeesError as exc:       # the peer's failure is a result, not a crash
+            rows.append(PeerRow(case.name, None, reason=f"OpenSees failed ({exc})"))
     return rows
 
 

@@ -24,7 +24,7 @@ from .bench import write_bench
 from .campaign import available_cores
 from .figurejobs import draw_now
 from .outputs import write_json, write_text
-from .peers import AGREEMENT_BAR, SUBSTEP_CHOICES, geometric_mean
+from .peers import AGREEMENT_BAR, geometric_mean
 from .reportdata import PAPER_REFERENCE, ReportData, SceneResults
 
 #: file names of the run times, beside report.md
@@ -112,8 +112,7 @@ def _peer_lines(res: SceneResults) -> list[str]:
     timed = [r for r in res.peers if r.substeps is not None]
     for r in res.peers:
         if r.substeps is None:
-            L.append(f"| {r.case} | – | – | > {SUBSTEP_CHOICES[-1]} | OpenSees did not "
-                     "converge | – | – |")
+            L.append(f"| {r.case} | – | – | – | {r.reason} | – | – |")
             continue
         L.append(f"| {r.case} | {1e3 * statistics.median(r.ours):.1f} | "
                  f"{1e3 * statistics.median(r.theirs):.1f} | {r.substeps} | {r.ratio:.2f}x | "
