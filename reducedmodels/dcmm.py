@@ -519,7 +519,7 @@ class DcmmGroup(ConnectorGroup):
         dofs = self._tables.element_dofs    # each sub-arc's bodies among the local coordinates
         fixed = (np.ascontiguousarray(gather[dofs[:, 0]], np.int64),
                  np.ascontiguousarray(gather[dofs[:, 3]], np.int64),
-                 np.concatenate([c._parameters for c in self.connectors]),
+                 self.stack().parameters,
                  np.ascontiguousarray(grad_dofs[dofs], np.int64),
                  np.ascontiguousarray(hess_slots, np.int64).reshape(-1, 36))
 
