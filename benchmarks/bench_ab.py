@@ -12,7 +12,7 @@ lasting longer than a process touches both versions alike; one shorter than
 the ``repeats`` runs of a path is what the minimum removes.
 
 Each path is one ``reducedmodels.run_reduced`` (or, for the continuum,
-``validation.run.run_model``) of a built-in scene's load case, timed as the
+``flexval.validation.run.run_model``) of a built-in scene's load case, timed as the
 model times itself (``LoadPath.seconds``: model build included). Next to the
 times it prints whether the two versions agree (Newton iterations and end
 values), so a speed-up is always read next to what it changed.
@@ -44,16 +44,17 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 MODELS = ("ee", "dcmm:1", "dcmm:2", "prbm", "beam:20", "beam:100")
-PACKAGES = ("geometry", "reducedmodels", "validation")
+PACKAGES = ("__init__.py", "geometry", "reducedmodels", "validation")
+"""What a checkout holds of the ``flexval`` package (its root is the package)."""
 AGREEMENT = 1e-9
 """Relative difference of end values (mm, rad) below which two versions agree."""
 
 WORKER = r"""
 import json, sys
-import reducedmodels, geometry
-from geometry import load_scene
-from reducedmodels.catalogue import parse_model
-from validation.run import run_model
+import flexval.reducedmodels, flexval.geometry
+from flexval.geometry import load_scene
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.validation.run import run_model
 
 scenes, cases, models, repeats = json.loads(sys.argv[1])
 rows = []
@@ -72,33 +73,35 @@ for name in scenes:
             rows.append({"path": f"{name} {case.name} {model}", "seconds": min(seconds),
                          "newton": lp.stats.get("newton_iterations"),
                          "end": [lp.displacement[-1], lp.rotation[-1]]})
-print(json.dumps({"imported": [reducedmodels.__file__, geometry.__file__], "rows": rows}))
+print(json.dumps({"imported": [flexval.reducedmodels.__file__, flexval.geometry.__file__], "rows": rows}))
 """
 
 
 def version_directory(version: str, scratch: Path) -> Path:
-    """The directory whose packages a version's processes import.
+    """The directory a version's processes put on ``PYTHONPATH``.
 
-    A directory is taken as it is; anything else is a git revision of this
-    repository, exported into ``scratch``.
+    It holds one entry, ``flexval``: a link to a checkout given as a
+    directory (this checkout for ``""``), or a git revision of this
+    repository exported there.
     """
-    if version == "":
-        return ROOT
-    path = Path(version)
-    if path.is_dir():
-        missing = [p for p in PACKAGES if not (path / p).is_dir()]
+    target = scratch / (version.replace("/", "_") or "this-checkout")
+    target.mkdir()
+    if version == "" or Path(version).is_dir():
+        path = ROOT if version == "" else Path(version).resolve()
+        missing = [p for p in PACKAGES if not (path / p).exists()]
         if missing:
             sys.exit(f"bench_ab: directory {version!r} is not a flexval checkout "
                      f"(no {', '.join(missing)})")
-        return path.resolve()
-    target = scratch / version.replace("/", "_")
-    target.mkdir()
+        (target / "flexval").symlink_to(path, target_is_directory=True)
+        return target
+    (target / "flexval").mkdir()
     archive = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", version,
                               *PACKAGES], capture_output=True)
     if archive.returncode != 0:
-        sys.exit(f"bench_ab: {version!r} is neither a directory nor a git revision "
-                 f"({archive.stderr.decode().strip()})")
-    subprocess.run(["tar", "-x", "-C", str(target)], input=archive.stdout, check=True)
+        sys.exit(f"bench_ab: {version!r} is neither a directory nor a git revision of a "
+                 f"flexval with the flexval namespace ({archive.stderr.decode().strip()})")
+    subprocess.run(["tar", "-x", "-C", str(target / "flexval")], input=archive.stdout,
+                   check=True)
     return target
 
 
@@ -110,8 +113,9 @@ def run_version(directory: Path, work: list) -> dict:
     if done.returncode != 0:
         sys.exit(f"bench_ab: the process of {directory} failed:\n{done.stderr.strip()}")
     out = json.loads(done.stdout.strip().splitlines()[-1])
+    code = (directory / "flexval").resolve()
     for module in out["imported"]:
-        if not Path(module).resolve().is_relative_to(directory):
+        if not Path(module).resolve().is_relative_to(code):
             sys.exit(f"bench_ab: a process meant for {directory} imported {module}")
     return out
 

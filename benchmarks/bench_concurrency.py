@@ -12,7 +12,7 @@ used, so that a load that changes meanwhile does not pass for a slow-down.
 Times are wall seconds: measure on an otherwise idle machine.
 
 It does so twice: with flexval's thread control (the default cap of
-``reducedmodels.threads``) and without it (``FLEXVAL_BLAS_THREADS=0``).
+``flexval.reducedmodels.threads``) and without it (``FLEXVAL_BLAS_THREADS=0``).
 ``OPENBLAS_NUM_THREADS``, ``OMP_NUM_THREADS`` and ``MKL_NUM_THREADS`` are
 removed from the workers' environment so that flexval's control is what
 limits the pools: without it OpenBLAS starts one busy-waiting thread per
@@ -36,9 +36,9 @@ THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"
 
 def worker(scene_name: str, case_name: str, model: str, repeats: int) -> None:
     """Run the path once untimed, then ``repeats`` timed runs; print the median seconds."""
-    from geometry import load_scene
-    from reducedmodels.catalogue import parse_model
-    from validation.run import run_model
+    from flexval.geometry import load_scene
+    from flexval.reducedmodels.catalogue import parse_model
+    from flexval.validation.run import run_model
 
     scene = load_scene(scene_name)
     spec, case = parse_model(model, "<benchmark>", "--model"), scene.load_case(case_name)

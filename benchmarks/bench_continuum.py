@@ -8,7 +8,7 @@ the other processes) and where the time goes: set-up (Gmsh mesh or cache,
 scikit-fem basis), the element kernels (``ElementKernel.evaluate``), the
 rest of the assembly (the connector group's scatter into the band storage
 and the core's), the banded factorisation and solves of the tangent
-(``reducedmodels.tangent``), the section-wise predictor and Newton update
+(``flexval.reducedmodels.tangent``), the section-wise predictor and Newton update
 (``ContinuumGroup.predict_internal`` / ``update_internal``) and the rest.
 The breakdown comes from cProfile over the same run (its overhead is a few
 per cent: few, heavy calls).
@@ -23,14 +23,14 @@ import cProfile
 import pstats
 import time
 
-from geometry import SceneError, load_scene
-from reducedmodels import System
-from reducedmodels.tangent import BandedTangent, SparseTangent
-from validation.continuum import DEFAULT_LEVEL, run_continuum
-from validation.continuum.group import ContinuumGroup
-from validation.continuum.run import build_system
-from validation.continuum.solid import ElementKernel
-from validation.outputs import check_file, write_json
+from flexval.geometry import SceneError, load_scene
+from flexval.reducedmodels import System
+from flexval.reducedmodels.tangent import BandedTangent, SparseTangent
+from flexval.validation.continuum import DEFAULT_LEVEL, run_continuum
+from flexval.validation.continuum.group import ContinuumGroup
+from flexval.validation.continuum.run import build_system
+from flexval.validation.continuum.solid import ElementKernel
+from flexval.validation.outputs import check_file, write_json
 
 CASES = (("open_chain", "f+"), ("open_chain", "f-"), ("closed_chain", "f+"))
 

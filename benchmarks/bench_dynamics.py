@@ -20,15 +20,15 @@ import dataclasses
 import statistics
 import time
 
-import validation  # noqa: F401  (registers the continuum family: --models continuum:0)
-from geometry import MassData, load_scene
-from geometry.inertia import PLA_DENSITY
-from geometry.timelaw import TimeLaw
-from reducedmodels.catalogue import parse_model
-from reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
-from reducedmodels.models import build_system
-from reducedmodels.modes import natural_modes
-from reducedmodels.recorder import solve_path
+import flexval.validation  # noqa: F401  (registers the continuum family: --models continuum:0)
+from flexval.geometry import MassData, load_scene
+from flexval.geometry.inertia import PLA_DENSITY
+from flexval.geometry.timelaw import TimeLaw
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
+from flexval.reducedmodels.models import build_system
+from flexval.reducedmodels.modes import natural_modes
+from flexval.reducedmodels.recorder import solve_path
 
 MODELS = ("dcmm:1", "dcmm:2", "prbm", "beam:20", "beam:100")
 RAMP_PERIODS, HOLD_PERIODS = 40.0, 10.0

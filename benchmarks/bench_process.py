@@ -51,11 +51,10 @@ COMMANDS = (
     "run closed_chain --model beam:20 --load-case f+",
     "run closed_chain --model continuum:1 --load-case f+",
 )
-ENTRY = "import sys; from validation.cli import main; sys.exit(main())"
+ENTRY = "import sys; from flexval.validation.cli import main; sys.exit(main())"
 """What the ``flexval`` console script runs."""
 FLOOR = (("interpreter alone", "pass"),
          ("numpy + scipy.linalg + scipy.sparse", "import numpy, scipy.linalg, scipy.sparse"))
-OWN = ("geometry", "reducedmodels", "validation")
 SCIPY_COMPAT = "scipy._lib.array_api_compat.numpy"
 
 
@@ -127,7 +126,7 @@ def _group(name: str, parent: dict[str, str]) -> str:
         seen.add(chain)
         chain = parent.get(chain, "")
     top = name.split(".")[0]
-    if top in OWN:
+    if top == "flexval":
         return "flexval (geometry, reducedmodels, validation)"
     if top in ("numpy", "scipy", "skfem", "numba", "llvmlite", "threadpoolctl"):
         return top

@@ -12,9 +12,9 @@ from __future__ import annotations
 import argparse
 import statistics
 
-from geometry import load_scene
-from reducedmodels.catalogue import parse_model
-from reducedmodels import run_reduced
+from flexval.geometry import load_scene
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels import run_reduced
 
 MODELS = ("ee", "dcmm:1", "dcmm:2", "dcmm:3", "prbm", "beam:20", "beam:100")
 

@@ -3,7 +3,7 @@
 Builds a valid open chain of n arcs (radius 1 mm, 120 deg, apex up), each
 starting where the previous one ends (the body between them holds both ends
 at one point), as parsed TOML data and times
-:func:`geometry.scene.parse_scene` on it: field checks, end ownership, the
+:func:`flexval.geometry.scene.parse_scene` on it: field checks, end ownership, the
 body-graph walk, the overlap check (a bounding-box sweep, then polyline
 crossings of the candidate pairs), degenerate magnitudes and the structure
 check. Prints, per n, the median wall time over the repeats, the time per
@@ -24,8 +24,8 @@ import time
 
 import numpy as np
 
-from geometry.overlap import SAMPLES, candidate_pairs
-from geometry.scene import parse_scene
+from flexval.geometry.overlap import SAMPLES, candidate_pairs
+from flexval.geometry.scene import parse_scene
 
 SIZES = (10, 100, 1000)
 RADIUS, WIDTH_DEG = 1.0, 120.0                            # mm, deg

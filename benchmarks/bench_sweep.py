@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/bench_sweep.py [--n 1000] [--continuum-n 10] [--batch N]
 [--cases f+]`` (about 4.5 minutes on the quiet 2-core machine with the defaults; the
-batch defaults to the engine's automatic choice, :func:`validation.sweep.engine.auto_batch`).
+batch defaults to the engine's automatic choice, :func:`flexval.validation.sweep.engine.auto_batch`).
 
 The sweep: ``--n`` random variants of the open chain (flexure thickness h
 uniform in 0.08..0.12 mm, Young's modulus lognormal about 2100 MPa with
@@ -13,7 +13,7 @@ rows are computed three ways, each timed from submission to the last Parquet
 part written (point generation and cluster start-up excluded):
 
 - a plain loop in this process (the task functions called one after the other);
-- :func:`validation.sweep.run_sweep` on a LocalCluster of 1 worker process;
+- :func:`flexval.validation.sweep.run_sweep` on a LocalCluster of 1 worker process;
 - the same on 2 worker processes.
 
 Printed for each: wall time, runs (load paths) per second, and the
@@ -46,9 +46,9 @@ import time
 
 from distributed import Client, get_task_stream
 
-from validation.sweep import local_cluster, parse_sweep, results_store, run_sweep
-from validation.sweep.engine import auto_batch, chunks, task_info
-from validation.sweep.tasks import run_model_batch, run_reference
+from flexval.validation.sweep import local_cluster, parse_sweep, results_store, run_sweep
+from flexval.validation.sweep.engine import auto_batch, chunks, task_info
+from flexval.validation.sweep.tasks import run_model_batch, run_reference
 
 MODELS = ["ee", "dcmm:1", "dcmm:2", "prbm", "beam:20"]
 

@@ -1,6 +1,6 @@
 """Offline calibration of the PRBM table ``reducedmodels/data/prbm_table.json``.
 
-Fits rho(arc angle) of :mod:`reducedmodels.prbm` against the elastica. It is
+Fits rho(arc angle) of :mod:`flexval.reducedmodels.prbm` against the elastica. It is
 not part of the runtime package (nothing under ``reducedmodels`` imports it);
 the runtime only reads the table it writes. Run from the repository root
 
@@ -14,7 +14,7 @@ samples, the Su 2009 figures) in CI, so it stays runnable.
 
 What is fitted
 --------------
-The chain of :mod:`reducedmodels.prbm` matches the arc's linear compliance
+The chain of :mod:`flexval.reducedmodels.prbm` matches the arc's linear compliance
 exactly for every rho; rho (the share of the compliance L/EI lumped in the
 two outer joints) is chosen per arc angle 2 gamma so that the chain best
 follows a nonlinear beam at large deflection.
@@ -118,11 +118,11 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from geometry import Arc, Segment
-from geometry.files import write_bytes
+from flexval.geometry import Arc, Segment
+from flexval.geometry.files import write_bytes
 
-import reducedmodels
-from reducedmodels.prbm import (TABLE_RESOURCE, PrbmParameters, joint_positions, shape_frame,
+import flexval.reducedmodels
+from flexval.reducedmodels.prbm import (TABLE_RESOURCE, PrbmParameters, joint_positions, shape_frame,
                                 table_parameters)
 
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])
@@ -469,7 +469,7 @@ def build_table(settings: FitSettings, progress: bool = True) -> dict:
     return {
         "metadata": {
             "description": "Symmetric 3R PRBM of uniform arcs: rho(arc angle) with exact "
-                           "linear compliance (see reducedmodels.prbm).",
+                           "linear compliance (see flexval.reducedmodels.prbm).",
             "parameter": "rho = 2 c1 / (L/EI), share of the rotational compliance in the two "
                          "outer joints; x1, y1, y2 (units of L, ellipse frame {C, e1, e2}) "
                          "and kappa1, kappa2 (units of EI/L) follow from rho and the angle.",
@@ -514,7 +514,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     settings = QUICK if args.quick else FitSettings()
     out = args.output or (Path("prbm_table_quick.json") if args.quick
-                          else Path(reducedmodels.__file__).parent / TABLE_RESOURCE)
+                          else Path(flexval.reducedmodels.__file__).parent / TABLE_RESOURCE)
     doc = build_table(settings)
     out.parent.mkdir(parents=True, exist_ok=True)
     write_bytes(out, (json.dumps(doc, indent=1, allow_nan=False) + "\n").encode("utf-8"))

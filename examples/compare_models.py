@@ -3,7 +3,7 @@
 What it shows
 -------------
 * loading a built-in scene and one of its load cases;
-* running models by id through the catalogue (``validation.run.run_model``,
+* running models by id through the catalogue (``flexval.validation.run.run_model``,
   the dispatcher behind ``flexval run``): any registered family, the
   continuum included, returns the same :class:`reducedmodels.LoadPath`;
 * the paper's comparison in a few lines: the end displacement of the target
@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from geometry import load_scene
-from reducedmodels import parse_model
-from validation.run import run_model
+from flexval.geometry import load_scene
+from flexval.reducedmodels import parse_model
+from flexval.validation.run import run_model
 
 MODELS = ("ee", "dcmm:1", "dcmm:2", "prbm", "beam:20")
 REFERENCE = "beam:100"

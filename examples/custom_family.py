@@ -15,7 +15,7 @@ What it shows
   linear in the load and must equal the linear ``ee`` model's to round-off,
   whatever the rotation; the target point's displacement differs from
   ``ee``'s, which linearises the rigid motion of that point too. The
-  family's *linear* response (``reducedmodels.models.trace_linear``, the
+  family's *linear* response (``flexval.reducedmodels.models.trace_linear``, the
   runner of ``ee``) must equal ``ee``'s under any load, displacements
   included: that checks that the DCMM connector's tangent at rest is the
   ellipse's stiffness.
@@ -33,12 +33,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from geometry import Flexure, Mechanism, load_scene
-from reducedmodels import Connector, Family, ModelSpec, SolverSettings, System, register
-from reducedmodels import parse_model
-from reducedmodels.catalogue import unregister
-from reducedmodels.models import connector_system, trace_linear, trace_nonlinear
-from validation.run import run_model
+from flexval.geometry import Flexure, Mechanism, load_scene
+from flexval.reducedmodels import Connector, Family, ModelSpec, SolverSettings, System, register
+from flexval.reducedmodels import parse_model
+from flexval.reducedmodels.catalogue import unregister
+from flexval.reducedmodels.models import connector_system, trace_linear, trace_nonlinear
+from flexval.validation.run import run_model
 
 
 class EllipseSpring(Connector):

@@ -25,9 +25,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from geometry import LoadCase, Material, Moment, Section, Segment
-from geometry.mechanism import FlexureSpec, assemble
-from reducedmodels import LoadControl, build_system, parse_model, trace
+from flexval.geometry import LoadCase, Material, Moment, Section, Segment
+from flexval.geometry.mechanism import FlexureSpec, assemble
+from flexval.reducedmodels import LoadControl, build_system, parse_model, trace
 
 LENGTH = 20.0                  # mm
 SECTION = Section(1.0, 0.2)    # depth b, thickness h (mm)

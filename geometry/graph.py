@@ -1,7 +1,7 @@
 """The body graph of a mechanism: bodies are vertices, flexures and pins are edges.
 
 One union-find serves both questions asked of it: which bodies a set of
-links welds into one rigid cluster (:mod:`geometry.mobility` welds bodies
+links welds into one rigid cluster (:mod:`flexval.geometry.mobility` welds bodies
 along flexures), and how many independent closed loops the mechanism has
 (its cycle rank: an open chain has none, the paper's closed chain one).
 """

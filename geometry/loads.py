@@ -71,7 +71,7 @@ class LoadCase:
     levels : int
         Number of equally spaced load levels from 0 to full load (>= 2).
     time_law : TimeLaw or None
-        How the load grows in time in a dynamic run (:mod:`geometry.timelaw`);
+        How the load grows in time in a dynamic run (:mod:`flexval.geometry.timelaw`);
         None: the run's command-line default.
     """
 

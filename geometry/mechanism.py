@@ -167,7 +167,7 @@ class Mechanism:
         Revolute joints between bodies (none by default).
     inertia : MassData
         Density, rigid-body masses and gravity (default: none, see
-        :mod:`geometry.inertia`).
+        :mod:`flexval.geometry.inertia`).
     """
 
     bodies: dict[str, Body]

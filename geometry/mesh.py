@@ -2,7 +2,7 @@
 
 An arc flexure is the annular band between radii r - h/2 and r + h/2 over
 the arc's polar angles (start at ``axis - width/2``); a straight
-:class:`~geometry.shapes.Segment` is a rectangle of thickness h around it.
+:class:`~flexval.geometry.shapes.Segment` is a rectangle of thickness h around it.
 The band is meshed with Gmsh's transfinite algorithm into biquadratic
 9-node quadrilaterals (quad9): ``n_t`` elements across the thickness and
 ``n_l`` along the length.
@@ -37,12 +37,12 @@ the face's segment within a tolerance); conversion to any FE library is
 done from the plain arrays here, not through a mesh file's tags.
 
 Meshes are cached on disk (``$FLEXVAL_CACHE/meshes`` or
-``~/.cache/flexval/meshes``, see :func:`geometry.files.cache_dir`) under a
+``~/.cache/flexval/meshes``, see :func:`flexval.geometry.files.cache_dir`) under a
 hash of the exact values that define them (``float.hex``). Each entry is an
 ``.npz`` written atomically under a unique temporary name, with a SHA-256
 checksum of its arrays and its key; an entry that is truncated, empty,
 foreign or inconsistent with its mesh level is discarded with a
-:class:`geometry.files.CacheWarning` and the mesh is rebuilt.
+:class:`flexval.geometry.files.CacheWarning` and the mesh is rebuilt.
 Nothing here knows about a solver. Units: mm, rad.
 """
 

@@ -20,7 +20,7 @@ The format (see README.md for a full example)::
     [[bodies]]  name, points   (optional: known points of a link)
     [[pins]]    name, bodies = [i, j], point = [x, y]
                 (optional revolute joints; either body may be the ground)
-    mass data (optional, see geometry.inertia): material.density,
+    mass data (optional, see flexval.geometry.inertia): material.density,
                 [gravity] acceleration, and per [[bodies]] mass, inertia,
                 center_of_mass or outline (+ depth)
     [[load_cases]] name, kind = "moment" | "force", value, body, point,
@@ -59,7 +59,7 @@ class Scene:
     """A mechanism with its load cases and the requested models and outputs.
 
     ``models`` are the model ids of ``request.models`` as written: geometry
-    knows no model; :func:`reducedmodels.catalogue.parse_model` reads them
+    knows no model; :func:`flexval.reducedmodels.catalogue.parse_model` reads them
     (with source ``source`` and field ``request.models``) when they are used.
     """
 
@@ -456,7 +456,7 @@ def read_scene_data(name_or_path: str | Path) -> tuple[str, dict, str]:
     """
     text_id = str(name_or_path)
     if text_id in BUILTIN_SCENES:
-        res = resources.files("geometry").joinpath("scenes", f"{text_id}.toml")
+        res = resources.files("flexval.geometry").joinpath("scenes", f"{text_id}.toml")
         source, text, stem = f"<builtin {text_id}>", res.read_text(encoding="utf-8"), text_id
     else:
         path = Path(text_id)

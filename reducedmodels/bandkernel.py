@@ -5,7 +5,7 @@ size column by column with one BLAS call each (``dscal``, ``dsyr``); on the
 chains of beam elements (half-bandwidth 5, about a thousand columns) those
 calls' overhead was the largest single cost of a Newton iteration, some 80 %
 of the factorisation time. These loops do the same arithmetic in the same
-order without the calls. :class:`reducedmodels.tangent.BandedTangent` uses
+order without the calls. :class:`flexval.reducedmodels.tangent.BandedTangent` uses
 them up to ``NARROW_BAND`` and LAPACK above, where its vectorised BLAS wins.
 
 The half-bandwidth b is given as the length of a tuple (:func:`band_token`):
@@ -278,9 +278,9 @@ def band_lu_solve(lu: np.ndarray, pivots: np.ndarray, rhs: np.ndarray, perm: np.
 def warm_up(b: int) -> None:
     """Compile, or load from the on-disk cache, the kernels of half-bandwidth b.
 
-    A band as :class:`reducedmodels.tangent.BandedTangent` holds it (a
+    A band as :class:`flexval.reducedmodels.tangent.BandedTangent` holds it (a
     Fortran-ordered (b + 1, n) array) and contiguous right-hand sides; see
-    :func:`reducedmodels.beamkernel.warm_up` for why.
+    :func:`flexval.reducedmodels.beamkernel.warm_up` for why.
     """
     n = b + 2
     band = np.zeros((b + 1, n), order="F")

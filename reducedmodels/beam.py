@@ -32,7 +32,7 @@ or, with ``shear=True``, the Timoshenko beam's condensed bending stiffness
 k_b = EI / (l0 (1 + phi)) [[4 + phi, 2 - phi], [2 - phi, 4 + phi]] with
 phi = 12 EI / (kappa G A l0^2), kappa = 5/6. Gradient and tangent are
 exact (material plus geometric parts); the elements of all flexures are
-evaluated in one compiled call (:mod:`reducedmodels.beamkernel`), which adds
+evaluated in one compiled call (:mod:`flexval.reducedmodels.beamkernel`), which adds
 them straight into the global gradient and tangent, and a connector's own
 Hessian is the values of a fixed sparse pattern.
 
@@ -52,8 +52,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from geometry import Flexure, Mechanism
-from geometry.kinematics import rotate_xy
+from flexval.geometry import Flexure, Mechanism
+from flexval.geometry.kinematics import rotate_xy
 
 from .connector import Connector, ConnectorGroup, LocalState
 from .validity import MAX_CHORD_TURN, MAX_STRAIN, rotation_reasons, stretch_reasons
@@ -74,7 +74,7 @@ CHAIN_HALF_BANDWIDTH = 2 * NODE_COORDINATES - 1
 
 @functools.cache
 def beam_kernels() -> ModuleType:
-    """:mod:`reducedmodels.beamkernel`, imported and loaded on first use (see its ``warm_up``).
+    """:mod:`flexval.reducedmodels.beamkernel`, imported and loaded on first use (see its ``warm_up``).
 
     A System of beams asks for it when it is built (:meth:`BeamGroup.assembler`),
     so numba's import and the kernels' machine code (~0.5 s) are paid before
@@ -122,7 +122,7 @@ class BeamGroup(ConnectorGroup):
     """Beam connectors evaluated together: all their elements in one compiled call.
 
     The elements of every flexure of the run are laid end to end and
-    evaluated by :func:`reducedmodels.beamkernel.assemble_elements`, which
+    evaluated by :func:`flexval.reducedmodels.beamkernel.assemble_elements`, which
     also transports the end nodes to their bodies and adds the results where
     they belong: into the concatenated local gradients and Hessian values
     (:meth:`evaluate`), or straight into the System's gradient and tangent
@@ -223,10 +223,10 @@ class BeamGroup(ConnectorGroup):
         The kernels read the nodes through the global node table
         ``gather[node table]``, as the assembler does: ``remember`` keeps a
         converged state's chords and rotations
-        (:func:`reducedmodels.beamkernel.chain_memory`, once per state),
+        (:func:`flexval.reducedmodels.beamkernel.chain_memory`, once per state),
         ``predict`` extrapolates them (with the path's slope when given:
         chord lengths, turns and node rotations one degree higher,
-        :func:`reducedmodels.beamkernel.predicted_chains`).
+        :func:`flexval.reducedmodels.beamkernel.predicted_chains`).
         """
         kernels = beam_kernels()
         nodes = (np.ascontiguousarray(gather[self._node_dof], np.int64), self._node_rel,
@@ -273,7 +273,7 @@ class BeamGroup(ConnectorGroup):
 
         ``coordinates`` as :meth:`ConnectorGroup.path_end_pass` says, read by
         the kernel as they are; each element's chord frame at each level
-        serves both (:func:`reducedmodels.beamkernel.path_element_ends`).
+        serves both (:func:`flexval.reducedmodels.beamkernel.path_element_ends`).
         """
         lengths, turns, axial, moment = self._element_ends(coordinates)
         return self._verdicts(lengths, turns), self._section_forces(axial, moment)
@@ -297,7 +297,7 @@ class BeamGroup(ConnectorGroup):
         """Every element's chord length, turn and end forces at each level (k, ...) each.
 
         ``coordinates`` (k, m): the local coordinates laid end to end at each
-        level; see :func:`reducedmodels.beamkernel.path_element_ends`.
+        level; see :func:`flexval.reducedmodels.beamkernel.path_element_ends`.
         """
         return beam_kernels().path_element_ends(
             coordinates, self._node_dof, self._node_rel, self._attached, self._first,
@@ -324,7 +324,7 @@ class BeamGroup(ConnectorGroup):
         """Concatenated interior nodes extrapolated in chord lengths and angles.
 
         As :meth:`BeamConnector.predict_internal` documents, for every
-        flexure at once (:func:`reducedmodels.beamkernel.predicted_chains`).
+        flexure at once (:func:`flexval.reducedmodels.beamkernel.predicted_chains`).
         """
         kernels = beam_kernels()
         nodes = (self._node_dof, self._node_rel, self._attached)
@@ -339,7 +339,7 @@ class BeamGroup(ConnectorGroup):
         """Concatenated interior nodes after a Newton correction, chords turned, not sheared.
 
         As :meth:`BeamConnector.update_internal` documents, for every flexure
-        at once (:func:`reducedmodels.beamkernel.updated_chains`).
+        at once (:func:`flexval.reducedmodels.beamkernel.updated_chains`).
         """
         return beam_kernels().updated_chains(_coordinates(old), _coordinates(new),
                                              self._node_dof, self._node_rel, self._attached,
@@ -390,7 +390,7 @@ def _levels(levels: Sequence[Sequence[LocalState]]) -> np.ndarray:
 
 
 class BeamConnector(Connector):
-    """Corotational beam model of one flexure with N elements (a :class:`~reducedmodels.connector.Connector`).
+    """Corotational beam model of one flexure with N elements (a :class:`~flexval.reducedmodels.connector.Connector`).
 
     Parameters
     ----------
@@ -412,7 +412,7 @@ class BeamConnector(Connector):
 
     update_above = 1e-7
     """Newton corrections go through :meth:`update_internal` (one compiled pass over the
-    nodes) down to 1e-7 (scaled). Below :data:`~reducedmodels.newton.NONLINEAR_UPDATE` a
+    nodes) down to 1e-7 (scaled). Below :data:`~flexval.reducedmodels.newton.NONLINEAR_UPDATE` a
     linear update still stretches each turning chord by (turn)^2 / 2 and each end element
     by |rel| (dtheta)^2 / 2 of its body's turn, and the axial stiffness makes that force
     many times the load: on the paper paths of beam:100 a correction of 5e-4 left a
@@ -470,7 +470,7 @@ class BeamConnector(Connector):
 
         The end nodes take their body's pose slots (0..2 for pose_a, 3..5 for
         pose_b): they are transported there by the element kernel
-        (:func:`reducedmodels.beamkernel.attach`).
+        (:func:`flexval.reducedmodels.beamkernel.attach`).
         """
         node_dofs = np.empty((self._n_nodes, 3), dtype=np.int64)
         node_dofs[0] = 3 * self._end_pose[0] + np.arange(3)
@@ -486,7 +486,7 @@ class BeamConnector(Connector):
         energy stays exact and frame-independent at any rotation (a
         consistent Hermite mass would have to turn with each chord). Each
         element gives m/2 and m l^2/78 to each end node
-        (:func:`reducedmodels.inertia.chain_mass_points`); the end nodes'
+        (:func:`flexval.reducedmodels.inertia.chain_mass_points`); the end nodes'
         masses sit on the end bodies at the flexure's end points.
         """
         n = self._n_nodes - 1
@@ -556,7 +556,7 @@ class BeamConnector(Connector):
         chain is then rebuilt from the start body's end node (at its pose
         in ``pose_a``/``pose_b``) and closed at the end body's node by the
         flexure's own least-energy bending
-        (:func:`reducedmodels.beamkernel.close_chains`). Extrapolating node
+        (:func:`flexval.reducedmodels.beamkernel.close_chains`). Extrapolating node
         positions instead would shorten every chord that turns, and the
         axial stiffness turns that O(h^2) error into forces far larger than
         the load (tens of Newton iterations on slender flexures); so would
@@ -584,7 +584,7 @@ class BeamConnector(Connector):
                  ) -> list[str]:
         """Reasons: element stretch over MAX_STRAIN, end turns from the chord over MAX_CHORD_TURN.
 
-        See :mod:`reducedmodels.validity`: the first is material strain, the
+        See :mod:`flexval.reducedmodels.validity`: the first is material strain, the
         second an element too coarse for the curvature it carries.
         """
         return self.path_validity([(pose_a, pose_b, internal)])[0]

@@ -1,16 +1,16 @@
 """Compiled kernels of the corotational beam elements (numba, cached on disk).
 
-The one implementation of the element physics of :mod:`reducedmodels.beam`:
+The one implementation of the element physics of :mod:`flexval.reducedmodels.beam`:
 :func:`assemble_elements` evaluates every element of a run of beam
 connectors, transports the end nodes to their bodies' poses and adds the
 gradients and tangent entries straight into the global gradient and the
-tangent's storage (the index maps come from :class:`reducedmodels.core.System`);
+tangent's storage (the index maps come from :class:`flexval.reducedmodels.core.System`);
 the chord-wise predictor and Newton update, the section forces and the
 validity measures are here too. One call per Newton iteration replaces some forty numpy calls and
 the scatter of the concatenated local Hessians, whose cost on a few hundred
 elements was interpreter overhead, not arithmetic.
 
-Compiled with :data:`reducedmodels.jit.kernel` (numba, cached on disk; the
+Compiled with :data:`flexval.reducedmodels.jit.kernel` (numba, cached on disk; the
 first run of an installation pays the compilation, see README, "Speed"), whose
 docstring gives the floating-point policy.
 
@@ -526,7 +526,7 @@ def predicted_chains(memories: np.ndarray, weights: np.ndarray, poses: np.ndarra
     path at the last state (per unit load factor, read like the
     coordinates): the chords' and rotations' derivatives it gives (an end
     node moving as dp + (dx/dtheta) dtheta) join the extrapolation with that
-    weight (Hermite weights, see :func:`reducedmodels.core.hermite_weights`).
+    weight (Hermite weights, see :func:`flexval.reducedmodels.core.hermite_weights`).
     """
     n_chains = chain_nodes.size - 1
     n_nodes = chain_nodes[-1]
@@ -630,7 +630,7 @@ def warm_up() -> None:
     process (importing numba included); the beam family calls this before a
     path's clock starts, so that path times measure the paths. Two elements
     between two bodies (one attached node each, one free node), the arrays
-    typed as :class:`reducedmodels.beam.BeamGroup` and the core pass them.
+    typed as :class:`flexval.reducedmodels.beam.BeamGroup` and the core pass them.
     """
     chain = np.array([0, 3, 6], np.int64)
     rel = np.array([[1.0, 0.0], [0.0, 0.0], [0.0, 0.5]])

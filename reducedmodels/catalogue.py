@@ -18,8 +18,8 @@ its id syntax (:class:`Resolution`), its :class:`Option` set, a runner that
 traces a load case (imports its code lazily, so ``flexval info`` never loads
 a solver) and its capabilities (:data:`FIELDS`, :data:`ARCLENGTH`,
 :data:`LINEAR`, :data:`REFERENCE`). Adding a family is one module that calls
-:func:`register`; the reduced models register in :mod:`reducedmodels.families`,
-the continuum in :mod:`validation.continuum.family`.
+:func:`register`; the reduced models register in :mod:`flexval.reducedmodels.families`,
+the continuum in :mod:`flexval.validation.continuum.family`.
 
 Bad ids raise :class:`geometry.SceneError` naming the source, the field and
 the text (the CLI turns it into exit code 2).
@@ -31,7 +31,7 @@ import re
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from geometry import SceneError
+from flexval.geometry import SceneError
 
 #: capability: writes stress fields (VTU files, PNG renderings) of the deformed flexures
 FIELDS = "fields"

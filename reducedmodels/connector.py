@@ -32,7 +32,7 @@ LocalState = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
 class Connector(ABC):
-    """Base class of every connector of :class:`reducedmodels.core.System`.
+    """Base class of every connector of :class:`flexval.reducedmodels.core.System`.
 
     Attributes
     ----------
@@ -107,7 +107,7 @@ class Connector(ABC):
     update_above: float | None = None
     """Scaled Newton correction above which the core applies :meth:`update_internal`.
 
-    None: :data:`reducedmodels.newton.NONLINEAR_UPDATE`, set for chords as
+    None: :data:`flexval.reducedmodels.newton.NONLINEAR_UPDATE`, set for chords as
     long as a fraction of the mechanism. Connectors whose coordinates are
     much closer together turn far more for the same scaled correction and
     set a lower value (a meshed flexure: 0, always)."""
@@ -170,12 +170,12 @@ class Connector(ABC):
         """
         return [self.validity(*state) for state in states]
 
-    # --- optional mass (reducedmodels.inertia) ---------------------------
+    # --- optional mass (flexval.reducedmodels.inertia) ---------------------------
     def mass_points(self, density: float) -> "MassPoints | None":
         """The connector's mass as point masses over its local coordinates.
 
         ``density`` is the flexure material's, t/mm^3. Returns a
-        :class:`reducedmodels.inertia.MassPoints` table (mass in t, rotary
+        :class:`flexval.reducedmodels.inertia.MassPoints` table (mass in t, rotary
         inertia in t mm^2, offsets in mm), which also gives the weight under
         gravity. Default None: massless (pins, and any model that does not
         say how its flexure's mass is distributed); a modal or dynamic
@@ -213,11 +213,11 @@ class Connector(ABC):
 
         Recorded at every load level by the path recorder, which turns them
         into the peak outer-fibre stress of the flexure's section (MPa) and
-        where it occurs (:class:`reducedmodels.sections.SectionForces`).
+        where it occurs (:class:`flexval.reducedmodels.sections.SectionForces`).
         They come from the model's own internal forces; a flexure model
         typically passes its energy gradient on the end body's pose and its
         displaced centre line to
-        :func:`reducedmodels.sections.statics_section_forces`.
+        :func:`flexval.reducedmodels.sections.statics_section_forces`.
 
         Parameters
         ----------
@@ -377,7 +377,7 @@ class ConnectorGroup:
                       ) -> tuple[list[list[list[str]]], list["SectionForces | None"]]:
         """:meth:`path_validity` and :meth:`path_section_forces` of the same k levels, together.
 
-        What a path's end pass records (:func:`reducedmodels.recorder.path_end_pass`).
+        What a path's end pass records (:func:`flexval.reducedmodels.recorder.path_end_pass`).
         ``coordinates`` (k, m) holds the connectors' local coordinates
         [pose_a, pose_b, internal] laid end to end at each level (mm, rad);
         a group that reads them as they are, or whose two answers share work

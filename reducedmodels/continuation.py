@@ -1,6 +1,6 @@
 """Arc-length continuation (Riks / Crisfield) for paths with limit points.
 
-Load control (:func:`reducedmodels.core.solve_path`) cannot pass a limit
+Load control (:func:`flexval.reducedmodels.core.solve_path`) cannot pass a limit
 point: beyond the largest load on the path there is no nearby equilibrium
 and Newton fails. Arc-length continuation makes the load factor lambda an
 unknown and adds one constraint on the size of each step,
@@ -28,9 +28,9 @@ grown by 1.5 after easy steps (at most ``fast_iterations`` Newton iterations,
 no cut), up to ``max_growth`` times its initial value.
 
 The corrector is the core's one Newton iteration
-(:func:`reducedmodels.newton.solve_step`, with all its safeguards) on the
+(:func:`flexval.reducedmodels.newton.solve_step`, with all its safeguards) on the
 bordered problem :class:`ArcLengthStep`; the stepping is the strategy
-:class:`ArcLength` of the one path tracer (:func:`reducedmodels.tracer.trace`).
+:class:`ArcLength` of the one path tracer (:func:`flexval.reducedmodels.tracer.trace`).
 
 Units: mm, N, N mm, rad; load factors are dimensionless.
 """
@@ -42,7 +42,7 @@ from typing import Callable
 
 import numpy as np
 
-from geometry import LoadCase
+from flexval.geometry import LoadCase
 
 from .core import System
 from .loadpath import LoadPath
@@ -93,7 +93,7 @@ class ArcLengthStep(StepProblem):
 
 
 class ArcLength(Stepping):
-    """Arc-length continuation as a stepping strategy of :func:`reducedmodels.tracer.trace`.
+    """Arc-length continuation as a stepping strategy of :func:`flexval.reducedmodels.tracer.trace`.
 
     Parameters
     ----------

@@ -5,12 +5,12 @@ private internal coordinates of the connectors (beam nodes, continuum nodes,
 DCMM intermediate bodies ...). Every connector is conservative: it returns
 its strain energy, gradient (internal forces) and Hessian (consistent
 tangent) from the poses of the two bodies it joins and its internal
-coordinates. Dead loads (:class:`~reducedmodels.loads.Loads`) add their potential.
+coordinates. Dead loads (:class:`~flexval.reducedmodels.loads.Loads`) add their potential.
 Equilibrium is grad(Pi) = 0; :class:`System` assembles it, and the path
-tracer (:mod:`reducedmodels.tracer`) solves it with the one Newton iteration
-of :mod:`reducedmodels.newton`. Open and closed chains need no special code:
+tracer (:mod:`flexval.reducedmodels.tracer`) solves it with the one Newton iteration
+of :mod:`flexval.reducedmodels.newton`. Open and closed chains need no special code:
 a closed chain is a connector graph with a loop. What a connector must and
-may provide is :class:`reducedmodels.connector.Connector`.
+may provide is :class:`flexval.reducedmodels.connector.Connector`.
 
 Units: mm, N, N mm, rad.
 """
@@ -24,9 +24,9 @@ from typing import Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from geometry import LoadCase, Mechanism
-from geometry.loads import MAX_LOAD_SUBSTEPS
-from geometry.kinematics import rotate_xy
+from flexval.geometry import LoadCase, Mechanism
+from flexval.geometry.loads import MAX_LOAD_SUBSTEPS
+from flexval.geometry.kinematics import rotate_xy
 
 from .connector import Connector, ConnectorGroup, LocalState, overrides
 from .loadpath import LoadPath
@@ -90,7 +90,7 @@ class SolverSettings:
     Newton converges quadratically, the error left after a correction of
     1e-8 is of order 1e-16. ``error_tol`` bounds the error left after a
     correction as estimated from the contraction of the last two (see
-    :func:`reducedmodels.newton.solve_step`); 1e-10 keeps equilibrium to ~1e-8 of the load even on
+    :func:`flexval.reducedmodels.newton.solve_step`); 1e-10 keeps equilibrium to ~1e-8 of the load even on
     stiff (axial) modes.
     ``max_rotation_step`` (rad) and ``max_translation_step`` (fraction of the
     mechanism size) bound how far any body may move in one sub-step, so the
@@ -184,7 +184,7 @@ class System:
           ``[q, ground pose]`` (ground dofs read the fixed ground pose);
         * ``_assemblers``: the groups that add their gradients and tangent
           entries into the global arrays themselves
-          (:meth:`~reducedmodels.connector.ConnectorGroup.assembler`: the
+          (:meth:`~flexval.reducedmodels.connector.ConnectorGroup.assembler`: the
           compiled kernels of beams, DCMM sub-arcs and PRBM chains), given
           these maps for their connectors;
         * for the other groups, whose gradients and Hessian values are
@@ -195,8 +195,8 @@ class System:
         * ``_diagonal_slots``: where each dof's diagonal entry is stored (the
           loads add to it);
         * ``_predictors`` / ``_updaters`` get the group's function of the
-          global coordinates (:meth:`~reducedmodels.connector.ConnectorGroup.predictor`,
-          :meth:`~reducedmodels.connector.ConnectorGroup.updater`) as a fourth
+          global coordinates (:meth:`~flexval.reducedmodels.connector.ConnectorGroup.predictor`,
+          :meth:`~flexval.reducedmodels.connector.ConnectorGroup.updater`) as a fourth
           entry, None where the group has none.
         """
         n, bounds, all_gather = self.n_dofs, self._bounds, self._all_gather
@@ -327,7 +327,7 @@ class System:
         """Dead loads of ``case`` at full value in global dof numbering.
 
         Connectors that carry dead loads of their own (weights, see
-        :mod:`reducedmodels.inertia`) declare their size as
+        :mod:`flexval.reducedmodels.inertia`) declare their size as
         ``dead_load_scale`` (N); it joins the force scale of the residual test,
         so that a case without load (or a small one) still has a meaningful one.
         """
@@ -355,7 +355,7 @@ class System:
         assembler (beams) adds into the global gradient and the tangent
         storage itself; the others' gradients and Hessian values are
         scattered with the index maps of :meth:`_build_scatter` into the
-        storage the :class:`~reducedmodels.tangent.TangentLayout` chose.
+        storage the :class:`~flexval.reducedmodels.tangent.TangentLayout` chose.
         """
         n = self.n_dofs
         energy = 0.0
@@ -438,7 +438,7 @@ class System:
     def predicts_with_slope(self) -> bool:
         """True if every connector that predicts its own coordinates can use the path's slope.
 
-        (Those with a :meth:`~reducedmodels.connector.ConnectorGroup.predictor`;
+        (Those with a :meth:`~flexval.reducedmodels.connector.ConnectorGroup.predictor`;
         then a slope given to :meth:`predict` raises the degree of the whole
         prediction, and a caller computes it only then.)
         """
@@ -448,7 +448,7 @@ class System:
         """What the connectors' own predictors keep of a converged state q (see :meth:`predict`).
 
         One entry per predicting group: the memory its
-        :meth:`~reducedmodels.connector.ConnectorGroup.predictor` keeps, or
+        :meth:`~flexval.reducedmodels.connector.ConnectorGroup.predictor` keeps, or
         the group's :meth:`local_states`. A caller that predicts many times
         from one history computes it once per state.
         """
@@ -481,7 +481,7 @@ class System:
         ``slope``, if given, is dq/dfactor at the last state (mm, rad per
         unit factor; K^-1 f from its tangent): the polynomial then matches
         it too, one degree higher (Hermite). Groups with a
-        :meth:`~reducedmodels.connector.ConnectorGroup.predictor` get it and
+        :meth:`~flexval.reducedmodels.connector.ConnectorGroup.predictor` get it and
         the Hermite weights; the other connectors' predictors extrapolate the
         states alone, with the states' Lagrange weights.
         """

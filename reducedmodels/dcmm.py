@@ -29,8 +29,8 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from geometry import Flexure, Mechanism
-from geometry.kinematics import rotate_xy
+from flexval.geometry import Flexure, Mechanism
+from flexval.geometry.kinematics import rotate_xy
 
 from .connector import Connector, ConnectorGroup
 from .inertia import MassPoints, rigid_pieces
@@ -49,13 +49,13 @@ three coordinates (x, y, theta) of two neighbouring bodies."""
 
 @functools.cache
 def dcmm_kernels() -> ModuleType:
-    """:mod:`reducedmodels.dcmmkernel`, imported and loaded on first use (see its ``warm_up``).
+    """:mod:`flexval.reducedmodels.dcmmkernel`, imported and loaded on first use (see its ``warm_up``).
 
     The DCMM and EE families ask for it before a path's clock starts
-    (:mod:`reducedmodels.families`), so numba's import and the kernels'
+    (:mod:`flexval.reducedmodels.families`), so numba's import and the kernels'
     machine code are paid once per process, not by a path; so are the
     compiled banded factorisations a chain of many sub-arcs takes
-    (:class:`reducedmodels.tangent.TangentLayout`).
+    (:class:`flexval.reducedmodels.tangent.TangentLayout`).
     """
     from . import dcmmkernel
     from .tangent import band_kernels
@@ -143,7 +143,7 @@ def _chain_layout(n: int, forward: bool) -> _ChainLayout:
 
 
 class DcmmConnector(Connector):
-    """DCMM_n model of one flexure (a :class:`~reducedmodels.connector.Connector`).
+    """DCMM_n model of one flexure (a :class:`~flexval.reducedmodels.connector.Connector`).
 
     Internal coordinates are the poses of the n - 1 intermediate bodies,
     whose reference points are the cut points on the centre line.
@@ -180,7 +180,7 @@ class DcmmConnector(Connector):
                 mechanism.bodies[self.bodies[1]].reference.tolist()]
         self._cuts = np.array(cuts).reshape(-1, 2)
         self._arc_lengths = [p.length for p in parts]               # chain order, mm
-        # each sub-arc's parameters of reducedmodels.dcmmkernel.sub_arc: offsets of its centre
+        # each sub-arc's parameters of flexval.reducedmodels.dcmmkernel.sub_arc: offsets of its centre
         # of elasticity from its two bodies (mm), ellipse axes, inverse compliances
         parameters = []
         for (lx, ly), (fx, fy), part in zip(refs, refs[1:], parts):
@@ -219,7 +219,7 @@ class DcmmConnector(Connector):
         neighbouring sub-arcs (the half sub-arc next to an end body, the two
         halves on either side of a cut), rigidly, with that piece's exact
         mass, centre of mass and rotary inertia
-        (:func:`reducedmodels.inertia.rigid_pieces`). Total mass, centre of
+        (:func:`flexval.reducedmodels.inertia.rigid_pieces`). Total mass, centre of
         mass and rotary inertia of the whole flexure are exact at rest. On a
         clamped-free beam f1 comes out above Euler-Bernoulli by 2.0 % at
         n = 1 and 3.6 % / n^2 as n grows (half of each sub-arc on each end
@@ -293,7 +293,7 @@ class DcmmConnector(Connector):
 
         A sub-arc's chord may shorten freely (bending) but not exceed the
         arc's length by more than the strain limit: its ends would have to be
-        farther apart than the material allows. See :mod:`reducedmodels.validity`.
+        farther apart than the material allows. See :mod:`flexval.reducedmodels.validity`.
         """
         chain, points = self._points(pose_a, pose_b, internal)
         chords = [math.dist(p, r) for p, r in zip(points, points[1:])]
@@ -442,7 +442,7 @@ def _stack_tables(chains: tuple[tuple[int, bool], ...]) -> _StackTables:
 class _Stack:
     """Several DCMM connectors in one stack: its numbering and the connectors' geometry.
 
-    What the end-of-path kernels read (:mod:`reducedmodels.dcmmkernel`).
+    What the end-of-path kernels read (:mod:`flexval.reducedmodels.dcmmkernel`).
 
     Attributes
     ----------
@@ -453,7 +453,7 @@ class _Stack:
     lengths : float array (e,)
         Sub-arc lengths (mm).
     parameters : float array (e, PARAMETERS)
-        Each sub-arc's :func:`reducedmodels.dcmmkernel.sub_arc` parameters.
+        Each sub-arc's :func:`flexval.reducedmodels.dcmmkernel.sub_arc` parameters.
     rel : float array (s, 4)
         Each sample's offsets from its leading and following bodies (mm).
     tangent : float array (s,)
@@ -487,7 +487,7 @@ class DcmmGroup(ConnectorGroup):
     """DCMM connectors evaluated together (:meth:`DcmmConnector.group`).
 
     Every sub-arc of the run is evaluated by one call of the compiled
-    :func:`reducedmodels.dcmmkernel.assemble_sub_arcs`, which adds the
+    :func:`flexval.reducedmodels.dcmmkernel.assemble_sub_arcs`, which adds the
     results straight into the System's gradient and tangent storage
     (:meth:`assembler`), in the order of the connector-by-connector
     evaluation. A load path's validity and section forces are computed for
@@ -551,9 +551,9 @@ class DcmmGroup(ConnectorGroup):
         """Each connector's :meth:`DcmmConnector.validity` at each level, screened in one pass.
 
         Every level's chord strains and relative rotations come from one
-        compiled call (:func:`reducedmodels.dcmmkernel.chain_measures`);
+        compiled call (:func:`flexval.reducedmodels.dcmmkernel.chain_measures`);
         only (level, connector) pairs within
-        :data:`~reducedmodels.validity.SCREEN_MARGIN` of a limit (or beyond)
+        :data:`~flexval.reducedmodels.validity.SCREEN_MARGIN` of a limit (or beyond)
         are judged by the scalar check, so the verdicts are its own.
         """
         return self._verdicts(self.stack().poses(levels), lambda: levels)

@@ -1,6 +1,6 @@
 """Compiled kernel of the DCMM displaced compliance element (numba, cached on disk).
 
-The one implementation of the sub-arc element of :mod:`reducedmodels.dcmm`:
+The one implementation of the sub-arc element of :mod:`flexval.reducedmodels.dcmm`:
 :func:`sub_arc` gives one element's energy, gradient and Hessian;
 :func:`assemble_sub_arcs` evaluates every sub-arc of a run of DCMM
 connectors and adds the results where the index maps say (into the
@@ -12,7 +12,7 @@ iteration replaces one Python call per sub-arc and the scatter of their
 float lists, whose cost on a few sub-arcs was interpreter overhead, not
 arithmetic; one call per path replaces some forty small array operations.
 
-Compiled with :data:`reducedmodels.jit.kernel` (numba, cached on disk; the
+Compiled with :data:`flexval.reducedmodels.jit.kernel` (numba, cached on disk; the
 first run of an installation pays the compilation, see README, "Speed"), whose
 docstring gives the floating-point policy.
 

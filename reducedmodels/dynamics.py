@@ -6,7 +6,7 @@ Equations of motion (mm, N, t, s):
 
 with grad Pi the System's gradient (elastic forces, weights, load case at the
 load factor lambda(t) of the time law), M and c the mass matrix and
-convective forces of :class:`reducedmodels.inertia.MassModel`, and Rayleigh
+convective forces of :class:`flexval.reducedmodels.inertia.MassModel`, and Rayleigh
 damping D = alpha M + beta K(q), K the tangent at the same state q as every
 other force (equilibrium at t_(n+1)). Freezing K at the start of the step made
 the damping force first-order in h: on the beams the error estimate saw that
@@ -28,7 +28,7 @@ b = (g + 1/2)^2 / 4 (Chung and Hulbert 1993): second order, unconditionally
 stable, spectral radius rho_inf at infinite frequency. rho_inf = 1 has no
 numerical dissipation (A = a, Newmark's trapezoidal rule: energy conserved
 exactly on a linear undamped system); rho_inf < 1 damps the high
-frequencies. Each step is one :func:`reducedmodels.newton.solve_step` on
+frequencies. Each step is one :func:`flexval.reducedmodels.newton.solve_step` on
 :class:`DynamicStep`, whose tangent is K + g/(b h) D + (1 - am)/((1 - af) b h^2) M
 + beta dK(q)[v] (the last the damping force's derivative along the motion),
 summed in the System's tangent storage and factorised like the static tangent.
@@ -52,8 +52,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from geometry import LoadCase
-from geometry.timelaw import TimeLaw
+from flexval.geometry import LoadCase
+from flexval.geometry.timelaw import TimeLaw
 
 from .core import SolverError, System
 from .inertia import MassModel

@@ -1,6 +1,6 @@
 """The reduced model families of the paper, registered in the model catalogue.
 
-``beam:N``, ``dcmm:N``, ``prbm`` and ``ee`` (see :mod:`reducedmodels.catalogue`
+``beam:N``, ``dcmm:N``, ``prbm`` and ``ee`` (see :mod:`flexval.reducedmodels.catalogue`
 for the id syntax). Registering them imports no solver code: the multibody
 core (scipy) is imported when a model of a family runs or builds a system,
 each connector module only when a model of its family is built, so commands
@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 from .catalogue import ARCLENGTH, LINEAR, Family, ModelSpec, Option, Resolution, register
 
 if TYPE_CHECKING:
-    from geometry import Flexure, LoadCase, Mechanism
+    from flexval.geometry import Flexure, LoadCase, Mechanism
 
     from .core import SolverSettings, System
 
@@ -79,7 +79,7 @@ def _load_solver(spec: ModelSpec) -> None:
 
 
 def _trace_nonlinear(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
-    """:func:`reducedmodels.models.trace_nonlinear` (imported here: see the module text).
+    """:func:`flexval.reducedmodels.models.trace_nonlinear` (imported here: see the module text).
 
     The System it builds orders its tangent with compiled kernels, loaded here too.
     """
@@ -111,8 +111,8 @@ def _trace_ee(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int
               record_reactions: bool = False, **options):
     """The linear response of dcmm:1's connectors, without a System (wall time includes the build).
 
-    :func:`reducedmodels.models.linear_response` of the family's connectors:
-    the numbers of :func:`reducedmodels.models.trace_linear` on its System
+    :func:`flexval.reducedmodels.models.linear_response` of the family's connectors:
+    the numbers of :func:`flexval.reducedmodels.models.trace_linear` on its System
     (tests/test_joints.py), without the index maps and solver state a System
     builds for Newton iterations. The ``record_*``
     flags are accepted for a uniform runner signature and ignored (no

@@ -24,12 +24,12 @@ Its weight is the dead force m g at x.
 
 Where the masses come from:
 
-* rigid bodies: ``[[bodies]]`` mass data (geometry.inertia), at the centre of mass;
+* rigid bodies: ``[[bodies]]`` mass data (flexval.geometry.inertia), at the centre of mass;
 * flexures: the optional connector hook
-  :meth:`reducedmodels.connector.Connector.mass_points` returning
+  :meth:`flexval.reducedmodels.connector.Connector.mass_points` returning
   :class:`MassPoints` over the connector's local coordinates
   ``[pose_a, pose_b, internal]`` (default None: massless), or a consistent
-  local matrix from :meth:`~reducedmodels.connector.Connector.mass_matrix`.
+  local matrix from :meth:`~flexval.reducedmodels.connector.Connector.mass_matrix`.
   Massless flexures are fine for static runs; the modal analysis condenses
   massless internal coordinates and refuses massless body coordinates.
 
@@ -43,7 +43,7 @@ from typing import NamedTuple, Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from geometry import Mechanism, SceneError
+from flexval.geometry import Mechanism, SceneError
 
 from .connector import Connector, overrides
 
@@ -169,7 +169,7 @@ def rigid_pieces(shape, forward: bool, bounds: np.ndarray, anchors: np.ndarray,
 
     Parameters
     ----------
-    shape : geometry.shapes.Shape
+    shape : flexval.geometry.shapes.Shape
         The flexure's centre line (arc length s from its start, mm).
     forward : bool
         Whether the chain order (body a to body b) runs from the shape's start.
@@ -406,7 +406,7 @@ class MassModel:
 
     Parameters
     ----------
-    system : reducedmodels.core.System
+    system : flexval.reducedmodels.core.System
         Its connectors' local-to-global maps place the connectors' masses.
     """
 
@@ -474,7 +474,7 @@ class MassModel:
         phi'^2 r2 (the derivative of G along the motion), so it adds
         m G^T a_c; without a link only the translations get a term
         ((k x r1) . r1 = 0). A ``mass_matrix`` connector adds its own
-        :meth:`~reducedmodels.connector.Connector.convective_forces`.
+        :meth:`~flexval.reducedmodels.connector.Connector.convective_forces`.
         """
         dofs, columns, r = _kinematics(q, self.points)
         rates = np.where(dofs[:, 2:] >= 0, v[np.maximum(dofs[:, 2:], 0)], 0.0) ** 2

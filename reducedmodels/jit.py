@@ -1,9 +1,9 @@
 """How flexval compiles its kernels: the one numba decorator of every compiled module.
 
 :data:`kernel` is ``numba.njit`` with the project's policy, so that the
-beam, band, DCMM and PRBM kernels (:mod:`reducedmodels.beamkernel`,
-:mod:`~reducedmodels.bandkernel`, :mod:`~reducedmodels.dcmmkernel`,
-:mod:`~reducedmodels.prbmkernel`) cannot drift apart:
+beam, band, DCMM and PRBM kernels (:mod:`flexval.reducedmodels.beamkernel`,
+:mod:`~flexval.reducedmodels.bandkernel`, :mod:`~flexval.reducedmodels.dcmmkernel`,
+:mod:`~flexval.reducedmodels.prbmkernel`) cannot drift apart:
 
 * ``cache=True``: compiled on first use and cached on disk next to the
   module (``__pycache__``); later processes load the machine code (README,

@@ -2,7 +2,7 @@
 
 A pin keeps the material point P of body a and the material point P of
 body b together; their relative rotation is free. It is a connector of
-:mod:`reducedmodels.core` whose two internal coordinates are (scaled)
+:mod:`flexval.reducedmodels.core` whose two internal coordinates are (scaled)
 Lagrange multipliers mu, and whose "energy" is the saddle function
 
     E = s mu . (x_a(P) - x_b(P)),      x(P) = p + R(theta) (P - ref),
@@ -13,7 +13,7 @@ potential is then exactly the Lagrange (KKT) system; no penalty, so the
 pin is rigid whatever the loads. The Hessian is exact, including the
 theta-theta terms s mu . d2x/dtheta2 that rigid rotation brings in. It is
 indefinite (zero mu-mu block), which the core's LU solves (dense, banded
-and sparse, all pivoting; see :mod:`reducedmodels.tangent`) handle.
+and sparse, all pivoting; see :mod:`flexval.reducedmodels.tangent`) handle.
 
 Why the scale s (N/mm): the core measures every non-angle coordinate as a
 length and its residual as a force. With ``lambda = s mu`` the multiplier
@@ -35,8 +35,8 @@ import math
 
 import numpy as np
 
-from geometry import Mechanism
-from geometry.kinematics import rigid_points
+from flexval.geometry import Mechanism
+from flexval.geometry.kinematics import rigid_points
 
 from .connector import Connector
 
@@ -49,7 +49,7 @@ def characteristic_stiffness(mechanism: Mechanism) -> float:
 
 
 class PinConnector(Connector):
-    """A pin between ``body_a`` and ``body_b`` at ``point`` (a :class:`~reducedmodels.connector.Connector`).
+    """A pin between ``body_a`` and ``body_b`` at ``point`` (a :class:`~flexval.reducedmodels.connector.Connector`).
 
     Parameters
     ----------

@@ -58,11 +58,11 @@ class LoadPath:
         None where it is. The run is never stopped by it.
     time : list of float, optional
         Time (s) of each recorded state of a dynamic run
-        (:mod:`reducedmodels.dynamics`); ``load`` is then the load at that time.
+        (:mod:`flexval.reducedmodels.dynamics`); ``load`` is then the load at that time.
     peak_stress : dict of flexure -> list of float, optional
         Peak outer-fibre normal stress |N|/A + |M| h/(2 I) in each flexure
         at each level, MPa, from the model's own section forces
-        (:meth:`reducedmodels.connector.Connector.section_forces`).
+        (:meth:`flexval.reducedmodels.connector.Connector.section_forces`).
     peak_stress_at : dict of flexure -> list of float, optional
         Where that peak lies: arc-length fraction from the flexure's first
         end (the start of its centre line), 0..1.
@@ -72,11 +72,11 @@ class LoadPath:
     fibre_stress : dict of flexure -> {"stress", "at", "layer"}, optional
         The continuum's own peak fibre normal stress at full load (MPa), where
         (fraction from the first end) and the boundary layer excluded at each
-        end face (mm): see :mod:`validation.continuum.fibre`.
+        end face (mm): see :mod:`flexval.validation.continuum.fibre`.
     limit_points : list of dict, optional
         Of an arc-length trace: where the load turns, each ``{"index",
         "load", "traced_load", "dx", "dy", "rotation"}`` (see
-        :func:`validation.limits.limit_points`; N or N mm, mm, rad).
+        :func:`flexval.validation.limits.limit_points`; N or N mm, mm, rad).
     """
 
     model: str

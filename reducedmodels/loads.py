@@ -24,7 +24,7 @@ from typing import Callable, Mapping
 
 import numpy as np
 
-from geometry import Force, LoadCase, Moment
+from flexval.geometry import Force, LoadCase, Moment
 
 
 @dataclass

@@ -1,9 +1,9 @@
-"""Build and run the reduced models of a :class:`reducedmodels.catalogue.ModelSpec`.
+"""Build and run the reduced models of a :class:`flexval.reducedmodels.catalogue.ModelSpec`.
 
 The family-independent pieces: a System with one connector per flexure (and
 exact joints for the pins), load-control tracing of a nonlinear model and
 the linear response of the EE. Which connector a family uses, and which of
-these runners, is registered in :mod:`reducedmodels.families`.
+these runners, is registered in :mod:`flexval.reducedmodels.families`.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from geometry import LoadCase, Mechanism, SceneError
+from flexval.geometry import LoadCase, Mechanism, SceneError
 
 from .catalogue import ModelSpec
 from .connector import Connector
@@ -35,9 +35,9 @@ def flexure_connectors(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFac
     """The connectors a System of ``mechanism`` joins: one ``make(...)`` per flexure, pins, weights.
 
     Pins (``mechanism.pins``) are added as exact Lagrange-multiplier joints
-    (:class:`reducedmodels.joints.PinConnector`) whatever the model. With
+    (:class:`flexval.reducedmodels.joints.PinConnector`) whatever the model. With
     ``[gravity]`` in the scene, the weights of the flexures and bodies are
-    dead loads in the potential (:func:`reducedmodels.inertia.with_weights`).
+    dead loads in the potential (:func:`flexval.reducedmodels.inertia.with_weights`).
 
     Raises
     ------
@@ -146,13 +146,13 @@ def linear_response(mechanism: Mechanism, connectors: Sequence[Connector], case:
     load case at full value, and reports the linearised target displacement
     J dq; without gravity it is proportional to the load. The validity monitor
     judges it by its body rotations alone
-    (:data:`~reducedmodels.validity.MAX_LINEAR_ROTATION`): q0 + lambda dq is
+    (:data:`~flexval.reducedmodels.validity.MAX_LINEAR_ROTATION`): q0 + lambda dq is
     a linear response, not a configuration, so the connectors' own stretch
     limits do not apply to it (its linearised rigid rotations stretch chords
     by theta^2 / 2, which is exactly what that rotation limit bounds).
 
     One evaluation of each connector at rest and one factorisation: the
-    connectors are numbered as a :class:`~reducedmodels.core.System` numbers
+    connectors are numbered as a :class:`~flexval.reducedmodels.core.System` numbers
     them (the moving bodies' poses, then each connector's internal
     coordinates in turn) and assembled the same way, but without the index
     maps, groups and solver state a System builds for many Newton

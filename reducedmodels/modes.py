@@ -5,7 +5,7 @@ scene has it) the linearised equations of motion are M(q*) x'' + K(q*) x = 0
 with K the consistent tangent of the total potential (elastic plus load
 stiffness: a load that softens the mechanism lowers the frequencies, and a
 limit point has a zero one) and M the mass matrix
-(:class:`reducedmodels.inertia.MassModel`).
+(:class:`flexval.reducedmodels.inertia.MassModel`).
 
 Coordinates without mass are of two kinds, both without inertia terms:
 Lagrange multipliers (pins, the PRBM closure) and massless internal
@@ -37,7 +37,7 @@ import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from geometry import Force, LoadCase, Moment, SceneError
+from flexval.geometry import Force, LoadCase, Moment, SceneError
 
 from .core import SolverError, System, local_hessian
 from .inertia import MassModel, describe_massless
@@ -137,7 +137,7 @@ vector generic (no wanted mode is missed) and the modes bit-reproducible."""
 def sparse_tangent(system: System, q: np.ndarray, loads: Loads, factor: float) -> sp.csc_matrix:
     """The System's tangent at q (N/mm, N, N mm) in sparse storage, whatever its usual one.
 
-    Each connector's Hessian (:func:`reducedmodels.core.local_hessian`) is
+    Each connector's Hessian (:func:`flexval.reducedmodels.core.local_hessian`) is
     scattered through its local-to-global map (ground rows and columns
     dropped), and the loads add their diagonal (:meth:`Loads.add_to`), as in
     :meth:`System.assemble`.
@@ -218,7 +218,7 @@ def equilibrium(system: System, case: LoadCase) -> np.ndarray:
 
     Raises
     ------
-    reducedmodels.core.SolverError
+    flexval.reducedmodels.core.SolverError
         If it is not reached (e.g. past a limit point); carries the load factor reached.
     """
     state = None
@@ -240,7 +240,7 @@ def natural_modes(system: System, case: LoadCase | None = None, fraction: float 
     ------
     SceneError
         If a moving body has no mass.
-    reducedmodels.core.SolverError
+    flexval.reducedmodels.core.SolverError
         If the equilibrium cannot be reached.
     """
     mass = MassModel(system)

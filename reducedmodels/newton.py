@@ -3,7 +3,7 @@
 A step problem says what one step solves: its residual and tangent at an
 iterate and the correction they give. :class:`FixedLoad` is equilibrium at
 a fixed load factor (load control, and the first and last points of arc
-length); :class:`reducedmodels.continuation.ArcLengthStep` borders it with
+length); :class:`flexval.reducedmodels.continuation.ArcLengthStep` borders it with
 the arc-length constraint and makes the load factor an unknown. An
 implicit time step is a third: its residual adds inertia and its tangent
 the mass matrix over the time step squared, and :func:`solve_step` needs no

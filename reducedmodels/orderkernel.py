@@ -1,6 +1,6 @@
 """Compiled reverse Cuthill-McKee ordering and band slots of a tangent's pattern (numba, on-disk cache).
 
-:class:`reducedmodels.tangent.TangentLayout` orders the unknowns of a
+:class:`flexval.reducedmodels.tangent.TangentLayout` orders the unknowns of a
 banded tangent by reverse Cuthill-McKee (RCM). For a system that already
 runs compiled kernels these loops do what scipy does there
 (``scipy.sparse.csgraph.reverse_cuthill_mckee`` of the CSR graph of the
@@ -126,7 +126,7 @@ def band_slots(perm: np.ndarray, rows: np.ndarray, cols: np.ndarray
 
     Returns (position, b, slots): ``position[perm[k]] = k``; b the largest
     |position[row] - position[col]| of an entry; ``slots`` where each entry
-    goes in the upper band storage of :class:`reducedmodels.tangent.BandedTangent`
+    goes in the upper band storage of :class:`flexval.reducedmodels.tangent.BandedTangent`
     laid out flat (column j's b + 1 values contiguous, the diagonal last:
     ``j (b + 1) + b - (j - i)`` for i = position[row] <= j = position[col]),
     -1 for an entry below the diagonal (its mirror carries the value).
@@ -154,7 +154,7 @@ def ordering(n: int, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
 def warm_up() -> None:
     """Compile, or load from the on-disk cache, the kernels for the int64 arrays of a layout.
 
-    See :func:`reducedmodels.beamkernel.warm_up` for why.
+    See :func:`flexval.reducedmodels.beamkernel.warm_up` for why.
     """
     rows = np.array([0, 1, 0, 1], np.int64)
     cols = np.array([0, 1, 1, 0], np.int64)

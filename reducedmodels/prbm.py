@@ -91,9 +91,9 @@ from typing import Callable, Mapping
 
 import numpy as np
 
-from geometry import Flexure, Mechanism
-from geometry.kinematics import rotate_xy
-from geometry.shapes import Shape, arc_semi_axes
+from flexval.geometry import Flexure, Mechanism
+from flexval.geometry.kinematics import rotate_xy
+from flexval.geometry.shapes import Shape, arc_semi_axes
 
 from .connector import Connector, ConnectorGroup
 from .inertia import MassPoints, rigid_pieces
@@ -157,7 +157,7 @@ class PrbmParameters:
 @lru_cache(maxsize=1)
 def load_table() -> dict:
     """The shipped fit (``reducedmodels/data/prbm_table.json``) as a dict."""
-    text = resources.files("reducedmodels").joinpath(TABLE_RESOURCE).read_text(encoding="utf-8")
+    text = resources.files("flexval.reducedmodels").joinpath(TABLE_RESOURCE).read_text(encoding="utf-8")
     return json.loads(text)
 
 
@@ -208,10 +208,10 @@ def joint_positions(shape: Shape, params: PrbmParameters) -> np.ndarray:
 
 @cache
 def prbm_kernels() -> ModuleType:
-    """:mod:`reducedmodels.prbmkernel`, imported and loaded on first use (see its ``warm_up``).
+    """:mod:`flexval.reducedmodels.prbmkernel`, imported and loaded on first use (see its ``warm_up``).
 
     The PRBM family asks for it before a path's clock starts
-    (:mod:`reducedmodels.families`), so numba's import and the kernel's
+    (:mod:`flexval.reducedmodels.families`), so numba's import and the kernel's
     machine code are paid once per process, not by a path.
     """
     from . import prbmkernel
@@ -243,7 +243,7 @@ _HESSIAN_ROWS, _HESSIAN_COLS = _hessian_pattern()
 
 
 class PrbmConnector(Connector):
-    """Symmetric 3R PRBM of one flexure (a :class:`~reducedmodels.connector.Connector`).
+    """Symmetric 3R PRBM of one flexure (a :class:`~flexval.reducedmodels.connector.Connector`).
 
     Internal coordinates: [phi_h, phi_l, mu_x, mu_y], the rotations (rad) of
     link h (at body a) and link l (at body b) from the initial configuration
@@ -298,7 +298,7 @@ class PrbmConnector(Connector):
         self._v_h, self._v_l = (r2[0] - ra[0], r2[1] - ra[1]), (rb[0] - r2[0], rb[1] - r2[1])
         self._end_rel_a = (ea[0] - fa[0], ea[1] - fa[1])
         self._end_rel_b = (eb[0] - fb[0], eb[1] - fb[1])
-        # the parameters of reducedmodels.prbmkernel.chain
+        # the parameters of flexval.reducedmodels.prbmkernel.chain
         self._parameters = np.array([*self._r_a, *self._r_b, *self._v_h, *self._v_l,
                                      *stiffness, self.closure_scale])
         self._fitted_rotation = fitted_rotation()
@@ -313,7 +313,7 @@ class PrbmConnector(Connector):
         their places among the polyline's segment ends, in increasing order.
 
         The stations are both ends of each polyline segment (places k and 4 + k
-        of segment k in :func:`reducedmodels.prbmkernel.chain_statics`); a
+        of segment k in :func:`flexval.reducedmodels.prbmkernel.chain_statics`); a
         segment of zero length at rest (two points of one rigid member that
         coincide) has none. Plain floats: five points.
         """
@@ -334,7 +334,7 @@ class PrbmConnector(Connector):
         end_a, R_a, R_2, R_b, end_b reaches each joint (by length fraction;
         on a straight beam, at the joints themselves), and each piece rides
         rigidly, with its exact mass, centre of mass and rotary inertia
-        (:func:`reducedmodels.inertia.rigid_pieces`), on the member that
+        (:func:`flexval.reducedmodels.inertia.rigid_pieces`), on the member that
         spans it: end body a, link h (hinged at R_a, turning with phi_h),
         link l (hinged at R_b, turning with phi_l), end body b. So the
         pseudo-links' angles carry inertia and the chain moves as the rigid
@@ -374,7 +374,7 @@ class PrbmConnector(Connector):
         """Lagrangian (N mm), gradient (10) and Hessian values over [pose_a, pose_b, internal].
 
         Local order: [x_a, y_a, theta_a, x_b, y_b, theta_b, phi_h, phi_l, mu_x, mu_y];
-        the values of :func:`reducedmodels.prbmkernel.chain` in the order of
+        the values of :func:`flexval.reducedmodels.prbmkernel.chain` in the order of
         :meth:`hessian_pattern`.
         """
         kernels = prbm_kernels()
@@ -393,7 +393,7 @@ class PrbmConnector(Connector):
         straining: a chord longer than L (1 + MAX_STRAIN) is refused as in
         DCMM. The chain's parameters are fitted on end rotations up to
         :func:`fitted_rotation`; beyond it the model extrapolates. See
-        :mod:`reducedmodels.validity`. (Plain floats: it runs at every level.)
+        :mod:`flexval.reducedmodels.validity`. (Plain floats: it runs at every level.)
         """
         (xa, ya, ta), (xb, yb, tb) = pose_a.tolist(), pose_b.tolist()
         ea, eb = rotate_xy(ta, *self._end_rel_a), rotate_xy(tb, *self._end_rel_b)
@@ -437,7 +437,7 @@ class PrbmGroup(ConnectorGroup):
     """PRBM connectors evaluated together (:meth:`PrbmConnector.group`).
 
     Every chain of the run is evaluated by one call of the compiled
-    :func:`reducedmodels.prbmkernel.assemble_chains`, which adds the results
+    :func:`flexval.reducedmodels.prbmkernel.assemble_chains`, which adds the results
     straight into the System's gradient and tangent storage
     (:meth:`assembler`), in the order of the connector-by-connector
     evaluation. A load path's validity and section forces use the
@@ -457,7 +457,7 @@ class PrbmGroup(ConnectorGroup):
         """The compiled kernel adding every chain into the System's gradient and tangent.
 
         See :meth:`ConnectorGroup.assembler`: each connector has ten local
-        coordinates and :data:`reducedmodels.prbmkernel.HESSIAN_VALUES` Hessian values.
+        coordinates and :data:`flexval.reducedmodels.prbmkernel.HESSIAN_VALUES` Hessian values.
         """
         kernels = prbm_kernels()
         chains = len(self.connectors)
@@ -480,7 +480,7 @@ class PrbmGroup(ConnectorGroup):
         """Each connector's polyline end_a, R_a, R_2, R_b, end_b at k levels, (k, c, 5, 2) mm.
 
         ``levels`` holds, for each level, the connectors' local states in
-        order; one compiled call (:func:`reducedmodels.prbmkernel.chain_polylines`).
+        order; one compiled call (:func:`flexval.reducedmodels.prbmkernel.chain_polylines`).
         """
         return prbm_kernels().chain_polylines(self._local(levels), self._parameters,
                                               self._end_rel)
@@ -502,7 +502,7 @@ class PrbmGroup(ConnectorGroup):
         """Each connector's :meth:`PrbmConnector.validity` at each level, screened in one pass.
 
         Only (level, connector) pairs whose chord stretch or end rotation
-        comes within :data:`~reducedmodels.validity.SCREEN_MARGIN` of its
+        comes within :data:`~flexval.reducedmodels.validity.SCREEN_MARGIN` of its
         limit (or beyond) are judged by the scalar check.
         """
         return self._verdicts(self._local(levels), lambda: levels)
@@ -525,8 +525,8 @@ class PrbmGroup(ConnectorGroup):
         """Each connector's :meth:`PrbmConnector.section_forces` at k levels, stacked (k, m).
 
         Every connector's wrench and statics at every level in two compiled
-        calls (:func:`reducedmodels.prbmkernel.chain_wrenches`,
-        :func:`reducedmodels.prbmkernel.chain_statics`).
+        calls (:func:`flexval.reducedmodels.prbmkernel.chain_wrenches`,
+        :func:`flexval.reducedmodels.prbmkernel.chain_statics`).
         """
         return self._forces(self._local(levels))
 

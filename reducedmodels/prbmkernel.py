@@ -1,7 +1,7 @@
 """Compiled kernel of the 3R pseudo-rigid-body chain (numba, cached on disk).
 
 The one implementation of the PRBM connector's Lagrangian of
-:mod:`reducedmodels.prbm`: :func:`chain` gives one chain's Lagrangian,
+:mod:`flexval.reducedmodels.prbm`: :func:`chain` gives one chain's Lagrangian,
 gradient and Hessian values; :func:`assemble_chains` evaluates every chain
 of a run of PRBM connectors and adds the results where the index maps say
 (into the System's gradient and tangent storage, or into a connector's
@@ -11,7 +11,7 @@ pass's wrenches, displaced polylines and section forces. One call per
 Newton iteration replaces one Python call per flexure and the scatter of
 their float lists.
 
-Compiled with :data:`reducedmodels.jit.kernel` (numba, cached on disk; the
+Compiled with :data:`flexval.reducedmodels.jit.kernel` (numba, cached on disk; the
 first run of an installation pays the compilation, see README, "Speed"), whose
 docstring gives the floating-point policy.
 
@@ -36,7 +36,7 @@ link vectors v_h, v_l (2 each, mm, initial), the joint stiffnesses k1, k2, k3 (N
 closure scale c (N/mm)."""
 
 HESSIAN_VALUES = 34
-"""Hessian values of one chain, in the order of :func:`reducedmodels.prbm._hessian_pattern`."""
+"""Hessian values of one chain, in the order of :func:`flexval.reducedmodels.prbm._hessian_pattern`."""
 
 
 @kernel

@@ -1,11 +1,11 @@
 """Recording a traced path as a LoadPath, and load control through the requested levels.
 
-:class:`PathRecorder` turns the points :func:`reducedmodels.tracer.trace`
-yields into a :class:`~reducedmodels.loadpath.LoadPath` (target motion,
+:class:`PathRecorder` turns the points :func:`flexval.reducedmodels.tracer.trace`
+yields into a :class:`~flexval.reducedmodels.loadpath.LoadPath` (target motion,
 optional poses, shapes and reactions, the validity monitor, solver
-statistics) and a tracer failure into a :class:`~reducedmodels.core.SolverError`
+statistics) and a tracer failure into a :class:`~flexval.reducedmodels.core.SolverError`
 that carries the path so far. :func:`solve_path` (load control) and
-:func:`reducedmodels.continuation.solve_arclength` are thin uses of it.
+:func:`flexval.reducedmodels.continuation.solve_arclength` are thin uses of it.
 
 Units: mm, N, N mm, rad.
 """
@@ -17,7 +17,7 @@ from typing import Callable, Iterator, Sequence
 
 import numpy as np
 
-from geometry import LoadCase
+from flexval.geometry import LoadCase
 
 from .connector import Connector
 from .core import SolverError, System
@@ -162,7 +162,7 @@ def path_end_pass(system: System, states: Sequence[np.ndarray]
     (prefixed with the connector's name, connectors in order); the section
     forces (k, m) per connector, None for one without (pins). Each group of
     connectors computes both for all the states in one call
-    (:meth:`~reducedmodels.connector.ConnectorGroup.path_end_pass`, given its
+    (:meth:`~flexval.reducedmodels.connector.ConnectorGroup.path_end_pass`, given its
     coordinates at every state: :meth:`System.group_coordinates`).
     """
     reasons: list[list[str]] = [[] for _ in states]
@@ -192,7 +192,7 @@ def record_stress(path: LoadPath, connectors, forces, sections: dict,
     path : LoadPath
     connectors, forces :
         The system's connectors and their section forces (N, N mm) at the
-        state (:meth:`~reducedmodels.connector.ConnectorGroup.section_forces`).
+        state (:meth:`~flexval.reducedmodels.connector.ConnectorGroup.section_forces`).
     sections : dict of flexure name -> Section
     scales : sequence of float
         The factors of the levels to append.
@@ -251,7 +251,7 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
     """Trace the load path of ``case`` through its requested levels by load control.
 
     Between two requested levels the load factor advances in sub-steps
-    (:class:`~reducedmodels.tracer.LoadControl`); the reported levels are
+    (:class:`~flexval.reducedmodels.tracer.LoadControl`); the reported levels are
     exactly the requested ones (``levels`` equal steps, default the load
     case's).
 

@@ -18,7 +18,7 @@ The peak normal stress of the rectangular section is the outer-fibre value
 Every flexure connector reports its section forces from its own internal
 forces (the gradient of its energy on the end body's pose) along its own
 displaced centre line (beam nodes, DCMM displaced sub-arcs, PRBM links,
-continuum mid-thickness nodes): see :meth:`reducedmodels.connector.Connector.section_forces`.
+continuum mid-thickness nodes): see :meth:`flexval.reducedmodels.connector.Connector.section_forces`.
 
 Units: mm, N, N mm, MPa.
 """
@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from geometry import Section
+from flexval.geometry import Section
 
 
 @dataclass(frozen=True)
@@ -45,7 +45,7 @@ class SectionForces:
     axial : array (m,) or (k, m)
         Normal force N, N (tension positive); one row per state when the
         forces of k states at the same stations are stacked (a whole load
-        path, see :meth:`reducedmodels.connector.Connector.path_section_forces`).
+        path, see :meth:`flexval.reducedmodels.connector.Connector.path_section_forces`).
     moment : array (m,) or (k, m)
         Bending moment M, N mm: the moment the part before the section
         exerts on the part towards the end body (counterclockwise positive).

@@ -1,7 +1,7 @@
 """Cubic spline interpolation of a tabulated function of one variable (not-a-knot ends).
 
 The PRBM's fitted parameter rho is tabulated against the arc angle and read
-between the rows by this spline (:func:`reducedmodels.prbm.table_parameters`).
+between the rows by this spline (:func:`flexval.reducedmodels.prbm.table_parameters`).
 It is the spline of ``scipy.interpolate.CubicSpline`` with its default
 not-a-knot ends, computed the same way (slopes from one tridiagonal solve,
 ``scipy.linalg.solve_banded``, then cubic Hermite pieces evaluated by

@@ -9,7 +9,7 @@ adds them as it computes them):
 * ``dense``  -- small systems (at most ``DENSE_LIMIT`` unknowns; see ``NARROW_MIN``), LAPACK;
 * ``banded`` -- chains of beams and bodies: after a reverse Cuthill-McKee
   ordering (scipy's, or for a compiled system the same one computed by
-  :mod:`reducedmodels.orderkernel`) their bandwidth is small whatever the number of elements, so a
+  :mod:`flexval.reducedmodels.orderkernel`) their bandwidth is small whatever the number of elements, so a
   banded LU (LAPACK ``dgbtrf``) costs O(n b^2), and so does the inertia
   (a banded Cholesky, or banded bisection when that fails, saddle points
   included);
@@ -60,7 +60,7 @@ def narrow_kernels(b: int) -> tuple[ModuleType, tuple[int, ...]]:
 
 @functools.cache
 def band_kernels(b: int) -> ModuleType:
-    """:mod:`reducedmodels.bandkernel`, its kernels of half-bandwidth b loaded (see ``warm_up``).
+    """:mod:`flexval.reducedmodels.bandkernel`, its kernels of half-bandwidth b loaded (see ``warm_up``).
 
     A layout that will use them asks for them when it is built, so that
     loading them is not charged to a path's time.
@@ -73,10 +73,10 @@ def band_kernels(b: int) -> ModuleType:
 
 @functools.cache
 def order_kernels() -> ModuleType:
-    """:mod:`reducedmodels.orderkernel`, its kernels loaded (a compiled system's ordering).
+    """:mod:`flexval.reducedmodels.orderkernel`, its kernels loaded (a compiled system's ordering).
 
     Loaded once per process, before a path's clock starts
-    (:func:`reducedmodels.families` loads it with a family's kernels).
+    (:func:`flexval.reducedmodels.families` loads it with a family's kernels).
     """
     from . import orderkernel
 
@@ -185,7 +185,7 @@ class BandedTangent:
     pivoting (on the general band storage, mirrored from the upper band)
     only when the Cholesky meets a non-positive pivot. Up to
     ``NARROW_BAND`` both are the compiled loops of
-    :mod:`reducedmodels.bandkernel` (numba), above it LAPACK's.
+    :mod:`flexval.reducedmodels.bandkernel` (numba), above it LAPACK's.
     """
 
     def __init__(self, storage: np.ndarray, perm: np.ndarray, half_bandwidth: int):
@@ -343,7 +343,7 @@ class TangentLayout:
     compiled : bool
         The system already runs compiled kernels (numba is loaded), so a
         narrow band may take the compiled Cholesky below ``DENSE_LIMIT``,
-        and the ordering is computed by :mod:`reducedmodels.orderkernel`
+        and the ordering is computed by :mod:`flexval.reducedmodels.orderkernel`
         (scipy's reverse Cuthill-McKee, the same permutation, without the
         sparse matrix scipy needs: 4-7 times faster on beam chains).
 

@@ -3,14 +3,14 @@
 :func:`trace` solves the first point at a fixed load factor from rest and
 then asks a *stepping strategy* for one step after the other: the strategy
 proposes a step problem and a predictor, the one Newton iteration
-(:func:`reducedmodels.newton.solve_step`) corrects it, the strategy reviews
+(:func:`flexval.reducedmodels.newton.solve_step`) corrects it, the strategy reviews
 the result (step bounds, stability, ...), and the tracer either cuts the
 step or accepts it and, when the strategy says the point is one to report,
 yields it as a :class:`PathPoint`. The caller records what it needs (the
 way scikit-fem's ``natural_jfnk`` yields ``(mu, sol)``): see
-:class:`reducedmodels.recorder.PathRecorder`. Two strategies exist:
+:class:`flexval.reducedmodels.recorder.PathRecorder`. Two strategies exist:
 :class:`LoadControl` (requested load levels, adaptive sub-steps) and
-:class:`reducedmodels.continuation.ArcLength` (Riks/Crisfield continuation).
+:class:`flexval.reducedmodels.continuation.ArcLength` (Riks/Crisfield continuation).
 
 Counts of Newton iterations, step cuts and accepted sub-steps are kept here,
 once, and travel with every point and every failure.
@@ -73,7 +73,7 @@ class PathPoint:
     Attributes
     ----------
     state : array (n_dofs,)
-        The system's coordinates (mm, rad; see :class:`reducedmodels.core.System`).
+        The system's coordinates (mm, rad; see :class:`flexval.reducedmodels.core.System`).
     factor : float
         Load factor (dimensionless; 1 is the load case's full value).
     iterations : int
@@ -225,7 +225,7 @@ class LoadControl(Stepping):
 
     Between two requested factors the load factor advances in sub-steps
     that are halved when Newton fails, a body moves more than the bounds of
-    :class:`~reducedmodels.core.SolverSettings` or (with ``check_stability``)
+    :class:`~flexval.reducedmodels.core.SolverSettings` or (with ``check_stability``)
     the equilibrium reached is unstable, and doubled (up to the spacing of
     the requested factors) after easy steps. Each sub-step starts from the
     extrapolation of the last ``PREDICTOR_STATES`` converged states

@@ -3,7 +3,7 @@
 A converged state is not necessarily a state a mechanism can reach: under
 loads far beyond their design, the reduced models happily report a 12.6 mm
 flexure with its ends 694 mm apart. Each connector's
-:meth:`~reducedmodels.connector.Connector.validity` compares its state with
+:meth:`~flexval.reducedmodels.connector.Connector.validity` compares its state with
 the limits below and names what it finds; the recorder stores the verdict
 per load level (``LoadPath.valid``, ``LoadPath.validity``) without
 stopping the run. The limits follow from the models' shared assumptions
@@ -22,7 +22,7 @@ typed in:
 * :data:`MAX_LINEAR_ROTATION` bounds the body rotations of a linear
   response (``ee``), whose kinematics are linearised.
 * the PRBM is meaningful within the end rotations its table was fitted on
-  (:func:`reducedmodels.prbm.fitted_rotation`).
+  (:func:`flexval.reducedmodels.prbm.fitted_rotation`).
 
 ``tests/test_validity.py`` checks that every model's states at the paper's
 loads are inside, and that DCMM_1 at 100 and 1000 times them is not.
@@ -87,9 +87,9 @@ connector refuses the state outright.)"""
 SCREEN_MARGIN = 1e-9
 """How close to a limit (in its own units) a vectorised screen sends a state to the exact check.
 
-A connector's :meth:`~reducedmodels.connector.Connector.path_validity`
+A connector's :meth:`~flexval.reducedmodels.connector.Connector.path_validity`
 screens all the states of a path with array arithmetic, which may differ
-from its scalar :meth:`~reducedmodels.connector.Connector.validity` in the
+from its scalar :meth:`~flexval.reducedmodels.connector.Connector.validity` in the
 last bits (``np.hypot`` against ``math.dist``): states within this margin
 of a limit, and beyond it, are judged by the scalar check, so the verdicts
 are the scalar check's exactly."""

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from geometry import Force, LoadCase, Material, Moment, Section
-from geometry.mechanism import FlexureSpec, assemble
-from reducedmodels.core import local_hessian
+from flexval.geometry import Force, LoadCase, Material, Moment, Section
+from flexval.geometry.mechanism import FlexureSpec, assemble
+from flexval.reducedmodels.core import local_hessian
 
 
 def cantilever(shape, E: float = 2100.0, b: float = 1.0, h: float = 0.1, nu: float = 0.3,

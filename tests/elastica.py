@@ -22,7 +22,7 @@ from scipy.integrate import solve_bvp
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
 
-from geometry import Arc, Segment
+from flexval.geometry import Arc, Segment
 
 
 def _length_parameter(m: float) -> float:

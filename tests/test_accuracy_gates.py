@@ -33,10 +33,10 @@ from pathlib import Path
 
 import pytest
 
-from geometry import load_scene
-from reducedmodels.catalogue import parse_model
-from validation.compare import errors
-from validation.run import run_model
+from flexval.geometry import load_scene
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.validation.compare import errors
+from flexval.validation.run import run_model
 
 GATES = Path(__file__).resolve().parents[1] / "reports" / "paper" / "gates.json"
 GATE_TOL = 1e-6

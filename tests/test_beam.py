@@ -14,13 +14,13 @@ from elastica import (arc_tip_compliance, cantilever_tip_force, circle_under_end
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from geometry import Arc, Force, LoadCase, Material, Moment, Section, Segment, load_scene
-from geometry.mechanism import FlexureSpec, assemble
-from reducedmodels.catalogue import parse_model
-from reducedmodels import LoadControl, build_system, run_reduced, trace
-from reducedmodels.beam import BeamConnector, beam_kernels, evenly_spaced
-from reducedmodels.core import hermite_weights, lagrange_weights, local_hessian
-from reducedmodels.tracer import PREDICTOR_STATES
+from flexval.geometry import Arc, Force, LoadCase, Material, Moment, Section, Segment, load_scene
+from flexval.geometry.mechanism import FlexureSpec, assemble
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels import LoadControl, build_system, run_reduced, trace
+from flexval.reducedmodels.beam import BeamConnector, beam_kernels, evenly_spaced
+from flexval.reducedmodels.core import hermite_weights, lagrange_weights, local_hessian
+from flexval.reducedmodels.tracer import PREDICTOR_STATES
 
 MATERIAL = Material(2000.0, 0.3)
 ARC = Arc((5.0, 2.0), 10.0, 0.3, np.radians(240.0))          # r = 10 mm, L = 41.9 mm

@@ -16,9 +16,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from geometry import load_scene
-from reducedmodels.catalogue import parse_model
-from reducedmodels.models import build_system
+from flexval.geometry import load_scene
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.models import build_system
 from tests.builders import assert_assembles_like_its_connectors
 
 

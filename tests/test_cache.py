@@ -12,12 +12,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from geometry import Segment, load_scene
-from geometry.files import CacheWarning, cache_dir
-from geometry.mesh import mesh_flexure
-from reducedmodels import LoadPath
-from validation.cache import ResultCache, exact, result_key
-from validation.cli import main
+from flexval.geometry import Segment, load_scene
+from flexval.geometry.files import CacheWarning, cache_dir
+from flexval.geometry.mesh import mesh_flexure
+from flexval.reducedmodels import LoadPath
+from flexval.validation.cache import ResultCache, exact, result_key
+from flexval.validation.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -227,8 +227,8 @@ def test_damaged_mesh_entry_is_discarded_and_rebuilt(kind, cache_root):
 _MESH_WORKER = """
 import sys
 import numpy as np
-from geometry import Segment
-from geometry.mesh import mesh_flexure
+from flexval.geometry import Segment
+from flexval.geometry.mesh import mesh_flexure
 for level in (0, 1, 2):
     m = mesh_flexure(Segment((0.0, 0.0), (3.0, 4.0)), 0.25, level)
     print(level, float(np.abs(m.nodes).sum()).hex(), int(m.elements.sum()))
@@ -247,7 +247,7 @@ def test_two_reports_share_an_empty_cache(tmp_path):
     with identical results (fixed temporary names made one of them fail 5 times in 6)."""
     cache = tmp_path / "cache"
     outs = [tmp_path / f"out{k}" for k in range(2)]
-    argv = ["-m", "validation.cli", "report", "open_chain", "--model", "ee", "--model", "dcmm:1",
+    argv = ["-m", "flexval.validation.cli", "report", "open_chain", "--model", "ee", "--model", "dcmm:1",
             "--model", "prbm", "--repeats", "1", "--no-bench", "--no-converge", "--quiet"]
     procs = [_spawn(argv + ["--out", str(o)], cache) for o in outs]
     for p in procs:

@@ -17,14 +17,14 @@ import sys
 import numpy as np
 import pytest
 
-from geometry import Arc, SceneError, load_scene
-from reducedmodels import Connector, run_reduced
-from reducedmodels.catalogue import (Family, Option, Resolution, families, family,
+from flexval.geometry import Arc, SceneError, load_scene
+from flexval.reducedmodels import Connector, run_reduced
+from flexval.reducedmodels.catalogue import (Family, Option, Resolution, families, family,
                                      parse_model, register, unregister)
-from reducedmodels.models import connector_system, trace_nonlinear
-from validation.cache import result_key
-from validation.cli import main
-from validation.run import run_model
+from flexval.reducedmodels.models import connector_system, trace_nonlinear
+from flexval.validation.cache import result_key
+from flexval.validation.cli import main
+from flexval.validation.run import run_model
 
 from builders import cantilever, tip_moment
 
@@ -175,7 +175,7 @@ def test_continuum_options_reach_the_law():
     slender arc under a moment turns less by about 1 - nu^2 (the thin-beam limit)."""
     mech = cantilever(Arc((0.0, 0.0), 10.0, 0.4, 1.0), h=0.2, nu=0.3)
     case = tip_moment(1e-3)
-    from geometry import Scene
+    from flexval.geometry import Scene
 
     scene = Scene("arc", "", mech, (case,), (), frozenset(), "<test>")
     stress = run_model(scene, parse_model("continuum:0"), case)
@@ -200,12 +200,12 @@ def test_request_models_are_checked_when_used(tmp_path):
     naming the file, the field and the value (exit 2)."""
     from importlib import resources
 
-    text = resources.files("geometry").joinpath("scenes", "open_chain.toml").read_text()
+    text = resources.files("flexval.geometry").joinpath("scenes", "open_chain.toml").read_text()
     head, _, _ = text.partition("[request]")
     scene = tmp_path / "s.toml"
     scene.write_text(head + '[request]\nmodels = ["dcmm:2[frame=up]"]\n')
     assert load_scene(scene).models == ("dcmm:2[frame=up]",)
-    proc = subprocess.run([sys.executable, "-m", "validation.cli", "run", str(scene)],
+    proc = subprocess.run([sys.executable, "-m", "flexval.validation.cli", "run", str(scene)],
                           capture_output=True, text=True)
     assert proc.returncode == 2
     assert str(scene) in proc.stderr and "request.models" in proc.stderr
@@ -213,10 +213,10 @@ def test_request_models_are_checked_when_used(tmp_path):
 
 
 def test_info_imports_no_model_code():
-    code = ("import sys; from validation.cli import main; main(['info', 'closed_chain']); "
-            "print(sorted(m for m in sys.modules if m.startswith(('reducedmodels.beam', "
-            "'reducedmodels.dcmm', 'reducedmodels.prbm', 'validation.continuum.run', "
-            "'validation.continuum.connector', 'skfem'))))")
+    code = ("import sys; from flexval.validation.cli import main; main(['info', 'closed_chain']); "
+            "print(sorted(m for m in sys.modules if m.startswith(('flexval.reducedmodels.beam', "
+            "'flexval.reducedmodels.dcmm', 'flexval.reducedmodels.prbm', 'flexval.validation.continuum.run', "
+            "'flexval.validation.continuum.connector', 'skfem'))))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip().splitlines()[-1] == "[]"
 
@@ -235,7 +235,7 @@ def test_every_family_documents_itself():
 def test_every_family_with_a_system_builds_it_with_its_options():
     """build_system reaches each family's System, the spec's options included (modes, the
     gate-spread benchmark and arc length build Systems this way)."""
-    from reducedmodels import build_system
+    from flexval.reducedmodels import build_system
 
     mech = _mech()
     system = build_system(mech, parse_model("continuum:0[plane=strain,law=neo-hookean]"))
@@ -250,7 +250,7 @@ def test_continuum_variants_write_their_own_fields(tmp_path):
     """Two options of one mesh level are two models: each keeps its VTU file."""
     from importlib import resources
 
-    text = resources.files("geometry").joinpath("scenes", "closed_chain.toml").read_text()
+    text = resources.files("flexval.geometry").joinpath("scenes", "closed_chain.toml").read_text()
     scene = tmp_path / "s.toml"
     scene.write_text(text.replace('models = ["beam:100"',
                                   'outputs = ["vtu"]\nmodels = ["beam:100"'))

@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from reducedmodels import LoadPath
-from validation.cli import main
+from flexval.reducedmodels import LoadPath
+from flexval.validation.cli import main
 
 
 @pytest.mark.parametrize("scene", ["open_chain", "closed_chain"])
@@ -47,8 +47,8 @@ def test_run_json_contract(tmp_path, capsys):
 
 def test_run_solver_failure_exit_3(monkeypatch, capsys):
     # a sub-step budget of 3 cannot follow the soft stretch of f-
-    import reducedmodels.models as models
-    from reducedmodels.core import SolverSettings
+    import flexval.reducedmodels.models as models
+    from flexval.reducedmodels.core import SolverSettings
 
     monkeypatch.setattr(models, "SolverSettings", lambda: SolverSettings(max_substeps=3))
     code = main(["run", "open_chain", "--model", "dcmm:1", "--load-case", "f-"])
@@ -60,7 +60,7 @@ def test_run_solver_failure_exit_3(monkeypatch, capsys):
 def test_run_writes_requested_continuum_fields(tmp_path):
     from importlib import resources
 
-    text = resources.files("geometry").joinpath("scenes", "closed_chain.toml").read_text()
+    text = resources.files("flexval.geometry").joinpath("scenes", "closed_chain.toml").read_text()
     scene = tmp_path / "s.toml"
     scene.write_text(text.replace('models = ["beam:100"', 'outputs = ["vtu", "png"]\nmodels = ["beam:100"'))
     out = tmp_path / "fields"

@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from geometry import Arc, Force, LoadCase, Material, Section, load_scene
-from geometry.mechanism import Body, FlexureSpec, Pin, PinSpec, assemble
-from reducedmodels.catalogue import parse_model
-from reducedmodels import SolverError, SolverSettings, build_system, solve_path
-from reducedmodels.continuation import limit_loads, solve_arclength
+from flexval.geometry import Arc, Force, LoadCase, Material, Section, load_scene
+from flexval.geometry.mechanism import Body, FlexureSpec, Pin, PinSpec, assemble
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels import SolverError, SolverSettings, build_system, solve_path
+from flexval.reducedmodels.continuation import limit_loads, solve_arclength
 from test_joints import von_mises_truss
 
 DA_DEPPO_SCHMIDT = 8.97
@@ -185,8 +185,8 @@ def test_arclength_drives_the_continuum_solver_too():
     """The continuum is a connector on the same core, so arc-length continuation
     traces it unchanged: on a monotone path it must reach the load-control end state
     (both are exact equilibria of the same discrete system; gate 1e-6 relative)."""
-    from geometry import Segment
-    from validation.continuum.run import build_system as continuum_system
+    from flexval.geometry import Segment
+    from flexval.validation.continuum.run import build_system as continuum_system
 
     seg = Segment((0.0, 0.0), (20.0, 0.0))
     spec = FlexureSpec("s", seg, ("g", "t"), Section(1.0, 1.0), start_body="g")

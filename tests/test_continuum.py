@@ -18,17 +18,17 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.optimize import brentq
 
-from geometry import Arc, Force, LoadCase, Material, Moment, Section, Segment
-from geometry.files import cache_dir
-from geometry.mechanism import FlexureSpec, assemble
-from geometry.mesh import mesh_flexure
-from reducedmodels import solve_path
-from reducedmodels.core import local_hessian
-from reducedmodels.newton import FixedLoad, solve_step
-from validation.continuum import ContinuumConnector
-from validation.continuum.material import make_law
-from validation.continuum.run import build_system
-from validation.continuum.solid import Solid
+from flexval.geometry import Arc, Force, LoadCase, Material, Moment, Section, Segment
+from flexval.geometry.files import cache_dir
+from flexval.geometry.mechanism import FlexureSpec, assemble
+from flexval.geometry.mesh import mesh_flexure
+from flexval.reducedmodels import solve_path
+from flexval.reducedmodels.core import local_hessian
+from flexval.reducedmodels.newton import FixedLoad, solve_step
+from flexval.validation.continuum import ContinuumConnector
+from flexval.validation.continuum.material import make_law
+from flexval.validation.continuum.run import build_system
+from flexval.validation.continuum.solid import Solid
 
 E_MOD, NU = 2100.0, 0.35
 
@@ -356,7 +356,7 @@ def test_svk_tangent_blocks_equal_the_general_contraction(plane):
     # the closed form against Law.tangent_blocks' contraction of the law's own CC over random
     # deformation gradients and weights: the same sums in another order, round-off only
     # (1e-16 of the largest block entry; 1e-13 allowed)
-    from validation.continuum.material import Law
+    from flexval.validation.continuum.material import Law
 
     law = make_law("svk", plane, E_MOD, NU)
     rng = np.random.default_rng(11)

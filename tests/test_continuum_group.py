@@ -1,4 +1,4 @@
-"""The continuum's group assembly (validation.continuum.group) against the per-connector chain rule.
+"""The continuum's group assembly (flexval.validation.continuum.group) against the per-connector chain rule.
 
 Reference: each ContinuumConnector's own gradient and Hessian over its local
 coordinates (checked by finite differences in tests/test_continuum.py),
@@ -11,11 +11,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from geometry import load_scene
-from reducedmodels.connector import ConnectorGroup
-from validation.continuum import ContinuumConnector
-from validation.continuum.group import ContinuumGroup
-from validation.continuum.run import build_system
+from flexval.geometry import load_scene
+from flexval.reducedmodels.connector import ConnectorGroup
+from flexval.validation.continuum import ContinuumConnector
+from flexval.validation.continuum.group import ContinuumGroup
+from flexval.validation.continuum.run import build_system
 from tests.builders import assert_assembles_like_its_connectors
 
 

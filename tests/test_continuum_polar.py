@@ -1,4 +1,4 @@
-"""The continuum's section-wise predictor (validation.continuum.polar).
+"""The continuum's section-wise predictor (flexval.validation.continuum.polar).
 
 Checks against geometry known independently of the module: the sections of
 an arc mesh lie on its radii, the polar description round-trips, and a
@@ -15,12 +15,12 @@ import math
 import numpy as np
 import pytest
 
-from geometry import Arc, Material, Section, Segment
-from geometry.mechanism import FlexureSpec, assemble
-from validation.continuum import ContinuumConnector
-from reducedmodels.core import hermite_weights
-from validation.continuum.group import ContinuumGroup
-from validation.continuum.polar import (cross_sections, first_order_change, from_polar,
+from flexval.geometry import Arc, Material, Section, Segment
+from flexval.geometry.mechanism import FlexureSpec, assemble
+from flexval.validation.continuum import ContinuumConnector
+from flexval.reducedmodels.core import hermite_weights
+from flexval.validation.continuum.group import ContinuumGroup
+from flexval.validation.continuum.polar import (cross_sections, first_order_change, from_polar,
                                         stack_sections, to_polar)
 
 

@@ -9,11 +9,11 @@ import pytest
 from scipy.integrate import quad
 
 from builders import cantilever, fd_check, tip_force, tip_moment
-from geometry import Arc, Segment, load_scene
-from reducedmodels.catalogue import parse_model
-from reducedmodels import run_reduced
-from reducedmodels.dcmm import DcmmConnector, dcmm_kernels
-from reducedmodels.models import build_system
+from flexval.geometry import Arc, Segment, load_scene
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels import run_reduced
+from flexval.reducedmodels.dcmm import DcmmConnector, dcmm_kernels
+from flexval.reducedmodels.models import build_system
 
 
 @pytest.mark.parametrize("n", [1, 3])
@@ -275,7 +275,7 @@ def test_one_big_step_does_not_land_on_an_unstable_branch():
 def test_every_tangent_storage_counts_the_inertia():
     import scipy.sparse as sp
 
-    from reducedmodels.tangent import BandedTangent, DenseTangent, SparseTangent
+    from flexval.reducedmodels.tangent import BandedTangent, DenseTangent, SparseTangent
 
     rng = np.random.default_rng(0)
     Q, _ = np.linalg.qr(rng.normal(size=(120, 120)))
@@ -298,7 +298,7 @@ def test_dense_ldl_gives_the_inertia_and_the_solution_of_saddle_points(seed):
     of negative eigenvalues is numpy's eigvalsh count (exact here: the spectrum keeps a gap
     of at least 1e-3 from zero) and the solve agrees with numpy's LU to round-off (1e-10
     relative, condition numbers below 1e6 measured)."""
-    from reducedmodels.tangent import DenseTangent
+    from flexval.reducedmodels.tangent import DenseTangent
 
     rng = np.random.default_rng(seed)
     n, m = 12, 4
@@ -319,7 +319,7 @@ def test_dense_ldl_gives_the_inertia_and_the_solution_of_saddle_points(seed):
 def test_dense_ldl_reads_two_by_two_pivots():
     """A zero diagonal forces a 2 x 2 pivot: [[0, 1], [1, 0]] (eigenvalues -1, 1), beside
     3 and the block [[0, 2], [2, -3]] (eigenvalues 1 and -4): two negative eigenvalues."""
-    from reducedmodels.tangent import DenseTangent
+    from flexval.reducedmodels.tangent import DenseTangent
 
     K = np.zeros((5, 5))
     K[0, 1] = K[1, 0] = 1.0

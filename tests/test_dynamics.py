@@ -1,4 +1,4 @@
-"""Time integration (reducedmodels.dynamics) and load time laws (geometry.timelaw)."""
+"""Time integration (flexval.reducedmodels.dynamics) and load time laws (flexval.geometry.timelaw)."""
 
 from __future__ import annotations
 
@@ -10,17 +10,17 @@ import tomllib
 import numpy as np
 import pytest
 
-from geometry import MassData, RigidMass, SceneError, Segment
-from geometry.scene import parse_scene
-from geometry.timelaw import TimeLaw, eq15_ramp
-from reducedmodels.catalogue import parse_model
-from reducedmodels.connector import Connector
-from reducedmodels.core import System
-from reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
-from reducedmodels.inertia import MassModel
-from reducedmodels.models import build_system
-from reducedmodels.modes import natural_modes
-from reducedmodels.recorder import solve_path
+from flexval.geometry import MassData, RigidMass, SceneError, Segment
+from flexval.geometry.scene import parse_scene
+from flexval.geometry.timelaw import TimeLaw, eq15_ramp
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.connector import Connector
+from flexval.reducedmodels.core import System
+from flexval.reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
+from flexval.reducedmodels.inertia import MassModel
+from flexval.reducedmodels.models import build_system
+from flexval.reducedmodels.modes import natural_modes
+from flexval.reducedmodels.recorder import solve_path
 from tests.builders import cantilever, tip_moment
 from tests.test_inertia import SCENE
 
@@ -63,7 +63,7 @@ class LinearSpring(Connector):
 def model_system(mech, model: str) -> System:
     """The System of ``mech`` with every flexure as ``model`` (continuum:LEVEL included)."""
     if model.startswith("continuum"):
-        from validation.continuum.run import build_system as continuum_system
+        from flexval.validation.continuum.run import build_system as continuum_system
 
         return continuum_system(mech, int(model.split(":")[1]))
     return build_system(mech, parse_model(model))
@@ -152,7 +152,7 @@ def test_bad_time_law_names_the_field(fields, field):
 
 
 def test_cli_dynamic_run_writes_time_histories(tmp_path):
-    from validation.cli import main
+    from flexval.validation.cli import main
 
     data = SCENE + 'ramp = "eq15"\nt1 = 0.05\nend_time = 0.08\n'
     scene = tmp_path / "dyn.toml"
@@ -236,8 +236,8 @@ def _swinging_cantilever_step(beta: float):
     lumped masses), so M is constant and the convective forces vanish: the
     step's residual then has no term the effective tangent leaves out.
     """
-    from reducedmodels.dynamics import DynamicStep, GeneralizedAlpha
-    from reducedmodels.tracer import LoadControl, trace
+    from flexval.reducedmodels.dynamics import DynamicStep, GeneralizedAlpha
+    from flexval.reducedmodels.tracer import LoadControl, trace
 
     mech = cantilever(Segment((0.0, 0.0), (L, 0.0)))
     mech = dataclasses.replace(mech, inertia=MassData(
@@ -287,7 +287,7 @@ def test_mass_outside_the_tangent_storage_gives_the_same_step(monkeypatch):
 
 @pytest.mark.parametrize("value", ["0", "-1e-5", "nan", "0.5"])
 def test_bad_error_tol_names_the_option(tmp_path, capsys, value):
-    from validation.cli import main
+    from flexval.validation.cli import main
 
     scene = tmp_path / "dyn.toml"
     scene.write_text(SCENE + 'ramp = "eq15"\nt1 = 0.05\n', encoding="utf-8")

@@ -52,7 +52,7 @@ def test_custom_family_is_the_ellipse_of_elasticity():
     1e-12 leaves room for the conditioning of the solves, far below any
     modelling difference (beam:100 differs by 7e-5 in rotation).
     """
-    from reducedmodels.catalogue import families
+    from flexval.reducedmodels.catalogue import families
 
     diff = load_example("custom_family").main()
     assert diff["rotation vs ee"] < 1e-12

@@ -19,12 +19,12 @@ import pytest
 from hypothesis import HealthCheck, Phase, event, given, settings
 from hypothesis import strategies as st
 
-from geometry import Arc, Force, LoadCase, Material, Moment, SceneError, Section
-from geometry.mechanism import FlexureSpec, PinSpec, assemble
-from reducedmodels.catalogue import parse_model
-from geometry.scene import parse_scene
-from reducedmodels import SolverError, build_system, run_reduced
-from reducedmodels.continuation import limit_loads, solve_arclength
+from flexval.geometry import Arc, Force, LoadCase, Material, Moment, SceneError, Section
+from flexval.geometry.mechanism import FlexureSpec, PinSpec, assemble
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.geometry.scene import parse_scene
+from flexval.reducedmodels import SolverError, build_system, run_reduced
+from flexval.reducedmodels.continuation import limit_loads, solve_arclength
 
 MODELS = ["dcmm:1", "dcmm:2", "beam:8", "ee", "prbm"]
 LEVELS = 5
@@ -178,7 +178,7 @@ def _scene_dicts() -> list[dict]:
     outputs and a pin, so that every kind of field is there to corrupt."""
     out = []
     for name in ("open_chain", "closed_chain"):
-        text = resources.files("geometry").joinpath("scenes", f"{name}.toml").read_text()
+        text = resources.files("flexval.geometry").joinpath("scenes", f"{name}.toml").read_text()
         out.append(tomllib.loads(text))
     d = out[0]
     d["bodies"] = [{"name": "4", "points": [[15.0805, 15.5321]]}]     # where e34 meets body 4

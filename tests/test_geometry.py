@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from geometry import Arc, Segment, load_scene
-from geometry.shapes import arc_semi_axes
+from flexval.geometry import Arc, Segment, load_scene
+from flexval.geometry.shapes import arc_semi_axes
 
 
 def test_open_chain_links_match_hand_derivation():

@@ -5,10 +5,10 @@ with a message naming the field and the value (exit 2), over several values each
 import pytest
 from test_scene_errors import _base, _dump
 
-from geometry import SceneError, load_scene
-from geometry.loads import MAX_LOAD_SUBSTEPS
-from reducedmodels.core import SolverSettings
-from validation.cli import EXIT_INPUT, MAX_LOCAL_WORKERS, main
+from flexval.geometry import SceneError, load_scene
+from flexval.geometry.loads import MAX_LOAD_SUBSTEPS
+from flexval.reducedmodels.core import SolverSettings
+from flexval.validation.cli import EXIT_INPUT, MAX_LOCAL_WORKERS, main
 
 
 def test_the_level_cap_is_the_solvers_sub_step_cap():
@@ -58,12 +58,12 @@ def test_a_moment_with_a_point_or_direction_is_refused(tmp_path, key, value):
 def test_a_study_of_one_resolution_is_refused_before_work(model, levels, monkeypatch, capsys):
     """One resolution gives no ratio, order or Richardson value (the table printed
     'refinement ratio nan'); a large single N ran for minutes before saying so."""
-    import validation.convergence
+    import flexval.validation.convergence
 
     def forbidden(*args, **kwargs):
         raise AssertionError("the study ran although --levels was refused")
 
-    monkeypatch.setattr(validation.convergence, "study", forbidden)
+    monkeypatch.setattr(flexval.validation.convergence, "study", forbidden)
     argv = ["converge", "open_chain", "--model", model, "--levels", levels]
     assert main(argv) == EXIT_INPUT
     err = capsys.readouterr().err

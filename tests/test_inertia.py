@@ -1,4 +1,4 @@
-"""Mass data in scenes (geometry.inertia) and gravity as dead loads (reducedmodels.inertia)."""
+"""Mass data in scenes (flexval.geometry.inertia) and gravity as dead loads (flexval.reducedmodels.inertia)."""
 
 from __future__ import annotations
 
@@ -10,12 +10,12 @@ import tomllib
 import numpy as np
 import pytest
 
-from geometry import Arc, MassData, RigidMass, SceneError, Segment
-from reducedmodels.catalogue import parse_model
-from geometry.inertia import polygon_properties
-from geometry.scene import parse_scene
-from reducedmodels.inertia import MassModel, Weighted, chain_mass_points
-from reducedmodels.models import build_system, run_reduced
+from flexval.geometry import Arc, MassData, RigidMass, SceneError, Segment
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.geometry.inertia import polygon_properties
+from flexval.geometry.scene import parse_scene
+from flexval.reducedmodels.inertia import MassModel, Weighted, chain_mass_points
+from flexval.reducedmodels.models import build_system, run_reduced
 from tests.builders import cantilever, fd_check, tip_moment
 
 SCENE = """
@@ -117,8 +117,8 @@ def test_self_weight_sag_of_a_cantilever(model, rtol):
     L, b, h, E, rho, g = 10.0, 1.0, 0.1, 2100.0, 1.24e-9, 9810.0
     mech = cantilever(Segment((0.0, 0.0), (L, 0.0)), E=E, b=b, h=h, nu=0.3)
     mech = dataclasses.replace(mech, inertia=MassData(density=rho, gravity=np.array([0.0, -g])))
-    from validation.run import run_model
-    from geometry import Scene
+    from flexval.validation.run import run_model
+    from flexval.geometry import Scene
 
     scene = Scene("sag", "", mech, (tip_moment(0.0, levels=2),), (), frozenset(), "<sag>")
     lp = run_model(scene, parse_model(model), scene.load_cases[0])
@@ -171,7 +171,7 @@ def test_mass_matrix_is_the_rigid_body_kinetic_energy():
 
 
 def test_cli_modes_json_and_refusal(tmp_path):
-    from validation.cli import main
+    from flexval.validation.cli import main
 
     scene = tmp_path / "mass.toml"
     scene.write_text(SCENE, encoding="utf-8")
@@ -193,8 +193,8 @@ def test_ee_carries_the_weights_like_its_nonlinear_parent():
     tip moment, the two differ only by the geometric
     nonlinearity, measured 2e-4 relative; ee without the weights misses the whole
     sag at the first level (a relative difference of 1)."""
-    from geometry import Scene
-    from validation.run import run_model
+    from flexval.geometry import Scene
+    from flexval.validation.run import run_model
 
     mech = cantilever(Arc((0.0, 0.0), 3.0, 0.4, 2.0), E=2100.0, b=1.0, h=0.1)
     mech = dataclasses.replace(mech, inertia=MassData(density=1.24e-9,
@@ -290,7 +290,7 @@ def test_convective_forces_are_the_lagrange_terms(model):
     central differences h = 1e-6: measured agreement 1e-9 relative; bound 1e-6."""
     mech = arc_cantilever(density=RHO, bodies={"t": RigidMass(1e-7, 1e-6, np.array([0.5, 0.5]))})
     if model.startswith("continuum"):
-        from validation.continuum.run import build_system as continuum_system
+        from flexval.validation.continuum.run import build_system as continuum_system
 
         system = continuum_system(mech, 0)
     else:

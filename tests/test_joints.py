@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from builders import fd_check
-from geometry import Force, LoadCase, Material, SceneError, Section, Segment, load_scene
-from geometry.mechanism import FlexureSpec, PinSpec, assemble
-from reducedmodels.catalogue import parse_model
-from geometry.scene import parse_scene
-from reducedmodels import build_system, run_reduced, solve_path
-from reducedmodels.joints import PinConnector
-from validation.cli import main
+from flexval.geometry import Force, LoadCase, Material, SceneError, Section, Segment, load_scene
+from flexval.geometry.mechanism import FlexureSpec, PinSpec, assemble
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.geometry.scene import parse_scene
+from flexval.reducedmodels import build_system, run_reduced, solve_path
+from flexval.reducedmodels.joints import PinConnector
+from flexval.validation.cli import main
 
 FOURBAR = """
 # A compliant four-bar: two rigid cranks pinned to the ground, joined by an arc.
@@ -299,14 +299,14 @@ def test_cli_bad_pin_exit_code_2_and_nothing_written(tmp_path, capsys):
 
 
 def test_linear_response_numbers_and_assembles_as_the_system():
-    """ee's linear response (reducedmodels.models.linear_response, built without a System)
+    """ee's linear response (flexval.reducedmodels.models.linear_response, built without a System)
     on the pinned four-bar with gravity: multipliers after the poses, weights as dead
     loads. Its levels must be the System's own K0^-1 (w + lambda f) at rest, from
     System.assemble and Loads.vector, carried to the target point (J dq, rotations
     linearised); both are one LU of the same matrix, so round-off only (1e-10)."""
     import dataclasses
 
-    from geometry.inertia import MassData
+    from flexval.geometry.inertia import MassData
 
     scene = fourbar_scene()
     mech = dataclasses.replace(scene.mechanism, inertia=MassData(

@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 
 from builders import cantilever, tip_force
-from geometry import Arc, Force, LoadCase, Moment, Segment
-from reducedmodels.catalogue import parse_model
-from reducedmodels import (Connector, LoadControl, SolverSettings, System, build_system,
+from flexval.geometry import Arc, Force, LoadCase, Moment, Segment
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels import (Connector, LoadControl, SolverSettings, System, build_system,
                            solve_path, trace)
-from reducedmodels.continuation import ArcLength, arc_dot
+from flexval.reducedmodels.continuation import ArcLength, arc_dot
 from test_continuation import deep_arch
 
 K1, K2, KT = 40.0, 60.0, 500.0
@@ -137,9 +137,9 @@ def test_arc_length_points_lie_on_the_constraint_in_equilibrium_past_the_limit()
 def test_hessian_product_equals_the_assembled_local_hessian(model):
     """local_hessian_product is the matrix-free form of local_hessian(...) @ x
     (same pattern values; summation order only, so 1e-12 relative)."""
-    from geometry import load_scene
-    from reducedmodels.core import local_hessian, local_hessian_product
-    from reducedmodels.models import build_system
+    from flexval.geometry import load_scene
+    from flexval.reducedmodels.core import local_hessian, local_hessian_product
+    from flexval.reducedmodels.models import build_system
 
     system = build_system(load_scene("closed_chain").mechanism, parse_model(model))
     rng = np.random.default_rng(3)

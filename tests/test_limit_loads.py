@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from validation.cli import main
+from flexval.validation.cli import main
 
 SCENES = Path(__file__).parent / "scenes"
 LEE_FRAME = 18.55

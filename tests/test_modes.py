@@ -1,4 +1,4 @@
-"""Natural frequencies against closed forms (reducedmodels.modes, reducedmodels.inertia)."""
+"""Natural frequencies against closed forms (flexval.reducedmodels.modes, flexval.reducedmodels.inertia)."""
 
 from __future__ import annotations
 
@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from geometry import Arc, MassData, RigidMass, SceneError, Segment
-from reducedmodels.catalogue import parse_model
-from reducedmodels.inertia import MassModel
-from reducedmodels.models import build_system
-from reducedmodels.modes import natural_modes, sparse_modes, sparse_tangent
+from flexval.geometry import Arc, MassData, RigidMass, SceneError, Segment
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.inertia import MassModel
+from flexval.reducedmodels.models import build_system
+from flexval.reducedmodels.modes import natural_modes, sparse_modes, sparse_tangent
 from tests.builders import cantilever, tip_force
 
 L, B, H, E, NU, RHO = 10.0, 1.0, 0.1, 2100.0, 0.3, 1.24e-9
@@ -73,8 +73,8 @@ def test_dcmm_rigid_pieces_on_a_cantilever(n):
     linear limit (the tip piece's weight acts l/4 inside the tip, the consistent load
     l/6: a tip moment rho A g l^2 / 24 too many); measured within 2.3e-4 of it (the
     geometric nonlinearity), bound 1e-3."""
-    from validation.run import run_model
-    from geometry import Scene
+    from flexval.validation.run import run_model
+    from flexval.geometry import Scene
 
     f = natural_modes(build_system(straight(density=RHO), parse_model(f"dcmm:{n}")),
                       count=1).frequencies_hz[0]
@@ -95,8 +95,8 @@ def test_prbm_pieces_on_links_match_a_cantilever():
     deflection under a uniform load weighs the compliance with (L - x)^3, and the
     symmetric chain matches the beam's compliance moments up to the third (measured
     -6e-7, the geometric nonlinearity; bound 1e-5)."""
-    from validation.run import run_model
-    from geometry import Scene
+    from flexval.validation.run import run_model
+    from flexval.geometry import Scene
 
     ratio = 2.0
     bare = natural_modes(build_system(straight(density=RHO), parse_model("prbm")),
@@ -132,7 +132,7 @@ def test_continuum_cantilever_against_beam_theory(level):
     Timoshenko-Rayleigh correction -(beta r)^2 (1 + E/(kappa G)) / 2 (r^2 = h^2/12:
     -0.006 % and -0.038 % at h/L = 0.01). Measured residuals: level 0 +0.025 %, +0.016 %;
     level 1 +0.015 %, +0.001 % (mesh and clamped-root effects); bound 0.05 %."""
-    from validation.continuum.run import build_system as continuum_system
+    from flexval.validation.continuum.run import build_system as continuum_system
 
     f = natural_modes(continuum_system(straight(density=RHO), level), count=2).frequencies_hz
     beta = np.asarray(BETA_L) / L
@@ -198,7 +198,7 @@ def test_sparse_and_dense_modes_agree_with_pins_and_multipliers():
     the dense null-space reduction and shift-invert Lanczos on the bordered problem give
     the same frequencies (1e-6: the dense solver's round-off on the lowest eigenvalues
     of a pencil whose stiffness spans ~10 decades)."""
-    from geometry import load_scene
+    from flexval.geometry import load_scene
 
     scene = load_scene("closed_chain")
     masses = {b: RigidMass(1e-6, 1e-5, scene.mechanism.bodies[b].reference + 1.0)

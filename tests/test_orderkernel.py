@@ -1,7 +1,7 @@
 """The compiled reverse Cuthill-McKee ordering against scipy's, and the layouts built with it.
 
 A compiled System's TangentLayout orders its unknowns with
-reducedmodels.orderkernel instead of scipy.sparse.csgraph.reverse_cuthill_mckee;
+flexval.reducedmodels.orderkernel instead of scipy.sparse.csgraph.reverse_cuthill_mckee;
 the permutation must be scipy's exactly (the same tangent storage, so the
 same numbers in every result). Checked on chains and closed loops in a
 shuffled numbering, disconnected graphs, patterns with duplicates, missing
@@ -16,11 +16,11 @@ import pytest
 import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from geometry import load_scene
-from reducedmodels import orderkernel
-from reducedmodels.catalogue import parse_model
-from reducedmodels.models import build_system
-from reducedmodels.tangent import NARROW_BAND, NARROW_MIN, TangentLayout
+from flexval.geometry import load_scene
+from flexval.reducedmodels import orderkernel
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.models import build_system
+from flexval.reducedmodels.tangent import NARROW_BAND, NARROW_MIN, TangentLayout
 
 
 def scipy_ordering(n: int, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:

@@ -15,17 +15,17 @@ import threading
 import numpy as np
 import pytest
 
-import geometry.files
-import validation.bench
-import validation.convergence
-import validation.report
-import validation.reportdata
-import validation.run
-import validation.stress
-from geometry import load_scene
-from geometry.files import OutputError, atomic_path
-from validation.cli import EXIT_INPUT, EXIT_OUTPUT, main
-from validation.outputs import (check_file, check_folder, inside, json_safe, output_path,
+import flexval.geometry.files
+import flexval.validation.bench
+import flexval.validation.convergence
+import flexval.validation.report
+import flexval.validation.reportdata
+import flexval.validation.run
+import flexval.validation.stress
+from flexval.geometry import load_scene
+from flexval.geometry.files import OutputError, atomic_path
+from flexval.validation.cli import EXIT_INPUT, EXIT_OUTPUT, main
+from flexval.validation.outputs import (check_file, check_folder, inside, json_safe, output_path,
                                 safe_name, write_json)
 
 
@@ -41,10 +41,10 @@ def no_work(monkeypatch):
     """Fail the test if any computation starts."""
     def forbidden(*args, **kwargs):
         raise AssertionError("computation started before the arguments were checked")
-    for module, name in ((validation.run, "run_model"), (validation.convergence, "study"),
-                         (validation.report, "build_report"),
-                         (validation.bench, "runtime_vs_error"),
-                         (validation.stress, "stress_report")):
+    for module, name in ((flexval.validation.run, "run_model"), (flexval.validation.convergence, "study"),
+                         (flexval.validation.report, "build_report"),
+                         (flexval.validation.bench, "runtime_vs_error"),
+                         (flexval.validation.stress, "stress_report")):
         monkeypatch.setattr(module, name, forbidden)
 
 
@@ -125,8 +125,8 @@ FOLDER_COMMANDS = [["report", "open_chain", "--out"], ["bench", "open_chain", "-
                                   "read-only place (/proc)"])
 def test_bad_output_file_refused_before_work(command, kind, tmp_path, no_work, capsys,
                                              monkeypatch):
-    import validation.drawing
-    monkeypatch.setattr(validation.drawing, "plot_mechanism",
+    import flexval.validation.drawing
+    monkeypatch.setattr(flexval.validation.drawing, "plot_mechanism",
                         lambda *a: pytest.fail("plotted before checking the output"))
     target = str(_bad_file_targets(tmp_path)[kind])
     assert _exit_code(command + [target]) == EXIT_INPUT
@@ -172,7 +172,7 @@ def test_write_failure_after_check_is_exit_4(tmp_path, monkeypatch, capsys):
 
     def full(fd):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-    monkeypatch.setattr(geometry.files.os, "fsync", full)
+    monkeypatch.setattr(flexval.geometry.files.os, "fsync", full)
     code = main(["run", "open_chain", "--model", "ee", "--load-case", "f+", "--levels", "3",
                  "--json", str(out)])
     assert code == EXIT_OUTPUT
@@ -292,9 +292,9 @@ def _hostile_scene(name: str, case_name: str):
                                              ("/abs/olute", ".."), ("..", "/")])
 def test_report_writes_only_inside_its_folder(name, case_name, tmp_path, monkeypatch):
     scene = _hostile_scene(name, case_name)
-    monkeypatch.setattr(validation.reportdata, "load_scene", lambda _: scene)
+    monkeypatch.setattr(flexval.validation.reportdata, "load_scene", lambda _: scene)
     out = tmp_path / "deep" / "out"
-    md = validation.report.build_report(["hostile"], out, ["beam:20", "ee"], repeats=1,
+    md = flexval.validation.report.build_report(["hostile"], out, ["beam:20", "ee"], repeats=1,
                                         use_cache=False, progress=False, bench=False,
                                         converge=False)
     assert md.parent == out
@@ -312,10 +312,10 @@ def test_bench_and_stress_files_stay_inside(name, tmp_path, monkeypatch):
     scene = _hostile_scene(name, "c")
     out = tmp_path / "out"
     rows = [{"model": "ee", "seconds": 1e-3, "error": 1.0, "per_case": {}}]
-    md = validation.bench.write_bench(scene, rows, "beam:20", out)
+    md = flexval.validation.bench.write_bench(scene, rows, "beam:20", out)
     report = {"scene": name, "models": {}}
-    monkeypatch.setattr(validation.stress, "format_markdown", lambda r: "# stress\n")
-    smd, sjs = validation.stress.write_stress(report, out)
+    monkeypatch.setattr(flexval.validation.stress, "format_markdown", lambda r: "# stress\n")
+    smd, sjs = flexval.validation.stress.write_stress(report, out)
     for p in tmp_path.rglob("*"):
         if p.is_file():
             assert out in p.parents
@@ -325,8 +325,8 @@ def test_bench_and_stress_files_stay_inside(name, tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("name", ["m.xyz", "m.png.exe", "m.json"])
 def test_plot_refuses_unknown_picture_formats(name, tmp_path, capsys, monkeypatch):
-    import validation.drawing
-    monkeypatch.setattr(validation.drawing, "plot_mechanism",
+    import flexval.validation.drawing
+    monkeypatch.setattr(flexval.validation.drawing, "plot_mechanism",
                         lambda *a: pytest.fail("plotted before checking the output"))
     assert main(["plot", "open_chain", "-o", str(tmp_path / name)]) == EXIT_INPUT
     err = capsys.readouterr().err
@@ -345,7 +345,7 @@ def test_plot_writes_other_known_formats(name, tmp_path):
 def test_run_out_dir_for_fields_refused_before_work(kind, tmp_path, no_work, capsys):
     from importlib import resources
 
-    text = resources.files("geometry").joinpath("scenes", "closed_chain.toml").read_text()
+    text = resources.files("flexval.geometry").joinpath("scenes", "closed_chain.toml").read_text()
     scene = tmp_path / "s.toml"
     scene.write_text(text.replace('models = ["beam:100"',
                                   'outputs = ["vtu", "png"]\nmodels = ["beam:100"'))
@@ -367,8 +367,8 @@ def test_bad_input_creates_no_output_folder(command, tmp_path, no_work):
 @pytest.mark.parametrize("option, name", [("--json", "x/none.json"), ("--plot", "m.xyz"),
                                           ("--plot", "x/none.png")])
 def test_modes_outputs_refused_before_work(option, name, tmp_path, capsys, monkeypatch):
-    import validation.modes
-    monkeypatch.setattr(validation.modes, "run_modes",
+    import flexval.validation.modes
+    monkeypatch.setattr(flexval.validation.modes, "run_modes",
                         lambda *a: pytest.fail("computed before checking the output"))
     target = str(tmp_path / name)
     assert main(["modes", "open_chain", "--model", "ee", option, target]) == EXIT_INPUT

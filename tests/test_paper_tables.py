@@ -29,11 +29,11 @@ from pathlib import Path
 
 import pytest
 
-from geometry import load_scene
-from reducedmodels.catalogue import parse_model
-from validation.campaign import run_campaign
-from validation.compare import paper_percent
-from validation.report import SceneResults, _paper_table
+from flexval.geometry import load_scene
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.validation.campaign import run_campaign
+from flexval.validation.compare import paper_percent
+from flexval.validation.report import SceneResults, _paper_table
 
 MODELS = ["beam:100", "beam:20", "prbm", "dcmm:1", "dcmm:2", "dcmm:3", "ee"]
 

@@ -1,4 +1,4 @@
-"""The OpenSees peer model (validation.peers) solves the same problem as flexval's beams.
+"""The OpenSees peer model (flexval.validation.peers) solves the same problem as flexval's beams.
 
 OpenSees' corotational elasticBeamColumn and flexval's beam:N discretise the
 flexures the same way (N two-node corotational Euler-Bernoulli elements, nodes
@@ -16,15 +16,15 @@ import math
 import numpy as np
 import pytest
 
-from geometry import load_scene
-from geometry.inertia import MassData
-from validation.peers import (AGREEMENT_BAR, PeerRow, PeerUnavailable, agreement,
+from flexval.geometry import load_scene
+from flexval.geometry.inertia import MassData
+from flexval.validation.peers import (AGREEMENT_BAR, PeerRow, PeerUnavailable, agreement,
                               compare_with_opensees)
 
 
 def _opensees_or_skip():
     try:
-        from validation.peers import opensees
+        from flexval.validation.peers import opensees
         return opensees()
     except PeerUnavailable as exc:
         pytest.skip(str(exc))
@@ -64,7 +64,7 @@ def test_a_case_opensees_cannot_follow_has_no_times_but_a_reason():
 
 def test_an_opensees_error_is_a_row_not_a_crash(monkeypatch):
     ops = _opensees_or_skip()
-    import validation.peers as peers
+    import flexval.validation.peers as peers
 
     def broken(*args):
         raise ops.OpenSeesError("See stderr output")
@@ -76,9 +76,9 @@ def test_an_opensees_error_is_a_row_not_a_crash(monkeypatch):
 
 def test_report_with_peers_says_when_opensees_is_missing(tmp_path, monkeypatch):
     """``flexval report --peers`` reaches the run times, and a missing peer is said there."""
-    import validation.peers as peers
+    import flexval.validation.peers as peers
     from test_report import TINY
-    from validation.cli import main
+    from flexval.validation.cli import main
 
     def missing():
         raise PeerUnavailable("OpenSeesPy is missing or does not load (test)")

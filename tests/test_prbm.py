@@ -14,12 +14,12 @@ from builders import cantilever, fd_check, tip_moment
 from elastica import (arc_tip_compliance, cantilever_tip_force, circle_under_end_moment,
                       curved_cantilever)
 
-from geometry import Arc, Force, LoadCase, Moment, Segment, load_scene
-from geometry.shapes import arc_semi_axes
-from reducedmodels.catalogue import parse_model
-from reducedmodels.core import local_hessian
-from reducedmodels import build_system, run_reduced, solve_path
-from reducedmodels.prbm import (PrbmConnector, PrbmParameters, load_table,
+from flexval.geometry import Arc, Force, LoadCase, Moment, Segment, load_scene
+from flexval.geometry.shapes import arc_semi_axes
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.core import local_hessian
+from flexval.reducedmodels import build_system, run_reduced, solve_path
+from flexval.reducedmodels.prbm import (PrbmConnector, PrbmParameters, load_table,
                                 shape_frame, table_parameters)
 from calibrate_prbm import (FitSettings, chain_cantilever, elastica, reference_paths,
                             relative_errors, su2009_comparison)
@@ -339,7 +339,7 @@ def test_end_pass_kernels_against_the_generic_statics():
     sections.statics_section_forces (the generic statics of a polyline) with
     the wrench of PrbmConnector.evaluate. To round-off (1e-12 relative).
     """
-    from reducedmodels.sections import statics_section_forces
+    from flexval.reducedmodels.sections import statics_section_forces
 
     system = build_system(load_scene("closed_chain").mechanism, parse_model("prbm"))
     group = system.groups[0][0]

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from validation.outputs import write_json
-from validation.protocolsection import (PROTOCOL_FORMAT, Cell, closest_cell, protocol_section,
+from flexval.validation.outputs import write_json
+from flexval.validation.protocolsection import (PROTOCOL_FORMAT, Cell, closest_cell, protocol_section,
                                         read_protocol)
 
 CODE = "0123456789abcdef"

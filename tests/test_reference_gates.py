@@ -35,8 +35,8 @@ import pytest
 from elastica import (arc_tip_compliance, cantilever_tip_force, circle_under_end_moment,
                       curved_cantilever)
 
-from geometry import Arc, Segment
-from validation.cli import main
+from flexval.geometry import Arc, Segment
+from flexval.validation.cli import main
 
 E = 2000.0                  # MPa
 DEPTH = 1.0                 # mm

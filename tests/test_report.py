@@ -8,12 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from geometry import load_scene
-from reducedmodels import parse_model
-from validation.compare import errors
-from validation.report import build_report
-from validation.reportdata import read_results
-from validation.run import run_model
+from flexval.geometry import load_scene
+from flexval.reducedmodels import parse_model
+from flexval.validation.compare import errors
+from flexval.validation.report import build_report
+from flexval.validation.reportdata import read_results
+from flexval.validation.run import run_model
 
 TINY = """
 name = "tiny"
@@ -158,8 +158,8 @@ def test_limit_load_table_of_a_scene_with_a_limit_point(tmp_path):
 @pytest.fixture(scope="module")
 def builtin_report(tmp_path_factory):
     """Both built-in scenes with one reduced model (the reference beam:100 is added)."""
-    from validation.report import write_report
-    from validation.reportdata import compute_report
+    from flexval.validation.report import write_report
+    from flexval.validation.reportdata import compute_report
 
     data = compute_report(["open_chain", "closed_chain"], ["dcmm:1"], repeats=1,
                           use_cache=False, progress=False, bench=False, converge=False)
@@ -182,10 +182,10 @@ def _frequency_rows(text: str, scene: str) -> dict[str, list[tuple[str, float]]]
 def test_frequency_table_equals_direct_modal_analysis(builtin_report, scene_name):
     """Each scene's table: the reference's own row at 0 %, every cell the frequency of a
     direct modal analysis (PLA flexures, massless links) and its error against the reference's."""
-    from reducedmodels.models import build_system
-    from reducedmodels.modes import natural_modes
-    from validation.frequencies import DEFAULT_DENSITY, MODE_COUNT
-    from validation.modes import with_density
+    from flexval.reducedmodels.models import build_system
+    from flexval.reducedmodels.modes import natural_modes
+    from flexval.validation.frequencies import DEFAULT_DENSITY, MODE_COUNT
+    from flexval.validation.modes import with_density
 
     data, md = builtin_report
     res = next(r for r in data.scenes if r.scene.name == scene_name)
@@ -204,8 +204,8 @@ def test_frequency_table_equals_direct_modal_analysis(builtin_report, scene_name
 
 def test_a_failed_modal_analysis_is_a_row_of_the_table(monkeypatch, tmp_path):
     """A model whose modal analysis raises is recorded as a failure; the others are kept."""
-    from reducedmodels import SolverError
-    from validation import frequencies
+    from flexval.reducedmodels import SolverError
+    from flexval.validation import frequencies
 
     real = frequencies.run_modes
 
@@ -231,7 +231,7 @@ def test_findings_name_the_levels_a_model_leaves_its_validity(tmp_path):
     """A twist that turns the tip by ~0.47 rad: the linear ee leaves its range (body
     rotations above sqrt(2 MAX_STRAIN)) at the first level whose own rotation passes
     the limit, found here from a direct run; beam:10 stays inside and gets no line."""
-    from reducedmodels.validity import MAX_LINEAR_ROTATION
+    from flexval.reducedmodels.validity import MAX_LINEAR_ROTATION
 
     scene_file = tmp_path / "tiny.toml"
     scene_file.write_text(TINY.replace("value = 0.02", "value = 0.1"))
@@ -249,10 +249,10 @@ def test_findings_name_the_levels_a_model_leaves_its_validity(tmp_path):
 def test_peak_stress_in_a_uniform_field_has_no_place():
     # Under the open chain's pure end moment every section carries the same moment: the
     # peak's place is round-off, so the table says "uniform"; under f+ it names the place.
-    from geometry import load_scene
-    from reducedmodels.catalogue import parse_model
-    from validation.run import run_model
-    from validation.strength import peak_at_full_load, peak_stress_table
+    from flexval.geometry import load_scene
+    from flexval.reducedmodels.catalogue import parse_model
+    from flexval.validation.run import run_model
+    from flexval.validation.strength import peak_at_full_load, peak_stress_table
 
     scene = load_scene("open_chain")
     cases = {c.name: c for c in scene.load_cases}
@@ -272,8 +272,8 @@ def test_protocol_section_sits_before_the_discussion_of_an_open_chain_report(bui
     """Without --protocol the section says how to include it; with a protocol.json of this
     code version it renders it, links the table next to it and calls nothing stale."""
     from test_protocol_section import _document
-    from validation.outputs import write_json
-    from validation.report import render_markdown
+    from flexval.validation.outputs import write_json
+    from flexval.validation.report import render_markdown
 
     data, md = builtin_report
     text = md.read_text()

@@ -14,12 +14,12 @@ import math
 
 import pytest
 
-from geometry import load_scene
-from reducedmodels.catalogue import parse_model
-from validation.compare import errors
-from validation.report import write_report
-from validation.reportdata import compute_report
-from validation.run import run_model
+from flexval.geometry import load_scene
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.validation.compare import errors
+from flexval.validation.report import write_report
+from flexval.validation.reportdata import compute_report
+from flexval.validation.run import run_model
 
 SCENE = "closed_chain"
 MODELS = ["continuum", "beam:100", "dcmm:1"]

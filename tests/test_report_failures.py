@@ -17,16 +17,16 @@ import re
 
 import pytest
 
-from geometry import load_scene
-from reducedmodels import build_system, catalogue
-from reducedmodels.catalogue import parse_model
-from reducedmodels.continuation import limit_loads, solve_arclength
-from validation import figures
-from validation.cli import main
-from validation.failures import LIMIT_POINT, LIMIT_SETTINGS
-from validation.report import write_report
-from geometry.graph import independent_loops
-from validation.reportdata import compute_report
+from flexval.geometry import load_scene
+from flexval.reducedmodels import build_system, catalogue
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.continuation import limit_loads, solve_arclength
+from flexval.validation import figures
+from flexval.validation.cli import main
+from flexval.validation.failures import LIMIT_POINT, LIMIT_SETTINGS
+from flexval.validation.report import write_report
+from flexval.geometry.graph import independent_loops
+from flexval.validation.reportdata import compute_report
 
 ARCH = """
 name = "arch"

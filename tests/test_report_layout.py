@@ -16,9 +16,9 @@ import re
 
 import pytest
 
-from validation.peers import PeerRow
-from validation.report import write_report
-from validation.reportdata import LEFT_OUT, TIMING_STATS, compute_report, read_results
+from flexval.validation.peers import PeerRow
+from flexval.validation.report import write_report
+from flexval.validation.reportdata import LEFT_OUT, TIMING_STATS, compute_report, read_results
 
 from test_report import TINY
 

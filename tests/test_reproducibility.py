@@ -2,7 +2,7 @@
 
 ``benchmarks/paper_protocol.py`` sets its ramp times in periods of the reference's
 first natural mode; the reference (beam:100) has more coordinates than
-:data:`reducedmodels.modes.DENSE_MODES_LIMIT`, so its modes come from ARPACK, whose
+:data:`flexval.reducedmodels.modes.DENSE_MODES_LIMIT`, so its modes come from ARPACK, whose
 default starting vector is drawn from the operating system's entropy. The frequencies
 then differed in the 9th digit between processes, and the adaptive time stepping
 carried that into end-of-ramp errors that moved by up to 0.8 percentage points from run
@@ -23,11 +23,11 @@ ROOT = Path(__file__).resolve().parents[1]
 RUN = """
 import hashlib, json
 import numpy as np
-from geometry.timelaw import TimeLaw
-from reducedmodels.catalogue import parse_model
-from reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
-from reducedmodels.models import build_system
-from reducedmodels.modes import DENSE_MODES_LIMIT, natural_modes
+from flexval.geometry.timelaw import TimeLaw
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
+from flexval.reducedmodels.models import build_system
+from flexval.reducedmodels.modes import DENSE_MODES_LIMIT, natural_modes
 from tests.builders import tip_moment
 from tests.test_modes import RHO, straight
 

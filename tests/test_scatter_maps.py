@@ -18,11 +18,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from geometry import MassData, load_scene
-from reducedmodels.beam import BeamGroup
-from reducedmodels.catalogue import parse_model
-from reducedmodels.models import build_system
-from reducedmodels.tangent import TangentLayout
+from flexval.geometry import MassData, load_scene
+from flexval.reducedmodels.beam import BeamGroup
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.models import build_system
+from flexval.reducedmodels.tangent import TangentLayout
 
 SCENES = Path(__file__).parent / "scenes"
 

@@ -6,13 +6,13 @@ from importlib import resources
 
 import pytest
 
-from geometry import SceneError, load_scene
-from reducedmodels.catalogue import parse_model
-from validation.cli import main
+from flexval.geometry import SceneError, load_scene
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.validation.cli import main
 
 
 def _base() -> dict:
-    text = resources.files("geometry").joinpath("scenes", "open_chain.toml").read_text()
+    text = resources.files("flexval.geometry").joinpath("scenes", "open_chain.toml").read_text()
     return tomllib.loads(text)
 
 
@@ -233,7 +233,7 @@ def test_arc_closing_on_itself(tmp_path):
 def test_crossings_finds_a_proper_crossing_only():
     import numpy as np
 
-    from geometry.overlap import crossings
+    from flexval.geometry.overlap import crossings
 
     p = np.array([[0.0, 0.0], [2.0, 2.0]])
     q = np.array([[0.0, 2.0], [2.0, 0.0]])

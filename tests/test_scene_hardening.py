@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from test_scene_errors import _base, _dump, _expect, _flex
 
-from geometry import SceneError, load_scene
-from geometry.magnitudes import SMALLEST_NORMAL, is_degenerate
-from geometry.scene import parse_scene
-from validation.cli import main
+from flexval.geometry import SceneError, load_scene
+from flexval.geometry.magnitudes import SMALLEST_NORMAL, is_degenerate
+from flexval.geometry.scene import parse_scene
+from flexval.validation.cli import main
 
 FOURBAR = {   # tests/test_joints.py's four-bar: a coupler arc between two pinned bodies
     "name": "fourbar",
@@ -257,7 +257,7 @@ def test_a_start_body_on_a_closed_chain_ground_flexure(tmp_path):
     import tomllib
     from importlib import resources
 
-    text = resources.files("geometry").joinpath("scenes", "closed_chain.toml").read_text()
+    text = resources.files("flexval.geometry").joinpath("scenes", "closed_chain.toml").read_text()
     d = tomllib.loads(text)
     for f in d["flexures"]:
         if "1" in f["bodies"]:
@@ -313,7 +313,7 @@ def _random_polylines(seed: int, n: int) -> list[np.ndarray]:
 
 @pytest.mark.parametrize("seed,n", [(0, 2), (1, 15), (2, 60), (3, 120)])
 def test_candidate_pairs_are_exactly_the_overlapping_bounding_boxes(seed, n):
-    from geometry.overlap import candidate_pairs
+    from flexval.geometry.overlap import candidate_pairs
 
     lines = _random_polylines(seed, n)
     lo = [line.min(axis=0) for line in lines]
@@ -325,7 +325,7 @@ def test_candidate_pairs_are_exactly_the_overlapping_bounding_boxes(seed, n):
 
 @pytest.mark.parametrize("seed", [4, 5, 6, 7])
 def test_crossings_restricted_to_the_box_overlap_find_every_crossing(seed):
-    from geometry.overlap import crossings
+    from flexval.geometry.overlap import crossings
 
     def all_pairs(p, q):     # the test on every pair of segments, no pruning
         found = []

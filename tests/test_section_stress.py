@@ -17,11 +17,11 @@ import pytest
 from builders import cantilever, tip_force, tip_moment
 from elastica import cantilever_tip_force
 
-from geometry import Arc, Segment
-from reducedmodels import run_reduced
-from reducedmodels.catalogue import parse_model
-from reducedmodels.sections import statics_section_forces
-from validation.convergence import richardson
+from flexval.geometry import Arc, Segment
+from flexval.reducedmodels import run_reduced
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.sections import statics_section_forces
+from flexval.validation.convergence import richardson
 
 B, H, E = 2.0, 0.5, 2100.0
 ARC = Arc((0.0, 0.0), 10.0, math.radians(-30.0), math.radians(150.0))
@@ -101,7 +101,7 @@ def test_statics_reports_fractions_from_the_first_end_when_reversed():
 
 def test_continuum_section_resultant_stress_converges_with_the_mesh():
     # a thick arc (R/h = 8) under an end force: levels 0, 1, 2 halve the element size
-    from validation.continuum.run import run_continuum
+    from flexval.validation.continuum.run import run_continuum
 
     arc = Arc((0.0, 0.0), 8.0, math.radians(-30.0), math.radians(120.0))
     mech = cantilever(arc, E=E, b=B, h=1.0)
@@ -133,7 +133,7 @@ def test_self_weight_moment_follows_the_distributed_load(model):
     """
     import dataclasses
 
-    from geometry.inertia import MassData
+    from flexval.geometry.inertia import MassData
 
     L, rho, g = 10.0, 1.24e-9, 9810.0
     mech = cantilever(Segment((0.0, 0.0), (L, 0.0)), E=E, b=B, h=0.1)
@@ -160,7 +160,7 @@ def test_curved_beam_factor_is_the_winkler_bach_inner_fibre_stress(r_over_h):
     factor; for r >> h it tends to 1 + h / (3 r)."""
     from scipy.integrate import quad
 
-    from validation.strength import curved_beam_factor
+    from flexval.validation.strength import curved_beam_factor
 
     h, b, M = 1.0, 1.0, 1.0
     r = r_over_h * h
@@ -181,8 +181,8 @@ def test_continuum_fibre_stress_of_a_thick_arc_is_the_curved_beam_value():
     fibre stress is Winkler-Bach's inner-fibre value, 9.0 % above the beam formula the
     section resultants give. Measured (levels 0, 1, 2): 1.1336, 1.1009, 1.0904 times
     6 M / (b h^2) against 1.0905; bound 0.5 % at level 2, and the differences shrink."""
-    from validation.continuum.run import run_continuum
-    from validation.strength import curved_beam_factor
+    from flexval.validation.continuum.run import run_continuum
+    from flexval.validation.strength import curved_beam_factor
 
     R, h = 4.0, 1.0
     mech = cantilever(Arc((0.0, 0.0), R, math.radians(-60.0), math.radians(120.0)), E=E, b=1.0,
@@ -201,7 +201,7 @@ def test_continuum_fibre_stress_of_a_thick_arc_is_the_curved_beam_value():
 
 def test_a_quantity_converged_to_round_off_gets_no_observed_order():
     """Changes of 1e-8 of the value are the solver's tolerance: no order is computed from them."""
-    from validation.convergence import ROUND_OFF_CHANGE, order_text
+    from flexval.validation.convergence import ROUND_OFF_CHANGE, order_text
 
     exact = richardson(3.0, 3.0 + 4.8e-8, 3.0 + 7.2e-8, 2.0)       # m+'s uniform peak stress
     assert exact["order"] is None and exact["extrapolated"] == 3.0 + 7.2e-8
@@ -217,8 +217,8 @@ def test_the_report_and_the_cli_print_why_there_is_no_order(tmp_path):
     """Both printers of a convergence study say "converged to round-off" instead of an order."""
     from types import SimpleNamespace
 
-    from validation.convergence import ConvergenceStudy, format_study
-    from validation.report import _convergence_lines
+    from flexval.validation.convergence import ConvergenceStudy, format_study
+    from flexval.validation.report import _convergence_lines
 
     st = ConvergenceStudy("continuum", "m+", 2.0)
     st.summary = {"peak_stress": richardson(3.0, 3.0 + 4.8e-8, 3.0 + 7.2e-8, 2.0),

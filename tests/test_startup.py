@@ -7,7 +7,7 @@ command in a fresh interpreter and check ``sys.modules`` afterwards, so a
 module-level import that drags a heavy library into a command that does not
 need it fails here instead of slowing every call unnoticed
 (``benchmarks/bench_process.py`` measures the times themselves). The end of
-the process (``validation.process.end_process``, no interpreter teardown) is
+the process (``flexval.validation.process.end_process``, no interpreter teardown) is
 checked for what a normal exit guarantees: the status, complete output and
 files, exit handlers run, C output flushed, running threads waited for.
 """
@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 _PROBE = """
 import contextlib, io, json, sys
-from validation.cli import main
+from flexval.validation.cli import main
 with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
     try:
         status = main(sys.argv[1:])
@@ -39,8 +39,8 @@ PLOTTING = {"matplotlib", "pyvista", "vtk", "meshio"}
 DISTRIBUTED = {"dask", "distributed", "pyarrow"}
 COMPILED = {"numba", "llvmlite"}
 MESHING = {"gmsh"}
-CONTINUUM = {"skfem", "validation.continuum.solid"}
-SOLVERS = {"scipy", "reducedmodels.core"}
+CONTINUUM = {"skfem", "flexval.validation.continuum.solid"}
+SOLVERS = {"scipy", "flexval.reducedmodels.core"}
 RARE_SCIPY = {"scipy.interpolate", "scipy.optimize", "scipy.integrate", "scipy.spatial",
               "scipy.special", "scipy.stats"}
 """scipy parts no ``run`` of a static load path uses."""
@@ -70,7 +70,7 @@ def test_commands_that_only_read_scenes_load_no_solver(argv, tmp_path):
 @pytest.mark.parametrize("model", ["dcmm:1", "ee", "prbm"])
 def test_small_models_load_only_the_core_and_their_kernels(model, tmp_path):
     modules = _imports(["run", "closed_chain", "--model", model, "--load-case", "f+"], tmp_path)
-    assert "reducedmodels.core" in modules          # the probe did run the model
+    assert "flexval.reducedmodels.core" in modules          # the probe did run the model
     assert "numba" in modules                       # the connectors' compiled kernels
     heavy = CONTINUUM | MESHING | PLOTTING | DISTRIBUTED | RARE_SCIPY
     assert _loaded(modules, heavy | {"scipy.sparse.linalg", "scipy.sparse.csgraph"}) == set()
@@ -91,7 +91,7 @@ def test_continuum_with_cached_meshes_loads_no_mesher(tmp_path):
     assert _loaded(modules, COMPILED | MESHING | PLOTTING | DISTRIBUTED | RARE_SCIPY) == set()
 
 
-# -- the end of a flexval process (validation.process.end_process) ---------------------------
+# -- the end of a flexval process (flexval.validation.process.end_process) ---------------------------
 
 def _program(code: str, tmp_path: Path, *argv: str) -> subprocess.CompletedProcess:
     """Run ``code`` as a program whose command line is ``argv`` (output piped and buffered)."""
@@ -103,13 +103,13 @@ def _program(code: str, tmp_path: Path, *argv: str) -> subprocess.CompletedProce
 
 def test_the_program_ends_with_its_status_output_and_files_complete(tmp_path):
     out = tmp_path / "paths.json"
-    proc = _program("from validation.cli import main; main()", tmp_path, "run", "closed_chain",
+    proc = _program("from flexval.validation.cli import main; main()", tmp_path, "run", "closed_chain",
                     "--model", "ee", "--model", "dcmm:1", "--json", str(out))
     assert proc.returncode == 0, proc.stderr
     rows = [line.split()[0] for line in proc.stdout.splitlines()[1:] if line[:1] not in " "]
     assert rows == ["ee", "ee", "dcmm:1", "dcmm:1"]
     assert len(json.loads(out.read_text())["results"]) == 4
-    bad = _program("from validation.cli import main; main()", tmp_path, "run", "closed_chain",
+    bad = _program("from flexval.validation.cli import main; main()", tmp_path, "run", "closed_chain",
                    "--model", "nonsense")
     assert bad.returncode == 2 and "'nonsense'" in bad.stderr and "Traceback" not in bad.stderr
 
@@ -118,7 +118,7 @@ def test_exit_handlers_run_and_c_output_is_flushed(tmp_path):
     """What a normal exit does that can be seen: atexit handlers, C stdio buffers written."""
     code = ("import atexit, ctypes; atexit.register(print, 'handler ran'); "
             "ctypes.CDLL(None).printf(b'from C\\n'); "
-            "from validation.cli import main; main(); print('not reached')")
+            "from flexval.validation.cli import main; main(); print('not reached')")
     proc = _program(code, tmp_path, "info", "closed_chain")
     assert proc.returncode == 0, proc.stderr
     lines = proc.stdout.splitlines()
@@ -128,7 +128,7 @@ def test_exit_handlers_run_and_c_output_is_flushed(tmp_path):
 
 def test_main_returns_while_another_thread_runs(tmp_path):
     """A normal exit waits for running threads, so ``main`` leaves the exit to the program."""
-    code = ("import threading; from validation.cli import main; done = threading.Event(); "
+    code = ("import threading; from flexval.validation.cli import main; done = threading.Event(); "
             "threading.Thread(target=done.wait).start(); "
             "status = main(); print('returned', status); done.set()")
     proc = _program(code, tmp_path, "info", "closed_chain")
@@ -136,11 +136,11 @@ def test_main_returns_while_another_thread_runs(tmp_path):
 
 
 def test_a_profiled_run_keeps_its_profile(tmp_path):
-    """``python -m cProfile -o FILE -m validation.cli ...`` writes FILE after the program."""
+    """``python -m cProfile -o FILE -m flexval.validation.cli ...`` writes FILE after the program."""
     env = {**os.environ, "FLEXVAL_CACHE": str(tmp_path / "cache")}
     stats = tmp_path / "cli.prof"
     proc = subprocess.run([sys.executable, "-m", "cProfile", "-o", str(stats), "-m",
-                           "validation.cli", "info", "closed_chain"], cwd=ROOT, env=env,
+                           "flexval.validation.cli", "info", "closed_chain"], cwd=ROOT, env=env,
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert stats.stat().st_size > 0
@@ -151,7 +151,7 @@ def test_a_reader_that_leaves_early_costs_only_the_rest_of_the_output(tmp_path):
     out = tmp_path / "paths.json"
     env = {**os.environ, "FLEXVAL_CACHE": str(tmp_path / "cache"), "OPENBLAS_NUM_THREADS": "1",
            "PYTHONUNBUFFERED": "1"}      # each row written when printed, as on a terminal
-    proc = subprocess.Popen([sys.executable, "-m", "validation.cli", "run", "closed_chain",
+    proc = subprocess.Popen([sys.executable, "-m", "flexval.validation.cli", "run", "closed_chain",
                              "--model", "ee", "--model", "dcmm:1", "--json", str(out)], cwd=ROOT,
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert proc.stdout.readline().split()[0] == "model"

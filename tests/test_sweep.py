@@ -8,13 +8,13 @@ import pyarrow.parquet as pq
 import pytest
 from distributed import Client, LocalCluster
 
-from reducedmodels import parse_model
-from validation.cli import main
-from validation.compare import errors
-from validation.run import run_model
-from validation.sweep import load_sweep, results_store, run_sweep, sweep_rows, write_outputs
-from validation.sweep import tasks as sweep_tasks
-from validation.sweep.engine import MAX_AUTO_BATCH, TASKS_PER_WORKER, auto_batch
+from flexval.reducedmodels import parse_model
+from flexval.validation.cli import main
+from flexval.validation.compare import errors
+from flexval.validation.run import run_model
+from flexval.validation.sweep import load_sweep, results_store, run_sweep, sweep_rows, write_outputs
+from flexval.validation.sweep import tasks as sweep_tasks
+from flexval.validation.sweep.engine import MAX_AUTO_BATCH, TASKS_PER_WORKER, auto_batch
 
 SCENES = Path(__file__).parent / "scenes"
 DA_DEPPO_SCHMIDT = 8.97
@@ -184,7 +184,7 @@ def test_solver_failure_records_the_load_reached(tmp_path, client):
 
 def test_a_reference_rotation_near_zero_is_measured_against_its_scale(tmp_path, client):
     """The shallow arch pressed on its axis turns its crown by round-off in every model: the
-    sweep's rotation errors are those of validation.compare.errors with the mechanism's
+    sweep's rotation errors are those of flexval.validation.compare.errors with the mechanism's
     size (about zero, against the rotation scale), not round-off over round-off."""
     from test_compare_scale import _arch
 
@@ -375,7 +375,7 @@ def test_limit_loads_of_the_deep_arch(tmp_path, client):
                for r in rows.values())
     for model in ("beam:40", "beam:10", "dcmm:2"):
         half, full, double = (rows[(i, model)] for i in range(3))
-        # the trace's parabola refinement is good to ~1e-5 (validation.failures)
+        # the trace's parabola refinement is good to ~1e-5 (flexval.validation.failures)
         assert half["limit_load"] == pytest.approx(full["limit_load"] / 2, rel=1e-4)
         assert double["status"] == "ok" and double["limit_load"] is None
         if model != "beam:40":
@@ -428,12 +428,12 @@ def test_an_older_dataset_is_refused_and_other_code_versions_left_out(tmp_path, 
 
 def test_cli_sweep_on_an_existing_scheduler(tmp_path, capsys, client, monkeypatch):
     """--scheduler ADDRESS: the tasks run on that cluster's workers, none is started."""
-    import validation.sweep
+    import flexval.validation.sweep
 
     def no_local_cluster(*args, **kwargs):
         raise AssertionError("a local cluster was started despite --scheduler")
 
-    monkeypatch.setattr(validation.sweep, "local_cluster", no_local_cluster)
+    monkeypatch.setattr(flexval.validation.sweep, "local_cluster", no_local_cluster)
     text = TINY.replace('["ee", "dcmm:1"]', '["ee"]').replace('reference = "prbm"',
                                                                'reference = "dcmm:1"')
     sweep_file = _write(tmp_path, text)

@@ -3,11 +3,11 @@
 import pytest
 from threadpoolctl import threadpool_info
 
-from geometry import load_scene
-from reducedmodels.catalogue import parse_model
-from reducedmodels import threads
-from reducedmodels.models import run_reduced
-from validation.cli import main
+from flexval.geometry import load_scene
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels import threads
+from flexval.reducedmodels.models import run_reduced
+from flexval.validation.cli import main
 
 
 @pytest.fixture

@@ -1,7 +1,7 @@
 """Runtime versus error: every model at several resolutions against one reference.
 
 For each model the error is the largest, over the scene's load cases, of the
-path displacement error (``path_disp`` of :mod:`validation.compare`: largest
+path displacement error (``path_disp`` of :mod:`flexval.validation.compare`: largest
 vector error along the path / largest reference displacement, percent), and
 the time is the mean over load cases of the median wall time per load path.
 """
@@ -11,8 +11,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Callable
 
-from geometry import Scene
-from reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
+from flexval.geometry import Scene
+from flexval.reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
 
 from .cache import ResultCache
 from .campaign import Progress, run_campaign
@@ -82,9 +82,9 @@ def write_bench(scene: Scene, rows: list[dict], reference: str, out: Path,
     """Table (Markdown), plot (PNG) and JSON of a runtime-versus-error study in ``out``.
 
     The files are ``bench_<scene>.md/.png/.json`` with the scene name made
-    safe (:func:`validation.outputs.safe_name`); returns the Markdown path.
+    safe (:func:`flexval.validation.outputs.safe_name`); returns the Markdown path.
     ``failures`` are listed below the table (a model that fails has no row).
-    The plot is drawn with ``draw(fn, *args)`` (see :mod:`validation.figurejobs`).
+    The plot is drawn with ``draw(fn, *args)`` (see :mod:`flexval.validation.figurejobs`).
     """
     from .figures import pareto_front, runtime_vs_error as plot
 

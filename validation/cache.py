@@ -10,13 +10,13 @@ changes the key. Fields that do not define the mechanism (its ``source``,
 i.e. how the scene path was typed) are left out.
 
 Location: ``$FLEXVAL_CACHE/results`` or ``~/.cache/flexval/results``
-(:func:`geometry.files.cache_dir`; an unusable folder means no caching,
+(:func:`flexval.geometry.files.cache_dir`; an unusable folder means no caching,
 with a warning). Each entry is one JSON document holding the LoadPath, its
 key and a SHA-256 checksum of its canonical text, written atomically under a
 unique temporary name, so concurrent runs sharing one cache never see each
 other's partial files. An entry that is truncated, empty, binary, of another
 format or whose checksum does not match is discarded with a
-:class:`geometry.files.CacheWarning` and recomputed.
+:class:`flexval.geometry.files.CacheWarning` and recomputed.
 """
 
 from __future__ import annotations
@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from geometry.files import CacheWarning, cache_dir, write_bytes
-from reducedmodels import LoadPath
+from flexval.geometry.files import CacheWarning, cache_dir, write_bytes
+from flexval.reducedmodels import LoadPath
 
 ENTRY_FORMAT = "flexval-loadpath/2"
 """Format tag of a cache entry (a different tag is a foreign entry)."""
@@ -42,7 +42,7 @@ ENTRY_FORMAT = "flexval-loadpath/2"
 def code_version() -> str:
     """Hash of the package sources (changes whenever the code does)."""
     h = hashlib.sha256()
-    for pkg in ("geometry", "reducedmodels", "validation"):
+    for pkg in ("flexval.geometry", "flexval.reducedmodels", "flexval.validation"):
         root = Path(str(resources.files(pkg)))
         for path in sorted(root.rglob("*")):
             if path.suffix in (".py", ".json", ".toml") and "__pycache__" not in path.parts:
@@ -116,7 +116,7 @@ class ResultCache:
     enabled : bool
         False: ``get`` always misses and ``put`` stores nothing.
     root : Path, optional
-        Cache root instead of :func:`geometry.files.cache_dir`.
+        Cache root instead of :func:`flexval.geometry.files.cache_dir`.
     """
 
     def __init__(self, enabled: bool = True, root: Path | None = None):

@@ -22,8 +22,8 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Callable
 
-from geometry import LoadCase, Scene, SceneError
-from reducedmodels import LoadPath, ModelSpec, SolverError
+from flexval.geometry import LoadCase, Scene, SceneError
+from flexval.reducedmodels import LoadPath, ModelSpec, SolverError
 
 from .cache import ResultCache, result_key
 from .failures import Failure, failure_of
@@ -174,7 +174,7 @@ def run_campaign(scene: Scene, specs: list[ModelSpec], cases: list[LoadCase], re
     """Every spec on every case: ({(model, case): LoadPath}, failures).
 
     A model that fails on a case is a result, not an error: its
-    :class:`~validation.failures.Failure` is listed and its partial path
+    :class:`~flexval.validation.failures.Failure` is listed and its partial path
     (the levels it reached) kept, and the campaign carries on. So is a
     model that cannot represent a flexure of the scene (a failure at load 0).
     """

@@ -7,7 +7,7 @@ full, I/O error, folder removed meanwhile; the message names the file).
 
 Every argument is checked before any work: numeric options against their
 ranges, and every output path (``--json``, ``-o``, ``--out``, ``--out-dir``)
-for writability (:mod:`validation.outputs`); such errors exit with 2.
+for writability (:mod:`flexval.validation.outputs`); such errors exit with 2.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from geometry import SceneError, load_scene
+from flexval.geometry import SceneError, load_scene
 
 from .outputs import (OutputError, check_figure_file, check_file, check_folder, output_path,
                       safe_name, write_json)
@@ -48,7 +48,7 @@ def _int_in(low: int, high: int):
 
 def _check_load_levels(levels: int | None) -> None:
     """``--levels`` of ``run``: 2 .. the solver's sub-step cap (one sub-step per increment)."""
-    from reducedmodels.core import SolverSettings
+    from flexval.reducedmodels.core import SolverSettings
 
     cap = SolverSettings().max_substeps
     if levels is not None and not 2 <= levels <= cap:
@@ -59,7 +59,7 @@ def _check_load_levels(levels: int | None) -> None:
 
 def _parse_models(texts, source: str, field: str) -> list:
     """Model ids -> checked ModelSpecs of the catalogue (SceneError naming source and field)."""
-    from reducedmodels.catalogue import parse_model
+    from flexval.reducedmodels.catalogue import parse_model
 
     return [parse_model(m, source, field) for m in texts]
 
@@ -87,7 +87,7 @@ def _cmd_plot(args: argparse.Namespace) -> int:
 
 def _run_request(args: argparse.Namespace, scene) -> tuple[list, list, frozenset]:
     """The models, load cases and stress-field outputs ``flexval run`` is asked for, checked."""
-    from reducedmodels.catalogue import FIELDS, families
+    from flexval.reducedmodels.catalogue import FIELDS, families
 
     specs = _parse_models(args.model or [], "<command line>", "--model")
     if not specs:
@@ -118,7 +118,7 @@ def _run_each(specs, cases, run_one, row, scene, json_path) -> int:
     A solver failure is reported on stderr with the load reached, its partial
     path is kept in the JSON, and the other runs go on (exit code 3 at the end).
     """
-    from reducedmodels import SolverError
+    from flexval.reducedmodels import SolverError
 
     results, status = [], EXIT_OK
     for spec in specs:
@@ -139,7 +139,7 @@ def _run_each(specs, cases, run_one, row, scene, json_path) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from reducedmodels.catalogue import FIELDS
+    from flexval.reducedmodels.catalogue import FIELDS
 
     from .cache import ResultCache, result_key
     from .run import run_model
@@ -247,7 +247,7 @@ def _validity_note(lp) -> str:
 
 
 def _cmd_modes(args: argparse.Namespace) -> int:
-    from reducedmodels import SolverError, parse_model
+    from flexval.reducedmodels import SolverError, parse_model
 
     from .modes import modes_record, plot_modes, run_modes, with_density
 
@@ -315,7 +315,7 @@ def _parse_levels(text: str, spec) -> list[int]:
 
 
 def _cmd_converge(args: argparse.Namespace) -> int:
-    from reducedmodels.catalogue import families
+    from flexval.reducedmodels.catalogue import families
 
     from .convergence import format_study, study
 
@@ -465,12 +465,15 @@ def build_parser() -> argparse.ArgumentParser:
         prog="flexval",
         description="Validate flexibility models of planar compliant mechanisms "
                     "(units: mm, N, N mm; angles in degrees on the command line and in files).")
+    from flexval import __version__
+
+    p.add_argument("--version", action="version", version=f"flexval {__version__}")
     p.add_argument("--blas-threads", metavar="N",
                    help="threads of the BLAS/LAPACK pools (default: $FLEXVAL_BLAS_THREADS, else 1, "
                         "which suits flexval's small banded systems; 0: leave them as the "
                         "libraries set them up)")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    from reducedmodels.catalogue import expected_ids, families
+    from flexval.reducedmodels.catalogue import expected_ids, families
 
     ids = expected_ids()
     refine = ", ".join(f"{f.name}:{f.resolution.name} ({f.resolution.meaning})"
@@ -639,9 +642,9 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``flexval`` console script; returns the exit code.
 
-    ``argv`` None (the console script, ``python -m validation.cli``): the
+    ``argv`` None (the console script, ``python -m flexval.validation.cli``): the
     arguments are the process's own, and so is the process: once the command
-    is done, :func:`validation.process.end_process` ends it without the
+    is done, :func:`flexval.validation.process.end_process` ends it without the
     interpreter's teardown (a fifth of a small model's whole run), and a
     reader that closes the output pipe early only discards the rest of the
     output. Called from Python with a list of arguments, ``main`` returns.
@@ -663,7 +666,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _dispatch(args: argparse.Namespace) -> int:
     """Run the chosen command; bad input, solver and output failures become exit codes."""
-    from reducedmodels.threads import ENV_VARIABLE, RULE, request_threads
+    from flexval.reducedmodels.threads import ENV_VARIABLE, RULE, request_threads
 
     try:
         try:

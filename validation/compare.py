@@ -47,7 +47,7 @@ from importlib import resources
 
 import numpy as np
 
-from reducedmodels import LoadPath
+from flexval.reducedmodels import LoadPath
 
 METRICS = ("end_disp", "end_disp_vec", "end_rot", "path_disp", "path_rot")
 
@@ -133,7 +133,7 @@ def errors(model: LoadPath, ref: LoadPath, length: float) -> dict[str, float]:
 
 def paper_results() -> dict:
     """The paper's Tables 2, 3, 5, 6 (percent differences from FEM100, seconds)."""
-    text = resources.files("validation").joinpath("data", "paper_results.toml").read_text()
+    text = resources.files("flexval.validation").joinpath("data", "paper_results.toml").read_text()
     return tomllib.loads(text)["paper_results"]
 
 

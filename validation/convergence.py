@@ -2,7 +2,7 @@
 
 For a model family refined by a constant ratio r (continuum mesh levels halve
 the element size: r = 2; ``beam:N`` and ``dcmm:N`` with N doubling: r = 2; the
-family's :class:`reducedmodels.catalogue.Resolution` gives the ratio),
+family's :class:`flexval.reducedmodels.catalogue.Resolution` gives the ratio),
 the end-of-ramp target displacement magnitude (mm) and rotation (rad) of
 the three finest resolutions f1 (coarse), f2, f3 (fine) give
 
@@ -27,9 +27,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Callable
 
-from geometry import LoadCase, Scene
-from reducedmodels import LoadPath, SolverError
-from reducedmodels.catalogue import ModelSpec
+from flexval.geometry import LoadCase, Scene
+from flexval.reducedmodels import LoadPath, SolverError
+from flexval.reducedmodels.catalogue import ModelSpec
 
 from .failures import Failure, failure_of
 from .run import run_model

@@ -1,6 +1,6 @@
 """The report's discussion: statements whose every number is read from the report's data.
 
-Each function takes the :class:`~validation.reportdata.ReportData` and returns
+Each function takes the :class:`~flexval.validation.reportdata.ReportData` and returns
 one bullet (or nothing when the data it needs is absent: no paper figures, no
 continuum reference ...), so the text cannot go stale when a model changes.
 Errors in percent, loads as a percentage of the full load.

@@ -13,7 +13,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from geometry import Force, Moment, Scene  # noqa: E402
+from flexval.geometry import Force, Moment, Scene  # noqa: E402
 
 from .outputs import save_figure  # noqa: E402
 

@@ -1,8 +1,8 @@
 """``flexval run --dynamic``: time histories of one model on one load case.
 
 The System is the static one (gravity included) with the masses of
-:mod:`reducedmodels.inertia`; the load follows the case's time law
-(:mod:`geometry.timelaw`) or, without one, the paper's Eq. 15 ramp over the
+:mod:`flexval.reducedmodels.inertia`; the load follows the case's time law
+(:mod:`flexval.geometry.timelaw`) or, without one, the paper's Eq. 15 ramp over the
 first 80 % of ``--duration``. Damping is Rayleigh's, given directly or as a
 damping ratio that holds exactly at the two lowest natural frequencies at
 rest. The paper's "damping adjusted to minimise dynamic effects" is, in
@@ -14,12 +14,12 @@ from __future__ import annotations
 
 import math
 
-from geometry import LoadCase, Scene, SceneError
-from geometry.timelaw import TimeLaw
-from reducedmodels.catalogue import ModelSpec
-from reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
-from reducedmodels.loadpath import LoadPath
-from reducedmodels.modes import natural_modes
+from flexval.geometry import LoadCase, Scene, SceneError
+from flexval.geometry.timelaw import TimeLaw
+from flexval.reducedmodels.catalogue import ModelSpec
+from flexval.reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
+from flexval.reducedmodels.loadpath import LoadPath
+from flexval.reducedmodels.modes import natural_modes
 
 from .modes import modal_system
 
@@ -88,7 +88,7 @@ def run_dynamic(scene: Scene, spec: ModelSpec, case: LoadCase, duration: float |
     ------
     SceneError
         Bad options or a massless body.
-    reducedmodels.core.SolverError
+    flexval.reducedmodels.core.SolverError
         If the time stepping fails; carries the history so far.
     """
     if not 0.0 <= rho_inf <= 1.0:

@@ -14,10 +14,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
 
-from geometry import LoadCase, Scene, SceneError
-from reducedmodels import LoadPath, SolverError, SolverSettings, build_system
-from reducedmodels.catalogue import ARCLENGTH, ModelSpec
-from reducedmodels.continuation import limit_loads, solve_arclength
+from flexval.geometry import LoadCase, Scene, SceneError
+from flexval.reducedmodels import LoadPath, SolverError, SolverSettings, build_system
+from flexval.reducedmodels.catalogue import ARCLENGTH, ModelSpec
+from flexval.reducedmodels.continuation import limit_loads, solve_arclength
 
 LIMIT_SETTINGS = SolverSettings(max_translation_step=0.01, max_rotation_step=0.05)
 """Step bounds (1 % of the size, 0.05 rad) of the arc-length search for limit points: fine

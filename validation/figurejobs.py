@@ -1,12 +1,12 @@
 """Draw the report's figures on worker processes while its text is written.
 
-Every figure function the report calls (:mod:`validation.figures`, the stress
+Every figure function the report calls (:mod:`flexval.validation.figures`, the stress
 profiles, the mechanism drawing, the runtime-versus-error plot) writes the
 file it is given and nothing the text depends on: the text links to the path
 it chose. :class:`Figures` runs them on ``workers`` processes, or at once in
 this process with one worker; :meth:`Figures.wait` (also on leaving the
 ``with`` block) waits for every figure and raises the first failure, e.g. an
-:class:`~validation.outputs.OutputError`, as the serial run would.
+:class:`~flexval.validation.outputs.OutputError`, as the serial run would.
 """
 
 from __future__ import annotations

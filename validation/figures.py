@@ -12,9 +12,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from geometry import Scene  # noqa: E402
-from geometry.kinematics import place_points  # noqa: E402
-from reducedmodels import LoadPath  # noqa: E402
+from flexval.geometry import Scene  # noqa: E402
+from flexval.geometry.kinematics import place_points  # noqa: E402
+from flexval.reducedmodels import LoadPath  # noqa: E402
 
 from .drawing import draw_mechanism  # noqa: E402
 from .outputs import save_figure  # noqa: E402
@@ -68,7 +68,7 @@ def load_path_curves(paths: dict[str, LoadPath], traces: dict[str, LoadPath] | N
 
     Each curve is ``{"label", "model", "load" (|load|, N or N mm), "displacement" (|d|, mm),
     "rotation" (deg), "style"}``. A trace (the branch an arc-length search traced through
-    the model's limit point, see :attr:`validation.failures.Failure.trace`) is drawn dashed
+    the model's limit point, see :attr:`flexval.validation.failures.Failure.trace`) is drawn dashed
     in its model's colour and labelled ``"<model> (arc length)"``.
     """
     curves = []

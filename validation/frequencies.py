@@ -4,14 +4,14 @@ Every model the report runs, and its reference, gets the first
 :data:`MODE_COUNT` natural frequencies about the rest state (the undeformed
 state, or the equilibrium under gravity if the scene has gravity), exactly as
 ``flexval modes SCENE --model M --count 4`` gives them
-(:func:`validation.modes.run_modes`), and each mode's error against the
+(:func:`flexval.validation.modes.run_modes`), and each mode's error against the
 reference's mode of the same rank. The scene's mass data are used as given;
 a scene without a flexure density gets :data:`DEFAULT_DENSITY` (PLA), as
 ``flexval modes --density`` would, and its bodies without mass data stay
 massless (they then carry only the flexure pieces each model lumps on
 them: see the models' ``mass_points``). A model whose modal
 analysis fails (a massless moving body, no equilibrium, a singular mass
-matrix) is a :class:`~validation.failures.Failure` in the table.
+matrix) is a :class:`~flexval.validation.failures.Failure` in the table.
 
 Units: Hz; density in t/mm^3; errors in percent.
 """
@@ -23,10 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse.linalg import ArpackError
 
-from geometry import LoadCase, Moment, Scene, SceneError
-from geometry.inertia import PLA_DENSITY
-from reducedmodels import SolverError
-from reducedmodels.catalogue import parse_model
+from flexval.geometry import LoadCase, Moment, Scene, SceneError
+from flexval.geometry.inertia import PLA_DENSITY
+from flexval.reducedmodels import SolverError
+from flexval.reducedmodels.catalogue import parse_model
 
 from .failures import Failure
 from .modes import run_modes, with_density
@@ -79,7 +79,7 @@ class FrequencyTable:
 
 
 def _rest_case(scene: Scene) -> LoadCase:
-    """The rest state's load case as :func:`reducedmodels.modes.scaled_case` builds it."""
+    """The rest state's load case as :func:`flexval.reducedmodels.modes.scaled_case` builds it."""
     return LoadCase("rest", (Moment(scene.mechanism.target_body, 0.0),), 2)
 
 

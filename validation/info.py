@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import math
 
-from geometry import Force, Moment, Scene
-from reducedmodels.catalogue import parse_model
+from flexval.geometry import Force, Moment, Scene
+from flexval.reducedmodels.catalogue import parse_model
 
 
 def scene_info(scene: Scene) -> dict:

@@ -1,10 +1,10 @@
 """Limit loads: arc-length traces of any model and the limit points they pass.
 
 Load control stops at a limit point (the largest load on the path); arc-length
-continuation (:func:`reducedmodels.continuation.solve_arclength`) passes it.
+continuation (:func:`flexval.reducedmodels.continuation.solve_arclength`) passes it.
 :func:`trace_arclength` traces a load case of a scene with any model whose
 family can be assembled as a :class:`reducedmodels.System` (catalogue
-capability :data:`~reducedmodels.catalogue.ARCLENGTH`: every nonlinear reduced
+capability :data:`~flexval.reducedmodels.catalogue.ARCLENGTH`: every nonlinear reduced
 model and the continuum), and :func:`limit_points` lists where the load turns.
 
 Units: mm, N, N mm, rad.
@@ -12,10 +12,10 @@ Units: mm, N, N mm, rad.
 
 from __future__ import annotations
 
-from geometry import LoadCase, Scene, SceneError
-from reducedmodels import LoadPath, ModelSpec, SolverError, SolverSettings
-from reducedmodels.catalogue import ARCLENGTH, families
-from reducedmodels.continuation import limit_loads, solve_arclength
+from flexval.geometry import LoadCase, Scene, SceneError
+from flexval.reducedmodels import LoadPath, ModelSpec, SolverError, SolverSettings
+from flexval.reducedmodels.catalogue import ARCLENGTH, families
+from flexval.reducedmodels.continuation import limit_loads, solve_arclength
 
 ARCLENGTH_SETTINGS = SolverSettings(max_translation_step=0.01, max_rotation_step=0.05)
 """Step bounds of arc-length traces (1 % of the mechanism size, 0.05 rad per step): fine
@@ -83,7 +83,7 @@ def limit_points(path: LoadPath) -> list[dict]:
 
     Each is ``{"index", "load", "traced_load", "dx", "dy", "rotation"}``:
     the index of the traced point nearest to it, the load refined by the
-    parabola through it and its neighbours (:func:`reducedmodels.continuation.limit_loads`,
+    parabola through it and its neighbours (:func:`flexval.reducedmodels.continuation.limit_loads`,
     N or N mm), the largest (or smallest) traced load, and the target's
     displacement (mm) and rotation (rad) at that traced point.
     """

@@ -2,7 +2,7 @@
 
 The System is built exactly as for ``flexval run`` (gravity included); the
 equilibrium at a fraction of a load case is traced by the same core, and the
-modes come from :func:`reducedmodels.modes.natural_modes`. Units: Hz, mm, rad.
+modes come from :func:`flexval.reducedmodels.modes.natural_modes`. Units: Hz, mm, rad.
 """
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from geometry import LoadCase, Scene, SceneError
-from reducedmodels.catalogue import LINEAR, ModelSpec
-from reducedmodels.modes import Modes, natural_modes
+from flexval.geometry import LoadCase, Scene, SceneError
+from flexval.reducedmodels.catalogue import LINEAR, ModelSpec
+from flexval.reducedmodels.modes import Modes, natural_modes
 
 from .outputs import save_figure
 
@@ -23,7 +23,7 @@ def with_density(scene: Scene, density: float) -> Scene:
     """``scene`` with its flexures' density replaced (t/mm^3; checked like the scene field)."""
     import dataclasses
 
-    from geometry.inertia import parse_density
+    from flexval.geometry.inertia import parse_density
 
     def fail(field: str, value, reason: str) -> None:
         raise SceneError("<command line>", "--density", value, reason)
@@ -37,7 +37,7 @@ def with_density(scene: Scene, density: float) -> Scene:
 def modal_system(scene: Scene, spec: ModelSpec):
     """The System of ``scene`` with every flexure modelled as ``spec`` (the family's
     ``system``; ``ee``'s is ``dcmm:1``'s, whose tangent at rest is the ellipse of elasticity)."""
-    from reducedmodels.models import build_system
+    from flexval.reducedmodels.models import build_system
 
     return build_system(scene.mechanism, spec)
 
@@ -50,7 +50,7 @@ def run_modes(scene: Scene, spec: ModelSpec, case: LoadCase | None, fraction: fl
     ------
     SceneError
         Bad ``--at`` or ``--count``, or a massless body.
-    reducedmodels.core.SolverError
+    flexval.reducedmodels.core.SolverError
         If the equilibrium cannot be reached.
     """
     if not 0.0 <= fraction <= 1.0 or not math.isfinite(fraction):

@@ -10,8 +10,8 @@
   name component, and :func:`inside` resolves a name in the user's folder and
   refuses any result outside it (``..``, absolute names, symlinks out).
 * :func:`write_text`, :func:`write_json` and :func:`save_figure` write through
-  :func:`geometry.files.atomic_path`; a write that still fails (device full,
-  I/O error) raises :class:`geometry.files.OutputError` (CLI exit code 4).
+  :func:`flexval.geometry.files.atomic_path`; a write that still fails (device full,
+  I/O error) raises :class:`flexval.geometry.files.OutputError` (CLI exit code 4).
 * :func:`write_json` writes strict JSON: non-finite floats (NaN, ±inf) become
   ``null``, never the non-standard ``NaN``/``Infinity`` tokens.
 """
@@ -28,8 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
-from geometry import SceneError
-from geometry.files import OutputError, atomic_path, write_bytes
+from flexval.geometry import SceneError
+from flexval.geometry.files import OutputError, atomic_path, write_bytes
 
 __all__ = ["OutputError", "check_figure_file", "check_file", "check_folder", "inside", "json_safe", "safe_name",
            "output_path", "save_figure", "write_json", "write_text"]

@@ -44,9 +44,9 @@ from typing import Callable
 
 import numpy as np
 
-from geometry import Force, LoadCase, Mechanism, Scene
-from reducedmodels import run_reduced
-from reducedmodels.catalogue import parse_model
+from flexval.geometry import Force, LoadCase, Mechanism, Scene
+from flexval.reducedmodels import run_reduced
+from flexval.reducedmodels.catalogue import parse_model
 
 RIGID_FACTOR = 1e8      # spokes' EA, EI over the flexures': the end values move 1e-4 % from
                         # 1e8 to 1e10 (0.01 % from 1e6 to 1e8); 1e10 breaks the 1e-10 test

@@ -1,7 +1,7 @@
 """The validation report: the paper's comparison, reproduced and extended.
 
-``build_report`` = :func:`validation.reportdata.compute_report` (every model
-run, every error, every study, into a :class:`~validation.reportdata.ReportData`)
+``build_report`` = :func:`flexval.validation.reportdata.compute_report` (every model
+run, every error, every study, into a :class:`~flexval.validation.reportdata.ReportData`)
 followed by :func:`write_report`, whose renderers only format that data into
 ``report.md`` and its PNG figures, ``results.json`` (every LoadPath and
 failure) and ``gates.json`` (every error figure, the baseline of the CI
@@ -9,7 +9,7 @@ accuracy gates). Every number in the text is filled in from the data: the
 tables against ``beam:100`` (with the paper's figures beside ours where the
 paper has the scene) and against the continuum reference, failures ("fails at 84 % (limit point, 0.126 N)") wherever the model
 appears, the natural frequencies at rest, the findings and the discussion.
-The run times are written apart (:mod:`validation.timings`), so that the
+The run times are written apart (:mod:`flexval.validation.timings`), so that the
 report, results.json and gates.json are the same from one run of the same
 code to the next.
 """
@@ -326,7 +326,7 @@ def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
 def render_markdown(data: ReportData, out: Path, draw: Callable = draw_now,
                     protocol: Path | None = None) -> str:
     """The report's Markdown, drawing its figures into ``out`` with ``draw(fn, *args)``
-    (default: at once; :meth:`validation.figurejobs.Figures.draw` on worker processes);
+    (default: at once; :meth:`flexval.validation.figurejobs.Figures.draw` on worker processes);
     ``protocol`` is the ``protocol.json`` of ``benchmarks/paper_protocol.py`` (None: not given),
     summarised in its own section when the scenes include the open chain."""
     from .discussion import discussion
@@ -365,7 +365,7 @@ def render_markdown(data: ReportData, out: Path, draw: Callable = draw_now,
 
 def write_report(data: ReportData, out: Path, protocol: Path | None = None) -> Path:
     """Write ``report.md`` (with figures), ``results.json`` and ``gates.json`` into ``out``,
-    and the run times (:mod:`validation.timings`); the figures are drawn on
+    and the run times (:mod:`flexval.validation.timings`); the figures are drawn on
     ``data.workers`` processes while the text is written. ``protocol``: as in
     :func:`render_markdown`."""
     t0 = time.perf_counter()

@@ -3,13 +3,13 @@
 :func:`compute_report` runs every requested model on every load case of each
 scene (cached), the measuring-frame variants, the runtime-versus-error and
 convergence studies, and returns a :class:`ReportData`; the renderers of
-:mod:`validation.report` and :mod:`validation.timings` only format it. Every
+:mod:`flexval.validation.report` and :mod:`flexval.validation.timings` only format it. Every
 load path of every study is listed first (``_Plan.jobs``) and, with several
 workers, computed ahead on that many processes
-(:func:`validation.campaign.prefetch`); a path two studies share (the
+(:func:`flexval.validation.campaign.prefetch`); a path two studies share (the
 reference in the campaign, the bench and the convergence study) is computed
 once. A model that fails on a load case
-is a result (:class:`validation.failures.Failure`), kept beside the paths.
+is a result (:class:`flexval.validation.failures.Failure`), kept beside the paths.
 Everything the report says about a scene comes from its data: the paper's
 figures attach to a scene by its name in ``validation/data/paper_results.toml``,
 and the chain's topology is the cycle rank of its body graph.
@@ -27,10 +27,10 @@ from functools import cached_property
 from importlib import metadata
 from pathlib import Path
 
-from geometry import Scene, load_scene
-from geometry.graph import independent_loops
-from reducedmodels import LoadPath
-from reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
+from flexval.geometry import Scene, load_scene
+from flexval.geometry.graph import independent_loops
+from flexval.reducedmodels import LoadPath
+from flexval.reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
 
 from .bench import runtime_vs_error, sweep_specs
 from .cache import ResultCache, code_version
@@ -55,7 +55,7 @@ PLANE_OPTION = "plane"
 
 @dataclass
 class PaperData:
-    """The paper's figures for one scene (see :func:`validation.compare.paper_scene`)."""
+    """The paper's figures for one scene (see :func:`flexval.validation.compare.paper_scene`)."""
 
     percent: dict[str, dict[str, dict[str, float]]]
     seconds: dict[str, dict[str, float]]
@@ -82,7 +82,7 @@ class FrameRow:
     """One model with one value of its measuring-frame option, on every load case.
 
     ``cells`` maps each load case to its errors against :data:`PAPER_REFERENCE`
-    (:func:`validation.compare.errors`), a :class:`Failure`, or None (no
+    (:func:`flexval.validation.compare.errors`), a :class:`Failure`, or None (no
     reference path).
     """
 
@@ -191,7 +191,7 @@ class SceneResults:
         Keys ``disp``/``disp_other``/``rot``/``rot_other`` (reference, then the
         bracket's other plane) and ``disp_spread``/``rot_spread``: the other
         plane's ``end_disp`` and ``end_rot`` errors against the reference
-        (:func:`validation.compare.errors`, percent: |other - reference| /
+        (:func:`flexval.validation.compare.errors`, percent: |other - reference| /
         |reference|, or of the scale where the reference is near zero), so they
         compare with the models' errors by the same rule. Cases where either path
         did not reach full load are left out.
@@ -429,12 +429,12 @@ def compute_report(scene_names: list[str], models: list[str] | None = None, repe
     """Run and compare everything the report shows (see the module docstring).
 
     With ``peers``, :data:`PAPER_REFERENCE` is also timed against OpenSeesPy
-    on every load case (:func:`validation.peers.compare_with_opensees`, in
+    on every load case (:func:`flexval.validation.peers.compare_with_opensees`, in
     this process once everything else is computed, ``repeats`` times each);
     where OpenSeesPy is missing the run times say so.
 
     With ``workers`` > 1 every load path of every study is first computed on
-    that many processes (:func:`validation.campaign.prefetch`); the studies
+    that many processes (:func:`flexval.validation.campaign.prefetch`); the studies
     then read them, so the results are those of a serial run.
 
     Raises

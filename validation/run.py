@@ -1,15 +1,15 @@
 """Run any requested model on a scene: the one dispatcher behind ``flexval run``.
 
-The model's family in the catalogue (:mod:`reducedmodels.catalogue`) runs it:
+The model's family in the catalogue (:mod:`flexval.reducedmodels.catalogue`) runs it:
 reduced models from :mod:`reducedmodels`, the continuum reference from
-:mod:`validation.continuum`; every one returns a :class:`reducedmodels.LoadPath`.
+:mod:`flexval.validation.continuum`; every one returns a :class:`reducedmodels.LoadPath`.
 Only what is requested is built.
 """
 
 from __future__ import annotations
 
-from geometry import LoadCase, Scene
-from reducedmodels import LoadPath, ModelSpec
+from flexval.geometry import LoadCase, Scene
+from flexval.reducedmodels import LoadPath, ModelSpec
 
 
 def run_model(scene: Scene, spec: ModelSpec, case: LoadCase, levels: int | None = None,

@@ -9,7 +9,7 @@
   (Winkler-Bach curved-beam theory, :func:`curved_beam_factor`).
 * Limit loads: a model that stops at a limit point under load control is
   traced by arc length when its failure is recorded
-  (:func:`validation.failures.failure_of`); the limit loads are tabulated
+  (:func:`flexval.validation.failures.failure_of`); the limit loads are tabulated
   with their error against the reference's own limit load where it has one.
 
 Units: MPa, N or N mm, mm.
@@ -27,8 +27,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from geometry import Scene  # noqa: E402
-from reducedmodels import LoadPath  # noqa: E402
+from flexval.geometry import Scene  # noqa: E402
+from flexval.reducedmodels import LoadPath  # noqa: E402
 
 from .failures import LIMIT_POINT, Failure  # noqa: E402
 from .figurejobs import draw_now  # noqa: E402
@@ -215,7 +215,7 @@ def section(scene: Scene, paths: dict[tuple[str, str], LoadPath], failures: list
             models: list[str], reference: str, out: Path, draw: Callable = draw_now
             ) -> list[str]:
     """The report's Markdown on peak stresses and limit loads of one scene (figures into
-    ``out``, drawn with ``draw(fn, *args)``: see :mod:`validation.figurejobs`)."""
+    ``out``, drawn with ``draw(fn, *args)``: see :mod:`flexval.validation.figurejobs`)."""
     cases = [c.name for c in scene.load_cases]
     name = scene.name
     lines = [f"### Peak stress against `{reference}`", "",

@@ -21,11 +21,11 @@ Three studies per model and load case:
 Displacements are compared as vectors: relative differences are the
 largest over the path of |d - d_base| / max |d_base| (rotations alike), a
 maximum near zero measured against its scale instead (the rule of
-:func:`validation.compare.errors`: :func:`~validation.compare.scale_of` of
-the base path on the mechanism's size, :func:`~validation.compare.denominator`),
+:func:`flexval.validation.compare.errors`: :func:`~flexval.validation.compare.scale_of` of
+the base path on the mechanism's size, :func:`~flexval.validation.compare.denominator`),
 so a rotation that vanishes by symmetry does not turn round-off into a
 failed invariance. Errors against the reference are the percentages of
-:func:`validation.compare.errors`.
+:func:`flexval.validation.compare.errors`.
 
 Units: mm, N, N mm, rad (the metre variant is internal to (c)).
 """
@@ -39,9 +39,9 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from geometry import Force, LoadCase, Material, Mechanism, Scene, Section, rotation
-from reducedmodels import LoadPath, SolverError
-from reducedmodels.catalogue import ModelSpec, parse_model
+from flexval.geometry import Force, LoadCase, Material, Mechanism, Scene, Section, rotation
+from flexval.reducedmodels import LoadPath, SolverError
+from flexval.reducedmodels.catalogue import ModelSpec, parse_model
 
 from .compare import denominator, errors, scale_of
 from .failures import first_limit
@@ -125,7 +125,7 @@ def _path_difference(a: LoadPath, b: LoadPath, size: float, turn: float = 0.0,
     ``b``'s displacements are turned back by ``-turn`` (rad) and divided by
     ``length`` first, so a rigidly moved or rescaled copy compares equal.
     ``size`` (mm) is the mechanism's: a maximum of ``a`` near zero is replaced
-    by its scale (:func:`validation.compare.denominator`).
+    by its scale (:func:`flexval.validation.compare.denominator`).
     """
     back = rotation(-turn) @ np.array([b.dx, b.dy]) / length
     da = np.array([a.dx, a.dy])

@@ -4,10 +4,10 @@ Everything of the report that depends on the machine, its load and the cache
 is written here, so that ``report.md``, ``results.json`` and ``gates.json``
 change only when a result does (two runs of the same code write them byte for
 byte the same). Here: the median wall time of every load path beside the
-paper's and the speed-ups against :data:`~validation.reportdata.PAPER_REFERENCE`,
+paper's and the speed-ups against :data:`~flexval.validation.reportdata.PAPER_REFERENCE`,
 the cheapest model within each error budget of the findings, the cost of the
 plane-strain bracket and of each convergence run, the comparison with
-OpenSeesPy (:mod:`validation.peers`, when asked), the runtime-versus-error
+OpenSeesPy (:mod:`flexval.validation.peers`, when asked), the runtime-versus-error
 study (``bench_<scene>.md/.png/.json``) and the report's own wall time.
 
 Units: s (ms where stated); speed-ups are ratios of mean seconds.
@@ -93,7 +93,7 @@ def _convergence_lines(res: SceneResults) -> list[str]:
 
 
 def _peer_lines(res: SceneResults) -> list[str]:
-    """Markdown: :data:`PAPER_REFERENCE` against OpenSeesPy (:mod:`validation.peers`), or why not."""
+    """Markdown: :data:`PAPER_REFERENCE` against OpenSeesPy (:mod:`flexval.validation.peers`), or why not."""
     if res.peers is None:
         return []
     title = f"### {PAPER_REFERENCE} against OpenSeesPy"
@@ -151,7 +151,7 @@ def _scene_lines(res: SceneResults, bench_md: Path | None) -> list[str]:
 
 def write_benches(data: ReportData, out: Path, draw: Callable = draw_now
                   ) -> dict[str, Path]:
-    """Each scene's runtime-versus-error files (:func:`validation.bench.write_bench`, the
+    """Each scene's runtime-versus-error files (:func:`flexval.validation.bench.write_bench`, the
     plot drawn with ``draw``): {scene: its Markdown path}, for the scenes that have one."""
     return {res.scene.name: write_bench(res.scene, res.bench_rows, res.bench_reference, out,
                                         res.bench_failures, draw)

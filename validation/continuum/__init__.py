@@ -1,6 +1,6 @@
 """Continuum reference: flexures as 2D plane-stress hyperelastic solids (Gmsh + scikit-fem).
 
-Each flexure is a structured quad9 mesh (:mod:`geometry.mesh`) whose end
+Each flexure is a structured quad9 mesh (:mod:`flexval.geometry.mesh`) whose end
 faces move rigidly with the bodies they are attached to; it is a connector
 of the multibody core (:mod:`.connector`), so the reference is solved by the
 same Newton iteration and load stepping as the reduced models, open or

@@ -24,13 +24,13 @@ from typing import Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from geometry import Flexure, Mechanism
-from geometry.kinematics import rigid_points
-from geometry.mesh import FlexureMesh, mesh_flexure
-from reducedmodels.connector import Connector, ConnectorGroup, LocalState
-from reducedmodels.inertia import MassPoints
-from reducedmodels.validity import MIN_DET_F, stretch_reasons
-from reducedmodels.sections import (SectionForces, polyline_axes, polyline_fractions,
+from flexval.geometry import Flexure, Mechanism
+from flexval.geometry.kinematics import rigid_points
+from flexval.geometry.mesh import FlexureMesh, mesh_flexure
+from flexval.reducedmodels.connector import Connector, ConnectorGroup, LocalState
+from flexval.reducedmodels.inertia import MassPoints
+from flexval.reducedmodels.validity import MIN_DET_F, stretch_reasons
+from flexval.reducedmodels.sections import (SectionForces, polyline_axes, polyline_fractions,
                                    statics_section_forces)
 
 from .group import ContinuumGroup
@@ -49,11 +49,11 @@ class ContinuumConnector(Connector):
     mechanism : Mechanism
         Gives the material and the bodies' reference points.
     level : int
-        Mesh level (see :mod:`geometry.mesh`).
+        Mesh level (see :mod:`flexval.geometry.mesh`).
     law : {'svk', 'neo-hookean'}
     plane : {'stress', 'strain'}
     mesh : FlexureMesh, optional
-        A ready mesh (default: :func:`geometry.mesh.mesh_flexure` of the flexure).
+        A ready mesh (default: :func:`flexval.geometry.mesh.mesh_flexure` of the flexure).
     """
 
     update_above = 0.0
@@ -211,7 +211,7 @@ class ContinuumConnector(Connector):
                  ) -> list[str]:
         """Centre-line fibre stretch beyond MAX_STRAIN; elements near inversion (det F < MIN_DET_F).
 
-        See :mod:`reducedmodels.validity`.
+        See :mod:`flexval.reducedmodels.validity`.
         """
         x = self.positions(pose_a, pose_b, internal)
         line = self.mesh.centre_line
@@ -226,7 +226,7 @@ class ContinuumConnector(Connector):
                            f"(limit {MIN_DET_F:.3g})")
         return reasons
 
-    # --- optional mass hook (reducedmodels.inertia) ---------------------------
+    # --- optional mass hook (flexval.reducedmodels.inertia) ---------------------------
     def mass_points(self, density: float) -> MassPoints:
         """Each node's row sum of the consistent mass (t) as a point: carries the weight."""
         lumped = np.asarray(scalar_mass(self.solid).sum(axis=1)).ravel() * density

@@ -7,10 +7,10 @@ continuum model runs.
 
 from __future__ import annotations
 
-from geometry import LoadCase, Mechanism
-from geometry.mesh import MAX_LEVEL
-from reducedmodels import LoadPath
-from reducedmodels.catalogue import (ARCLENGTH, FIELDS, REFERENCE, Family, ModelSpec, Option,
+from flexval.geometry import LoadCase, Mechanism
+from flexval.geometry.mesh import MAX_LEVEL
+from flexval.reducedmodels import LoadPath
+from flexval.reducedmodels.catalogue import (ARCLENGTH, FIELDS, REFERENCE, Family, ModelSpec, Option,
                                      Resolution, register)
 
 from .material import LAWS, PLANES
@@ -51,7 +51,7 @@ def run(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int | Non
 
     ``record_poses`` and ``record_reactions`` are accepted for a uniform
     runner signature and not recorded; ``extra`` are ``vtu_dir`` and ``png``
-    (:data:`~reducedmodels.catalogue.FIELDS`) or options overriding the
+    (:data:`~flexval.reducedmodels.catalogue.FIELDS`) or options overriding the
     spec's. The result carries the spec's canonical id.
     """
     from .run import run_continuum

@@ -15,7 +15,7 @@ from typing import Sequence
 
 import numpy as np
 
-from geometry.files import atomic_path
+from flexval.geometry.files import atomic_path
 
 from .connector import ContinuumConnector
 from .material import out_of_plane

@@ -1,6 +1,6 @@
 """A flexure mesh's cross-sections in polar form: the load-stepping predictor of the continuum.
 
-The structured quad9 mesh (:mod:`geometry.mesh`) is a stack of
+The structured quad9 mesh (:mod:`flexval.geometry.mesh`) is a stack of
 cross-sections: the ``2 n_t + 1`` nodes on the normal to the centre line
 through each centre-line node, the first and last being the end faces. A
 deformed mesh is described section by section by
@@ -20,7 +20,7 @@ forces hundreds of times the load, which Newton then spends iterations
 removing (measured on the built-in scenes: predicted residuals fall from
 ~1e3 to ~10 times the load, and whole paths take 20-30 % fewer
 iterations). The same reason made the beam model extrapolate chord lengths
-and angles (:meth:`reducedmodels.beam.BeamConnector.predict_internal`).
+and angles (:meth:`flexval.reducedmodels.beam.BeamConnector.predict_internal`).
 
 The same description makes the Newton update of a turning flexure exact
 (:func:`increment`): a correction is mapped to the first-order changes of
@@ -35,7 +35,7 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from geometry.mesh import FlexureMesh
+from flexval.geometry.mesh import FlexureMesh
 
 
 class PolarShape(NamedTuple):

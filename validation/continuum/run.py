@@ -20,11 +20,11 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from geometry import LoadCase, Mechanism
-from geometry.mesh import ASPECT_RATIO, ELEMENT_ORDER, MESH_VERSION
-from reducedmodels import LoadControl, LoadPath, PathRecorder, SolverSettings, System, trace
-from reducedmodels.inertia import with_weights
-from reducedmodels.threads import limit_threads
+from flexval.geometry import LoadCase, Mechanism
+from flexval.geometry.mesh import ASPECT_RATIO, ELEMENT_ORDER, MESH_VERSION
+from flexval.reducedmodels import LoadControl, LoadPath, PathRecorder, SolverSettings, System, trace
+from flexval.reducedmodels.inertia import with_weights
+from flexval.reducedmodels.threads import limit_threads
 
 from .connector import ContinuumConnector
 from .family import DEFAULT_LEVEL
@@ -34,7 +34,7 @@ from .family import DEFAULT_LEVEL
 def build_system(mechanism: Mechanism, level: int, law: str = "svk", plane: str = "stress",
                  settings: SolverSettings | None = None) -> System:
     """The multibody System with every flexure meshed at ``level`` (pins as exact joints)."""
-    from reducedmodels.joints import pin_connectors
+    from flexval.reducedmodels.joints import pin_connectors
 
     conns = [ContinuumConnector(f, mechanism, level, law=law, plane=plane)
              for f in mechanism.flexures]

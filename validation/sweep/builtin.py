@@ -74,7 +74,7 @@ def _cantilever_sweep(name: str, description: str, axes: list[dict], combine: st
 def builtin_sweep(name: str) -> dict:
     """The sweep data (parsed-TOML form) of the built-in sweep ``name``."""
     if name in FILE_SWEEPS:
-        text = resources.files("validation").joinpath("data", "sweeps", f"{name}.toml")
+        text = resources.files("flexval.validation").joinpath("data", "sweeps", f"{name}.toml")
         return tomllib.loads(text.read_text(encoding="utf-8"))
     if name == "slenderness":
         return _cantilever_sweep(

@@ -25,8 +25,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterator
 
-from reducedmodels import ModelSpec
-from reducedmodels.catalogue import REFERENCE
+from flexval.reducedmodels import ModelSpec
+from flexval.reducedmodels.catalogue import REFERENCE
 
 from ..cache import code_version
 from .spec import Point, Sweep

@@ -32,7 +32,7 @@ The last key may be absent from the base scene when the scene format allows
 it there (``flexures.e12.thickness`` overrides the ``[section]`` default).
 
 Every point is the base scene's parsed TOML with the axis values written in,
-loaded through :func:`geometry.scene.parse_scene`, so every scene check
+loaded through :func:`flexval.geometry.scene.parse_scene`, so every scene check
 applies. A point built from listed values (``values``, ``linspace``,
 ``logspace``) that the loader refuses is bad input (:class:`SceneError`
 naming the point and the field); a point built from random samples that the
@@ -57,9 +57,9 @@ from typing import Any
 
 import numpy as np
 
-from geometry import BUILTIN_SCENES, Scene, SceneError
-from geometry.scene import parse_scene, read_scene_data
-from reducedmodels import ModelSpec, parse_model, run_reduced
+from flexval.geometry import BUILTIN_SCENES, Scene, SceneError
+from flexval.geometry.scene import parse_scene, read_scene_data
+from flexval.reducedmodels import ModelSpec, parse_model, run_reduced
 
 from ..compare import METRICS
 from ..stress import scale_case
@@ -397,7 +397,7 @@ def parse_sweep(data: dict, source: str, folder: Path = Path("."),
 
 
 def load_sweep(name_or_path: str | Path) -> Sweep:
-    """Load a built-in sweep by name (see :mod:`validation.sweep.builtin`) or a sweep file.
+    """Load a built-in sweep by name (see :mod:`flexval.validation.sweep.builtin`) or a sweep file.
 
     Raises
     ------

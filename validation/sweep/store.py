@@ -27,8 +27,8 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from geometry import SceneError
-from geometry.files import atomic_path
+from flexval.geometry import SceneError
+from flexval.geometry.files import atomic_path
 
 from ..compare import METRICS
 

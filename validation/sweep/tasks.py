@@ -1,6 +1,6 @@
 """What a Dask worker runs: one model on a batch of sweep points, all load cases.
 
-A task returns finished result rows (see :mod:`validation.sweep.store`),
+A task returns finished result rows (see :mod:`flexval.validation.sweep.store`),
 never raises for a model that fails: a SolverError, a model that refuses
 the geometry, an unexpected numerical exception or a non-finite result is a
 row with its status and reason. The reference task also returns its load
@@ -8,12 +8,12 @@ paths and limit loads, which the model tasks of the same points receive
 from Dask (the reference is computed once per point and shared).
 
 With the ``peak_stress`` output (the default), a row carries its peak stress
-at the last level its path recorded (:func:`validation.strength.peak_at_full_load`
+at the last level its path recorded (:func:`flexval.validation.strength.peak_at_full_load`
 of the path so far) and that level's load (``peak_stress_load``: 1 for a
 converged row, at or below ``load_reached`` for a solver failure), and a
 converged row its error against the reference's at full load; with the ``limit_load``
 output, a run that stops below full load is searched for its first limit
-point by arc length (:func:`validation.failures.first_limit`, as the
+point by arc length (:func:`flexval.validation.failures.first_limit`, as the
 report does), and the row carries that load.
 
 Units: errors in percent, times in s, stresses in MPa, loads in N or N mm.
@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from geometry import LoadCase, SceneError
-from reducedmodels import LoadPath, ModelSpec, SolverError
+from flexval.geometry import LoadCase, SceneError
+from flexval.reducedmodels import LoadPath, ModelSpec, SolverError
 
 from ..cache import ResultCache, result_key
 from ..compare import METRICS, errors
@@ -41,7 +41,7 @@ from .store import PARAM_PREFIX
 @dataclass(frozen=True)
 class TaskInfo:
     """What every row of a task shares: sweep name, reference id, code version and the
-    optional outputs asked for (see :data:`validation.sweep.spec.OPTIONAL_OUTPUTS`)."""
+    optional outputs asked for (see :data:`flexval.validation.sweep.spec.OPTIONAL_OUTPUTS`)."""
 
     sweep: str
     reference: str
