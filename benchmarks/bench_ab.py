@@ -90,26 +90,35 @@ def version_directory(version: str, scratch: Path) -> Path:
         path = ROOT if version == "" else Path(version).resolve()
         missing = [p for p in PACKAGES if not (path / p).exists()]
         if missing:
-            sys.exit(f"bench_ab: directory {version!r} is not a flexval checkout "
-                     f"(no {', '.join(missing)})")
+            sys.exit(
+                f"bench_ab: directory {version!r} is not a flexval checkout "
+                f"(no {', '.join(missing)})"
+            )
         (target / "flexval").symlink_to(path, target_is_directory=True)
         return target
     (target / "flexval").mkdir()
-    archive = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", version,
-                              *PACKAGES], capture_output=True)
+    archive = subprocess.run(
+        ["git", "-C", str(ROOT), "archive", "--format=tar", version, *PACKAGES], capture_output=True
+    )
     if archive.returncode != 0:
-        sys.exit(f"bench_ab: {version!r} is neither a directory nor a git revision of a "
-                 f"flexval with the flexval namespace ({archive.stderr.decode().strip()})")
-    subprocess.run(["tar", "-x", "-C", str(target / "flexval")], input=archive.stdout,
-                   check=True)
+        sys.exit(
+            f"bench_ab: {version!r} is neither a directory nor a git revision of a "
+            f"flexval with the flexval namespace ({archive.stderr.decode().strip()})"
+        )
+    subprocess.run(["tar", "-x", "-C", str(target / "flexval")], input=archive.stdout, check=True)
     return target
 
 
 def run_version(directory: Path, work: list) -> dict:
     """One process of a version: its rows, checked to come from ``directory``."""
     env = {**os.environ, "PYTHONPATH": str(directory), "OPENBLAS_NUM_THREADS": "1"}
-    done = subprocess.run([sys.executable, "-c", WORKER, json.dumps(work)], env=env,
-                          capture_output=True, text=True, cwd=directory)
+    done = subprocess.run(
+        [sys.executable, "-c", WORKER, json.dumps(work)],
+        env=env,
+        capture_output=True,
+        text=True,
+        cwd=directory,
+    )
     if done.returncode != 0:
         sys.exit(f"bench_ab: the process of {directory} failed:\n{done.stderr.strip()}")
     out = json.loads(done.stdout.strip().splitlines()[-1])
@@ -145,8 +154,12 @@ def agreement(a: dict, b: dict) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("base", help="git revision or flexval directory (version A)")
-    ap.add_argument("new", nargs="?", default="",
-                    help="git revision or flexval directory (version B; default: this checkout)")
+    ap.add_argument(
+        "new",
+        nargs="?",
+        default="",
+        help="git revision or flexval directory (version B; default: this checkout)",
+    )
     ap.add_argument("--models", nargs="+", default=list(MODELS))
     ap.add_argument("--scenes", nargs="+", default=["open_chain", "closed_chain"])
     ap.add_argument("--cases", nargs="*", default=[], help="load case names (default: all)")
@@ -162,12 +175,14 @@ def main() -> None:
         dirs = [version_directory(v, Path(scratch)) for v in (args.base, args.new)]
         runs: list[list[dict]] = [[], []]
         for r in range(args.rounds):
-            for side in ((0, 1) if r % 2 == 0 else (1, 0)):
+            for side in (0, 1) if r % 2 == 0 else (1, 0):
                 runs[side].append(run_version(dirs[side], work))
                 print(f"round {r + 1}/{args.rounds}: {'AB'[side]} done", file=sys.stderr)
     a, b = fastest(runs[0]), fastest(runs[1])
-    print(f"A = {args.base}, B = {args.new or 'this checkout'}; fastest of {args.rounds} "
-          f"processes x {args.repeats} runs per path, ms")
+    print(
+        f"A = {args.base}, B = {args.new or 'this checkout'}; fastest of {args.rounds} "
+        f"processes x {args.repeats} runs per path, ms"
+    )
     print(f"{'path':<32} {'A ms':>8} {'B ms':>8} {'A/B':>6}  results")
     ratios: dict[str, list[float]] = {}
     rows = []
@@ -175,15 +190,29 @@ def main() -> None:
         ratio = a[path]["seconds"] / b[path]["seconds"]
         ratios.setdefault(path.split()[-1], []).append(ratio)
         same = agreement(a[path], b[path])
-        rows.append({"path": path, "a_ms": 1e3 * a[path]["seconds"],
-                     "b_ms": 1e3 * b[path]["seconds"], "speedup": ratio, "results": same})
-        print(f"{path:<32} {1e3 * a[path]['seconds']:>8.3f} {1e3 * b[path]['seconds']:>8.3f} "
-              f"{ratio:>6.2f}  {same}")
-    print("geometric mean speed-up A/B per model: " + ", ".join(
-        f"{m} {math.exp(sum(map(math.log, r)) / len(r)):.2f}x" for m, r in ratios.items()))
+        rows.append(
+            {
+                "path": path,
+                "a_ms": 1e3 * a[path]["seconds"],
+                "b_ms": 1e3 * b[path]["seconds"],
+                "speedup": ratio,
+                "results": same,
+            }
+        )
+        print(
+            f"{path:<32} {1e3 * a[path]['seconds']:>8.3f} {1e3 * b[path]['seconds']:>8.3f} "
+            f"{ratio:>6.2f}  {same}"
+        )
+    print(
+        "geometric mean speed-up A/B per model: "
+        + ", ".join(
+            f"{m} {math.exp(sum(map(math.log, r)) / len(r)):.2f}x" for m, r in ratios.items()
+        )
+    )
     if args.json:
-        Path(args.json).write_text(json.dumps({"a": args.base, "b": args.new or "checkout",
-                                               "rows": rows}, indent=1) + "\n")
+        Path(args.json).write_text(
+            json.dumps({"a": args.base, "b": args.new or "checkout", "rows": rows}, indent=1) + "\n"
+        )
 
 
 if __name__ == "__main__":

@@ -61,7 +61,7 @@ def measure(n: int, case_name: str, repeats: int) -> tuple[int, int, float]:
     scene = load_scene("open_chain")
     case = scene.load_case(case_name)
     spec = parse_model(f"beam:{n}")
-    run_reduced(scene.mechanism, spec, case)      # warm-up: the compiled kernels loaded once
+    run_reduced(scene.mechanism, spec, case)  # warm-up: the compiled kernels loaded once
     runs = [run_reduced(scene.mechanism, spec, case) for _ in range(repeats)]
     stats = runs[-1].stats
     return stats["unknowns"], stats["newton_iterations"], statistics.median(r.seconds for r in runs)
@@ -79,17 +79,25 @@ def main() -> None:
         unknowns, iterations, seconds = measure(n, args.case, args.repeats)
         rows.append((n, unknowns, iterations, seconds, iteration_seconds(n, args.case)))
     cheapest = min(one / unknowns for _, unknowns, _, _, one in rows)
-    print(f"open_chain, load case {args.case}, 11 levels, median of {args.repeats} runs; "
-          f"one iteration: fastest in {ITERATION_BUDGET} s")
-    print(f"{'N':>6} {'unknowns':>9} {'newton':>7} {'path s':>9} {'path ms/iter':>13} "
-          f"{'iteration us':>13} {'us/unknown':>11} {'rel.':>6}")
+    print(
+        f"open_chain, load case {args.case}, 11 levels, median of {args.repeats} runs; "
+        f"one iteration: fastest in {ITERATION_BUDGET} s"
+    )
+    print(
+        f"{'N':>6} {'unknowns':>9} {'newton':>7} {'path s':>9} {'path ms/iter':>13} "
+        f"{'iteration us':>13} {'us/unknown':>11} {'rel.':>6}"
+    )
     for n, unknowns, iterations, seconds, one in rows:
-        print(f"{n:>6} {unknowns:>9} {iterations:>7} {seconds:>9.4f} "
-              f"{1e3 * seconds / max(iterations, 1):>13.3f} {1e6 * one:>13.1f} "
-              f"{1e6 * one / unknowns:>11.4f} {one / unknowns / cheapest:>6.2f}")
+        print(
+            f"{n:>6} {unknowns:>9} {iterations:>7} {seconds:>9.4f} "
+            f"{1e3 * seconds / max(iterations, 1):>13.3f} {1e6 * one:>13.1f} "
+            f"{1e6 * one / unknowns:>11.4f} {one / unknowns / cheapest:>6.2f}"
+        )
     spread = max(one / unknowns for _, unknowns, _, _, one in rows) / cheapest
-    print(f"cost of one iteration per unknown: largest / smallest = {spread:.2f} "
-          "(1: proportional to the unknowns)")
+    print(
+        f"cost of one iteration per unknown: largest / smallest = {spread:.2f} "
+        "(1: proportional to the unknowns)"
+    )
 
 
 if __name__ == "__main__":

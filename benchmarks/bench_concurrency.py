@@ -44,7 +44,7 @@ def worker(scene_name: str, case_name: str, model: str, repeats: int) -> None:
     spec, case = parse_model(model, "<benchmark>", "--model"), scene.load_case(case_name)
     run_model(scene, spec, case)
     print("ready", flush=True)
-    sys.stdin.readline()                  # the parent's "go": all workers start timing together
+    sys.stdin.readline()  # the parent's "go": all workers start timing together
     times = []
     for _ in range(repeats):
         t0 = time.perf_counter()
@@ -60,16 +60,29 @@ def run_workers(count: int, args: argparse.Namespace, controlled: bool) -> list[
         env.pop("FLEXVAL_BLAS_THREADS", None)
     else:
         env["FLEXVAL_BLAS_THREADS"] = "0"
-    command = [sys.executable, __file__, "--worker", "--scene", args.scene, "--case", args.case,
-               "--model", args.model, "--repeats", str(args.repeats)]
-    procs = [subprocess.Popen(command, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                              text=True) for _ in range(count)]
+    command = [
+        sys.executable,
+        __file__,
+        "--worker",
+        "--scene",
+        args.scene,
+        "--case",
+        args.case,
+        "--model",
+        args.model,
+        "--repeats",
+        str(args.repeats),
+    ]
+    procs = [
+        subprocess.Popen(command, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        for _ in range(count)
+    ]
     ready = [p.stdout.readline().strip() for p in procs]
     if ready != ["ready"] * count:
         for p in procs:
             p.kill()
         raise SystemExit(f"a worker failed before its timed runs: {ready}")
-    for p in procs:                       # start the timed runs of all workers at once
+    for p in procs:  # start the timed runs of all workers at once
         p.stdin.write("go\n")
         p.stdin.flush()
     outputs = [p.communicate()[0] for p in procs]
@@ -89,8 +102,10 @@ def main() -> None:
     if args.worker:
         worker(args.scene, args.case, args.model, args.repeats)
         return
-    print(f"{args.scene} {args.case} {args.model}, median of {args.repeats} runs per worker, "
-          f"{os.cpu_count()} cores, load average before: {os.getloadavg()[0]:.1f}")
+    print(
+        f"{args.scene} {args.case} {args.model}, median of {args.repeats} runs per worker, "
+        f"{os.cpu_count()} cores, load average before: {os.getloadavg()[0]:.1f}"
+    )
     print(f"{'thread control':<28}{'alone s':>9}{'two at once s':>16}{'slow-down':>11}")
     for controlled, label in ((True, "flexval default (1 thread)"), (False, "none (BLAS default)")):
         before = run_workers(1, args, controlled)[0]

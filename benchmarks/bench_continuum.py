@@ -38,8 +38,11 @@ CASES = (("open_chain", "f+"), ("open_chain", "f-"), ("closed_chain", "f+"))
 def _cumulative(stats: pstats.Stats, function) -> float:
     """Cumulative seconds of ``function`` (matched by its code's file and first line)."""
     code = function.__code__
-    return sum(v[3] for (path, line, name), v in stats.stats.items()
-               if path == code.co_filename and line == code.co_firstlineno)
+    return sum(
+        v[3]
+        for (path, line, name), v in stats.stats.items()
+        if path == code.co_filename and line == code.co_firstlineno
+    )
 
 
 def bench(scene_name: str, case_name: str, level: int) -> dict:
@@ -56,19 +59,29 @@ def bench(scene_name: str, case_name: str, level: int) -> dict:
     kernels = _cumulative(st, ElementKernel.evaluate)
     assemble = _cumulative(st, System.assemble)
     solve = _cumulative(st, BandedTangent.solve) + _cumulative(st, SparseTangent.solve)
-    update = (_cumulative(st, ContinuumGroup.update_internal)
-              + _cumulative(st, ContinuumGroup.predict_internal))
+    update = _cumulative(st, ContinuumGroup.update_internal) + _cumulative(
+        st, ContinuumGroup.predict_internal
+    )
     setup = _cumulative(st, build_system)
     its = lp.stats["newton_iterations"]
-    return {"scene": scene_name, "load_case": case_name, "model": lp.model,
-            "unknowns": lp.stats["unknowns"], "newton_iterations": its,
-            "substeps": lp.stats["substeps"], "step_cuts": lp.stats["step_cuts"],
-            "seconds": wall, "cpu_seconds": cpu,
-            "seconds_per_iteration": (wall - setup) / max(its, 1),
-            "setup_s": setup, "element_kernels_s": kernels,
-            "global_assembly_s": assemble - kernels, "factorisation_s": solve,
-            "predictor_update_s": update,
-            "other_s": wall - setup - assemble - solve - update}
+    return {
+        "scene": scene_name,
+        "load_case": case_name,
+        "model": lp.model,
+        "unknowns": lp.stats["unknowns"],
+        "newton_iterations": its,
+        "substeps": lp.stats["substeps"],
+        "step_cuts": lp.stats["step_cuts"],
+        "seconds": wall,
+        "cpu_seconds": cpu,
+        "seconds_per_iteration": (wall - setup) / max(its, 1),
+        "setup_s": setup,
+        "element_kernels_s": kernels,
+        "global_assembly_s": assemble - kernels,
+        "factorisation_s": solve,
+        "predictor_update_s": update,
+        "other_s": wall - setup - assemble - solve - update,
+    }
 
 
 def main() -> None:
@@ -78,21 +91,25 @@ def main() -> None:
     args = parser.parse_args()
     try:
         if args.json:
-            check_file(args.json, "--json")      # before the minutes of work, not after
+            check_file(args.json, "--json")  # before the minutes of work, not after
     except SceneError as exc:
         parser.error(str(exc))
     rows = [bench(s, c, args.level) for s, c in CASES]
-    head = (f"{'scene':<13}{'case':<5}{'model':<13}{'unknowns':>9}{'iters':>6}{'s':>7}"
-            f"{'cpu s':>7}"
-            f"{'s/iter':>8}{'setup':>7}{'kernel':>8}{'assem':>7}{'LU':>7}{'update':>8}"
-            f"{'other':>7}")
+    head = (
+        f"{'scene':<13}{'case':<5}{'model':<13}{'unknowns':>9}{'iters':>6}{'s':>7}"
+        f"{'cpu s':>7}"
+        f"{'s/iter':>8}{'setup':>7}{'kernel':>8}{'assem':>7}{'LU':>7}{'update':>8}"
+        f"{'other':>7}"
+    )
     print(head)
     for r in rows:
-        print(f"{r['scene']:<13}{r['load_case']:<5}{r['model']:<13}{r['unknowns']:>9}"
-              f"{r['newton_iterations']:>6}{r['seconds']:>7.2f}{r['cpu_seconds']:>7.2f}"
-              f"{r['seconds_per_iteration']:>8.3f}"
-              f"{r['setup_s']:>7.2f}{r['element_kernels_s']:>8.2f}{r['global_assembly_s']:>7.2f}"
-              f"{r['factorisation_s']:>7.2f}{r['predictor_update_s']:>8.2f}{r['other_s']:>7.2f}")
+        print(
+            f"{r['scene']:<13}{r['load_case']:<5}{r['model']:<13}{r['unknowns']:>9}"
+            f"{r['newton_iterations']:>6}{r['seconds']:>7.2f}{r['cpu_seconds']:>7.2f}"
+            f"{r['seconds_per_iteration']:>8.3f}"
+            f"{r['setup_s']:>7.2f}{r['element_kernels_s']:>8.2f}{r['global_assembly_s']:>7.2f}"
+            f"{r['factorisation_s']:>7.2f}{r['predictor_update_s']:>8.2f}{r['other_s']:>7.2f}"
+        )
     if args.json:
         write_json(args.json, rows)
 

@@ -41,8 +41,10 @@ def main() -> None:
     ap.add_argument("--scenes", nargs="*", default=["open_chain", "closed_chain"])
     ap.add_argument("--cases", nargs="*", help="load cases (default: every case of a scene)")
     args = ap.parse_args()
-    print(f"{'scene':<13} {'case':<5} {'model':<9} {'f1 Hz':>8} {'sim s':>8} {'wall/sim':>9} "
-          f"{'steps':>6} {'rejected':>8} {'newton':>7} {'rot end':>10} {'vs static':>10}")
+    print(
+        f"{'scene':<13} {'case':<5} {'model':<9} {'f1 Hz':>8} {'sim s':>8} {'wall/sim':>9} "
+        f"{'steps':>6} {'rejected':>8} {'newton':>7} {'rot end':>10} {'vs static':>10}"
+    )
     for name in args.scenes:
         scene = load_scene(name)
         mech = dataclasses.replace(scene.mechanism, inertia=MassData(density=PLA_DENSITY))
@@ -58,15 +60,22 @@ def main() -> None:
                 walls = []
                 for _ in range(args.repeats):
                     t0 = time.perf_counter()
-                    lp = solve_dynamic(system, case, TimeLaw("eq15", 0.0, ramp), end,
-                                       Rayleigh.from_ratio(1.0, f[0], f[1]),
-                                       DynamicSettings(rho_inf=0.9))
+                    lp = solve_dynamic(
+                        system,
+                        case,
+                        TimeLaw("eq15", 0.0, ramp),
+                        end,
+                        Rayleigh.from_ratio(1.0, f[0], f[1]),
+                        DynamicSettings(rho_inf=0.9),
+                    )
                     walls.append(time.perf_counter() - t0)
                 lag = lp.rotation[-1] / static.rotation[-1] - 1.0
-                print(f"{name:<13} {case.name:<5} {m:<9} {f[0]:>8.2f} {end:>8.4f} "
-                      f"{statistics.median(walls) / end:>9.2f} {lp.stats['steps']:>6} "
-                      f"{lp.stats['rejected_steps']:>8} {lp.stats['newton_iterations']:>7} "
-                      f"{lp.rotation[-1]:>10.5f} {lag:>10.2e}")
+                print(
+                    f"{name:<13} {case.name:<5} {m:<9} {f[0]:>8.2f} {end:>8.4f} "
+                    f"{statistics.median(walls) / end:>9.2f} {lp.stats['steps']:>6} "
+                    f"{lp.stats['rejected_steps']:>8} {lp.stats['newton_iterations']:>7} "
+                    f"{lp.rotation[-1]:>10.5f} {lag:>10.2e}"
+                )
 
 
 if __name__ == "__main__":

@@ -22,22 +22,34 @@ import statistics
 import sys
 
 from flexval.geometry import load_scene
-from flexval.validation.peers import (AGREEMENT_BAR, PeerUnavailable, compare_with_opensees,
-                              geometric_mean)
+from flexval.validation.peers import (
+    AGREEMENT_BAR,
+    PeerUnavailable,
+    compare_with_opensees,
+    geometric_mean,
+)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("scene", nargs="*", default=["open_chain", "closed_chain"],
-                        help="built-in scene names or scene TOML files")
+    parser.add_argument(
+        "scene",
+        nargs="*",
+        default=["open_chain", "closed_chain"],
+        help="built-in scene names or scene TOML files",
+    )
     parser.add_argument("--n", type=int, default=100, help="elements per flexure (default 100)")
     parser.add_argument("--repeats", type=int, default=5, help="timing repeats (median)")
     args = parser.parse_args()
-    print(f"beam:{args.n} against OpenSeesPy, {args.n} corotational elements per flexure; "
-          f"median of {args.repeats}, model build included")
-    print(f"{'scene':<13}{'case':<5}{'flexval ms':>11}{'OpenSees ms':>12}{'substeps':>9}"
-          f"{'OpenSees/flexval':>17}{'agree %':>10}{'CPU ratio':>10}"
-          f"{'b2b ours':>10}{'b2b OS':>10}{'b2b':>9}")
+    print(
+        f"beam:{args.n} against OpenSeesPy, {args.n} corotational elements per flexure; "
+        f"median of {args.repeats}, model build included"
+    )
+    print(
+        f"{'scene':<13}{'case':<5}{'flexval ms':>11}{'OpenSees ms':>12}{'substeps':>9}"
+        f"{'OpenSees/flexval':>17}{'agree %':>10}{'CPU ratio':>10}"
+        f"{'b2b ours':>10}{'b2b OS':>10}{'b2b':>9}"
+    )
     rows = []
     for name in args.scene:
         scene = load_scene(name)
@@ -51,16 +63,20 @@ def main() -> None:
                 continue
             rows.append(row)
             flag = "" if row.agreement <= AGREEMENT_BAR else "  (above the 0.01 % bar)"
-            print(f"{scene.name:<13}{row.case:<5}{1e3 * statistics.median(row.ours):>11.1f}"
-                  f"{1e3 * statistics.median(row.theirs):>12.1f}{row.substeps:>9}"
-                  f"{row.ratio:>16.2f}x{row.agreement:>10.4f}{row.cpu_ratio:>9.2f}x"
-                  f"{1e3 * statistics.median(row.ours_b2b):>10.1f}"
-                  f"{1e3 * statistics.median(row.theirs_b2b):>10.1f}{row.b2b_ratio:>8.2f}x{flag}")
+            print(
+                f"{scene.name:<13}{row.case:<5}{1e3 * statistics.median(row.ours):>11.1f}"
+                f"{1e3 * statistics.median(row.theirs):>12.1f}{row.substeps:>9}"
+                f"{row.ratio:>16.2f}x{row.agreement:>10.4f}{row.cpu_ratio:>9.2f}x"
+                f"{1e3 * statistics.median(row.ours_b2b):>10.1f}"
+                f"{1e3 * statistics.median(row.theirs_b2b):>10.1f}{row.b2b_ratio:>8.2f}x{flag}"
+            )
     if rows:
-        print(f"geometric mean OpenSees/flexval: {geometric_mean([r.ratio for r in rows]):.2f}x "
-              f"interleaved (fastest CPU times: "
-              f"{geometric_mean([r.cpu_ratio for r in rows]):.2f}x), "
-              f"{geometric_mean([r.b2b_ratio for r in rows]):.2f}x back to back")
+        print(
+            f"geometric mean OpenSees/flexval: {geometric_mean([r.ratio for r in rows]):.2f}x "
+            f"interleaved (fastest CPU times: "
+            f"{geometric_mean([r.cpu_ratio for r in rows]):.2f}x), "
+            f"{geometric_mean([r.b2b_ratio for r in rows]):.2f}x back to back"
+        )
 
 
 if __name__ == "__main__":

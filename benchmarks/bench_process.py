@@ -53,14 +53,19 @@ COMMANDS = (
 )
 ENTRY = "import sys; from flexval.validation.cli import main; sys.exit(main())"
 """What the ``flexval`` console script runs."""
-FLOOR = (("interpreter alone", "pass"),
-         ("numpy + scipy.linalg + scipy.sparse", "import numpy, scipy.linalg, scipy.sparse"))
+FLOOR = (
+    ("interpreter alone", "pass"),
+    ("numpy + scipy.linalg + scipy.sparse", "import numpy, scipy.linalg, scipy.sparse"),
+)
 SCIPY_COMPAT = "scipy._lib.array_api_compat.numpy"
 
 
 def _environment(cache: Path, pycache: Path | None) -> dict[str, str]:
-    env = {**os.environ, "FLEXVAL_CACHE": str(cache),
-           "PYTHONPATH": os.pathsep.join(filter(None, (str(ROOT), os.environ.get("PYTHONPATH"))))}
+    env = {
+        **os.environ,
+        "FLEXVAL_CACHE": str(cache),
+        "PYTHONPATH": os.pathsep.join(filter(None, (str(ROOT), os.environ.get("PYTHONPATH")))),
+    }
     env.pop("PYTHONPYCACHEPREFIX", None)
     if pycache is None:
         env["PYTHONDONTWRITEBYTECODE"] = "1"
@@ -74,13 +79,15 @@ def _run(argv: list[str], env: dict[str, str]) -> tuple[float, float, float]:
     """Wall, user CPU and system CPU seconds of one process (it must exit with 0)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    proc = subprocess.run(argv, env=env, cwd=ROOT, stdout=subprocess.DEVNULL,
-                          stderr=subprocess.PIPE, text=True)
+    proc = subprocess.run(
+        argv, env=env, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
+    )
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if proc.returncode != 0:
-        raise SystemExit(f"bench_process: {shlex.join(argv)} exited with {proc.returncode}:\n"
-                         f"{proc.stderr}")
+        raise SystemExit(
+            f"bench_process: {shlex.join(argv)} exited with {proc.returncode}:\n{proc.stderr}"
+        )
     return wall, after.ru_utime - before.ru_utime, after.ru_stime - before.ru_stime
 
 
@@ -88,30 +95,40 @@ def time_process(argv: list[str], env: dict[str, str], repeats: int) -> dict[str
     """One warm-up run, then ``repeats`` timed runs of ``argv``."""
     _run(argv, env)
     walls, users, systems = zip(*(_run(argv, env) for _ in range(repeats)))
-    return {"wall_min": min(walls), "wall_median": statistics.median(walls),
-            "user_min": min(users), "user_median": statistics.median(users),
-            "sys_min": min(systems)}
+    return {
+        "wall_min": min(walls),
+        "wall_median": statistics.median(walls),
+        "user_min": min(users),
+        "user_median": statistics.median(users),
+        "sys_min": min(systems),
+    }
 
 
-def import_times(argv: list[str], env: dict[str, str], repeats: int
-                 ) -> tuple[dict[str, int], dict[str, str]]:
+def import_times(
+    argv: list[str], env: dict[str, str], repeats: int
+) -> tuple[dict[str, int], dict[str, str]]:
     """Each module's smallest self time (us) over ``repeats`` runs, and its importer."""
     best: dict[str, int] = {}
     parent: dict[str, str] = {}
     for _ in range(repeats):
-        proc = subprocess.run([sys.executable, "-X", "importtime", *argv[1:]], env=env,
-                              cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                              text=True)
+        proc = subprocess.run(
+            [sys.executable, "-X", "importtime", *argv[1:]],
+            env=env,
+            cwd=ROOT,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         rows = []
         for line in proc.stderr.splitlines():
             if not line.startswith("import time:") or "self [us]" in line:
                 continue
-            self_us, _, name = line[len("import time:"):].split("|")
+            self_us, _, name = line[len("import time:") :].split("|")
             rows.append(((len(name) - len(name.lstrip())) // 2, name.strip(), int(self_us)))
             best[rows[-1][1]] = min(best.get(rows[-1][1], rows[-1][2]), rows[-1][2])
         # -X importtime prints a module after everything it imported, one level deeper
         for k, (depth, name, _) in enumerate(rows):
-            owner = next((r[1] for r in rows[k + 1:] if r[0] == depth - 1), "")
+            owner = next((r[1] for r in rows[k + 1 :] if r[0] == depth - 1), "")
             parent.setdefault(name, owner)
     return best, parent
 
@@ -121,8 +138,11 @@ def _group(name: str, parent: dict[str, str]) -> str:
     chain, seen = name, set()
     while chain and chain not in seen:
         if chain == SCIPY_COMPAT:
-            return "numpy sub-packages loaded by scipy's array-api-compat" \
-                if name.split(".")[0] == "numpy" else "stdlib/other loaded by those"
+            return (
+                "numpy sub-packages loaded by scipy's array-api-compat"
+                if name.split(".")[0] == "numpy"
+                else "stdlib/other loaded by those"
+            )
         seen.add(chain)
         chain = parent.get(chain, "")
     top = name.split(".")[0]
@@ -141,8 +161,10 @@ def print_imports(command: str, env: dict[str, str], repeats: int) -> None:
     for name, us in best.items():
         groups[_group(name, parent)] += us
     total = sum(groups.values())
-    print(f"\n## imports of `flexval {command}`: {len(best)} modules, {total / 1000:.0f} ms "
-          f"self time (python -X importtime, each module's minimum over {repeats} runs)")
+    print(
+        f"\n## imports of `flexval {command}`: {len(best)} modules, {total / 1000:.0f} ms "
+        f"self time (python -X importtime, each module's minimum over {repeats} runs)"
+    )
     for group, us in groups.most_common():
         print(f"{us / 1000:8.1f} ms  {100 * us / total:5.1f} %  {group}")
 
@@ -150,32 +172,50 @@ def print_imports(command: str, env: dict[str, str], repeats: int) -> None:
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--repeats", type=int, default=7, help="timed runs per command (default 7)")
-    p.add_argument("--command", action="append", metavar="ARGS",
-                   help="flexval arguments to time (repeatable; default: a set of common calls)")
-    p.add_argument("--imports", metavar="ARGS", default=COMMANDS[-1],
-                   help=f"command whose imports are broken down (default: {COMMANDS[-1]!r}; "
-                        "'' for none)")
-    p.add_argument("--no-bytecode", action="store_true",
-                   help="PYTHONDONTWRITEBYTECODE=1: compile flexval's sources at every start")
+    p.add_argument(
+        "--command",
+        action="append",
+        metavar="ARGS",
+        help="flexval arguments to time (repeatable; default: a set of common calls)",
+    )
+    p.add_argument(
+        "--imports",
+        metavar="ARGS",
+        default=COMMANDS[-1],
+        help=f"command whose imports are broken down (default: {COMMANDS[-1]!r}; '' for none)",
+    )
+    p.add_argument(
+        "--no-bytecode",
+        action="store_true",
+        help="PYTHONDONTWRITEBYTECODE=1: compile flexval's sources at every start",
+    )
     args = p.parse_args(argv)
     if args.repeats < 1:
         p.error("--repeats must be at least 1")
     with tempfile.TemporaryDirectory(prefix="flexval-bench-process-") as tmp:
         pycache = None if args.no_bytecode else Path(tmp) / "pycache"
         env = _environment(Path(tmp) / "cache", pycache)
-        print(f"# whole processes: one warm-up run, then {args.repeats} runs each; seconds; "
-              f"bytecode {'not cached' if pycache is None else 'cached'}; load average before: "
-              f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")
-        print(f"{'command':<58} {'wall min':>8} {'median':>8} {'user min':>8} {'median':>8} "
-              f"{'sys min':>8}")
+        print(
+            f"# whole processes: one warm-up run, then {args.repeats} runs each; seconds; "
+            f"bytecode {'not cached' if pycache is None else 'cached'}; load average before: "
+            f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs"
+        )
+        print(
+            f"{'command':<58} {'wall min':>8} {'median':>8} {'user min':>8} {'median':>8} "
+            f"{'sys min':>8}"
+        )
         rows = [(label, [sys.executable, "-c", code]) for label, code in FLOOR]
-        rows += [(f"flexval {c}", [sys.executable, "-c", ENTRY, *shlex.split(c)])
-                 for c in (args.command or COMMANDS)]
+        rows += [
+            (f"flexval {c}", [sys.executable, "-c", ENTRY, *shlex.split(c)])
+            for c in (args.command or COMMANDS)
+        ]
         for label, cmd in rows:
             t = time_process(cmd, env, args.repeats)
-            print(f"{label:<58} {t['wall_min']:>8.3f} {t['wall_median']:>8.3f} "
-                  f"{t['user_min']:>8.3f} {t['user_median']:>8.3f} {t['sys_min']:>8.3f}",
-                  flush=True)
+            print(
+                f"{label:<58} {t['wall_min']:>8.3f} {t['wall_median']:>8.3f} "
+                f"{t['user_min']:>8.3f} {t['user_median']:>8.3f} {t['sys_min']:>8.3f}",
+                flush=True,
+            )
         if args.imports:
             print_imports(args.imports, env, args.repeats)
 

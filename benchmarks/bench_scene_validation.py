@@ -28,7 +28,7 @@ from flexval.geometry.overlap import SAMPLES, candidate_pairs
 from flexval.geometry.scene import parse_scene
 
 SIZES = (10, 100, 1000)
-RADIUS, WIDTH_DEG = 1.0, 120.0                            # mm, deg
+RADIUS, WIDTH_DEG = 1.0, 120.0  # mm, deg
 PITCH = 2.0 * RADIUS * math.sin(math.radians(WIDTH_DEG / 2))  # the chord, mm: ends meet
 
 
@@ -36,18 +36,28 @@ def chain_scene(n: int) -> dict:
     """Scene data of an open chain of n arcs along x: body k holds arc k's left end,
     which is also arc k-1's right end."""
     half = math.radians(WIDTH_DEG / 2)
-    left = np.array([-RADIUS * math.sin(half), RADIUS * math.cos(half)])   # relative to the centre
-    flexures = [{"name": f"e{k}", "bodies": [str(k), str(k + 1)], "center": [PITCH * k, 0.0],
-                 "radius": RADIUS, "axis_deg": 90.0, "width_deg": WIDTH_DEG}
-                for k in range(n)]
+    left = np.array([-RADIUS * math.sin(half), RADIUS * math.cos(half)])  # relative to the centre
+    flexures = [
+        {
+            "name": f"e{k}",
+            "bodies": [str(k), str(k + 1)],
+            "center": [PITCH * k, 0.0],
+            "radius": RADIUS,
+            "axis_deg": 90.0,
+            "width_deg": WIDTH_DEG,
+        }
+        for k in range(n)
+    ]
     tip = [PITCH * (n - 1) - left[0], left[1]]
-    return {"name": f"chain{n}",
-            "material": {"youngs_modulus": 2100.0, "poisson_ratio": 0.3},
-            "section": {"depth": 1.0, "thickness": 0.1},
-            "ground": {"name": "0", "points": [left.tolist()]},
-            "target": {"body": str(n), "point": tip},
-            "flexures": flexures,
-            "load_cases": [{"name": "m", "kind": "moment", "value": 1e-3}]}
+    return {
+        "name": f"chain{n}",
+        "material": {"youngs_modulus": 2100.0, "poisson_ratio": 0.3},
+        "section": {"depth": 1.0, "thickness": 0.1},
+        "ground": {"name": "0", "points": [left.tolist()]},
+        "target": {"body": str(n), "point": tip},
+        "flexures": flexures,
+        "load_cases": [{"name": "m", "kind": "moment", "value": 1e-3}],
+    }
 
 
 def measure(n: int, repeats: int) -> tuple[float, int]:
@@ -58,8 +68,10 @@ def measure(n: int, repeats: int) -> tuple[float, int]:
         t0 = time.perf_counter()
         scene = parse_scene(data, f"<chain {n}>")
         times.append(time.perf_counter() - t0)
-    lines = [f.shape.point(np.linspace(0.0, f.shape.length, SAMPLES + 1))
-             for f in scene.mechanism.flexures]
+    lines = [
+        f.shape.point(np.linspace(0.0, f.shape.length, SAMPLES + 1))
+        for f in scene.mechanism.flexures
+    ]
     return statistics.median(times), len(candidate_pairs(lines))
 
 
@@ -73,8 +85,9 @@ def main() -> None:
     print(f"{'n':>6} {'seconds':>9} {'ms/flexure':>11} {'pairs tested':>13} {'all pairs':>10}")
     for n in args.sizes:
         seconds, pairs = measure(n, args.repeats)
-        print(f"{n:>6} {seconds:>9.3f} {1e3 * seconds / n:>11.3f} {pairs:>13} "
-              f"{n * (n - 1) // 2:>10}")
+        print(
+            f"{n:>6} {seconds:>9.3f} {1e3 * seconds / n:>11.3f} {pairs:>13} {n * (n - 1) // 2:>10}"
+        )
 
 
 if __name__ == "__main__":

@@ -55,15 +55,41 @@ MODELS = ["ee", "dcmm:1", "dcmm:2", "prbm", "beam:20"]
 
 def variants(n: int, reference: str, batch: int | None, cases: list[str]) -> dict:
     """Sweep data of ``n`` random open-chain variants (zipped axes, seeds fixed)."""
-    return {"name": f"bench_{n}", "base": "open_chain", "models": MODELS,
-            "reference": reference, "load_cases": cases, "combine": "zip",
-            **({"batch": batch} if batch else {}),
-            "axes": [{"path": "section.thickness", "sample": "uniform", "low": 0.08,
-                      "high": 0.12, "count": n, "seed": 1},
-                     {"path": "material.youngs_modulus", "sample": "lognormal",
-                      "median": 2100.0, "sigma": 0.05, "count": n, "seed": 2},
-                     {"path": "load_cases.f+.value", "sample": "uniform", "low": 2e-3,
-                      "high": 4e-3, "count": n, "seed": 3}]}
+    return {
+        "name": f"bench_{n}",
+        "base": "open_chain",
+        "models": MODELS,
+        "reference": reference,
+        "load_cases": cases,
+        "combine": "zip",
+        **({"batch": batch} if batch else {}),
+        "axes": [
+            {
+                "path": "section.thickness",
+                "sample": "uniform",
+                "low": 0.08,
+                "high": 0.12,
+                "count": n,
+                "seed": 1,
+            },
+            {
+                "path": "material.youngs_modulus",
+                "sample": "lognormal",
+                "median": 2100.0,
+                "sigma": 0.05,
+                "count": n,
+                "seed": 2,
+            },
+            {
+                "path": "load_cases.f+.value",
+                "sample": "uniform",
+                "low": 2e-3,
+                "high": 4e-3,
+                "count": n,
+                "seed": 3,
+            },
+        ],
+    }
 
 
 def plain_loop(sweep) -> tuple[float, int, float]:
@@ -72,8 +98,9 @@ def plain_loop(sweep) -> tuple[float, int, float]:
     inside = 0.0
     t0 = time.perf_counter()
     t = time.perf_counter()
-    ref = run_reference(list(sweep.valid_points), sweep.reference, sweep.load_cases, info,
-                        use_cache=False)
+    ref = run_reference(
+        list(sweep.valid_points), sweep.reference, sweep.load_cases, info, use_cache=False
+    )
     inside += time.perf_counter() - t
     rows = list(ref["rows"])
     for spec in sweep.models:
@@ -91,8 +118,12 @@ def _batch(sweep, workers: int) -> int:
 
 def _in_tasks(stream: list[dict]) -> float:
     """Seconds the workers spent computing tasks (Dask's task stream, 'compute' intervals)."""
-    return sum(s["stop"] - s["start"] for task in stream for s in task["startstops"]
-               if s["action"] == "compute")
+    return sum(
+        s["stop"] - s["start"]
+        for task in stream
+        for s in task["startstops"]
+        if s["action"] == "compute"
+    )
 
 
 def on_dask(sweep, workers: int) -> tuple[float, int, int, float, float]:
@@ -114,54 +145,82 @@ def on_dask(sweep, workers: int) -> tuple[float, int, int, float, float]:
 
 
 def _line(label: str, wall: float, rows: int, busy: float, note: str = "") -> None:
-    print(f"  {label:<11}: {wall:8.2f} s {rows / wall:8.1f} runs/s  busy {100 * busy:5.1f} %"
-          f"{note}  (load average {os.getloadavg()[0]:.1f})", flush=True)
+    print(
+        f"  {label:<11}: {wall:8.2f} s {rows / wall:8.1f} runs/s  busy {100 * busy:5.1f} %"
+        f"{note}  (load average {os.getloadavg()[0]:.1f})",
+        flush=True,
+    )
 
 
 def report(label: str, sweep, loop: bool) -> None:
     """Time the sweep the three ways (two without the loop) and print the ratios."""
-    print(f"\n{label}: {len(sweep.valid_points)} points x ({len(sweep.models)} models + "
-          f"{sweep.reference.id}) x {len(sweep.load_cases)} case(s); points per task "
-          f"{_batch(sweep, 1)} (1 worker), {_batch(sweep, 2)} (2 workers); "
-          f"load average before {os.getloadavg()[0]:.1f}", flush=True)
+    print(
+        f"\n{label}: {len(sweep.valid_points)} points x ({len(sweep.models)} models + "
+        f"{sweep.reference.id}) x {len(sweep.load_cases)} case(s); points per task "
+        f"{_batch(sweep, 1)} (1 worker), {_batch(sweep, 2)} (2 workers); "
+        f"load average before {os.getloadavg()[0]:.1f}",
+        flush=True,
+    )
     if loop:
         t_loop, rows, inside = plain_loop(sweep)
         _line("plain loop", t_loop, rows, inside / t_loop)
     t1, rows1, tasks, in1, cpu1 = on_dask(sweep, 1)
-    _line("dask 1 wkr", t1, rows1, in1 / t1,
-          f"  ({tasks} tasks; driver CPU {100 * cpu1 / in1:.1f} % of the work)")
+    _line(
+        "dask 1 wkr",
+        t1,
+        rows1,
+        in1 / t1,
+        f"  ({tasks} tasks; driver CPU {100 * cpu1 / in1:.1f} % of the work)",
+    )
     t2, rows2, _, in2, cpu2 = on_dask(sweep, 2)
-    _line("dask 2 wkr", t2, rows2, in2 / (2 * t2),
-          f"  (driver CPU {100 * cpu2 / in2:.1f} % of the work)")
+    _line(
+        "dask 2 wkr",
+        t2,
+        rows2,
+        in2 / (2 * t2),
+        f"  (driver CPU {100 * cpu2 / in2:.1f} % of the work)",
+    )
     if loop:
-        print(f"  Dask overhead vs loop, 1 worker: {100 * (t1 / t_loop - 1):+.1f} % wall "
-              f"(measured under the load above); {1e3 * (t1 - in1) / tasks:.1f} ms per task "
-              f"outside the tasks = {100 * (t1 - in1) / in1:.1f} % of the work "
-              "(load-independent)")
-    print(f"  scaling efficiency 1 -> 2 workers: {100 * t1 / (2 * t2):.0f} % wall "
-          f"(measured under the load above); busy fraction {100 * in2 / (2 * t2):.1f} % "
-          f"with 2 workers vs {100 * in1 / t1:.1f} % with 1 (load-independent)", flush=True)
+        print(
+            f"  Dask overhead vs loop, 1 worker: {100 * (t1 / t_loop - 1):+.1f} % wall "
+            f"(measured under the load above); {1e3 * (t1 - in1) / tasks:.1f} ms per task "
+            f"outside the tasks = {100 * (t1 - in1) / in1:.1f} % of the work "
+            "(load-independent)"
+        )
+    print(
+        f"  scaling efficiency 1 -> 2 workers: {100 * t1 / (2 * t2):.0f} % wall "
+        f"(measured under the load above); busy fraction {100 * in2 / (2 * t2):.1f} % "
+        f"with 2 workers vs {100 * in1 / t1:.1f} % with 1 (load-independent)",
+        flush=True,
+    )
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=1000, help="variants (default 1000)")
-    ap.add_argument("--continuum-n", type=int, default=10,
-                    help="variants with the continuum:0 reference (default 10; 0: skip)")
-    ap.add_argument("--batch", type=int, default=None,
-                    help="points per reduced-model task (default: automatic)")
+    ap.add_argument(
+        "--continuum-n",
+        type=int,
+        default=10,
+        help="variants with the continuum:0 reference (default 10; 0: skip)",
+    )
+    ap.add_argument(
+        "--batch", type=int, default=None, help="points per reduced-model task (default: automatic)"
+    )
     ap.add_argument("--cases", default="f+", help="load cases, comma-separated (default f+)")
     ap.add_argument("--no-loop", action="store_true", help="skip the plain loop")
     args = ap.parse_args()
     cases = args.cases.split(",")
     t0 = time.perf_counter()
     sweep = parse_sweep(variants(args.n, "beam:100", args.batch, cases), "<bench>")
-    print(f"{args.n} points generated and checked in {time.perf_counter() - t0:.1f} s; "
-          f"{os.cpu_count()} cores", flush=True)
+    print(
+        f"{args.n} points generated and checked in {time.perf_counter() - t0:.1f} s; "
+        f"{os.cpu_count()} cores",
+        flush=True,
+    )
     report("reduced models vs beam:100", sweep, loop=not args.no_loop)
     if args.continuum_n:
-        sub = parse_sweep(variants(args.continuum_n, "continuum:0", args.batch, cases),
-                          "<bench>")
+        sub = parse_sweep(variants(args.continuum_n, "continuum:0", args.batch, cases), "<bench>")
         report("reduced models vs continuum:0", sub, loop=False)
     print(f"\nbenchmark total {time.perf_counter() - t0:.0f} s")
 

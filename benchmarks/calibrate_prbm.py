@@ -118,12 +118,16 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+import flexval.reducedmodels
 from flexval.geometry import Arc, Segment
 from flexval.geometry.files import write_bytes
-
-import flexval.reducedmodels
-from flexval.reducedmodels.prbm import (TABLE_RESOURCE, PrbmParameters, joint_positions, shape_frame,
-                                table_parameters)
+from flexval.reducedmodels.prbm import (
+    TABLE_RESOURCE,
+    PrbmParameters,
+    joint_positions,
+    shape_frame,
+    table_parameters,
+)
 
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])
 
@@ -211,9 +215,14 @@ def _shoot(width: float, loads: np.ndarray, end_angle: np.ndarray, n_steps: int)
     return z
 
 
-def elastica(width: float, loads: np.ndarray, guess: np.ndarray | None = None,
-             n_steps: int = 200, tol: float = 1e-12, max_iterations: int = 50
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def elastica(
+    width: float,
+    loads: np.ndarray,
+    guess: np.ndarray | None = None,
+    n_steps: int = 200,
+    tol: float = 1e-12,
+    max_iterations: int = 50,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """End deflection of the clamped curved elastica under dead end loads.
 
     Parameters
@@ -255,8 +264,9 @@ def elastica(width: float, loads: np.ndarray, guess: np.ndarray | None = None,
     return pose, th, z[3]
 
 
-def reference_paths(width: float, settings: FitSettings
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def reference_paths(
+    width: float, settings: FitSettings
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Ramp every unit load until a stop criterion, then sample the elastica along it.
 
     Returns
@@ -279,10 +289,14 @@ def reference_paths(width: float, settings: FitSettings
     while active.any():
         idx = np.flatnonzero(active)
         trial = lam[idx] + dlam[idx]
-        pose, th_new, stab = elastica(width, units[idx] * trial[:, None], th[idx],
-                                      settings.n_steps)
-        crit = np.maximum.reduce([np.abs(pose[:, 2]) / max_rot, trial / settings.max_load,
-                                  settings.min_stability / np.maximum(stab, 1e-12)])
+        pose, th_new, stab = elastica(width, units[idx] * trial[:, None], th[idx], settings.n_steps)
+        crit = np.maximum.reduce(
+            [
+                np.abs(pose[:, 2]) / max_rot,
+                trial / settings.max_load,
+                settings.min_stability / np.maximum(stab, 1e-12),
+            ]
+        )
         over = crit > 1.0 + 1e-3
         # overshoot: retry with a shorter step, or stop if the step is already tiny
         dlam[idx[over]] *= 0.3
@@ -296,7 +310,7 @@ def reference_paths(width: float, settings: FitSettings
             hist_lam[i].append(lam[i])
             hist_th[i].append(th[i])
     fractions = np.arange(1, settings.levels + 1) / settings.levels
-    levels = lam[:, None] * fractions[None]                       # (paths, levels)
+    levels = lam[:, None] * fractions[None]  # (paths, levels)
     guess = np.array([np.interp(levels[i], hist_lam[i], hist_th[i]) for i in range(n)])
     loads = units[:, None, :] * levels[..., None]
     pose, _, _ = elastica(width, loads.reshape(-1, 3), guess.ravel(), settings.n_steps)
@@ -310,9 +324,15 @@ def _rotate(phi: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1]], axis=-1)
 
 
-def prbm_cantilever(joints: np.ndarray, end: np.ndarray, stiffness: np.ndarray,
-                    loads: np.ndarray, substeps: int = 4, tol: float = 1e-12,
-                    max_iterations: int = 40) -> tuple[np.ndarray, np.ndarray]:
+def prbm_cantilever(
+    joints: np.ndarray,
+    end: np.ndarray,
+    stiffness: np.ndarray,
+    loads: np.ndarray,
+    substeps: int = 4,
+    tol: float = 1e-12,
+    max_iterations: int = 40,
+) -> tuple[np.ndarray, np.ndarray]:
     """End deflection of a 3R chain clamped before joint 1, by Newton continuation.
 
     Parameters
@@ -369,8 +389,9 @@ def prbm_cantilever(joints: np.ndarray, end: np.ndarray, stiffness: np.ndarray,
     return pose, ok
 
 
-def chain_cantilever(width: float, params: PrbmParameters, loads: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray]:
+def chain_cantilever(
+    width: float, params: PrbmParameters, loads: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """:func:`prbm_cantilever` for the symmetric chain ``params`` of the unit arc ``width``."""
     shape = cantilever_shape(width)
     stiffness = np.array([params.kappa1, params.kappa2, params.kappa1])
@@ -401,15 +422,24 @@ def fit_width(width_deg: float, settings: FitSettings) -> dict:
     lo, hi, n = settings.rho_scan
     grid = np.linspace(lo, hi, n)
     k = int(np.argmin([rms(r) for r in grid]))
-    res = minimize_scalar(rms, bounds=(grid[max(k - 1, 0)], grid[min(k + 1, n - 1)]),
-                          method="bounded", options={"xatol": 1e-6})
+    res = minimize_scalar(
+        rms,
+        bounds=(grid[max(k - 1, 0)], grid[min(k + 1, n - 1)]),
+        method="bounded",
+        options={"xatol": 1e-6},
+    )
     rho = round(float(res.x), 6)
     p = PrbmParameters.from_rho(width, rho)
     pose, ok = chain_cantilever(width, p, loads)
     err = np.linalg.norm(relative_errors(pose, ref, settings.floor), axis=-1)
     return {
-        "width_deg": float(width_deg), "rho": rho,
-        "x1": p.x1, "y1": p.y1, "y2": p.y2, "kappa1": p.kappa1, "kappa2": p.kappa2,
+        "width_deg": float(width_deg),
+        "rho": rho,
+        "x1": p.x1,
+        "y1": p.y1,
+        "y2": p.y2,
+        "kappa1": p.kappa1,
+        "kappa2": p.kappa2,
         "rms_rel_error": float(np.sqrt(np.mean(err**2))),
         "max_rel_error": float(err.max()),
         "max_position_error": float(np.linalg.norm(pose[..., :2] - ref[..., :2], axis=-1).max()),
@@ -426,12 +456,16 @@ def su2009_comparison(n_steps: int = 400) -> list[dict]:
     Returns one dict per load with the end position error / L and the end
     rotation error (rad) of each model.
     """
-    cases = [("F = 1 at 90 deg", [0.0, 1.0, 0.0]), ("F = 3 at 90 deg", [0.0, 3.0, 0.0]),
-             ("F = 5 at 90 deg", [0.0, 5.0, 0.0]),
-             ("F = 2 at 135 deg", [-np.sqrt(2.0), np.sqrt(2.0), 0.0]),
-             ("F = 3 at 45 deg", [1.5 * np.sqrt(2.0), 1.5 * np.sqrt(2.0), 0.0]),
-             ("F = 1.5 at 180 deg + M = 0.2", [-1.5, 0.0, 0.2]),
-             ("M = 1", [0.0, 0.0, 1.0]), ("M = 2", [0.0, 0.0, 2.0])]
+    cases = [
+        ("F = 1 at 90 deg", [0.0, 1.0, 0.0]),
+        ("F = 3 at 90 deg", [0.0, 3.0, 0.0]),
+        ("F = 5 at 90 deg", [0.0, 5.0, 0.0]),
+        ("F = 2 at 135 deg", [-np.sqrt(2.0), np.sqrt(2.0), 0.0]),
+        ("F = 3 at 45 deg", [1.5 * np.sqrt(2.0), 1.5 * np.sqrt(2.0), 0.0]),
+        ("F = 1.5 at 180 deg + M = 0.2", [-1.5, 0.0, 0.2]),
+        ("M = 1", [0.0, 0.0, 1.0]),
+        ("M = 2", [0.0, 0.0, 2.0]),
+    ]
     names = [c[0] for c in cases]
     # each case ramped through 20 levels so that both solvers follow the stable branch
     ramp = np.linspace(0.05, 1.0, 20)
@@ -440,8 +474,9 @@ def su2009_comparison(n_steps: int = 400) -> list[dict]:
     for lev in range(len(ramp)):
         ref, guess, _ = elastica(0.0, loads[:, lev], guess, n_steps)
     su_joints = np.array([[0.10, 0.0], [0.45, 0.0], [0.85, 0.0]])
-    su, ok_su = prbm_cantilever(su_joints, np.array([1.0, 0.0]), np.array([3.51, 2.99, 2.58]),
-                                loads)
+    su, ok_su = prbm_cantilever(
+        su_joints, np.array([1.0, 0.0]), np.array([3.51, 2.99, 2.58]), loads
+    )
     ours, ok_ours = chain_cantilever(0.0, table_parameters(0.0), loads)
     if not (ok_su.all() and ok_ours.all()):
         raise RuntimeError("su2009_comparison: a PRBM solve failed")
@@ -463,26 +498,29 @@ def build_table(settings: FitSettings, progress: bool = True) -> dict:
         rows.append(fit_width(w, settings))
         if progress:
             r = rows[-1]
-            print(f"{w:6.1f} deg  rho {r['rho']:.4f}  rms {100 * r['rms_rel_error']:.2f} %  "
-                  f"max {100 * r['max_rel_error']:.2f} %  "
-                  f"({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
+            print(
+                f"{w:6.1f} deg  rho {r['rho']:.4f}  rms {100 * r['rms_rel_error']:.2f} %  "
+                f"max {100 * r['max_rel_error']:.2f} %  "
+                f"({time.perf_counter() - t0:.0f} s)",
+                file=sys.stderr,
+            )
     return {
         "metadata": {
             "description": "Symmetric 3R PRBM of uniform arcs: rho(arc angle) with exact "
-                           "linear compliance (see flexval.reducedmodels.prbm).",
+            "linear compliance (see flexval.reducedmodels.prbm).",
             "parameter": "rho = 2 c1 / (L/EI), share of the rotational compliance in the two "
-                         "outer joints; x1, y1, y2 (units of L, ellipse frame {C, e1, e2}) "
-                         "and kappa1, kappa2 (units of EI/L) follow from rho and the angle.",
+            "outer joints; x1, y1, y2 (units of L, ellipse frame {C, e1, e2}) "
+            "and kappa1, kappa2 (units of EI/L) follow from rho and the angle.",
             "objective": "minimise the RMS over all samples of |e|, e = (pose_prbm - "
-                         "pose_ref) / max(|pose_ref|, floor), pose = (dx/L, dy/L, dtheta); "
-                         "rms_rel_error and max_rel_error of each row are of |e|",
+            "pose_ref) / max(|pose_ref|, floor), pose = (dx/L, dy/L, dtheta); "
+            "rms_rel_error and max_rel_error of each row are of |e|",
             "reference_model": "inextensible Kirchhoff elastica of the initially curved "
-                               "cantilever, shooting from the loaded end, RK4",
+            "cantilever, shooting from the loaded end, RK4",
             "load_set": "end forces in n_directions directions from the symmetry axis and "
-                        "end moments of both signs, each ramped until the end rotation "
-                        "reaches max_rotation_deg, the load reaches max_load, or the "
-                        "shooting stability d theta(0)/d theta(L) falls to min_stability; "
-                        "sampled at `levels` equal steps",
+            "end moments of both signs, each ramped until the end rotation "
+            "reaches max_rotation_deg, the load reaches max_load, or the "
+            "shooting stability d theta(0)/d theta(L) falls to min_stability; "
+            "sampled at `levels` equal steps",
             "settings": asdict(settings),
             "interpolation": "cubic spline (not-a-knot) of rho in the arc angle",
             "date": datetime.date.today().isoformat(),
@@ -495,26 +533,42 @@ def build_table(settings: FitSettings, progress: bool = True) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     """Command line: fit and write the table, or print the Su (2009) comparison."""
-    ap = argparse.ArgumentParser(prog="python benchmarks/calibrate_prbm.py", description=__doc__
-                                 .split("\n")[0])
-    ap.add_argument("--quick", action="store_true",
-                    help="coarse fit (every 30 deg, 8 directions, 5 levels) for a smoke test")
-    ap.add_argument("--output", type=Path, default=None,
-                    help="where to write the table (default: the shipped "
-                         f"reducedmodels/{TABLE_RESOURCE}, or prbm_table_quick.json with --quick)")
-    ap.add_argument("--su2009", action="store_true",
-                    help="print the straight-beam comparison with Su (2009) and exit")
+    ap = argparse.ArgumentParser(
+        prog="python benchmarks/calibrate_prbm.py", description=__doc__.split("\n")[0]
+    )
+    ap.add_argument(
+        "--quick",
+        action="store_true",
+        help="coarse fit (every 30 deg, 8 directions, 5 levels) for a smoke test",
+    )
+    ap.add_argument(
+        "--output",
+        type=Path,
+        default=None,
+        help="where to write the table (default: the shipped "
+        f"reducedmodels/{TABLE_RESOURCE}, or prbm_table_quick.json with --quick)",
+    )
+    ap.add_argument(
+        "--su2009",
+        action="store_true",
+        help="print the straight-beam comparison with Su (2009) and exit",
+    )
     args = ap.parse_args(argv)
     if args.su2009:
         print(f"{'load':32s} {'Su2009 dp':>10s} {'dth':>8s} {'fit dp':>10s} {'dth':>8s}")
         for r in su2009_comparison():
-            print(f"{r['load']:32s} {r['su2009_position_error']:10.4f} "
-                  f"{r['su2009_rotation_error']:8.4f} {r['this_fit_position_error']:10.4f} "
-                  f"{r['this_fit_rotation_error']:8.4f}")
+            print(
+                f"{r['load']:32s} {r['su2009_position_error']:10.4f} "
+                f"{r['su2009_rotation_error']:8.4f} {r['this_fit_position_error']:10.4f} "
+                f"{r['this_fit_rotation_error']:8.4f}"
+            )
         return 0
     settings = QUICK if args.quick else FitSettings()
-    out = args.output or (Path("prbm_table_quick.json") if args.quick
-                          else Path(flexval.reducedmodels.__file__).parent / TABLE_RESOURCE)
+    out = args.output or (
+        Path("prbm_table_quick.json")
+        if args.quick
+        else Path(flexval.reducedmodels.__file__).parent / TABLE_RESOURCE
+    )
     doc = build_table(settings)
     out.parent.mkdir(parents=True, exist_ok=True)
     write_bytes(out, (json.dumps(doc, indent=1, allow_nan=False) + "\n").encode("utf-8"))

@@ -39,8 +39,9 @@ def trace(scene, model: str, case: str, settings: SolverSettings):
 def spread(variant: tuple[float, float, float]) -> tuple[float, float, int]:
     """Largest absolute (points) and relative change of a gated figure, and their number."""
     rot, trans, tol = variant
-    settings = dataclasses.replace(SolverSettings(), max_rotation_step=rot,
-                                   max_translation_step=trans, error_tol=tol)
+    settings = dataclasses.replace(
+        SolverSettings(), max_rotation_step=rot, max_translation_step=trans, error_tol=tol
+    )
     base = json.loads(GATES.read_text())
     paths: dict = {}
     worst_abs = worst_rel = 0.0
@@ -55,8 +56,11 @@ def spread(variant: tuple[float, float, float]) -> tuple[float, float, int]:
                     for m in (model, ref):
                         if (scene_name, m, case) not in paths:
                             paths[scene_name, m, case] = trace(scene, m, case, settings)
-                    got = errors(paths[scene_name, model, case], paths[scene_name, ref, case],
-                                 scene.mechanism.size())
+                    got = errors(
+                        paths[scene_name, model, case],
+                        paths[scene_name, ref, case],
+                        scene.mechanism.size(),
+                    )
                     for metric in GATED:
                         change = abs(got[metric] - was[metric])
                         worst_abs = max(worst_abs, change)
@@ -68,8 +72,10 @@ def spread(variant: tuple[float, float, float]) -> tuple[float, float, int]:
 def main() -> None:
     for variant in VARIANTS:
         worst_abs, worst_rel, count = spread(variant)
-        print(f"sub-step bounds {variant[0]} rad / {variant[1]} of size, error_tol {variant[2]:g}: "
-              f"{count} figures, largest change {worst_abs:.2e} points ({worst_rel:.1e} relative)")
+        print(
+            f"sub-step bounds {variant[0]} rad / {variant[1]} of size, error_tol {variant[2]:g}: "
+            f"{count} figures, largest change {worst_abs:.2e} points ({worst_rel:.1e} relative)"
+        )
 
 
 if __name__ == "__main__":

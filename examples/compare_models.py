@@ -48,8 +48,7 @@ def main(scene_name: str = "open_chain", case_name: str = "f+") -> dict[str, flo
         path = run_model(scene, parse_model(model), case)
         d = end_displacement(path)
         errors[model] = float(np.linalg.norm(d - reference) / np.linalg.norm(reference))
-        print(f"{model:<9} {np.linalg.norm(d):9.4f} {100 * errors[model]:8.2f} "
-              f"{path.seconds:8.4f}")
+        print(f"{model:<9} {np.linalg.norm(d):9.4f} {100 * errors[model]:8.2f} {path.seconds:8.4f}")
     return errors
 
 

@@ -34,8 +34,15 @@ from __future__ import annotations
 import numpy as np
 
 from flexval.geometry import Flexure, Mechanism, load_scene
-from flexval.reducedmodels import Connector, Family, ModelSpec, SolverSettings, System, register
-from flexval.reducedmodels import parse_model
+from flexval.reducedmodels import (
+    Connector,
+    Family,
+    ModelSpec,
+    SolverSettings,
+    System,
+    parse_model,
+    register,
+)
 from flexval.reducedmodels.catalogue import unregister
 from flexval.reducedmodels.models import connector_system, trace_linear, trace_nonlinear
 from flexval.validation.run import run_model
@@ -60,9 +67,9 @@ class EllipseSpring(Connector):
         jac = []
         for sign, ref in zip((-1.0, 1.0), refs):
             arm = ell.center - ref
-            moves = np.array([[1.0, 0.0, -arm[1]], [0.0, 1.0, arm[0]]])   # dC/d(x, y, theta)
+            moves = np.array([[1.0, 0.0, -arm[1]], [0.0, 1.0, arm[0]]])  # dC/d(x, y, theta)
             jac.append(sign * np.vstack([ell.axes.T @ moves, [0.0, 0.0, 1.0]]))
-        self.jacobian = np.hstack(jac)                                     # (3, 6)
+        self.jacobian = np.hstack(jac)  # (3, 6)
         self.rest = np.concatenate([[*refs[0], 0.0], [*refs[1], 0.0]])
         stiffness = np.diag(1.0 / np.diag(ell.compliance()))
         self.hessian = self.jacobian.T @ stiffness @ self.jacobian
@@ -77,14 +84,18 @@ class EllipseSpring(Connector):
         return np.array([pose_a[:2], pose_b[:2]])
 
 
-def _system(mechanism: Mechanism, spec: ModelSpec, settings: SolverSettings | None = None,
-            **options) -> System:
-    return connector_system(mechanism, spec, lambda f, m, s: EllipseSpring(f, m), settings,
-                            options)
+def _system(
+    mechanism: Mechanism, spec: ModelSpec, settings: SolverSettings | None = None, **options
+) -> System:
+    return connector_system(mechanism, spec, lambda f, m, s: EllipseSpring(f, m), settings, options)
 
 
-ELLIPSE_SPRING = Family("ellipse-spring", "linear spring at each flexure's centre of elasticity",
-                        trace_nonlinear, system=_system)
+ELLIPSE_SPRING = Family(
+    "ellipse-spring",
+    "linear spring at each flexure's centre of elasticity",
+    trace_nonlinear,
+    system=_system,
+)
 
 
 def main() -> dict[str, float]:
@@ -98,8 +109,9 @@ def main() -> dict[str, float]:
     try:
         scene = load_scene("open_chain")
         case = scene.load_case("m+")
-        paths = {m: run_model(scene, parse_model(m), case)
-                 for m in ("ellipse-spring", "ee", "beam:100")}
+        paths = {
+            m: run_model(scene, parse_model(m), case) for m in ("ellipse-spring", "ee", "beam:100")
+        }
         force = scene.load_case("f+")
         linear = trace_linear(scene.mechanism, parse_model("ellipse-spring"), force)
         ee_force = run_model(scene, parse_model("ee"), force)
@@ -110,15 +122,20 @@ def main() -> dict[str, float]:
         return paths[m].rotation[-1]
 
     spring = rotation("ellipse-spring")
-    out = {"rotation vs ee": abs(spring - rotation("ee")) / abs(rotation("ee")),
-           "rotation vs beam:100": abs(spring - rotation("beam:100")) / abs(rotation("beam:100")),
-           "linear f+ vs ee": float(np.hypot(linear.dx[-1] - ee_force.dx[-1],
-                                             linear.dy[-1] - ee_force.dy[-1])
-                                    / np.hypot(ee_force.dx[-1], ee_force.dy[-1]))}
+    out = {
+        "rotation vs ee": abs(spring - rotation("ee")) / abs(rotation("ee")),
+        "rotation vs beam:100": abs(spring - rotation("beam:100")) / abs(rotation("beam:100")),
+        "linear f+ vs ee": float(
+            np.hypot(linear.dx[-1] - ee_force.dx[-1], linear.dy[-1] - ee_force.dy[-1])
+            / np.hypot(ee_force.dx[-1], ee_force.dy[-1])
+        ),
+    }
     for model in ("ellipse-spring", "ee", "beam:100"):
         p = paths[model]
-        print(f"{model:<15} dx {p.dx[-1]:9.4f} mm  dy {p.dy[-1]:9.4f} mm  "
-              f"rot {p.rotation[-1]:8.5f} rad")
+        print(
+            f"{model:<15} dx {p.dx[-1]:9.4f} mm  dy {p.dy[-1]:9.4f} mm  "
+            f"rot {p.rotation[-1]:8.5f} rad"
+        )
     for k, v in out.items():
         print(f"ellipse-spring {k}: {v:.2e} (relative)")
     return out

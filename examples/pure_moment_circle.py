@@ -29,18 +29,20 @@ from flexval.geometry import LoadCase, Material, Moment, Section, Segment
 from flexval.geometry.mechanism import FlexureSpec, assemble
 from flexval.reducedmodels import LoadControl, build_system, parse_model, trace
 
-LENGTH = 20.0                  # mm
-SECTION = Section(1.0, 0.2)    # depth b, thickness h (mm)
+LENGTH = 20.0  # mm
+SECTION = Section(1.0, 0.2)  # depth b, thickness h (mm)
 MATERIAL = Material(2100.0, 0.35)
-TURN = np.pi / 2               # tip rotation asked for at full load, rad
+TURN = np.pi / 2  # tip rotation asked for at full load, rad
 
 
 def cantilever():
     """A straight flexure along x from the ground (at the origin) to the body 'tip'."""
-    spec = FlexureSpec("f", Segment((0.0, 0.0), (LENGTH, 0.0)), ("ground", "tip"), SECTION,
-                       start_body="ground")
-    return assemble([spec], "ground", np.array([[0.0, 0.0]]), MATERIAL, "tip",
-                    np.array([LENGTH, 0.0]))
+    spec = FlexureSpec(
+        "f", Segment((0.0, 0.0), (LENGTH, 0.0)), ("ground", "tip"), SECTION, start_body="ground"
+    )
+    return assemble(
+        [spec], "ground", np.array([[0.0, 0.0]]), MATERIAL, "tip", np.array([LENGTH, 0.0])
+    )
 
 
 def tip_path(model: str, levels: int = 5) -> list[tuple[float, np.ndarray]]:
@@ -51,8 +53,10 @@ def tip_path(model: str, levels: int = 5) -> list[tuple[float, np.ndarray]]:
     case = LoadCase("M", (Moment("tip", moment),), levels)
     system = build_system(mech, parse_model(model))
     loads = system.loads(case)
-    return [(point.factor * moment, system.pose(point.state, "tip").copy())
-            for point in trace(system, loads, LoadControl(case.factors()))]
+    return [
+        (point.factor * moment, system.pose(point.state, "tip").copy())
+        for point in trace(system, loads, LoadControl(case.factors()))
+    ]
 
 
 def closed_form(moment: float) -> np.ndarray:
@@ -67,8 +71,9 @@ def closed_form(moment: float) -> np.ndarray:
 
 def tip_error(model: str) -> float:
     """Largest tip position error along the path, relative to the length (dimensionless)."""
-    return max(float(np.hypot(*(pose - closed_form(m))[:2])) / LENGTH
-               for m, pose in tip_path(model))
+    return max(
+        float(np.hypot(*(pose - closed_form(m))[:2])) / LENGTH for m, pose in tip_path(model)
+    )
 
 
 def main() -> dict[int, float]:

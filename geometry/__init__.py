@@ -4,15 +4,32 @@ Units everywhere: mm, N, MPa, N mm, rad (degrees only in scene files).
 """
 
 from .errors import SceneError
-from .kinematics import rotation
 from .inertia import MassData, RigidMass
+from .kinematics import rotation
 from .loads import Force, LoadCase, Moment
 from .mechanism import Body, Flexure, FlexureSpec, Material, Mechanism, PinSpec, Section
 from .scene import BUILTIN_SCENES, Scene, load_scene
 from .shapes import Arc, Ellipse, Segment
 
 __all__ = [
-    "Arc", "Body", "BUILTIN_SCENES", "Ellipse", "Flexure", "FlexureSpec", "Force", "LoadCase",
-    "MassData", "Material", "Mechanism", "Moment", "PinSpec", "RigidMass", "Scene", "SceneError",
-    "Section", "Segment", "load_scene", "rotation",
+    "Arc",
+    "Body",
+    "BUILTIN_SCENES",
+    "Ellipse",
+    "Flexure",
+    "FlexureSpec",
+    "Force",
+    "LoadCase",
+    "MassData",
+    "Material",
+    "Mechanism",
+    "Moment",
+    "PinSpec",
+    "RigidMass",
+    "Scene",
+    "SceneError",
+    "Section",
+    "Segment",
+    "load_scene",
+    "rotation",
 ]

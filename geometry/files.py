@@ -17,9 +17,9 @@ from __future__ import annotations
 import os
 import tempfile
 import warnings
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterator
 
 CACHE_ENV = "FLEXVAL_CACHE"
 """Environment variable that moves the cache root (default ``~/.cache/flexval``)."""
@@ -81,8 +81,9 @@ def atomic_path(target: str | Path) -> Iterator[Path]:
     """
     target = Path(target)
     try:
-        fd, name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.",
-                                    suffix=f".tmp{target.suffix}")
+        fd, name = tempfile.mkstemp(
+            dir=target.parent, prefix=f".{target.name}.", suffix=f".tmp{target.suffix}"
+        )
         os.close(fd)
     except OSError as exc:
         raise OutputError(target, exc.strerror or str(exc)) from exc
@@ -132,9 +133,16 @@ def cache_dir() -> Path | None:
         if not os.access(root, os.W_OK | os.X_OK):
             raise PermissionError("not writable")
     except OSError as exc:
-        reason = "it is not a folder" if root.exists() and not root.is_dir() else \
-            (exc.strerror or str(exc))
-        warnings.warn(f"cache folder {root} ({CACHE_ENV}) cannot be used: {reason}; "
-                      "computing without a cache", CacheWarning, stacklevel=2)
+        reason = (
+            "it is not a folder"
+            if root.exists() and not root.is_dir()
+            else (exc.strerror or str(exc))
+        )
+        warnings.warn(
+            f"cache folder {root} ({CACHE_ENV}) cannot be used: {reason}; "
+            "computing without a cache",
+            CacheWarning,
+            stacklevel=2,
+        )
         return None
     return root

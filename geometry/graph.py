@@ -8,7 +8,8 @@ along flexures), and how many independent closed loops the mechanism has
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Iterable
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from .mechanism import Mechanism
@@ -29,7 +30,7 @@ def connected_roots(vertices: Iterable[str], edges: Iterable[tuple[str, str]]) -
     return {v: root(v) for v in parent}
 
 
-def independent_loops(mechanism: "Mechanism") -> int:
+def independent_loops(mechanism: Mechanism) -> int:
     """Number of independent closed loops of the body graph (its cycle rank).
 
     Bodies (the ground included) are vertices, flexures and pins edges:

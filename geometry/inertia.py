@@ -23,8 +23,9 @@ dynamic runs and modal analyses refuse it by name.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -86,13 +87,15 @@ class MassData:
         """The moving bodies without mass data, in order."""
         return [b for b in moving_bodies if b not in self.bodies]
 
-    def transformed(self, angle: float, shift: np.ndarray) -> "MassData":
+    def transformed(self, angle: float, shift: np.ndarray) -> MassData:
         """The same data for the mechanism rotated by ``angle`` (rad) about the origin and
         shifted by ``shift`` (mm): centres of mass move with it, gravity turns with it."""
         c, s = math.cos(angle), math.sin(angle)
         rot = np.array([[c, -s], [s, c]])
-        bodies = {n: RigidMass(b.mass, b.inertia, rot @ b.center_of_mass + shift)
-                  for n, b in self.bodies.items()}
+        bodies = {
+            n: RigidMass(b.mass, b.inertia, rot @ b.center_of_mass + shift)
+            for n, b in self.bodies.items()
+        }
         gravity = None if self.gravity is None else rot @ self.gravity
         return MassData(self.density, gravity, bodies)
 
@@ -126,17 +129,26 @@ def _positive(fail: Fail, field_name: str, value: Any, allow_zero: bool = False)
     if value < 0.0 or (value == 0.0 and not allow_zero):
         fail(field_name, value, "must be positive" if not allow_zero else "must not be negative")
     if value != 0.0 and value < SMALLEST_NORMAL:
-        fail(field_name, value, f"is below the smallest normal double ({SMALLEST_NORMAL:g}): "
-             "masses and frequencies computed from it lose all precision or vanish")
+        fail(
+            field_name,
+            value,
+            f"is below the smallest normal double ({SMALLEST_NORMAL:g}): "
+            "masses and frequencies computed from it lose all precision or vanish",
+        )
     if value > 1e12:
         fail(field_name, value, "absurd magnitude (> 1e12)")
     return float(value)
 
 
 def _point(fail: Fail, field_name: str, value: Any) -> np.ndarray:
-    if not (isinstance(value, list) and len(value) == 2
-            and all(not isinstance(c, bool) and isinstance(c, (int, float)) and math.isfinite(c)
-                    for c in value)):
+    if not (
+        isinstance(value, list)
+        and len(value) == 2
+        and all(
+            not isinstance(c, bool) and isinstance(c, (int, float)) and math.isfinite(c)
+            for c in value
+        )
+    ):
         fail(field_name, value, "must be a point [x, y] in mm")
     return np.array(value, float)
 
@@ -148,8 +160,11 @@ def parse_density(material: dict, fail: Fail) -> float | None:
         return None
     value = _positive(fail, "material.density", material["density"])
     if value > 1e-3:
-        fail("material.density", value, "t/mm^3 expected (PLA is about 1.24e-9); "
-             "is this in kg/m^3 or g/cm^3?")
+        fail(
+            "material.density",
+            value,
+            "t/mm^3 expected (PLA is about 1.24e-9); is this in kg/m^3 or g/cm^3?",
+        )
     return value
 
 
@@ -162,7 +177,11 @@ def parse_gravity(data: dict, fail: Fail) -> np.ndarray | None:
         fail("gravity", table, "must be a table with acceleration = [gx, gy] in mm/s^2")
     for key in table:
         if key not in GRAVITY_KEYS:
-            fail(f"gravity.{key}", table[key], f"unknown field; expected one of {sorted(GRAVITY_KEYS)}")
+            fail(
+                f"gravity.{key}",
+                table[key],
+                f"unknown field; expected one of {sorted(GRAVITY_KEYS)}",
+            )
     if "acceleration" not in table:
         fail("gravity.acceleration", None, "missing value [gx, gy] in mm/s^2")
     g = _point(fail, "gravity.acceleration", table["acceleration"])
@@ -171,8 +190,9 @@ def parse_gravity(data: dict, fail: Fail) -> np.ndarray | None:
     return g
 
 
-def parse_body_mass(body: dict, where: str, density: float | None, default_depth: float,
-                    fail: Fail) -> RigidMass | None:
+def parse_body_mass(
+    body: dict, where: str, density: float | None, default_depth: float, fail: Fail
+) -> RigidMass | None:
     """The mass of one ``[[bodies]]`` table, or None if it gives none.
 
     Either ``mass``, ``inertia`` and ``center_of_mass`` together, or an
@@ -183,17 +203,24 @@ def parse_body_mass(body: dict, where: str, density: float | None, default_depth
     explicit = [k for k in ("mass", "inertia", "center_of_mass") if k in body]
     if "outline" in body:
         if explicit:
-            fail(f"{where}{explicit[0]}", body[explicit[0]],
-                 "give either outline (+ depth) or mass, inertia and center_of_mass, not both")
+            fail(
+                f"{where}{explicit[0]}",
+                body[explicit[0]],
+                "give either outline (+ depth) or mass, inertia and center_of_mass, not both",
+            )
         if density is None:
-            fail(f"{where}outline", body["outline"],
-                 "an outline needs material.density (t/mm^3) to give a mass")
+            fail(
+                f"{where}outline",
+                body["outline"],
+                "an outline needs material.density (t/mm^3) to give a mass",
+            )
         raw = body["outline"]
         if not (isinstance(raw, list) and len(raw) >= 3):
             fail(f"{where}outline", raw, "must be a polygon of at least 3 points [x, y] in mm")
         outline = np.array([_point(fail, f"{where}outline[{i}]", p) for i, p in enumerate(raw)])
-        depth = (_positive(fail, f"{where}depth", body["depth"]) if "depth" in body
-                 else default_depth)
+        depth = (
+            _positive(fail, f"{where}depth", body["depth"]) if "depth" in body else default_depth
+        )
         try:
             area, centroid, polar = polygon_properties(outline)
         except ValueError as exc:
@@ -205,8 +232,13 @@ def parse_body_mass(body: dict, where: str, density: float | None, default_depth
         return None
     if len(explicit) < 3:
         missing = [k for k in ("mass", "inertia", "center_of_mass") if k not in body]
-        fail(f"{where}{missing[0]}", None,
-             "mass, inertia (about the centre of mass) and center_of_mass go together")
-    return RigidMass(_positive(fail, f"{where}mass", body["mass"]),
-                     _positive(fail, f"{where}inertia", body["inertia"], allow_zero=True),
-                     _point(fail, f"{where}center_of_mass", body["center_of_mass"]))
+        fail(
+            f"{where}{missing[0]}",
+            None,
+            "mass, inertia (about the centre of mass) and center_of_mass go together",
+        )
+    return RigidMass(
+        _positive(fail, f"{where}mass", body["mass"]),
+        _positive(fail, f"{where}inertia", body["inertia"], allow_zero=True),
+        _point(fail, f"{where}center_of_mass", body["center_of_mass"]),
+    )

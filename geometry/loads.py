@@ -30,7 +30,7 @@ class Moment:
     body: str
     value: float
 
-    def transformed(self, angle: float, shift: np.ndarray) -> "Moment":
+    def transformed(self, angle: float, shift: np.ndarray) -> Moment:
         """The same moment for a rigidly moved mechanism (unchanged)."""
         return self
 
@@ -53,7 +53,7 @@ class Force:
         """Force vector (N) at full load."""
         return self.value * np.array([np.cos(self.angle), np.sin(self.angle)])
 
-    def transformed(self, angle: float, shift: np.ndarray) -> "Force":
+    def transformed(self, angle: float, shift: np.ndarray) -> Force:
         """The same force for a mechanism rotated by ``angle`` (rad) and shifted (mm)."""
         p = rotation(angle) @ np.asarray(self.point, float) + shift
         return Force(self.body, p, self.angle + angle, self.value)
@@ -94,7 +94,11 @@ class LoadCase:
         """Unit of ``magnitude``: 'N' for a force, 'N mm' for a moment."""
         return "N" if isinstance(self.components[0], Force) else "N mm"
 
-    def transformed(self, angle: float, shift: np.ndarray) -> "LoadCase":
+    def transformed(self, angle: float, shift: np.ndarray) -> LoadCase:
         """The load case for a rigidly moved mechanism."""
-        return LoadCase(self.name, tuple(c.transformed(angle, shift) for c in self.components),
-                        self.levels, self.time_law)
+        return LoadCase(
+            self.name,
+            tuple(c.transformed(angle, shift) for c in self.components),
+            self.levels,
+            self.time_law,
+        )

@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import dataclasses
 from collections import deque
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Sequence
 
 import numpy as np
 
@@ -196,22 +196,28 @@ class Mechanism:
 
     @cached_property
     def _size(self) -> float:
-        pts = np.vstack([f.shape.end_points for f in self.flexures]
-                        + [np.asarray(p.point, float)[None] for p in self.pins]
-                        + [self.target_point[None]])
+        pts = np.vstack(
+            [f.shape.end_points for f in self.flexures]
+            + [np.asarray(p.point, float)[None] for p in self.pins]
+            + [self.target_point[None]]
+        )
         # numpy, not scipy.spatial.distance.pdist: importing scipy.spatial costs a
         # command's start-up 0.1-0.2 s, and a mechanism has a few dozen points
         return float(np.linalg.norm(pts[:, None] - pts[None], axis=-1).max())
 
-    def transformed(self, angle: float, shift: np.ndarray) -> "Mechanism":
+    def transformed(self, angle: float, shift: np.ndarray) -> Mechanism:
         """The same mechanism rotated by ``angle`` (rad) about the origin, then shifted (mm)."""
         from .transform import transform_mechanism, transform_point
 
         shift = np.asarray(shift, dtype=float)
-        pins = tuple(dataclasses.replace(p, point=transform_point(p.point, angle, shift))
-                     for p in self.pins)
-        return dataclasses.replace(transform_mechanism(self, angle, shift), pins=pins,
-                                   inertia=self.inertia.transformed(angle, shift))
+        pins = tuple(
+            dataclasses.replace(p, point=transform_point(p.point, angle, shift)) for p in self.pins
+        )
+        return dataclasses.replace(
+            transform_mechanism(self, angle, shift),
+            pins=pins,
+            inertia=self.inertia.transformed(angle, shift),
+        )
 
 
 @dataclass(frozen=True)
@@ -303,29 +309,32 @@ def assemble(
     all_ends = np.vstack([spec.shape.end_points for spec in specs])
     scale = float(np.hypot(*(all_ends.max(axis=0) - all_ends.min(axis=0)))) or 1.0
     tol = tolerance if tolerance is not None else 1e-3 * scale
-    body_points = {name: np.asarray(pts, float).reshape(-1, 2)
-                   for name, pts in (body_points or {}).items()}
+    body_points = {
+        name: np.asarray(pts, float).reshape(-1, 2) for name, pts in (body_points or {}).items()
+    }
     ground_points = np.asarray(ground_points, float).reshape(-1, 2)
 
     body_names = _check_names_and_graph(specs, pins, ground, target_body, body_points, source)
     known = _known_points(ground, ground_points, body_points, pins)
     start_body = _attach_ends(specs, pins, ground, known, tol, source)
-    flexures = tuple(Flexure(s.name, s.shape, tuple(s.bodies), start_body[s.name], s.section)
-                     for s in specs)
-    pins_built = tuple(Pin(p.name, tuple(p.bodies), np.asarray(p.point, dtype=float))
-                       for p in pins)
+    flexures = tuple(
+        Flexure(s.name, s.shape, tuple(s.bodies), start_body[s.name], s.section) for s in specs
+    )
+    pins_built = tuple(Pin(p.name, tuple(p.bodies), np.asarray(p.point, dtype=float)) for p in pins)
     _check_points_used(flexures, pins_built, ground, ground_points, body_points, tol, source)
     check_overlaps(flexures, source, tol)
     points: dict[str, list[np.ndarray]] = {name: [] for name in body_names}
-    for f in flexures:                      # flexure ends first, then pin points
+    for f in flexures:  # flexure ends first, then pin points
         start, end = f.shape.end_points
         points[f.start_body].append(start)
         points[f.end_body].append(end)
     for pin in pins_built:
         for name in pin.bodies:
             points[name].append(pin.point)
-    bodies = {name: Body(name, np.array(points[name], dtype=float), is_ground=(name == ground))
-              for name in body_names}
+    bodies = {
+        name: Body(name, np.array(points[name], dtype=float), is_ground=(name == ground))
+        for name in body_names
+    }
     mechanism = Mechanism(
         bodies=bodies,
         flexures=flexures,
@@ -341,9 +350,14 @@ def assemble(
     return mechanism
 
 
-def _check_names_and_graph(specs: tuple[FlexureSpec, ...], pins: tuple[PinSpec, ...],
-                           ground: str, target_body: str, body_points: dict[str, np.ndarray],
-                           source: str) -> list[str]:
+def _check_names_and_graph(
+    specs: tuple[FlexureSpec, ...],
+    pins: tuple[PinSpec, ...],
+    ground: str,
+    target_body: str,
+    body_points: dict[str, np.ndarray],
+    source: str,
+) -> list[str]:
     """The body names (ground first, then in order of appearance), after checking the graph.
 
     Names must be unique (pins and flexures share one namespace), the ground
@@ -357,8 +371,12 @@ def _check_names_and_graph(specs: tuple[FlexureSpec, ...], pins: tuple[PinSpec, 
     seen = set(names)
     for pin in pins:
         if pin.name in seen:
-            raise SceneError(source, "pins.name", pin.name,
-                             "duplicate name (pins and flexures share one namespace)")
+            raise SceneError(
+                source,
+                "pins.name",
+                pin.name,
+                "duplicate name (pins and flexures share one namespace)",
+            )
         seen.add(pin.name)
     links = [*specs, *pins]
     body_names: list[str] = [ground]
@@ -381,22 +399,35 @@ def _check_names_and_graph(specs: tuple[FlexureSpec, ...], pins: tuple[PinSpec, 
                 queue.append(other)
     unreached = [b for b in body_names if b not in visited]
     if unreached:
-        raise SceneError(source, "flexures", unreached[0],
-                         f"body {unreached[0]!r} is not connected to the ground")
+        raise SceneError(
+            source,
+            "flexures",
+            unreached[0],
+            f"body {unreached[0]!r} is not connected to the ground",
+        )
     if target_body not in neighbours:
-        raise SceneError(source, "target.body", target_body,
-                         f"unknown body; bodies are {body_names}")
+        raise SceneError(
+            source, "target.body", target_body, f"unknown body; bodies are {body_names}"
+        )
     if target_body == ground:
         raise SceneError(source, "target.body", target_body, "the target cannot be the ground")
     for name in body_points:
         if name not in neighbours:
-            raise SceneError(source, f"bodies.{name}", name,
-                             f"no flexure or pin joins this body; bodies are {body_names}")
+            raise SceneError(
+                source,
+                f"bodies.{name}",
+                name,
+                f"no flexure or pin joins this body; bodies are {body_names}",
+            )
     return body_names
 
 
-def _known_points(ground: str, ground_points: np.ndarray, body_points: dict[str, np.ndarray],
-                  pins: tuple[PinSpec, ...]) -> dict[str, list[np.ndarray]]:
+def _known_points(
+    ground: str,
+    ground_points: np.ndarray,
+    body_points: dict[str, np.ndarray],
+    pins: tuple[PinSpec, ...],
+) -> dict[str, list[np.ndarray]]:
     """Points (mm) known to lie on each body before any flexure is attached."""
     known: dict[str, list[np.ndarray]] = {ground: list(ground_points)}
     for name, pts in body_points.items():
@@ -407,8 +438,14 @@ def _known_points(ground: str, ground_points: np.ndarray, body_points: dict[str,
     return known
 
 
-def _attach_ends(specs: tuple[FlexureSpec, ...], pins: tuple[PinSpec, ...], ground: str,
-                 known: dict[str, list[np.ndarray]], tol: float, source: str) -> dict[str, str]:
+def _attach_ends(
+    specs: tuple[FlexureSpec, ...],
+    pins: tuple[PinSpec, ...],
+    ground: str,
+    known: dict[str, list[np.ndarray]],
+    tol: float,
+    source: str,
+) -> dict[str, str]:
     """The body holding each flexure's start point, by flexure name.
 
     Explicit ``start_body`` first, then coincidence of an end with a known
@@ -421,8 +458,12 @@ def _attach_ends(specs: tuple[FlexureSpec, ...], pins: tuple[PinSpec, ...], grou
     for spec in specs:
         if spec.start_body is not None:
             if spec.start_body not in spec.bodies:
-                raise SceneError(source, f"flexures.{spec.name}.start_body", spec.start_body,
-                                 f"must be one of the flexure's bodies {list(spec.bodies)}")
+                raise SceneError(
+                    source,
+                    f"flexures.{spec.name}.start_body",
+                    spec.start_body,
+                    f"must be one of the flexure's bodies {list(spec.bodies)}",
+                )
             start_body[spec.name] = spec.start_body
             continue
         ends = spec.shape.end_points
@@ -478,8 +519,14 @@ def _attach_ends(specs: tuple[FlexureSpec, ...], pins: tuple[PinSpec, ...], grou
     return start_body
 
 
-def _check_ground_end(spec: FlexureSpec, start_body: str | None, ground: str,
-                      ground_points: list[np.ndarray], tol: float, source: str) -> None:
+def _check_ground_end(
+    spec: FlexureSpec,
+    start_body: str | None,
+    ground: str,
+    ground_points: list[np.ndarray],
+    tol: float,
+    source: str,
+) -> None:
     """Refuse a ground flexure whose ground end (or, if not yet known, either end) meets no ground point."""
     ends = spec.shape.end_points
     candidates = ends if start_body is None else [ends[0] if start_body == ground else ends[1]]
@@ -487,24 +534,44 @@ def _check_ground_end(spec: FlexureSpec, start_body: str | None, ground: str,
     if min(gaps) <= tol:
         return
     if start_body is None:
-        raise SceneError(source, f"flexures.{spec.name}", spec.name,
-                         f"no end point meets a ground point within {tol:.3g} mm "
-                         f"(nearest is {min(gaps):.3g} mm away)")
-    raise SceneError(source, f"flexures.{spec.name}.start_body", start_body,
-                     f"puts the flexure's ground end {gaps[0]:.3g} mm away from every ground "
-                     f"point (tolerance {tol:.3g} mm): the ground holds nothing there")
+        raise SceneError(
+            source,
+            f"flexures.{spec.name}",
+            spec.name,
+            f"no end point meets a ground point within {tol:.3g} mm "
+            f"(nearest is {min(gaps):.3g} mm away)",
+        )
+    raise SceneError(
+        source,
+        f"flexures.{spec.name}.start_body",
+        start_body,
+        f"puts the flexure's ground end {gaps[0]:.3g} mm away from every ground "
+        f"point (tolerance {tol:.3g} mm): the ground holds nothing there",
+    )
 
 
-def _check_points_used(flexures: tuple[Flexure, ...], pins: tuple[Pin, ...], ground: str,
-                       ground_points: np.ndarray, body_points: dict[str, np.ndarray],
-                       tol: float, source: str) -> None:
+def _check_points_used(
+    flexures: tuple[Flexure, ...],
+    pins: tuple[Pin, ...],
+    ground: str,
+    ground_points: np.ndarray,
+    body_points: dict[str, np.ndarray],
+    tol: float,
+    source: str,
+) -> None:
     """Refuse a given ground or body point that no flexure end or pin of that body meets."""
-    given = [(ground, "ground.points", p) for p in ground_points] + \
-        [(name, f"bodies.{name}.points", p) for name, pts in body_points.items() for p in pts]
+    given = [(ground, "ground.points", p) for p in ground_points] + [
+        (name, f"bodies.{name}.points", p) for name, pts in body_points.items() for p in pts
+    ]
     for body, field_name, p in given:
-        attached = [f.end_point_of(body) for f in flexures if body in f.bodies] + \
-            [pin.point for pin in pins if body in pin.bodies]
+        attached = [f.end_point_of(body) for f in flexures if body in f.bodies] + [
+            pin.point for pin in pins if body in pin.bodies
+        ]
         if not any(np.hypot(*(p - q)) <= tol for q in attached):
-            raise SceneError(source, field_name, [float(p[0]), float(p[1])],
-                             f"no flexure end or pin of body {body!r} meets this point "
-                             f"within {tol:.3g} mm: it would be ignored")
+            raise SceneError(
+                source,
+                field_name,
+                [float(p[0]), float(p[1])],
+                f"no flexure end or pin of body {body!r} meets this point "
+                f"within {tol:.3g} mm: it would be ignored",
+            )

@@ -53,10 +53,10 @@ import json
 import math
 import warnings
 import zipfile
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
 
 import numpy as np
 
@@ -82,8 +82,9 @@ _ARRAYS = ("nodes", "elements", "start_face", "end_face", "centre_line")
 # quad9 node order (Gmsh and meshio): corners 0-3 counterclockwise, then
 # mid-edge nodes of edges 0-1, 1-2, 2-3, 3-0, then the centre.  Natural
 # coordinates (xi, eta) of each node in [0, 1]^2:
-_QUAD9_NATURAL = np.array([[0, 0], [1, 0], [1, 1], [0, 1],
-                           [0.5, 0], [1, 0.5], [0.5, 1], [0, 0.5], [0.5, 0.5]])
+_QUAD9_NATURAL = np.array(
+    [[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0], [1, 0.5], [0.5, 1], [0, 0.5], [0.5, 0.5]]
+)
 _QUAD9_REVERSED = np.array([0, 3, 2, 1, 7, 6, 5, 4, 8])
 
 
@@ -137,14 +138,27 @@ def divisions(shape: FlexureShape, thickness: float, level: int) -> tuple[int, i
 
 def _key(shape: FlexureShape, thickness: float, level: int) -> str:
     if isinstance(shape, Arc):
-        desc = {"kind": "arc", "center": list(map(float.hex, map(float, shape.center))),
-                "radius": float(shape.radius).hex(), "axis": float(shape.axis).hex(),
-                "width": float(shape.width).hex()}
+        desc = {
+            "kind": "arc",
+            "center": list(map(float.hex, map(float, shape.center))),
+            "radius": float(shape.radius).hex(),
+            "axis": float(shape.axis).hex(),
+            "width": float(shape.width).hex(),
+        }
     else:
-        desc = {"kind": "segment", "start": list(map(float.hex, map(float, shape.start))),
-                "end": list(map(float.hex, map(float, shape.end)))}
-    desc.update(h=float(thickness).hex(), level=level, order=ELEMENT_ORDER,
-                aspect=ASPECT_RATIO, version=MESH_VERSION, cache_format=CACHE_FORMAT)
+        desc = {
+            "kind": "segment",
+            "start": list(map(float.hex, map(float, shape.start))),
+            "end": list(map(float.hex, map(float, shape.end))),
+        }
+    desc.update(
+        h=float(thickness).hex(),
+        level=level,
+        order=ELEMENT_ORDER,
+        aspect=ASPECT_RATIO,
+        version=MESH_VERSION,
+        cache_format=CACHE_FORMAT,
+    )
     return hashlib.sha256(json.dumps(desc, sort_keys=True).encode()).hexdigest()[:24]
 
 
@@ -158,8 +172,9 @@ def _checksum(key: str, arrays: dict[str, np.ndarray]) -> str:
     return h.hexdigest()
 
 
-def mesh_flexure(shape: FlexureShape, thickness: float, level: int,
-                 use_cache: bool = True) -> FlexureMesh:
+def mesh_flexure(
+    shape: FlexureShape, thickness: float, level: int, use_cache: bool = True
+) -> FlexureMesh:
     """Structured quad9 mesh of one flexure (cached on disk).
 
     Parameters
@@ -175,8 +190,9 @@ def mesh_flexure(shape: FlexureShape, thickness: float, level: int,
     """
     n_t, n_l = divisions(shape, thickness, level)
     if thickness >= shape.max_thickness:
-        raise ValueError(f"thickness {thickness} must be smaller than the diameter "
-                         f"{shape.max_thickness}")
+        raise ValueError(
+            f"thickness {thickness} must be smaller than the diameter {shape.max_thickness}"
+        )
     key = _key(shape, thickness, level)
     root = cache_dir() if use_cache else None
     path = root / "meshes" / f"{key}.npz" if root is not None else None
@@ -188,8 +204,9 @@ def mesh_flexure(shape: FlexureShape, thickness: float, level: int,
     if isinstance(shape, Arc):
         nodes = _snap_polar(nodes, elements, shape)
     elements = _counterclockwise(nodes, elements)
-    start, end = (_face_nodes(nodes, faces[k], _face_segment(shape, thickness, k), thickness)
-                  for k in (0, 1))
+    start, end = (
+        _face_nodes(nodes, faces[k], _face_segment(shape, thickness, k), thickness) for k in (0, 1)
+    )
     centre = _centre_line(nodes, shape, thickness, 2 * n_l + 1)
     mesh = FlexureMesh(nodes, elements, start, end, centre, level, n_t, n_l)
     if path is not None:
@@ -219,18 +236,24 @@ def _consistent(mesh: FlexureMesh) -> bool:
     """Array shapes, dtypes and index ranges match a structured quad9 mesh of its divisions."""
     n_nodes = (2 * mesh.n_t + 1) * (2 * mesh.n_l + 1)
     indices = (mesh.elements, mesh.start_face, mesh.end_face, mesh.centre_line)
-    return (mesh.nodes.shape == (n_nodes, 2) and mesh.nodes.dtype == np.float64
-            and bool(np.all(np.isfinite(mesh.nodes)))
-            and mesh.elements.shape == (mesh.n_t * mesh.n_l, 9)
-            and mesh.start_face.shape == mesh.end_face.shape == (2 * mesh.n_t + 1,)
-            and mesh.centre_line.shape == (2 * mesh.n_l + 1,)
-            and all(np.issubdtype(a.dtype, np.integer) and a.size and 0 <= a.min()
-                    and a.max() < n_nodes for a in indices))
+    return (
+        mesh.nodes.shape == (n_nodes, 2)
+        and mesh.nodes.dtype == np.float64
+        and bool(np.all(np.isfinite(mesh.nodes)))
+        and mesh.elements.shape == (mesh.n_t * mesh.n_l, 9)
+        and mesh.start_face.shape == mesh.end_face.shape == (2 * mesh.n_t + 1,)
+        and mesh.centre_line.shape == (2 * mesh.n_l + 1,)
+        and all(
+            np.issubdtype(a.dtype, np.integer) and a.size and 0 <= a.min() and a.max() < n_nodes
+            for a in indices
+        )
+    )
 
 
 def _discard(path: Path, reason: str) -> None:
-    warnings.warn(f"cached mesh {path} discarded ({reason}); rebuilding it", CacheWarning,
-                  stacklevel=3)
+    warnings.warn(
+        f"cached mesh {path} discarded ({reason}); rebuilding it", CacheWarning, stacklevel=3
+    )
     path.unlink(missing_ok=True)
     return None
 
@@ -274,8 +297,9 @@ def _gmsh_session() -> Iterator[object]:
                 gmsh.model.setCurrent(previous)
 
 
-def _gmsh_band(shape: FlexureShape, h: float, n_t: int, n_l: int
-               ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+def _gmsh_band(
+    shape: FlexureShape, h: float, n_t: int, n_l: int
+) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
     """Gmsh quad9 mesh of the band; returns nodes, elements and the two faces' nodes."""
     with _gmsh_session() as gmsh:
         occ = gmsh.model.occ
@@ -283,12 +307,14 @@ def _gmsh_band(shape: FlexureShape, h: float, n_t: int, n_l: int
             # full-sweep OCC circles (a three-point arc would take the short way round)
             cx, cy = map(float, shape.center)
             r_in, r_out = shape.radius - 0.5 * h, shape.radius + 0.5 * h
-            inner = occ.addCircle(cx, cy, 0.0, r_in, angle1=shape.start_angle,
-                                  angle2=shape.end_angle)
-            outer = occ.addCircle(cx, cy, 0.0, r_out, angle1=shape.start_angle,
-                                  angle2=shape.end_angle)
+            inner = occ.addCircle(
+                cx, cy, 0.0, r_in, angle1=shape.start_angle, angle2=shape.end_angle
+            )
+            outer = occ.addCircle(
+                cx, cy, 0.0, r_out, angle1=shape.start_angle, angle2=shape.end_angle
+            )
             occ.synchronize()
-            face = _face_segment(shape, h, 0)             # [inner, outer] start corners
+            face = _face_segment(shape, h, 0)  # [inner, outer] start corners
             at_start, at_end = [], []
             for k, curve in enumerate((inner, outer)):
                 ends = [t for _, t in gmsh.model.getBoundary([(1, curve)], oriented=False)]
@@ -329,8 +355,9 @@ def _gmsh_band(shape: FlexureShape, h: float, n_t: int, n_l: int
         if list(etypes) != [quad9]:
             raise RuntimeError(f"gmsh produced element types {list(etypes)}, expected quad9")
         elements = index[enodes[0].astype(int)].reshape(-1, 9)
-        faces = tuple(index[gmsh.model.mesh.getNodesForPhysicalGroup(1, g)[0].astype(int)]
-                      for g in (1, 2))
+        faces = tuple(
+            index[gmsh.model.mesh.getNodesForPhysicalGroup(1, g)[0].astype(int)] for g in (1, 2)
+        )
     return nodes, elements, faces
 
 
@@ -345,10 +372,10 @@ def _polar(points: np.ndarray, arc: Arc) -> tuple[np.ndarray, np.ndarray]:
 
 def _snap_polar(nodes: np.ndarray, elements: np.ndarray, arc: Arc) -> np.ndarray:
     """Move every node to the exact polar image of its element's (rho, phi) rectangle."""
-    rho, phi = _polar(nodes[elements[:, :4]], arc)          # (n_el, 4) corners
+    rho, phi = _polar(nodes[elements[:, :4]], arc)  # (n_el, 4) corners
     xi, eta = _QUAD9_NATURAL[:, 0], _QUAD9_NATURAL[:, 1]
     w = np.stack([(1 - xi) * (1 - eta), xi * (1 - eta), xi * eta, (1 - xi) * eta])  # (4, 9)
-    r9, p9 = rho @ w, arc.start_angle + phi @ w             # (n_el, 9)
+    r9, p9 = rho @ w, arc.start_angle + phi @ w  # (n_el, 9)
     out = nodes.copy()
     out[elements, 0] = arc.center[0] + r9 * np.cos(p9)
     out[elements, 1] = arc.center[1] + r9 * np.sin(p9)
@@ -358,8 +385,10 @@ def _snap_polar(nodes: np.ndarray, elements: np.ndarray, arc: Arc) -> np.ndarray
 def _counterclockwise(nodes: np.ndarray, elements: np.ndarray) -> np.ndarray:
     """Elements reordered so that all are counterclockwise (positive area)."""
     x = nodes[elements[:, :4]]
-    area2 = np.sum(x[:, :, 0] * np.roll(x[:, :, 1], -1, axis=1)
-                   - np.roll(x[:, :, 0], -1, axis=1) * x[:, :, 1], axis=1)
+    area2 = np.sum(
+        x[:, :, 0] * np.roll(x[:, :, 1], -1, axis=1) - np.roll(x[:, :, 0], -1, axis=1) * x[:, :, 1],
+        axis=1,
+    )
     if np.any(area2 == 0.0):
         raise RuntimeError("degenerate element in flexure mesh")
     return np.where((area2 < 0.0)[:, None], elements[:, _QUAD9_REVERSED], elements)

@@ -36,9 +36,9 @@ RANK_TOL = 1e-9
 """Singular values below this fraction of the largest count as zero (the matrices are O(1))."""
 
 
-
-def _pin_rows(pins: "list[Pin]", column: dict[str, int], origin: dict[str, np.ndarray],
-              scale: float) -> np.ndarray:
+def _pin_rows(
+    pins: list[Pin], column: dict[str, int], origin: dict[str, np.ndarray], scale: float
+) -> np.ndarray:
     """Rows of [v_b(P) - v_a(P)] for each pin, over 3 columns per entry of ``column``.
 
     A body (or cluster) with pose rates (u, v, omega) about its origin R moves
@@ -53,7 +53,9 @@ def _pin_rows(pins: "list[Pin]", column: dict[str, int], origin: dict[str, np.nd
                 continue
             c = 3 * column[key]
             r = (pin.point - origin[key]) / scale
-            J[2 * k:2 * k + 2, c:c + 3] += sign * np.array([[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]]])
+            J[2 * k : 2 * k + 2, c : c + 3] += sign * np.array(
+                [[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]]]
+            )
     return J
 
 
@@ -66,21 +68,25 @@ def _null_space(J: np.ndarray) -> np.ndarray:
     return vt[rank:].T
 
 
-def check_structure(mech: "Mechanism") -> None:
+def check_structure(mech: Mechanism) -> None:
     """Raise SceneError if some bodies can move freely or some pins are redundant.
 
     The message names the bodies that can move (field ``pins``) or the pins
     that constrain the same motion twice (field ``pins.NAME``).
     """
     if not mech.pins:
-        return                       # flexures alone: reachability already makes a structure
+        return  # flexures alone: reachability already makes a structure
     for pin in mech.pins:
         for body in pin.bodies:
-            if body != mech.ground and not any(body in link.bodies for link in
-                                               (*mech.flexures, *mech.pins) if link is not pin):
-                raise SceneError(mech.source, f"pins.{pin.name}.bodies", list(pin.bodies),
-                                 f"body {body!r} is held by this pin only and would turn freely "
-                                 "about it")
+            if body != mech.ground and not any(
+                body in link.bodies for link in (*mech.flexures, *mech.pins) if link is not pin
+            ):
+                raise SceneError(
+                    mech.source,
+                    f"pins.{pin.name}.bodies",
+                    list(pin.bodies),
+                    f"body {body!r} is held by this pin only and would turn freely about it",
+                )
     scale = mech.size() or 1.0
     cluster = connected_roots(mech.bodies, (f.bodies for f in mech.flexures))
     ground_cluster = cluster[mech.ground]
@@ -92,22 +98,33 @@ def check_structure(mech: "Mechanism") -> None:
     free = _null_space(_pin_rows(lifted, column, origin, scale))
     if free.shape[1]:
         moving = np.abs(free).reshape(len(moving_clusters), 3, -1).max(axis=(1, 2)) > 1e-6
-        names = [b for b in mech.bodies if cluster[b] in
-                 {c for c, m in zip(moving_clusters, moving) if m}]
-        raise SceneError(mech.source, "pins", names,
-                         f"the mechanism is not a structure: bodies {names} can move with no "
-                         f"flexure deforming ({free.shape[1]} free motion(s)); add a flexure or "
-                         "remove a pin")
+        names = [
+            b
+            for b in mech.bodies
+            if cluster[b] in {c for c, m in zip(moving_clusters, moving) if m}
+        ]
+        raise SceneError(
+            mech.source,
+            "pins",
+            names,
+            f"the mechanism is not a structure: bodies {names} can move with no "
+            f"flexure deforming ({free.shape[1]} free motion(s)); add a flexure or "
+            "remove a pin",
+        )
 
     pinned = [b for b in dict.fromkeys(b for p in mech.pins for b in p.bodies) if b != mech.ground]
     column = {b: k for k, b in enumerate(pinned)}
     origin = {b: mech.bodies[b].reference for b in pinned}
     J = _pin_rows(list(mech.pins), column, origin, scale)
-    dependent = _null_space(J.T)             # combinations of pin rows that vanish
+    dependent = _null_space(J.T)  # combinations of pin rows that vanish
     if dependent.shape[1]:
         weight = np.abs(dependent).reshape(len(mech.pins), 2, -1).max(axis=(1, 2))
         names = [p.name for p, w in zip(mech.pins, weight) if w > 1e-6]
-        raise SceneError(mech.source, f"pins.{names[-1]}", names,
-                         f"redundant pins: {names} constrain the same relative motion more than "
-                         "once (e.g. a body pinned twice to the ground), so their reactions are "
-                         "not determined; remove one")
+        raise SceneError(
+            mech.source,
+            f"pins.{names[-1]}",
+            names,
+            f"redundant pins: {names} constrain the same relative motion more than "
+            "once (e.g. a body pinned twice to the ground), so their reactions are "
+            "not determined; remove one",
+        )

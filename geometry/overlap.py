@@ -22,8 +22,9 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
 
-def _segments_meeting(line: np.ndarray, lo: np.ndarray, hi: np.ndarray
-                      ) -> tuple[np.ndarray, np.ndarray]:
+def _segments_meeting(
+    line: np.ndarray, lo: np.ndarray, hi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Start and end points of the segments of ``line`` whose bounding boxes meet [lo, hi], in order."""
     a, b = line[:-1], line[1:]
     keep = np.all((np.maximum(a, b) >= lo) & (np.minimum(a, b) <= hi), axis=1)
@@ -79,18 +80,27 @@ def check_overlaps(flexures, source: str, tol: float) -> None:
     for f in flexures:
         if f.shape.closes_on_itself(f.section.thickness):
             gap = float(np.hypot(*(f.shape.end_points[0] - f.shape.end_points[1])))
-            raise SceneError(source, f"flexures.{f.name}.width_deg", f.shape.width * 180 / np.pi,
-                             f"the arc's ends are {gap:.3g} mm apart, less than its "
-                             f"thickness {f.section.thickness:g} mm: the solid closes on itself")
+            raise SceneError(
+                source,
+                f"flexures.{f.name}.width_deg",
+                f.shape.width * 180 / np.pi,
+                f"the arc's ends are {gap:.3g} mm apart, less than its "
+                f"thickness {f.section.thickness:g} mm: the solid closes on itself",
+            )
     for i, j in candidate_pairs(lines):
         f, g = flexures[i], flexures[j]
         pts = crossings(lines[i], lines[j])
         if not len(pts):
             continue
-        shared = [f.end_point_of(b) for b in f.bodies if b in g.bodies] + \
-                 [g.end_point_of(b) for b in g.bodies if b in f.bodies]
+        shared = [f.end_point_of(b) for b in f.bodies if b in g.bodies] + [
+            g.end_point_of(b) for b in g.bodies if b in f.bodies
+        ]
         for x in pts:
             if not any(np.hypot(*(x - s)) <= tol for s in shared):
-                raise SceneError(source, f"flexures.{g.name}", g.name,
-                                 f"crosses flexure {f.name!r} at ({x[0]:.3g}, {x[1]:.3g}) mm: "
-                                 "the mechanism intersects itself")
+                raise SceneError(
+                    source,
+                    f"flexures.{g.name}",
+                    g.name,
+                    f"crosses flexure {f.name!r} at ({x[0]:.3g}, {x[1]:.3g}) mm: "
+                    "the mechanism intersects itself",
+                )

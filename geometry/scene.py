@@ -32,9 +32,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import tomllib
 import unicodedata
 from collections import Counter
-import tomllib
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -76,8 +76,12 @@ class Scene:
         for lc in self.load_cases:
             if lc.name == name:
                 return lc
-        raise SceneError(self.source, "load_case", name,
-                         f"unknown load case; the scene has {[lc.name for lc in self.load_cases]}")
+        raise SceneError(
+            self.source,
+            "load_case",
+            name,
+            f"unknown load case; the scene has {[lc.name for lc in self.load_cases]}",
+        )
 
 
 class _Reader:
@@ -98,8 +102,16 @@ class _Reader:
             self.fail(f"{where}{key}", data[key], "must be a table")
         return data[key]
 
-    def number(self, data: dict, key: str, where: str, *, default: float | None = None,
-               positive: bool = False, limit: float = 1e12) -> float:
+    def number(
+        self,
+        data: dict,
+        key: str,
+        where: str,
+        *,
+        default: float | None = None,
+        positive: bool = False,
+        limit: float = 1e12,
+    ) -> float:
         field = f"{where}{key}"
         if key not in data:
             if default is None:
@@ -116,8 +128,11 @@ class _Reader:
         if positive and v <= 0.0:
             self.fail(field, v, "must be positive")
         if v != 0.0 and abs(v) < SMALLEST_NORMAL:
-            self.fail(field, v, f"is subnormal (|value| < {SMALLEST_NORMAL:.3g}): too small to "
-                      "compute with")
+            self.fail(
+                field,
+                v,
+                f"is subnormal (|value| < {SMALLEST_NORMAL:.3g}): too small to compute with",
+            )
         return v
 
     def point(self, data: dict, key: str, where: str) -> np.ndarray:
@@ -127,8 +142,12 @@ class _Reader:
         v = data[key]
         if not (isinstance(v, list) and len(v) == 2):
             self.fail(field, v, "must be a point [x, y] in mm")
-        return np.array([self.number({f"{key}[{i}]": c}, f"{key}[{i}]", where, limit=1e9)
-                         for i, c in enumerate(v)])
+        return np.array(
+            [
+                self.number({f"{key}[{i}]": c}, f"{key}[{i}]", where, limit=1e9)
+                for i, c in enumerate(v)
+            ]
+        )
 
     def name(self, data: dict, key: str, where: str) -> str:
         field = f"{where}{key}"
@@ -165,7 +184,9 @@ class _Reader:
     def known_keys(self, data: dict, allowed: set[str], where: str) -> None:
         for k in data:
             if k not in allowed:
-                self.fail(f"{where}{k}", data[k], f"unknown field; expected one of {sorted(allowed)}")
+                self.fail(
+                    f"{where}{k}", data[k], f"unknown field; expected one of {sorted(allowed)}"
+                )
 
 
 def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> FlexureSpec:
@@ -173,8 +194,24 @@ def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> Fle
         rd.fail(f"flexures[{k}]", f, "must be a table")
     name = rd.name(f, "name", f"flexures[{k}].")
     where = f"flexures.{name}."
-    rd.known_keys(f, {"name", "bodies", "shape", "center", "radius", "axis_deg", "width_deg",
-                      "start", "end", "start_body", "depth", "thickness"}, where)
+    rd.known_keys(
+        f,
+        {
+            "name",
+            "bodies",
+            "shape",
+            "center",
+            "radius",
+            "axis_deg",
+            "width_deg",
+            "start",
+            "end",
+            "start_body",
+            "depth",
+            "thickness",
+        },
+        where,
+    )
     bodies = rd.body_pair(f, where, "flexure")
     section = Section(
         rd.number(f, "depth", where, default=default_section.depth, positive=True),
@@ -189,10 +226,14 @@ def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> Fle
         if not 0.0 < width < 360.0:
             rd.fail(f"{where}width_deg", width, "must be in (0, 360) degrees")
         if section.thickness >= 2.0 * radius:
-            rd.fail(f"{where}thickness", section.thickness,
-                    f"thickness h must be smaller than 2 r = {2 * radius:g} mm")
-        shape = Arc((float(center[0]), float(center[1])), radius, math.radians(axis),
-                    math.radians(width))
+            rd.fail(
+                f"{where}thickness",
+                section.thickness,
+                f"thickness h must be smaller than 2 r = {2 * radius:g} mm",
+            )
+        shape = Arc(
+            (float(center[0]), float(center[1])), radius, math.radians(axis), math.radians(width)
+        )
     elif kind == "segment":
         a, b = rd.point(f, "start", where), rd.point(f, "end", where)
         if np.hypot(*(b - a)) <= 0.0:
@@ -222,8 +263,9 @@ _COMPONENT_KEYS = {"kind", "body", "point", "angle_deg", "value"}
 """Fields of one load; a load case adds ``name`` and ``levels`` (or ``loads`` to combine)."""
 
 
-def _load_component(rd: _Reader, c: dict, where: str, target_body: str,
-                    target_point: np.ndarray, allowed: set[str]) -> Moment | Force:
+def _load_component(
+    rd: _Reader, c: dict, where: str, target_body: str, target_point: np.ndarray, allowed: set[str]
+) -> Moment | Force:
     rd.known_keys(c, allowed, where)
     kind = c.get("kind")
     value = rd.number(c, "value", where, limit=1e9)
@@ -231,8 +273,12 @@ def _load_component(rd: _Reader, c: dict, where: str, target_body: str,
     if kind == "moment":
         for key in ("point", "angle_deg"):
             if key in c:
-                rd.fail(f"{where}{key}", c[key], "a moment has no point of application or "
-                        "direction (it acts on the whole body): remove it or use kind = 'force'")
+                rd.fail(
+                    f"{where}{key}",
+                    c[key],
+                    "a moment has no point of application or "
+                    "direction (it acts on the whole body): remove it or use kind = 'force'",
+                )
         return Moment(body, value)
     if kind == "force":
         point = rd.point(c, "point", where) if "point" in c else target_point
@@ -250,11 +296,20 @@ def _scene_name(rd: _Reader, value: Any) -> str:
     """The scene's name, which other commands use as a file-name stem: it must be safe as one."""
     if not isinstance(value, str) or not value.strip():
         rd.fail("name", value, "must be a non-empty string")
-    bad = sorted({ch for ch in value if ch in _UNSAFE_NAME_CHARACTERS
-                  or unicodedata.category(ch) in ("Cc", "Cf", "Zl", "Zp")})
+    bad = sorted(
+        {
+            ch
+            for ch in value
+            if ch in _UNSAFE_NAME_CHARACTERS or unicodedata.category(ch) in ("Cc", "Cf", "Zl", "Zp")
+        }
+    )
     if bad:
-        rd.fail("name", value, f"must be usable as a file name: it contains {bad} (path "
-                "separators, characters file systems forbid, or control characters)")
+        rd.fail(
+            "name",
+            value,
+            f"must be usable as a file name: it contains {bad} (path "
+            "separators, characters file systems forbid, or control characters)",
+        )
     if value.strip(" .") == "":
         rd.fail("name", value, "must be usable as a file name, not a path like '.' or '..'")
     if len(value) > MAX_NAME_LENGTH:
@@ -277,8 +332,10 @@ def _section(rd: _Reader, data: dict) -> Section:
     """``[section]``: the default depth b and thickness h of every flexure, mm."""
     sec = rd.table(data, "section", "")
     rd.known_keys(sec, {"depth", "thickness"}, "section.")
-    return Section(rd.number(sec, "depth", "section.", positive=True),
-                   rd.number(sec, "thickness", "section.", positive=True))
+    return Section(
+        rd.number(sec, "depth", "section.", positive=True),
+        rd.number(sec, "thickness", "section.", positive=True),
+    )
 
 
 def _ground(rd: _Reader, data: dict) -> tuple[str, np.ndarray]:
@@ -288,8 +345,11 @@ def _ground(rd: _Reader, data: dict) -> tuple[str, np.ndarray]:
     ground = rd.name(ground_t, "name", "ground.")
     gpts = ground_t.get("points")
     if not (isinstance(gpts, list) and gpts):
-        rd.fail("ground.points", gpts, "must list at least one point [x, y] where the ground "
-                "holds a flexure")
+        rd.fail(
+            "ground.points",
+            gpts,
+            "must list at least one point [x, y] where the ground holds a flexure",
+        )
     return ground, np.array([rd.point({"p": p}, "p", "ground.points.") for p in gpts])
 
 
@@ -300,8 +360,9 @@ def _target(rd: _Reader, data: dict) -> tuple[str, np.ndarray]:
     return rd.name(target_t, "body", "target."), rd.point(target_t, "point", "target.")
 
 
-def _bodies(rd: _Reader, data: dict, density: float | None, depth: float
-            ) -> tuple[dict[str, np.ndarray], dict]:
+def _bodies(
+    rd: _Reader, data: dict, density: float | None, depth: float
+) -> tuple[dict[str, np.ndarray], dict]:
     """``[[bodies]]``: known points of links (mm) and their mass data, by body name."""
     body_points, body_masses = {}, {}
     for k, b in enumerate(rd.array(data, "bodies", "", "tables [[bodies]]")):
@@ -313,9 +374,12 @@ def _bodies(rd: _Reader, data: dict, density: float | None, depth: float
         rigid_mass = parse_body_mass(b, f"bodies.{bname}.", density, depth, rd.fail)
         if rigid_mass is not None:
             body_masses[bname] = rigid_mass
-        body_points[bname] = np.array([rd.point({"p": p}, "p", f"bodies.{bname}.points.")
-                                       for p in rd.array(b, "points", f"bodies.{bname}.",
-                                                         "points [x, y]")])
+        body_points[bname] = np.array(
+            [
+                rd.point({"p": p}, "p", f"bodies.{bname}.points.")
+                for p in rd.array(b, "points", f"bodies.{bname}.", "points [x, y]")
+            ]
+        )
     return body_points, body_masses
 
 
@@ -335,14 +399,28 @@ def _mechanism(rd: _Reader, data: dict, source: str) -> Mechanism:
     if not isinstance(raw_pins, list):
         rd.fail("pins", raw_pins, "must be an array of tables [[pins]]")
     pins = [_pin_spec(rd, p, k) for k, p in enumerate(raw_pins)]
-    mech = assemble(specs, ground, ground_points, material, target_body, target_point,
-                    source=source, body_points=body_points, pin_specs=pins)
+    mech = assemble(
+        specs,
+        ground,
+        ground_points,
+        material,
+        target_body,
+        target_point,
+        source=source,
+        body_points=body_points,
+        pin_specs=pins,
+    )
     for bname in body_masses:
         if bname not in mech.bodies or bname == mech.ground:
-            rd.fail(f"bodies.{bname}.mass", bname, "mass data for the ground or for a body no "
-                    f"flexure or pin holds; moving bodies are {mech.moving_bodies}")
-    return dataclasses.replace(mech, inertia=MassData(density, parse_gravity(data, rd.fail),
-                                                      body_masses))
+            rd.fail(
+                f"bodies.{bname}.mass",
+                bname,
+                "mass data for the ground or for a body no "
+                f"flexure or pin holds; moving bodies are {mech.moving_bodies}",
+            )
+    return dataclasses.replace(
+        mech, inertia=MassData(density, parse_gravity(data, rd.fail), body_masses)
+    )
 
 
 def _load_case(rd: _Reader, c: Any, k: int, mech: Mechanism) -> LoadCase:
@@ -351,23 +429,45 @@ def _load_case(rd: _Reader, c: Any, k: int, mech: Mechanism) -> LoadCase:
     lname = rd.name(c, "name", f"load_cases[{k}].")
     where = f"load_cases.{lname}."
     levels = c.get("levels", DEFAULT_LEVELS)
-    if isinstance(levels, bool) or not isinstance(levels, int) or not 2 <= levels <= MAX_LOAD_SUBSTEPS:
-        rd.fail(f"{where}levels", levels,
-                f"must be an integer from 2 to {MAX_LOAD_SUBSTEPS} (each of the levels - 1 "
-                f"load increments takes at least one of the solver's {MAX_LOAD_SUBSTEPS} "
-                "sub-steps)")
+    if (
+        isinstance(levels, bool)
+        or not isinstance(levels, int)
+        or not 2 <= levels <= MAX_LOAD_SUBSTEPS
+    ):
+        rd.fail(
+            f"{where}levels",
+            levels,
+            f"must be an integer from 2 to {MAX_LOAD_SUBSTEPS} (each of the levels - 1 "
+            f"load increments takes at least one of the solver's {MAX_LOAD_SUBSTEPS} "
+            "sub-steps)",
+        )
     target_body, target_point = mech.target_body, mech.target_point
     if "loads" in c:
         rd.known_keys(c, {"name", "levels", "loads", *TIME_LAW_KEYS}, where)
-        comps = tuple(_load_component(rd, rd.item_table(x, f"{where}loads[{i}]"),
-                                      f"{where}loads[{i}].", target_body, target_point,
-                                      _COMPONENT_KEYS)
-                      for i, x in enumerate(rd.array(c, "loads", where, "load tables")))
+        comps = tuple(
+            _load_component(
+                rd,
+                rd.item_table(x, f"{where}loads[{i}]"),
+                f"{where}loads[{i}].",
+                target_body,
+                target_point,
+                _COMPONENT_KEYS,
+            )
+            for i, x in enumerate(rd.array(c, "loads", where, "load tables"))
+        )
         if not comps:
             rd.fail(f"{where}loads", [], "must contain at least one load")
     else:
-        comps = (_load_component(rd, c, where, target_body, target_point,
-                                 _COMPONENT_KEYS | {"name", "levels", *TIME_LAW_KEYS}),)
+        comps = (
+            _load_component(
+                rd,
+                c,
+                where,
+                target_body,
+                target_point,
+                _COMPONENT_KEYS | {"name", "levels", *TIME_LAW_KEYS},
+            ),
+        )
     for comp in comps:
         if comp.body not in mech.bodies:
             rd.fail(f"{where}body", comp.body, f"unknown body; bodies are {list(mech.bodies)}")
@@ -396,8 +496,11 @@ def _refuse_dangling_bodies(rd: _Reader, mech: Mechanism, cases: list[LoadCase])
     links = Counter(b for link in (*mech.flexures, *mech.pins) for b in link.bodies)
     for b in mech.moving_bodies:
         if links[b] == 1 and b not in loaded:
-            rd.fail("flexures", b, f"body {b!r} is dangling: held by one flexure, not loaded "
-                    "and not the target")
+            rd.fail(
+                "flexures",
+                b,
+                f"body {b!r} is dangling: held by one flexure, not loaded and not the target",
+            )
 
 
 def _request(rd: _Reader, data: dict) -> tuple[tuple, list]:
@@ -407,7 +510,7 @@ def _request(rd: _Reader, data: dict) -> tuple[tuple, list]:
     models = tuple(rd.array(req, "models", "request.", "model names"))
     for m in models:
         if not isinstance(m, str):
-            rd.fail("request.models", m, "expected a model id string such as \"beam:20\"")
+            rd.fail("request.models", m, 'expected a model id string such as "beam:20"')
     outputs = rd.array(req, "outputs", "request.", "output names")
     for o in outputs:
         if not isinstance(o, str) or o not in OUTPUTS:
@@ -424,15 +527,38 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
     value is checked where it is read (:class:`SceneError` names the field).
     """
     rd = _Reader(source)
-    rd.known_keys(data, {"name", "description", "material", "section", "ground", "target",
-                         "flexures", "bodies", "pins", "load_cases", "request", "gravity"}, "")
+    rd.known_keys(
+        data,
+        {
+            "name",
+            "description",
+            "material",
+            "section",
+            "ground",
+            "target",
+            "flexures",
+            "bodies",
+            "pins",
+            "load_cases",
+            "request",
+            "gravity",
+        },
+        "",
+    )
     name = _scene_name(rd, data.get("name", default_name))
     mech = _mechanism(rd, data, source)
     cases = _load_cases(rd, data, mech)
     _refuse_dangling_bodies(rd, mech, cases)
     models, outputs = _request(rd, data)
-    return Scene(name, str(data.get("description", "")), mech, tuple(cases), models,
-                 frozenset(outputs), source)
+    return Scene(
+        name,
+        str(data.get("description", "")),
+        mech,
+        tuple(cases),
+        models,
+        frozenset(outputs),
+        source,
+    )
 
 
 def load_scene(name_or_path: str | Path) -> Scene:
@@ -461,21 +587,33 @@ def read_scene_data(name_or_path: str | Path) -> tuple[str, dict, str]:
     else:
         path = Path(text_id)
         if not path.is_file():
-            raise SceneError(text_id, "scene", text_id,
-                             f"no such file, and not a built-in scene {list(BUILTIN_SCENES)}")
+            raise SceneError(
+                text_id,
+                "scene",
+                text_id,
+                f"no such file, and not a built-in scene {list(BUILTIN_SCENES)}",
+            )
         source, text, stem = str(path), _read_text(path), path.stem
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(source, "toml", None, f"malformed TOML: {exc}") from None
     except RecursionError:
-        raise SceneError(source, "toml", None, "arrays or tables nested too deeply to read "
-                         "(a scene needs at most 3 levels)") from None
+        raise SceneError(
+            source,
+            "toml",
+            None,
+            "arrays or tables nested too deeply to read (a scene needs at most 3 levels)",
+        ) from None
     return source, data, stem
 
 
-_BYTE_ORDER_MARKS = {b"\xff\xfe": "UTF-16", b"\xfe\xff": "UTF-16",
-                     b"\xff\xfe\x00\x00": "UTF-32", b"\x00\x00\xfe\xff": "UTF-32"}
+_BYTE_ORDER_MARKS = {
+    b"\xff\xfe": "UTF-16",
+    b"\xfe\xff": "UTF-16",
+    b"\xff\xfe\x00\x00": "UTF-32",
+    b"\x00\x00\xfe\xff": "UTF-32",
+}
 
 
 def _read_text(path: Path) -> str:
@@ -487,9 +625,22 @@ def _read_text(path: Path) -> str:
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        found = next((enc for bom, enc in sorted(_BYTE_ORDER_MARKS.items(), reverse=True)
-                      if raw.startswith(bom)), None)
-        what = f"it looks like {found}" if found else \
-            f"byte 0x{raw[exc.start]:02x} at offset {exc.start} is not UTF-8 (Latin-1?)"
-        raise SceneError(str(path), "encoding", None, f"a scene file must be UTF-8 text: {what}; "
-                         "save it as UTF-8") from None
+        found = next(
+            (
+                enc
+                for bom, enc in sorted(_BYTE_ORDER_MARKS.items(), reverse=True)
+                if raw.startswith(bom)
+            ),
+            None,
+        )
+        what = (
+            f"it looks like {found}"
+            if found
+            else f"byte 0x{raw[exc.start]:02x} at offset {exc.start} is not UTF-8 (Latin-1?)"
+        )
+        raise SceneError(
+            str(path),
+            "encoding",
+            None,
+            f"a scene file must be UTF-8 text: {what}; save it as UTF-8",
+        ) from None

@@ -19,14 +19,13 @@ import numpy as np
 
 from .kinematics import rotate
 
-
 _SERIES_TOP = 1.0
 """Largest half-angle gamma (rad) for which :func:`arc_semi_axes` sums Taylor series."""
 _K = np.arange(2, 18)
 _FACT = np.array([math.factorial(n) for n in range(2 * int(_K[-1]) + 3)], float)
 _A2_SERIES = -((-1.0) ** _K) * 4.0 ** (_K - 1) / (2.0 * _FACT[2 * _K + 1])
 _B2_SERIES = (-1.0) ** _K * 4.0 ** (_K - 1) * (_K - 1) / _FACT[2 * _K + 2]
-_POWERS = 2 * _K - 2           # the power of gamma in each term of the series
+_POWERS = 2 * _K - 2  # the power of gamma in each term of the series
 
 
 def arc_semi_axes(width: float) -> tuple[float, float]:
@@ -62,14 +61,14 @@ def arc_semi_axes(width: float) -> tuple[float, float]:
         (dimensionless).
     """
     g = 0.5 * width
-    if g <= _SERIES_TOP:                      # the k = 1 term of a^2 is 1/12
-        powers = g ** _POWERS
+    if g <= _SERIES_TOP:  # the k = 1 term of a^2 is 1/12
+        powers = g**_POWERS
         a2 = 1.0 / 12.0 + float(_A2_SERIES @ powers)
         b2 = float(_B2_SERIES @ powers)
     else:
         a2 = float((1.0 - np.sin(2.0 * g) / (2.0 * g)) / (8.0 * g**2))
         b2 = float((0.5 + np.sin(2.0 * g) / (4.0 * g) - (np.sin(g) / g) ** 2) / (4.0 * g**2))
-    return math.sqrt(a2), math.sqrt(max(b2, 0.0))       # rounded as np.sqrt rounds
+    return math.sqrt(a2), math.sqrt(max(b2, 0.0))  # rounded as np.sqrt rounds
 
 
 def _directions(angle: np.ndarray) -> np.ndarray:
@@ -147,7 +146,7 @@ class Shape(Protocol):
 
     def tangent(self, s: np.ndarray | float) -> np.ndarray: ...
 
-    def split(self, n: int) -> list["Shape"]: ...
+    def split(self, n: int) -> list[Shape]: ...
 
     def ellipse(self, bending_stiffness: float) -> Ellipse: ...
 
@@ -155,9 +154,9 @@ class Shape(Protocol):
 
     def closes_on_itself(self, thickness: float) -> bool: ...
 
-    def moved(self, angle: float, shift: np.ndarray) -> "Shape": ...
+    def moved(self, angle: float, shift: np.ndarray) -> Shape: ...
 
-    def scaled(self, factor: float) -> "Shape": ...
+    def scaled(self, factor: float) -> Shape: ...
 
     def parameters(self) -> dict: ...
 
@@ -228,15 +227,18 @@ class Arc:
     def end_points(self) -> np.ndarray:
         """Start and end points, shape (2, 2), mm (:meth:`point` at 0 and the length, on floats)."""
         (cx, cy), r = self.center, self.radius
-        return np.array([[cx + r * math.cos(phi), cy + r * math.sin(phi)]
-                         for phi in (self.start_angle, self.start_angle + self.length / r)])
+        return np.array(
+            [
+                [cx + r * math.cos(phi), cy + r * math.sin(phi)]
+                for phi in (self.start_angle, self.start_angle + self.length / r)
+            ]
+        )
 
-    def split(self, n: int) -> list["Arc"]:
+    def split(self, n: int) -> list[Arc]:
         """The arc cut into n equal sub-arcs, from start to end."""
         dw = self.width / n
         return [
-            Arc(self.center, self.radius, self.start_angle + (k + 0.5) * dw, dw)
-            for k in range(n)
+            Arc(self.center, self.radius, self.start_angle + (k + 0.5) * dw, dw) for k in range(n)
         ]
 
     @property
@@ -252,10 +254,13 @@ class Arc:
         r sin(gamma) / gamma from the centre (paper Eqs. 1-2).
         """
         gamma = 0.5 * self.width
-        c, s = math.cos(self.axis), math.sin(self.axis)       # floats: a few numbers
+        c, s = math.cos(self.axis), math.sin(self.axis)  # floats: a few numbers
         oc = self.radius * math.sin(gamma) / gamma
-        return (np.array([self.center[0] + oc * c, self.center[1] + oc * s]),
-                np.array([s, -c]), np.array([c, s]))
+        return (
+            np.array([self.center[0] + oc * c, self.center[1] + oc * s]),
+            np.array([s, -c]),
+            np.array([c, s]),
+        )
 
     def ellipse(self, bending_stiffness: float) -> Ellipse:
         """Ellipse of elasticity for bending stiffness EI (N mm^2), Eqs. 1-4.
@@ -270,27 +275,31 @@ class Arc:
             center=center,
             a=self.length * a,
             b=self.length * b,
-            axes=np.array([e1, e2]).T,          # columns e1, e2
+            axes=np.array([e1, e2]).T,  # columns e1, e2
         )
 
     def closes_on_itself(self, thickness: float) -> bool:
         """True if the ends are at most ``thickness`` (mm) apart: the solid band would close."""
         return float(np.hypot(*(self.end_points[0] - self.end_points[1]))) <= thickness
 
-    def moved(self, angle: float, shift: np.ndarray) -> "Arc":
+    def moved(self, angle: float, shift: np.ndarray) -> Arc:
         """The arc rotated by ``angle`` (rad) about the origin, then shifted by ``shift`` (mm)."""
         c = rotate(angle, np.asarray(self.center)) + shift
         return Arc((float(c[0]), float(c[1])), self.radius, self.axis + angle, self.width)
 
-    def scaled(self, factor: float) -> "Arc":
+    def scaled(self, factor: float) -> Arc:
         """The arc with every length (centre, radius) multiplied by ``factor``; angles kept."""
         c = np.asarray(self.center, float) * factor
         return Arc(tuple(map(float, c)), self.radius * factor, self.axis, self.width)
 
     def parameters(self) -> dict:
         """The scene-file parameters: centre and radius (mm), axis and width (deg)."""
-        return {"center": list(self.center), "radius_mm": self.radius,
-                "axis_deg": math.degrees(self.axis), "width_deg": math.degrees(self.width)}
+        return {
+            "center": list(self.center),
+            "radius_mm": self.radius,
+            "axis_deg": math.degrees(self.axis),
+            "width_deg": math.degrees(self.width),
+        }
 
 
 @dataclass(frozen=True)
@@ -340,7 +349,7 @@ class Segment:
         """Start and end points, shape (2, 2), mm."""
         return np.array([self.start, self.end], dtype=float)
 
-    def split(self, n: int) -> list["Segment"]:
+    def split(self, n: int) -> list[Segment]:
         """The segment cut into n equal parts, from start to end."""
         p = self.point(np.linspace(0.0, self.length, n + 1))
         return [Segment(tuple(p[k]), tuple(p[k + 1])) for k in range(n)]
@@ -375,16 +384,18 @@ class Segment:
         """Never: a straight band cannot close on itself."""
         return False
 
-    def moved(self, angle: float, shift: np.ndarray) -> "Segment":
+    def moved(self, angle: float, shift: np.ndarray) -> Segment:
         """The segment rotated by ``angle`` (rad) about the origin, then shifted by ``shift`` (mm)."""
         a = rotate(angle, np.asarray(self.start)) + shift
         b = rotate(angle, np.asarray(self.end)) + shift
         return Segment(tuple(map(float, a)), tuple(map(float, b)))
 
-    def scaled(self, factor: float) -> "Segment":
+    def scaled(self, factor: float) -> Segment:
         """The segment with its end points multiplied by ``factor``."""
-        return Segment(tuple(map(float, np.asarray(self.start, float) * factor)),
-                       tuple(map(float, np.asarray(self.end, float) * factor)))
+        return Segment(
+            tuple(map(float, np.asarray(self.start, float) * factor)),
+            tuple(map(float, np.asarray(self.end, float) * factor)),
+        )
 
     def parameters(self) -> dict:
         """The scene-file parameters: start and end points, mm."""

@@ -17,8 +17,9 @@ Static runs ignore these fields.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 TIME_LAW_KEYS = frozenset({"ramp", "t0", "t1", "end_time"})
 """Fields of a ``[[load_cases]]`` table that set its time law."""
@@ -65,8 +66,7 @@ class TimeLaw:
         return self.end_time if self.end_time is not None else 1.25 * self.t1
 
 
-def parse_time_law(case: dict, where: str, fail: Callable[[str, Any, str], None]
-                   ) -> TimeLaw | None:
+def parse_time_law(case: dict, where: str, fail: Callable[[str, Any, str], None]) -> TimeLaw | None:
     """The time law of one ``[[load_cases]]`` table (``where`` is its field prefix), or None."""
     if not TIME_LAW_KEYS & set(case):
         return None
@@ -81,8 +81,13 @@ def parse_time_law(case: dict, where: str, fail: Callable[[str, Any, str], None]
                 fail(f"{where}t1", None, "a ramp needs its end time t1 (s)")
             values[key] = None
             continue
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
-                or v < 0.0 or v > 1e9:
+        if (
+            isinstance(v, bool)
+            or not isinstance(v, (int, float))
+            or not math.isfinite(v)
+            or v < 0.0
+            or v > 1e9
+        ):
             fail(f"{where}{key}", v, "must be a time in s, from 0 to 1e9")
         values[key] = float(v)
     if values["t1"] <= values["t0"]:

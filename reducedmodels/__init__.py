@@ -15,16 +15,26 @@ from importlib import import_module
 from . import families as _families  # noqa: F401  (registers beam, prbm, dcmm, ee)
 
 _HOMES = {
-    "Family": "catalogue", "ModelSpec": "catalogue", "Option": "catalogue",
-    "Resolution": "catalogue", "family": "catalogue", "parse_model": "catalogue",
+    "Family": "catalogue",
+    "ModelSpec": "catalogue",
+    "Option": "catalogue",
+    "Resolution": "catalogue",
+    "family": "catalogue",
+    "parse_model": "catalogue",
     "register": "catalogue",
     "Connector": "connector",
-    "SolverError": "core", "SolverSettings": "core", "System": "core",
+    "SolverError": "core",
+    "SolverSettings": "core",
+    "System": "core",
     "LoadPath": "loadpath",
     "Loads": "loads",
-    "build_system": "models", "run_reduced": "models",
-    "PathRecorder": "recorder", "solve_path": "recorder",
-    "LoadControl": "tracer", "PathPoint": "tracer", "trace": "tracer",
+    "build_system": "models",
+    "run_reduced": "models",
+    "PathRecorder": "recorder",
+    "solve_path": "recorder",
+    "LoadControl": "tracer",
+    "PathPoint": "tracer",
+    "trace": "tracer",
 }
 """Module (within the package) of each public name."""
 
@@ -36,7 +46,7 @@ def __getattr__(name: str):
     if name not in _HOMES:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     value = getattr(import_module(f".{_HOMES[name]}", __name__), name)
-    globals()[name] = value             # later look-ups skip this function
+    globals()[name] = value  # later look-ups skip this function
     return value
 
 

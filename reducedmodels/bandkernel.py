@@ -30,7 +30,6 @@ import numpy as np
 from .jit import kernel
 
 
-
 @functools.cache
 def band_token(b: int) -> tuple[int, ...]:
     """The argument that selects the kernels compiled for half-bandwidth b: b + 1 zeros."""
@@ -54,8 +53,9 @@ def band_cholesky(band: np.ndarray, token: tuple) -> tuple[np.ndarray, int]:
 
 
 @kernel
-def factor_columns(band: np.ndarray, token: tuple, rhs: np.ndarray, perm: np.ndarray,
-                   y: np.ndarray) -> tuple[np.ndarray, int]:
+def factor_columns(
+    band: np.ndarray, token: tuple, rhs: np.ndarray, perm: np.ndarray, y: np.ndarray
+) -> tuple[np.ndarray, int]:
     """:func:`band_cholesky`, and with a right-hand side (``rhs.size`` > 0) U^T y = P rhs too.
 
     Column by column (the "up-looking" order): U[i, j] = (K[i, j] -
@@ -72,17 +72,17 @@ def factor_columns(band: np.ndarray, token: tuple, rhs: np.ndarray, perm: np.nda
     forward = rhs.size > 0
     factor = np.zeros((n, b + 1))
     for c in range(n):
-        if c >= b:                             # a full column: trip counts known, unrolled
-            for r in range(b):                 # U[c - b + r, c]
+        if c >= b:  # a full column: trip counts known, unrolled
+            for r in range(b):  # U[c - b + r, c]
                 total = band[r, c]
                 i = c - b + r
-                for s in range(r):             # k = c - b + s
+                for s in range(r):  # k = c - b + s
                     total -= factor[i, b + s - r] * factor[c, s]
                 factor[c, r] = total * factor[i, b]
             total = band[b, c]
             for s in range(b):
                 total -= factor[c, s] * factor[c, s]
-        else:                                  # the first b columns are shorter
+        else:  # the first b columns are shorter
             for i in range(c):
                 total = band[b + i - c, c]
                 for k in range(max(0, i - b), i):
@@ -100,8 +100,9 @@ def factor_columns(band: np.ndarray, token: tuple, rhs: np.ndarray, perm: np.nda
 
 
 @kernel
-def forward_unknown(factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray, y: np.ndarray,
-                    j: int, token: tuple) -> None:
+def forward_unknown(
+    factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray, y: np.ndarray, j: int, token: tuple
+) -> None:
     """Unknown j of U^T y = P rhs, from column j of U and the unknowns before it (in place).
 
     Each unknown is a sum times a stored 1 / U[j, j]: a product, where a
@@ -110,18 +111,19 @@ def forward_unknown(factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray, y: np
     """
     b = len(token) - 1
     total = rhs[perm[j]]
-    if j >= b:                                 # a full row: unrolled
+    if j >= b:  # a full row: unrolled
         for s in range(b):
             total -= factor[j, s] * y[j - b + s]
-    else:                                      # the first b rows are shorter
+    else:  # the first b rows are shorter
         for i in range(j):
             total -= factor[j, b + i - j] * y[i]
     y[j] = total * factor[j, b]
 
 
 @kernel
-def band_cholesky_solve(factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray, token: tuple,
-                        out: np.ndarray) -> None:
+def band_cholesky_solve(
+    factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray, token: tuple, out: np.ndarray
+) -> None:
     """x with K x = rhs into ``out``, K = P^T U^T U P (:func:`band_cholesky`'s factor, P ``perm``).
 
     The band holds K's rows and columns in the order ``perm``: the solution
@@ -130,19 +132,20 @@ def band_cholesky_solve(factor: np.ndarray, rhs: np.ndarray, perm: np.ndarray, t
     """
     n = factor.shape[0]
     y = np.empty(n)
-    for j in range(n):                         # U^T y = P rhs
+    for j in range(n):  # U^T y = P rhs
         forward_unknown(factor, rhs, perm, y, j, token)
     backward_solve(factor, y, perm, token, out)
 
 
 @kernel
-def backward_solve(factor: np.ndarray, y: np.ndarray, perm: np.ndarray, token: tuple,
-                   out: np.ndarray) -> None:
+def backward_solve(
+    factor: np.ndarray, y: np.ndarray, perm: np.ndarray, token: tuple, out: np.ndarray
+) -> None:
     """x with U P x = y into ``out`` (``y`` overwritten): the second half of a Cholesky solve."""
     b = len(token) - 1
     n = factor.shape[0]
     head = min(b, n)
-    for j in range(n - 1, n - 1 - head, -1):   # the short rows first
+    for j in range(n - 1, n - 1 - head, -1):  # the short rows first
         total = y[j]
         for k in range(j + 1, n):
             total -= factor[k, b + j - k] * y[k]
@@ -157,8 +160,9 @@ def backward_solve(factor: np.ndarray, y: np.ndarray, perm: np.ndarray, token: t
 
 
 @kernel
-def band_factor_solve(band: np.ndarray, rhs: np.ndarray, perm: np.ndarray, token: tuple
-                      ) -> tuple[np.ndarray, int, np.ndarray]:
+def band_factor_solve(
+    band: np.ndarray, rhs: np.ndarray, perm: np.ndarray, token: tuple
+) -> tuple[np.ndarray, int, np.ndarray]:
     """:func:`band_cholesky` of K, then K x = rhs (:func:`band_cholesky_solve`), in one call.
 
     Returns the factor, the status and x (``rhs`` (n,) contiguous; x is
@@ -193,13 +197,13 @@ def band_lu(band: np.ndarray, token: tuple) -> tuple[np.ndarray, np.ndarray, int
     """
     b = len(token) - 1
     n = band.shape[1]
-    d = 2 * b                                  # the diagonal's row
+    d = 2 * b  # the diagonal's row
     lu = np.zeros((n, 3 * b + 1))
-    for j in range(n):                         # K[i, j] for |i - j| <= b, K symmetric
-        if b <= j < n - b:                     # trip counts known, unrolled
-            for r in range(b + 1):             # i = j - b + r
+    for j in range(n):  # K[i, j] for |i - j| <= b, K symmetric
+        if b <= j < n - b:  # trip counts known, unrolled
+            for r in range(b + 1):  # i = j - b + r
                 lu[j, b + r] = band[r, j]
-            for p in range(1, b + 1):          # i = j + p
+            for p in range(1, b + 1):  # i = j + p
                 lu[j, d + p] = band[b - p, j + p]
             continue
         for i in range(max(0, j - b), j + 1):
@@ -208,10 +212,10 @@ def band_lu(band: np.ndarray, token: tuple) -> tuple[np.ndarray, np.ndarray, int
             lu[j, d + i - j] = band[b + j - i, i]
     pivots = np.empty(n, np.int64)
     info = 0
-    reach = 0                                  # last column the pivot rows reach so far
+    reach = 0  # last column the pivot rows reach so far
     for j in range(n):
         below = min(b, n - 1 - j)
-        jp, largest = 0, abs(lu[j, d])         # the first largest |entry| on and below the diagonal
+        jp, largest = 0, abs(lu[j, d])  # the first largest |entry| on and below the diagonal
         for p in range(1, below + 1):
             if abs(lu[j, d + p]) > largest:
                 jp, largest = p, abs(lu[j, d + p])
@@ -225,7 +229,7 @@ def band_lu(band: np.ndarray, token: tuple) -> tuple[np.ndarray, np.ndarray, int
             for c in range(j, reach + 1):
                 upper, lower = d + j - c, d + j + jp - c
                 lu[c, upper], lu[c, lower] = lu[c, lower], lu[c, upper]
-        if below == b:                         # a full column: trip counts known, unrolled
+        if below == b:  # a full column: trip counts known, unrolled
             scale = 1.0 / lu[j, d]
             for p in range(1, b + 1):
                 lu[j, d + p] *= scale
@@ -234,7 +238,7 @@ def band_lu(band: np.ndarray, token: tuple) -> tuple[np.ndarray, np.ndarray, int
                 if y != 0.0:
                     for p in range(1, b + 1):
                         lu[c, d + j + p - c] -= lu[j, d + p] * y
-        elif below > 0:                        # the last b columns: the same, shorter
+        elif below > 0:  # the last b columns: the same, shorter
             scale = 1.0 / lu[j, d]
             for p in range(1, below + 1):
                 lu[j, d + p] *= scale
@@ -247,8 +251,14 @@ def band_lu(band: np.ndarray, token: tuple) -> tuple[np.ndarray, np.ndarray, int
 
 
 @kernel
-def band_lu_solve(lu: np.ndarray, pivots: np.ndarray, rhs: np.ndarray, perm: np.ndarray,
-                  token: tuple, out: np.ndarray) -> None:
+def band_lu_solve(
+    lu: np.ndarray,
+    pivots: np.ndarray,
+    rhs: np.ndarray,
+    perm: np.ndarray,
+    token: tuple,
+    out: np.ndarray,
+) -> None:
     """x with K x = rhs into ``out``, from :func:`band_lu`'s factors of K ordered by ``perm``.
 
     ``rhs`` and ``out`` are contiguous (n,); L's row interchanges and

@@ -47,8 +47,8 @@ Units: mm, N, MPa, N mm, rad.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable, Sequence
 from types import ModuleType
-from typing import Callable, Sequence
 
 import numpy as np
 
@@ -56,10 +56,9 @@ from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.kinematics import rotate_xy
 
 from .connector import Connector, ConnectorGroup, LocalState
-from .validity import MAX_CHORD_TURN, MAX_STRAIN, rotation_reasons, stretch_reasons
-from .sections import SectionForces, statics_section_forces, unit_vectors
-
 from .inertia import MassPoints, chain_mass_points
+from .sections import SectionForces, statics_section_forces, unit_vectors
+from .validity import MAX_CHORD_TURN, MAX_STRAIN, rotation_reasons, stretch_reasons
 
 SHEAR_CORRECTION = 5.0 / 6.0
 """Timoshenko shear coefficient kappa of a rectangular section."""
@@ -86,10 +85,9 @@ def beam_kernels() -> ModuleType:
     return beamkernel
 
 
-
-
-def bending_stiffness_terms(EI: float, l0: np.ndarray, shear_stiffness: float | None
-                            ) -> tuple[np.ndarray, np.ndarray]:
+def bending_stiffness_terms(
+    EI: float, l0: np.ndarray, shear_stiffness: float | None
+) -> tuple[np.ndarray, np.ndarray]:
     """Diagonal and off-diagonal entries of the local bending stiffness k_b, N mm.
 
     Parameters
@@ -106,7 +104,9 @@ def bending_stiffness_terms(EI: float, l0: np.ndarray, shear_stiffness: float | 
     return scale * (4.0 + phi), scale * (2.0 - phi)
 
 
-def end_node(pose: np.ndarray, rel: tuple[float, float]) -> tuple[float, float, float, float, float]:
+def end_node(
+    pose: np.ndarray, rel: tuple[float, float]
+) -> tuple[float, float, float, float, float]:
     """(x, y, theta, dx/dtheta) of a flexure's end node on a body at ``pose``, mm and rad.
 
     The node is the body's material point at initial offset ``rel`` (mm) from
@@ -136,7 +136,7 @@ class BeamGroup(ConnectorGroup):
 
     compiled = True
 
-    def __init__(self, connectors: Sequence["BeamConnector"]):
+    def __init__(self, connectors: Sequence[BeamConnector]):
         super().__init__(connectors)
         n_nodes = [c._n_nodes for c in self.connectors]
         n_elements = [n - 1 for n in n_nodes]
@@ -146,27 +146,32 @@ class BeamGroup(ConnectorGroup):
         self._chain_nodes = np.array([*node_start, self._n_nodes], np.int64)
         # element e of flexure k joins node e + k to the next (a flexure's nodes follow its
         # elements', plus one)
-        self._first = (np.arange(sum(n_elements), dtype=np.int64)
-                       + np.repeat(np.arange(len(n_nodes), dtype=np.int64), n_elements))
+        self._first = np.arange(sum(n_elements), dtype=np.int64) + np.repeat(
+            np.arange(len(n_nodes), dtype=np.int64), n_elements
+        )
         ends = np.array([[s, s + n - 1] for s, n in zip(node_start, n_nodes)], np.intp).ravel()
         self._chord0, self._l0, self._k_axial, self._k11, self._k12, self._flexibility = (
             np.concatenate([getattr(c, name) for c in self.connectors])
-            for name in ("_chord0", "_l0", "_k_axial", "_k11", "_k12", "_flexibility"))
+            for name in ("_chord0", "_l0", "_k_axial", "_k11", "_k12", "_flexibility")
+        )
         # the chain closure's element flexibilities, l0 / EI and l0 / EA (beamkernel.close_chains)
         self._chain_tables = (self._chain_nodes, self._flexibility, 1.0 / self._k_axial)
         # the element kernel's per-element numbers in one table (one argument, not five)
-        self._terms = np.column_stack([self._chord0, self._l0, self._k_axial, self._k11,
-                                       self._k12])
+        self._terms = np.column_stack([self._chord0, self._l0, self._k_axial, self._k11, self._k12])
         # the kernel's node tables in the concatenated local coordinates: where each node's
         # (x, y, theta) or its body's pose is read, its offset on the body, whether attached
         # (BeamConnector._node_dof_table laid end to end: interior node i of a flexure at
         # 6 + 3 (i - 1) of its coordinates, its end nodes at their bodies' poses)
         offset = np.repeat(np.array(local_start, np.int64), n_nodes)
         within = np.arange(self._n_nodes, dtype=np.int64) - np.repeat(
-            np.array(node_start, np.int64), n_nodes)
+            np.array(node_start, np.int64), n_nodes
+        )
         self._node_dof = offset + 3 * within + 3
-        self._node_dof[ends] = [start + 3 * pose for c, start in zip(self.connectors, local_start)
-                                for pose in c._end_pose]
+        self._node_dof[ends] = [
+            start + 3 * pose
+            for c, start in zip(self.connectors, local_start)
+            for pose in c._end_pose
+        ]
         self._node_rel = np.zeros((self._n_nodes, 2))
         self._node_rel[ends] = [rel for c in self.connectors for rel in c._end_offsets]
         self._attached = np.zeros(self._n_nodes, bool)
@@ -179,9 +184,10 @@ class BeamGroup(ConnectorGroup):
         self._tangent0 = np.concatenate([c._node_tangent0 for c in self.connectors])
         self._element_start = np.array(_starts(n_elements), np.intp)
         total = sum(n_elements)
-        self._section_index = [np.concatenate([e0 + np.arange(n), total + e0 + np.arange(n)])
-                               [c._section_order] for c, e0, n
-                               in zip(self.connectors, self._element_start, n_elements)]
+        self._section_index = [
+            np.concatenate([e0 + np.arange(n), total + e0 + np.arange(n)])[c._section_order]
+            for c, e0, n in zip(self.connectors, self._element_start, n_elements)
+        ]
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         """The connectors' :meth:`BeamConnector.hessian_pattern` laid end to end (as the base class).
@@ -191,24 +197,33 @@ class BeamGroup(ConnectorGroup):
         """
         return _block_pattern(self._dofs)
 
-    def _kernel(self, node_dof: np.ndarray, grad_slot: np.ndarray, tangent_slot: np.ndarray
-                ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
+    def _kernel(
+        self, node_dof: np.ndarray, grad_slot: np.ndarray, tangent_slot: np.ndarray
+    ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
         """``f(coordinates, grad, storage) -> energy``: the element kernel on these index maps."""
         kernels = beam_kernels()
         assemble_elements = kernels.assemble_elements
         ends = self._attached[self._first] | self._attached[self._first + 1]
-        fixed = (np.ascontiguousarray(node_dof, np.int64), self._node_rel, self._attached,
-                 self._first, self._terms, np.ascontiguousarray(grad_slot, np.int64),
-                 *kernels.scatter_tables(
-                     np.ascontiguousarray(tangent_slot, np.int64).reshape(-1, 36), ends))
+        fixed = (
+            np.ascontiguousarray(node_dof, np.int64),
+            self._node_rel,
+            self._attached,
+            self._first,
+            self._terms,
+            np.ascontiguousarray(grad_slot, np.int64),
+            *kernels.scatter_tables(
+                np.ascontiguousarray(tangent_slot, np.int64).reshape(-1, 36), ends
+            ),
+        )
 
         def kernel(coordinates: np.ndarray, grad: np.ndarray, storage: np.ndarray) -> float:
             return assemble_elements(coordinates, *fixed, grad, storage)
 
         return kernel
 
-    def assembler(self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
-                  ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
+    def assembler(
+        self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
+    ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
         """The compiled kernel adding every element into the System's gradient and tangent.
 
         See :meth:`ConnectorGroup.assembler`; a node's (or its body's pose's)
@@ -216,8 +231,9 @@ class BeamGroup(ConnectorGroup):
         """
         return self._kernel(gather[self._node_dof], grad_dofs[self._dofs], hess_slots)
 
-    def predictor(self, gather: np.ndarray
-                  ) -> tuple[Callable[[np.ndarray], np.ndarray], Callable[..., np.ndarray]]:
+    def predictor(
+        self, gather: np.ndarray
+    ) -> tuple[Callable[[np.ndarray], np.ndarray], Callable[..., np.ndarray]]:
         """:meth:`predict_internal` on global coordinates (:meth:`ConnectorGroup.predictor`).
 
         The kernels read the nodes through the global node table
@@ -229,26 +245,39 @@ class BeamGroup(ConnectorGroup):
         :func:`flexval.reducedmodels.beamkernel.predicted_chains`).
         """
         kernels = beam_kernels()
-        nodes = (np.ascontiguousarray(gather[self._node_dof], np.int64), self._node_rel,
-                 self._attached)
+        nodes = (
+            np.ascontiguousarray(gather[self._node_dof], np.int64),
+            self._node_rel,
+            self._attached,
+        )
         fixed = (*nodes, *self._chain_tables)
-        no_slope = np.zeros(0)                 # not read with a zero weight
+        no_slope = np.zeros(0)  # not read with a zero weight
 
         def remember(coordinates: np.ndarray) -> np.ndarray:
             return kernels.chain_memory(coordinates, *nodes, self._chain_nodes)
 
-        def predict(memories: np.ndarray, weights: np.ndarray, guess: np.ndarray,
-                    slope: np.ndarray | None = None, slope_weight: float = 0.0) -> np.ndarray:
-            return kernels.predicted_chains(memories, weights, guess, *fixed,
-                                            no_slope if slope is None else slope, slope_weight)
+        def predict(
+            memories: np.ndarray,
+            weights: np.ndarray,
+            guess: np.ndarray,
+            slope: np.ndarray | None = None,
+            slope_weight: float = 0.0,
+        ) -> np.ndarray:
+            return kernels.predicted_chains(
+                memories, weights, guess, *fixed, no_slope if slope is None else slope, slope_weight
+            )
 
         return remember, predict
 
     def updater(self, gather: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
         """:meth:`update_internal` on global coordinates (:meth:`ConnectorGroup.updater`)."""
         updated_chains = beam_kernels().updated_chains
-        fixed = (np.ascontiguousarray(gather[self._node_dof], np.int64), self._node_rel,
-                 self._attached, *self._chain_tables)
+        fixed = (
+            np.ascontiguousarray(gather[self._node_dof], np.int64),
+            self._node_rel,
+            self._attached,
+            *self._chain_tables,
+        )
 
         def update(old: np.ndarray, new: np.ndarray) -> np.ndarray:
             return updated_chains(old, new, *fixed)
@@ -267,8 +296,9 @@ class BeamGroup(ConnectorGroup):
         energy = kernel(_coordinates(states), gradient, hessian)
         return energy, gradient, hessian
 
-    def path_end_pass(self, coordinates: np.ndarray
-                      ) -> tuple[list[list[list[str]]], list[SectionForces]]:
+    def path_end_pass(
+        self, coordinates: np.ndarray
+    ) -> tuple[list[list[list[str]]], list[SectionForces]]:
         """:meth:`path_validity` and :meth:`path_section_forces` from one compiled pass.
 
         ``coordinates`` as :meth:`ConnectorGroup.path_end_pass` says, read by
@@ -292,16 +322,27 @@ class BeamGroup(ConnectorGroup):
         """
         return self._section_forces(*self._element_ends(_levels(levels))[2:])
 
-    def _element_ends(self, coordinates: np.ndarray
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def _element_ends(
+        self, coordinates: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Every element's chord length, turn and end forces at each level (k, ...) each.
 
         ``coordinates`` (k, m): the local coordinates laid end to end at each
         level; see :func:`flexval.reducedmodels.beamkernel.path_element_ends`.
         """
         return beam_kernels().path_element_ends(
-            coordinates, self._node_dof, self._node_rel, self._attached, self._first,
-            self._tangent0, self._chord0, self._l0, self._k_axial, self._k11, self._k12)
+            coordinates,
+            self._node_dof,
+            self._node_rel,
+            self._attached,
+            self._first,
+            self._tangent0,
+            self._chord0,
+            self._l0,
+            self._k_axial,
+            self._k11,
+            self._k12,
+        )
 
     def _verdicts(self, lengths: np.ndarray, turns: np.ndarray) -> list[list[list[str]]]:
         """The validity reasons per connector and level from the elements' chord measures."""
@@ -309,18 +350,32 @@ class BeamGroup(ConnectorGroup):
         turn = np.maximum.reduceat(turns, self._element_start, axis=1)
         valid = ((strain <= MAX_STRAIN) & (turn <= MAX_CHORD_TURN)).T.tolist()
         ends = [*self._element_start[1:], lengths.shape[1]]
-        return [[[] if ok else (stretch_reasons("element", length[e0:e1], c._l0)
-                                + rotation_reasons("element", turn_e[e0:e1], MAX_CHORD_TURN))
-                 for ok, length, turn_e in zip(flags, lengths, turns)]
-                for c, flags, e0, e1 in zip(self.connectors, valid, self._element_start, ends)]
+        return [
+            [
+                []
+                if ok
+                else (
+                    stretch_reasons("element", length[e0:e1], c._l0)
+                    + rotation_reasons("element", turn_e[e0:e1], MAX_CHORD_TURN)
+                )
+                for ok, length, turn_e in zip(flags, lengths, turns)
+            ]
+            for c, flags, e0, e1 in zip(self.connectors, valid, self._element_start, ends)
+        ]
 
     def _section_forces(self, axial: np.ndarray, moment: np.ndarray) -> list[SectionForces]:
         """Each connector's stacked section forces from every element's end forces."""
-        return [SectionForces(c._section_at.copy(), axial[:, index], moment[:, index])
-                for c, index in zip(self.connectors, self._section_index)]
+        return [
+            SectionForces(c._section_at.copy(), axial[:, index], moment[:, index])
+            for c, index in zip(self.connectors, self._section_index)
+        ]
 
-    def predict_internal(self, past: Sequence[Sequence[LocalState]], weights: Sequence[float],
-                         poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    def predict_internal(
+        self,
+        past: Sequence[Sequence[LocalState]],
+        weights: Sequence[float],
+        poses: Sequence[tuple[np.ndarray, np.ndarray]],
+    ) -> np.ndarray:
         """Concatenated interior nodes extrapolated in chord lengths and angles.
 
         As :meth:`BeamConnector.predict_internal` documents, for every
@@ -328,22 +383,37 @@ class BeamGroup(ConnectorGroup):
         """
         kernels = beam_kernels()
         nodes = (self._node_dof, self._node_rel, self._attached)
-        memories = np.array([kernels.chain_memory(_coordinates(states), *nodes, self._chain_nodes)
-                             for states in past])
+        memories = np.array(
+            [
+                kernels.chain_memory(_coordinates(states), *nodes, self._chain_nodes)
+                for states in past
+            ]
+        )
         predicted = _coordinates([(*pose, state[2]) for pose, state in zip(poses, past[-1])])
-        return kernels.predicted_chains(memories, np.asarray(weights, float), predicted, *nodes,
-                                        *self._chain_tables, np.zeros(0), 0.0)
+        return kernels.predicted_chains(
+            memories,
+            np.asarray(weights, float),
+            predicted,
+            *nodes,
+            *self._chain_tables,
+            np.zeros(0),
+            0.0,
+        )
 
-    def update_internal(self, old: Sequence[LocalState], new: Sequence[LocalState]
-                        ) -> np.ndarray:
+    def update_internal(self, old: Sequence[LocalState], new: Sequence[LocalState]) -> np.ndarray:
         """Concatenated interior nodes after a Newton correction, chords turned, not sheared.
 
         As :meth:`BeamConnector.update_internal` documents, for every flexure
         at once (:func:`flexval.reducedmodels.beamkernel.updated_chains`).
         """
-        return beam_kernels().updated_chains(_coordinates(old), _coordinates(new),
-                                             self._node_dof, self._node_rel, self._attached,
-                                             *self._chain_tables)
+        return beam_kernels().updated_chains(
+            _coordinates(old),
+            _coordinates(new),
+            self._node_dof,
+            self._node_rel,
+            self._attached,
+            *self._chain_tables,
+        )
 
 
 def _starts(counts: Sequence[int]) -> list[int]:
@@ -370,8 +440,7 @@ def evenly_spaced(stop: float, n: int) -> np.ndarray:
 
 def _block_pattern(element_dofs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(rows, cols) of every element's row-major 6 x 6 block, from its coordinates (elements, 6)."""
-    return (np.repeat(element_dofs, 6, axis=1).ravel(),
-            np.tile(element_dofs, (1, 6)).ravel())
+    return (np.repeat(element_dofs, 6, axis=1).ravel(), np.tile(element_dofs, (1, 6)).ravel())
 
 
 def _coordinates(states: Sequence[LocalState]) -> np.ndarray:
@@ -424,8 +493,9 @@ class BeamConnector(Connector):
     more, 1e-5: three), on open f+/f- with beam:500 27/83 and beam:2000 33/127
     (with 0: 27/85, 34/127)."""
 
-    def __init__(self, flexure: Flexure, mechanism: Mechanism, n_elements: int,
-                 shear: bool = False):
+    def __init__(
+        self, flexure: Flexure, mechanism: Mechanism, n_elements: int, shear: bool = False
+    ):
         if n_elements < 1:
             raise ValueError(f"beam: number of elements must be >= 1, got {n_elements}")
         self.name = flexure.name
@@ -447,16 +517,22 @@ class BeamConnector(Connector):
         material = mechanism.material
         self._k_axial = flexure.axial_stiffness(material) / l0
         bending = flexure.bending_stiffness(material)
-        self._flexibility = l0 / bending   # 1/(N mm)
-        shear_stiffness = (SHEAR_CORRECTION * material.shear_modulus * flexure.section.area
-                           if shear else None)
+        self._flexibility = l0 / bending  # 1/(N mm)
+        shear_stiffness = (
+            SHEAR_CORRECTION * material.shear_modulus * flexure.section.area if shear else None
+        )
         self._k11, self._k12 = bending_stiffness_terms(bending, l0, shear_stiffness)
         # which pose (0: pose_a, 1: pose_b) carries the start node and the end node
-        self._end_pose = (self.bodies.index(flexure.start_body),
-                          self.bodies.index(flexure.end_body))
-        self._end_rel = np.array([
-            self._nodes0[0] - mechanism.bodies[flexure.start_body].reference,
-            self._nodes0[-1] - mechanism.bodies[flexure.end_body].reference])
+        self._end_pose = (
+            self.bodies.index(flexure.start_body),
+            self.bodies.index(flexure.end_body),
+        )
+        self._end_rel = np.array(
+            [
+                self._nodes0[0] - mechanism.bodies[flexure.start_body].reference,
+                self._nodes0[-1] - mechanism.bodies[flexure.end_body].reference,
+            ]
+        )
         self._end_offsets = tuple(map(tuple, self._end_rel.tolist()))
         self._area, self._arc_length = flexure.section.area, length
 
@@ -494,8 +570,9 @@ class BeamConnector(Connector):
         node_dofs = [frames[0], *(6 + np.arange(self.n_internal).reshape(-1, 3)), frames[1]]
         rel = np.zeros((n + 1, 2))
         rel[0], rel[-1] = self._end_rel
-        return chain_mass_points(node_dofs, rel, np.full(n, self._arc_length / n),
-                                 density * self._area)
+        return chain_mass_points(
+            node_dofs, rel, np.full(n, self._arc_length / n), density * self._area
+        )
 
     def initial_internal(self) -> np.ndarray:
         """Interior nodes at rest: (x, y, 0) each, mm and rad."""
@@ -506,8 +583,9 @@ class BeamConnector(Connector):
         """Every third internal coordinate (the nodal rotation) is an angle."""
         return np.tile([False, False, True], self.n_internal // 3)
 
-    def _nodes(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-               ) -> tuple[np.ndarray, np.ndarray]:
+    def _nodes(
+        self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Current node positions (N + 1, 2) and rotations (N + 1,), mm and rad."""
         poses = (pose_a, pose_b)
         x = np.empty((self._n_nodes, 2))
@@ -531,8 +609,9 @@ class BeamConnector(Connector):
         node_dofs = self._node_dof_table()
         return _block_pattern(np.hstack([node_dofs[:-1], node_dofs[1:]]))
 
-    def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> tuple[float, np.ndarray, np.ndarray]:
+    def evaluate(
+        self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+    ) -> tuple[float, np.ndarray, np.ndarray]:
         """Strain energy (N mm), gradient (6 + n_internal) and Hessian values.
 
         The gradient holds the internal forces conjugate to
@@ -543,12 +622,17 @@ class BeamConnector(Connector):
         return self._alone.evaluate([(pose_a, pose_b, internal)])
 
     @classmethod
-    def group(cls, connectors: Sequence["BeamConnector"]) -> BeamGroup:
+    def group(cls, connectors: Sequence[BeamConnector]) -> BeamGroup:
         """All the connectors' elements evaluated in one vectorised call (:class:`BeamGroup`)."""
         return BeamGroup(connectors)
 
-    def predict_internal(self, states: Sequence[LocalState], weights: Sequence[float],
-                         pose_a: np.ndarray, pose_b: np.ndarray) -> np.ndarray:
+    def predict_internal(
+        self,
+        states: Sequence[LocalState],
+        weights: Sequence[float],
+        pose_a: np.ndarray,
+        pose_b: np.ndarray,
+    ) -> np.ndarray:
         """Interior nodes extrapolated in chord lengths and angles (for the load stepping).
 
         Each element's chord length and direction and each node's rotation
@@ -562,8 +646,9 @@ class BeamConnector(Connector):
         the load (tens of Newton iterations on slender flexures); so would
         closing the chain by a uniform stretch.
         """
-        return self._alone.predict_internal([[state] for state in states], weights,
-                                            [(pose_a, pose_b)])
+        return self._alone.predict_internal(
+            [[state] for state in states], weights, [(pose_a, pose_b)]
+        )
 
     def update_internal(self, old: LocalState, new: LocalState) -> np.ndarray:
         """Interior nodes after a Newton correction, with chords turned instead of sheared.
@@ -580,8 +665,7 @@ class BeamConnector(Connector):
         """
         return self._alone.update_internal([old], [new])
 
-    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> list[str]:
+    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> list[str]:
         """Reasons: element stretch over MAX_STRAIN, end turns from the chord over MAX_CHORD_TURN.
 
         See :mod:`flexval.reducedmodels.validity`: the first is material strain, the
@@ -597,8 +681,13 @@ class BeamConnector(Connector):
         """Deformed node positions (N + 1, 2), mm, from the flexure's start to its end."""
         return self._nodes(pose_a, pose_b, internal)[0]
 
-    def section_forces(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray,
-                       gradient: np.ndarray | None = None) -> SectionForces:
+    def section_forces(
+        self,
+        pose_a: np.ndarray,
+        pose_b: np.ndarray,
+        internal: np.ndarray,
+        gradient: np.ndarray | None = None,
+    ) -> SectionForces:
         """Normal force (N) and bending moment (N mm) at both end nodes of every element.
 
         Each element's own end forces (its internal-force vector at each
@@ -610,10 +699,13 @@ class BeamConnector(Connector):
         if gradient is not None:
             x, theta = self._nodes(pose_a, pose_b, internal)
             slot = self._end_pose[1]
-            return statics_section_forces(x, self._node_fractions,
-                                          gradient[3 * slot:3 * slot + 3],
-                                          (pose_a, pose_b)[slot],
-                                          axes=unit_vectors(self._node_tangent0 + theta))
+            return statics_section_forces(
+                x,
+                self._node_fractions,
+                gradient[3 * slot : 3 * slot + 3],
+                (pose_a, pose_b)[slot],
+                axes=unit_vectors(self._node_tangent0 + theta),
+            )
         forces = self.path_section_forces([(pose_a, pose_b, internal)])
         return SectionForces(forces.at, forces.axial[0], forces.moment[0])
 

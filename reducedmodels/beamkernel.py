@@ -25,7 +25,6 @@ import numpy as np
 
 from .jit import kernel
 
-
 TWO_PI = 2.0 * math.pi
 
 
@@ -71,8 +70,9 @@ def wrapped(angle: float) -> float:
 
 
 @kernel
-def chord_frame(x1: float, y1: float, x2: float, y2: float, theta1: float, theta2: float,
-                c0x: float, c0y: float) -> tuple[float, float, float, float, float]:
+def chord_frame(
+    x1: float, y1: float, x2: float, y2: float, theta1: float, theta2: float, c0x: float, c0y: float
+) -> tuple[float, float, float, float, float]:
     """An element's corotational frame: chord length l (mm), direction (c, s), local end rotations.
 
     The local rotations a1, a2 (rad) are the nodes' rotations from the
@@ -86,9 +86,22 @@ def chord_frame(x1: float, y1: float, x2: float, y2: float, theta1: float, theta
 
 
 @kernel
-def element(x1: float, y1: float, x2: float, y2: float, theta1: float, theta2: float,
-            c0x: float, c0y: float, l0: float, k_axial: float, k11: float, k12: float,
-            grad: np.ndarray, entries: np.ndarray) -> float:
+def element(
+    x1: float,
+    y1: float,
+    x2: float,
+    y2: float,
+    theta1: float,
+    theta2: float,
+    c0x: float,
+    c0y: float,
+    l0: float,
+    k_axial: float,
+    k11: float,
+    k12: float,
+    grad: np.ndarray,
+    entries: np.ndarray,
+) -> float:
     """Energy (N mm) of one corotational element; its gradient and tangent entries in place.
 
     The element joins node 1 (x1, y1, theta1) to node 2 (x2, y2, theta2)
@@ -110,9 +123,19 @@ def element(x1: float, y1: float, x2: float, y2: float, theta1: float, theta2: f
 
 
 @kernel
-def element_in_frame(length: float, c: float, s: float, a1: float, a2: float, l0: float,
-                     k_axial: float, k11: float, k12: float, grad: np.ndarray,
-                     entries: np.ndarray) -> float:
+def element_in_frame(
+    length: float,
+    c: float,
+    s: float,
+    a1: float,
+    a2: float,
+    l0: float,
+    k_axial: float,
+    k11: float,
+    k12: float,
+    grad: np.ndarray,
+    entries: np.ndarray,
+) -> float:
     """:func:`element` from the element's :func:`chord_frame` (same arguments otherwise)."""
     u = length - l0
     axial = k_axial * u
@@ -160,8 +183,9 @@ def attach(grad: np.ndarray, tangent: np.ndarray, slot: int, t0: float, t1: floa
 
 
 @kernel
-def place_nodes(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndarray,
-                attached: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def place_nodes(
+    coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndarray, attached: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Node positions (nodes, 2) mm, rotations (nodes,) rad and dx/dtheta (nodes, 2) mm.
 
     A free node reads its (x, y, theta) at ``coordinates[node_dof]``; an
@@ -188,10 +212,19 @@ def place_nodes(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndar
 
 
 @kernel
-def assemble_elements(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndarray,
-                      attached: np.ndarray, first: np.ndarray, terms: np.ndarray,
-                      grad_slot: np.ndarray, tangent_slot: np.ndarray, tangent_pick: np.ndarray,
-                      grad_out: np.ndarray, tangent_out: np.ndarray) -> float:
+def assemble_elements(
+    coordinates: np.ndarray,
+    node_dof: np.ndarray,
+    node_rel: np.ndarray,
+    attached: np.ndarray,
+    first: np.ndarray,
+    terms: np.ndarray,
+    grad_slot: np.ndarray,
+    tangent_slot: np.ndarray,
+    tangent_pick: np.ndarray,
+    grad_out: np.ndarray,
+    tangent_out: np.ndarray,
+) -> float:
     """Add every element's gradient and tangent into ``grad_out`` and ``tangent_out``; the energy.
 
     Parameters
@@ -231,10 +264,23 @@ def assemble_elements(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: n
     for e in range(first.size):
         i = first[e]
         j = i + 1
-        energy += element(x[i, 0], x[i, 1], x[j, 0], x[j, 1], theta[i], theta[j], terms[e, 0],
-                          terms[e, 1], terms[e, 2], terms[e, 3], terms[e, 4], terms[e, 5],
-                          grad, entries)
-        if attached[i] or attached[j]:          # an end element: transported to its bodies
+        energy += element(
+            x[i, 0],
+            x[i, 1],
+            x[j, 0],
+            x[j, 1],
+            theta[i],
+            theta[j],
+            terms[e, 0],
+            terms[e, 1],
+            terms[e, 2],
+            terms[e, 3],
+            terms[e, 4],
+            terms[e, 5],
+            grad,
+            entries,
+        )
+        if attached[i] or attached[j]:  # an end element: transported to its bodies
             for k in range(36):
                 tangent[k] = SIGN[k] * entries[SOURCE[k]]
             if attached[i]:
@@ -246,7 +292,7 @@ def assemble_elements(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: n
                 if slot < 0:
                     break
                 tangent_out[slot] += tangent[tangent_pick[e, m]]
-        else:                                   # an interior one: added from its seven entries
+        else:  # an interior one: added from its seven entries
             for k in range(7):
                 signed[k], signed[7 + k] = entries[k], -entries[k]
             for m in range(width):
@@ -351,8 +397,14 @@ def scatter_tables(tangent_slot: np.ndarray, ends: np.ndarray) -> tuple[np.ndarr
 
 
 @kernel
-def close_chains(chords: np.ndarray, x: np.ndarray, theta: np.ndarray, chain_nodes: np.ndarray,
-                 bending_flexibility: np.ndarray, axial_flexibility: np.ndarray) -> np.ndarray:
+def close_chains(
+    chords: np.ndarray,
+    x: np.ndarray,
+    theta: np.ndarray,
+    chain_nodes: np.ndarray,
+    bending_flexibility: np.ndarray,
+    axial_flexibility: np.ndarray,
+) -> np.ndarray:
     """Interior nodes (x, y, theta) of chains of chords (elements, 2) mm, concatenated.
 
     Chain k holds the nodes ``chain_nodes[k]`` to ``chain_nodes[k + 1] - 1``
@@ -381,7 +433,7 @@ def close_chains(chords: np.ndarray, x: np.ndarray, theta: np.ndarray, chain_nod
     for k in range(n_chains):
         n0, n1 = chain_nodes[k], chain_nodes[k + 1]
         e0, m = n0 - k, n1 - n0 - 1
-        cx, cy = chords[e0:e0 + m, 0].copy(), chords[e0:e0 + m, 1].copy()
+        cx, cy = chords[e0 : e0 + m, 0].copy(), chords[e0 : e0 + m, 1].copy()
         ell = np.empty(m)
         px, py = np.empty(m + 1), np.empty(m + 1)
         psi = np.zeros(m + 1)
@@ -395,13 +447,16 @@ def close_chains(chords: np.ndarray, x: np.ndarray, theta: np.ndarray, chain_nod
             for i in range(m):
                 px[i + 1], py[i + 1] = px[i] + cx[i], py[i] + cy[i]
             gap_x, gap_y = target_x - px[m], target_y - py[m]
-            if (m < 2 or iteration == CLOSURE_ITERATIONS
-                    or math.hypot(gap_x, gap_y) <= CLOSURE_TOL * arc):
+            if (
+                m < 2
+                or iteration == CLOSURE_ITERATIONS
+                or math.hypot(gap_x, gap_y) <= CLOSURE_TOL * arc
+            ):
                 break
             a[:, :] = 0.0
             for i in range(m):
                 fb, fa = bending_flexibility[e0 + i], axial_flexibility[e0 + i]
-                rx = -(py[m] - py[i] - 0.5 * cy[i])      # J (end - midpoint of chord i)
+                rx = -(py[m] - py[i] - 0.5 * cy[i])  # J (end - midpoint of chord i)
                 ry = px[m] - px[i] - 0.5 * cx[i]
                 ex, ey = cx[i] / ell[i], cy[i] / ell[i]
                 a[0, 0] += fb
@@ -438,10 +493,16 @@ def close_chains(chords: np.ndarray, x: np.ndarray, theta: np.ndarray, chain_nod
 
 
 @kernel
-def updated_chains(old: np.ndarray, new: np.ndarray, node_dof: np.ndarray,
-                   node_rel: np.ndarray, attached: np.ndarray, chain_nodes: np.ndarray,
-                   bending_flexibility: np.ndarray, axial_flexibility: np.ndarray
-                   ) -> np.ndarray:
+def updated_chains(
+    old: np.ndarray,
+    new: np.ndarray,
+    node_dof: np.ndarray,
+    node_rel: np.ndarray,
+    attached: np.ndarray,
+    chain_nodes: np.ndarray,
+    bending_flexibility: np.ndarray,
+    axial_flexibility: np.ndarray,
+) -> np.ndarray:
     """Interior nodes after a Newton correction from ``old`` to ``new`` (linear), chords turned.
 
     Each chord's change is split into its stretch (along the old chord) and
@@ -474,15 +535,20 @@ def updated_chains(old: np.ndarray, new: np.ndarray, node_dof: np.ndarray,
             chord = math.hypot(dx, dy)
             tx, ty = dx / chord, dy / chord
             length = chord + (tx * cx + ty * cy)
-            chords[i - k, 0], chords[i - k, 1] = rotated(length * tx, length * ty,
-                                                         (tx * cy - ty * cx) / chord)
-    return close_chains(chords, x_new, theta, chain_nodes, bending_flexibility,
-                        axial_flexibility)
+            chords[i - k, 0], chords[i - k, 1] = rotated(
+                length * tx, length * ty, (tx * cy - ty * cx) / chord
+            )
+    return close_chains(chords, x_new, theta, chain_nodes, bending_flexibility, axial_flexibility)
 
 
 @kernel
-def chain_memory(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndarray,
-                 attached: np.ndarray, chain_nodes: np.ndarray) -> np.ndarray:
+def chain_memory(
+    coordinates: np.ndarray,
+    node_dof: np.ndarray,
+    node_rel: np.ndarray,
+    attached: np.ndarray,
+    chain_nodes: np.ndarray,
+) -> np.ndarray:
     """What :func:`predicted_chains` reads of a converged state, computed once per state.
 
     Laid end to end (4 elements + 3 nodes,): each chord's length (mm),
@@ -509,11 +575,19 @@ def chain_memory(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.nda
 
 
 @kernel
-def predicted_chains(memories: np.ndarray, weights: np.ndarray, poses: np.ndarray,
-                     node_dof: np.ndarray, node_rel: np.ndarray, attached: np.ndarray,
-                     chain_nodes: np.ndarray, bending_flexibility: np.ndarray,
-                     axial_flexibility: np.ndarray, slope: np.ndarray, slope_weight: float
-                     ) -> np.ndarray:
+def predicted_chains(
+    memories: np.ndarray,
+    weights: np.ndarray,
+    poses: np.ndarray,
+    node_dof: np.ndarray,
+    node_rel: np.ndarray,
+    attached: np.ndarray,
+    chain_nodes: np.ndarray,
+    bending_flexibility: np.ndarray,
+    axial_flexibility: np.ndarray,
+    slope: np.ndarray,
+    slope_weight: float,
+) -> np.ndarray:
     """Interior nodes extrapolated in chord lengths and angles from converged states.
 
     ``memories`` (states, m) holds :func:`chain_memory` of each converged
@@ -534,7 +608,7 @@ def predicted_chains(memories: np.ndarray, weights: np.ndarray, poses: np.ndarra
     newest = memories.shape[0] - 1
     last = memories[newest]
     length, turn, theta = np.empty(n), np.zeros(n), np.empty(n_nodes)
-    w = weights[newest]                       # the last state's own turn is 0
+    w = weights[newest]  # the last state's own turn is 0
     for e in range(n):
         length[e] = w * last[e]
     for i in range(n_nodes):
@@ -564,19 +638,27 @@ def predicted_chains(memories: np.ndarray, weights: np.ndarray, poses: np.ndarra
                 turn[e] += slope_weight * (ux * vy - uy * vx) / last[e]
     chords = np.empty((n, 2))
     for e in range(n):
-        chords[e, 0], chords[e, 1] = rotated(length[e] * last[2 * n + e],
-                                             length[e] * last[3 * n + e], turn[e])
+        chords[e, 0], chords[e, 1] = rotated(
+            length[e] * last[2 * n + e], length[e] * last[3 * n + e], turn[e]
+        )
     ends = place_nodes(poses, node_dof, node_rel, attached)[0]
-    return close_chains(chords, ends, theta, chain_nodes, bending_flexibility,
-                        axial_flexibility)
+    return close_chains(chords, ends, theta, chain_nodes, bending_flexibility, axial_flexibility)
 
 
 @kernel
-def path_element_ends(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: np.ndarray,
-                      attached: np.ndarray, first: np.ndarray, tangent0: np.ndarray,
-                      chord0: np.ndarray, l0: np.ndarray, k_axial: np.ndarray,
-                      k11: np.ndarray, k12: np.ndarray
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def path_element_ends(
+    coordinates: np.ndarray,
+    node_dof: np.ndarray,
+    node_rel: np.ndarray,
+    attached: np.ndarray,
+    first: np.ndarray,
+    tangent0: np.ndarray,
+    chord0: np.ndarray,
+    l0: np.ndarray,
+    k_axial: np.ndarray,
+    k11: np.ndarray,
+    k12: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Each element's chord and end forces at k states: what the end pass of a load path needs.
 
     ``coordinates`` (k, m) holds the coordinates at each state, read through
@@ -611,12 +693,12 @@ def path_element_ends(coordinates: np.ndarray, node_dof: np.ndarray, node_rel: n
         for e in range(n):
             i = first[e]
             j = i + 1
-            chord, c, s, a1, a2 = chord_frame(x[i, 0], x[i, 1], x[j, 0], x[j, 1], theta[i],
-                                              theta[j], chord0[e, 0], chord0[e, 1])
+            chord, c, s, a1, a2 = chord_frame(
+                x[i, 0], x[i, 1], x[j, 0], x[j, 1], theta[i], theta[j], chord0[e, 0], chord0[e, 1]
+            )
             length[state, e] = chord
             turn[state, e] = max(abs(a1), abs(a2))
-            element_in_frame(chord, c, s, a1, a2, l0[e], k_axial[e], k11[e], k12[e], grad,
-                             entries)
+            element_in_frame(chord, c, s, a1, a2, l0[e], k_axial[e], k11[e], k12[e], grad, entries)
             axial[state, e] = -(grad[0] * cos_axis[i] + grad[1] * sin_axis[i])
             axial[state, n + e] = grad[3] * cos_axis[j] + grad[4] * sin_axis[j]
             moment[state, e], moment[state, n + e] = grad[2], -grad[5]
@@ -641,12 +723,35 @@ def warm_up() -> None:
     grad_slot, tangent_slot = np.full((2, 6), -1, np.int64), np.full((2, 36), -1, np.int64)
     coordinates = np.zeros(9)
     slots, picks = scatter_tables(tangent_slot, np.array([True, True]))
-    assemble_elements(coordinates, chain, rel, attached, first, np.ones((2, 6)), grad_slot,
-                      slots, picks, np.zeros(9), np.zeros(9))
+    assemble_elements(
+        coordinates,
+        chain,
+        rel,
+        attached,
+        first,
+        np.ones((2, 6)),
+        grad_slot,
+        slots,
+        picks,
+        np.zeros(9),
+        np.zeros(9),
+    )
     chain_nodes = np.array([0, 3], np.int64)
     updated_chains(coordinates, coordinates, chain, rel, attached, chain_nodes, ones, ones)
     memory = chain_memory(coordinates, chain, rel, attached, chain_nodes)
-    predicted_chains(np.array([memory, memory]), ones, coordinates, chain, rel, attached,
-                     chain_nodes, ones, ones, coordinates, 0.0)
-    path_element_ends(np.zeros((1, 9)), chain, rel, attached, first, np.zeros(3), chord0, ones,
-                      ones, ones, ones)
+    predicted_chains(
+        np.array([memory, memory]),
+        ones,
+        coordinates,
+        chain,
+        rel,
+        attached,
+        chain_nodes,
+        ones,
+        ones,
+        coordinates,
+        0.0,
+    )
+    path_element_ends(
+        np.zeros((1, 9)), chain, rel, attached, first, np.zeros(3), chord0, ones, ones, ones, ones
+    )

@@ -28,8 +28,9 @@ the text (the CLI turns it into exit code 2).
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 from flexval.geometry import SceneError
 
@@ -44,8 +45,10 @@ LINEAR = "linear"
 REFERENCE = "reference"
 CAPABILITIES = frozenset({FIELDS, ARCLENGTH, LINEAR, REFERENCE})
 
-_ID_RE = re.compile(r"^(?P<family>[A-Za-z][\w-]*)(?::(?P<res>[^\[\]]*))?"
-                    r"(?:\[(?P<opts>[^\[\]]*)\])?$")
+_ID_RE = re.compile(
+    r"^(?P<family>[A-Za-z][\w-]*)(?::(?P<res>[^\[\]]*))?"
+    r"(?:\[(?P<opts>[^\[\]]*)\])?$"
+)
 
 
 @dataclass(frozen=True)
@@ -124,8 +127,9 @@ class Option:
         return cls(name, doc, (("false", False), ("true", True)), "false", "true", keyword)
 
     @classmethod
-    def choice(cls, name: str, doc: str, choices: tuple[str, ...], default: str,
-               keyword: str | None = None) -> Option:
+    def choice(
+        cls, name: str, doc: str, choices: tuple[str, ...], default: str, keyword: str | None = None
+    ) -> Option:
         """An option taking one of ``choices`` (passed on as the text itself)."""
         return cls(name, doc, tuple((c, c) for c in choices), default, None, keyword)
 
@@ -186,8 +190,10 @@ class Family:
     def __post_init__(self) -> None:
         unknown = set(self.capabilities) - CAPABILITIES
         if unknown:
-            raise ValueError(f"family {self.name!r}: unknown capabilities {sorted(unknown)}; "
-                             f"expected some of {sorted(CAPABILITIES)}")
+            raise ValueError(
+                f"family {self.name!r}: unknown capabilities {sorted(unknown)}; "
+                f"expected some of {sorted(CAPABILITIES)}"
+            )
         if ARCLENGTH in self.capabilities and self.system is None:
             raise ValueError(f"family {self.name!r}: capability {ARCLENGTH!r} needs `system`")
 
@@ -291,8 +297,9 @@ def expected_ids() -> str:
     return ", ".join(f.syntax for f in _FAMILIES.values())
 
 
-def _parse_options(fam: Family, text: str, fail: Callable[[str], None]
-                   ) -> tuple[tuple[str, str], ...]:
+def _parse_options(
+    fam: Family, text: str, fail: Callable[[str], None]
+) -> tuple[tuple[str, str], ...]:
     given: dict[str, str] = {}
     for item in (t.strip() for t in text.split(",")):
         name, eq, value = (s.strip() for s in item.partition("="))
@@ -302,12 +309,16 @@ def _parse_options(fam: Family, text: str, fail: Callable[[str], None]
             fail(f"unknown option {name!r} of '{fam.name}'; allowed: {allowed}")
         if not eq:
             if opt.bare is None:
-                fail(f"option {name!r} of '{fam.name}' needs a value, one of "
-                     f"{', '.join(opt.allowed)}")
+                fail(
+                    f"option {name!r} of '{fam.name}' needs a value, one of "
+                    f"{', '.join(opt.allowed)}"
+                )
             value = opt.bare
         if value not in opt.allowed:
-            fail(f"option {name!r} of '{fam.name}' must be one of {', '.join(opt.allowed)}, "
-                 f"got {value!r}")
+            fail(
+                f"option {name!r} of '{fam.name}' must be one of {', '.join(opt.allowed)}, "
+                f"got {value!r}"
+            )
         if name in given:
             fail(f"option {name!r} given twice")
         given[name] = value
@@ -323,6 +334,7 @@ def parse_model(text: str, source: str = "<command line>", field: str = "model")
         Naming ``source``, ``field`` and ``text``: unknown family, bad or
         out-of-range resolution, unknown option or value.
     """
+
     def fail(reason: str) -> None:
         raise SceneError(source, field, text, reason)
 
@@ -345,7 +357,9 @@ def parse_model(text: str, source: str = "<command line>", field: str = "model")
             fail(f"the {res.name} of '{fam.name}' ({res.meaning}) must be an integer")
         n = int(res_text)
         if not res.low <= n <= res.high:
-            fail(f"the {res.name} of '{fam.name}' ({res.meaning}) must be between {res.low} "
-                 f"and {res.high}")
+            fail(
+                f"the {res.name} of '{fam.name}' ({res.meaning}) must be between {res.low} "
+                f"and {res.high}"
+            )
     options = _parse_options(fam, opts, fail) if opts is not None and opts.strip() else ()
     return ModelSpec(fam.name, n, options)

@@ -17,7 +17,8 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import TYPE_CHECKING, Callable, Sequence
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -56,8 +57,9 @@ class Connector(ABC):
 
     # --- required --------------------------------------------------------
     @abstractmethod
-    def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> tuple[float, np.ndarray, np.ndarray]:
+    def evaluate(
+        self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+    ) -> tuple[float, np.ndarray, np.ndarray]:
         """Energy (N mm), gradient (6 + n_internal) and Hessian.
 
         The gradient holds the generalised forces conjugate to the local
@@ -79,7 +81,7 @@ class Connector(ABC):
 
     # --- optional, with defaults ----------------------------------------
     @classmethod
-    def group(cls, connectors: Sequence["Connector"]) -> "ConnectorGroup":
+    def group(cls, connectors: Sequence[Connector]) -> ConnectorGroup:
         """The evaluator of several connectors of this class at once (built once by the core).
 
         The core evaluates each run of consecutive connectors of one class
@@ -120,8 +122,13 @@ class Connector(ABC):
         """
         return None
 
-    def predict_internal(self, states: Sequence[LocalState], weights: Sequence[float],
-                         pose_a: np.ndarray, pose_b: np.ndarray) -> np.ndarray:
+    def predict_internal(
+        self,
+        states: Sequence[LocalState],
+        weights: Sequence[float],
+        pose_a: np.ndarray,
+        pose_b: np.ndarray,
+    ) -> np.ndarray:
         """Internal coordinates predicted for the next load step (predictor of the stepping).
 
         Parameters
@@ -150,8 +157,7 @@ class Connector(ABC):
         """
         return new[2]
 
-    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> list[str]:
+    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> list[str]:
         """Reasons why this state lies outside the model's range of meaning (empty: valid).
 
         Evaluated at every converged load level without stopping the run
@@ -171,7 +177,7 @@ class Connector(ABC):
         return [self.validity(*state) for state in states]
 
     # --- optional mass (flexval.reducedmodels.inertia) ---------------------------
-    def mass_points(self, density: float) -> "MassPoints | None":
+    def mass_points(self, density: float) -> MassPoints | None:
         """The connector's mass as point masses over its local coordinates.
 
         ``density`` is the flexure material's, t/mm^3. Returns a
@@ -184,8 +190,9 @@ class Connector(ABC):
         """
         return None
 
-    def mass_matrix(self, density: float, pose_a: np.ndarray, pose_b: np.ndarray,
-                    internal: np.ndarray) -> "sp.spmatrix | None":
+    def mass_matrix(
+        self, density: float, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+    ) -> sp.spmatrix | None:
         """A consistent mass matrix over the local coordinates at this state (t, t mm, t mm^2).
 
         Default None: the mass is that of :meth:`mass_points`. A connector
@@ -195,8 +202,14 @@ class Connector(ABC):
         """
         return None
 
-    def convective_forces(self, density: float, pose_a: np.ndarray, pose_b: np.ndarray,
-                          internal: np.ndarray, velocity: np.ndarray) -> "np.ndarray | None":
+    def convective_forces(
+        self,
+        density: float,
+        pose_a: np.ndarray,
+        pose_b: np.ndarray,
+        internal: np.ndarray,
+        velocity: np.ndarray,
+    ) -> np.ndarray | None:
         """Velocity-dependent inertia forces of a :meth:`mass_matrix` (N, N mm), local.
 
         For a kinetic energy 1/2 v^T M(q) v they are M'(q) v - 1/2 d(v^T M v)/dq,
@@ -207,8 +220,13 @@ class Connector(ABC):
         """
         return None
 
-    def section_forces(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray,
-                       gradient: np.ndarray | None = None) -> "SectionForces | None":
+    def section_forces(
+        self,
+        pose_a: np.ndarray,
+        pose_b: np.ndarray,
+        internal: np.ndarray,
+        gradient: np.ndarray | None = None,
+    ) -> SectionForces | None:
         """Normal force (N) and bending moment (N mm) along the flexure at a converged state.
 
         Recorded at every load level by the path recorder, which turns them
@@ -231,7 +249,7 @@ class Connector(ABC):
         """
         return None
 
-    def path_section_forces(self, states: Sequence[LocalState]) -> "SectionForces | None":
+    def path_section_forces(self, states: Sequence[LocalState]) -> SectionForces | None:
         """The section forces of :meth:`section_forces` at several states, stacked.
 
         The path recorder asks once per load path, for every converged level
@@ -256,8 +274,9 @@ class Connector(ABC):
             return None
         from .sections import SectionForces
 
-        return SectionForces(forces[0].at, np.array([f.axial for f in forces]),
-                             np.array([f.moment for f in forces]))
+        return SectionForces(
+            forces[0].at, np.array([f.axial for f in forces]), np.array([f.moment for f in forces])
+        )
 
 
 class ConnectorGroup:
@@ -311,11 +330,14 @@ class ConnectorGroup:
                 pattern = np.repeat(np.arange(m), m), np.tile(np.arange(m), m)
             rows.append(pattern[0] + start), cols.append(pattern[1] + start)
             start += m
-        return (np.concatenate(rows or [np.zeros(0, np.int64)]),
-                np.concatenate(cols or [np.zeros(0, np.int64)]))
+        return (
+            np.concatenate(rows or [np.zeros(0, np.int64)]),
+            np.concatenate(cols or [np.zeros(0, np.int64)]),
+        )
 
-    def assembler(self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
-                  ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float] | None:
+    def assembler(
+        self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
+    ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float] | None:
         """A function that adds the group's gradient and tangent into the global arrays, or None.
 
         The core calls it once, with the index maps of the concatenated local
@@ -331,8 +353,9 @@ class ConnectorGroup:
         """
         return None
 
-    def predictor(self, gather: np.ndarray
-                  ) -> tuple[Callable[[np.ndarray], np.ndarray], Callable[..., np.ndarray]] | None:
+    def predictor(
+        self, gather: np.ndarray
+    ) -> tuple[Callable[[np.ndarray], np.ndarray], Callable[..., np.ndarray]] | None:
         """:meth:`predict_internal` as functions of global coordinates, or None.
 
         Called once with ``gather`` as for :meth:`assembler`; returns
@@ -364,17 +387,22 @@ class ConnectorGroup:
         ``levels`` holds, for each of k states (a load path's levels), the
         connectors' local states in the order of :attr:`connectors`.
         """
-        return [c.path_validity([states[j] for states in levels])
-                for j, c in enumerate(self.connectors)]
+        return [
+            c.path_validity([states[j] for states in levels]) for j, c in enumerate(self.connectors)
+        ]
 
-    def path_section_forces(self, levels: Sequence[Sequence[LocalState]]
-                            ) -> list["SectionForces | None"]:
+    def path_section_forces(
+        self, levels: Sequence[Sequence[LocalState]]
+    ) -> list[SectionForces | None]:
         """Each connector's :meth:`Connector.path_section_forces` at k levels (as ``path_validity``)."""
-        return [c.path_section_forces([states[j] for states in levels])
-                for j, c in enumerate(self.connectors)]
+        return [
+            c.path_section_forces([states[j] for states in levels])
+            for j, c in enumerate(self.connectors)
+        ]
 
-    def path_end_pass(self, coordinates: np.ndarray
-                      ) -> tuple[list[list[list[str]]], list["SectionForces | None"]]:
+    def path_end_pass(
+        self, coordinates: np.ndarray
+    ) -> tuple[list[list[list[str]]], list[SectionForces | None]]:
         """:meth:`path_validity` and :meth:`path_section_forces` of the same k levels, together.
 
         What a path's end pass records (:func:`flexval.reducedmodels.recorder.path_end_pass`).
@@ -394,43 +422,55 @@ class ConnectorGroup:
         for row in coordinates:
             states, start = [], 0
             for m in sizes:
-                states.append((row[start:start + 3], row[start + 3:start + 6],
-                               row[start + 6:start + m]))
+                states.append(
+                    (row[start : start + 3], row[start + 3 : start + 6], row[start + 6 : start + m])
+                )
                 start += m
             levels.append(states)
         return levels
 
-    def section_forces(self, states: Sequence[LocalState], gradients: Sequence[np.ndarray]
-                       ) -> list["SectionForces | None"]:
+    def section_forces(
+        self, states: Sequence[LocalState], gradients: Sequence[np.ndarray]
+    ) -> list[SectionForces | None]:
         """Each connector's :meth:`Connector.section_forces` at its state with a known gradient.
 
         ``states`` and ``gradients`` hold each connector's local state and
         local energy gradient (e.g. a linear response's K0 dq), in the order
         of :attr:`connectors`. Default: connector by connector.
         """
-        return [c.section_forces(*local, gradient=g)
-                for c, local, g in zip(self.connectors, states, gradients)]
+        return [
+            c.section_forces(*local, gradient=g)
+            for c, local, g in zip(self.connectors, states, gradients)
+        ]
 
-    def predict_internal(self, past: Sequence[Sequence[LocalState]], weights: Sequence[float],
-                         poses: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    def predict_internal(
+        self,
+        past: Sequence[Sequence[LocalState]],
+        weights: Sequence[float],
+        poses: Sequence[tuple[np.ndarray, np.ndarray]],
+    ) -> np.ndarray:
         """The connectors' predicted internal coordinates for the next load step, concatenated.
 
         ``past`` holds, for each converged state (oldest first), the
         connectors' local states; ``poses`` each connector's predicted
         (pose_a, pose_b); see :meth:`Connector.predict_internal`.
         """
-        return np.concatenate([c.predict_internal([states[k] for states in past], weights, *pose)
-                               for k, (c, pose) in enumerate(zip(self.connectors, poses))])
+        return np.concatenate(
+            [
+                c.predict_internal([states[k] for states in past], weights, *pose)
+                for k, (c, pose) in enumerate(zip(self.connectors, poses))
+            ]
+        )
 
-    def update_internal(self, old: Sequence[LocalState], new: Sequence[LocalState]
-                        ) -> np.ndarray:
+    def update_internal(self, old: Sequence[LocalState], new: Sequence[LocalState]) -> np.ndarray:
         """The connectors' internal coordinates after a Newton correction, concatenated.
 
         ``old`` and ``new`` hold each connector's local state before and
         after the linear update (see :meth:`Connector.update_internal`).
         """
-        return np.concatenate([c.update_internal(o, n)
-                               for c, o, n in zip(self.connectors, old, new)])
+        return np.concatenate(
+            [c.update_internal(o, n) for c, o, n in zip(self.connectors, old, new)]
+        )
 
 
 def overrides(connector: Connector, hook: str) -> bool:

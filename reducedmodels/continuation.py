@@ -38,7 +38,7 @@ Units: mm, N, N mm, rad; load factors are dimensionless.
 from __future__ import annotations
 
 import math
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
@@ -66,8 +66,16 @@ class ArcLengthStep(StepProblem):
     converged point (q0, lambda0).
     """
 
-    def __init__(self, system: System, loads: Loads, factor: float, origin: np.ndarray,
-                 origin_factor: float, arc: float, psi: float):
+    def __init__(
+        self,
+        system: System,
+        loads: Loads,
+        factor: float,
+        origin: np.ndarray,
+        origin_factor: float,
+        arc: float,
+        psi: float,
+    ):
         super().__init__(system, loads, factor)
         self.q0, self.lam0, self.arc, self.psi = origin, origin_factor, arc, psi
 
@@ -87,8 +95,9 @@ class ArcLengthStep(StepProblem):
         root = math.sqrt(disc)
         # the root that keeps the increment closest to the previous one
         roots = ((-b + root) / (2.0 * a), (-b - root) / (2.0 * a))
-        dl = max(roots, key=lambda r: (arc_dot(system, base + r * d_f, dq)
-                                       + psi2 * (dlam + r) * dlam))
+        dl = max(
+            roots, key=lambda r: arc_dot(system, base + r * d_f, dq) + psi2 * (dlam + r) * dlam
+        )
         return d_r + dl * d_f, dl
 
 
@@ -116,8 +125,9 @@ class ArcLength(Stepping):
     cut_name = "arc-length"
     first_factor = 0.0
 
-    def __init__(self, max_load_factor: float, n_steps: int, psi: float, max_steps: int,
-                 max_growth: float):
+    def __init__(
+        self, max_load_factor: float, n_steps: int, psi: float, max_steps: int, max_growth: float
+    ):
         self.max_load_factor, self.n_steps, self.psi = max_load_factor, n_steps, psi
         self.max_steps, self.max_growth = max_steps, max_growth
 
@@ -137,7 +147,7 @@ class ArcLength(Stepping):
             raise StepRefused("the load does not move the mechanism")
         self.arc, self.arc_max = arc0, self.max_growth * arc0
         self.arc_min = arc0 * 0.5**self.settings.max_cuts
-        self.direction = (tangent, 1.0)     # unscaled (dq, dlambda) of the last converged step
+        self.direction = (tangent, 1.0)  # unscaled (dq, dlambda) of the last converged step
         self.was_cut = self.landed = False
 
     def finished(self) -> bool:
@@ -149,8 +159,9 @@ class ArcLength(Stepping):
         dq_dir, dlam_dir = self.direction
         norm = math.sqrt(arc_dot(self.system, dq_dir, dq_dir) + self.psi**2 * dlam_dir**2)
         dq, dlam = dq_dir * (self.arc / norm), dlam_dir * (self.arc / norm)
-        problem = ArcLengthStep(self.system, self.loads, self.factor + dlam, self.q, self.factor,
-                                self.arc, self.psi)
+        problem = ArcLengthStep(
+            self.system, self.loads, self.factor + dlam, self.q, self.factor, self.arc, self.psi
+        )
         return problem, self.q + dq, self.q
 
     def review(self, result: NewtonResult, solve: Solve) -> Verdict:
@@ -160,8 +171,11 @@ class ArcLength(Stepping):
         dq_dir, dlam_dir = self.direction
         if q_new is not None and self.system.motion_ratio(q, q_new) > 1.0:
             q_new, why = None, "step too large"
-        elif q_new is not None and (arc_dot(self.system, q_new - q, dq_dir)
-                                    + self.psi**2 * (lam_new - lam) * dlam_dir) <= 0.0:
+        elif (
+            q_new is not None
+            and (arc_dot(self.system, q_new - q, dq_dir) + self.psi**2 * (lam_new - lam) * dlam_dir)
+            <= 0.0
+        ):
             q_new, why = None, "the corrector turned back along the path"
         if q_new is None:
             return Verdict(None, lam, why, None, False)
@@ -170,8 +184,9 @@ class ArcLength(Stepping):
         if lam_new >= self.max_load_factor > lam:
             # crossed the end: solve at exactly max_load_factor from the interpolated state
             t = (self.max_load_factor - lam) / (lam_new - lam)
-            landing = solve(FixedLoad(self.system, self.loads, self.max_load_factor),
-                            q + t * (q_new - q), q)
+            landing = solve(
+                FixedLoad(self.system, self.loads, self.max_load_factor), q + t * (q_new - q), q
+            )
             if landing.state is None:
                 return Verdict(None, lam, landing.reason, None, False)
             self.landed = True
@@ -203,15 +218,26 @@ class ArcLength(Stepping):
         """More than ``max_steps`` converged steps without reaching the end."""
         if self.landed or counters.substeps < self.max_steps:
             return None
-        return (f"load factor {self.max_load_factor:g} not reached in {self.max_steps} steps "
-                f"(largest load factor on the path {self.peak:.6g})")
+        return (
+            f"load factor {self.max_load_factor:g} not reached in {self.max_steps} steps "
+            f"(largest load factor on the path {self.peak:.6g})"
+        )
 
 
-def solve_arclength(system: System, case: LoadCase, max_load_factor: float = 1.0,
-                    n_steps: int = 20, *, model: str = "", scene: str = "", psi: float = 0.0,
-                    max_steps: int | None = None, max_growth: float = 10.0,
-                    stop: Callable[[LoadPath], bool] | None = None,
-                    record_poses: bool = False) -> LoadPath:
+def solve_arclength(
+    system: System,
+    case: LoadCase,
+    max_load_factor: float = 1.0,
+    n_steps: int = 20,
+    *,
+    model: str = "",
+    scene: str = "",
+    psi: float = 0.0,
+    max_steps: int | None = None,
+    max_growth: float = 10.0,
+    stop: Callable[[LoadPath], bool] | None = None,
+    record_poses: bool = False,
+) -> LoadPath:
     """Trace the equilibrium path of ``case`` by arc-length continuation.
 
     Parameters
@@ -264,9 +290,15 @@ def solve_arclength(system: System, case: LoadCase, max_load_factor: float = 1.0
     if n_steps < 1:
         raise ValueError(f"n_steps must be >= 1, got {n_steps}")
     max_steps = 100 * n_steps if max_steps is None else max_steps
-    recorder = PathRecorder(system, case, f"{model or 'model'}:arclength", scene,
-                            {"max_load_factor": max_load_factor, "n_steps": n_steps, "psi": psi},
-                            record_poses=record_poses, limit_points=True)
+    recorder = PathRecorder(
+        system,
+        case,
+        f"{model or 'model'}:arclength",
+        scene,
+        {"max_load_factor": max_load_factor, "n_steps": n_steps, "psi": psi},
+        record_poses=record_poses,
+        limit_points=True,
+    )
     stepping = ArcLength(max_load_factor, n_steps, psi, max_steps, max_growth)
     path, last = recorder.run(trace(system, system.loads(case), stepping), stop)
     path.stats["arc_length"] = last.step
@@ -286,7 +318,7 @@ def limit_loads(path: LoadPath) -> list[float]:
     travel = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(path.dx), np.diff(path.dy)))])
     out = []
     for k in path.stats.get("limit_points", []):
-        t, p = travel[k - 1:k + 2], load[k - 1:k + 2]
+        t, p = travel[k - 1 : k + 2], load[k - 1 : k + 2]
         if not (t[0] < t[1] < t[2]):
             out.append(float(p[1]))
             continue

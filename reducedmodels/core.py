@@ -18,15 +18,15 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
 from flexval.geometry import LoadCase, Mechanism
-from flexval.geometry.loads import MAX_LOAD_SUBSTEPS
 from flexval.geometry.kinematics import rotate_xy
+from flexval.geometry.loads import MAX_LOAD_SUBSTEPS
 
 from .connector import Connector, ConnectorGroup, LocalState, overrides
 from .loadpath import LoadPath
@@ -49,8 +49,7 @@ def local_hessian(connector: Connector, hessian: np.ndarray) -> np.ndarray | sp.
     return sp.csc_matrix((hessian, pattern), shape=(n, n))
 
 
-def local_hessian_product(connector: Connector, hessian: np.ndarray, x: np.ndarray
-                          ) -> np.ndarray:
+def local_hessian_product(connector: Connector, hessian: np.ndarray, x: np.ndarray) -> np.ndarray:
     """``local_hessian(connector, hessian) @ x`` without building the matrix.
 
     For a connector with a :meth:`~Connector.hessian_pattern` the product is
@@ -131,8 +130,10 @@ class System:
         self.body_index = {b: k for k, b in enumerate(mech.moving_bodies)}
         self.reference = {b: mech.bodies[b].reference for b in mech.bodies}
         #: the target point's offset from its body's reference point and its place at rest (mm)
-        self._target_offsets = ((mech.target_point - self.reference[mech.target_body]).tolist(),
-                                mech.target_point.tolist())
+        self._target_offsets = (
+            (mech.target_point - self.reference[mech.target_body]).tolist(),
+            mech.target_point.tolist(),
+        )
         n = 3 * len(self.body_index)
         total = n + sum(c.n_internal for c in self.connectors)
         # every connector's global dofs [pose_a, pose_b, internal] in one array (ground: -1),
@@ -166,15 +167,24 @@ class System:
         # themselves, with those coordinates' global dofs (the defaults give what
         # the core computes for every coordinate anyway)
         self._predictors, self._updaters = (
-            [(group, run, np.concatenate([idx[6:] for idx in self._local_to_global[run]]))
-             for group, run in self._groups
-             if overrides(group.connectors[0], hook)
-             and sum(c.n_internal for c in group.connectors)]
-            for hook in ("predict_internal", "update_internal"))
+            [
+                (group, run, np.concatenate([idx[6:] for idx in self._local_to_global[run]]))
+                for group, run in self._groups
+                if overrides(group.connectors[0], hook)
+                and sum(c.n_internal for c in group.connectors)
+            ]
+            for hook in ("predict_internal", "update_internal")
+        )
         #: scaled Newton correction above which :meth:`update` applies the connectors' updates
-        self.update_threshold = min((c.update_above for group, _, _ in self._updaters
-                                     for c in group.connectors if c.update_above is not None),
-                                    default=NONLINEAR_UPDATE)
+        self.update_threshold = min(
+            (
+                c.update_above
+                for group, _, _ in self._updaters
+                for c in group.connectors
+                if c.update_above is not None
+            ),
+            default=NONLINEAR_UPDATE,
+        )
         self._build_scatter()
 
     def _build_scatter(self) -> None:
@@ -204,7 +214,7 @@ class System:
 
         def of_run(values: np.ndarray, offsets: list[int], run: slice) -> np.ndarray:
             """The entries of a run of consecutive connectors (a view)."""
-            return values[offsets[run.start]:offsets[run.stop]]
+            return values[offsets[run.start] : offsets[run.stop]]
 
         # each group's Hessian entries in global dofs, ground entries dropped (kept: keep)
         rows, cols, hess_keep = [], [], []
@@ -224,39 +234,48 @@ class System:
         self._gather = gathers
         diagonal = np.arange(n)
         compiled = any(group.compiled for group, _ in self._groups)
-        self.layout = TangentLayout(n, np.concatenate([*rows, diagonal]),
-                                    np.concatenate([*cols, diagonal]), self.n_multipliers,
-                                    compiled)
+        self.layout = TangentLayout(
+            n,
+            np.concatenate([*rows, diagonal]),
+            np.concatenate([*cols, diagonal]),
+            self.n_multipliers,
+            compiled,
+        )
         # each group's Hessian values -> storage slots (-1: a ground entry, dropped)
         group_slots, start = [], 0
         for keep in hess_keep:
             slots = np.full(keep.size, -1, np.int64)
             kept = int(np.count_nonzero(keep))
-            slots[keep] = self.layout.slots[start:start + kept]
+            slots[keep] = self.layout.slots[start : start + kept]
             group_slots.append(slots)
             start += kept
         self._diagonal_slots = self.layout.slots[-n:]
-        self._diagonal_slot_list = self._diagonal_slots.tolist()   # read one by one per assembly
+        self._diagonal_slot_list = self._diagonal_slots.tolist()  # read one by one per assembly
 
         #: each group's local coordinates laid end to end, as positions in [q, ground pose]
         self._group_gathers = [of_run(all_gather, bounds, run) for _, run in self._groups]
         self._assemblers, self._generic, generic_slots = [], [], []
         for (group, run), slots in zip(self._groups, group_slots):
-            assembler = group.assembler(of_run(all_gather, bounds, run),
-                                        of_run(self._all_dofs, bounds, run), slots)
+            assembler = group.assembler(
+                of_run(all_gather, bounds, run), of_run(self._all_dofs, bounds, run), slots
+            )
             if assembler is None:
                 self._generic.append((group, run))
                 generic_slots.append(slots)
             else:
                 self._assemblers.append(assembler)
         # predictors and updaters with a function of the global coordinates use it (or None)
-        self._predictors = [(group, run, internal,
-                             group.predictor(of_run(all_gather, bounds, run)))
-                            for group, run, internal in self._predictors]
-        self._updaters = [(group, run, internal, group.updater(of_run(all_gather, bounds, run)))
-                          for group, run, internal in self._updaters]
-        all_grad = np.concatenate([of_run(self._all_dofs, bounds, run) for _, run in self._generic]
-                                  or [np.zeros(0, int)])
+        self._predictors = [
+            (group, run, internal, group.predictor(of_run(all_gather, bounds, run)))
+            for group, run, internal in self._predictors
+        ]
+        self._updaters = [
+            (group, run, internal, group.updater(of_run(all_gather, bounds, run)))
+            for group, run, internal in self._updaters
+        ]
+        all_grad = np.concatenate(
+            [of_run(self._all_dofs, bounds, run) for _, run in self._generic] or [np.zeros(0, int)]
+        )
         self._grad_keep = all_grad >= 0
         self._grad_dofs = all_grad[self._grad_keep]
         generic_slots = np.concatenate(generic_slots or [np.zeros(0, np.int64)])
@@ -279,7 +298,7 @@ class System:
         """Coordinates of the undeformed configuration."""
         q = np.zeros(self.n_dofs)
         for b, k in self.body_index.items():
-            q[3 * k:3 * k + 2] = self.reference[b]
+            q[3 * k : 3 * k + 2] = self.reference[b]
         for c, idx in zip(self.connectors, self._local_to_global):
             q[idx[6:]] = c.initial_internal()
         return q
@@ -289,7 +308,7 @@ class System:
         if body == self.mechanism.ground:
             return self._ground_pose.copy()
         k = self.body_index[body]
-        return q[3 * k:3 * k + 3]
+        return q[3 * k : 3 * k + 3]
 
     @property
     def groups(self) -> list[tuple[ConnectorGroup, slice]]:
@@ -332,13 +351,15 @@ class System:
         so that a case without load (or a small one) still has a meaningful one.
         """
         loads = Loads.of_case(case, self.pose_dofs, self.reference, self.size)
-        loads.scale = max([loads.scale, *(getattr(c, "dead_load_scale", 0.0)
-                                           for c in self.connectors)])
+        loads.scale = max(
+            [loads.scale, *(getattr(c, "dead_load_scale", 0.0) for c in self.connectors)]
+        )
         return loads
 
     # --- assembly --------------------------------------------------------
-    def assemble(self, q: np.ndarray, loads: Loads, factor: float
-                 ) -> tuple[float, np.ndarray, Tangent]:
+    def assemble(
+        self, q: np.ndarray, loads: Loads, factor: float
+    ) -> tuple[float, np.ndarray, Tangent]:
         """Total potential (N mm), its gradient and the tangent at state q and load factor.
 
         See :meth:`assemble_storage`; the tangent wraps its storage.
@@ -346,8 +367,9 @@ class System:
         energy, grad, storage = self.assemble_storage(q, loads, factor)
         return energy, grad, self.layout.tangent(storage)
 
-    def assemble_storage(self, q: np.ndarray, loads: Loads, factor: float
-                         ) -> tuple[float, np.ndarray, np.ndarray]:
+    def assemble_storage(
+        self, q: np.ndarray, loads: Loads, factor: float
+    ) -> tuple[float, np.ndarray, np.ndarray]:
         """Total potential (N mm), its gradient and the tangent's values in :attr:`layout`'s storage.
 
         Every connector is evaluated once, each run of consecutive connectors
@@ -367,21 +389,24 @@ class System:
                 energy += e
                 grads.append(g)
                 hessians.append(h)
-            grad = np.bincount(self._grad_dofs, weights=np.concatenate(grads)[self._grad_keep],
-                               minlength=n)
-            storage = np.bincount(self._hess_slots,
-                                  weights=np.concatenate(hessians)[self._hess_keep],
-                                  minlength=self.layout.size)
+            grad = np.bincount(
+                self._grad_dofs, weights=np.concatenate(grads)[self._grad_keep], minlength=n
+            )
+            storage = np.bincount(
+                self._hess_slots,
+                weights=np.concatenate(hessians)[self._hess_keep],
+                minlength=self.layout.size,
+            )
         else:
             grad, storage = np.zeros(n), np.zeros(self.layout.size)
         if self._assemblers:
-            coordinates = self._coordinates      # [q, ground pose], the ground's part set once
+            coordinates = self._coordinates  # [q, ground pose], the ground's part set once
             coordinates[:n] = q
             for assembler in self._assemblers:
                 energy += assembler(coordinates, grad, storage)
-        diagonal = self._load_diagonal           # zero between assemblies
+        diagonal = self._load_diagonal  # zero between assemblies
         energy += loads.add_to(q, factor, grad, diagonal)
-        for dof in loads.diagonal_dofs:            # the few loaded bodies' rotations
+        for dof in loads.diagonal_dofs:  # the few loaded bodies' rotations
             value = diagonal[dof]
             if value:
                 storage[self._diagonal_slot_list[dof]] += value
@@ -398,13 +423,13 @@ class System:
             _, g, _ = c.evaluate(*local)
             for k, b in enumerate(c.bodies):
                 if b == g_name:
-                    total += g[3 * k:3 * k + 3]
+                    total += g[3 * k : 3 * k + 3]
         return total
 
     # --- outputs ---------------------------------------------------------
     def target(self, q: np.ndarray) -> tuple[float, float, float]:
         """Target point displacement (dx, dy) in mm and target body rotation in rad."""
-        x, y, theta = self.pose(q, self.mechanism.target_body).tolist()   # floats: once per level
+        x, y, theta = self.pose(q, self.mechanism.target_body).tolist()  # floats: once per level
         (rel_x, rel_y), (tx, ty) = self._target_offsets
         rx, ry = rotate_xy(theta, rel_x, rel_y)
         return (x + rx) - tx, (y + ry) - ty, theta
@@ -424,8 +449,8 @@ class System:
                 if update is not None:
                     new[internal] = update(*extended)
                     continue
-                if local is None:        # from q + du, as the updates before this one found it
-                    local = self.local_states(q), self.local_states(extended[1][:q.size])
+                if local is None:  # from q + du, as the updates before this one found it
+                    local = self.local_states(q), self.local_states(extended[1][: q.size])
                 new[internal] = group.update_internal(local[0][run], local[1][run])
         return new
 
@@ -462,9 +487,13 @@ class System:
                 out.append(local[run])
         return out
 
-    def predict(self, history: Sequence[tuple[np.ndarray, float]], factor: float,
-                past: Sequence[list] | None = None,
-                slope: np.ndarray | None = None) -> np.ndarray:
+    def predict(
+        self,
+        history: Sequence[tuple[np.ndarray, float]],
+        factor: float,
+        past: Sequence[list] | None = None,
+        slope: np.ndarray | None = None,
+    ) -> np.ndarray:
         """Predicted state at ``factor`` from converged (state, factor) pairs, oldest first.
 
         Coordinates are extrapolated by the Lagrange polynomial through the
@@ -505,17 +534,21 @@ class System:
                     if slope is None:
                         guess[internal] = predictor[1](memories, np.asarray(weights, float), poses)
                     else:
-                        guess[internal] = predictor[1](memories, np.asarray(weights, float), poses,
-                                                       np.concatenate([slope, np.zeros(3)]),
-                                                       slope_weight)
+                        guess[internal] = predictor[1](
+                            memories,
+                            np.asarray(weights, float),
+                            poses,
+                            np.concatenate([slope, np.zeros(3)]),
+                            slope_weight,
+                        )
                     continue
-                if now is None:          # the guess as the predictions before this one found it
-                    now = self.local_states(poses[:guess.size])
+                if now is None:  # the guess as the predictions before this one found it
+                    now = self.local_states(poses[: guess.size])
                     if slope is not None:
                         states_weights = lagrange_weights(factors, factor)
-                guess[internal] = group.predict_internal([state[k] for state in past],
-                                                         states_weights,
-                                                         [state[:2] for state in now[run]])
+                guess[internal] = group.predict_internal(
+                    [state[k] for state in past], states_weights, [state[:2] for state in now[run]]
+                )
         return guess
 
     def validity(self, q: np.ndarray) -> list[str]:
@@ -524,13 +557,16 @@ class System:
         Each reason is prefixed with the connector's name; empty: valid
         (see :meth:`Connector.validity`).
         """
-        return [f"{c.name}: {why}" for c, local in zip(self.connectors, self.local_states(q))
-                for why in c.validity(*local)]
+        return [
+            f"{c.name}: {why}"
+            for c, local in zip(self.connectors, self.local_states(q))
+            for why in c.validity(*local)
+        ]
 
     def motion_ratio(self, q0: np.ndarray, q1: np.ndarray) -> float:
         """Largest body motion from q0 to q1 over the settings' step bounds (> 1: too far)."""
         s = self.settings
-        poses = 3 * len(self.body_index)         # the bodies' coordinates come first
+        poses = 3 * len(self.body_index)  # the bodies' coordinates come first
         # plain floats in one loop: a mechanism has a few bodies, and numpy calls (or
         # list slices and maps) cost more than the sums
         before, after = q0[:poses].tolist(), q1[:poses].tolist()
@@ -542,8 +578,9 @@ class System:
                 rotation = turn
             if shift > translation:
                 translation = shift
-        return max(rotation / s.max_rotation_step,
-                   translation / (s.max_translation_step * self.size))
+        return max(
+            rotation / s.max_rotation_step, translation / (s.max_translation_step * self.size)
+        )
 
     def unstable(self, tangent: Tangent | None) -> bool:
         """True if the tangent has more negative eigenvalues than the system has multipliers.
@@ -562,8 +599,6 @@ class System:
     def scaled(self, v: np.ndarray) -> np.ndarray:
         """Dimensionless version of a coordinate vector (lengths / size, angles as is)."""
         return v / self._coordinate_scale
-
-
 
 
 def connector_groups(connectors: Sequence[Connector]) -> list[tuple[ConnectorGroup, slice]]:
@@ -597,7 +632,7 @@ def hermite_weights(factors: Sequence[float], factor: float) -> tuple[list[float
     """
     m = len(factors) - 1
     last = factors[m]
-    node = 1.0                                   # w(x)
+    node = 1.0  # w(x)
     for f in factors:
         node *= factor - f
     weights, spread = [], []

@@ -24,8 +24,9 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from collections.abc import Callable
 from types import ModuleType
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
@@ -35,8 +36,13 @@ from flexval.geometry.kinematics import rotate_xy
 from .connector import Connector, ConnectorGroup
 from .inertia import MassPoints, rigid_pieces
 from .sections import SectionForces
-from .validity import (MAX_RELATIVE_ROTATION, MAX_STRAIN, SCREEN_MARGIN, rotation_reasons,
-                       stretch_reasons)
+from .validity import (
+    MAX_RELATIVE_ROTATION,
+    MAX_STRAIN,
+    SCREEN_MARGIN,
+    rotation_reasons,
+    stretch_reasons,
+)
 
 SAMPLES_PER_SUB_ARC = 16
 """Segments of each displaced sub-arc at whose ends the section forces are reported."""
@@ -118,24 +124,35 @@ def _chain_layout(n: int, forward: bool) -> _ChainLayout:
     It depends on n and the direction only, so the flexures of a model
     share it (computed once, like a module constant; the arrays are read-only).
     """
-    slots = ([np.arange(0, 3)] + [np.arange(6 + 3 * k, 9 + 3 * k) for k in range(n - 1)]
-             + [np.arange(3, 6)])
-    element_dofs = np.array([np.concatenate([slots[k], slots[k + 1]]) for k in range(n)],
-                            np.int64)
+    slots = (
+        [np.arange(0, 3)]
+        + [np.arange(6 + 3 * k, 9 + 3 * k) for k in range(n - 1)]
+        + [np.arange(3, 6)]
+    )
+    element_dofs = np.array([np.concatenate([slots[k], slots[k + 1]]) for k in range(n)], np.int64)
     w = _SAMPLE_FRACTIONS
     sample_w = np.concatenate([w] + [w[1:]] * (n - 1))
-    sample_part = np.concatenate([np.zeros(len(w), int)]
-                                 + [np.full(len(w) - 1, k) for k in range(1, n)])
+    sample_part = np.concatenate(
+        [np.zeros(len(w), int)] + [np.full(len(w) - 1, k) for k in range(1, n)]
+    )
     fractions = np.concatenate([w / n] + [(k + w[1:]) / n for k in range(1, n)])
     at = fractions if forward else 1.0 - fractions
-    order = np.argsort(at, kind="stable")    # the fractions are distinct
-    layout = _ChainLayout(element_dofs, element_dofs[:, 0].copy(), element_dofs[:, 3].copy(),
-                          np.arange(36 * n, dtype=np.int64).reshape(n, 36),
-                          np.repeat(element_dofs, 6, axis=1).ravel(),
-                          np.tile(element_dofs, (1, 6)).ravel(),
-                          np.tile([False, False, True], n - 1), sample_part, sample_w,
-                          np.stack([sample_part, sample_part + 1], 1).astype(np.int64),
-                          at, order, at[order])
+    order = np.argsort(at, kind="stable")  # the fractions are distinct
+    layout = _ChainLayout(
+        element_dofs,
+        element_dofs[:, 0].copy(),
+        element_dofs[:, 3].copy(),
+        np.arange(36 * n, dtype=np.int64).reshape(n, 36),
+        np.repeat(element_dofs, 6, axis=1).ravel(),
+        np.tile(element_dofs, (1, 6)).ravel(),
+        np.tile([False, False, True], n - 1),
+        sample_part,
+        sample_w,
+        np.stack([sample_part, sample_part + 1], 1).astype(np.int64),
+        at,
+        order,
+        at[order],
+    )
     for array in dataclasses.astuple(layout):
         if isinstance(array, np.ndarray):
             array.flags.writeable = False
@@ -161,7 +178,7 @@ class DcmmConnector(Connector):
             raise ValueError(f"dcmm: number of sub-arcs must be >= 1, got {n}")
         if frame not in ("leader", "follower"):
             raise ValueError(f"dcmm: frame must be 'leader' or 'follower', got {frame!r}")
-        if frame == "follower":      # measure in the displaced frame of body j of e_ij
+        if frame == "follower":  # measure in the displaced frame of body j of e_ij
             flexure = dataclasses.replace(flexure, bodies=flexure.bodies[::-1])
         self.name = flexure.name
         self.bodies = tuple(flexure.bodies)
@@ -170,35 +187,47 @@ class DcmmConnector(Connector):
         EA = flexure.axial_stiffness(mechanism.material)
         shape = flexure.shape
         parts = shape.split(n)
-        forward = flexure.start_body == self.bodies[0]   # chain runs start -> end
+        forward = flexure.start_body == self.bodies[0]  # chain runs start -> end
         if not forward:
             parts = parts[::-1]
         self._layout = layout = _chain_layout(n, forward)
         # chain of reference points: body a, cuts (in chain order), body b (float pairs, mm)
         cuts = [(p.end_points[1] if forward else p.end_points[0]).tolist() for p in parts[:-1]]
-        refs = [mechanism.bodies[self.bodies[0]].reference.tolist(), *cuts,
-                mechanism.bodies[self.bodies[1]].reference.tolist()]
+        refs = [
+            mechanism.bodies[self.bodies[0]].reference.tolist(),
+            *cuts,
+            mechanism.bodies[self.bodies[1]].reference.tolist(),
+        ]
         self._cuts = np.array(cuts).reshape(-1, 2)
-        self._arc_lengths = [p.length for p in parts]               # chain order, mm
+        self._arc_lengths = [p.length for p in parts]  # chain order, mm
         # each sub-arc's parameters of flexval.reducedmodels.dcmmkernel.sub_arc: offsets of its centre
         # of elasticity from its two bodies (mm), ellipse axes, inverse compliances
         parameters = []
         for (lx, ly), (fx, fy), part in zip(refs, refs[1:], parts):
             ell = part.ellipse(EI)
             w = ell.weight
-            compliance = [w * ell.b**2, w * ell.a**2, w]            # Ellipse.compliance()
+            compliance = [w * ell.b**2, w * ell.a**2, w]  # Ellipse.compliance()
             if ell.b == 0.0:
                 compliance[0] = part.length / EA
             cx, cy = ell.center.tolist()
-            parameters.append([cx - lx, cy - ly, cx - fx, cy - fy, *ell.axes.ravel().tolist(),
-                               *(1.0 / c for c in compliance)])
+            parameters.append(
+                [
+                    cx - lx,
+                    cy - ly,
+                    cx - fx,
+                    cy - fy,
+                    *ell.axes.ravel().tolist(),
+                    *(1.0 / c for c in compliance),
+                ]
+            )
         self._parameters = np.array(parameters)
         # flexure ends' offsets from the end bodies' reference points, float pairs (mm)
         ends = shape.end_points.tolist()
         if not forward:
-            ends = ends[::-1]                                              # body a's first
-        self._end_rel = [(ex - rx, ey - ry)
-                         for (ex, ey), (rx, ry) in zip(ends, (refs[0], refs[-1]))]
+            ends = ends[::-1]  # body a's first
+        self._end_rel = [
+            (ex - rx, ey - ry) for (ex, ey), (rx, ry) in zip(ends, (refs[0], refs[-1]))
+        ]
         self._area, self._sub_lengths = flexure.section.area, np.array(self._arc_lengths)
         self._centre_line, self._refs, self._forward = shape, np.array(refs), forward
         # each sample's point at rest (all sub-arcs' at once: they are equal parts of the
@@ -233,12 +262,14 @@ class DcmmConnector(Connector):
         (its second bending frequency is 39 % low on a cantilever).
         """
         n = len(self._sub_lengths)
-        l = self._sub_lengths[0]                 # equal sub-arcs
+        l = self._sub_lengths[0]  # equal sub-arcs
         bounds = np.clip((np.arange(n + 2) - 0.5) * l, 0.0, n * l)
-        mass, rel, rotary = rigid_pieces(self._centre_line, self._forward, bounds, self._refs,
-                                         density * self._area)
-        dofs = np.vstack([np.arange(3), 6 + np.arange(self.n_internal).reshape(-1, 3),
-                          np.arange(3, 6)])
+        mass, rel, rotary = rigid_pieces(
+            self._centre_line, self._forward, bounds, self._refs, density * self._area
+        )
+        dofs = np.vstack(
+            [np.arange(3), 6 + np.arange(self.n_internal).reshape(-1, 3), np.arange(3, 6)]
+        )
         return MassPoints(dofs, rel, mass, rotary)
 
     def initial_internal(self) -> np.ndarray:
@@ -256,7 +287,7 @@ class DcmmConnector(Connector):
         return self._layout.rows, self._layout.cols
 
     @classmethod
-    def group(cls, connectors) -> "DcmmGroup":
+    def group(cls, connectors) -> DcmmGroup:
         """The DCMM connectors of a run, evaluated in one compiled call (:class:`DcmmGroup`)."""
         return DcmmGroup(connectors)
 
@@ -270,9 +301,15 @@ class DcmmConnector(Connector):
         layout = self._layout
         gradient, hessian = np.zeros(6 + self.n_internal), np.zeros(layout.values.size)
         energy = dcmm_kernels().assemble_sub_arcs(
-            np.concatenate([pose_a, pose_b, internal]), layout.lead, layout.follow,
-            self._parameters, layout.element_dofs, layout.values,
-            gradient, hessian)
+            np.concatenate([pose_a, pose_b, internal]),
+            layout.lead,
+            layout.follow,
+            self._parameters,
+            layout.element_dofs,
+            layout.values,
+            gradient,
+            hessian,
+        )
         return energy, gradient, hessian
 
     def _points(self, pose_a, pose_b, internal) -> tuple[list, list[tuple[float, float]]]:
@@ -284,8 +321,11 @@ class DcmmConnector(Connector):
         chain = [pose_a.tolist(), *np.asarray(internal).reshape(-1, 3).tolist(), pose_b.tolist()]
         (xa, ya, ta), (xb, yb, tb) = chain[0], chain[-1]
         ea, eb = rotate_xy(ta, *self._end_rel[0]), rotate_xy(tb, *self._end_rel[1])
-        points = [(xa + ea[0], ya + ea[1]), *((p[0], p[1]) for p in chain[1:-1]),
-                  (xb + eb[0], yb + eb[1])]
+        points = [
+            (xa + ea[0], ya + ea[1]),
+            *((p[0], p[1]) for p in chain[1:-1]),
+            (xb + eb[0], yb + eb[1]),
+        ]
         return chain, points
 
     def validity(self, pose_a, pose_b, internal) -> list[str]:
@@ -298,12 +338,14 @@ class DcmmConnector(Connector):
         chain, points = self._points(pose_a, pose_b, internal)
         chords = [math.dist(p, r) for p, r in zip(points, points[1:])]
         turns = [f[2] - lead[2] for lead, f in zip(chain, chain[1:])]
-        if (max(c / a for c, a in zip(chords, self._arc_lengths)) - 1.0 <= MAX_STRAIN
-                and max(map(abs, turns)) <= MAX_RELATIVE_ROTATION):
+        if (
+            max(c / a for c, a in zip(chords, self._arc_lengths)) - 1.0 <= MAX_STRAIN
+            and max(map(abs, turns)) <= MAX_RELATIVE_ROTATION
+        ):
             return []
-        return (stretch_reasons("sub-arc chord", np.array(chords), np.array(self._arc_lengths),
-                                one_sided=True)
-                + rotation_reasons("sub-arc", np.array(turns), MAX_RELATIVE_ROTATION))
+        return stretch_reasons(
+            "sub-arc chord", np.array(chords), np.array(self._arc_lengths), one_sided=True
+        ) + rotation_reasons("sub-arc", np.array(turns), MAX_RELATIVE_ROTATION)
 
     def path_validity(self, states) -> list[list[str]]:
         """:meth:`validity` at k states, screened in one vectorised pass (see :class:`DcmmGroup`)."""
@@ -313,8 +355,9 @@ class DcmmConnector(Connector):
         """Polyline through the flexure ends and the cut points, mm."""
         return np.array(self._points(pose_a, pose_b, internal)[1])
 
-    def section_forces(self, pose_a, pose_b, internal,
-                       gradient: np.ndarray | None = None) -> SectionForces:
+    def section_forces(
+        self, pose_a, pose_b, internal, gradient: np.ndarray | None = None
+    ) -> SectionForces:
         """Normal force (N) and bending moment (N mm) along the displaced sub-arcs.
 
         Each sub-arc's own generalised force (its gradient on its following
@@ -416,22 +459,34 @@ def _stack_tables(chains: tuple[tuple[int, bool], ...]) -> _StackTables:
         sub_arc_start.append(sub_arc_start[-1] + n)
         sample_start.append(sample_start[-1] + count)
         body += n + 1
-        m = 6 + 3 * (n - 1)                  # [pose_a, pose_b, internal] -> a, internal, b
-        pose_order += [*range(start, start + 3), *range(start + 6, start + m),
-                       *range(start + 3, start + 6)]
+        m = 6 + 3 * (n - 1)  # [pose_a, pose_b, internal] -> a, internal, b
+        pose_order += [
+            *range(start, start + 3),
+            *range(start + 6, start + m),
+            *range(start + 3, start + 6),
+        ]
         element_dofs.append(layout.element_dofs + start)
         rows.append(layout.rows + start)
         cols.append(layout.cols + start)
         start += m
     lead = np.concatenate(lead).astype(np.int64)
     tables = _StackTables(
-        np.array(first, np.int64), np.array(sub_arc_body, np.int64),
-        np.array(sub_arc_start, np.int64), lead, lead + 1,
-        np.concatenate(sub_arc).astype(np.int64), np.array(last, np.int64),
-        np.array(connector, np.int64), np.concatenate(w),
-        np.concatenate(order).astype(np.int64), sample_start, pose_order,
-        np.concatenate(element_dofs), np.concatenate(rows).astype(np.int64),
-        np.concatenate(cols).astype(np.int64))
+        np.array(first, np.int64),
+        np.array(sub_arc_body, np.int64),
+        np.array(sub_arc_start, np.int64),
+        lead,
+        lead + 1,
+        np.concatenate(sub_arc).astype(np.int64),
+        np.array(last, np.int64),
+        np.array(connector, np.int64),
+        np.concatenate(w),
+        np.concatenate(order).astype(np.int64),
+        sample_start,
+        pose_order,
+        np.concatenate(element_dofs),
+        np.concatenate(rows).astype(np.int64),
+        np.concatenate(cols).astype(np.int64),
+    )
     for array in tables:
         if isinstance(array, np.ndarray):
             array.flags.writeable = False
@@ -468,19 +523,28 @@ class _Stack:
     tangent: np.ndarray
 
     @classmethod
-    def of(cls, connectors, tables: _StackTables) -> "_Stack":
+    def of(cls, connectors, tables: _StackTables) -> _Stack:
         """The stack of ``connectors`` (DcmmConnector), in their order, with their tables."""
-        return cls(tables, np.array([(*c._end_rel[0], *c._end_rel[1]) for c in connectors]),
-                   np.concatenate([c._sub_lengths for c in connectors]),
-                   np.concatenate([c._parameters for c in connectors]),
-                   np.concatenate([c._sample_rel for c in connectors]),
-                   np.concatenate([c._sample_tangent for c in connectors]))
+        return cls(
+            tables,
+            np.array([(*c._end_rel[0], *c._end_rel[1]) for c in connectors]),
+            np.concatenate([c._sub_lengths for c in connectors]),
+            np.concatenate([c._parameters for c in connectors]),
+            np.concatenate([c._sample_rel for c in connectors]),
+            np.concatenate([c._sample_tangent for c in connectors]),
+        )
 
     @staticmethod
     def poses(levels) -> np.ndarray:
         """The stacked chain bodies' poses at each of k levels, (k, bodies, 3) (mm, rad)."""
-        return np.concatenate([x for states in levels for pose_a, pose_b, internal in states
-                               for x in (pose_a, internal, pose_b)]).reshape(len(levels), -1, 3)
+        return np.concatenate(
+            [
+                x
+                for states in levels
+                for pose_a, pose_b, internal in states
+                for x in (pose_a, internal, pose_b)
+            ]
+        ).reshape(len(levels), -1, 3)
 
 
 class DcmmGroup(ConnectorGroup):
@@ -500,15 +564,17 @@ class DcmmGroup(ConnectorGroup):
     def __init__(self, connectors):
         super().__init__(connectors)
         self._stack: _Stack | None = None
-        self._tables = _stack_tables(tuple((len(c._parameters), c._forward)
-                                           for c in self.connectors))
+        self._tables = _stack_tables(
+            tuple((len(c._parameters), c._forward) for c in self.connectors)
+        )
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         """(rows, cols) of the connectors' Hessian values laid end to end (see the base class)."""
         return self._tables.hessian_rows, self._tables.hessian_cols
 
-    def assembler(self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
-                  ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
+    def assembler(
+        self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
+    ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
         """The compiled kernel adding every sub-arc into the System's gradient and tangent.
 
         See :meth:`ConnectorGroup.assembler`; a body's (or a cut's) three
@@ -516,12 +582,14 @@ class DcmmGroup(ConnectorGroup):
         values are the sub-arcs' 36 in turn.
         """
         assemble_sub_arcs = dcmm_kernels().assemble_sub_arcs
-        dofs = self._tables.element_dofs    # each sub-arc's bodies among the local coordinates
-        fixed = (np.ascontiguousarray(gather[dofs[:, 0]], np.int64),
-                 np.ascontiguousarray(gather[dofs[:, 3]], np.int64),
-                 self.stack().parameters,
-                 np.ascontiguousarray(grad_dofs[dofs], np.int64),
-                 np.ascontiguousarray(hess_slots, np.int64).reshape(-1, 36))
+        dofs = self._tables.element_dofs  # each sub-arc's bodies among the local coordinates
+        fixed = (
+            np.ascontiguousarray(gather[dofs[:, 0]], np.int64),
+            np.ascontiguousarray(gather[dofs[:, 3]], np.int64),
+            self.stack().parameters,
+            np.ascontiguousarray(grad_dofs[dofs], np.int64),
+            np.ascontiguousarray(hess_slots, np.int64).reshape(-1, 36),
+        )
 
         def add(coordinates: np.ndarray, grad: np.ndarray, storage: np.ndarray) -> float:
             return assemble_sub_arcs(coordinates, *fixed, grad, storage)
@@ -534,8 +602,9 @@ class DcmmGroup(ConnectorGroup):
             self._stack = _Stack.of(self.connectors, self._tables)
         return self._stack
 
-    def path_end_pass(self, coordinates: np.ndarray
-                      ) -> tuple[list[list[list[str]]], list[SectionForces]]:
+    def path_end_pass(
+        self, coordinates: np.ndarray
+    ) -> tuple[list[list[list[str]]], list[SectionForces]]:
         """:meth:`path_validity` and :meth:`path_section_forces` on the stacked coordinates.
 
         ``coordinates`` (k, m): the connectors' local coordinates at each
@@ -544,8 +613,7 @@ class DcmmGroup(ConnectorGroup):
         pairs the screen sends to the scalar check.
         """
         poses = coordinates[:, self._tables.pose_order].reshape(len(coordinates), -1, 3)
-        return (self._verdicts(poses, lambda: self.local_levels(coordinates)),
-                self._forces(poses))
+        return (self._verdicts(poses, lambda: self.local_levels(coordinates)), self._forces(poses))
 
     def path_validity(self, levels) -> list[list[list[str]]]:
         """Each connector's :meth:`DcmmConnector.validity` at each level, screened in one pass.
@@ -558,18 +626,25 @@ class DcmmGroup(ConnectorGroup):
         """
         return self._verdicts(self.stack().poses(levels), lambda: levels)
 
-    def _verdicts(self, poses: np.ndarray, levels_of: Callable[[], list]
-                  ) -> list[list[list[str]]]:
+    def _verdicts(self, poses: np.ndarray, levels_of: Callable[[], list]) -> list[list[list[str]]]:
         """:meth:`path_validity` from the stacked poses; ``levels_of()`` gives the local states."""
         stack, tables = self.stack(), self._tables
         strain, turn = dcmm_kernels().chain_measures(
-            poses, tables.first, stack.end_rel, tables.sub_arc_body, stack.lengths,
-            tables.sub_arc_start)
-        near = ((strain > MAX_STRAIN - SCREEN_MARGIN)
-                | (turn > MAX_RELATIVE_ROTATION - SCREEN_MARGIN)).T.tolist()
+            poses,
+            tables.first,
+            stack.end_rel,
+            tables.sub_arc_body,
+            stack.lengths,
+            tables.sub_arc_start,
+        )
+        near = (
+            (strain > MAX_STRAIN - SCREEN_MARGIN) | (turn > MAX_RELATIVE_ROTATION - SCREEN_MARGIN)
+        ).T.tolist()
         levels = levels_of() if any(map(any, near)) else [None] * len(poses)
-        return [[c.validity(*states[j]) if flag else [] for states, flag in zip(levels, flags)]
-                for j, (c, flags) in enumerate(zip(self.connectors, near))]
+        return [
+            [c.validity(*states[j]) if flag else [] for states, flag in zip(levels, flags)]
+            for j, (c, flags) in enumerate(zip(self.connectors, near))
+        ]
 
     def path_section_forces(self, levels) -> list[SectionForces]:
         """Each connector's :meth:`DcmmConnector.section_forces` at k levels, stacked (k, m).
@@ -585,9 +660,19 @@ class DcmmGroup(ConnectorGroup):
         stack, tables = self.stack(), self._tables
         kernels = dcmm_kernels()
         wrenches = kernels.sub_arc_wrenches(poses, tables.sub_arc_body, stack.parameters)
-        return self._split(*kernels.sample_statics(
-            poses, wrenches, tables.sub_arc, tables.follow, tables.lead, tables.w, stack.rel,
-            stack.tangent, tables.order))
+        return self._split(
+            *kernels.sample_statics(
+                poses,
+                wrenches,
+                tables.sub_arc,
+                tables.follow,
+                tables.lead,
+                tables.w,
+                stack.rel,
+                stack.tangent,
+                tables.order,
+            )
+        )
 
     def section_forces(self, states, gradients) -> list[SectionForces]:
         """Each connector's :meth:`DcmmConnector.section_forces` with a known gradient, in one pass.
@@ -599,12 +684,22 @@ class DcmmGroup(ConnectorGroup):
         stack, tables = self.stack(), self._tables
         wrenches = np.array([np.asarray(g, float)[3:6] for g in gradients])[None]
         axial, moment = dcmm_kernels().sample_statics(
-            stack.poses([states]), wrenches, tables.connector, tables.last, tables.lead,
-            tables.w, stack.rel, stack.tangent, tables.order)
+            stack.poses([states]),
+            wrenches,
+            tables.connector,
+            tables.last,
+            tables.lead,
+            tables.w,
+            stack.rel,
+            stack.tangent,
+            tables.order,
+        )
         return self._split(axial[0], moment[0])
 
     def _split(self, axial: np.ndarray, moment: np.ndarray) -> list[SectionForces]:
         """Each connector's section forces from the stack's (..., samples) in station order."""
         bounds = self._tables.sample_start
-        return [SectionForces(c._layout.stations, axial[..., start:stop], moment[..., start:stop])
-                for c, start, stop in zip(self.connectors, bounds, bounds[1:])]
+        return [
+            SectionForces(c._layout.stations, axial[..., start:stop], moment[..., start:stop])
+            for c, start, stop in zip(self.connectors, bounds, bounds[1:])
+        ]

@@ -27,15 +27,24 @@ import numpy as np
 
 from .jit import kernel
 
-
 PARAMETERS = 11
 """A sub-arc's parameters: r_L (2), r_F (2) in mm, the rows of Q (q11, q12, q21, q22) and the
 inverse compliances k1, k2 (N/mm), k3 (N mm)."""
 
 
 @kernel
-def sub_arc(xl: float, yl: float, tl: float, xf: float, yf: float, tf: float,
-            p: np.ndarray, grad: np.ndarray, hessian: np.ndarray, with_hessian: bool) -> float:
+def sub_arc(
+    xl: float,
+    yl: float,
+    tl: float,
+    xf: float,
+    yf: float,
+    tf: float,
+    p: np.ndarray,
+    grad: np.ndarray,
+    hessian: np.ndarray,
+    with_hessian: bool,
+) -> float:
     """Energy (N mm) of one displaced compliance element; gradient (6) and Hessian (36) in place.
 
     Parameters
@@ -66,22 +75,32 @@ def sub_arc(xl: float, yl: float, tl: float, xf: float, yf: float, tf: float,
     rlx, rly, rfx, rfy = p[0], p[1], p[2], p[3]
     q11, q12, q21, q22 = p[4], p[5], p[6], p[7]
     k1, k2, k3 = p[8], p[9], p[10]
-    ca, sa = math.cos(tl), math.sin(tl)          # A = R(-tl) = [[ca, sa], [-sa, ca]]
+    ca, sa = math.cos(tl), math.sin(tl)  # A = R(-tl) = [[ca, sa], [-sa, ca]]
     phi = tf - tl
     dx, dy = xf - xl, yf - yl
-    adx, ady = ca * dx + sa * dy, -sa * dx + ca * dy          # A d
+    adx, ady = ca * dx + sa * dy, -sa * dx + ca * dy  # A d
     cp, sp = math.cos(phi), math.sin(phi)
-    rrx, rry = cp * rfx - sp * rfy, sp * rfx + cp * rfy       # R(phi) r_F
+    rrx, rry = cp * rfx - sp * rfy, sp * rfx + cp * rfy  # R(phi) r_F
     vx, vy = adx + rrx - rlx, ady + rry - rly
-    u1, u2 = q11 * vx + q21 * vy, q12 * vx + q22 * vy          # Q^T v
+    u1, u2 = q11 * vx + q21 * vy, q12 * vx + q22 * vy  # Q^T v
     f1, f2, m = k1 * u1, k2 * u2, k3 * phi
     energy = 0.5 * (f1 * u1 + f2 * u2 + m * phi)
     # dv/d(x_L, y_L, theta_L, theta_F); dv/d(x_F, y_F) = -dv/d(x_L, y_L)
     # dv_x = (-ca, -sa, ady + rry, -rry), dv_y = (sa, -ca, -adx - rrx, rrx)
     ex, ey, et, ef = -ca, -sa, ady + rry, -rry
     nx, ny, nt, nf = sa, -ca, -adx - rrx, rrx
-    a1, b1, c1, d1 = q11 * ex + q21 * nx, q11 * ey + q21 * ny, q11 * et + q21 * nt, q11 * ef + q21 * nf
-    a2, b2, c2, d2 = q12 * ex + q22 * nx, q12 * ey + q22 * ny, q12 * et + q22 * nt, q12 * ef + q22 * nf
+    a1, b1, c1, d1 = (
+        q11 * ex + q21 * nx,
+        q11 * ey + q21 * ny,
+        q11 * et + q21 * nt,
+        q11 * ef + q21 * nf,
+    )
+    a2, b2, c2, d2 = (
+        q12 * ex + q22 * nx,
+        q12 * ey + q22 * ny,
+        q12 * et + q22 * nt,
+        q12 * ef + q22 * nf,
+    )
     gx, gy = f1 * a1 + f2 * a2, f1 * b1 + f2 * b2
     grad[0], grad[1], grad[2] = gx, gy, f1 * c1 + f2 * c2 - m
     grad[3], grad[4], grad[5] = -gx, -gy, f1 * d1 + f2 * d2 + m
@@ -115,9 +134,16 @@ def sub_arc(xl: float, yl: float, tl: float, xf: float, yf: float, tf: float,
 
 
 @kernel
-def assemble_sub_arcs(coordinates: np.ndarray, lead_dof: np.ndarray, follow_dof: np.ndarray,
-                      parameters: np.ndarray, grad_slot: np.ndarray, hess_slot: np.ndarray,
-                      grad: np.ndarray, storage: np.ndarray) -> float:
+def assemble_sub_arcs(
+    coordinates: np.ndarray,
+    lead_dof: np.ndarray,
+    follow_dof: np.ndarray,
+    parameters: np.ndarray,
+    grad_slot: np.ndarray,
+    hess_slot: np.ndarray,
+    grad: np.ndarray,
+    storage: np.ndarray,
+) -> float:
     """Every sub-arc's gradient and Hessian added into ``grad`` and ``storage``; the energy (N mm).
 
     Sub-arc k reads its leading body's pose at ``coordinates[lead_dof[k]:+3]``
@@ -132,9 +158,18 @@ def assemble_sub_arcs(coordinates: np.ndarray, lead_dof: np.ndarray, follow_dof:
     h = np.empty(36)
     for k in range(parameters.shape[0]):
         i, j = lead_dof[k], follow_dof[k]
-        energy += sub_arc(coordinates[i], coordinates[i + 1], coordinates[i + 2],
-                          coordinates[j], coordinates[j + 1], coordinates[j + 2],
-                          parameters[k], g, h, True)
+        energy += sub_arc(
+            coordinates[i],
+            coordinates[i + 1],
+            coordinates[i + 2],
+            coordinates[j],
+            coordinates[j + 1],
+            coordinates[j + 2],
+            parameters[k],
+            g,
+            h,
+            True,
+        )
         for a in range(6):
             slot = grad_slot[k, a]
             if slot >= 0:
@@ -159,17 +194,34 @@ def sub_arc_wrenches(poses: np.ndarray, lead: np.ndarray, parameters: np.ndarray
     for s in range(poses.shape[0]):
         for k in range(parameters.shape[0]):
             b = lead[k]
-            sub_arc(poses[s, b, 0], poses[s, b, 1], poses[s, b, 2],
-                    poses[s, b + 1, 0], poses[s, b + 1, 1], poses[s, b + 1, 2],
-                    parameters[k], g, h, False)
+            sub_arc(
+                poses[s, b, 0],
+                poses[s, b, 1],
+                poses[s, b, 2],
+                poses[s, b + 1, 0],
+                poses[s, b + 1, 1],
+                poses[s, b + 1, 2],
+                parameters[k],
+                g,
+                h,
+                False,
+            )
             out[s, k, 0], out[s, k, 1], out[s, k, 2] = g[3], g[4], g[5]
     return out
 
 
 @kernel
-def sample_statics(poses: np.ndarray, wrenches: np.ndarray, wrench_of: np.ndarray,
-                   end: np.ndarray, lead: np.ndarray, w: np.ndarray, rel: np.ndarray,
-                   tangent: np.ndarray, order: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def sample_statics(
+    poses: np.ndarray,
+    wrenches: np.ndarray,
+    wrench_of: np.ndarray,
+    end: np.ndarray,
+    lead: np.ndarray,
+    w: np.ndarray,
+    rel: np.ndarray,
+    tangent: np.ndarray,
+    order: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
     """Normal force (N) and bending moment (N mm) at every sample of a chain stack, k states.
 
     Sample i lies on the sub-arc from body ``lead[i]`` to the next one, at
@@ -195,10 +247,12 @@ def sample_statics(poses: np.ndarray, wrenches: np.ndarray, wrench_of: np.ndarra
             a, b, wi = lead[i], lead[i] + 1, w[i]
             ta, ca, sa = turns[a, 0], turns[a, 1], turns[a, 2]
             tb, cb, sb = turns[b, 0], turns[b, 1], turns[b, 2]
-            px = ((1.0 - wi) * (poses[s, a, 0] + (ca * rel[i, 0] - sa * rel[i, 1]))
-                  + wi * (poses[s, b, 0] + (cb * rel[i, 2] - sb * rel[i, 3])))
-            py = ((1.0 - wi) * (poses[s, a, 1] + (sa * rel[i, 0] + ca * rel[i, 1]))
-                  + wi * (poses[s, b, 1] + (sb * rel[i, 2] + cb * rel[i, 3])))
+            px = (1.0 - wi) * (poses[s, a, 0] + (ca * rel[i, 0] - sa * rel[i, 1])) + wi * (
+                poses[s, b, 0] + (cb * rel[i, 2] - sb * rel[i, 3])
+            )
+            py = (1.0 - wi) * (poses[s, a, 1] + (sa * rel[i, 0] + ca * rel[i, 1])) + wi * (
+                poses[s, b, 1] + (sb * rel[i, 2] + cb * rel[i, 3])
+            )
             angle = tangent[i] + (1.0 - wi) * ta + wi * tb
             e, k = end[i], wrench_of[i]
             fx, fy = wrenches[s, k, 0], wrenches[s, k, 1]
@@ -209,22 +263,30 @@ def sample_statics(poses: np.ndarray, wrenches: np.ndarray, wrench_of: np.ndarra
 
 
 @kernel
-def _chord_point(poses: np.ndarray, state: int, body: int, a: int, b: int, end_rel: np.ndarray,
-                 chain: int) -> tuple[float, float]:
+def _chord_point(
+    poses: np.ndarray, state: int, body: int, a: int, b: int, end_rel: np.ndarray, chain: int
+) -> tuple[float, float]:
     """A chord's end on ``body`` (mm): the flexure's end on the end bodies a and b, else the cut."""
     x, y = poses[state, body, 0], poses[state, body, 1]
     if body != a and body != b:
         return x, y
     o = 0 if body == a else 2
     c, s = math.cos(poses[state, body, 2]), math.sin(poses[state, body, 2])
-    return (x + (c * end_rel[chain, o] - s * end_rel[chain, o + 1]),
-            y + (s * end_rel[chain, o] + c * end_rel[chain, o + 1]))
+    return (
+        x + (c * end_rel[chain, o] - s * end_rel[chain, o + 1]),
+        y + (s * end_rel[chain, o] + c * end_rel[chain, o + 1]),
+    )
 
 
 @kernel
-def chain_measures(poses: np.ndarray, first: np.ndarray, end_rel: np.ndarray,
-                   sub_arc_body: np.ndarray, lengths: np.ndarray, sub_arc_start: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray]:
+def chain_measures(
+    poses: np.ndarray,
+    first: np.ndarray,
+    end_rel: np.ndarray,
+    sub_arc_body: np.ndarray,
+    lengths: np.ndarray,
+    sub_arc_start: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
     """Each chain's largest sub-arc chord strain and relative rotation (rad) at k states.
 
     Chain j runs from body ``first[j]`` (body a, its flexure end at the
@@ -261,11 +323,27 @@ def warm_up() -> None:
     """
     parameters = np.zeros((1, PARAMETERS))
     dofs = np.zeros(1, np.int64)
-    assemble_sub_arcs(np.zeros(6), dofs, dofs + 3, parameters,
-                      np.full((1, 6), -1, np.int64), np.full((1, 36), -1, np.int64),
-                      np.zeros(6), np.zeros(36))
+    assemble_sub_arcs(
+        np.zeros(6),
+        dofs,
+        dofs + 3,
+        parameters,
+        np.full((1, 6), -1, np.int64),
+        np.full((1, 36), -1, np.int64),
+        np.zeros(6),
+        np.zeros(36),
+    )
     poses = np.zeros((1, 2, 3))
     sub_arc_wrenches(poses, dofs, parameters)
-    sample_statics(poses, np.zeros((1, 1, 3)), dofs, dofs, dofs, np.zeros(1), np.zeros((1, 4)),
-                   np.zeros(1), dofs)
+    sample_statics(
+        poses,
+        np.zeros((1, 1, 3)),
+        dofs,
+        dofs,
+        dofs,
+        np.zeros(1),
+        np.zeros((1, 4)),
+        np.zeros(1),
+        dofs,
+    )
     chain_measures(poses, dofs, np.zeros((1, 4)), dofs, np.ones(1), np.array([0, 1], np.int64))

@@ -72,7 +72,7 @@ class Rayleigh:
     beta: float = 0.0
 
     @classmethod
-    def from_ratio(cls, ratio: float, f1: float, f2: float) -> "Rayleigh":
+    def from_ratio(cls, ratio: float, f1: float, f2: float) -> Rayleigh:
         """The damping ratio ``ratio`` at the two frequencies f1 < f2 (Hz), exactly.
 
         zeta(omega) = alpha / (2 omega) + beta omega / 2; between f1 and f2 it
@@ -157,9 +157,17 @@ class DynamicStep(StepProblem):
     the compiled banded Cholesky); otherwise it becomes a scipy matrix.
     """
 
-    def __init__(self, system: System, loads: Loads, factor: float, mass: MassModel,
-                 state: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], h: float,
-                 scheme: GeneralizedAlpha, damping: Rayleigh):
+    def __init__(
+        self,
+        system: System,
+        loads: Loads,
+        factor: float,
+        mass: MassModel,
+        state: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+        h: float,
+        scheme: GeneralizedAlpha,
+        damping: Rayleigh,
+    ):
         super().__init__(system, loads, factor)
         self.mass, self.h, self.scheme, self.damping = mass, h, scheme, damping
         self.q0, self.v0, self.a0, self.A0 = state
@@ -196,8 +204,8 @@ class DynamicStep(StepProblem):
             M = sp.csr_matrix((values, (rows, cols)), shape=(system.n_dofs, system.n_dofs))
             r += M @ (a + alpha * v)
             k = sp.csc_matrix(layout.tangent(effective).toarray())
-            return r, _SparseEffectiveTangent((k + c_mass * M).tocsc())   # no copy if CSC
-        kept = slots >= 0                    # a symmetric band: the upper mirror holds the value
+            return r, _SparseEffectiveTangent((k + c_mass * M).tocsc())  # no copy if CSC
+        kept = slots >= 0  # a symmetric band: the upper mirror holds the value
         mass = np.bincount(slots[kept], weights=values[kept], minlength=layout.size)
         r += layout.product(mass, a + alpha * v)
         effective += c_mass * mass
@@ -207,10 +215,18 @@ class DynamicStep(StepProblem):
         return K.solve(-g), 0.0
 
 
-def solve_dynamic(system: System, case: LoadCase, law: TimeLaw, duration: float,
-                  damping: Rayleigh = Rayleigh(), settings: DynamicSettings | None = None,
-                  model: str = "", scene: str = "", record_poses: bool = False,
-                  initial_velocity: np.ndarray | None = None) -> LoadPath:
+def solve_dynamic(
+    system: System,
+    case: LoadCase,
+    law: TimeLaw,
+    duration: float,
+    damping: Rayleigh = Rayleigh(),
+    settings: DynamicSettings | None = None,
+    model: str = "",
+    scene: str = "",
+    record_poses: bool = False,
+    initial_velocity: np.ndarray | None = None,
+) -> LoadPath:
     """Integrate from rest (the equilibrium at lambda(0), gravity included) to ``duration`` (s).
 
     Every accepted step is recorded: ``time`` (s), ``load`` (lambda(t) times
@@ -238,12 +254,29 @@ def solve_dynamic(system: System, case: LoadCase, law: TimeLaw, duration: float,
     bodies = np.zeros(system.n_dofs, bool)
     bodies[: 3 * len(system.body_index)] = True
     loads = system.loads(case)
-    path = LoadPath(model=model, load_case=case.name, load=[], dx=[], dy=[], rotation=[],
-                    seconds=0.0, scene=scene, load_unit=case.unit, time=[],
-                    poses={b: [] for b in system.mechanism.bodies} if record_poses else None,
-                    settings={"rho_inf": s.rho_inf, "error_tol": s.error_tol, "rayleigh_alpha": damping.alpha,
-                              "rayleigh_beta": damping.beta, "ramp": law.ramp, "t0": law.t0,
-                              "t1": law.t1, "duration": duration})
+    path = LoadPath(
+        model=model,
+        load_case=case.name,
+        load=[],
+        dx=[],
+        dy=[],
+        rotation=[],
+        seconds=0.0,
+        scene=scene,
+        load_unit=case.unit,
+        time=[],
+        poses={b: [] for b in system.mechanism.bodies} if record_poses else None,
+        settings={
+            "rho_inf": s.rho_inf,
+            "error_tol": s.error_tol,
+            "rayleigh_alpha": damping.alpha,
+            "rayleigh_beta": damping.beta,
+            "ramp": law.ramp,
+            "t0": law.t0,
+            "t1": law.t1,
+            "duration": duration,
+        },
+    )
     stats = {"unknowns": system.n_dofs, "steps": 0, "rejected_steps": 0, "newton_iterations": 0}
 
     def record(t: float, q: np.ndarray) -> None:
@@ -259,16 +292,19 @@ def solve_dynamic(system: System, case: LoadCase, law: TimeLaw, duration: float,
         stats["failure"] = message
         path.converged, path.stats = False, stats
         path.seconds = time.perf_counter() - t_start
-        return SolverError(f"{model or 'model'} dynamic run on '{case.name}': {message}; "
-                           f"reached t = {t:.6g} s of {duration:.6g} s", law(t), path)
+        return SolverError(
+            f"{model or 'model'} dynamic run on '{case.name}': {message}; "
+            f"reached t = {t:.6g} s of {duration:.6g} s",
+            law(t),
+            path,
+        )
 
     first = solve_step(FixedLoad(system, loads, law(0.0)), system.initial_state(), system.settings)
     if first.state is None:
         raise fail(f"no initial equilibrium ({first.reason})", 0.0)
     q = first.state
     potential_start = system.assemble(q, loads, law(0.0))[0]
-    v = np.zeros(system.n_dofs) if initial_velocity is None else np.asarray(initial_velocity,
-                                                                             float)
+    v = np.zeros(system.n_dofs) if initial_velocity is None else np.asarray(initial_velocity, float)
     a = np.zeros(system.n_dofs)
     A = a.copy()
     t, h, rejected = 0.0, s.first_step * duration, False
@@ -287,17 +323,24 @@ def solve_dynamic(system: System, case: LoadCase, law: TimeLaw, duration: float,
         if error > s.error_tol:
             stats["rejected_steps"] += 1
             rejected = True
-            h *= 0.5 if not math.isfinite(error) else max(0.2, 0.9 * (s.error_tol / error) ** (1 / 3))
+            h *= (
+                0.5
+                if not math.isfinite(error)
+                else max(0.2, 0.9 * (s.error_tol / error) ** (1 / 3))
+            )
             if h < s.min_step:
-                raise fail(f"time step below {s.min_step:g} s "
-                           f"({result.reason or 'local error too large'})", t)
+                raise fail(
+                    f"time step below {s.min_step:g} s "
+                    f"({result.reason or 'local error too large'})",
+                    t,
+                )
             continue
         q, v, a, A, t = result.state, v_new, a_new, A_new, t + h
         stats["steps"] += 1
         if stats["steps"] > s.max_steps:
             raise fail(f"more than {s.max_steps} time steps", t)
         record(t, q)
-        if s.adaptive:      # no growth right after a rejection: it would only be rejected again
+        if s.adaptive:  # no growth right after a rejection: it would only be rejected again
             grow = 1.0 if rejected else 2.0
             h *= min(grow, max(0.5, 0.9 * (s.error_tol / max(error, 1e-300)) ** (1 / 3)))
         rejected = False

@@ -22,9 +22,12 @@ if TYPE_CHECKING:
 MAX_ELEMENTS = 100_000
 
 FRAME = Option.choice(
-    "frame", "DCMM measuring frame: each element's relative displacement is measured in the "
+    "frame",
+    "DCMM measuring frame: each element's relative displacement is measured in the "
     "displaced frame of its leading body (the paper's text) or of the following one",
-    ("leader", "follower"), "leader")
+    ("leader", "follower"),
+    "leader",
+)
 
 
 def _beam(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
@@ -74,7 +77,7 @@ def _load_solver(spec: ModelSpec) -> None:
     module = import_module(_CONNECTOR_MODULES[spec.family], __package__)
     if spec.family in _KERNEL_LOADERS:
         getattr(module, _KERNEL_LOADERS[spec.family])()
-    import_module(".models", __package__)           # the core and scipy.linalg with it
+    import_module(".models", __package__)  # the core and scipy.linalg with it
     limit_threads()
 
 
@@ -106,9 +109,17 @@ def _trace_beams(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
     return _trace_nonlinear(mechanism, spec, *args, **kwargs)
 
 
-def _trace_ee(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int | None = None,
-              scene: str = "", record_poses: bool = False, record_shapes: bool = False,
-              record_reactions: bool = False, **options):
+def _trace_ee(
+    mechanism: Mechanism,
+    spec: ModelSpec,
+    case: LoadCase,
+    levels: int | None = None,
+    scene: str = "",
+    record_poses: bool = False,
+    record_shapes: bool = False,
+    record_reactions: bool = False,
+    **options,
+):
     """The linear response of dcmm:1's connectors, without a System (wall time includes the build).
 
     :func:`flexval.reducedmodels.models.linear_response` of the family's connectors:
@@ -132,33 +143,63 @@ def _trace_ee(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int
 
 def _system_of(make):
     """``Family.system`` of a family whose flexures are ``make`` connectors."""
-    def system(mechanism: Mechanism, spec: ModelSpec, settings: SolverSettings | None = None,
-               **options) -> System:
+
+    def system(
+        mechanism: Mechanism, spec: ModelSpec, settings: SolverSettings | None = None, **options
+    ) -> System:
         from .models import connector_system
 
         return connector_system(mechanism, spec, make, settings, options)
+
     return system
 
 
-BEAM = register(Family(
-    "beam", "geometrically exact corotational beam elements (Euler-Bernoulli, or Timoshenko "
-    "with the option shear); beam:100 and beam:20 are the paper's FEM100 and FEM20",
-    _trace_beams,
-    Resolution("N", "beam elements per flexure", 20, 1, MAX_ELEMENTS, True, (5, 320)),
-    (Option.flag("shear", "Timoshenko beams (shear deformation of the rectangular section)"),),
-    frozenset({ARCLENGTH}), _system_of(_beam)))
+BEAM = register(
+    Family(
+        "beam",
+        "geometrically exact corotational beam elements (Euler-Bernoulli, or Timoshenko "
+        "with the option shear); beam:100 and beam:20 are the paper's FEM100 and FEM20",
+        _trace_beams,
+        Resolution("N", "beam elements per flexure", 20, 1, MAX_ELEMENTS, True, (5, 320)),
+        (Option.flag("shear", "Timoshenko beams (shear deformation of the rectangular section)"),),
+        frozenset({ARCLENGTH}),
+        _system_of(_beam),
+    )
+)
 
-PRBM = register(Family(
-    "prbm", "symmetric 3R pseudo-rigid-body chain per flexure, exact in the linear limit",
-    _trace_nonlinear, None, (), frozenset({ARCLENGTH}), _system_of(_prbm)))
+PRBM = register(
+    Family(
+        "prbm",
+        "symmetric 3R pseudo-rigid-body chain per flexure, exact in the linear limit",
+        _trace_nonlinear,
+        None,
+        (),
+        frozenset({ARCLENGTH}),
+        _system_of(_prbm),
+    )
+)
 
-DCMM = register(Family(
-    "dcmm", "Displaced Compliance Matrix Method: each arc cut into N sub-arcs, each a diagonal "
-    "compliance at its centre of elasticity",
-    _trace_nonlinear,
-    Resolution("N", "sub-arcs per flexure", 1, 1, MAX_ELEMENTS, True, (1, 8)),
-    (FRAME,), frozenset({ARCLENGTH}), _system_of(_dcmm)))
+DCMM = register(
+    Family(
+        "dcmm",
+        "Displaced Compliance Matrix Method: each arc cut into N sub-arcs, each a diagonal "
+        "compliance at its centre of elasticity",
+        _trace_nonlinear,
+        Resolution("N", "sub-arcs per flexure", 1, 1, MAX_ELEMENTS, True, (1, 8)),
+        (FRAME,),
+        frozenset({ARCLENGTH}),
+        _system_of(_dcmm),
+    )
+)
 
-EE = register(Family(
-    "ee", "linear ellipse-of-elasticity prediction (the small-load limit of dcmm:1)",
-    _trace_ee, None, (), frozenset({LINEAR}), _system_of(_ee)))
+EE = register(
+    Family(
+        "ee",
+        "linear ellipse-of-elasticity prediction (the small-load limit of dcmm:1)",
+        _trace_ee,
+        None,
+        (),
+        frozenset({LINEAR}),
+        _system_of(_ee),
+    )
+)

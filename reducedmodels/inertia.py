@@ -38,7 +38,8 @@ Units: mm, t, s, N; g in mm/s^2.
 
 from __future__ import annotations
 
-from typing import NamedTuple, Sequence
+from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -85,17 +86,23 @@ class MassPoints(NamedTuple):
     link: np.ndarray | None = None
     link_rel: np.ndarray | None = None
 
-    def complete(self) -> "MassPoints":
+    def complete(self) -> MassPoints:
         """The same points with ``link`` and ``link_rel`` filled in (-1 and zeros if absent)."""
         k = self.mass.size
         return self._replace(
             link=np.full(k, -1) if self.link is None else np.asarray(self.link, int),
-            link_rel=np.zeros((k, 2)) if self.link_rel is None else np.asarray(self.link_rel,
-                                                                               float))
+            link_rel=np.zeros((k, 2))
+            if self.link_rel is None
+            else np.asarray(self.link_rel, float),
+        )
 
 
-def chain_mass_points(node_dofs: Sequence[Sequence[int]], node_rel: np.ndarray,
-                      lengths: np.ndarray, line_density: float) -> MassPoints:
+def chain_mass_points(
+    node_dofs: Sequence[Sequence[int]],
+    node_rel: np.ndarray,
+    lengths: np.ndarray,
+    line_density: float,
+) -> MassPoints:
     """HRZ-lumped masses of a chain of segments between consecutive nodes.
 
     Segment k (length ``lengths[k]``, mm, between nodes k and k + 1) of mass
@@ -123,8 +130,9 @@ def chain_mass_points(node_dofs: Sequence[Sequence[int]], node_rel: np.ndarray,
     mass[1:] += 0.5 * seg_mass
     rotary[:-1] += seg_rotary
     rotary[1:] += seg_rotary
-    return MassPoints(np.asarray(node_dofs, int).reshape(-1, 3), np.asarray(node_rel, float),
-                      mass, rotary)
+    return MassPoints(
+        np.asarray(node_dofs, int).reshape(-1, 3), np.asarray(node_rel, float), mass, rotary
+    )
 
 
 GAUSS_POINTS = 16
@@ -133,8 +141,9 @@ straight piece (polynomial integrands of degree <= 2), and for a circular piece 
 angle phi the error is of order (phi / 2)^32 / 32!, below round-off for phi <= 2 pi."""
 
 
-def piece_inertia(shape, s0: float, s1: float, line_density: float, origin: np.ndarray
-                  ) -> tuple[float, np.ndarray, float]:
+def piece_inertia(
+    shape, s0: float, s1: float, line_density: float, origin: np.ndarray
+) -> tuple[float, np.ndarray, float]:
     """Mass, centre of mass and rotary inertia of a piece of flexure taken as rigid.
 
     The centre line of ``shape`` between arc lengths ``s0`` and ``s1`` (mm),
@@ -163,8 +172,9 @@ def piece_inertia(shape, s0: float, s1: float, line_density: float, origin: np.n
     return mass, centre - np.asarray(origin, float), rotary
 
 
-def rigid_pieces(shape, forward: bool, bounds: np.ndarray, anchors: np.ndarray,
-                 line_density: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def rigid_pieces(
+    shape, forward: bool, bounds: np.ndarray, anchors: np.ndarray, line_density: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A flexure cut into consecutive pieces, each taken as rigid (:func:`piece_inertia`).
 
     Parameters
@@ -205,22 +215,29 @@ def _angles(coords: np.ndarray, theta_dofs: np.ndarray) -> np.ndarray:
     return np.where(theta_dofs >= 0, coords[np.maximum(theta_dofs, 0)], 0.0)
 
 
-def _kinematics(coords: np.ndarray, points: MassPoints
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _kinematics(
+    coords: np.ndarray, points: MassPoints
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each point's coordinates (k, 4: x, y, theta, phi; -1 absent), the columns of its
     Jacobian G (k, 4, 2) and its offsets r1, r2 (k, 2, 2) at ``coords``."""
     full = points.complete()
     dofs = np.column_stack([full.dofs, full.link])
-    r = np.stack([_rotated(_angles(coords, full.dofs[:, 2]), full.rel),
-                  _rotated(_angles(coords, full.link), full.link_rel)], axis=1)
+    r = np.stack(
+        [
+            _rotated(_angles(coords, full.dofs[:, 2]), full.rel),
+            _rotated(_angles(coords, full.link), full.link_rel),
+        ],
+        axis=1,
+    )
     columns = np.zeros((dofs.shape[0], 4, 2))
     columns[:, 0, 0] = columns[:, 1, 1] = 1.0
-    columns[:, 2:, 0], columns[:, 2:, 1] = -r[:, :, 1], r[:, :, 0]        # k x r
+    columns[:, 2:, 0], columns[:, 2:, 1] = -r[:, :, 1], r[:, :, 0]  # k x r
     return dofs, columns, r
 
 
-def weight_terms(coords: np.ndarray, points: MassPoints, gravity: np.ndarray
-                 ) -> tuple[float, np.ndarray, np.ndarray]:
+def weight_terms(
+    coords: np.ndarray, points: MassPoints, gravity: np.ndarray
+) -> tuple[float, np.ndarray, np.ndarray]:
     """Potential of the weights (N mm), its gradient and the diagonal of its Hessian.
 
     The potential of dead forces m g at x = p + r1 + r2 is -sum m g . x (up
@@ -235,13 +252,13 @@ def weight_terms(coords: np.ndarray, points: MassPoints, gravity: np.ndarray
     """
     n = coords.size
     dofs, columns, r = _kinematics(coords, points)
-    weight = points.mass[:, None] * np.asarray(gravity, float)[None]          # (k, 2), N
+    weight = points.mass[:, None] * np.asarray(gravity, float)[None]  # (k, 2), N
     x = coords[dofs[:, 0]] + r[:, :, 0].sum(axis=1), coords[dofs[:, 1]] + r[:, :, 1].sum(axis=1)
     energy = -float(np.sum(weight[:, 0] * x[0] + weight[:, 1] * x[1]))
     present = dofs >= 0
     forces = -np.einsum("kjc,kc->kj", columns, weight)
     grad = np.bincount(dofs[present], weights=forces[present], minlength=n)
-    second = np.einsum("kjc,kc->kj", r, weight)                               # (k, 2): m g . r
+    second = np.einsum("kjc,kc->kj", r, weight)  # (k, 2): m g . r
     turns = present[:, 2:]
     diagonal = np.bincount(dofs[:, 2:][turns], weights=second[turns], minlength=n)
     return energy, grad, diagonal
@@ -264,8 +281,11 @@ class Weighted(Connector):
         self._gravity = np.asarray(gravity, float)
         n = 6 + inner.n_internal
         pattern = inner.hessian_pattern()
-        rows, cols = (pattern if pattern is not None
-                      else (np.repeat(np.arange(n), n), np.tile(np.arange(n), n)))
+        rows, cols = (
+            pattern
+            if pattern is not None
+            else (np.repeat(np.arange(n), n), np.tile(np.arange(n), n))
+        )
         full = points.complete()
         turns = np.concatenate([full.dofs[:, 2], full.link])
         self._theta = np.unique(turns[turns >= 0])
@@ -284,8 +304,9 @@ class Weighted(Connector):
         """The wrapped connector's pattern plus the diagonal of the weighted rotations."""
         return self._rows, self._cols
 
-    def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> tuple[float, np.ndarray, np.ndarray]:
+    def evaluate(
+        self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+    ) -> tuple[float, np.ndarray, np.ndarray]:
         """Strain energy plus weight potential (N mm), gradient and Hessian values."""
         e, g, h = self.inner.evaluate(pose_a, pose_b, internal)
         coords = np.concatenate([pose_a, pose_b, internal])
@@ -352,8 +373,12 @@ def body_mass_points(mechanism: Mechanism, body: str, slot: int) -> MassPoints |
     if data is None:
         return None
     rel = data.center_of_mass - mechanism.bodies[body].reference
-    return MassPoints(np.array([[3 * slot, 3 * slot + 1, 3 * slot + 2]]), rel[None],
-                      np.array([data.mass]), np.array([data.inertia]))
+    return MassPoints(
+        np.array([[3 * slot, 3 * slot + 1, 3 * slot + 2]]),
+        rel[None],
+        np.array([data.mass]),
+        np.array([data.inertia]),
+    )
 
 
 def merge(points: Sequence[MassPoints | None]) -> MassPoints | None:
@@ -361,8 +386,9 @@ def merge(points: Sequence[MassPoints | None]) -> MassPoints | None:
     points = [p.complete() for p in points if p is not None and p.mass.size]
     if not points:
         return None
-    return MassPoints(*(np.concatenate([getattr(p, f) for p in points])
-                        for f in MassPoints._fields))
+    return MassPoints(
+        *(np.concatenate([getattr(p, f) for p in points]) for f in MassPoints._fields)
+    )
 
 
 def with_weights(mechanism: Mechanism, connectors: list) -> list:
@@ -383,10 +409,17 @@ def with_weights(mechanism: Mechanism, connectors: list) -> list:
     out = []
     for c in connectors:
         own = connector_mass_points(c, data.density)
-        if own is None and data.density is not None and c.name in {f.name for f in
-                                                                     mechanism.flexures}:
-            raise SceneError(mechanism.source, "material.density", data.density,
-                             f"flexure {c.name!r}: this model has no mass of the flexure")
+        if (
+            own is None
+            and data.density is not None
+            and c.name in {f.name for f in mechanism.flexures}
+        ):
+            raise SceneError(
+                mechanism.source,
+                "material.density",
+                data.density,
+                f"flexure {c.name!r}: this model has no mass of the flexure",
+            )
         parts = [own]
         for slot, b in enumerate(c.bodies):
             if b in pending:
@@ -431,8 +464,12 @@ class MassModel:
             if points is not None:
                 tables.append(points._replace(dofs=system.pose_dofs(b)[None]))
         self.n = system.n_dofs
-        merged = merge(tables) or MassPoints(np.zeros((0, 3), int), np.zeros((0, 2)),
-                                             np.zeros(0), np.zeros(0)).complete()
+        merged = (
+            merge(tables)
+            or MassPoints(
+                np.zeros((0, 3), int), np.zeros((0, 2)), np.zeros(0), np.zeros(0)
+            ).complete()
+        )
         # points on the ground never move (unless on a link hinged to it)
         moving = (merged.dofs[:, 0] >= 0) | (merged.link >= 0)
         self.points = MassPoints(*(getattr(merged, f)[moving] for f in MassPoints._fields))
@@ -483,15 +520,15 @@ class MassModel:
         present = dofs >= 0
         # astype: numpy's bincount gives int64 zeros for an empty input even with
         # weights (no lumped mass points: every mass in a consistent matrix)
-        total = np.bincount(dofs[present], weights=forces[present],
-                            minlength=self.n).astype(float, copy=False)
+        total = np.bincount(dofs[present], weights=forces[present], minlength=self.n).astype(
+            float, copy=False
+        )
         if self._consistent:
             states = self.system.local_states(q)
             for k in self._consistent:
                 idx = self.system._local_to_global[k]
                 local_v = np.where(idx >= 0, v[np.maximum(idx, 0)], 0.0)
-                c = self.system.connectors[k].convective_forces(self.density, *states[k],
-                                                                local_v)
+                c = self.system.connectors[k].convective_forces(self.density, *states[k], local_v)
                 keep = idx >= 0
                 total += np.bincount(idx[keep], weights=c[keep], minlength=self.n)
         return total

@@ -43,8 +43,10 @@ from .connector import Connector
 
 def characteristic_stiffness(mechanism: Mechanism) -> float:
     """Geometric mean of EI / L^3 over the flexures, N/mm (a cantilever's bending stiffness / 3)."""
-    logs = [math.log(f.bending_stiffness(mechanism.material) / f.shape.length**3)
-            for f in mechanism.flexures]
+    logs = [
+        math.log(f.bending_stiffness(mechanism.material) / f.shape.length**3)
+        for f in mechanism.flexures
+    ]
     return math.exp(sum(logs) / len(logs))
 
 
@@ -73,22 +75,32 @@ class PinConnector(Connector):
     n_internal = 2
     n_multipliers = 2
 
-    def __init__(self, name: str, body_a: str, body_b: str, point: np.ndarray,
-                 mechanism: Mechanism, stiffness: float | None = None):
+    def __init__(
+        self,
+        name: str,
+        body_a: str,
+        body_b: str,
+        point: np.ndarray,
+        mechanism: Mechanism,
+        stiffness: float | None = None,
+    ):
         if body_a == body_b:
             raise ValueError(f"pin {name!r}: a pin must join two different bodies, got {body_a!r}")
         self.name = name
         self.bodies = (body_a, body_b)
         point = np.asarray(point, dtype=float)
         self._rel = [(point - mechanism.bodies[b].reference)[None] for b in self.bodies]
-        self.stiffness = float(stiffness if stiffness is not None
-                               else characteristic_stiffness(mechanism))
+        self.stiffness = float(
+            stiffness if stiffness is not None else characteristic_stiffness(mechanism)
+        )
         if not (math.isfinite(self.stiffness) and self.stiffness > 0.0):
-            raise ValueError(f"pin {name!r}: scale must be positive and finite, "
-                             f"got {self.stiffness!r} N/mm")
+            raise ValueError(
+                f"pin {name!r}: scale must be positive and finite, got {self.stiffness!r} N/mm"
+            )
 
-    def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> tuple[float, np.ndarray, np.ndarray]:
+    def evaluate(
+        self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+    ) -> tuple[float, np.ndarray, np.ndarray]:
         """Saddle 'energy' s mu.(x_a - x_b) (N mm), its gradient (8) and exact Hessian (8, 8)."""
         s = self.stiffness
         mu = np.asarray(internal, dtype=float)
@@ -123,5 +135,7 @@ def pin_connectors(mechanism: Mechanism) -> list[PinConnector]:
     if not mechanism.pins:
         return []
     s = characteristic_stiffness(mechanism)
-    return [PinConnector(p.name, p.bodies[0], p.bodies[1], p.point, mechanism, stiffness=s)
-            for p in mechanism.pins]
+    return [
+        PinConnector(p.name, p.bodies[0], p.bodies[1], p.point, mechanism, stiffness=s)
+        for p in mechanism.pins
+    ]

@@ -113,7 +113,7 @@ class LoadPath:
         return {k: v for k, v in asdict(self).items() if v is not None}
 
     @classmethod
-    def from_dict(cls, data: dict) -> "LoadPath":
+    def from_dict(cls, data: dict) -> LoadPath:
         """Inverse of :meth:`to_dict`."""
         return cls(**data)
 
@@ -122,6 +122,6 @@ class LoadPath:
         return json.dumps(self.to_dict())
 
     @classmethod
-    def from_json(cls, text: str) -> "LoadPath":
+    def from_json(cls, text: str) -> LoadPath:
         """Inverse of :meth:`to_json`."""
         return cls.from_dict(json.loads(text))

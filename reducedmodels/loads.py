@@ -19,8 +19,8 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Callable, Mapping
 
 import numpy as np
 
@@ -56,8 +56,13 @@ class Loads:
     scale: float
 
     @classmethod
-    def of_case(cls, case: LoadCase, pose_dofs: Callable[[str], np.ndarray],
-                reference: Mapping[str, np.ndarray], size: float) -> "Loads":
+    def of_case(
+        cls,
+        case: LoadCase,
+        pose_dofs: Callable[[str], np.ndarray],
+        reference: Mapping[str, np.ndarray],
+        size: float,
+    ) -> Loads:
         """The loads of ``case`` in ``pose_dofs(body)`` numbering; bodies' reference points in mm.
 
         ``size`` (mm) turns moments into forces for :attr:`scale`.
@@ -75,23 +80,38 @@ class Loads:
         forces = np.array(ff).reshape(-1, 2)
         moments = np.array(mv, float)
         # plain floats: a load case has a few components
-        scale = max([max(map(abs, forces.ravel().tolist()), default=0.0),
-                     max(map(abs, moments.tolist()), default=0.0) / size, 1e-300])
-        return cls(np.array(fd, int).reshape(-1, 3), forces, np.array(fr).reshape(-1, 2),
-                   np.array(md, int), moments, scale)
+        scale = max(
+            [
+                max(map(abs, forces.ravel().tolist()), default=0.0),
+                max(map(abs, moments.tolist()), default=0.0) / size,
+                1e-300,
+            ]
+        )
+        return cls(
+            np.array(fd, int).reshape(-1, 3),
+            forces,
+            np.array(fr).reshape(-1, 2),
+            np.array(md, int),
+            moments,
+            scale,
+        )
 
     def __post_init__(self) -> None:
         # the loads on moving bodies as plain numbers, read at every assembly
-        self._points = [(ix, iy, it, fx, fy, rx, ry) for (ix, iy, it), (fx, fy), (rx, ry)
-                        in zip(self.dofs.tolist(), self.forces.tolist(), self.rels.tolist())
-                        if ix >= 0]
-        self._moments = [(dof, m) for dof, m in zip(self.moment_dofs.tolist(),
-                                                     self.moments.tolist()) if dof >= 0]
+        self._points = [
+            (ix, iy, it, fx, fy, rx, ry)
+            for (ix, iy, it), (fx, fy), (rx, ry) in zip(
+                self.dofs.tolist(), self.forces.tolist(), self.rels.tolist()
+            )
+            if ix >= 0
+        ]
+        self._moments = [
+            (dof, m) for dof, m in zip(self.moment_dofs.tolist(), self.moments.tolist()) if dof >= 0
+        ]
         #: the rotation dofs whose tangent diagonal :meth:`add_to` may change (each once)
         self.diagonal_dofs = list(dict.fromkeys(it for _, _, it, *_ in self._points))
 
-    def add_to(self, q: np.ndarray, factor: float, grad: np.ndarray, diagonal: np.ndarray
-               ) -> float:
+    def add_to(self, q: np.ndarray, factor: float, grad: np.ndarray, diagonal: np.ndarray) -> float:
         """Add the loads at ``factor`` to ``grad`` and the tangent ``diagonal`` (in place).
 
         Returns their potential, N mm. On plain floats (q read with
@@ -102,12 +122,12 @@ class Loads:
         for ix, iy, it, fx, fy, rx, ry in self._points:
             theta = item(it)
             c, s = math.cos(theta), math.sin(theta)
-            rrx, rry = c * rx - s * ry, s * rx + c * ry             # R(theta) rel (rotate_xy)
+            rrx, rry = c * rx - s * ry, s * rx + c * ry  # R(theta) rel (rotate_xy)
             energy -= factor * (fx * (item(ix) + rrx) + fy * (item(iy) + rry))
             grad[ix] -= factor * fx
             grad[iy] -= factor * fy
-            grad[it] -= factor * (fy * rrx - fx * rry)              # F . dx/dtheta
-            diagonal[it] += factor * (fx * rrx + fy * rry)          # -F . d2x/dtheta2
+            grad[it] -= factor * (fy * rrx - fx * rry)  # F . dx/dtheta
+            diagonal[it] += factor * (fx * rrx + fy * rry)  # -F . d2x/dtheta2
         for dof, m in self._moments:
             energy -= factor * m * item(dof)
             grad[dof] -= factor * m

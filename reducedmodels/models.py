@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any, Callable, Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -18,7 +19,7 @@ from flexval.geometry import LoadCase, Mechanism, SceneError
 
 from .catalogue import ModelSpec
 from .connector import Connector
-from .core import SolverSettings, System, connector_groups, local_hessian_product
+from .core import SolverSettings, System, connector_groups
 from .inertia import with_weights
 from .loadpath import LoadPath
 from .loads import Loads
@@ -30,8 +31,9 @@ from .validity import MAX_LINEAR_ROTATION
 ConnectorFactory = Callable[..., Any]
 
 
-def flexure_connectors(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFactory,
-                       options: dict) -> list:
+def flexure_connectors(
+    mechanism: Mechanism, spec: ModelSpec, make: ConnectorFactory, options: dict
+) -> list:
     """The connectors a System of ``mechanism`` joins: one ``make(...)`` per flexure, pins, weights.
 
     Pins (``mechanism.pins``) are added as exact Lagrange-multiplier joints
@@ -50,7 +52,7 @@ def flexure_connectors(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFac
     for f in mechanism.flexures:
         try:
             conns.append(make(f, mechanism, spec, **options))
-        except ValueError as exc:      # the model cannot represent this flexure
+        except ValueError as exc:  # the model cannot represent this flexure
             raise SceneError(mechanism.source, f"flexures.{f.name}", spec.id, str(exc)) from None
     if mechanism.pins:
         from .joints import pin_connectors
@@ -59,8 +61,13 @@ def flexure_connectors(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFac
     return with_weights(mechanism, conns)
 
 
-def connector_system(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFactory,
-                     settings: SolverSettings | None, options: dict) -> System:
+def connector_system(
+    mechanism: Mechanism,
+    spec: ModelSpec,
+    make: ConnectorFactory,
+    settings: SolverSettings | None,
+    options: dict,
+) -> System:
     """The System of ``mechanism`` joining its :func:`flexure_connectors` (``make`` per flexure).
 
     Raises
@@ -68,12 +75,14 @@ def connector_system(mechanism: Mechanism, spec: ModelSpec, make: ConnectorFacto
     SceneError
         If the model cannot represent a flexure.
     """
-    return System(mechanism, flexure_connectors(mechanism, spec, make, options),
-                  settings or SolverSettings())
+    return System(
+        mechanism, flexure_connectors(mechanism, spec, make, options), settings or SolverSettings()
+    )
 
 
-def build_system(mechanism: Mechanism, spec: ModelSpec,
-                 settings: SolverSettings | None = None, **options) -> System:
+def build_system(
+    mechanism: Mechanism, spec: ModelSpec, settings: SolverSettings | None = None, **options
+) -> System:
     """The multibody System of ``mechanism`` with every flexure modelled as ``spec``.
 
     ``options`` are Python keyword arguments of the connector that override
@@ -93,10 +102,17 @@ def build_system(mechanism: Mechanism, spec: ModelSpec,
     return fam.system(mechanism, spec, settings, **{**spec.kwargs, **options})
 
 
-def trace_nonlinear(mechanism: Mechanism, spec: ModelSpec, case: LoadCase,
-                    levels: int | None = None, scene: str = "", record_poses: bool = False,
-                    record_shapes: bool = False, record_reactions: bool = False,
-                    **options) -> LoadPath:
+def trace_nonlinear(
+    mechanism: Mechanism,
+    spec: ModelSpec,
+    case: LoadCase,
+    levels: int | None = None,
+    scene: str = "",
+    record_poses: bool = False,
+    record_shapes: bool = False,
+    record_reactions: bool = False,
+    **options,
+) -> LoadPath:
     """Build the model ``spec`` and trace ``case`` by load control (wall time includes the build).
 
     Raises
@@ -107,17 +123,32 @@ def trace_nonlinear(mechanism: Mechanism, spec: ModelSpec, case: LoadCase,
     t0 = time.perf_counter()
     options = {**spec.kwargs, **options}
     system = build_system(mechanism, spec, **options)
-    lp = solve_path(system, case, levels, model=spec.id, settings=options, scene=scene,
-                    record_poses=record_poses, record_shapes=record_shapes,
-                    record_reactions=record_reactions)
+    lp = solve_path(
+        system,
+        case,
+        levels,
+        model=spec.id,
+        settings=options,
+        scene=scene,
+        record_poses=record_poses,
+        record_shapes=record_shapes,
+        record_reactions=record_reactions,
+    )
     lp.seconds = time.perf_counter() - t0
     return lp
 
 
-def trace_linear(mechanism: Mechanism, spec: ModelSpec, case: LoadCase,
-                 levels: int | None = None, scene: str = "", record_poses: bool = False,
-                 record_shapes: bool = False, record_reactions: bool = False,
-                 **options) -> LoadPath:
+def trace_linear(
+    mechanism: Mechanism,
+    spec: ModelSpec,
+    case: LoadCase,
+    levels: int | None = None,
+    scene: str = "",
+    record_poses: bool = False,
+    record_shapes: bool = False,
+    record_reactions: bool = False,
+    **options,
+) -> LoadPath:
     """Build the model ``spec`` and return its linear response (wall time includes the build).
 
     The ``record_*`` flags are accepted for a uniform runner signature and
@@ -130,14 +161,21 @@ def trace_linear(mechanism: Mechanism, spec: ModelSpec, case: LoadCase,
     return lp
 
 
-def solve_linear(system: System, case: LoadCase, levels: int | None = None, model: str = "ee",
-                 scene: str = "") -> LoadPath:
+def solve_linear(
+    system: System, case: LoadCase, levels: int | None = None, model: str = "ee", scene: str = ""
+) -> LoadPath:
     """:func:`linear_response` of a System's connectors."""
     return linear_response(system.mechanism, system.connectors, case, levels, model, scene)
 
 
-def linear_response(mechanism: Mechanism, connectors: Sequence[Connector], case: LoadCase,
-                    levels: int | None = None, model: str = "ee", scene: str = "") -> LoadPath:
+def linear_response(
+    mechanism: Mechanism,
+    connectors: Sequence[Connector],
+    case: LoadCase,
+    levels: int | None = None,
+    model: str = "ee",
+    scene: str = "",
+) -> LoadPath:
     """Linear response at the undeformed configuration (the EE prediction).
 
     Solves K0 dq = w + lambda f with the elastic tangent K0 at rest (no load
@@ -168,21 +206,24 @@ def linear_response(mechanism: Mechanism, connectors: Sequence[Connector], case:
 
     n = 3 * len(bodies)
     reference = {b: mechanism.bodies[b].reference for b in mechanism.bodies}
-    poses = {b: [*reference[b].tolist(), 0.0] for b in mechanism.bodies}      # at rest
+    poses = {b: [*reference[b].tolist(), 0.0] for b in mechanism.bodies}  # at rest
     first[ground] = None
     # each connector's local coordinates at rest, their global dofs (-1: the ground's) and
     # their places in q extended by the ground's pose, all connectors' end to end
     rest, dofs, places, patterns, start = [], [], [], [], 0
     for c in connectors:
-        ends = [(-1, -1, -1) if first[b] is None else range(first[b], first[b] + 3)
-                for b in c.bodies]
-        rest.append((np.array(poses[c.bodies[0]]), np.array(poses[c.bodies[1]]),
-                     c.initial_internal()))
+        ends = [
+            (-1, -1, -1) if first[b] is None else range(first[b], first[b] + 3) for b in c.bodies
+        ]
+        rest.append(
+            (np.array(poses[c.bodies[0]]), np.array(poses[c.bodies[1]]), c.initial_internal())
+        )
         dofs += [*ends[0], *ends[1], *range(n, n + c.n_internal)]
         pattern = c.hessian_pattern()
         m = 6 + c.n_internal
-        patterns.append((np.repeat(np.arange(m), m), np.tile(np.arange(m), m))
-                        if pattern is None else pattern)
+        patterns.append(
+            (np.repeat(np.arange(m), m), np.tile(np.arange(m), m)) if pattern is None else pattern
+        )
         places.append(start)
         start += m
         n += c.n_internal
@@ -197,49 +238,66 @@ def linear_response(mechanism: Mechanism, connectors: Sequence[Connector], case:
     rows, cols = dofs[local_rows], dofs[local_cols]
     keep = (rows >= 0) & (cols >= 0)
     diagonal = np.arange(n)
-    layout = TangentLayout(n, np.concatenate([rows[keep], diagonal]),
-                           np.concatenate([cols[keep], diagonal]),
-                           sum(c.n_multipliers for c in connectors))
-    K0 = layout.tangent(np.bincount(layout.slots[:layout.slots.size - n],
-                                    weights=hessians[keep], minlength=layout.size))
+    layout = TangentLayout(
+        n,
+        np.concatenate([rows[keep], diagonal]),
+        np.concatenate([cols[keep], diagonal]),
+        sum(c.n_multipliers for c in connectors),
+    )
+    K0 = layout.tangent(
+        np.bincount(
+            layout.slots[: layout.slots.size - n], weights=hessians[keep], minlength=layout.size
+        )
+    )
     moving = dofs >= 0
-    g_zero = np.bincount(dofs[moving], weights=np.concatenate([g for _, g, _ in terms])[moving],
-                         minlength=n)
-    at_rest = np.concatenate([r for state in rest for r in state])   # the local coordinates
+    g_zero = np.bincount(
+        dofs[moving], weights=np.concatenate([g for _, g, _ in terms])[moving], minlength=n
+    )
+    at_rest = np.concatenate([r for state in rest for r in state])  # the local coordinates
     q0 = np.zeros(n)
-    q0[:3 * len(bodies)] = [x for b in bodies for x in poses[b]]
-    q0[dofs[moving]] = at_rest[moving]                # and the internal coordinates
+    q0[: 3 * len(bodies)] = [x for b in bodies for x in poses[b]]
+    q0[dofs[moving]] = at_rest[moving]  # and the internal coordinates
     loads = Loads.of_case(case, pose_dofs, reference, mechanism.size())
-    g_unit = g_zero.copy()                           # g = grad E(q0) - f = -f at rest
+    g_unit = g_zero.copy()  # g = grad E(q0) - f = -f at rest
     loads.add_to(q0, 1.0, g_unit, np.zeros_like(g_unit))
-    dq = K0.solve(g_zero - g_unit)                   # per unit load factor
+    dq = K0.solve(g_zero - g_unit)  # per unit load factor
     # the weights, g = -w at rest and no load (without gravity g_zero is only round-off)
     has_weights = mechanism.inertia.gravity is not None
     dq_dead = K0.solve(-g_zero) if has_weights else np.zeros_like(dq)
     # the target point's linearised motion at rest: (dx - rel_y dtheta, dy + rel_x dtheta)
     tdofs = pose_dofs(mechanism.target_body).tolist()
     rel_x, rel_y = (mechanism.target_point - reference[mechanism.target_body]).tolist()
-    (ux, uy, rot), (wx, wy, dead_rot) = ([v[tdofs[0]], v[tdofs[1]], v[tdofs[2]]] if tdofs[0] >= 0
-                                         else [0.0] * 3 for v in (dq.tolist(), dq_dead.tolist()))
+    (ux, uy, rot), (wx, wy, dead_rot) = (
+        [v[tdofs[0]], v[tdofs[1]], v[tdofs[2]]] if tdofs[0] >= 0 else [0.0] * 3
+        for v in (dq.tolist(), dq_dead.tolist())
+    )
     lam = case.factors(levels)
-    lp = LoadPath(model=model, load_case=case.name, load=(lam * case.magnitude).tolist(),
-                  dx=(wx - rel_y * dead_rot + lam * (ux - rel_y * rot)).tolist(),
-                  dy=(wy + rel_x * dead_rot + lam * (uy + rel_x * rot)).tolist(),
-                  rotation=(dead_rot + lam * rot).tolist(),
-                  seconds=0.0, converged=True,
-                  stats={"unknowns": n, "newton_iterations": 0, "step_cuts": 0,
-                         "substeps": 0},
-                  settings={}, scene=scene, load_unit=case.unit)
+    lp = LoadPath(
+        model=model,
+        load_case=case.name,
+        load=(lam * case.magnitude).tolist(),
+        dx=(wx - rel_y * dead_rot + lam * (ux - rel_y * rot)).tolist(),
+        dy=(wy + rel_x * dead_rot + lam * (uy + rel_x * rot)).tolist(),
+        rotation=(dead_rot + lam * rot).tolist(),
+        seconds=0.0,
+        converged=True,
+        stats={"unknowns": n, "newton_iterations": 0, "step_cuts": 0, "substeps": 0},
+        settings={},
+        scene=scene,
+        load_unit=case.unit,
+    )
     # every level's largest body rotation at once, (levels,) rad
-    turns = np.abs(dq_dead[2:3 * len(bodies):3] + lam[:, None] * dq[2:3 * len(bodies):3])
+    turns = np.abs(dq_dead[2 : 3 * len(bodies) : 3] + lam[:, None] * dq[2 : 3 * len(bodies) : 3])
     largest = np.argmax(turns, axis=1).tolist() if bodies else [0] * len(lam)
     lp.valid, lp.validity = [], []
     for row, k in zip(turns.tolist(), largest):
         reason = None
         if bodies and row[k] > MAX_LINEAR_ROTATION:
-            reason = (f"linear response: body {bodies[k]!r} turned "
-                      f"{math.degrees(row[k]):.3g} deg (limit "
-                      f"{math.degrees(MAX_LINEAR_ROTATION):.3g} deg: linearised kinematics)")
+            reason = (
+                f"linear response: body {bodies[k]!r} turned "
+                f"{math.degrees(row[k]):.3g} deg (limit "
+                f"{math.degrees(MAX_LINEAR_ROTATION):.3g} deg: linearised kinematics)"
+            )
         lp.valid.append(reason is None)
         lp.validity.append(reason)
     # section forces of the linear response: K0 dq on the undeformed centre lines
@@ -249,29 +307,43 @@ def linear_response(mechanism: Mechanism, connectors: Sequence[Connector], case:
     def section_gradients(dq_: np.ndarray) -> list[np.ndarray]:
         moved = np.concatenate([q0 + dq_, ground_pose])[gather] - at_rest
         products = np.bincount(local_rows, weights=hessians * moved[local_cols], minlength=start)
-        return [products[a:b] for a, b in zip(places, bounds)]   # each connector's
+        return [products[a:b] for a, b in zip(places, bounds)]  # each connector's
 
     def section_forces(gradients: list[np.ndarray]) -> list:
-        return [forces for group, run in groups
-                for forces in group.section_forces(rest[run], gradients[run])]
+        return [
+            forces
+            for group, run in groups
+            for forces in group.section_forces(rest[run], gradients[run])
+        ]
 
     per_unit = section_gradients(dq)
     sections = {f.name: f.section for f in mechanism.flexures}
     if has_weights:
         of_weights = section_gradients(dq_dead)
         for factor in lam:
-            record_stress(lp, connectors,
-                          section_forces([w + factor * g for w, g in zip(of_weights, per_unit)]),
-                          sections)
-    else:                   # section forces proportional to the load
+            record_stress(
+                lp,
+                connectors,
+                section_forces([w + factor * g for w, g in zip(of_weights, per_unit)]),
+                sections,
+            )
+    else:  # section forces proportional to the load
         record_stress(lp, connectors, section_forces(per_unit), sections, lam)
     lp.seconds = time.perf_counter() - t0
     return lp
 
 
-def run_reduced(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int | None = None,
-                scene: str = "", record_poses: bool = False, record_shapes: bool = False,
-                record_reactions: bool = False, **options) -> LoadPath:
+def run_reduced(
+    mechanism: Mechanism,
+    spec: ModelSpec,
+    case: LoadCase,
+    levels: int | None = None,
+    scene: str = "",
+    record_poses: bool = False,
+    record_shapes: bool = False,
+    record_reactions: bool = False,
+    **options,
+) -> LoadPath:
     """Trace ``case`` with the model ``spec`` (its family's runner; wall time includes the build).
 
     ``options`` override the spec's options (Python keyword arguments of the
@@ -282,7 +354,14 @@ def run_reduced(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: i
     core.SolverError
         If the path cannot be followed to full load.
     """
-    return spec.model_family.run(mechanism, spec, case, levels=levels, scene=scene,
-                                 record_poses=record_poses, record_shapes=record_shapes,
-                                 record_reactions=record_reactions, **options)
-
+    return spec.model_family.run(
+        mechanism,
+        spec,
+        case,
+        levels=levels,
+        scene=scene,
+        record_poses=record_poses,
+        record_shapes=record_shapes,
+        record_reactions=record_reactions,
+        **options,
+    )

@@ -79,17 +79,23 @@ def refuse_massless_bodies(system: System, massless: np.ndarray, what: str) -> N
     """SceneError naming the massless body coordinates, if any (``what`` needs them)."""
     n_body = 3 * len(system.body_index)
     if massless[:n_body].any():
-        names = describe_massless(system, np.concatenate([massless[:n_body],
-                                                          np.zeros(system.n_dofs - n_body, bool)]))
+        names = describe_massless(
+            system, np.concatenate([massless[:n_body], np.zeros(system.n_dofs - n_body, bool)])
+        )
         body = names[0].split("'")[1]
-        raise SceneError(system.mechanism.source, f"bodies.{body}.mass", None,
-                         f"{what} needs the mass of every moving body; massless: "
-                         f"{', '.join(names)} (give mass, inertia and center_of_mass, "
-                         "or an outline)")
+        raise SceneError(
+            system.mechanism.source,
+            f"bodies.{body}.mass",
+            None,
+            f"{what} needs the mass of every moving body; massless: "
+            f"{', '.join(names)} (give mass, inertia and center_of_mass, "
+            "or an outline)",
+        )
 
 
-def modes_at(system: System, mass: MassModel, q: np.ndarray, tangent: np.ndarray,
-             count: int) -> Modes:
+def modes_at(
+    system: System, mass: MassModel, q: np.ndarray, tangent: np.ndarray, count: int
+) -> Modes:
     """The ``count`` lowest modes of (tangent, M(q)) with massless coordinates handled.
 
     Parameters
@@ -107,7 +113,7 @@ def modes_at(system: System, mass: MassModel, q: np.ndarray, tangent: np.ndarray
         w, U = la.eigh(Kss)
         regular = np.abs(w) > SINGULAR_RELATIVE * max(float(np.abs(w).max()), 1e-300)
         R, Z = U[:, regular], U[:, ~regular]
-        condense = R @ ((R.T @ Kms.T) / w[regular, None])       # K_ss^+ K_sm
+        condense = R @ ((R.T @ Kms.T) / w[regular, None])  # K_ss^+ K_sm
         Kmm = Kmm - Kms @ condense
         T = la.null_space(Z.T @ Kms.T) if Z.shape[1] else np.eye(m.size)
     else:
@@ -144,8 +150,7 @@ def sparse_tangent(system: System, q: np.ndarray, loads: Loads, factor: float) -
     """
     n = system.n_dofs
     rows, cols, vals = [], [], []
-    for c, idx, local in zip(system.connectors, system._local_to_global,
-                             system.local_states(q)):
+    for c, idx, local in zip(system.connectors, system._local_to_global, system.local_states(q)):
         h = sp.coo_matrix(local_hessian(c, c.evaluate(*local)[2]))
         r, cc = idx[h.row], idx[h.col]
         keep = (r >= 0) & (cc >= 0)
@@ -153,12 +158,14 @@ def sparse_tangent(system: System, q: np.ndarray, loads: Loads, factor: float) -
     diagonal = np.zeros(n)
     loads.add_to(q, factor, np.zeros(n), diagonal)
     rows.append(np.arange(n)), cols.append(np.arange(n)), vals.append(diagonal)
-    return sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                         shape=(n, n))
+    return sp.csc_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)
+    )
 
 
-def sparse_modes(system: System, mass: MassModel, q: np.ndarray, tangent: sp.spmatrix,
-                 count: int) -> Modes:
+def sparse_modes(
+    system: System, mass: MassModel, q: np.ndarray, tangent: sp.spmatrix, count: int
+) -> Modes:
     """The ``count`` lowest modes by Lanczos on the flexibility of the massive coordinates.
 
     With G = [K^-1]_mm the massive block of the inverse of the (bordered)
@@ -188,8 +195,9 @@ def sparse_modes(system: System, mass: MassModel, q: np.ndarray, tangent: sp.spm
     inverse_mass = spla.LinearOperator(shape, matvec=m_lu.solve, dtype=float)
     apply_mass = spla.LinearOperator(shape, matvec=lambda v: m_mm @ v, dtype=float)
     start = np.random.default_rng(LANCZOS_START_SEED).uniform(-1.0, 1.0, m.size)
-    mu, y = spla.eigsh(flexibility, k=min(count, m.size - 1), M=inverse_mass, Minv=apply_mass,
-                       which="LM", v0=start)
+    mu, y = spla.eigsh(
+        flexibility, k=min(count, m.size - 1), M=inverse_mass, Minv=apply_mass, which="LM", v0=start
+    )
     lam = 1.0 / mu
     order = np.argsort(lam)
     lam, y = lam[order], y[:, order]
@@ -198,8 +206,9 @@ def sparse_modes(system: System, mass: MassModel, q: np.ndarray, tangent: sp.spm
     return Modes(lam, x.T, q)
 
 
-def scaled_case(system: System, case: LoadCase | None, fraction: float, levels: int = 11
-                ) -> LoadCase:
+def scaled_case(
+    system: System, case: LoadCase | None, fraction: float, levels: int = 11
+) -> LoadCase:
     """``case`` at ``fraction`` (0..1) of its value, traced in ``levels`` levels.
 
     Without a case (or at 0) a zero moment on the target body: the state
@@ -207,8 +216,12 @@ def scaled_case(system: System, case: LoadCase | None, fraction: float, levels: 
     """
     if case is None or fraction == 0.0:
         return LoadCase("rest", (Moment(system.mechanism.target_body, 0.0),), 2)
-    comps = tuple(Force(c.body, c.point, c.angle, fraction * c.value) if isinstance(c, Force)
-                  else Moment(c.body, fraction * c.value) for c in case.components)
+    comps = tuple(
+        Force(c.body, c.point, c.angle, fraction * c.value)
+        if isinstance(c, Force)
+        else Moment(c.body, fraction * c.value)
+        for c in case.components
+    )
     return LoadCase(case.name, comps, levels)
 
 
@@ -226,14 +239,18 @@ def equilibrium(system: System, case: LoadCase) -> np.ndarray:
         for point in trace(system, system.loads(case), LoadControl(case.factors())):
             state = point.state
     except TraceFailure as exc:
-        raise SolverError(f"equilibrium for the modal analysis on load case '{case.name}': "
-                          f"{exc.reason}; last converged at {100 * exc.factor:.2f} % of the "
-                          "requested level", exc.factor) from None
+        raise SolverError(
+            f"equilibrium for the modal analysis on load case '{case.name}': "
+            f"{exc.reason}; last converged at {100 * exc.factor:.2f} % of the "
+            "requested level",
+            exc.factor,
+        ) from None
     return state
 
 
-def natural_modes(system: System, case: LoadCase | None = None, fraction: float = 0.0,
-                  count: int = 6) -> Modes:
+def natural_modes(
+    system: System, case: LoadCase | None = None, fraction: float = 0.0, count: int = 6
+) -> Modes:
     """The ``count`` lowest natural modes about the equilibrium at ``fraction`` of ``case``.
 
     Raises

@@ -64,7 +64,7 @@ class StepProblem(ABC):
         value :meth:`correction` returns.
     """
 
-    def __init__(self, system: "System", loads: Loads, factor: float):
+    def __init__(self, system: System, loads: Loads, factor: float):
         self.system, self.loads, self.factor = system, loads, factor
 
     def assemble(self, q: np.ndarray) -> tuple[np.ndarray, Tangent]:
@@ -117,8 +117,12 @@ class NewtonResult(NamedTuple):
     tangent: Tangent | None
 
 
-def solve_step(problem: StepProblem, q: np.ndarray, settings: "SolverSettings",
-               origin: np.ndarray | None = None) -> NewtonResult:
+def solve_step(
+    problem: StepProblem,
+    q: np.ndarray,
+    settings: SolverSettings,
+    origin: np.ndarray | None = None,
+) -> NewtonResult:
     """Newton-Raphson with the exact tangent on ``problem`` from the iterate q.
 
     Converged when the residual is below ``force_tol`` (relative to the load
@@ -154,7 +158,7 @@ def solve_step(problem: StepProblem, q: np.ndarray, settings: "SolverSettings",
     for it in range(max_iterations + 1):
         try:
             g, K = problem.assemble(q)
-        except (ValueError, FloatingPointError) as exc:   # a connector refused the state
+        except (ValueError, FloatingPointError) as exc:  # a connector refused the state
             return NewtonResult(None, problem.factor, it, f"invalid state ({exc})", None)
         res = problem.residual(g)
         if not math.isfinite(res):
@@ -166,8 +170,13 @@ def solve_step(problem: StepProblem, q: np.ndarray, settings: "SolverSettings",
             return NewtonResult(None, problem.factor, it, f"diverging residual {res:.3g}", None)
         best, stalled = (res, 0) if res < best else (best, stalled + 1)
         if stalled >= max_stall:
-            return NewtonResult(None, problem.factor, it, f"stalled (no lower residual in "
-                                f"{stalled} iterations, best {best:.3g})", None)
+            return NewtonResult(
+                None,
+                problem.factor,
+                it,
+                f"stalled (no lower residual in {stalled} iterations, best {best:.3g})",
+                None,
+            )
         if it == max_iterations:
             break
         try:
@@ -186,10 +195,18 @@ def solve_step(problem: StepProblem, q: np.ndarray, settings: "SolverSettings",
         if step <= step_tol or (contracting and step * min(1.0, step / last_step) <= error_tol):
             return NewtonResult(q, problem.factor, it + 1, "", K)
         last_step = step
-        if (origin is not None and step > EXCURSION_CHECK
-                and system.motion_ratio(origin, q) > settings.max_excursion):
-            return NewtonResult(None, problem.factor, it + 1,
-                                "iterates left the sub-step's bounds", None)
-    return NewtonResult(None, problem.factor, settings.max_iterations,
-                        f"no convergence in {settings.max_iterations} iterations "
-                        f"(residual {res:.3g})", None)
+        if (
+            origin is not None
+            and step > EXCURSION_CHECK
+            and system.motion_ratio(origin, q) > settings.max_excursion
+        ):
+            return NewtonResult(
+                None, problem.factor, it + 1, "iterates left the sub-step's bounds", None
+            )
+    return NewtonResult(
+        None,
+        problem.factor,
+        settings.max_iterations,
+        f"no convergence in {settings.max_iterations} iterations (residual {res:.3g})",
+        None,
+    )

@@ -35,8 +35,9 @@ from .jit import kernel
 
 
 @kernel
-def pattern_graph(n: int, rows: np.ndarray, cols: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def pattern_graph(
+    n: int, rows: np.ndarray, cols: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The graph of the entries (rows, cols) of an n x n pattern: (indptr, indices, degree).
 
     Row i's neighbours are ``indices[indptr[i]:indptr[i + 1]]``, its
@@ -57,7 +58,7 @@ def pattern_graph(n: int, rows: np.ndarray, cols: np.ndarray
     indptr = np.zeros(n + 1, np.int64)
     indices = np.empty(rows.size, np.int64)
     degree = np.zeros(n, np.int32)
-    seen = np.full(n, -1, np.int64)             # the last row that listed each column
+    seen = np.full(n, -1, np.int64)  # the last row that listed each column
     m = 0
     for i in range(n):
         start = m
@@ -66,7 +67,7 @@ def pattern_graph(n: int, rows: np.ndarray, cols: np.ndarray
             if seen[col] == i:
                 continue
             seen[col] = i
-            a = m                                # insertion sort: a row has a few columns
+            a = m  # insertion sort: a row has a few columns
             while a > start and indices[a - 1] > col:
                 indices[a] = indices[a - 1]
                 a -= 1
@@ -78,8 +79,9 @@ def pattern_graph(n: int, rows: np.ndarray, cols: np.ndarray
 
 
 @kernel
-def reverse_cuthill_mckee(indptr: np.ndarray, indices: np.ndarray, degree: np.ndarray,
-                          seeds: np.ndarray) -> np.ndarray:
+def reverse_cuthill_mckee(
+    indptr: np.ndarray, indices: np.ndarray, degree: np.ndarray, seeds: np.ndarray
+) -> np.ndarray:
     """The RCM permutation of a :func:`pattern_graph` (``perm[k]``: the unknown placed k-th).
 
     ``seeds`` is ``numpy.argsort(degree)``: each connected component
@@ -106,7 +108,7 @@ def reverse_cuthill_mckee(indptr: np.ndarray, indices: np.ndarray, degree: np.nd
                         placed[neighbour] = True
                         order[count] = neighbour
                         count += 1
-                for a in range(first + 1, count):      # stable insertion sort by degree
+                for a in range(first + 1, count):  # stable insertion sort by degree
                     moving = order[a]
                     b = a
                     while b > first and degree[moving] < degree[order[b - 1]]:
@@ -120,8 +122,9 @@ def reverse_cuthill_mckee(indptr: np.ndarray, indices: np.ndarray, degree: np.nd
 
 
 @kernel
-def band_slots(perm: np.ndarray, rows: np.ndarray, cols: np.ndarray
-               ) -> tuple[np.ndarray, int, np.ndarray]:
+def band_slots(
+    perm: np.ndarray, rows: np.ndarray, cols: np.ndarray
+) -> tuple[np.ndarray, int, np.ndarray]:
     """Each unknown's place under ``perm``, the half-bandwidth and the entries' band slots.
 
     Returns (position, b, slots): ``position[perm[k]] = k``; b the largest

@@ -83,11 +83,11 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import cache, lru_cache
 from importlib import resources
 from types import ModuleType
-from typing import Callable, Mapping
 
 import numpy as np
 
@@ -130,13 +130,15 @@ class PrbmParameters:
         if not all(map(math.isfinite, (self.x1, self.y1, self.y2, self.kappa1, self.kappa2))):
             raise ValueError(f"prbm: parameters must be finite, got {self}")
         if self.kappa1 <= 0.0 or self.kappa2 <= 0.0:
-            raise ValueError(f"prbm: joint stiffnesses must be > 0, got kappa1={self.kappa1}, "
-                             f"kappa2={self.kappa2}")
+            raise ValueError(
+                f"prbm: joint stiffnesses must be > 0, got kappa1={self.kappa1}, "
+                f"kappa2={self.kappa2}"
+            )
         if self.x1 <= 0.0:
             raise ValueError(f"prbm: outer joints must be apart (x1 > 0), got x1={self.x1}")
 
     @classmethod
-    def from_rho(cls, width: float, rho: float) -> "PrbmParameters":
+    def from_rho(cls, width: float, rho: float) -> PrbmParameters:
         """The chain with the arc's exact linear compliance and outer-joint compliance share rho.
 
         Parameters
@@ -149,15 +151,24 @@ class PrbmParameters:
         """
         if not 0.0 < rho < 1.0:
             raise ValueError(f"prbm: rho must lie in (0, 1), got {rho}")
-        a, b = arc_semi_axes(width)          # floats (math.sqrt rounds as np.sqrt does)
-        return cls(x1=a / math.sqrt(rho), y1=-b * math.sqrt((1.0 - rho) / rho),
-                   y2=b * math.sqrt(rho / (1.0 - rho)), kappa1=2.0 / rho, kappa2=1.0 / (1.0 - rho))
+        a, b = arc_semi_axes(width)  # floats (math.sqrt rounds as np.sqrt does)
+        return cls(
+            x1=a / math.sqrt(rho),
+            y1=-b * math.sqrt((1.0 - rho) / rho),
+            y2=b * math.sqrt(rho / (1.0 - rho)),
+            kappa1=2.0 / rho,
+            kappa2=1.0 / (1.0 - rho),
+        )
 
 
 @lru_cache(maxsize=1)
 def load_table() -> dict:
     """The shipped fit (``reducedmodels/data/prbm_table.json``) as a dict."""
-    text = resources.files("flexval.reducedmodels").joinpath(TABLE_RESOURCE).read_text(encoding="utf-8")
+    text = (
+        resources.files("flexval.reducedmodels")
+        .joinpath(TABLE_RESOURCE)
+        .read_text(encoding="utf-8")
+    )
     return json.loads(text)
 
 
@@ -178,8 +189,10 @@ def table_parameters(width: float) -> PrbmParameters:
     """
     spline, top = _rho_spline()
     if not 0.0 <= width <= top + 1e-12:
-        raise ValueError(f"prbm: arc angle {np.degrees(width):.6g} deg is outside the fitted "
-                         f"range 0 .. {np.degrees(top):.6g} deg of {TABLE_RESOURCE}")
+        raise ValueError(
+            f"prbm: arc angle {np.degrees(width):.6g} deg is outside the fitted "
+            f"range 0 .. {np.degrees(top):.6g} deg of {TABLE_RESOURCE}"
+        )
     return PrbmParameters.from_rho(width, float(spline(width)))
 
 
@@ -203,7 +216,7 @@ def joint_positions(shape: Shape, params: PrbmParameters) -> np.ndarray:
     """Initial joints [R_start, R_2, R_end] of the chain for ``shape``, shape (3, 2), mm."""
     center, e1, e2, length, _ = shape_frame(shape)
     local = np.array([[params.x1, params.y1], [0.0, params.y2], [-params.x1, params.y1]])
-    return center + length * local @ np.array([e1, e2])       # rows e1, e2
+    return center + length * local @ np.array([e1, e2])  # rows e1, e2
 
 
 @cache
@@ -263,33 +276,43 @@ class PrbmConnector(Connector):
         arc angle.
     """
 
-    def __init__(self, flexure: Flexure, mechanism: Mechanism,
-                 params: PrbmParameters | Mapping[str, float] | None = None):
+    def __init__(
+        self,
+        flexure: Flexure,
+        mechanism: Mechanism,
+        params: PrbmParameters | Mapping[str, float] | None = None,
+    ):
         self.name = flexure.name
         self.bodies = tuple(flexure.bodies)
         self.n_internal = 4
-        self.n_multipliers = 2       # the closure multiplier mu
+        self.n_multipliers = 2  # the closure multiplier mu
         shape = flexure.shape
         length, width = shape.length, shape.width
         if params is None:
             params = table_parameters(width)
         elif not isinstance(params, PrbmParameters):
-            params = (PrbmParameters.from_rho(width, float(params["rho"])) if set(params) == {"rho"}
-                      else PrbmParameters(**params))
+            params = (
+                PrbmParameters.from_rho(width, float(params["rho"]))
+                if set(params) == {"rho"}
+                else PrbmParameters(**params)
+            )
         self.params = params
         EI = flexure.bending_stiffness(mechanism.material)
-        stiffness = [params.kappa1 * EI / length, params.kappa2 * EI / length,
-                     params.kappa1 * EI / length]
+        stiffness = [
+            params.kappa1 * EI / length,
+            params.kappa2 * EI / length,
+            params.kappa1 * EI / length,
+        ]
         self.stiffness = np.array(stiffness)
         self.closure_scale = EI / length**3
         joints = joint_positions(shape, params)
-        ends = shape.end_points               # [start, end]
+        ends = shape.end_points  # [start, end]
         self._forward = flexure.start_body == self.bodies[0]
         if not self._forward:
             joints, ends = joints[::-1], ends[::-1]
-        self.joints = joints                      # [R_a, R_2, R_b], chain order a -> b
+        self.joints = joints  # [R_a, R_2, R_b], chain order a -> b
         self._ref = np.array([mechanism.bodies[b].reference for b in self.bodies])
-        self._ends = ends                         # flexure end points on a and b
+        self._ends = ends  # flexure end points on a and b
         self.length = length
         # joint offsets from the body references, link vectors and the flexure ends' offsets,
         # as float pairs (mm; plain floats: a few numbers)
@@ -299,12 +322,13 @@ class PrbmConnector(Connector):
         self._end_rel_a = (ea[0] - fa[0], ea[1] - fa[1])
         self._end_rel_b = (eb[0] - fb[0], eb[1] - fb[1])
         # the parameters of flexval.reducedmodels.prbmkernel.chain
-        self._parameters = np.array([*self._r_a, *self._r_b, *self._v_h, *self._v_l,
-                                     *stiffness, self.closure_scale])
+        self._parameters = np.array(
+            [*self._r_a, *self._r_b, *self._v_h, *self._v_l, *stiffness, self.closure_scale]
+        )
         self._fitted_rotation = fitted_rotation()
         self._area = flexure.section.area
         self._shape = shape
-        self._rest = np.array([ea, ra, r2, rb, eb])   # polyline, mm
+        self._rest = np.array([ea, ra, r2, rb, eb])  # polyline, mm
         self._fractions = polyline_fractions(self._rest)
         self._stations = self._station_order()
 
@@ -323,9 +347,8 @@ class PrbmConnector(Connector):
         at = [fractions[k] for k in kept] + [fractions[k + 1] for k in kept]
         if not self._forward:
             at = [1.0 - a for a in at]
-        order = sorted(range(len(at)), key=at.__getitem__)          # stable, as argsort's
-        return (np.array([at[k] for k in order]),
-                np.array([where[k] for k in order], np.int64))
+        order = sorted(range(len(at)), key=at.__getitem__)  # stable, as argsort's
+        return (np.array([at[k] for k in order]), np.array([where[k] for k in order], np.int64))
 
     def mass_points(self, density: float) -> MassPoints:
         """The flexure's mass (density in t/mm^3) on the chain's four rigid members.
@@ -346,15 +369,19 @@ class PrbmConnector(Connector):
         """
         bounds = self._fractions * self.length
         hinges = np.array([self._ref[0], self.joints[0], self.joints[2], self._ref[1]])
-        mass, rel, rotary = rigid_pieces(self._shape, self._forward, bounds, hinges,
-                                         density * self._area)
+        mass, rel, rotary = rigid_pieces(
+            self._shape, self._forward, bounds, hinges, density * self._area
+        )
         on_link = np.array([0.0, 1.0, 1.0, 0.0])[:, None]
         hinge_rel = np.array([[0.0, 0.0], self._r_a, self._r_b, [0.0, 0.0]])
-        return MassPoints(dofs=np.array([np.arange(3), np.arange(3), np.arange(3, 6),
-                                         np.arange(3, 6)]),
-                          rel=on_link * hinge_rel + (1.0 - on_link) * rel, mass=mass,
-                          rotary=rotary, link=np.array([-1, 6, 7, -1]),
-                          link_rel=on_link * rel)
+        return MassPoints(
+            dofs=np.array([np.arange(3), np.arange(3), np.arange(3, 6), np.arange(3, 6)]),
+            rel=on_link * hinge_rel + (1.0 - on_link) * rel,
+            mass=mass,
+            rotary=rotary,
+            link=np.array([-1, 6, 7, -1]),
+            link_rel=on_link * rel,
+        )
 
     def internal_is_rotation(self) -> np.ndarray:
         """[True, True, False, False]: two link rotations, then the multiplier (mm)."""
@@ -365,12 +392,13 @@ class PrbmConnector(Connector):
         return _HESSIAN_ROWS, _HESSIAN_COLS
 
     @classmethod
-    def group(cls, connectors) -> "PrbmGroup":
+    def group(cls, connectors) -> PrbmGroup:
         """The PRBM connectors of a run, evaluated into one array of each kind (:class:`PrbmGroup`)."""
         return PrbmGroup(connectors)
 
-    def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> tuple[float, np.ndarray, np.ndarray]:
+    def evaluate(
+        self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+    ) -> tuple[float, np.ndarray, np.ndarray]:
         """Lagrangian (N mm), gradient (10) and Hessian values over [pose_a, pose_b, internal].
 
         Local order: [x_a, y_a, theta_a, x_b, y_b, theta_b, phi_h, phi_l, mu_x, mu_y];
@@ -380,12 +408,17 @@ class PrbmConnector(Connector):
         kernels = prbm_kernels()
         gradient, hessian = np.zeros(10), np.zeros(kernels.HESSIAN_VALUES)
         energy = kernels.assemble_chains(
-            np.concatenate([pose_a, pose_b, internal]), _LOCAL, self._parameters[None], _LOCAL,
-            np.arange(kernels.HESSIAN_VALUES, dtype=np.int64)[None], gradient, hessian)
+            np.concatenate([pose_a, pose_b, internal]),
+            _LOCAL,
+            self._parameters[None],
+            _LOCAL,
+            np.arange(kernels.HESSIAN_VALUES, dtype=np.int64)[None],
+            gradient,
+            hessian,
+        )
         return energy, gradient, hessian
 
-    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> list[str]:
+    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> list[str]:
         """Flexure ends farther apart than its length allows; end rotation beyond the fitted range.
 
         The rigid links cannot stretch, but the chain's end-to-end span can
@@ -401,9 +434,9 @@ class PrbmConnector(Connector):
         turn = tb - ta
         if chord / self.length - 1.0 <= MAX_STRAIN and abs(turn) <= self._fitted_rotation:
             return []
-        return (stretch_reasons("chord", np.array([chord]), np.array([self.length]),
-                                one_sided=True)
-                + rotation_reasons("end rotation", np.array([turn]), self._fitted_rotation))
+        return stretch_reasons(
+            "chord", np.array([chord]), np.array([self.length]), one_sided=True
+        ) + rotation_reasons("end rotation", np.array([turn]), self._fitted_rotation)
 
     def path_validity(self, states) -> list[list[str]]:
         """:meth:`validity` at k states, screened in one vectorised pass (:meth:`PrbmGroup.path_validity`)."""
@@ -413,8 +446,13 @@ class PrbmConnector(Connector):
         """Polyline end_a, R_a, R_2, R_b, end_b in the current configuration, (5, 2) mm."""
         return PrbmGroup([self]).polylines([[(pose_a, pose_b, internal)]])[0, 0]
 
-    def section_forces(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray,
-                       gradient: np.ndarray | None = None) -> SectionForces:
+    def section_forces(
+        self,
+        pose_a: np.ndarray,
+        pose_b: np.ndarray,
+        internal: np.ndarray,
+        gradient: np.ndarray | None = None,
+    ) -> SectionForces:
         """Normal force (N) and bending moment (N mm) along the displaced links.
 
         The chain transmits one wrench (the gradient on body b's pose,
@@ -452,8 +490,9 @@ class PrbmGroup(ConnectorGroup):
         self._parameters = np.array([c._parameters for c in self.connectors])
         self._end_rel = np.array([(*c._end_rel_a, *c._end_rel_b) for c in self.connectors])
 
-    def assembler(self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
-                  ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
+    def assembler(
+        self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
+    ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
         """The compiled kernel adding every chain into the System's gradient and tangent.
 
         See :meth:`ConnectorGroup.assembler`: each connector has ten local
@@ -461,9 +500,12 @@ class PrbmGroup(ConnectorGroup):
         """
         kernels = prbm_kernels()
         chains = len(self.connectors)
-        fixed = (np.ascontiguousarray(gather, np.int64).reshape(chains, 10), self._parameters,
-                 np.ascontiguousarray(grad_dofs, np.int64).reshape(chains, 10),
-                 np.ascontiguousarray(hess_slots, np.int64).reshape(chains, kernels.HESSIAN_VALUES))
+        fixed = (
+            np.ascontiguousarray(gather, np.int64).reshape(chains, 10),
+            self._parameters,
+            np.ascontiguousarray(grad_dofs, np.int64).reshape(chains, 10),
+            np.ascontiguousarray(hess_slots, np.int64).reshape(chains, kernels.HESSIAN_VALUES),
+        )
         assemble_chains = kernels.assemble_chains
 
         def add(coordinates: np.ndarray, grad: np.ndarray, storage: np.ndarray) -> float:
@@ -473,8 +515,9 @@ class PrbmGroup(ConnectorGroup):
 
     def _local(self, levels) -> np.ndarray:
         """Every connector's local coordinates at each of k levels, (k, c, 10)."""
-        return np.concatenate([x for states in levels for state in states
-                               for x in state]).reshape(len(levels), len(self.connectors), 10)
+        return np.concatenate([x for states in levels for state in states for x in state]).reshape(
+            len(levels), len(self.connectors), 10
+        )
 
     def polylines(self, levels) -> np.ndarray:
         """Each connector's polyline end_a, R_a, R_2, R_b, end_b at k levels, (k, c, 5, 2) mm.
@@ -482,11 +525,11 @@ class PrbmGroup(ConnectorGroup):
         ``levels`` holds, for each level, the connectors' local states in
         order; one compiled call (:func:`flexval.reducedmodels.prbmkernel.chain_polylines`).
         """
-        return prbm_kernels().chain_polylines(self._local(levels), self._parameters,
-                                              self._end_rel)
+        return prbm_kernels().chain_polylines(self._local(levels), self._parameters, self._end_rel)
 
-    def path_end_pass(self, coordinates: np.ndarray
-                      ) -> tuple[list[list[list[str]]], list[SectionForces]]:
+    def path_end_pass(
+        self, coordinates: np.ndarray
+    ) -> tuple[list[list[list[str]]], list[SectionForces]]:
         """:meth:`path_validity` and :meth:`path_section_forces` on the stacked coordinates as they are.
 
         ``coordinates`` (k, 10 c): the connectors' local coordinates at each
@@ -495,8 +538,7 @@ class PrbmGroup(ConnectorGroup):
         sends to the scalar check.
         """
         local = coordinates.reshape(len(coordinates), len(self.connectors), 10)
-        return (self._verdicts(local, lambda: self.local_levels(coordinates)),
-                self._forces(local))
+        return (self._verdicts(local, lambda: self.local_levels(coordinates)), self._forces(local))
 
     def path_validity(self, levels) -> list[list[list[str]]]:
         """Each connector's :meth:`PrbmConnector.validity` at each level, screened in one pass.
@@ -507,19 +549,22 @@ class PrbmGroup(ConnectorGroup):
         """
         return self._verdicts(self._local(levels), lambda: levels)
 
-    def _verdicts(self, local: np.ndarray, levels_of: Callable[[], list]
-                  ) -> list[list[list[str]]]:
+    def _verdicts(self, local: np.ndarray, levels_of: Callable[[], list]) -> list[list[list[str]]]:
         """:meth:`path_validity` from the (k, c, 10) table; ``levels_of()`` gives the local states."""
         lines = prbm_kernels().chain_polylines(local, self._parameters, self._end_rel)
         chord = lines[:, :, 4] - lines[:, :, 0]
         turn = np.abs(local[..., 5] - local[..., 2])
         length = np.array([c.length for c in self.connectors])
         fitted = np.array([c._fitted_rotation for c in self.connectors])
-        near = ((np.hypot(chord[..., 0], chord[..., 1]) / length - 1.0 > MAX_STRAIN - SCREEN_MARGIN)
-                | (turn > fitted - SCREEN_MARGIN)).T.tolist()
+        near = (
+            (np.hypot(chord[..., 0], chord[..., 1]) / length - 1.0 > MAX_STRAIN - SCREEN_MARGIN)
+            | (turn > fitted - SCREEN_MARGIN)
+        ).T.tolist()
         levels = levels_of() if any(map(any, near)) else [None] * len(local)
-        return [[c.validity(*states[j]) if flag else [] for states, flag in zip(levels, flags)]
-                for j, (c, flags) in enumerate(zip(self.connectors, near))]
+        return [
+            [c.validity(*states[j]) if flag else [] for states, flag in zip(levels, flags)]
+            for j, (c, flags) in enumerate(zip(self.connectors, near))
+        ]
 
     def path_section_forces(self, levels) -> list[SectionForces]:
         """Each connector's :meth:`PrbmConnector.section_forces` at k levels, stacked (k, m).
@@ -534,8 +579,7 @@ class PrbmGroup(ConnectorGroup):
         """:meth:`path_section_forces` from the (k, c, 10) table."""
         kernels = prbm_kernels()
         wrenches = kernels.chain_wrenches(local, self._parameters)
-        return self._split(*kernels.chain_statics(local, self._parameters, self._end_rel,
-                                                  wrenches))
+        return self._split(*kernels.chain_statics(local, self._parameters, self._end_rel, wrenches))
 
     def section_forces(self, states, gradients) -> list[SectionForces]:
         """Each connector's :meth:`PrbmConnector.section_forces` with a known gradient, in one call.
@@ -543,8 +587,9 @@ class PrbmGroup(ConnectorGroup):
         The wrench is the gradient on body b's pose (entries 3-5).
         """
         wrenches = np.array([np.asarray(g, float)[3:6] for g in gradients])[None]
-        axial, moment = prbm_kernels().chain_statics(self._local([states]), self._parameters,
-                                                     self._end_rel, wrenches)
+        axial, moment = prbm_kernels().chain_statics(
+            self._local([states]), self._parameters, self._end_rel, wrenches
+        )
         return [SectionForces(f.at, f.axial[0], f.moment[0]) for f in self._split(axial, moment)]
 
     def _split(self, axial: np.ndarray, moment: np.ndarray) -> list[SectionForces]:

@@ -26,7 +26,6 @@ import numpy as np
 
 from .jit import kernel
 
-
 COORDINATES = 10
 """A chain's local coordinates: x_a, y_a, theta_a, x_b, y_b, theta_b, phi_h, phi_l, mu_x, mu_y."""
 
@@ -40,8 +39,9 @@ HESSIAN_VALUES = 34
 
 
 @kernel
-def chain(local: np.ndarray, p: np.ndarray, grad: np.ndarray, values: np.ndarray,
-          with_hessian: bool) -> float:
+def chain(
+    local: np.ndarray, p: np.ndarray, grad: np.ndarray, values: np.ndarray, with_hessian: bool
+) -> float:
     """Lagrangian (N mm) of one chain; its gradient (10) and Hessian values (34) in place.
 
     ``local`` holds the chain's coordinates (:data:`COORDINATES`), ``p`` its
@@ -56,13 +56,13 @@ def chain(local: np.ndarray, p: np.ndarray, grad: np.ndarray, values: np.ndarray
     ph, pl, mx, my = local[6], local[7], local[8], local[9]
     k1, k2, k3, c = p[8], p[9], p[10], p[11]
     ca, sa = math.cos(ta), math.sin(ta)
-    rax, ray = ca * p[0] - sa * p[1], sa * p[0] + ca * p[1]          # R(theta_a) r_a
+    rax, ray = ca * p[0] - sa * p[1], sa * p[0] + ca * p[1]  # R(theta_a) r_a
     cb, sb = math.cos(tb), math.sin(tb)
-    rbx, rby = cb * p[2] - sb * p[3], sb * p[2] + cb * p[3]          # R(theta_b) r_b
+    rbx, rby = cb * p[2] - sb * p[3], sb * p[2] + cb * p[3]  # R(theta_b) r_b
     ch, sh = math.cos(ph), math.sin(ph)
-    vhx, vhy = ch * p[4] - sh * p[5], sh * p[4] + ch * p[5]          # R(phi_h) v_h
+    vhx, vhy = ch * p[4] - sh * p[5], sh * p[4] + ch * p[5]  # R(phi_h) v_h
     cl, sl = math.cos(pl), math.sin(pl)
-    vlx, vly = cl * p[6] - sl * p[7], sl * p[6] + cl * p[7]          # R(phi_l) v_l
+    vlx, vly = cl * p[6] - sl * p[7], sl * p[6] + cl * p[7]  # R(phi_l) v_l
     gx = xa + rax + vhx + vlx - xb - rbx
     gy = ya + ray + vhy + vly - yb - rby
     # gap Jacobian columns on the angles: J R v = (-y, x)
@@ -83,7 +83,7 @@ def chain(local: np.ndarray, p: np.ndarray, grad: np.ndarray, values: np.ndarray
     values[6], values[7], values[8] = k2 + k3 - cmx * vlx - cmy * vly, -k3, -k3
     values[9] = k3 + cmx * rbx + cmy * rby
     mixed = (c * ga0, c * gb0, c * gh0, c * gl0, c * ga1, c * gb1, c * gh1, c * gl1)
-    for start in (10, 22):              # c G in the mu rows, then c G^T in the mu columns
+    for start in (10, 22):  # c G in the mu rows, then c G^T in the mu columns
         values[start], values[start + 1], values[start + 2], values[start + 3] = c, -c, c, -c
         for j in range(8):
             values[start + 4 + j] = mixed[j]
@@ -91,9 +91,15 @@ def chain(local: np.ndarray, p: np.ndarray, grad: np.ndarray, values: np.ndarray
 
 
 @kernel
-def assemble_chains(coordinates: np.ndarray, gather: np.ndarray, parameters: np.ndarray,
-                    grad_slot: np.ndarray, hess_slot: np.ndarray, grad: np.ndarray,
-                    storage: np.ndarray) -> float:
+def assemble_chains(
+    coordinates: np.ndarray,
+    gather: np.ndarray,
+    parameters: np.ndarray,
+    grad_slot: np.ndarray,
+    hess_slot: np.ndarray,
+    grad: np.ndarray,
+    storage: np.ndarray,
+) -> float:
     """Every chain's gradient and Hessian values added into ``grad`` and ``storage``; the energy.
 
     Chain k reads its local coordinate j at ``coordinates[gather[k, j]]``;
@@ -138,8 +144,7 @@ def chain_wrenches(local: np.ndarray, parameters: np.ndarray) -> np.ndarray:
 
 
 @kernel
-def chain_polylines(local: np.ndarray, parameters: np.ndarray, end_rel: np.ndarray
-                    ) -> np.ndarray:
+def chain_polylines(local: np.ndarray, parameters: np.ndarray, end_rel: np.ndarray) -> np.ndarray:
     """Each chain's polyline end_a, R_a, R_2, R_b, end_b at k states, (k, c, 5, 2) mm.
 
     ``local`` (k, c, COORDINATES) holds every chain's coordinates at each
@@ -167,8 +172,9 @@ def chain_polylines(local: np.ndarray, parameters: np.ndarray, end_rel: np.ndarr
 
 
 @kernel
-def chain_statics(local: np.ndarray, parameters: np.ndarray, end_rel: np.ndarray,
-                  wrenches: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def chain_statics(
+    local: np.ndarray, parameters: np.ndarray, end_rel: np.ndarray, wrenches: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Normal force (N) and bending moment (N mm) at both ends of each polyline segment.
 
     Each chain's wrench ``wrenches[state, chain]`` (force N, moment N mm
@@ -207,9 +213,15 @@ def warm_up() -> None:
     """
     parameters = np.zeros((1, PARAMETERS))
     slots = np.full((1, COORDINATES), -1, np.int64)
-    assemble_chains(np.zeros(COORDINATES), slots + 1, parameters, slots,
-                    np.full((1, HESSIAN_VALUES), -1, np.int64), np.zeros(COORDINATES),
-                    np.zeros(HESSIAN_VALUES))
+    assemble_chains(
+        np.zeros(COORDINATES),
+        slots + 1,
+        parameters,
+        slots,
+        np.full((1, HESSIAN_VALUES), -1, np.int64),
+        np.zeros(COORDINATES),
+        np.zeros(HESSIAN_VALUES),
+    )
     local = np.zeros((1, 1, COORDINATES))
     chain_wrenches(local, parameters)
     chain_statics(local, parameters, np.zeros((1, 4)), np.zeros((1, 1, 3)))

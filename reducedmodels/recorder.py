@@ -13,7 +13,7 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 import time
-from typing import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 
 import numpy as np
 
@@ -55,27 +55,51 @@ class PathRecorder:
     instead of one call per level.
     """
 
-    def __init__(self, system: System, case: LoadCase, model: str = "", scene: str = "",
-                 settings: dict | None = None, record_poses: bool = False,
-                 record_shapes: bool = False, record_reactions: bool = False,
-                 limit_points: bool = False):
+    def __init__(
+        self,
+        system: System,
+        case: LoadCase,
+        model: str = "",
+        scene: str = "",
+        settings: dict | None = None,
+        record_poses: bool = False,
+        record_shapes: bool = False,
+        record_reactions: bool = False,
+        limit_points: bool = False,
+    ):
         self.t0 = time.perf_counter()
         self.system, self.case, self.model = system, case, model
-        self.magnitude = case.magnitude          # the full load (N or N mm), read at every level
+        self.magnitude = case.magnitude  # the full load (N or N mm), read at every level
         self.path = LoadPath(
-            model=model, load_case=case.name, load=[], dx=[], dy=[], rotation=[], seconds=0.0,
-            settings=settings or {}, scene=scene, load_unit=case.unit,
+            model=model,
+            load_case=case.name,
+            load=[],
+            dx=[],
+            dy=[],
+            rotation=[],
+            seconds=0.0,
+            settings=settings or {},
+            scene=scene,
+            load_unit=case.unit,
             poses={b: [] for b in system.mechanism.bodies} if record_poses else None,
             shapes={c.name: [] for c in system.connectors} if record_shapes else None,
-            reactions=[] if record_reactions else None, valid=[], validity=[])
-        self.stats = {"unknowns": system.n_dofs, "newton_iterations": 0, "step_cuts": 0,
-                      "substeps": 0, "iterations": []}
+            reactions=[] if record_reactions else None,
+            valid=[],
+            validity=[],
+        )
+        self.stats = {
+            "unknowns": system.n_dofs,
+            "newton_iterations": 0,
+            "step_cuts": 0,
+            "substeps": 0,
+            "iterations": [],
+        }
         if limit_points:
             self.stats["limit_points"] = []
         self.path.stats = self.stats
         self.factors: list[float] = []
         self.sections = {f.name: f.section for f in system.mechanism.flexures}
-        self.states: list[np.ndarray] = []      # recorded states not yet judged and stressed
+        self.states: list[np.ndarray] = []  # recorded states not yet judged and stressed
 
     def record(self, point: PathPoint) -> None:
         """Append one converged point."""
@@ -100,8 +124,11 @@ class PathRecorder:
             self.stats["limit_points"].append(len(f) - 2)
 
     def _count(self, counters) -> None:
-        self.stats.update(newton_iterations=counters.newton_iterations,
-                          step_cuts=counters.step_cuts, substeps=counters.substeps)
+        self.stats.update(
+            newton_iterations=counters.newton_iterations,
+            step_cuts=counters.step_cuts,
+            substeps=counters.substeps,
+        )
 
     def _judge(self) -> None:
         """Validity verdicts and section stresses of the states recorded since the last call."""
@@ -130,12 +157,17 @@ class PathRecorder:
         self.path.converged = False
         self.path.seconds = time.perf_counter() - self.t0
         lam, case = exc.factor, self.case
-        return SolverError(f"{self.model or 'model'} on load case '{case.name}': {exc.reason}; "
-                           f"last converged load {lam * case.magnitude:.6g} {case.unit} "
-                           f"({100 * lam:.2f} % of full load)", lam, self.path)
+        return SolverError(
+            f"{self.model or 'model'} on load case '{case.name}': {exc.reason}; "
+            f"last converged load {lam * case.magnitude:.6g} {case.unit} "
+            f"({100 * lam:.2f} % of full load)",
+            lam,
+            self.path,
+        )
 
-    def run(self, points: Iterator[PathPoint],
-            stop: Callable[[LoadPath], bool] | None = None) -> tuple[LoadPath, PathPoint]:
+    def run(
+        self, points: Iterator[PathPoint], stop: Callable[[LoadPath], bool] | None = None
+    ) -> tuple[LoadPath, PathPoint]:
         """Record the points (until ``stop(path)`` is True); return the path and the last point.
 
         Raises
@@ -154,8 +186,9 @@ class PathRecorder:
         return self.finish(), last
 
 
-def path_end_pass(system: System, states: Sequence[np.ndarray]
-                  ) -> tuple[list[list[str]], list[tuple[Connector, SectionForces | None]]]:
+def path_end_pass(
+    system: System, states: Sequence[np.ndarray]
+) -> tuple[list[list[str]], list[tuple[Connector, SectionForces | None]]]:
     """The validity monitor's reasons at each state and every connector's stacked section forces.
 
     The reasons are those :meth:`System.validity` gives at each state
@@ -177,8 +210,9 @@ def path_end_pass(system: System, states: Sequence[np.ndarray]
     return reasons, forces
 
 
-def record_stress(path: LoadPath, connectors, forces, sections: dict,
-                  scales: Sequence[float] = (1.0,)) -> None:
+def record_stress(
+    path: LoadPath, connectors, forces, sections: dict, scales: Sequence[float] = (1.0,)
+) -> None:
     """Append each flexure's peak outer-fibre stress (MPa) at one state, scaled, to ``path``.
 
     The linear response's form: one level is appended per entry of
@@ -204,13 +238,20 @@ def record_stress(path: LoadPath, connectors, forces, sections: dict,
             continue
         unit = found.fibre_stress(section)
         peak = int(np.argmax(unit))
-        top = float(unit[peak])                 # plain floats: one product per level
-        _append_stress(path, c.name, [f * top for f in factors],
-                       [float(found.at[peak])] * len(factors), found.at, factors[-1] * unit)
+        top = float(unit[peak])  # plain floats: one product per level
+        _append_stress(
+            path,
+            c.name,
+            [f * top for f in factors],
+            [float(found.at[peak])] * len(factors),
+            found.at,
+            factors[-1] * unit,
+        )
 
 
-def record_path_stress(path: LoadPath, forces: Sequence[tuple[Connector, SectionForces | None]],
-                       sections: dict) -> None:
+def record_path_stress(
+    path: LoadPath, forces: Sequence[tuple[Connector, SectionForces | None]], sections: dict
+) -> None:
     """Append each flexure's peak outer-fibre stress (MPa) and its place at several levels.
 
     ``forces`` pairs each connector with its section forces stacked over the
@@ -230,12 +271,24 @@ def record_path_stress(path: LoadPath, forces: Sequence[tuple[Connector, Section
         if section is None or stacked is None:
             continue
         unit = stacked.fibre_stress(section)
-        _append_stress(path, c.name, unit.max(axis=1).tolist(),
-                       stacked.at[unit.argmax(axis=1)].tolist(), stacked.at, unit[-1])
+        _append_stress(
+            path,
+            c.name,
+            unit.max(axis=1).tolist(),
+            stacked.at[unit.argmax(axis=1)].tolist(),
+            stacked.at,
+            unit[-1],
+        )
 
 
-def _append_stress(path: LoadPath, name: str, peaks: list[float], places: list[float],
-                   at: np.ndarray, profile: np.ndarray) -> None:
+def _append_stress(
+    path: LoadPath,
+    name: str,
+    peaks: list[float],
+    places: list[float],
+    at: np.ndarray,
+    profile: np.ndarray,
+) -> None:
     """Append one flexure's peak stresses (MPa) and places; its profile replaces the last one."""
     if path.peak_stress is None:
         path.peak_stress, path.peak_stress_at, path.stress_profile = {}, {}, {}
@@ -244,10 +297,17 @@ def _append_stress(path: LoadPath, name: str, peaks: list[float], places: list[f
     path.stress_profile[name] = {"at": at.tolist(), "stress": profile.tolist()}
 
 
-def solve_path(system: System, case: LoadCase, levels: int | None = None,
-               model: str = "", settings: dict | None = None, scene: str = "",
-               record_poses: bool = False, record_shapes: bool = False,
-               record_reactions: bool = False) -> LoadPath:
+def solve_path(
+    system: System,
+    case: LoadCase,
+    levels: int | None = None,
+    model: str = "",
+    settings: dict | None = None,
+    scene: str = "",
+    record_poses: bool = False,
+    record_shapes: bool = False,
+    record_reactions: bool = False,
+) -> LoadPath:
     """Trace the load path of ``case`` through its requested levels by load control.
 
     Between two requested levels the load factor advances in sub-steps
@@ -261,7 +321,8 @@ def solve_path(system: System, case: LoadCase, levels: int | None = None,
         When step cutting cannot save a step; carries the last converged load
         factor and the partial LoadPath.
     """
-    recorder = PathRecorder(system, case, model, scene, settings, record_poses, record_shapes,
-                            record_reactions)
+    recorder = PathRecorder(
+        system, case, model, scene, settings, record_poses, record_shapes, record_reactions
+    )
     points = trace(system, system.loads(case), LoadControl(case.factors(levels)))
     return recorder.run(points)[0]

@@ -57,8 +57,9 @@ class SectionForces:
 
     def fibre_stress(self, section: Section) -> np.ndarray:
         """Outer-fibre normal stress |N|/A + |M| h/(2 I) at each station (and state), MPa."""
-        return (np.abs(self.axial) / section.area
-                + np.abs(self.moment) * section.thickness / (2.0 * section.inertia))
+        return np.abs(self.axial) / section.area + np.abs(self.moment) * section.thickness / (
+            2.0 * section.inertia
+        )
 
     def peak(self, section: Section) -> tuple[float, float]:
         """Largest outer-fibre stress (MPa) and its arc-length fraction from the first end."""
@@ -67,9 +68,14 @@ class SectionForces:
         return float(sigma[k]), float(self.at[k])
 
 
-def statics_section_forces(points: np.ndarray, fractions: np.ndarray, wrench: np.ndarray,
-                           end_pose: np.ndarray, reverse: bool = False,
-                           axes: np.ndarray | None = None) -> SectionForces:
+def statics_section_forces(
+    points: np.ndarray,
+    fractions: np.ndarray,
+    wrench: np.ndarray,
+    end_pose: np.ndarray,
+    reverse: bool = False,
+    axes: np.ndarray | None = None,
+) -> SectionForces:
     """Section forces along a displaced centre line from the wrench at its end body.
 
     Every array may carry a leading axis of k states (a whole load path)
@@ -138,7 +144,7 @@ def polyline_fractions(points: np.ndarray) -> np.ndarray:
 
 def unit_vectors(angle: np.ndarray) -> np.ndarray:
     """(cos, sin) of each angle (rad) of an array of shape (...), shape (..., 2)."""
-    out = np.empty((*np.shape(angle), 2))      # (np.column_stack costs more on short arrays)
+    out = np.empty((*np.shape(angle), 2))  # (np.column_stack costs more on short arrays)
     out[..., 0], out[..., 1] = np.cos(angle), np.sin(angle)
     return out
 

@@ -35,8 +35,9 @@ class NotAKnotSpline:
 
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         if x.ndim != 1 or x.shape != y.shape or x.size < 4:
-            raise ValueError(f"need two 1-D arrays of one length >= 4, got shapes "
-                             f"{x.shape} and {y.shape}")
+            raise ValueError(
+                f"need two 1-D arrays of one length >= 4, got shapes {x.shape} and {y.shape}"
+            )
         dx = np.diff(x)
         if not np.all(dx > 0.0):
             raise ValueError("the abscissae must increase strictly")
@@ -65,7 +66,7 @@ class NotAKnotSpline:
 
     def __call__(self, x: float) -> float:
         """The spline at ``x``; outside the knots, the end piece's cubic continued."""
-        i = bisect.bisect_right(self._knots, x) - 1      # np.searchsorted's "right" side
+        i = bisect.bisect_right(self._knots, x) - 1  # np.searchsorted's "right" side
         i = min(max(i, 0), len(self._knots) - 2)
         u = float(x) - self._knots[i]
         c0, c1, c2, c3 = self._pieces[i]

@@ -30,22 +30,22 @@ from typing import Protocol
 
 import numpy as np
 import scipy.linalg as sla
-from scipy.linalg import lapack
 import scipy.sparse as sp
+from scipy.linalg import lapack
 
 from .threads import limit_threads
 
-DENSE_LIMIT = 96     # above ~100 unknowns, multithreaded LAPACK stalls on a loaded 2-core machine
-BAND_LIMIT = 64      # band storage beats SuperLU up to at least this half-bandwidth, measured on
-                     # the continuum meshes: banded LU was 2x faster at b = 29, even at b = 61, 2x
-                     # slower at b = 117; the banded Cholesky now used makes whole level-2 paths
-                     # (b = 61 on both scenes) 1.6x faster than SuperLU; b = 117 is not measured
-NARROW_BAND = 8      # compiled banded Cholesky up to this half-bandwidth, LAPACK's above: at b = 5
-                     # (beam chains) the loop takes half of dpbtrf's time, at b = 29 three times it
-NARROW_MIN = 48      # a system that already runs compiled kernels takes a narrow band instead of
-                     # dense storage from this many unknowns (factor + solve at b = 5, n = 57:
-                     # 5 us instead of 15 us, n = 90: 8 instead of 36 us; n = 33: 6 against 9)
-ROUND_OFF = 1e-12    # eigenvalues above -ROUND_OFF * |K| count as zero, not as negative
+DENSE_LIMIT = 96  # above ~100 unknowns, multithreaded LAPACK stalls on a loaded 2-core machine
+BAND_LIMIT = 64  # band storage beats SuperLU up to at least this half-bandwidth, measured on
+# the continuum meshes: banded LU was 2x faster at b = 29, even at b = 61, 2x
+# slower at b = 117; the banded Cholesky now used makes whole level-2 paths
+# (b = 61 on both scenes) 1.6x faster than SuperLU; b = 117 is not measured
+NARROW_BAND = 8  # compiled banded Cholesky up to this half-bandwidth, LAPACK's above: at b = 5
+# (beam chains) the loop takes half of dpbtrf's time, at b = 29 three times it
+NARROW_MIN = 48  # a system that already runs compiled kernels takes a narrow band instead of
+# dense storage from this many unknowns (factor + solve at b = 5, n = 57:
+# 5 us instead of 15 us, n = 90: 8 instead of 36 us; n = 33: 6 against 9)
+ROUND_OFF = 1e-12  # eigenvalues above -ROUND_OFF * |K| count as zero, not as negative
 
 
 @functools.cache
@@ -119,9 +119,9 @@ class DenseTangent:
 
     def __init__(self, matrix: np.ndarray, indefinite: bool = False):
         self.matrix, self.n = matrix, matrix.shape[0]
-        self._cholesky = None       # upper Cholesky factor, when K is positive definite
-        self._ldl = None            # (ldu, ipiv, info) of dsytrf, when it is not
-        self._positive = False if indefinite else None   # dpotrf succeeded (None: not tried)
+        self._cholesky = None  # upper Cholesky factor, when K is positive definite
+        self._ldl = None  # (ldu, ipiv, info) of dsytrf, when it is not
+        self._positive = False if indefinite else None  # dpotrf succeeded (None: not tried)
 
     def _factorise(self) -> None:
         if self._positive is None:
@@ -154,8 +154,8 @@ class DenseTangent:
         if self._positive:
             return 0
         ldu, ipiv, _ = self._ldl
-        eigenvalues = ldu.diagonal().tolist()          # D's 1 x 1 blocks, and the 2 x 2 ones':
-        blocks = [k for k, p in enumerate(ipiv.tolist()) if p < 0][0::2]   # first rows
+        eigenvalues = ldu.diagonal().tolist()  # D's 1 x 1 blocks, and the 2 x 2 ones':
+        blocks = [k for k, p in enumerate(ipiv.tolist()) if p < 0][0::2]  # first rows
         if blocks:
             off = ldu.diagonal(1).tolist()
             for k in blocks:
@@ -191,8 +191,8 @@ class BandedTangent:
     def __init__(self, storage: np.ndarray, perm: np.ndarray, half_bandwidth: int):
         self.storage, self.perm, self.b = storage, perm, half_bandwidth
         self.n = storage.shape[1]
-        self._cholesky = None       # upper Cholesky factor in band form, when K is positive definite
-        self._lu = None             # (lu, pivots, info) of a banded LU, when it is not
+        self._cholesky = None  # upper Cholesky factor in band form, when K is positive definite
+        self._lu = None  # (lu, pivots, info) of a banded LU, when it is not
         # the compiled kernels and their token for a narrow band (None: LAPACK's)
         self._narrow = narrow_kernels(half_bandwidth) if half_bandwidth <= NARROW_BAND else None
 
@@ -215,16 +215,22 @@ class BandedTangent:
         """K in LAPACK general band storage (3b + 1, n), with the b rows dgbtrf works in."""
         b, n = self.b, self.n
         general = np.zeros((3 * b + 1, n), order="F")
-        general[b: 2 * b + 1] = self.storage
-        for k in range(1, b + 1):                      # K[j + k, j] = K[j, j + k]
+        general[b : 2 * b + 1] = self.storage
+        for k in range(1, b + 1):  # K[j + k, j] = K[j, j + k]
             general[2 * b + k, : n - k] = self.storage[b - k, k:]
         return general
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         narrow = self._narrow
-        if (narrow is not None and self._cholesky is None and self._lu is None
-                and rhs.ndim == 1 and rhs.flags.c_contiguous and rhs.dtype == np.float64):
-            kernels, token = narrow                 # the first solve: factorise and solve at once
+        if (
+            narrow is not None
+            and self._cholesky is None
+            and self._lu is None
+            and rhs.ndim == 1
+            and rhs.flags.c_contiguous
+            and rhs.dtype == np.float64
+        ):
+            kernels, token = narrow  # the first solve: factorise and solve at once
             factor, info, x = kernels.band_factor_solve(self.storage, rhs, self.perm, token)
             if info == 0:
                 self._cholesky = factor
@@ -257,7 +263,7 @@ class BandedTangent:
         if rhs.ndim == 1:
             solve(rhs, self.perm, token, x)
             return x
-        for k in range(rhs.shape[1]):                    # each column contiguous
+        for k in range(rhs.shape[1]):  # each column contiguous
             solve(rhs[:, k], self.perm, token, x[:, k])
         return x
 
@@ -273,14 +279,15 @@ class BandedTangent:
         self._factorise()
         if self._cholesky is not None:
             return 0
-        scale = np.abs(upper).max(initial=0.0) * (2 * self.b + 1)    # >= spectral radius
-        negative = sla.eigvals_banded(upper, select="v", select_range=(-np.inf, -ROUND_OFF * scale),
-                                      check_finite=False)
+        scale = np.abs(upper).max(initial=0.0) * (2 * self.b + 1)  # >= spectral radius
+        negative = sla.eigvals_banded(
+            upper, select="v", select_range=(-np.inf, -ROUND_OFF * scale), check_finite=False
+        )
         return int(negative.size)
 
     def toarray(self) -> np.ndarray:
         dense = np.zeros((self.n, self.n))
-        for k in range(self.b + 1):                     # k = j - i
+        for k in range(self.b + 1):  # k = j - i
             j = np.arange(k, self.n)
             dense[self.perm[j - k], self.perm[j]] = self.storage[self.b - k, j]
             dense[self.perm[j], self.perm[j - k]] = self.storage[self.b - k, j]
@@ -302,7 +309,7 @@ class SparseTangent:
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         if self._lu is None:
-            import scipy.sparse.linalg as spla     # SuperLU: only wide bands (a start-up cost)
+            import scipy.sparse.linalg as spla  # SuperLU: only wide bands (a start-up cost)
 
             self._lu = spla.splu(self.matrix)
         return self._lu.solve(rhs)
@@ -318,8 +325,12 @@ class SparseTangent:
         import scipy.sparse.linalg as spla
 
         try:
-            lu = spla.splu(self.matrix, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                           options={"SymmetricMode": True})
+            lu = spla.splu(
+                self.matrix,
+                permc_spec="MMD_AT_PLUS_A",
+                diag_pivot_thresh=0.0,
+                options={"SymmetricMode": True},
+            )
         except RuntimeError:
             return None
         d = lu.U.diagonal()
@@ -361,16 +372,22 @@ class TangentLayout:
     ``BAND_LIMIT``, else sparse.
     """
 
-    def __init__(self, n: int, rows: np.ndarray, cols: np.ndarray, n_multipliers: int = 0,
-                 compiled: bool = False):
-        limit_threads()               # once per process: small banded systems want 1 BLAS thread
+    def __init__(
+        self,
+        n: int,
+        rows: np.ndarray,
+        cols: np.ndarray,
+        n_multipliers: int = 0,
+        compiled: bool = False,
+    ):
+        limit_threads()  # once per process: small banded systems want 1 BLAS thread
         self.n, self.n_multipliers = n, n_multipliers
         rows, cols = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
         small = n <= DENSE_LIMIT
         if small and not (compiled and n >= NARROW_MIN):
             self.kind, self.slots, self.size = "dense", rows * n + cols, n * n
             return
-        if compiled:               # scipy's ordering, without building a sparse matrix
+        if compiled:  # scipy's ordering, without building a sparse matrix
             kernels = order_kernels()
             perm = kernels.ordering(n, rows, cols)
             position, b, band_slots = kernels.band_slots(perm, rows, cols)
@@ -382,18 +399,21 @@ class TangentLayout:
             position = np.empty(n, np.int64)
             position[perm] = np.arange(n)
             j = position[cols]
-            offset = j - position[rows]                     # j - i >= 0: an upper-band entry
+            offset = j - position[rows]  # j - i >= 0: an upper-band entry
             b = int(max(offset.max(initial=0), -offset.min(initial=0)))
             band_slots = None
         if small and b > NARROW_BAND:
             self.kind, self.slots, self.size = "dense", rows * n + cols, n * n
             return
-        if b <= BAND_LIMIT:        # the upper band only: the lower entries mirror it (slot -1)
+        if b <= BAND_LIMIT:  # the upper band only: the lower entries mirror it (slot -1)
             self.kind, self.perm, self.b, self._position = "banded", perm, b, position
             if b <= NARROW_BAND:
                 band_kernels(b)
-            self.slots = (np.where(offset >= 0, j * (b + 1) + (b - offset), -1)
-                          if band_slots is None else band_slots)
+            self.slots = (
+                np.where(offset >= 0, j * (b + 1) + (b - offset), -1)
+                if band_slots is None
+                else band_slots
+            )
             self.size = (b + 1) * n
             return
         self.kind = "sparse"
@@ -429,14 +449,13 @@ class TangentLayout:
         if self.kind == "dense":
             return storage.reshape(self.n, self.n) @ x
         if self.kind == "sparse":
-            return sp.csc_matrix((storage, self._indices, self._indptr),
-                                 shape=(self.n, self.n)) @ x
+            return sp.csc_matrix((storage, self._indices, self._indptr), shape=(self.n, self.n)) @ x
         b, perm = self.b, self.perm
-        band = storage.reshape(self.n, b + 1)          # band[j, b + i - j] = K[perm i, perm j]
+        band = storage.reshape(self.n, b + 1)  # band[j, b + i - j] = K[perm i, perm j]
         xp = x[perm]
         yp = band[:, b] * xp
-        for k in range(1, b + 1):                      # the k-th super- and sub-diagonal
-            upper = band[k:, b - k]                    # K[perm (j - k), perm j], j >= k
+        for k in range(1, b + 1):  # the k-th super- and sub-diagonal
+            upper = band[k:, b - k]  # K[perm (j - k), perm j], j >= k
             yp[:-k] += upper * xp[k:]
             yp[k:] += upper * xp[:-k]
         y = np.empty_like(yp)
@@ -447,7 +466,7 @@ class TangentLayout:
         """The tangent held in ``storage`` (:attr:`size` values, summed at :attr:`slots`)."""
         if self.kind == "dense":
             return DenseTangent(storage.reshape(self.n, self.n), self.n_multipliers > 0)
-        if self.kind == "banded":     # column j contiguous: Fortran order, as LAPACK wants it
+        if self.kind == "banded":  # column j contiguous: Fortran order, as LAPACK wants it
             return BandedTangent(storage.reshape(self.n, self.b + 1).T, self.perm, self.b)
         matrix = sp.csc_matrix((storage, self._indices, self._indptr), shape=(self.n, self.n))
         return SparseTangent(matrix, self.n_multipliers)

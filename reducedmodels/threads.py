@@ -25,11 +25,13 @@ ENV_VARIABLE = "FLEXVAL_BLAS_THREADS"
 DEFAULT_THREADS = 1
 MAX_THREADS = os.cpu_count() or 1
 """Most threads a cap may ask for: the logical CPUs (more only busy-wait against each other)."""
-RULE = (f"must be a whole number of threads from 0 to {MAX_THREADS}, the logical CPUs "
-        "(0: leave the BLAS pools alone)")
+RULE = (
+    f"must be a whole number of threads from 0 to {MAX_THREADS}, the logical CPUs "
+    "(0: leave the BLAS pools alone)"
+)
 
-_requested: int | None = None        # the command line's cap, when it gave one
-_applied: int | None = None          # the cap in force (0: pools left alone), None: not yet applied
+_requested: int | None = None  # the command line's cap, when it gave one
+_applied: int | None = None  # the cap in force (0: pools left alone), None: not yet applied
 
 
 def requested_threads(value: str | int | None = None) -> int:

@@ -23,7 +23,8 @@ from __future__ import annotations
 import dataclasses
 import math
 from abc import ABC, abstractmethod
-from typing import TYPE_CHECKING, Callable, Iterator, NamedTuple, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -61,7 +62,7 @@ class Counters:
     step_cuts: int = 0
     substeps: int = 0
 
-    def copy(self) -> "Counters":
+    def copy(self) -> Counters:
         """The counts now, as a new object (``dataclasses.replace`` costs four times more)."""
         return Counters(self.newton_iterations, self.step_cuts, self.substeps)
 
@@ -136,7 +137,7 @@ class Stepping(ABC):
     factor: float
 
     @abstractmethod
-    def begin(self, system: "System", loads: Loads, point: PathPoint) -> None:
+    def begin(self, system: System, loads: Loads, point: PathPoint) -> None:
         """Start from the first converged point (raise StepRefused if the path cannot start)."""
 
     @abstractmethod
@@ -168,7 +169,7 @@ class Stepping(ABC):
         return None
 
 
-def trace(system: "System", loads: Loads, stepping: Stepping) -> Iterator[PathPoint]:
+def trace(system: System, loads: Loads, stepping: Stepping) -> Iterator[PathPoint]:
     """Yield the converged points of the path ``stepping`` follows under ``loads``.
 
     Raises
@@ -181,8 +182,9 @@ def trace(system: "System", loads: Loads, stepping: Stepping) -> Iterator[PathPo
     settings = system.settings
     counters = Counters()
 
-    def solve(problem: StepProblem, guess: np.ndarray, origin: np.ndarray | None = None
-              ) -> NewtonResult:
+    def solve(
+        problem: StepProblem, guess: np.ndarray, origin: np.ndarray | None = None
+    ) -> NewtonResult:
         result = solve_step(problem, guess, settings, origin)
         counters.newton_iterations += result.iterations
         return result
@@ -190,8 +192,9 @@ def trace(system: "System", loads: Loads, stepping: Stepping) -> Iterator[PathPo
     first = solve(FixedLoad(system, loads, stepping.first_factor), system.initial_state())
     if first.state is None:
         raise TraceFailure(first.reason, 0.0, counters)
-    point = PathPoint(first.state, first.factor, first.iterations, first.tangent, 0.0,
-                      counters.copy())
+    point = PathPoint(
+        first.state, first.factor, first.iterations, first.tangent, 0.0, counters.copy()
+    )
     try:
         stepping.begin(system, loads, point)
     except StepRefused as exc:
@@ -206,14 +209,23 @@ def trace(system: "System", loads: Loads, stepping: Stepping) -> Iterator[PathPo
         if verdict.state is None:
             counters.step_cuts += 1
             if not stepping.cut():
-                raise TraceFailure(f"{stepping.cut_name} cutting failed ({verdict.reason})",
-                                   stepping.factor, counters)
+                raise TraceFailure(
+                    f"{stepping.cut_name} cutting failed ({verdict.reason})",
+                    stepping.factor,
+                    counters,
+                )
             continue
         counters.substeps += 1
         reported = stepping.advance(verdict)
         if reported is not None:
-            yield PathPoint(verdict.state, reported, spent, verdict.tangent, stepping.step_size(),
-                            counters.copy())
+            yield PathPoint(
+                verdict.state,
+                reported,
+                spent,
+                verdict.tangent,
+                stepping.step_size(),
+                counters.copy(),
+            )
             spent = 0
         why = stepping.exhausted(counters)
         if why is not None:
@@ -254,18 +266,18 @@ class LoadControl(Stepping):
         self.factors = [float(f) for f in factors]
         self.first_factor = self.factors[0]
 
-    def begin(self, system: "System", loads: Loads, point: PathPoint) -> None:
+    def begin(self, system: System, loads: Loads, point: PathPoint) -> None:
         """Start at the first requested factor."""
         self.system, self.loads, self.settings = system, loads, system.settings
         self.q, self.factor = point.state, point.factor
-        self.history = [(self.q, self.factor)]   # converged (state, factor) for the predictor
+        self.history = [(self.q, self.factor)]  # converged (state, factor) for the predictor
         # what the connectors' own predictors keep of each state, computed once per state
         self.past = [system.remembered(self.q)] if system.predicts_internal else None
         self.slope = self._slope(point.tangent)
         f = self.factors
         self.spacing = f[1] - f[0] if len(f) > 1 else 1.0
         self.step = self.last_step = self.spacing
-        self.min_step = self.spacing * 0.5 ** self.settings.max_cuts
+        self.min_step = self.spacing * 0.5**self.settings.max_cuts
         self.targets = iter(f[1:])
         self.target = next(self.targets, None)
 
@@ -282,8 +294,7 @@ class LoadControl(Stepping):
         while True:
             trial = min(self.factor + self.step, self.target)
             guess = self._predict(trial)
-            if (self.system.motion_ratio(self.q, guess) <= 1.0
-                    or 0.5 * self.step < self.min_step):
+            if self.system.motion_ratio(self.q, guess) <= 1.0 or 0.5 * self.step < self.min_step:
                 break
             self.step *= 0.5
         self.last_step = trial - self.factor
@@ -295,7 +306,7 @@ class LoadControl(Stepping):
             return None
         try:
             slope = tangent.solve(self.loads.vector(self.q))
-        except (RuntimeError, np.linalg.LinAlgError):   # singular: Newton will say so
+        except (RuntimeError, np.linalg.LinAlgError):  # singular: Newton will say so
             return None
         return slope if np.isfinite(slope).all() else None
 
@@ -309,15 +320,23 @@ class LoadControl(Stepping):
         """Refuse non-convergence, a step beyond the bounds and (optionally) instability."""
         q_new, why = result.state, result.reason
         ratio = self.system.motion_ratio(self.q, q_new) if q_new is not None else math.inf
-        if (ratio <= 1.0 and self.settings.check_stability
-                and self.system.unstable(result.tangent)):
-            q_new, ratio, why = None, math.inf, ("converged to an unstable equilibrium "
-                                                 "(past a limit point?)")
+        if ratio <= 1.0 and self.settings.check_stability and self.system.unstable(result.tangent):
+            q_new, ratio, why = (
+                None,
+                math.inf,
+                ("converged to an unstable equilibrium (past a limit point?)"),
+            )
         if ratio > 1.0:
-            return Verdict(None, result.factor, why if q_new is None else "step too large",
-                           None, False)
-        return Verdict(q_new, result.factor, "", result.tangent,
-                       result.iterations <= self.settings.fast_iterations and ratio < 0.5)
+            return Verdict(
+                None, result.factor, why if q_new is None else "step too large", None, False
+            )
+        return Verdict(
+            q_new,
+            result.factor,
+            "",
+            result.tangent,
+            result.iterations <= self.settings.fast_iterations and ratio < 0.5,
+        )
 
     def cut(self) -> bool:
         """Halve the sub-step."""
@@ -338,9 +357,9 @@ class LoadControl(Stepping):
             reached, self.target = self.target, next(self.targets, None)
         if self.target is not None:
             self.slope = self._slope(verdict.tangent) if self.system.predicts_with_slope else None
-            self.history = [*self.history[1 - PREDICTOR_STATES:], (self.q, self.factor)]
+            self.history = [*self.history[1 - PREDICTOR_STATES :], (self.q, self.factor)]
             if self.past is not None:
-                self.past = [*self.past[1 - PREDICTOR_STATES:], self.system.remembered(self.q)]
+                self.past = [*self.past[1 - PREDICTOR_STATES :], self.system.remembered(self.q)]
         return reached
 
     def step_size(self) -> float:

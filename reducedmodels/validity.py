@@ -95,8 +95,9 @@ of a limit, and beyond it, are judged by the scalar check, so the verdicts
 are the scalar check's exactly."""
 
 
-def stretch_reasons(what: str, lengths: np.ndarray, reference: np.ndarray,
-                    one_sided: bool = False) -> list[str]:
+def stretch_reasons(
+    what: str, lengths: np.ndarray, reference: np.ndarray, one_sided: bool = False
+) -> list[str]:
     """The worst stretch of ``lengths`` against ``reference`` (mm) beyond :data:`MAX_STRAIN`.
 
     ``one_sided``: only lengthening counts (a chord against its arc length
@@ -108,8 +109,10 @@ def stretch_reasons(what: str, lengths: np.ndarray, reference: np.ndarray,
     k = int(np.argmax(measure))
     if not measure[k] > MAX_STRAIN:
         return []
-    return [f"{_label(what, k, measure.size)} stretched {100.0 * strain[k]:.3g} % "
-            f"({lengths[k]:.4g} mm for {reference[k]:.4g} mm; limit {100.0 * MAX_STRAIN:g} %)"]
+    return [
+        f"{_label(what, k, measure.size)} stretched {100.0 * strain[k]:.3g} % "
+        f"({lengths[k]:.4g} mm for {reference[k]:.4g} mm; limit {100.0 * MAX_STRAIN:g} %)"
+    ]
 
 
 def rotation_reasons(what: str, angles: np.ndarray, limit: float) -> list[str]:
@@ -118,8 +121,10 @@ def rotation_reasons(what: str, angles: np.ndarray, limit: float) -> list[str]:
     k = int(np.argmax(measure))
     if not measure[k] > limit:
         return []
-    return [f"{_label(what, k, measure.size)} turned {math.degrees(measure[k]):.3g} deg "
-            f"(limit {math.degrees(limit):.3g} deg)"]
+    return [
+        f"{_label(what, k, measure.size)} turned {math.degrees(measure[k]):.3g} deg "
+        f"(limit {math.degrees(limit):.3g} deg)"
+    ]
 
 
 def _label(what: str, k: int, count: int) -> str:

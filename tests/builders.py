@@ -9,18 +9,32 @@ from flexval.geometry.mechanism import FlexureSpec, assemble
 from flexval.reducedmodels.core import local_hessian
 
 
-def cantilever(shape, E: float = 2100.0, b: float = 1.0, h: float = 0.1, nu: float = 0.3,
-               clamped_end: int = 0, target_offset=(0.0, 0.0)):
+def cantilever(
+    shape,
+    E: float = 2100.0,
+    b: float = 1.0,
+    h: float = 0.1,
+    nu: float = 0.3,
+    clamped_end: int = 0,
+    target_offset=(0.0, 0.0),
+):
     """A flexure clamped to ground "g" at one end; the other end is body "t".
 
     The target point is the free end plus ``target_offset`` (mm).
     """
     ends = shape.end_points
     free = ends[1 - clamped_end]
-    spec = FlexureSpec("f", shape, ("g", "t"), Section(b, h),
-                       start_body="g" if clamped_end == 0 else "t")
-    return assemble([spec], "g", ends[clamped_end][None], Material(E, nu), "t",
-                    free + np.asarray(target_offset, float))
+    spec = FlexureSpec(
+        "f", shape, ("g", "t"), Section(b, h), start_body="g" if clamped_end == 0 else "t"
+    )
+    return assemble(
+        [spec],
+        "g",
+        ends[clamped_end][None],
+        Material(E, nu),
+        "t",
+        free + np.asarray(target_offset, float),
+    )
 
 
 def tip_force(mech, fx: float, fy: float, levels: int = 11, name: str = "F") -> LoadCase:
@@ -59,8 +73,9 @@ def fd_check(connector, pose_a, pose_b, internal, h: float = 1e-6):
     return eg, eh, np.abs(H0 - H0.T).max() / np.abs(H0).max()
 
 
-def assembled_one_by_one(system, q: np.ndarray, loads, factor: float
-                         ) -> tuple[float, np.ndarray, np.ndarray]:
+def assembled_one_by_one(
+    system, q: np.ndarray, loads, factor: float
+) -> tuple[float, np.ndarray, np.ndarray]:
     """Energy (N mm), gradient and dense tangent of ``system`` at q, assembled the plain way.
 
     Every connector's own ``evaluate`` scattered densely through its local-to-global map,
@@ -83,8 +98,9 @@ def assembled_one_by_one(system, q: np.ndarray, loads, factor: float
     return energy, grad, tangent
 
 
-def assert_assembles_like_its_connectors(system, q: np.ndarray, loads, factor: float
-                                         ) -> tuple[np.ndarray, np.ndarray]:
+def assert_assembles_like_its_connectors(
+    system, q: np.ndarray, loads, factor: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Check ``system.assemble`` at q against :func:`assembled_one_by_one`; return its
     reference (gradient, dense tangent).
 
@@ -95,6 +111,7 @@ def assert_assembles_like_its_connectors(system, q: np.ndarray, loads, factor: f
     ref_energy, ref_grad, ref_tangent = assembled_one_by_one(system, q, loads, factor)
     assert abs(energy - ref_energy) <= 1e-13 * abs(ref_energy)
     np.testing.assert_allclose(grad, ref_grad, rtol=0, atol=1e-13 * np.abs(ref_grad).max())
-    np.testing.assert_allclose(tangent.toarray(), ref_tangent, rtol=0,
-                               atol=1e-13 * np.abs(ref_tangent).max())
+    np.testing.assert_allclose(
+        tangent.toarray(), ref_tangent, rtol=0, atol=1e-13 * np.abs(ref_tangent).max()
+    )
     return ref_grad, ref_tangent

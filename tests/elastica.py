@@ -58,8 +58,13 @@ def cantilever_tip_force(load_parameter: float) -> tuple[float, float, float]:
         Tip rotation, rad.
     """
     alpha = np.sqrt(load_parameter)
-    m = brentq(lambda mm: _length_parameter(mm) - alpha, 0.5 + 1e-15, 1.0 - 1e-15, xtol=1e-15,
-               rtol=4 * np.finfo(float).eps)
+    m = brentq(
+        lambda mm: _length_parameter(mm) - alpha,
+        0.5 + 1e-15,
+        1.0 - 1e-15,
+        xtol=1e-15,
+        rtol=4 * np.finfo(float).eps,
+    )
     psi1 = np.arcsin(np.sqrt(0.5 / m))
     phi0 = float(np.arcsin(2.0 * m - 1.0))
     y_tip = 1.0 - 2.0 * (ellipe(m) - ellipeinc(psi1, m)) / alpha
@@ -67,8 +72,9 @@ def cantilever_tip_force(load_parameter: float) -> tuple[float, float, float]:
     return float(x_tip), float(y_tip), phi0
 
 
-def circle_under_end_moment(shape: Arc | Segment, EI: float, moment: float
-                            ) -> tuple[np.ndarray, float]:
+def circle_under_end_moment(
+    shape: Arc | Segment, EI: float, moment: float
+) -> tuple[np.ndarray, float]:
     """Exact end point (mm) and end rotation (rad) of a cantilever under an end moment.
 
     A pure end moment M leaves no force resultant, so the axial and shear
@@ -88,8 +94,9 @@ def circle_under_end_moment(shape: Arc | Segment, EI: float, moment: float
     return start + chord, moment * L / EI
 
 
-def corotational_chain_under_end_moment(shape: Arc | Segment, EI: float, moment: float,
-                                        n_elements: int) -> tuple[np.ndarray, float]:
+def corotational_chain_under_end_moment(
+    shape: Arc | Segment, EI: float, moment: float, n_elements: int
+) -> tuple[np.ndarray, float]:
     """End point (mm) and rotation (rad) of the N-element corotational model under an end moment.
 
     With no force anywhere every chord keeps its length l0 and carries the
@@ -107,8 +114,13 @@ def corotational_chain_under_end_moment(shape: Arc | Segment, EI: float, moment:
     return end, float(moment * l0.sum() / EI)
 
 
-def arc_tip_compliance(shape: Arc | Segment, EI: float, EA: float,
-                       shear_stiffness: float | None = None, points: int = 64) -> np.ndarray:
+def arc_tip_compliance(
+    shape: Arc | Segment,
+    EI: float,
+    EA: float,
+    shear_stiffness: float | None = None,
+    points: int = 64,
+) -> np.ndarray:
     """Linear tip compliance (3, 3) of a cantilever clamped at the shape's start.
 
     For tip loads (Fx, Fy, M0) applied at the end point P_L, the section at
@@ -140,8 +152,9 @@ def arc_tip_compliance(shape: Arc | Segment, EI: float, EA: float,
     return sum(np.einsum("k,ki,kj->ij", w, b, b) / k for b, k in parts)
 
 
-def curved_cantilever(width: float, load: np.ndarray, steps: int = 8,
-                      tol: float = 1e-8) -> np.ndarray:
+def curved_cantilever(
+    width: float, load: np.ndarray, steps: int = 8, tol: float = 1e-8
+) -> np.ndarray:
     """End pose change of a uniformly curved inextensible cantilever under dead end loads.
 
     Dimensionless: length L = 1, EI = 1, initial curvature ``width`` (the arc
@@ -194,8 +207,9 @@ def curved_cantilever(width: float, load: np.ndarray, steps: int = 8,
         if not sol.success:
             dlam *= 0.5
             if dlam < 1e-3:
-                raise RuntimeError(f"elastica collocation failed at {trial:.3f} of the load: "
-                                   f"{sol.message}")
+                raise RuntimeError(
+                    f"elastica collocation failed at {trial:.3f} of the load: {sol.message}"
+                )
             continue
         # the next guess on the initial mesh: collocation only ever adds nodes
         lam, guess, end = trial, sol.sol(s), sol.y[:3, -1]

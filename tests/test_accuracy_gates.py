@@ -89,7 +89,8 @@ def test_no_error_figure_moved(scene_name, reference, case):
             assert abs(got[metric] - was) <= GATE_TOL, (
                 f"{model} vs {reference} on {scene_name}/{case}: {metric} = "
                 f"{got[metric]:.8f} % moved from the committed {was:.8f} % "
-                f"(gate +-{GATE_TOL} points)")
+                f"(gate +-{GATE_TOL} points)"
+            )
 
 
 @pytest.mark.parametrize("scene_name", ["open_chain", "closed_chain"])
@@ -103,6 +104,7 @@ def test_fem_agrees_with_the_continuum_and_fem20_with_fem100(scene_name):
     e = errors(_path(scene_name, "beam:100", "f+"), _path(scene_name, "continuum:1", "f+"), L)
     assert e["end_disp_vec"] < 3.0 and e["end_rot"] < 3.0, e
     for case in load_scene(scene_name).load_cases:
-        e = errors(_path(scene_name, "beam:20", case.name), _path(scene_name, "beam:100", case.name),
-                   L)
+        e = errors(
+            _path(scene_name, "beam:20", case.name), _path(scene_name, "beam:100", case.name), L
+        )
         assert e["path_disp"] < 1.0 and e["path_rot"] < 1.0, (case.name, e)

@@ -17,7 +17,7 @@ from scipy.linalg import lapack
 from flexval.reducedmodels.beam import CHAIN_HALF_BANDWIDTH
 from flexval.reducedmodels.tangent import NARROW_BAND, BandedTangent, band_kernels
 
-N = 23                  # more columns than any band is wide: full and short columns both occur
+N = 23  # more columns than any band is wide: full and short columns both occur
 WIDTHS = sorted({1, 2, CHAIN_HALF_BANDWIDTH, NARROW_BAND})
 
 
@@ -47,28 +47,30 @@ def upper_band(dense: np.ndarray, b: int) -> np.ndarray:
 @pytest.mark.parametrize("b", [0, *WIDTHS])
 def test_factor_and_solve_agree_with_lapack_and_a_dense_solve(b):
     rng = np.random.default_rng(b)
-    dense = random_band(b, rng, 4.0 * (b + 1))          # diagonally dominant: positive definite
+    dense = random_band(b, rng, 4.0 * (b + 1))  # diagonally dominant: positive definite
     band = upper_band(dense, b)
     kernels = band_kernels(b)
     factor, info = kernels.band_cholesky(band, kernels.band_token(b))
     reference, ref_info = lapack.dpbtrf(band, lower=0)
     assert info == ref_info == 0
-    for j in range(N):                 # factor[j, b + i - j] = U[i, j], factor[j, b] = 1 / U[j, j]
+    for j in range(N):  # factor[j, b + i - j] = U[i, j], factor[j, b] = 1 / U[j, j]
         rows = slice(max(0, b - j), b)
         np.testing.assert_allclose(factor[j, rows], reference[rows, j], rtol=1e-14, atol=1e-14)
         assert factor[j, b] == pytest.approx(1.0 / reference[b, j], rel=1e-14)
     perm = rng.permutation(N)
     matrix = np.empty((N, N))
-    matrix[np.ix_(perm, perm)] = dense                 # the band holds K[perm][:, perm]
+    matrix[np.ix_(perm, perm)] = dense  # the band holds K[perm][:, perm]
     rhs = rng.normal(size=(N, 2))
     tangent = BandedTangent(band, perm.astype(np.int64), b)
     np.testing.assert_allclose(tangent.solve(rhs), np.linalg.solve(matrix, rhs), rtol=1e-12)
-    np.testing.assert_allclose(tangent.solve(rhs[:, 0]), np.linalg.solve(matrix, rhs[:, 0]),
-                               rtol=1e-12)
+    np.testing.assert_allclose(
+        tangent.solve(rhs[:, 0]), np.linalg.solve(matrix, rhs[:, 0]), rtol=1e-12
+    )
     assert tangent.negative_eigenvalues() == 0
-    first = BandedTangent(band, perm.astype(np.int64), b)       # factorised by its first solve
-    np.testing.assert_allclose(first.solve(rhs[:, 0]), np.linalg.solve(matrix, rhs[:, 0]),
-                               rtol=1e-12)
+    first = BandedTangent(band, perm.astype(np.int64), b)  # factorised by its first solve
+    np.testing.assert_allclose(
+        first.solve(rhs[:, 0]), np.linalg.solve(matrix, rhs[:, 0]), rtol=1e-12
+    )
     assert first.negative_eigenvalues() == 0
 
 
@@ -91,14 +93,16 @@ def test_factor_and_solve_in_one_call_equal_the_two_calls(b):
     np.testing.assert_array_equal(x, expected)
     dense[N // 2, N // 2] = -1.0
     band = upper_band(dense, b)
-    assert kernels.band_factor_solve(band, rhs, perm, token)[1] == lapack.dpbtrf(band, lower=0)[1] > 0
+    assert (
+        kernels.band_factor_solve(band, rhs, perm, token)[1] == lapack.dpbtrf(band, lower=0)[1] > 0
+    )
 
 
 @pytest.mark.parametrize("b", WIDTHS)
 def test_an_indefinite_band_fails_at_lapacks_column_and_is_solved_by_lu(b):
     rng = np.random.default_rng(100 + b)
     dense = random_band(b, rng, 4.0 * (b + 1))
-    dense[N // 2, N // 2] = -1.0                       # one negative pivot half way
+    dense[N // 2, N // 2] = -1.0  # one negative pivot half way
     band = upper_band(dense, b)
     kernels = band_kernels(b)
     _, info = kernels.band_cholesky(band, kernels.band_token(b))
@@ -114,11 +118,11 @@ def test_an_indefinite_band_fails_at_lapacks_column_and_is_solved_by_lu(b):
 def test_the_banded_lu_agrees_with_lapacks_dgbtrf(b):
     """dgbtf2's algorithm (partial pivoting, right-looking): same pivots, factors to round-off."""
     rng = np.random.default_rng(200 + b)
-    dense = random_band(b, rng, 0.0)                   # indefinite: row interchanges happen
+    dense = random_band(b, rng, 0.0)  # indefinite: row interchanges happen
     band = upper_band(dense, b)
     kernels = band_kernels(b)
     lu, pivots, info = kernels.band_lu(band, kernels.band_token(b))
-    general = np.zeros((3 * b + 1, N), order="F")      # LAPACK general band: A[i, j] at 2b + i - j
+    general = np.zeros((3 * b + 1, N), order="F")  # LAPACK general band: A[i, j] at 2b + i - j
     for i in range(N):
         for j in range(max(0, i - b), min(N, i + b + 1)):
             general[2 * b + i - j, j] = dense[i, j]

@@ -9,22 +9,26 @@ Units: mm, N, MPa, N mm, rad.
 
 import numpy as np
 import pytest
-from elastica import (arc_tip_compliance, cantilever_tip_force, circle_under_end_moment,
-                      corotational_chain_under_end_moment)
+from elastica import (
+    arc_tip_compliance,
+    cantilever_tip_force,
+    circle_under_end_moment,
+    corotational_chain_under_end_moment,
+)
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from flexval.geometry import Arc, Force, LoadCase, Material, Moment, Section, Segment, load_scene
 from flexval.geometry.mechanism import FlexureSpec, assemble
-from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels import LoadControl, build_system, run_reduced, trace
 from flexval.reducedmodels.beam import BeamConnector, beam_kernels, evenly_spaced
+from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels.core import hermite_weights, lagrange_weights, local_hessian
 from flexval.reducedmodels.tracer import PREDICTOR_STATES
 
 MATERIAL = Material(2000.0, 0.3)
-ARC = Arc((5.0, 2.0), 10.0, 0.3, np.radians(240.0))          # r = 10 mm, L = 41.9 mm
-SEGMENT = Segment((1.0, 2.0), (30.0, 10.0))                  # L = 30.1 mm, inclined
+ARC = Arc((5.0, 2.0), 10.0, 0.3, np.radians(240.0))  # r = 10 mm, L = 41.9 mm
+SEGMENT = Segment((1.0, 2.0), (30.0, 10.0))  # L = 30.1 mm, inclined
 
 
 def cantilever(shape, section: Section):
@@ -46,6 +50,7 @@ def solve(mech, case: LoadCase, n_elements: int, **options):
 
 # --- 1. consistent tangent and objectivity ---------------------------------------------------
 
+
 def deformed_state(conn: BeamConnector, mech, turn: float, rng: np.random.Generator):
     """Coordinates after a rigid turn by ``turn`` (rad) plus a random bending state.
 
@@ -57,8 +62,15 @@ def deformed_state(conn: BeamConnector, mech, turn: float, rng: np.random.Genera
     shift = np.array([3.0, -7.0])
     length = next(f.shape.length for f in mech.flexures if f.name == conn.name)
     jiggle = 0.05 * length / (conn.n_internal // 3 + 1)
-    poses = [np.array([*(R @ mech.bodies[b].reference + shift + jiggle * rng.normal(size=2)),
-                       turn + 0.3 * rng.normal()]) for b in conn.bodies]
+    poses = [
+        np.array(
+            [
+                *(R @ mech.bodies[b].reference + shift + jiggle * rng.normal(size=2)),
+                turn + 0.3 * rng.normal(),
+            ]
+        )
+        for b in conn.bodies
+    ]
     inner = conn.initial_internal().reshape(-1, 3)
     inner[:, :2] = inner[:, :2] @ R.T + shift + jiggle * rng.normal(size=(len(inner), 2))
     inner[:, 2] = turn + 0.3 * rng.normal(size=len(inner))
@@ -79,9 +91,11 @@ def parallel_pair(shape, bodies: tuple[str, str]):
     terms) are exercised. ``bodies`` sets the order in which "f" names them.
     """
     start, end = shape.end_points
-    side = Segment(tuple(start + [-6.0, -4.0]), tuple(end + [5.0, -3.0]))   # not crossing "f"
-    specs = [FlexureSpec("s", side, ("g", "t"), Section(1.0, 0.5)),
-             FlexureSpec("f", shape, tuple(bodies), Section(1.0, 0.5))]
+    side = Segment(tuple(start + [-6.0, -4.0]), tuple(end + [5.0, -3.0]))  # not crossing "f"
+    specs = [
+        FlexureSpec("s", side, ("g", "t"), Section(1.0, 0.5)),
+        FlexureSpec("f", shape, tuple(bodies), Section(1.0, 0.5)),
+    ]
     mech = assemble(specs, "g", np.array([side.start, start]), MATERIAL, "t", end)
     return mech, mech.flexures[1]
 
@@ -116,8 +130,11 @@ def test_group_evaluates_every_connector_as_alone():
     # for one element (both end nodes on one element) and many, either body order
     rng = np.random.default_rng(11)
     conns, states = [], []
-    for shape, bodies, n_elements in [(ARC, ("g", "t"), 6), (SEGMENT, ("t", "g"), 1),
-                                      (ARC, ("t", "g"), 3)]:
+    for shape, bodies, n_elements in [
+        (ARC, ("g", "t"), 6),
+        (SEGMENT, ("t", "g"), 1),
+        (ARC, ("t", "g"), 3),
+    ]:
         mech, flexure = parallel_pair(shape, bodies)
         conns.append(BeamConnector(flexure, mech, n_elements))
         q = deformed_state(conns[-1], mech, 2.0, rng)
@@ -156,13 +173,17 @@ def test_connector_layout_follows_the_protocol():
     assert conn.name == "f" and conn.bodies == ("g", "t") and conn.n_internal == 12
     np.testing.assert_array_equal(conn.internal_is_rotation(), [False, False, True] * 4)
     nodes = conn.initial_internal().reshape(-1, 3)
-    np.testing.assert_allclose(nodes[:, :2], ARC.point(np.arange(1, 5) * ARC.length / 5),
-                               atol=1e-13)
+    np.testing.assert_allclose(
+        nodes[:, :2], ARC.point(np.arange(1, 5) * ARC.length / 5), atol=1e-13
+    )
     rest = [np.array([*mech.bodies[b].reference, 0.0]) for b in conn.bodies]
     e, g, H = conn.evaluate(*rest, conn.initial_internal())
     assert e == 0.0 and not np.any(g) and local_hessian(conn, H).shape == (18, 18)
-    np.testing.assert_allclose(conn.shape(*rest, conn.initial_internal()),
-                               ARC.point(np.linspace(0.0, ARC.length, 6)), atol=1e-13)
+    np.testing.assert_allclose(
+        conn.shape(*rest, conn.initial_internal()),
+        ARC.point(np.linspace(0.0, ARC.length, 6)),
+        atol=1e-13,
+    )
     with pytest.raises(ValueError, match="elements"):
         BeamConnector(flex, mech, 0)
 
@@ -220,8 +241,9 @@ def test_newton_update_turns_chords_instead_of_stretching_them():
     assert np.sum(remaining**2) < 1e-6 * np.sum(stretched**2)
 
 
-def castigliano_closure(shape, EI: float, EA: float, gap: np.ndarray, s: np.ndarray
-                        ) -> tuple[np.ndarray, np.ndarray]:
+def castigliano_closure(
+    shape, EI: float, EA: float, gap: np.ndarray, s: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Displacements (k, 2) and rotations (k,) at arc lengths s of a flexure clamped at both
     ends whose end point is moved by ``gap`` (mm), its end rotation held: linear elasticity.
 
@@ -266,11 +288,20 @@ def test_chain_closure_is_the_clamped_flexures_linear_response_at_second_order()
         length = np.hypot(chord[:, 0], chord[:, 1])
         ends = nodes.copy()
         ends[-1] += gap
-        closed = beam_kernels().close_chains(chord, ends, np.zeros(n + 1), np.array([0, n + 1]),
-                                             length / EI, length / EA).reshape(-1, 3)
+        closed = (
+            beam_kernels()
+            .close_chains(
+                chord, ends, np.zeros(n + 1), np.array([0, n + 1]), length / EI, length / EA
+            )
+            .reshape(-1, 3)
+        )
         moved, turned = castigliano_closure(ARC, EI, EA, gap, s[1:-1])
-        errors.append((np.abs(closed[:, :2] - nodes[1:-1] - moved).max() / np.abs(moved).max(),
-                       np.abs(closed[:, 2] - turned).max() / np.abs(turned).max()))
+        errors.append(
+            (
+                np.abs(closed[:, :2] - nodes[1:-1] - moved).max() / np.abs(moved).max(),
+                np.abs(closed[:, 2] - turned).max() / np.abs(turned).max(),
+            )
+        )
     errors = np.array(errors)
     assert np.all(errors[-1] < [1e-3, 4e-3])
     np.testing.assert_allclose(errors[:-1] / errors[1:], 4.0, rtol=0.05)
@@ -313,8 +344,10 @@ def test_predictor_reproduces_a_converged_state_and_a_rigid_motion():
     conn = BeamConnector(mech.flexures[0], mech, 10)
     q = deformed_state(conn, mech, 0.3, rng)
     state = (q[:3], q[3:6], q[6:])
-    np.testing.assert_allclose(conn.predict_internal([state], [1.0], q[:3], q[3:6]), q[6:],
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        conn.predict_internal([state], [1.0], q[:3], q[3:6]), q[6:], atol=1e-12
+    )
+
     # two states differing by a rigid turn about the origin, extrapolated one step further:
     # the chords keep their lengths, so the prediction is the next rigid turn exactly
     def turned(angle):
@@ -323,6 +356,7 @@ def test_predictor_reproduces_a_converged_state_and_a_rigid_motion():
         out[:, :2] = out[:, :2] @ R.T
         out[:, 2] += angle
         return out.ravel()
+
     states = [(v[:3], v[3:6], v[6:]) for v in (turned(0.0), turned(0.2))]
     target = turned(0.4)
     predicted = conn.predict_internal(states, [-1.0, 2.0], target[:3], target[3:6])
@@ -356,23 +390,30 @@ def test_chord_predictor_with_the_slope_is_exact_one_degree_higher():
         return q.ravel()
 
     def slope(f):
-        rate = sum(k * c * f**(k - 1) for k, c in enumerate(coefficients) if k)
+        rate = sum(k * c * f ** (k - 1) for k, c in enumerate(coefficients) if k)
         q = state(f).reshape(-1, 3)
-        return (rate * np.column_stack([-(q[:, 1] - pivot[1]), q[:, 0] - pivot[0],
-                                        np.ones(len(q))])).ravel()
+        return (
+            rate * np.column_stack([-(q[:, 1] - pivot[1]), q[:, 0] - pivot[0], np.ones(len(q))])
+        ).ravel()
 
     factors = [0.1, 0.2, 0.25, 0.275, 0.3][-PREDICTOR_STATES:]
     past = np.array([remember(system.extended(state(f))) for f in factors])
     exact = state(0.35)
     weights, slope_weight = hermite_weights(factors, 0.35)
-    with_slope = predict(past, np.array(weights), system.extended(exact),
-                         np.append(slope(factors[-1]), np.zeros(3)), slope_weight)
+    with_slope = predict(
+        past,
+        np.array(weights),
+        system.extended(exact),
+        np.append(slope(factors[-1]), np.zeros(3)),
+        slope_weight,
+    )
     assert np.max(np.abs(with_slope - exact[internal])) <= 1e-12
     without = predict(past, np.array(lagrange_weights(factors, 0.35)), system.extended(exact))
     assert np.max(np.abs(without - exact[internal])) > 1e-6
 
 
 # --- 2. straight cantilever under a dead tip force: the elastica ------------------------------
+
 
 def test_cantilever_tip_force_matches_elliptic_elastica_at_second_order():
     # L/h = 1000: the stretch the inextensible reference ignores is of relative
@@ -382,10 +423,11 @@ def test_cantilever_tip_force_matches_elliptic_elastica_at_second_order():
     mech = cantilever(Segment((0.0, 0.0), (L, 0.0)), section)
     EI = bending_stiffness(section)
     # 11 levels of 0 .. 10 EI / L^2: the levels 1, 2, 5, 10 are P L^2 / EI = 1, 2, 5, 10
-    case = LoadCase("tip", (Force("t", np.array([L, 0.0]), 0.5 * np.pi, 10.0 * EI / L**2),),
-                    levels=11)
+    case = LoadCase(
+        "tip", (Force("t", np.array([L, 0.0]), 0.5 * np.pi, 10.0 * EI / L**2),), levels=11
+    )
     params = [1, 2, 5, 10]
-    exact = np.array([cantilever_tip_force(p) for p in params])    # x/L, y/L, phi0
+    exact = np.array([cantilever_tip_force(p) for p in params])  # x/L, y/L, phi0
     errors = {}
     for n in (20, 40, 80):
         lp = solve(mech, case, n)
@@ -406,6 +448,7 @@ def test_elliptic_elastica_reference_agrees_with_shooting():
     # independent check of the reference: integrate phi'' = -(P L^2/EI) cos phi on
     # s in [0, 1] from the clamp and shoot on phi'(0) until phi'(1) = 0
     for p in (1, 2, 5, 10):
+
         def rhs(s, z):
             return [z[1], -p * np.cos(z[0]), np.cos(z[0]), np.sin(z[0])]
 
@@ -417,6 +460,7 @@ def test_elliptic_elastica_reference_agrees_with_shooting():
 
 
 # --- 3. pure end moment: the exact circle ----------------------------------------------------
+
 
 @pytest.mark.parametrize("shape", [ARC, SEGMENT], ids=["arc", "segment"])
 def test_end_moment_gives_the_discrete_circle_exactly(shape):
@@ -446,7 +490,7 @@ def test_end_moment_on_arc_converges_to_the_exact_circle_at_second_order():
     section = Section(1.0, 0.2)
     EI = bending_stiffness(section)
     mech = cantilever(ARC, section)
-    M = EI * ARC.curvature              # doubles the curvature: end turns by 4.19 rad
+    M = EI * ARC.curvature  # doubles the curvature: end turns by 4.19 rad
     case = LoadCase("m", (Moment("t", M),), levels=3)
     x_exact, rot_exact = circle_under_end_moment(ARC, EI, M)
     pos_err, rot_err = [], []
@@ -465,8 +509,10 @@ def test_end_moment_on_arc_converges_to_the_exact_circle_at_second_order():
 
 # --- 4. small-load limit: Castigliano's compliance of the arc -------------------------------
 
-@pytest.mark.parametrize("thickness, shear", [(0.2, False), (2.0, True)],
-                         ids=["euler-bernoulli", "timoshenko"])
+
+@pytest.mark.parametrize(
+    "thickness, shear", [(0.2, False), (2.0, True)], ids=["euler-bernoulli", "timoshenko"]
+)
 def test_small_load_matches_castigliano_compliance(thickness, shear):
     # At 1e-6 of a load that turns the tip by ~1 rad the response is linear to
     # ~1e-6; the chord discretisation errs by ~(width/N)^2/24 = 2e-5 at N = 200,
@@ -481,9 +527,12 @@ def test_small_load_matches_castigliano_compliance(thickness, shear):
     if shear:
         assert np.abs(C - arc_tip_compliance(ARC, EI, EA)).max() > 2e-3 * np.abs(C).max()
     tip = ARC.end_points[1]
-    loads = [Force("t", tip, 0.0, 1e-6 * EI / L**2), Force("t", tip, 0.5 * np.pi, 1e-6 * EI / L**2),
-             Moment("t", 1e-6 * EI / L)]
-    weights = np.array([1.0, 1.0, L])          # rotation counted as the tip motion it causes
+    loads = [
+        Force("t", tip, 0.0, 1e-6 * EI / L**2),
+        Force("t", tip, 0.5 * np.pi, 1e-6 * EI / L**2),
+        Moment("t", 1e-6 * EI / L),
+    ]
+    weights = np.array([1.0, 1.0, L])  # rotation counted as the tip motion it causes
     for j, load in enumerate(loads):
         lp = solve(mech, LoadCase("small", (load,), levels=2), 200, shear=shear)
         response = np.array([lp.dx[-1], lp.dy[-1], lp.rotation[-1]]) / load.value
@@ -492,6 +541,7 @@ def test_small_load_matches_castigliano_compliance(thickness, shear):
 
 
 # --- 5. invariance under a rigid placement of the whole mechanism ---------------------------
+
 
 @pytest.mark.parametrize("case_name", ["f+", "m+"])
 def test_rigidly_moved_mechanism_gives_the_same_response(case_name):
@@ -509,8 +559,13 @@ def test_rigidly_moved_mechanism_gives_the_same_response(case_name):
 
 def test_run_reduced_records_shapes_attached_to_the_bodies():
     scene = load_scene("open_chain")
-    lp = run_reduced(scene.mechanism, parse_model("beam:12"), scene.load_case("m+"),
-                     record_poses=True, record_shapes=True)
+    lp = run_reduced(
+        scene.mechanism,
+        parse_model("beam:12"),
+        scene.load_case("m+"),
+        record_poses=True,
+        record_shapes=True,
+    )
     mech = scene.mechanism
     for flex in mech.flexures:
         shape = np.array(lp.shapes[flex.name][-1])

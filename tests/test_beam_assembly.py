@@ -22,9 +22,14 @@ from flexval.reducedmodels.models import build_system
 from tests.builders import assert_assembles_like_its_connectors
 
 
-@pytest.mark.parametrize("scene_name, model, kind", [("open_chain", "beam:10", "banded"),
-                                                     ("closed_chain", "beam:20", "banded"),
-                                                     ("closed_chain", "beam:3", "dense")])
+@pytest.mark.parametrize(
+    "scene_name, model, kind",
+    [
+        ("open_chain", "beam:10", "banded"),
+        ("closed_chain", "beam:20", "banded"),
+        ("closed_chain", "beam:3", "dense"),
+    ],
+)
 def test_system_assembly_equals_the_connectors_chain_rule(scene_name, model, kind):
     scene = load_scene(scene_name)
     system = build_system(scene.mechanism, parse_model(model))
@@ -36,8 +41,9 @@ def test_system_assembly_equals_the_connectors_chain_rule(scene_name, model, kin
     _, grad, tangent = system.assemble(q, loads, 0.7)
     # the Newton correction: relative round-off of a solve, times the condition number
     # (~1e8 for slender flexures), far below 1e-6
-    np.testing.assert_allclose(tangent.solve(-grad), np.linalg.solve(ref_tangent, -ref_grad),
-                               rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(
+        tangent.solve(-grad), np.linalg.solve(ref_tangent, -ref_grad), rtol=1e-6, atol=1e-9
+    )
 
 
 def test_assembly_leaves_no_trace_between_calls():

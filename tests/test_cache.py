@@ -30,12 +30,21 @@ def cache_root(tmp_path, monkeypatch):
 
 
 def _path(**changes) -> LoadPath:
-    base = dict(model="ee", load_case="f+", load=[0.0, 1.0], dx=[0.0, 0.1], dy=[0.0, -0.2],
-                rotation=[0.0, 0.01], seconds=0.5, stats={"newton_iterations": 3})
+    base = dict(
+        model="ee",
+        load_case="f+",
+        load=[0.0, 1.0],
+        dx=[0.0, 0.1],
+        dy=[0.0, -0.2],
+        rotation=[0.0, 0.01],
+        seconds=0.5,
+        stats={"newton_iterations": 3},
+    )
     return LoadPath(**{**base, **changes})
 
 
 # ---------------------------------------------------------------- exact keys
+
 
 def _moved(scene, delta: float):
     """``scene`` with the target point moved by ``delta`` mm in x."""
@@ -44,18 +53,20 @@ def _moved(scene, delta: float):
     return dataclasses.replace(scene, mechanism=moved)
 
 
-@pytest.mark.parametrize("offset, delta", [(0.0, 1e-12), (1e8, 0.4), (1e8, 1.5e-8),
-                                           (1e15, 0.125), (-3e7, 1e-8)])
+@pytest.mark.parametrize(
+    "offset, delta", [(0.0, 1e-12), (1e8, 0.4), (1e8, 1.5e-8), (1e15, 0.125), (-3e7, 1e-8)]
+)
 def test_key_changes_with_any_change_of_a_number(offset, delta):
     """Every representable move of a point changes the key (8-digit repr did not at 1e8 mm)."""
-    base = _moved(load_scene("open_chain"), offset)   # keys only: nothing is solved
+    base = _moved(load_scene("open_chain"), offset)  # keys only: nothing is solved
     moved = _moved(base, delta)
     assert not np.array_equal(base.mechanism.target_point, moved.mechanism.target_point)
     assert result_key(base, "ee", "f+", None, {}) != result_key(moved, "ee", "f+", None, {})
 
 
-@pytest.mark.parametrize("field, value", [("levels", 12), ("model", "ee:x"),
-                                          ("extra", {"record": True})])
+@pytest.mark.parametrize(
+    "field, value", [("levels", 12), ("model", "ee:x"), ("extra", {"record": True})]
+)
 def test_key_changes_with_every_input(field, value):
     sc = load_scene("open_chain")
     args = {"model": "ee", "levels": None, "extra": {}}
@@ -70,8 +81,12 @@ def test_key_does_not_depend_on_how_the_scene_path_was_typed(tmp_path, monkeypat
     scene_file = tmp_path / "sub" / "s.toml"
     scene_file.write_text(text)
     monkeypatch.chdir(tmp_path)
-    spellings = [str(scene_file), "sub/s.toml", "./sub/../sub/s.toml",
-                 str(tmp_path / "sub" / "." / "s.toml")]
+    spellings = [
+        str(scene_file),
+        "sub/s.toml",
+        "./sub/../sub/s.toml",
+        str(tmp_path / "sub" / "." / "s.toml"),
+    ]
     keys = {result_key(load_scene(p), "ee", "f+", None, {}) for p in spellings}
     assert len(keys) == 1
 
@@ -83,6 +98,7 @@ def test_exact_refuses_types_without_an_exact_form():
 
 
 # ---------------------------------------------------------------- damaged result entries
+
 
 def _damage(kind: str, path: Path, key: str) -> None:
     good = path.read_bytes()
@@ -110,8 +126,20 @@ def _damage(kind: str, path: Path, key: str) -> None:
         path.write_text("[" * 100000 + "]" * 100000)
 
 
-@pytest.mark.parametrize("kind", ["truncated", "empty", "binary", "foreign", "old format",
-                                  "tampered value", "other key", "a folder", "deeply nested"])
+@pytest.mark.parametrize(
+    "kind",
+    [
+        "truncated",
+        "empty",
+        "binary",
+        "foreign",
+        "old format",
+        "tampered value",
+        "other key",
+        "a folder",
+        "deeply nested",
+    ],
+)
 def test_damaged_result_entry_is_discarded_with_a_warning(kind, cache_root):
     cache = ResultCache()
     key = "k" * 32
@@ -122,14 +150,23 @@ def test_damaged_result_entry_is_discarded_with_a_warning(kind, cache_root):
     with pytest.warns(CacheWarning):
         assert cache.get(key) is None
     if kind != "a folder":
-        assert not entry.exists()          # discarded: the next put stores a good one
+        assert not entry.exists()  # discarded: the next put stores a good one
         cache.put(key, _path())
         assert cache.get(key) == _path()
 
 
 def test_cli_recomputes_after_a_damaged_entry(cache_root, capsys):
-    argv = ["run", "open_chain", "--model", "dcmm:1", "--load-case", "f+", "--levels", "4",
-            "--cache"]
+    argv = [
+        "run",
+        "open_chain",
+        "--model",
+        "dcmm:1",
+        "--load-case",
+        "f+",
+        "--levels",
+        "4",
+        "--cache",
+    ]
     assert main(argv) == 0
     first = capsys.readouterr().out
     (entry,) = (cache_root / "results").iterdir()
@@ -157,12 +194,16 @@ def test_run_uses_the_cache_only_when_asked(cache_root):
 
 # ---------------------------------------------------------------- unusable cache folder
 
+
 @pytest.mark.parametrize("make", ["regular file", "under a regular file", "device"])
 def test_unusable_cache_folder_warns_and_computes(make, tmp_path, monkeypatch, capsys):
     regular = tmp_path / "f"
     regular.write_text("x")
-    root = {"regular file": regular, "under a regular file": regular / "sub",
-            "device": Path("/dev/null")}[make]
+    root = {
+        "regular file": regular,
+        "under a regular file": regular / "sub",
+        "device": Path("/dev/null"),
+    }[make]
     monkeypatch.setenv("FLEXVAL_CACHE", str(root))
     with pytest.warns(CacheWarning, match="FLEXVAL_CACHE"):
         assert cache_dir() is None
@@ -177,6 +218,7 @@ def test_unusable_cache_folder_warns_and_computes(make, tmp_path, monkeypatch, c
 
 
 # ---------------------------------------------------------------- damaged mesh entries
+
 
 def _damage_npz(kind: str, path: Path) -> None:
     good = path.read_bytes()
@@ -205,8 +247,19 @@ def _damage_npz(kind: str, path: Path) -> None:
             zf.writestr("nodes.npy", b"\x93NUMPY garbage")
 
 
-@pytest.mark.parametrize("kind", ["truncated", "empty", "binary", "text", "foreign npz",
-                                  "pickled object", "tampered nodes", "corrupt member"])
+@pytest.mark.parametrize(
+    "kind",
+    [
+        "truncated",
+        "empty",
+        "binary",
+        "text",
+        "foreign npz",
+        "pickled object",
+        "tampered nodes",
+        "corrupt member",
+    ],
+)
 def test_damaged_mesh_entry_is_discarded_and_rebuilt(kind, cache_root):
     seg = Segment((0.0, 0.0), (3.0, 4.0))
     fresh = mesh_flexure(seg, 0.5, 0, use_cache=False)
@@ -218,7 +271,7 @@ def test_damaged_mesh_entry_is_discarded_and_rebuilt(kind, cache_root):
     np.testing.assert_array_equal(again.nodes, fresh.nodes)
     np.testing.assert_array_equal(again.elements, fresh.elements)
     with warnings.catch_warnings():
-        warnings.simplefilter("error")     # the rebuilt entry is sound
+        warnings.simplefilter("error")  # the rebuilt entry is sound
         mesh_flexure(seg, 0.5, 0)
 
 
@@ -236,10 +289,20 @@ for level in (0, 1, 2):
 
 
 def _spawn(argv: list[str], cache: Path) -> subprocess.Popen:
-    env = {**os.environ, "FLEXVAL_CACHE": str(cache), "PYTHONPATH": str(ROOT),
-           "OPENBLAS_NUM_THREADS": "1"}
-    return subprocess.Popen([sys.executable, *argv], env=env, cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    env = {
+        **os.environ,
+        "FLEXVAL_CACHE": str(cache),
+        "PYTHONPATH": str(ROOT),
+        "OPENBLAS_NUM_THREADS": "1",
+    }
+    return subprocess.Popen(
+        [sys.executable, *argv],
+        env=env,
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def test_two_reports_share_an_empty_cache(tmp_path):
@@ -247,8 +310,23 @@ def test_two_reports_share_an_empty_cache(tmp_path):
     with identical results (fixed temporary names made one of them fail 5 times in 6)."""
     cache = tmp_path / "cache"
     outs = [tmp_path / f"out{k}" for k in range(2)]
-    argv = ["-m", "flexval.validation.cli", "report", "open_chain", "--model", "ee", "--model", "dcmm:1",
-            "--model", "prbm", "--repeats", "1", "--no-bench", "--no-converge", "--quiet"]
+    argv = [
+        "-m",
+        "flexval.validation.cli",
+        "report",
+        "open_chain",
+        "--model",
+        "ee",
+        "--model",
+        "dcmm:1",
+        "--model",
+        "prbm",
+        "--repeats",
+        "1",
+        "--no-bench",
+        "--no-converge",
+        "--quiet",
+    ]
     procs = [_spawn(argv + ["--out", str(o)], cache) for o in outs]
     for p in procs:
         _, err = p.communicate(timeout=600)
@@ -257,8 +335,12 @@ def test_two_reports_share_an_empty_cache(tmp_path):
     results = []
     for o in outs:
         data = json.loads((o / "results.json").read_text())
-        results.append({(r["model"], r["load_case"]): (r["dx"], r["dy"], r["rotation"])
-                        for r in data["scenes"]["open_chain"]["results"]})
+        results.append(
+            {
+                (r["model"], r["load_case"]): (r["dx"], r["dy"], r["rotation"])
+                for r in data["scenes"]["open_chain"]["results"]
+            }
+        )
     assert results[0] == results[1] and len(results[0]) == 3 * 4
     assert not [p for p in cache.rglob("*") if ".tmp" in p.name]
 

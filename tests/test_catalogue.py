@@ -16,17 +16,24 @@ import sys
 
 import numpy as np
 import pytest
+from builders import cantilever, tip_moment
 
 from flexval.geometry import Arc, SceneError, load_scene
 from flexval.reducedmodels import Connector, run_reduced
-from flexval.reducedmodels.catalogue import (Family, Option, Resolution, families, family,
-                                     parse_model, register, unregister)
+from flexval.reducedmodels.catalogue import (
+    Family,
+    Option,
+    Resolution,
+    families,
+    family,
+    parse_model,
+    register,
+    unregister,
+)
 from flexval.reducedmodels.models import connector_system, trace_nonlinear
 from flexval.validation.cache import result_key
 from flexval.validation.cli import main
 from flexval.validation.run import run_model
-
-from builders import cantilever, tip_moment
 
 
 class SpringConnector(Connector):
@@ -58,11 +65,14 @@ def _spring_system(mechanism, spec, settings=None, **options):
 
 
 SPRING = Family(
-    "spring", "toy: linear springs between the bodies of each flexure",
+    "spring",
+    "toy: linear springs between the bodies of each flexure",
     trace_nonlinear,
     Resolution("K", "rotational stiffness, N mm/rad", 50, 1, 10**6, True, (10, 40)),
     (Option("stiffer", "multiplies the stiffness", (("1", 1.0), ("2", 2.0), ("4", 4.0)), "1"),),
-    frozenset(), _spring_system)
+    frozenset(),
+    _spring_system,
+)
 
 
 @pytest.fixture
@@ -89,12 +99,27 @@ def test_toy_family_parses_builds_and_runs(spring):
 
 def test_toy_family_from_the_command_line(spring, tmp_path):
     out = tmp_path / "r.json"
-    assert main(["run", "open_chain", "--model", "spring:100[stiffer=2]", "--model", "spring",
-                 "--load-case", "m+", "--json", str(out)]) == 0
+    assert (
+        main(
+            [
+                "run",
+                "open_chain",
+                "--model",
+                "spring:100[stiffer=2]",
+                "--model",
+                "spring",
+                "--load-case",
+                "m+",
+                "--json",
+                str(out),
+            ]
+        )
+        == 0
+    )
     data = json.loads(out.read_text())
     assert [r["model"] for r in data["results"]] == ["spring:100[stiffer=2]", "spring:50"]
     rot = [r["rotation"][-1] for r in data["results"]]
-    assert rot[0] * 200 == pytest.approx(rot[1] * 50, rel=1e-8)   # chain of springs: 1/k
+    assert rot[0] * 200 == pytest.approx(rot[1] * 50, rel=1e-8)  # chain of springs: 1/k
     assert main(["run", "open_chain", "--model", "spring:100[softer]"]) == 2
     assert main(["converge", "open_chain", "--model", "spring", "--load-case", "m+"]) == 0
 
@@ -104,44 +129,50 @@ def test_unregistered_family_is_unknown():
         parse_model("spring:5")
 
 
-@pytest.mark.parametrize("text, canonical", [
-    ("beam", "beam:20"),
-    ("beam:100", "beam:100"),
-    ("beam:100[shear]", "beam:100[shear]"),
-    ("beam:100[shear=true]", "beam:100[shear]"),
-    ("beam:100[shear=false]", "beam:100"),
-    ("beam:100[]", "beam:100"),
-    ("dcmm:2[frame=follower]", "dcmm:2[frame=follower]"),
-    ("dcmm:2[frame=leader]", "dcmm:2"),
-    ("dcmm[ frame = follower ]", "dcmm:1[frame=follower]"),
-    ("continuum", "continuum:1"),
-    ("continuum:0[plane=strain]", "continuum:0[plane=strain]"),
-    ("continuum:1[plane=strain,law=neo-hookean]", "continuum:1[law=neo-hookean,plane=strain]"),
-    ("continuum:1[law=svk,plane=stress]", "continuum:1"),
-    ("prbm", "prbm"),
-    (" ee ", "ee"),
-])
+@pytest.mark.parametrize(
+    "text, canonical",
+    [
+        ("beam", "beam:20"),
+        ("beam:100", "beam:100"),
+        ("beam:100[shear]", "beam:100[shear]"),
+        ("beam:100[shear=true]", "beam:100[shear]"),
+        ("beam:100[shear=false]", "beam:100"),
+        ("beam:100[]", "beam:100"),
+        ("dcmm:2[frame=follower]", "dcmm:2[frame=follower]"),
+        ("dcmm:2[frame=leader]", "dcmm:2"),
+        ("dcmm[ frame = follower ]", "dcmm:1[frame=follower]"),
+        ("continuum", "continuum:1"),
+        ("continuum:0[plane=strain]", "continuum:0[plane=strain]"),
+        ("continuum:1[plane=strain,law=neo-hookean]", "continuum:1[law=neo-hookean,plane=strain]"),
+        ("continuum:1[law=svk,plane=stress]", "continuum:1"),
+        ("prbm", "prbm"),
+        (" ee ", "ee"),
+    ],
+)
 def test_canonical_ids(text, canonical):
     spec = parse_model(text)
     assert spec.id == canonical
-    assert parse_model(spec.id) == spec           # the canonical id reads back as itself
+    assert parse_model(spec.id) == spec  # the canonical id reads back as itself
 
 
-@pytest.mark.parametrize("text, words", [
-    ("beam:100[sheer]", ["unknown option 'sheer'", "shear"]),
-    ("dcmm:2[frame=side]", ["'frame'", "leader, follower", "'side'"]),
-    ("dcmm:2[frame]", ["'frame'", "needs a value"]),
-    ("continuum:1[law=rubber]", ["'law'", "svk, neo-hookean"]),
-    ("continuum:1[plane=3d]", ["'plane'", "stress, strain"]),
-    ("prbm[shear]", ["unknown option 'shear'", "allowed: none"]),
-    ("dcmm:2[frame=follower,frame=leader]", ["given twice"]),
-    ("beam:0", ["between 1 and"]),
-    ("continuum:9", ["between 0 and 8"]),
-    ("ee:2", ["takes no resolution"]),
-    ("beam:x", ["must be an integer"]),
-    ("fem", ["expected", "beam[:N]", "continuum[:LEVEL]"]),
-    ("beam:10[shear", ["expected"]),
-])
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("beam:100[sheer]", ["unknown option 'sheer'", "shear"]),
+        ("dcmm:2[frame=side]", ["'frame'", "leader, follower", "'side'"]),
+        ("dcmm:2[frame]", ["'frame'", "needs a value"]),
+        ("continuum:1[law=rubber]", ["'law'", "svk, neo-hookean"]),
+        ("continuum:1[plane=3d]", ["'plane'", "stress, strain"]),
+        ("prbm[shear]", ["unknown option 'shear'", "allowed: none"]),
+        ("dcmm:2[frame=follower,frame=leader]", ["given twice"]),
+        ("beam:0", ["between 1 and"]),
+        ("continuum:9", ["between 0 and 8"]),
+        ("ee:2", ["takes no resolution"]),
+        ("beam:x", ["must be an integer"]),
+        ("fem", ["expected", "beam[:N]", "continuum[:LEVEL]"]),
+        ("beam:10[shear", ["expected"]),
+    ],
+)
 def test_bad_ids_name_the_option_and_the_allowed_values(text, words):
     with pytest.raises(SceneError) as err:
         parse_model(text, "<test>", "--model")
@@ -151,8 +182,10 @@ def test_bad_ids_name_the_option_and_the_allowed_values(text, words):
         assert w in msg
 
 
-@pytest.mark.parametrize("model, option", [("beam:4[shear]", {"shear": True}),
-                                           ("dcmm:2[frame=follower]", {"frame": "follower"})])
+@pytest.mark.parametrize(
+    "model, option",
+    [("beam:4[shear]", {"shear": True}), ("dcmm:2[frame=follower]", {"frame": "follower"})],
+)
 def test_options_reach_the_connector(model, option):
     """The id's option gives the same path as the Python keyword, and a different one than
     without it (thick arcs of the closed chain: shear turns the link 0.4 % less, the follower
@@ -190,8 +223,10 @@ def test_continuum_options_reach_the_law():
 
 def test_options_change_the_cache_key():
     scene = load_scene("open_chain")
-    keys = {result_key(scene, parse_model(m).id, "f+", None, {})
-            for m in ("dcmm:2", "dcmm:2[frame=follower]", "dcmm:2[frame=leader]")}
+    keys = {
+        result_key(scene, parse_model(m).id, "f+", None, {})
+        for m in ("dcmm:2", "dcmm:2[frame=follower]", "dcmm:2[frame=leader]")
+    }
     assert len(keys) == 2
 
 
@@ -205,18 +240,23 @@ def test_request_models_are_checked_when_used(tmp_path):
     scene = tmp_path / "s.toml"
     scene.write_text(head + '[request]\nmodels = ["dcmm:2[frame=up]"]\n')
     assert load_scene(scene).models == ("dcmm:2[frame=up]",)
-    proc = subprocess.run([sys.executable, "-m", "flexval.validation.cli", "run", str(scene)],
-                          capture_output=True, text=True)
+    proc = subprocess.run(
+        [sys.executable, "-m", "flexval.validation.cli", "run", str(scene)],
+        capture_output=True,
+        text=True,
+    )
     assert proc.returncode == 2
     assert str(scene) in proc.stderr and "request.models" in proc.stderr
     assert "'dcmm:2[frame=up]'" in proc.stderr and "Traceback" not in proc.stderr
 
 
 def test_info_imports_no_model_code():
-    code = ("import sys; from flexval.validation.cli import main; main(['info', 'closed_chain']); "
-            "print(sorted(m for m in sys.modules if m.startswith(('flexval.reducedmodels.beam', "
-            "'flexval.reducedmodels.dcmm', 'flexval.reducedmodels.prbm', 'flexval.validation.continuum.run', "
-            "'flexval.validation.continuum.connector', 'skfem'))))")
+    code = (
+        "import sys; from flexval.validation.cli import main; main(['info', 'closed_chain']); "
+        "print(sorted(m for m in sys.modules if m.startswith(('flexval.reducedmodels.beam', "
+        "'flexval.reducedmodels.dcmm', 'flexval.reducedmodels.prbm', 'flexval.validation.continuum.run', "
+        "'flexval.validation.continuum.connector', 'skfem'))))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip().splitlines()[-1] == "[]"
 
@@ -252,10 +292,27 @@ def test_continuum_variants_write_their_own_fields(tmp_path):
 
     text = resources.files("flexval.geometry").joinpath("scenes", "closed_chain.toml").read_text()
     scene = tmp_path / "s.toml"
-    scene.write_text(text.replace('models = ["beam:100"',
-                                  'outputs = ["vtu"]\nmodels = ["beam:100"'))
+    scene.write_text(
+        text.replace('models = ["beam:100"', 'outputs = ["vtu"]\nmodels = ["beam:100"')
+    )
     out = tmp_path / "fields"
-    assert main(["run", str(scene), "--model", "continuum:0", "--model",
-                 "continuum:0[plane=strain]", "--load-case", "f+", "--levels", "2",
-                 "--out-dir", str(out)]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(scene),
+                "--model",
+                "continuum:0",
+                "--model",
+                "continuum:0[plane=strain]",
+                "--load-case",
+                "f+",
+                "--levels",
+                "2",
+                "--out-dir",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert len(list(out.glob("*.vtu"))) == 2

@@ -30,8 +30,22 @@ def test_plot_writes_png(tmp_path):
 
 def test_run_json_contract(tmp_path, capsys):
     out = tmp_path / "r.json"
-    code = main(["run", "open_chain", "--model", "ee", "--model", "dcmm:1",
-                 "--load-case", "f+", "--levels", "5", "--json", str(out)])
+    code = main(
+        [
+            "run",
+            "open_chain",
+            "--model",
+            "ee",
+            "--model",
+            "dcmm:1",
+            "--load-case",
+            "f+",
+            "--levels",
+            "5",
+            "--json",
+            str(out),
+        ]
+    )
     assert code == 0
     data = json.loads(out.read_text())
     assert data["scene"] == "open_chain"
@@ -62,10 +76,27 @@ def test_run_writes_requested_continuum_fields(tmp_path):
 
     text = resources.files("flexval.geometry").joinpath("scenes", "closed_chain.toml").read_text()
     scene = tmp_path / "s.toml"
-    scene.write_text(text.replace('models = ["beam:100"', 'outputs = ["vtu", "png"]\nmodels = ["beam:100"'))
+    scene.write_text(
+        text.replace('models = ["beam:100"', 'outputs = ["vtu", "png"]\nmodels = ["beam:100"')
+    )
     out = tmp_path / "fields"
-    assert main(["run", str(scene), "--model", "continuum:0", "--load-case", "f+",
-                 "--levels", "3", "--out-dir", str(out)]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(scene),
+                "--model",
+                "continuum:0",
+                "--load-case",
+                "f+",
+                "--levels",
+                "3",
+                "--out-dir",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert list(out.glob("*.vtu")) and list(out.glob("*.png"))
     # a beam model has no stress field to write: a named input error
     assert main(["run", str(scene), "--model", "beam:10", "--out-dir", str(out)]) == 2

@@ -13,19 +13,19 @@ from __future__ import annotations
 import math
 
 import pytest
+from test_report_failures import ARCH
 
 from flexval.geometry import load_scene
 from flexval.reducedmodels import LoadPath, parse_model
 from flexval.validation.compare import NEAR_ZERO, errors, scale_of
 from flexval.validation.run import run_model
 
-from test_report_failures import ARCH
-
 
 def _path(dx, rotation, dy=None) -> LoadPath:
     n = len(dx)
-    return LoadPath("m", "c", [k / (n - 1) for k in range(n)], list(dx), dy or [0.0] * n,
-                    list(rotation), 0.0)
+    return LoadPath(
+        "m", "c", [k / (n - 1) for k in range(n)], list(dx), dy or [0.0] * n, list(rotation), 0.0
+    )
 
 
 def test_a_rotation_back_to_zero_is_measured_against_its_scale():
@@ -34,8 +34,8 @@ def test_a_rotation_back_to_zero_is_measured_against_its_scale():
     model = _path([0.0, 5.0, 10.0], [0.0, 0.2, 0.05])
     assert scale_of(ref, 20.0) == {"disp": pytest.approx(0.2 * 20.0), "rot": 0.5}
     e = errors(model, ref, 20.0)
-    assert e["end_rot"] == pytest.approx(100 * 0.05 / 0.5)      # 10 % of the scale
-    assert e["path_rot"] == pytest.approx(100 * 0.05 / 0.2)     # the path's own maximum
+    assert e["end_rot"] == pytest.approx(100 * 0.05 / 0.5)  # 10 % of the scale
+    assert e["path_rot"] == pytest.approx(100 * 0.05 / 0.2)  # the path's own maximum
 
 
 @pytest.mark.parametrize("length", [None, 0.0, -1.0, float("nan"), float("inf"), "20"])
@@ -44,7 +44,7 @@ def test_the_mechanism_size_is_required_and_checked(length):
     with pytest.raises(ValueError, match="length must be the mechanism's size"):
         errors(ref, ref, length)
     with pytest.raises(TypeError):
-        errors(ref, ref)                                        # no caller can forget it
+        errors(ref, ref)  # no caller can forget it
 
 
 def test_a_target_on_the_centre_of_rotation_is_measured_against_its_scale():
@@ -85,13 +85,13 @@ def _arch(tmp_path, angle_deg: float, force: float):
 def test_the_crown_of_an_arch_pressed_on_its_axis_does_not_turn(tmp_path, model):
     scene, case, ref = _arch(tmp_path, -90.0, 0.1)
     L = scene.mechanism.size()
-    assert abs(ref.rotation[-1]) < 1e-9 * scale_of(ref, L)["rot"]    # round-off
+    assert abs(ref.rotation[-1]) < 1e-9 * scale_of(ref, L)["rot"]  # round-off
     lp = run_model(scene, parse_model(model), case)
     scaled = errors(lp, ref, L)
     plain = abs(lp.rotation[-1] - ref.rotation[-1]) / abs(ref.rotation[-1])
-    assert plain > 0.01                   # round-off over round-off: percent and more
+    assert plain > 0.01  # round-off over round-off: percent and more
     assert scaled["end_rot"] < 1e-9 and scaled["path_rot"] < 1e-9
-    d, d_ref = lp.displacement, ref.displacement    # not near zero: plain relative error
+    d, d_ref = lp.displacement, ref.displacement  # not near zero: plain relative error
     assert scaled["end_disp"] == pytest.approx(100 * abs(d[-1] / d_ref[-1] - 1), rel=1e-9)
 
 
@@ -104,5 +104,6 @@ def test_an_arch_pressed_off_its_axis_keeps_its_relative_rotation_error(tmp_path
     lp = run_model(scene, parse_model("dcmm:1"), case)
     e = errors(lp, ref, L)
     assert e["end_rot"] == pytest.approx(
-        100 * abs(lp.rotation[-1] / ref.rotation[-1] - 1), rel=1e-12)
+        100 * abs(lp.rotation[-1] / ref.rotation[-1] - 1), rel=1e-12
+    )
     assert e["end_rot"] > 500 and math.isfinite(e["end_rot"])

@@ -7,13 +7,13 @@ import math
 
 import numpy as np
 import pytest
+from test_joints import von_mises_truss
 
 from flexval.geometry import Arc, Force, LoadCase, Material, Section, load_scene
 from flexval.geometry.mechanism import Body, FlexureSpec, Pin, PinSpec, assemble
-from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels import SolverError, SolverSettings, build_system, solve_path
+from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels.continuation import limit_loads, solve_arclength
-from test_joints import von_mises_truss
 
 DA_DEPPO_SCHMIDT = 8.97
 """Limit load P R^2 / EI of the clamped-hinged 215 deg circular arch under a
@@ -26,8 +26,10 @@ def _arch_halves(R: float, h: float, opening_deg: float, far_body: str):
     half = math.radians(opening_deg / 2)
     right = Arc((0.0, 0.0), R, math.pi / 2 - half / 2, half)
     left = Arc((0.0, 0.0), R, math.pi / 2 + half / 2, half)
-    specs = [FlexureSpec("right", right, ("g", "c"), Section(1.0, h), start_body="g"),
-             FlexureSpec("left", left, ("c", far_body), Section(1.0, h), start_body="c")]
+    specs = [
+        FlexureSpec("right", right, ("g", "c"), Section(1.0, h), start_body="g"),
+        FlexureSpec("left", left, ("c", far_body), Section(1.0, h), start_body="c"),
+    ]
     return right, left, np.array([0.0, R]), specs
 
 
@@ -42,8 +44,9 @@ def deep_arch(n: int, R: float = 100.0, h: float = 1.0, E: float = 1000.0):
     """
     right, left, crown, specs = _arch_halves(R, h, 215.0, "h")
     pins = [PinSpec("hinge", ("h", "g"), tuple(left.end_points[1]))]
-    mech = assemble(specs, "g", right.end_points[0][None], Material(E, 0.3), "c", crown,
-                    pin_specs=pins)
+    mech = assemble(
+        specs, "g", right.end_points[0][None], Material(E, 0.3), "c", crown, pin_specs=pins
+    )
     EI = E * h**3 / 12.0
     case = LoadCase("P", (Force("c", crown, -math.pi / 2, EI / R**2),))
     return build_system(mech, parse_model(f"beam:{n}")), case
@@ -51,11 +54,18 @@ def deep_arch(n: int, R: float = 100.0, h: float = 1.0, E: float = 1000.0):
 
 def _first_limit(n: int) -> float:
     system, case = deep_arch(n)
-    lp = solve_arclength(system, case, 12.0, 40, model=f"beam:{n}", max_growth=1.0,
-                         stop=lambda p: bool(p.stats["limit_points"]))
+    lp = solve_arclength(
+        system,
+        case,
+        12.0,
+        40,
+        model=f"beam:{n}",
+        max_growth=1.0,
+        stop=lambda p: bool(p.stats["limit_points"]),
+    )
     loads = np.array(lp.load) / case.magnitude
     k = lp.stats["limit_points"][0]
-    assert loads[-1] < loads[k] and loads[k] == loads.max()    # traced past the maximum
+    assert loads[-1] < loads[k] and loads[k] == loads.max()  # traced past the maximum
     return limit_loads(lp)[0] / case.magnitude
 
 
@@ -81,8 +91,7 @@ def test_load_vector_is_the_load_derivative_of_the_gradient():
         _, g0, _ = system.assemble(q, loads, 0.0)
         _, g1, _ = system.assemble(q, loads, 1.0)
         # the gradient is affine in the load factor: exact up to the round-off of g
-        np.testing.assert_allclose(loads.vector(q), g0 - g1, rtol=0,
-                                   atol=1e-12 * np.abs(g0).max())
+        np.testing.assert_allclose(loads.vector(q), g0 - g1, rtol=0, atol=1e-12 * np.abs(g0).max())
 
 
 def test_without_limit_point_arclength_ends_on_the_load_controlled_state():
@@ -103,7 +112,7 @@ def test_without_limit_point_arclength_ends_on_the_load_controlled_state():
 def test_von_mises_truss_snaps_through_on_the_exact_path():
     mech, load = von_mises_truss()
     a, h0, L0 = 100.0, 20.0, math.hypot(100.0, 20.0)
-    L = (a * a * L0) ** (1.0 / 3.0)          # dP/dw = 0 where L^3 = a^2 L0
+    L = (a * a * L0) ** (1.0 / 3.0)  # dP/dw = 0 where L^3 = a^2 L0
     p_max = float(load(h0 - math.sqrt(L * L - a * a)))
     case = LoadCase("P", (Force("c", mech.target_point, -math.pi / 2, 1.5 * p_max),))
     system = build_system(mech, parse_model("beam:1"), SolverSettings(max_translation_step=0.01))
@@ -122,8 +131,14 @@ def _shallow_arch():
     """Clamped shallow arch: R = 100 mm, 20 deg opening (rise 1.52 mm), h = 0.1 mm, beam:16."""
     R, h, E = 100.0, 0.1, 1000.0
     right, left, crown, specs = _arch_halves(R, h, 20.0, "g")
-    mech = assemble(specs, "g", np.array([right.end_points[0], left.end_points[1]]),
-                    Material(E, 0.3), "c", crown)
+    mech = assemble(
+        specs,
+        "g",
+        np.array([right.end_points[0], left.end_points[1]]),
+        Material(E, 0.3),
+        "c",
+        crown,
+    )
     p0 = E * h**3 / 12.0 / R**2
     return mech, LoadCase("P", (Force("c", crown, -math.pi / 2, 200.0 * p0),))
 
@@ -170,13 +185,19 @@ def test_a_free_mechanism_is_a_solver_error_not_a_crash():
     end = arc.end_points[1]
     spec = FlexureSpec("f", arc, ("g", "t"), Section(1.0, 0.2), start_body="g")
     held = assemble([spec], "g", arc.end_points[0][None], Material(2000.0, 0.3), "t", end)
-    mech = dataclasses.replace(held, bodies={**held.bodies, "x": Body("x", end[None])},
-                               pins=(Pin("p", ("t", "x"), end),), target_body="x",
-                               target_point=end + [3.0, 0.0])
+    mech = dataclasses.replace(
+        held,
+        bodies={**held.bodies, "x": Body("x", end[None])},
+        pins=(Pin("p", ("t", "x"), end),),
+        target_body="x",
+        target_point=end + [3.0, 0.0],
+    )
     case = LoadCase("F", (Force("t", end, 0.0, 1e-3),))
     system = build_system(mech, parse_model("dcmm:1"))
-    for solve in (lambda: solve_path(system, case),
-                  lambda: solve_arclength(system, case, 1.0, 10, model="dcmm:1")):
+    for solve in (
+        lambda: solve_path(system, case),
+        lambda: solve_arclength(system, case, 1.0, 10, model="dcmm:1"),
+    ):
         with pytest.raises(SolverError, match="singular"):
             solve()
 
@@ -190,8 +211,9 @@ def test_arclength_drives_the_continuum_solver_too():
 
     seg = Segment((0.0, 0.0), (20.0, 0.0))
     spec = FlexureSpec("s", seg, ("g", "t"), Section(1.0, 1.0), start_body="g")
-    mech = assemble([spec], "g", np.array([[0.0, 0.0]]), Material(2000.0, 0.3), "t",
-                    np.array([20.0, 0.0]))
+    mech = assemble(
+        [spec], "g", np.array([[0.0, 0.0]]), Material(2000.0, 0.3), "t", np.array([20.0, 0.0])
+    )
     EI = 2000.0 / 12.0
     case = LoadCase("P", (Force("t", mech.target_point, math.pi / 2, 1.5 * EI / 400.0),), 5)
     ref = solve_path(continuum_system(mech, 0), case)

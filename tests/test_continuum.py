@@ -40,20 +40,28 @@ def cantilever(shape, h: float, b: float = 1.0, nu: float = NU, start_on_ground:
     """One flexure from the ground (body 1) to body 2, the shape's start on the ground or not."""
     spec = FlexureSpec("e", shape, ("1", "2"), Section(b, h))
     ground, tip = (0, 1) if start_on_ground else (1, 0)
-    return assemble([spec], "1", shape.end_points[ground:ground + 1], Material(E_MOD, nu), "2",
-                    shape.end_points[tip])
+    return assemble(
+        [spec],
+        "1",
+        shape.end_points[ground : ground + 1],
+        Material(E_MOD, nu),
+        "2",
+        shape.end_points[tip],
+    )
 
 
 def rest_poses(mech) -> tuple[np.ndarray, np.ndarray]:
-    return (np.array([*mech.bodies["1"].reference, 0.0]),
-            np.array([*mech.bodies["2"].reference, 0.0]))
+    return (
+        np.array([*mech.bodies["1"].reference, 0.0]),
+        np.array([*mech.bodies["2"].reference, 0.0]),
+    )
 
 
 def tip_compliance(mech, level: int) -> np.ndarray:
     """Linear 3x3 compliance of body 2 (dx, dy, theta per Fx, Fy, M) from the tangent at rest."""
     c = ContinuumConnector(mech.flexures[0], mech, level)
     _, _, H = c.evaluate(*rest_poses(mech), c.initial_internal())
-    K = local_hessian(c, H)[3:, 3:]                     # ground pose removed
+    K = local_hessian(c, H)[3:, 3:]  # ground pose removed
     rhs = np.zeros((K.shape[0], 3))
     rhs[:3] = np.eye(3)
     return spla.spsolve(K.tocsc(), rhs)[:3]
@@ -61,10 +69,10 @@ def tip_compliance(mech, level: int) -> np.ndarray:
 
 # --- mesh --------------------------------------------------------------------
 def test_arc_mesh_is_the_exact_band_with_tagged_faces(capfd):
-    arc = Arc((1.0, -2.0), 3.0, math.radians(150.0), math.radians(240.0))   # wider than pi
+    arc = Arc((1.0, -2.0), 3.0, math.radians(150.0), math.radians(240.0))  # wider than pi
     h = 0.3
     m = mesh_flexure(arc, h, 1, use_cache=False)
-    assert capfd.readouterr().out == ""                                    # Gmsh is silent
+    assert capfd.readouterr().out == ""  # Gmsh is silent
     assert (m.n_t, m.n_l) == (2, 2 * math.ceil(arc.length / h))
     assert m.nodes.shape[0] == (2 * m.n_t + 1) * (2 * m.n_l + 1)
     rho = np.hypot(*(m.nodes - arc.center).T)
@@ -76,8 +84,9 @@ def test_arc_mesh_is_the_exact_band_with_tagged_faces(capfd):
     np.testing.assert_allclose(rho[m.centre_line], 3.0, atol=1e-12)
     for face, angle in ((m.start_face, arc.start_angle), (m.end_face, arc.end_angle)):
         u = np.array([math.cos(angle), math.sin(angle)])
-        np.testing.assert_allclose(m.nodes[face], np.asarray(arc.center) + rings[:, None] * u,
-                                   atol=1e-12)
+        np.testing.assert_allclose(
+            m.nodes[face], np.asarray(arc.center) + rings[:, None] * u, atol=1e-12
+        )
     np.testing.assert_allclose(m.nodes[m.centre_line[[0, -1]]], arc.end_points, atol=1e-12)
     # the isoparametric area is the band's: quadratic interpolation of the circles
     # errs by ~dphi^4 / 500 = 1.3e-8 with element angle dphi = h / 2r = 0.05 rad
@@ -103,16 +112,17 @@ def test_strip_in_tension_has_the_plane_law(law, b_over_h, plane):
     h, length, eps = 1.0, 20.0, 1e-6
     mech = cantilever(Segment((0.0, 0.0), (length, 0.0)), h, b=b_over_h * h)
     system = build_system(mech, 1, law=law, plane=plane)
-    force = eps * E_MOD * b_over_h * h * h          # plane-stress axial strain eps
+    force = eps * E_MOD * b_over_h * h * h  # plane-stress axial strain eps
     case = LoadCase("pull", (Force("2", np.array([length, 0.0]), 0.0, force),))
-    q, _, _, why, _ = solve_step(FixedLoad(system, system.loads(case), 1.0),
-                                 system.initial_state(), system.settings)
+    q, _, _, why, _ = solve_step(
+        FixedLoad(system, system.loads(case), 1.0), system.initial_state(), system.settings
+    )
     assert q is not None, why
     conn = system.connectors[0]
     x = conn.positions(*system.local_states(q)[0])
     X = conn.mesh.nodes
 
-    def section(at):      # nodes of the cross-section at x = at, bottom to top
+    def section(at):  # nodes of the cross-section at x = at, bottom to top
         idx = np.flatnonzero(np.abs(X[:, 0] - at) < 1e-9)
         return idx[np.argsort(X[idx, 1])]
 
@@ -162,7 +172,7 @@ def test_an_inverted_element_is_refused():
     mech = cantilever(Segment((0.0, 0.0), (2.0, 0.0)), 0.5)
     conn = ContinuumConnector(mech.flexures[0], mech, 0)
     internal = conn.initial_internal()
-    internal[1::2] = -2.0 * conn.mesh.nodes[conn.free_nodes, 1]   # mirror the free nodes in y
+    internal[1::2] = -2.0 * conn.mesh.nodes[conn.free_nodes, 1]  # mirror the free nodes in y
     with pytest.raises(ValueError, match="inverted"):
         conn.evaluate(*rest_poses(mech), internal)
 
@@ -170,18 +180,32 @@ def test_an_inverted_element_is_refused():
 # --- 3. patch test -------------------------------------------------------------------
 def test_linear_patch_test_on_a_distorted_mesh():
     rng = np.random.default_rng(7)
-    n = 5                                          # 2 x 2 quad9 elements: 5 x 5 nodes
+    n = 5  # 2 x 2 quad9 elements: 5 x 5 nodes
     g = np.linspace(0.0, 2.0, n)
     X = np.array([[x, y] for y in g for x in g])
-    node = np.arange(n * n).reshape(n, n)          # node[row (y), col (x)]
+    node = np.arange(n * n).reshape(n, n)  # node[row (y), col (x)]
     boundary = np.zeros(n * n, bool)
     boundary[node[[0, -1], :]] = boundary[node[:, [0, -1]]] = True
     X[~boundary] += rng.uniform(-0.12, 0.12, ((~boundary).sum(), 2))
-    elements = np.array([[node[j, i], node[j, i + 2], node[j + 2, i + 2], node[j + 2, i],
-                          node[j, i + 1], node[j + 1, i + 2], node[j + 2, i + 1], node[j + 1, i],
-                          node[j + 1, i + 1]] for j in (0, 2) for i in (0, 2)])
+    elements = np.array(
+        [
+            [
+                node[j, i],
+                node[j, i + 2],
+                node[j + 2, i + 2],
+                node[j + 2, i],
+                node[j, i + 1],
+                node[j + 1, i + 2],
+                node[j + 2, i + 1],
+                node[j + 1, i],
+                node[j + 1, i + 1],
+            ]
+            for j in (0, 2)
+            for i in (0, 2)
+        ]
+    )
     solid = Solid(X, elements, make_law("svk", "stress", E_MOD, NU), 2.0)
-    _, _, Ke = solid.evaluate(X)                   # tangent at rest: the linear stiffness
+    _, _, Ke = solid.evaluate(X)  # tangent at rest: the linear stiffness
     K = sp.coo_matrix((Ke.ravel(), (solid.rows, solid.cols))).tocsr()
     grad_u, shift = np.array([[2e-3, -1e-3], [4e-3, 1e-3]]), np.array([0.3, -0.2])
     u_exact = (X @ grad_u.T + shift).ravel()
@@ -205,7 +229,7 @@ def test_newton_converges_quadratically():
     loads = system.loads(LoadCase("m", (Moment("2", 0.1 * EI / arc.length),)))  # 0.1 rad
     q = system.initial_state()
     iterates = [q]
-    for _ in range(8):                             # one Newton solve from rest, full load
+    for _ in range(8):  # one Newton solve from rest, full load
         _, g, K = system.assemble(q, loads, 1.0)
         q = q + K.solve(-g)
         iterates.append(q)
@@ -214,15 +238,15 @@ def test_newton_converges_quadratically():
     # e_k+1 <= C e_k^2 with C ~ 4 measured (10 allowed), then hits round-off (~1e-15)
     # in the next step, where a linearly converging method at rate 0.1 would need 9
     k = int(np.argmax(err < 1e-4))
-    assert err[k + 1] <= 10.0 * err[k]**2, err
+    assert err[k + 1] <= 10.0 * err[k] ** 2, err
     assert err[k + 2] < 1e-13, err
 
 
 # --- 5. large rotation of a straight cantilever --------------------------------------------
 def test_pure_moment_bends_a_slender_strip_into_the_circle():
-    L, h, b = 50.0, 1.0, 1.0                      # L/h = 50
+    L, h, b = 50.0, 1.0, 1.0  # L/h = 50
     mech = cantilever(Segment((0.0, 0.0), (L, 0.0)), h, b)
-    EI = E_MOD * b * h**3 / 12                     # plane stress: E, not E/(1 - nu^2)
+    EI = E_MOD * b * h**3 / 12  # plane stress: E, not E/(1 - nu^2)
     theta = math.pi / 3
     case = LoadCase("m", (Moment("2", EI * theta / L),), levels=2)
     lp = solve_path(build_system(mech, 1), case)
@@ -251,7 +275,7 @@ def castigliano(arc: Arc, h: float, b: float, nu: float = NU) -> np.ndarray:
     m = np.column_stack([-(tip[1] - q[:, 1]), tip[0] - q[:, 0], np.ones_like(phi)])  # per Fx, Fy, M
     ax = np.column_stack([t, np.zeros_like(phi)])
     sh = np.column_stack([n, np.zeros_like(phi)])
-    return ((m.T * ds / EI) @ m + (ax.T * ds / EA) @ ax + (sh.T * ds / kGA) @ sh)
+    return (m.T * ds / EI) @ m + (ax.T * ds / EA) @ ax + (sh.T * ds / kGA) @ sh
 
 
 @pytest.mark.parametrize("r_over_h", [10.0, 20.0])
@@ -262,14 +286,18 @@ def test_small_loads_give_the_thin_curved_beam_compliance(r_over_h):
     system = build_system(mech, 2)
     ref = castigliano(arc, h, b)
     tip = arc.end_points[1]
-    unit_loads = [lambda v: Force("2", tip, 0.0, v), lambda v: Force("2", tip, math.pi / 2, v),
-                  lambda v: Moment("2", v)]
+    unit_loads = [
+        lambda v: Force("2", tip, 0.0, v),
+        lambda v: Force("2", tip, math.pi / 2, v),
+        lambda v: Moment("2", v),
+    ]
     measured = np.zeros((3, 3))
     for k, load in enumerate(unit_loads):
-        scale = 1e-7 / ref[k, k]                   # displacement ~1e-7 of the size: linear
+        scale = 1e-7 / ref[k, k]  # displacement ~1e-7 of the size: linear
         loads = system.loads(LoadCase("u", (load(scale),)))
-        q, _, _, why, _ = solve_step(FixedLoad(system, loads, 1.0), system.initial_state(),
-                                     system.settings)
+        q, _, _, why, _ = solve_step(
+            FixedLoad(system, loads, 1.0), system.initial_state(), system.settings
+        )
         assert q is not None, why
         dx, dy, rot = system.target(q)
         measured[:, k] = np.array([dx, dy, rot]) / scale
@@ -279,7 +307,7 @@ def test_small_loads_give_the_thin_curved_beam_compliance(r_over_h):
     # r/h = 10, 20 and 40, relative to the diagonal of the compliance.
     scale = np.sqrt(np.outer(np.diag(ref), np.diag(ref)))
     err = (np.abs(measured - ref) / scale).max()
-    assert 0.25 * (h / arc.radius)**2 < err < (h / arc.radius)**2
+    assert 0.25 * (h / arc.radius) ** 2 < err < (h / arc.radius) ** 2
 
 
 # --- 7. mesh convergence rate ------------------------------------------------------------
@@ -290,18 +318,19 @@ def williams_clamped_free(nu: float) -> float:
     alpha = pi/2, plane stress kappa = (3 - nu) / (1 + nu).
     """
     kappa = (3 - nu) / (1 + nu)
-    return brentq(lambda lam: 1 + kappa**2 + 2 * kappa * math.cos(math.pi * lam) - 4 * lam**2,
-                  0.5, 0.999)
+    return brentq(
+        lambda lam: 1 + kappa**2 + 2 * kappa * math.cos(math.pi * lam) - 4 * lam**2, 0.5, 0.999
+    )
 
 
 @pytest.mark.parametrize("nu", [0.0, NU])
 def test_mesh_convergence_rate_of_a_curved_flexure(nu):
     arc = Arc((0.0, 0.0), 5.0, math.radians(90.0), math.radians(120.0))
-    mech = cantilever(arc, 0.5, nu=nu)             # r/h = 10
+    mech = cantilever(arc, 0.5, nu=nu)  # r/h = 10
     rot = np.array([tip_compliance(mech, level)[2, 2] for level in range(5)])
     d = np.abs(np.diff(rot))
     order = np.log2(d[:-1] / d[1:])
-    assert np.all(np.diff(rot) > 0)                # displacement FE: stiff, converging upwards
+    assert np.all(np.diff(rot) > 0)  # displacement FE: stiff, converging upwards
     if nu == 0.0:
         # kappa = 3 gives lambda = 1: no corner singularity, the smooth rate of a
         # compliance (energy) with quad9 is h^(2 p) = h^4
@@ -314,8 +343,10 @@ def test_mesh_convergence_rate_of_a_curved_flexure(nu):
 
 
 # --- 8. tangent consistency ---------------------------------------------------------------
-@pytest.mark.parametrize("law,plane", [("svk", "stress"), ("neo-hookean", "stress"),
-                                       ("svk", "strain"), ("neo-hookean", "strain")])
+@pytest.mark.parametrize(
+    "law,plane",
+    [("svk", "stress"), ("neo-hookean", "stress"), ("svk", "strain"), ("neo-hookean", "strain")],
+)
 @pytest.mark.parametrize("start_on_ground", [True, False])
 def test_gradient_and_hessian_match_finite_differences(law, plane, start_on_ground):
     arc = Arc((2.0, 1.0), 4.0, math.radians(-30.0), math.radians(150.0))
@@ -325,13 +356,16 @@ def test_gradient_and_hessian_match_finite_differences(law, plane, start_on_grou
     rng = np.random.default_rng(3)
     # a state far from rest: everything turned by 0.7 rad and shifted, then body b
     # moved a little more and the free nodes perturbed (elements stay valid)
-    rot, shift = np.array([[math.cos(0.7), -math.sin(0.7)], [math.sin(0.7), math.cos(0.7)]]), \
-        np.array([0.2, -0.1])
+    rot, shift = (
+        np.array([[math.cos(0.7), -math.sin(0.7)], [math.sin(0.7), math.cos(0.7)]]),
+        np.array([0.2, -0.1]),
+    )
     pa, pb = (np.array([*(rot @ p[:2] + shift), 0.7]) for p in rest_poses(mech))
     free = conn.mesh.nodes[conn.free_nodes]
     internal = (free @ rot.T + shift - free).ravel()
-    z = np.concatenate([pa, pb + [0.05, -0.03, 0.05],
-                        internal + 0.005 * rng.standard_normal(conn.n_internal)])
+    z = np.concatenate(
+        [pa, pb + [0.05, -0.03, 0.05], internal + 0.005 * rng.standard_normal(conn.n_internal)]
+    )
 
     def ev(v):
         return conn.evaluate(v[:3], v[3:6], v[6:])
@@ -346,8 +380,9 @@ def test_gradient_and_hessian_match_finite_differences(law, plane, start_on_grou
         ep, gp, _ = ev(z + step * v)
         em, gm, _ = ev(z - step * v)
         assert (ep - em) / (2 * step) == pytest.approx(g @ v, abs=1e-6 * np.abs(g).max())
-        np.testing.assert_allclose((gp - gm) / (2 * step), H @ v, rtol=0,
-                                   atol=1e-6 * np.abs(H @ v).max())
+        np.testing.assert_allclose(
+            (gp - gm) / (2 * step), H @ v, rtol=0, atol=1e-6 * np.abs(H @ v).max()
+        )
     np.testing.assert_allclose(H, H.T, rtol=0, atol=1e-12 * np.abs(H).max())
 
 

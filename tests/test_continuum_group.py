@@ -18,7 +18,6 @@ from flexval.validation.continuum.group import ContinuumGroup
 from flexval.validation.continuum.run import build_system
 from tests.builders import assert_assembles_like_its_connectors
 
-
 pytestmark = pytest.mark.usefixtures("private_mesh_cache")  # meshes go to a temporary cache
 
 
@@ -35,8 +34,10 @@ def test_group_assembly_equals_the_connectors_chain_rule(scene_name):
 
 def test_flexures_of_different_laws_are_evaluated_one_by_one():
     mech = load_scene("open_chain").mechanism
-    conns = [ContinuumConnector(f, mech, 0, law=law)
-             for f, law in zip(mech.flexures, ("svk", "neo-hookean", "svk"))]
+    conns = [
+        ContinuumConnector(f, mech, 0, law=law)
+        for f, law in zip(mech.flexures, ("svk", "neo-hookean", "svk"))
+    ]
     assert type(ContinuumConnector.group(conns)) is ConnectorGroup
     assert type(ContinuumConnector.group(conns[::2])) is ContinuumGroup
 
@@ -46,7 +47,7 @@ def test_section_forces_from_the_end_face_equal_those_from_the_whole_gradient():
     system = build_system(scene.mechanism, 0)
     q = system.initial_state() + 1e-3 * np.random.default_rng(2).standard_normal(system.n_dofs)
     for conn, local in zip(system.connectors, system.local_states(q)):
-        face = conn.section_forces(*local)                 # end-face elements only
+        face = conn.section_forces(*local)  # end-face elements only
         full = conn.section_forces(*local, gradient=conn.evaluate(*local)[1])
         # the same nodal forces summed in another order: round-off (1e-16), 1e-13 allowed
         for name in ("axial", "moment"):

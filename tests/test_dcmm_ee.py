@@ -6,12 +6,12 @@ import math
 
 import numpy as np
 import pytest
+from builders import cantilever, fd_check, tip_force, tip_moment
 from scipy.integrate import quad
 
-from builders import cantilever, fd_check, tip_force, tip_moment
 from flexval.geometry import Arc, Segment, load_scene
-from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels import run_reduced
+from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels.dcmm import DcmmConnector, dcmm_kernels
 from flexval.reducedmodels.models import build_system
 
@@ -44,9 +44,13 @@ def test_compiled_energy_is_the_displaced_compliance_quadratic_form(n):
     flexure = mech.flexures[0]
     conn = DcmmConnector(flexure, mech, n)
     rng = np.random.default_rng(5)
-    chain = np.vstack([[*mech.bodies["g"].reference, 0.0],
-                       conn.initial_internal().reshape(-1, 3),
-                       [*mech.bodies["t"].reference, 0.0]])
+    chain = np.vstack(
+        [
+            [*mech.bodies["g"].reference, 0.0],
+            conn.initial_internal().reshape(-1, 3),
+            [*mech.bodies["t"].reference, 0.0],
+        ]
+    )
     refs = chain[:, :2].copy()
     chain += rng.normal(0.0, [0.3, 0.3, 0.7], chain.shape)
     EI = flexure.bending_stiffness(mech.material)
@@ -55,8 +59,9 @@ def test_compiled_energy_is_the_displaced_compliance_quadratic_form(n):
         return np.array([[math.cos(t), -math.sin(t)], [math.sin(t), math.cos(t)]])
 
     expected = 0.0
-    for (lead, follow), (ref_l, ref_f), part in zip(zip(chain, chain[1:]), zip(refs, refs[1:]),
-                                                   flexure.shape.split(n)):
+    for (lead, follow), (ref_l, ref_f), part in zip(
+        zip(chain, chain[1:]), zip(refs, refs[1:]), flexure.shape.split(n)
+    ):
         ell = part.ellipse(EI)
         p_l = lead[:2] + rot(lead[2]) @ (ell.center - ref_l)
         p_f = follow[:2] + rot(follow[2]) @ (ell.center - ref_f)
@@ -75,11 +80,14 @@ def test_path_wrenches_are_the_assembled_gradient_on_the_follower():
     system = build_system(load_scene("closed_chain").mechanism, parse_model("dcmm:1"))
     group = system.groups[0][0]
     rng = np.random.default_rng(3)
-    states = [(a + rng.normal(0.0, 0.3, 3), b + rng.normal(0.0, 0.3, 3), i)
-              for a, b, i in system.local_states(system.initial_state())]
+    states = [
+        (a + rng.normal(0.0, 0.3, 3), b + rng.normal(0.0, 0.3, 3), i)
+        for a, b, i in system.local_states(system.initial_state())
+    ]
     stack = group.stack()
-    wrenches = dcmm_kernels().sub_arc_wrenches(stack.poses([states]),
-                                                stack.tables.sub_arc_body, stack.parameters)[0]
+    wrenches = dcmm_kernels().sub_arc_wrenches(
+        stack.poses([states]), stack.tables.sub_arc_body, stack.parameters
+    )[0]
     for c, state, wrench in zip(group.connectors, states, wrenches):
         assert np.array_equal(wrench, c.evaluate(*state)[1][3:6])
 
@@ -103,9 +111,9 @@ def test_end_pass_measures_and_statics_against_direct_numpy_forms():
     kernels = dcmm_kernels()
     poses = stack.poses(levels)
     tables = stack.tables
-    strain, turn = kernels.chain_measures(poses, tables.first, stack.end_rel,
-                                          tables.sub_arc_body, stack.lengths,
-                                          tables.sub_arc_start)
+    strain, turn = kernels.chain_measures(
+        poses, tables.first, stack.end_rel, tables.sub_arc_body, stack.lengths, tables.sub_arc_start
+    )
     forces = group.path_section_forces(levels)
     wrenches = kernels.sub_arc_wrenches(poses, tables.sub_arc_body, stack.parameters)
 
@@ -116,28 +124,33 @@ def test_end_pass_measures_and_statics_against_direct_numpy_forms():
     for k, states in enumerate(levels):
         for j, (c, (pose_a, pose_b, internal)) in enumerate(zip(group.connectors, states)):
             chain = np.vstack([pose_a, internal.reshape(-1, 3), pose_b])
-            points = np.vstack([place(pose_a, c._end_rel[0]), chain[1:-1, :2],
-                                place(pose_b, c._end_rel[1])])
+            points = np.vstack(
+                [place(pose_a, c._end_rel[0]), chain[1:-1, :2], place(pose_b, c._end_rel[1])]
+            )
             chords = np.hypot(*np.diff(points, axis=0).T)
-            assert strain[k, j] == pytest.approx(np.max(chords / c._sub_lengths - 1.0),
-                                                 rel=1e-12, abs=1e-15)
+            assert strain[k, j] == pytest.approx(
+                np.max(chords / c._sub_lengths - 1.0), rel=1e-12, abs=1e-15
+            )
             assert turn[k, j] == pytest.approx(np.max(np.abs(np.diff(chain[:, 2]))), rel=1e-12)
             start = tables.sample_start[j]
             for i in range(start, tables.sample_start[j + 1]):
                 e, w = tables.sub_arc[i], tables.w[i]
                 local = e - tables.sub_arc_start[j]
                 lead, follow = chain[local], chain[local + 1]
-                point = ((1.0 - w) * place(lead, c._sample_rel[i - start, :2])
-                         + w * place(follow, c._sample_rel[i - start, 2:]))
+                point = (1.0 - w) * place(lead, c._sample_rel[i - start, :2]) + w * place(
+                    follow, c._sample_rel[i - start, 2:]
+                )
                 axis = c._sample_tangent[i - start] + (1.0 - w) * lead[2] + w * follow[2]
                 fx, fy, m = wrenches[k, e]
                 r = follow[:2] - point
                 station = np.flatnonzero(tables.order == i)[0] - start
                 scale = np.abs(forces[j].moment[k]).max()
                 assert forces[j].moment[k, station] == pytest.approx(
-                    -(m + r[0] * fy - r[1] * fx), abs=1e-12 * scale)
+                    -(m + r[0] * fy - r[1] * fx), abs=1e-12 * scale
+                )
                 assert forces[j].axial[k, station] == pytest.approx(
-                    math.cos(axis) * fx + math.sin(axis) * fy, abs=1e-12 * scale)
+                    math.cos(axis) * fx + math.sin(axis) * fy, abs=1e-12 * scale
+                )
 
 
 def _castigliano_tip_compliance(shape, EI, point):
@@ -165,8 +178,9 @@ def test_ee_equals_castigliano_compliance_of_an_arc(width_deg):
     C = _castigliano_tip_compliance(arc, EI, mech.target_point)
     spec = parse_model("ee")
     got = []
-    for k, case in enumerate([tip_force(mech, 1e-3, 0.0), tip_force(mech, 0.0, 1e-3),
-                              tip_moment(1e-3)]):
+    for k, case in enumerate(
+        [tip_force(mech, 1e-3, 0.0), tip_force(mech, 0.0, 1e-3), tip_moment(1e-3)]
+    ):
         lp = run_reduced(mech, spec, case)
         got.append([lp.dx[-1], lp.dy[-1], lp.rotation[-1]])
     # exact up to round-off: both are the same linear bending compliance
@@ -178,7 +192,7 @@ def test_dcmm1_pure_moment_rotation_is_exact_at_large_rotation():
     arc = Arc((0.0, 0.0), 2.5, 1.0, math.radians(270))
     mech = cantilever(arc)
     EI = mech.flexures[0].bending_stiffness(mech.material)
-    M = 1.2 * EI / arc.length           # 1.2 rad of end rotation
+    M = 1.2 * EI / arc.length  # 1.2 rad of end rotation
     for n in (1, 2):
         lp = run_reduced(mech, parse_model(f"dcmm:{n}"), tip_moment(M))
         assert lp.rotation[-1] == pytest.approx(M * arc.length / EI, rel=1e-10)
@@ -190,8 +204,11 @@ def test_small_load_limit_dcmm_tends_to_ee():
     ee = run_reduced(mech, parse_model("ee"), case)
     errs = []
     for scale in (1e-2, 1e-3):
-        small = case.__class__(case.name, tuple(
-            c.__class__(**{**c.__dict__, "value": c.value * scale}) for c in case.components), 3)
+        small = case.__class__(
+            case.name,
+            tuple(c.__class__(**{**c.__dict__, "value": c.value * scale}) for c in case.components),
+            3,
+        )
         lp = run_reduced(mech, parse_model("dcmm:1"), small)
         errs.append(abs(lp.displacement[-1] / scale - ee.displacement[-1]) / ee.displacement[-1])
     # geometric nonlinearity enters at first order in the load: error ~ load
@@ -204,8 +221,11 @@ def test_rigid_motion_of_the_scene_changes_nothing_but_the_frame(model):
     case = scene.load_case("f+")
     base = run_reduced(scene.mechanism, parse_model(model), case)
     angle, shift = 2.1, np.array([-40.0, 17.0])
-    moved = run_reduced(scene.mechanism.transformed(angle, shift), parse_model(model),
-                        case.transformed(angle, shift))
+    moved = run_reduced(
+        scene.mechanism.transformed(angle, shift),
+        parse_model(model),
+        case.transformed(angle, shift),
+    )
     R = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
     d0 = R @ np.array([base.dx, base.dy])
     np.testing.assert_allclose(np.array([moved.dx, moved.dy]), d0, atol=1e-8 * 50)
@@ -231,8 +251,9 @@ def test_closed_chain_reactions_balance_the_load():
 def test_path_independence_of_the_end_state():
     scene = load_scene("open_chain")
     case = scene.load_case("f+")
-    ends = [run_reduced(scene.mechanism, parse_model("dcmm:2"), case, levels=n)
-            for n in (2, 11, 41)]
+    ends = [
+        run_reduced(scene.mechanism, parse_model("dcmm:2"), case, levels=n) for n in (2, 11, 41)
+    ]
     for lp in ends[1:]:
         assert lp.dx[-1] == pytest.approx(ends[0].dx[-1], rel=1e-8)
         assert lp.rotation[-1] == pytest.approx(ends[0].rotation[-1], rel=1e-8)
@@ -256,7 +277,7 @@ def test_measuring_frame_matters_less_as_n_grows():
         a = run_reduced(scene.mechanism, parse_model(f"dcmm:{n}"), case)
         b = run_reduced(scene.mechanism, parse_model(f"dcmm:{n}"), case, frame="follower")
         diffs.append(abs(a.displacement[-1] - b.displacement[-1]) / a.displacement[-1])
-    assert diffs[0] > 0.05                  # DCMM_1: the choice matters (paper discrepancy)
+    assert diffs[0] > 0.05  # DCMM_1: the choice matters (paper discrepancy)
     assert diffs[-1] < 0.01 and diffs[3] < diffs[2] < diffs[1]
 
 
@@ -282,8 +303,8 @@ def test_every_tangent_storage_counts_the_inertia():
     ev = np.concatenate([-np.logspace(-3, 2, 3), np.logspace(-2, 3, 117)])
     A = (Q * ev) @ Q.T
     A = 0.5 * (A + A.T)
-    upper = np.zeros((119 + 1, 120), order="F")   # LAPACK upper band form, identity permutation
-    for k in range(120):                          # k = j - i
+    upper = np.zeros((119 + 1, 120), order="F")  # LAPACK upper band form, identity permutation
+    for k in range(120):  # k = j - i
         j = np.arange(k, 120)
         upper[119 - k, j] = A[j - k, j]
     assert DenseTangent(A).negative_eigenvalues() == 3
@@ -303,8 +324,9 @@ def test_dense_ldl_gives_the_inertia_and_the_solution_of_saddle_points(seed):
     rng = np.random.default_rng(seed)
     n, m = 12, 4
     Q, _ = np.linalg.qr(rng.normal(size=(n, n)))
-    H = (Q * np.concatenate([-rng.uniform(1.0, 5.0, seed % 4), rng.uniform(1.0, 5.0, n - seed % 4)])
-         ) @ Q.T
+    H = (
+        Q * np.concatenate([-rng.uniform(1.0, 5.0, seed % 4), rng.uniform(1.0, 5.0, n - seed % 4)])
+    ) @ Q.T
     B = rng.normal(size=(m, n))
     K = np.block([[0.5 * (H + H.T), B.T], [B, np.zeros((m, m))]])
     ev = np.linalg.eigvalsh(K)
@@ -328,6 +350,6 @@ def test_dense_ldl_reads_two_by_two_pivots():
     K[4, 4] = -3.0
     tangent = DenseTangent(K, indefinite=True)
     assert tangent.negative_eigenvalues() == 2
-    assert (tangent._ldl[1] < 0).any()            # a 2 x 2 block was read
+    assert (tangent._ldl[1] < 0).any()  # a 2 x 2 block was read
     rhs = np.arange(1.0, 6.0)
     assert np.allclose(tangent.solve(rhs), np.linalg.solve(K, rhs), rtol=1e-14, atol=0)

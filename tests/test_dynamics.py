@@ -36,8 +36,9 @@ def test_eq15_ramp_is_a_smooth_step():
     h = 1e-4
     for t in (t0, t1):
         slope = (eq15_ramp(t + h, t0, t1) - eq15_ramp(t - h, t0, t1)) / (2 * h)
-        curvature = (eq15_ramp(t + h, t0, t1) - 2 * eq15_ramp(t, t0, t1)
-                     + eq15_ramp(t - h, t0, t1)) / h**2
+        curvature = (
+            eq15_ramp(t + h, t0, t1) - 2 * eq15_ramp(t, t0, t1) + eq15_ramp(t - h, t0, t1)
+        ) / h**2
         assert abs(slope) < 1e-6 and abs(curvature) < 1e-2
 
 
@@ -71,8 +72,9 @@ def model_system(mech, model: str) -> System:
 
 def spring_system():
     mech = cantilever(Segment((0.0, 0.0), (L, 0.0)))
-    mech = dataclasses.replace(mech, inertia=MassData(
-        bodies={"t": RigidMass(1e-6, 2e-5, np.array([L, 0.0]))}))
+    mech = dataclasses.replace(
+        mech, inertia=MassData(bodies={"t": RigidMass(1e-6, 2e-5, np.array([L, 0.0]))})
+    )
     return System(mech, [LinearSpring([1.0, 3.0, 50.0], [L, 0.0, 0.0])])
 
 
@@ -86,10 +88,17 @@ def test_energy_is_conserved_without_dissipation(adaptive):
     e0 = MassModel(system).kinetic_energy(system.initial_state(), v0)
     results = {}
     for rho in (1.0, 0.8):
-        lp = solve_dynamic(system, tip_moment(0.0, levels=2), TimeLaw("eq15", 0.0, 0.01), 0.05,
-                           settings=DynamicSettings(rho_inf=rho, adaptive=adaptive,
-                                                    first_step=2e-3, max_step=2e-3),
-                           initial_velocity=v0, record_poses=True)
+        lp = solve_dynamic(
+            system,
+            tip_moment(0.0, levels=2),
+            TimeLaw("eq15", 0.0, 0.01),
+            0.05,
+            settings=DynamicSettings(
+                rho_inf=rho, adaptive=adaptive, first_step=2e-3, max_step=2e-3
+            ),
+            initial_velocity=v0,
+            record_poses=True,
+        )
         u = np.array(lp.poses["t"][-1]) - [L, 0.0, 0.0]
         elastic = 0.5 * float(np.sum(np.array([1.0, 3.0, 50.0]) * u**2))
         results[rho] = (lp.stats["kinetic_energy"] + elastic) / e0 - 1.0
@@ -113,19 +122,30 @@ def test_slow_damped_ramp_follows_the_static_path(model):
     0.046 %; it scales as 1 / ramp time: 0.137 % for the continuum over 10000 periods),
     and equal at the end (measured 9e-9; bound 1e-6)."""
     mech = cantilever(Segment((0.0, 0.0), (L, 0.0)))
-    mech = dataclasses.replace(mech, inertia=MassData(
-        density=1.24e-9, bodies={"t": RigidMass(1e-9, 1e-8, np.array([L + 1.0, 0.0]))}))
-    case = tip_moment(0.5 * EI / L, levels=11)          # about 1 rad at full load
+    mech = dataclasses.replace(
+        mech,
+        inertia=MassData(
+            density=1.24e-9, bodies={"t": RigidMass(1e-9, 1e-8, np.array([L + 1.0, 0.0]))}
+        ),
+    )
+    case = tip_moment(0.5 * EI / L, levels=11)  # about 1 rad at full load
     system = model_system(mech, model)
     f = natural_modes(system, count=2).frequencies_hz
     static = solve_path(system, case)
     ramp = 30000.0 / f[0]
-    lp = solve_dynamic(system, case, TimeLaw("eq15", 0.0, ramp), 1.5 * ramp,
-                       Rayleigh.from_ratio(1.0, f[0], f[1]), DynamicSettings(error_tol=1e-4))
+    lp = solve_dynamic(
+        system,
+        case,
+        TimeLaw("eq15", 0.0, ramp),
+        1.5 * ramp,
+        Rayleigh.from_ratio(1.0, f[0], f[1]),
+        DynamicSettings(error_tol=1e-4),
+    )
     t, lam = np.array(lp.time), np.array(lp.load) / case.magnitude
     during = t <= ramp
-    rotation = np.interp(static.load[1:-1] / np.float64(case.magnitude), lam[during],
-                         np.array(lp.rotation)[during])
+    rotation = np.interp(
+        static.load[1:-1] / np.float64(case.magnitude), lam[during], np.array(lp.rotation)[during]
+    )
     np.testing.assert_allclose(rotation, static.rotation[1:-1], rtol=1e-3)
     assert lp.rotation[-1] == pytest.approx(static.rotation[-1], rel=1e-6)
 
@@ -137,12 +157,15 @@ def test_dynamic_run_refuses_a_massless_body():
         solve_dynamic(system, tip_moment(1e-3), TimeLaw(), 1.0)
 
 
-@pytest.mark.parametrize("fields, field", [
-    ({"ramp": "cubic", "t1": 1.0}, "ramp"),
-    ({"t0": 1.0, "t1": 0.5}, "t1"),
-    ({"ramp": "eq15"}, "t1"),
-    ({"t1": 1.0, "end_time": -2.0}, "end_time"),
-])
+@pytest.mark.parametrize(
+    "fields, field",
+    [
+        ({"ramp": "cubic", "t1": 1.0}, "ramp"),
+        ({"t0": 1.0, "t1": 0.5}, "t1"),
+        ({"ramp": "eq15"}, "t1"),
+        ({"t1": 1.0, "end_time": -2.0}, "end_time"),
+    ],
+)
 def test_bad_time_law_names_the_field(fields, field):
     data = tomllib.loads(SCENE)
     data["load_cases"][0].update(fields)
@@ -158,18 +181,62 @@ def test_cli_dynamic_run_writes_time_histories(tmp_path):
     scene = tmp_path / "dyn.toml"
     scene.write_text(data, encoding="utf-8")
     out = tmp_path / "dyn.json"
-    assert main(["run", str(scene), "--dynamic", "--model", "dcmm:1", "--damping-ratio", "1",
-                 "--json", str(out)]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(scene),
+                "--dynamic",
+                "--model",
+                "dcmm:1",
+                "--damping-ratio",
+                "1",
+                "--json",
+                str(out),
+            ]
+        )
+        == 0
+    )
     result = json.loads(out.read_text())["results"][0]
     assert result["time"][-1] == pytest.approx(0.08)
     assert len(result["time"]) == len(result["rotation"]) > 2
-    assert main(["run", str(scene), "--dynamic", "--model", "dcmm:1", "--damping-ratio", "1",
-                 "--error-tol", "1e-7", "--json", str(out)]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(scene),
+                "--dynamic",
+                "--model",
+                "dcmm:1",
+                "--damping-ratio",
+                "1",
+                "--error-tol",
+                "1e-7",
+                "--json",
+                str(out),
+            ]
+        )
+        == 0
+    )
     finer = json.loads(out.read_text())["results"][0]
     assert finer["settings"]["error_tol"] == 1e-7 and result["settings"]["error_tol"] == 1e-5
-    assert len(finer["time"]) > len(result["time"])          # a tighter bound takes more steps
-    assert main(["run", str(scene), "--dynamic", "--model", "continuum:0", "--damping-ratio",
-                 "1", "--json", str(out)]) == 0
+    assert len(finer["time"]) > len(result["time"])  # a tighter bound takes more steps
+    assert (
+        main(
+            [
+                "run",
+                str(scene),
+                "--dynamic",
+                "--model",
+                "continuum:0",
+                "--damping-ratio",
+                "1",
+                "--json",
+                str(out),
+            ]
+        )
+        == 0
+    )
     result = json.loads(out.read_text())["results"][0]
     assert result["time"][-1] == pytest.approx(0.08) and result["model"] == "continuum:0"
 
@@ -193,10 +260,14 @@ def test_continuum_conserves_energy_without_dissipation(tip_body_mass):
     e0 = MassModel(system).kinetic_energy(system.initial_state(), v0)
     drift = {}
     for rho in (1.0, 0.8):
-        lp = solve_dynamic(system, tip_moment(0.0, levels=2), TimeLaw("eq15", 0.0, 1.0 / f1),
-                           4.0 / f1, settings=DynamicSettings(rho_inf=rho, adaptive=False,
-                                                              first_step=0.05, max_step=0.05),
-                           initial_velocity=v0)
+        lp = solve_dynamic(
+            system,
+            tip_moment(0.0, levels=2),
+            TimeLaw("eq15", 0.0, 1.0 / f1),
+            4.0 / f1,
+            settings=DynamicSettings(rho_inf=rho, adaptive=False, first_step=0.05, max_step=0.05),
+            initial_velocity=v0,
+        )
         assert lp.stats["steps"] == 20
         drift[rho] = (lp.stats["kinetic_energy"] + lp.stats["potential_change"]) / e0 - 1.0
     assert abs(drift[1.0]) < 1e-7
@@ -211,8 +282,12 @@ def test_stiffness_proportional_damping_converges_at_second_order():
     4.5, changes 4.5e-4 and 1.0e-4 rad). With K frozen at the start of each step the
     ratio was 1.8 and the changes 0.054 and 0.031 rad."""
     mech = cantilever(Segment((0.0, 0.0), (L, 0.0)))
-    mech = dataclasses.replace(mech, inertia=MassData(
-        density=1.24e-9, bodies={"t": RigidMass(1e-9, 1e-8, np.array([L + 1.0, 0.0]))}))
+    mech = dataclasses.replace(
+        mech,
+        inertia=MassData(
+            density=1.24e-9, bodies={"t": RigidMass(1e-9, 1e-8, np.array([L + 1.0, 0.0]))}
+        ),
+    )
     case = tip_moment(0.5 * EI / L, levels=11)
     system = build_system(mech, parse_model("beam:4"))
     f1 = natural_modes(system, count=1).frequencies_hz[0]
@@ -220,9 +295,14 @@ def test_stiffness_proportional_damping_converges_at_second_order():
     damping = Rayleigh(0.0, 2.0 * 0.3 / (2.0 * math.pi * f1))
     ends = []
     for steps in (50, 100, 200):
-        lp = solve_dynamic(system, case, TimeLaw("eq15", 0.0, end), end, damping,
-                           DynamicSettings(adaptive=False, first_step=1.0 / steps,
-                                           max_step=1.0 / steps))
+        lp = solve_dynamic(
+            system,
+            case,
+            TimeLaw("eq15", 0.0, end),
+            end,
+            damping,
+            DynamicSettings(adaptive=False, first_step=1.0 / steps, max_step=1.0 / steps),
+        )
         assert lp.stats["steps"] == steps
         ends.append(lp.rotation[-1])
     coarse, fine = abs(ends[1] - ends[0]), abs(ends[2] - ends[1])
@@ -240,17 +320,31 @@ def _swinging_cantilever_step(beta: float):
     from flexval.reducedmodels.tracer import LoadControl, trace
 
     mech = cantilever(Segment((0.0, 0.0), (L, 0.0)))
-    mech = dataclasses.replace(mech, inertia=MassData(
-        density=1.24e-9, bodies={"t": RigidMass(1e-9, 1e-8, np.array([L, 0.0]))}))
+    mech = dataclasses.replace(
+        mech,
+        inertia=MassData(density=1.24e-9, bodies={"t": RigidMass(1e-9, 1e-8, np.array([L, 0.0]))}),
+    )
     case = tip_moment(EI / L, levels=11)
     system = build_system(mech, parse_model("beam:4"))
     loads = system.loads(case)
     states = [p.state for p in trace(system, loads, LoadControl(case.factors()))]
     h = 1e-3
-    moving = (states[4], (states[6] - states[4]) / (2 * h), np.zeros_like(states[4]),
-              np.zeros_like(states[4]))
-    step = DynamicStep(system, loads, 0.55, MassModel(system), moving, h, GeneralizedAlpha(0.9),
-                       Rayleigh(0.0, beta))
+    moving = (
+        states[4],
+        (states[6] - states[4]) / (2 * h),
+        np.zeros_like(states[4]),
+        np.zeros_like(states[4]),
+    )
+    step = DynamicStep(
+        system,
+        loads,
+        0.55,
+        MassModel(system),
+        moving,
+        h,
+        GeneralizedAlpha(0.9),
+        Rayleigh(0.0, beta),
+    )
     return system, step, states[5]
 
 
@@ -281,8 +375,7 @@ def test_mass_outside_the_tangent_storage_gives_the_same_step(monkeypatch):
     r_scipy, tangent_scipy = step.assemble(q)
     np.testing.assert_allclose(r_scipy, r, rtol=0, atol=1e-12 * np.abs(r).max())
     du = tangent.solve(-r)
-    np.testing.assert_allclose(tangent_scipy.solve(-r), du, rtol=0,
-                               atol=1e-10 * np.abs(du).max())
+    np.testing.assert_allclose(tangent_scipy.solve(-r), du, rtol=0, atol=1e-10 * np.abs(du).max())
 
 
 @pytest.mark.parametrize("value", ["0", "-1e-5", "nan", "0.5"])
@@ -291,7 +384,6 @@ def test_bad_error_tol_names_the_option(tmp_path, capsys, value):
 
     scene = tmp_path / "dyn.toml"
     scene.write_text(SCENE + 'ramp = "eq15"\nt1 = 0.05\n', encoding="utf-8")
-    assert main(["run", str(scene), "--dynamic", "--model", "dcmm:1",
-                 f"--error-tol={value}"]) == 2
+    assert main(["run", str(scene), "--dynamic", "--model", "dcmm:1", f"--error-tol={value}"]) == 2
     err = capsys.readouterr().err
     assert "--error-tol" in err and repr(float(value)) in err

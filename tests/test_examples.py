@@ -11,8 +11,6 @@ import importlib.util
 import math
 from pathlib import Path
 
-import pytest
-
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
 
@@ -35,14 +33,14 @@ def test_pure_moment_circle_converges_at_second_order():
     ns = sorted(errors)
     orders = [math.log2(errors[a] / errors[b]) for a, b in zip(ns, ns[1:])]
     assert all(1.9 < p < 2.1 for p in orders), orders
-    assert errors[40] < 1e-4          # 5.8e-5 of the length measured
+    assert errors[40] < 1e-4  # 5.8e-5 of the length measured
 
 
 def test_compare_models_orders_the_models_as_the_paper():
     """Linear EE worst, DCMM better when split, the beam within 1 % of beam:100."""
     err = load_example("compare_models").main()
     assert err["ee"] > err["dcmm:1"] > err["dcmm:2"] > err["beam:20"]
-    assert err["beam:20"] < 0.01      # 0.42 % measured
+    assert err["beam:20"] < 0.01  # 0.42 % measured
 
 
 def test_custom_family_is_the_ellipse_of_elasticity():

@@ -21,18 +21,22 @@ from hypothesis import strategies as st
 
 from flexval.geometry import Arc, Force, LoadCase, Material, Moment, SceneError, Section
 from flexval.geometry.mechanism import FlexureSpec, PinSpec, assemble
-from flexval.reducedmodels.catalogue import parse_model
 from flexval.geometry.scene import parse_scene
 from flexval.reducedmodels import SolverError, build_system, run_reduced
+from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels.continuation import limit_loads, solve_arclength
 
 MODELS = ["dcmm:1", "dcmm:2", "beam:8", "ee", "prbm"]
 LEVELS = 5
 
 # no shrinking: a failing chain is reported as drawn (shrinking re-solves it for minutes)
-FAST = settings(max_examples=25, deadline=None, derandomize=True,
-                phases=[Phase.explicit, Phase.generate],
-                suppress_health_check=[HealthCheck.too_slow])
+FAST = settings(
+    max_examples=25,
+    deadline=None,
+    derandomize=True,
+    phases=[Phase.explicit, Phase.generate],
+    suppress_health_check=[HealthCheck.too_slow],
+)
 
 
 @st.composite
@@ -43,7 +47,7 @@ def arc_from(draw, start: np.ndarray) -> tuple[Arc, bool, np.ndarray]:
     """
     r = draw(st.floats(2.0, 20.0))
     width = math.radians(draw(st.floats(20.0, 300.0)))
-    phi = draw(st.floats(-math.pi, math.pi))           # polar angle of ``start`` on the circle
+    phi = draw(st.floats(-math.pi, math.pi))  # polar angle of ``start`` on the circle
     forward = draw(st.booleans())
     center = start - r * np.array([math.cos(phi), math.sin(phi)])
     axis = phi + width / 2 if forward else phi - width / 2
@@ -60,15 +64,23 @@ def link(draw, point: np.ndarray) -> np.ndarray:
 
 
 @st.composite
-def branch(draw, start: np.ndarray, bodies: list[str], prefix: str
-           ) -> tuple[list[FlexureSpec], np.ndarray]:
+def branch(
+    draw, start: np.ndarray, bodies: list[str], prefix: str
+) -> tuple[list[FlexureSpec], np.ndarray]:
     """Arcs in series from ``start`` on bodies[0] through rigid links to bodies[-1]."""
     specs, point = [], start
     for k in range(len(bodies) - 1):
         arc, forward, far = draw(arc_from(point))
         h = arc.radius * draw(st.floats(0.01, 0.08))
-        specs.append(FlexureSpec(f"{prefix}{k}", arc, (bodies[k], bodies[k + 1]), Section(1.0, h),
-                                 start_body=bodies[k] if forward else bodies[k + 1]))
+        specs.append(
+            FlexureSpec(
+                f"{prefix}{k}",
+                arc,
+                (bodies[k], bodies[k + 1]),
+                Section(1.0, h),
+                start_body=bodies[k] if forward else bodies[k + 1],
+            )
+        )
         point = draw(link(far)) if k < len(bodies) - 2 else far
     return specs, point
 
@@ -84,25 +96,33 @@ def chains(draw, closed: bool):
     if closed:
         start = draw(link(np.zeros(2)))
         ground_points.append(start)
-        if draw(st.booleans()):      # a second branch ending rigidly on the last body
+        if draw(st.booleans()):  # a second branch ending rigidly on the last body
             via = ["c1"] if draw(st.booleans()) else []
             more, _ = draw(branch(start, ["g", *via, bodies[-1]], "c"))
-        else:                        # ... or on its own body, pinned to the last body
+        else:  # ... or on its own body, pinned to the last body
             more, tip = draw(branch(start, ["g", "p1"], "c"))
             pins.append(PinSpec("pin", (bodies[-1], "p1"), (float(tip[0]), float(tip[1]))))
         specs += more
     target = draw(link(end))
     try:
-        mech = assemble(specs, "g", np.array(ground_points), Material(2000.0, 0.3), bodies[-1],
-                        target, pin_specs=pins)
+        mech = assemble(
+            specs,
+            "g",
+            np.array(ground_points),
+            Material(2000.0, 0.3),
+            bodies[-1],
+            target,
+            pin_specs=pins,
+        )
     except SceneError as exc:
         # random arcs often cross: such a mechanism must be refused by name
         assert "intersects itself" in str(exc) or "closes on itself" in str(exc), str(exc)
         event("self-intersecting: refused with a SceneError")
         return None
     if draw(st.booleans()):
-        case = LoadCase("F", (Force(bodies[-1], target, draw(st.floats(-math.pi, math.pi)),
-                                    1.0),), LEVELS)
+        case = LoadCase(
+            "F", (Force(bodies[-1], target, draw(st.floats(-math.pi, math.pi)), 1.0),), LEVELS
+        )
     else:
         case = LoadCase("M", (Moment(bodies[-1], 1.0),), LEVELS)
     return mech, case, draw(st.floats(0.02, 0.3)), draw(st.floats(0.05, 1.0))
@@ -114,22 +134,32 @@ def _moderate(mech, case, disp: float, rot: float) -> LoadCase:
     d, r = float(np.hypot(lin.dx[-1], lin.dy[-1])), abs(lin.rotation[-1])
     scale = min(disp * mech.size() / max(d, 1e-300), rot / max(r, 1e-300))
     comp = case.components[0]
-    comp = (Force(comp.body, comp.point, comp.angle, scale) if isinstance(comp, Force)
-            else Moment(comp.body, scale))
+    comp = (
+        Force(comp.body, comp.point, comp.angle, scale)
+        if isinstance(comp, Force)
+        else Moment(comp.body, scale)
+    )
     return LoadCase(case.name, (comp,), LEVELS)
 
 
-def _assert_limit_point_below_full_load(mech, model: str, case: LoadCase,
-                                       exc: SolverError) -> None:
+def _assert_limit_point_below_full_load(mech, model: str, case: LoadCase, exc: SolverError) -> None:
     """A load-control failure is legitimate only at a limit point: arc-length
     continuation of the same model must find the load turning back below full load,
     at or above the load that load control reached (it stops just before the limit)."""
     system = build_system(mech, parse_model(model))
-    path = solve_arclength(system, case, 1.0, 20, model=model, max_steps=2000,
-                           stop=lambda p: bool(p.stats["limit_points"]))
+    path = solve_arclength(
+        system,
+        case,
+        1.0,
+        20,
+        model=model,
+        max_steps=2000,
+        stop=lambda p: bool(p.stats["limit_points"]),
+    )
     limits = [abs(p) / case.magnitude for p in limit_loads(path)]
     assert limits and exc.load_factor * (1 - 1e-3) <= limits[0] <= 1.0, (
-        f"{model} failed under load control without a limit point: {exc}")
+        f"{model} failed under load control without a limit point: {exc}"
+    )
 
 
 def _check_every_model(mech, case) -> None:
@@ -137,7 +167,7 @@ def _check_every_model(mech, case) -> None:
         try:
             lp = run_reduced(mech, parse_model(model), case)
         except SolverError as exc:
-            event(f"{model}: SolverError")        # outcome counts: --hypothesis-show-statistics
+            event(f"{model}: SolverError")  # outcome counts: --hypothesis-show-statistics
             assert str(exc).strip() and 0.0 <= exc.load_factor < 1.0
             partial = exc.path
             if partial is not None:
@@ -173,6 +203,7 @@ def test_random_closed_chains_converge_or_fail_honestly(example):
 
 # --- bad input ---------------------------------------------------------------
 
+
 def _scene_dicts() -> list[dict]:
     """The built-in scenes, one extended with a body table, a combined load case,
     outputs and a pin, so that every kind of field is there to corrupt."""
@@ -181,9 +212,17 @@ def _scene_dicts() -> list[dict]:
         text = resources.files("flexval.geometry").joinpath("scenes", f"{name}.toml").read_text()
         out.append(tomllib.loads(text))
     d = out[0]
-    d["bodies"] = [{"name": "4", "points": [[15.0805, 15.5321]]}]     # where e34 meets body 4
-    d["load_cases"].append({"name": "both", "levels": 3, "loads": [
-        {"kind": "moment", "value": 1e-3}, {"kind": "force", "value": 1e-3, "angle_deg": 0.0}]})
+    d["bodies"] = [{"name": "4", "points": [[15.0805, 15.5321]]}]  # where e34 meets body 4
+    d["load_cases"].append(
+        {
+            "name": "both",
+            "levels": 3,
+            "loads": [
+                {"kind": "moment", "value": 1e-3},
+                {"kind": "force", "value": 1e-3, "angle_deg": 0.0},
+            ],
+        }
+    )
     d["request"]["outputs"] = ["poses"]
     d["pins"] = [{"name": "p", "bodies": ["3", "4"], "point": [14.0, 14.0]}]
     return out
@@ -191,17 +230,26 @@ def _scene_dicts() -> list[dict]:
 
 def _paths(data, prefix=()):
     yield prefix
-    items = data.items() if isinstance(data, dict) else enumerate(data) \
-        if isinstance(data, list) else ()
+    items = (
+        data.items()
+        if isinstance(data, dict)
+        else enumerate(data)
+        if isinstance(data, list)
+        else ()
+    )
     for k, v in items:
         yield from _paths(v, prefix + (k,))
 
 
-JUNK = st.one_of(st.none(), st.booleans(), st.integers(-3, 2**70), st.text(max_size=3),
-                 st.floats(allow_nan=True, allow_infinity=True),
-                 st.lists(st.one_of(st.integers(-1, 3), st.floats(-5, 5), st.text(max_size=2)),
-                          max_size=3),
-                 st.dictionaries(st.text(max_size=2), st.integers(), max_size=2))
+JUNK = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(-3, 2**70),
+    st.text(max_size=3),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.lists(st.one_of(st.integers(-1, 3), st.floats(-5, 5), st.text(max_size=2)), max_size=3),
+    st.dictionaries(st.text(max_size=2), st.integers(), max_size=2),
+)
 
 
 def _corrupt(data: dict, path: tuple, value) -> dict:
@@ -238,12 +286,22 @@ def test_corrupted_scenes_fail_with_a_scene_error_naming_a_field(example):
         assert exc.field and f"field '{exc.field}'" in str(exc) and "fuzz.toml" in str(exc)
 
 
-@pytest.mark.parametrize("path,value", [
-    (("bodies",), 0), (("bodies", 0), 0), (("bodies", 0, "points"), 0),
-    (("load_cases",), [1]), (("load_cases", 0), 0), (("load_cases", 4, "loads"), "x"),
-    (("load_cases", 4, "loads", 0), ""), (("load_cases", 4, "loads", 0), [1]),
-    (("request", "models"), 0), (("request", "outputs"), 0), (("request", "outputs", 0), []),
-])
+@pytest.mark.parametrize(
+    "path,value",
+    [
+        (("bodies",), 0),
+        (("bodies", 0), 0),
+        (("bodies", 0, "points"), 0),
+        (("load_cases",), [1]),
+        (("load_cases", 0), 0),
+        (("load_cases", 4, "loads"), "x"),
+        (("load_cases", 4, "loads", 0), ""),
+        (("load_cases", 4, "loads", 0), [1]),
+        (("request", "models"), 0),
+        (("request", "outputs"), 0),
+        (("request", "outputs", 0), []),
+    ],
+)
 def test_wrong_container_types_give_a_scene_error(path, value):
     """Containers of the wrong type (once crashes with TypeError/AttributeError)."""
     with pytest.raises(SceneError):

@@ -17,13 +17,15 @@ def test_open_chain_links_match_hand_derivation():
     mech = load_scene("open_chain").mechanism
     e12 = next(f for f in mech.flexures if f.name == "e12")
     np.testing.assert_allclose(e12.end_point_of("1"), [0.0, 0.0], atol=1e-12)
-    np.testing.assert_allclose(e12.end_point_of("2"), [3 * math.cos(math.radians(30)), 4.5],
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        e12.end_point_of("2"), [3 * math.cos(math.radians(30)), 4.5], atol=1e-12
+    )
     np.testing.assert_allclose(e12.end_point_of("2"), [2.598, 4.500], atol=5e-4)
     # link 2 joins e12's end to e23's start at polar -150 deg around (9.09, 8.25), r = 3.5
     link2 = mech.bodies["2"].points
-    np.testing.assert_allclose(link2[1], [9.09 - 3.5 * math.cos(math.radians(30)), 8.25 - 1.75],
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        link2[1], [9.09 - 3.5 * math.cos(math.radians(30)), 8.25 - 1.75], atol=1e-12
+    )
     np.testing.assert_allclose(link2, [[2.598, 4.500], [6.059, 6.500]], atol=5e-4)
     # link 3 joins e23's end (12.59, 8.25) to e34's end at polar 265 deg
     np.testing.assert_allclose(mech.bodies["3"].points[0], [12.59, 8.25], atol=1e-12)
@@ -39,7 +41,11 @@ def test_closed_chain_is_grounded_at_both_anchors():
     np.testing.assert_allclose(ground, [[0.0, 0.0], [100.0, 0.0]], atol=0.01)
     assert sorted(mech.bodies) == ["1", "2", "3", "4"]
     assert {f.name: f.start_body for f in mech.flexures} == {
-        "e12": "2", "e24": "4", "e13": "1", "e34": "3"}
+        "e12": "2",
+        "e24": "4",
+        "e13": "1",
+        "e34": "3",
+    }
     # body 4 holds e24 and e34: a loop
     assert len(mech.bodies["4"].points) == 2
 
@@ -50,8 +56,17 @@ def _moments_by_quadrature(arc: Arc):
     m0 = L
     m1 = np.array([quad(lambda s, k=k: arc.point(s)[k], 0, L)[0] for k in range(2)])
     c = m1 / m0
-    S = np.array([[quad(lambda s, i=i, j=j: (arc.point(s)[i] - c[i]) * (arc.point(s)[j] - c[j]),
-                        0, L)[0] for j in range(2)] for i in range(2)])
+    S = np.array(
+        [
+            [
+                quad(lambda s, i=i, j=j: (arc.point(s)[i] - c[i]) * (arc.point(s)[j] - c[j]), 0, L)[
+                    0
+                ]
+                for j in range(2)
+            ]
+            for i in range(2)
+        ]
+    )
     return m0, c, S / m0
 
 
@@ -145,24 +160,33 @@ def _semi_axes_by_quadrature(width: float) -> tuple[float, float]:
     kw = {"epsabs": 0.0, "epsrel": 2e-14, "limit": 200}
     a2 = quad(lambda t: (math.sin(g * t) / g) ** 2, -1.0, 1.0, **kw)[0] / 8.0
     d = quad(lambda v: 2.0 * (math.sin(0.5 * g * v) / g) ** 2, 0.0, 1.0, **kw)[0]
-    b2 = g * g / 8.0 * quad(lambda t: (d - 2.0 * (math.sin(0.5 * g * t) / g) ** 2) ** 2,
-                            -1.0, 1.0, **kw)[0]
+    b2 = (
+        g
+        * g
+        / 8.0
+        * quad(lambda t: (d - 2.0 * (math.sin(0.5 * g * t) / g) ** 2) ** 2, -1.0, 1.0, **kw)[0]
+    )
     return math.sqrt(a2), math.sqrt(b2)
 
 
-@pytest.mark.parametrize("width_deg", [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0, 57.0, 114.59, 114.6,
-                                       120.0, 180.0, 270.0, 359.0])
+@pytest.mark.parametrize(
+    "width_deg", [1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0, 57.0, 114.59, 114.6, 120.0, 180.0, 270.0, 359.0]
+)
 def test_ellipse_semi_axes_are_accurate_down_to_vanishing_arcs(width_deg):
     # measured worst relative error over 68 widths from 1e-4 to 359 deg: 3.4e-15 (b, just above
     # the series/closed-form switch at 114.59 deg); 1e-14 leaves a 3x margin
     width = math.radians(width_deg)
-    np.testing.assert_allclose(arc_semi_axes(width), _semi_axes_by_quadrature(width),
-                               rtol=1e-14, atol=0.0)
+    np.testing.assert_allclose(
+        arc_semi_axes(width), _semi_axes_by_quadrature(width), rtol=1e-14, atol=0.0
+    )
     arc = Arc((0.4, -1.0), 7.0, 0.3, width)
     ell = arc.ellipse(2.0)
-    np.testing.assert_allclose([ell.a, ell.b],
-                               np.multiply(arc.length, _semi_axes_by_quadrature(width)),
-                               rtol=1e-14, atol=0.0)
+    np.testing.assert_allclose(
+        [ell.a, ell.b],
+        np.multiply(arc.length, _semi_axes_by_quadrature(width)),
+        rtol=1e-14,
+        atol=0.0,
+    )
 
 
 @pytest.mark.parametrize("width_deg", [1e-4, 1e-3, 1e-2])
@@ -175,12 +199,17 @@ def test_ellipse_semi_axes_follow_the_flat_arc_limit(width_deg):
     assert b == pytest.approx(g * math.sqrt(1.0 / 180.0 - g * g / 1260.0), rel=1e-15)
 
 
-SHAPES = [Arc((1.3, -2.0), 3.5, 0.4, math.radians(250.0)), Arc((0.0, 0.0), 2.0, -2.0, 0.01),
-          Segment((1.0, 2.0), (-4.0, 7.5))]
+SHAPES = [
+    Arc((1.3, -2.0), 3.5, 0.4, math.radians(250.0)),
+    Arc((0.0, 0.0), 2.0, -2.0, 0.01),
+    Segment((1.0, 2.0), (-4.0, 7.5)),
+]
 
 
 @pytest.mark.parametrize("shape", SHAPES)
-@pytest.mark.parametrize("angle,shift", [(0.7, (3.0, -1.0)), (-2.5, (0.0, 0.0)), (math.pi, (-8.0, 2.0))])
+@pytest.mark.parametrize(
+    "angle,shift", [(0.7, (3.0, -1.0)), (-2.5, (0.0, 0.0)), (math.pi, (-8.0, 2.0))]
+)
 def test_moved_shapes_move_every_point_rigidly(shape, angle, shift):
     moved = shape.moved(angle, np.array(shift))
     s = np.linspace(0.0, shape.length, 9)
@@ -196,8 +225,11 @@ def test_moved_shapes_move_every_point_rigidly(shape, angle, shift):
 def test_scaled_shapes_scale_every_point(shape, factor):
     scaled = shape.scaled(factor)
     s = np.linspace(0.0, shape.length, 9)
-    np.testing.assert_allclose(scaled.point(s * factor), shape.point(s) * factor,
-                               atol=1e-12 * factor * (1 + np.abs(shape.point(s)).max()))
+    np.testing.assert_allclose(
+        scaled.point(s * factor),
+        shape.point(s) * factor,
+        atol=1e-12 * factor * (1 + np.abs(shape.point(s)).max()),
+    )
     assert scaled.width == shape.width
 
 
@@ -212,8 +244,10 @@ def test_symmetry_frame_is_the_ellipse_centre_and_a_right_handed_frame_to_the_st
     assert (start - end) @ e1 > 0.0 and abs((start - end) @ e2) < 1e-9 * shape.length
 
 
-@pytest.mark.parametrize("width_deg,h,closes", [(358.0, 0.1, True), (350.0, 0.1, False),
-                                                (300.0, 2.6, True), (300.0, 2.4, False)])
+@pytest.mark.parametrize(
+    "width_deg,h,closes",
+    [(358.0, 0.1, True), (350.0, 0.1, False), (300.0, 2.6, True), (300.0, 2.4, False)],
+)
 def test_arc_closes_on_itself_when_its_ends_are_within_the_thickness(width_deg, h, closes):
     arc = Arc((0.0, 0.0), 2.5, 0.3, math.radians(width_deg))
     gap = float(np.hypot(*(arc.end_points[0] - arc.end_points[1])))

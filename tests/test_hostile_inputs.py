@@ -39,8 +39,10 @@ def test_scene_levels_within_the_cap_are_accepted(tmp_path, levels):
     assert load_scene(path).load_cases[0].levels == levels
 
 
-@pytest.mark.parametrize("key,value", [("point", [1.0, 1.0]), ("point", [20.0, 15.8]),
-                                       ("angle_deg", 30.0), ("angle_deg", 0.0)])
+@pytest.mark.parametrize(
+    "key,value",
+    [("point", [1.0, 1.0]), ("point", [20.0, 15.8]), ("angle_deg", 30.0), ("angle_deg", 0.0)],
+)
 def test_a_moment_with_a_point_or_direction_is_refused(tmp_path, key, value):
     """A moment acts on its whole body: a ``point`` or ``angle_deg`` given with it was
     silently ignored, hiding a scene that meant a force."""
@@ -53,8 +55,10 @@ def test_a_moment_with_a_point_or_direction_is_refused(tmp_path, key, value):
     assert f"'load_cases.m+.{key}'" in str(info.value), str(info.value)
 
 
-@pytest.mark.parametrize("model,levels", [("dcmm", "2"), ("beam", "20001"), ("beam", "5:9"),
-                                          ("dcmm", "3:5"), ("continuum", "1")])
+@pytest.mark.parametrize(
+    "model,levels",
+    [("dcmm", "2"), ("beam", "20001"), ("beam", "5:9"), ("dcmm", "3:5"), ("continuum", "1")],
+)
 def test_a_study_of_one_resolution_is_refused_before_work(model, levels, monkeypatch, capsys):
     """One resolution gives no ratio, order or Richardson value (the table printed
     'refinement ratio nan'); a large single N ran for minutes before saying so."""
@@ -70,9 +74,15 @@ def test_a_study_of_one_resolution_is_refused_before_work(model, levels, monkeyp
     assert "'--levels'" in err and levels in err and "single resolution" in err, err
 
 
-@pytest.mark.parametrize("law,field,shown", [
-    ('t1 = 1e-300\n', "t1", "1e-300"), ('t1 = 5e-324\n', "t1", "5e-324"),
-    ('t1 = 1e-12\n', "t1", "1e-12"), ('t1 = 1.0\nend_time = 1e-200\n', "end_time", "1e-200")])
+@pytest.mark.parametrize(
+    "law,field,shown",
+    [
+        ("t1 = 1e-300\n", "t1", "1e-300"),
+        ("t1 = 5e-324\n", "t1", "5e-324"),
+        ("t1 = 1e-12\n", "t1", "1e-12"),
+        ("t1 = 1.0\nend_time = 1e-200\n", "end_time", "1e-200"),
+    ],
+)
 def test_a_time_law_too_short_to_integrate_is_refused(tmp_path, capsys, law, field, shown):
     """A run shorter than the integrator's smallest first step ended in ZeroDivisionError."""
     from test_dynamics import SCENE
@@ -90,8 +100,10 @@ def test_a_duration_outside_the_integrators_range_is_refused(tmp_path, capsys, d
 
     scene = tmp_path / "dyn.toml"
     scene.write_text(SCENE, encoding="utf-8")
-    assert main(["run", str(scene), "--dynamic", "--model", "ee",
-                 "--duration", duration]) == EXIT_INPUT
+    assert (
+        main(["run", str(scene), "--dynamic", "--model", "ee", "--duration", duration])
+        == EXIT_INPUT
+    )
     err = capsys.readouterr().err
     assert "'--duration'" in err and str(float(duration)) in err, err
 
@@ -129,20 +141,23 @@ def test_subnormal_mass_data_is_refused(tmp_path, field, value):
 def test_the_mass_data_base_is_valid(tmp_path):
     data = _base()
     data["material"]["density"] = 1.2e-9
-    data["bodies"] = [{"name": "4", "mass": 1e-6, "inertia": 1e-5,
-                       "center_of_mass": [20.0, 15.8]}]
+    data["bodies"] = [{"name": "4", "mass": 1e-6, "inertia": 1e-5, "center_of_mass": [20.0, 15.8]}]
     path = tmp_path / "mass.toml"
     path.write_text(_dump(data))
     assert load_scene(path).mechanism.inertia.bodies["4"].mass == 1e-6
 
 
-@pytest.mark.parametrize("argv", [
-    ["info", "open_chain", "--json", ""],
-    ["run", "open_chain", "--model", "ee", "--load-case", "m+", "--json", ""],
-    ["converge", "open_chain", "--model", "dcmm", "--levels", "1:2", "--json", ""],
-    ["modes", "open_chain", "--model", "ee", "--density", "1.2e-9", "--json", ""],
-    ["modes", "open_chain", "--model", "ee", "--density", "1.2e-9", "--plot", ""],
-    ["sweep", "slenderness", "--out", ""]])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["info", "open_chain", "--json", ""],
+        ["run", "open_chain", "--model", "ee", "--load-case", "m+", "--json", ""],
+        ["converge", "open_chain", "--model", "dcmm", "--levels", "1:2", "--json", ""],
+        ["modes", "open_chain", "--model", "ee", "--density", "1.2e-9", "--json", ""],
+        ["modes", "open_chain", "--model", "ee", "--density", "1.2e-9", "--plot", ""],
+        ["sweep", "slenderness", "--out", ""],
+    ],
+)
 def test_an_empty_output_path_is_refused_not_ignored(argv, tmp_path, monkeypatch, capsys):
     """``--json ''`` was taken as 'no JSON' (the run went on and wrote nothing) and
     ``sweep --out ''`` as the default folder sweeps/NAME: an empty path is an error."""

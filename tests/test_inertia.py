@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from flexval.geometry import Arc, MassData, RigidMass, SceneError, Segment
-from flexval.reducedmodels.catalogue import parse_model
 from flexval.geometry.inertia import polygon_properties
 from flexval.geometry.scene import parse_scene
+from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels.inertia import MassModel, Weighted, chain_mass_points
 from flexval.reducedmodels.models import build_system, run_reduced
 from tests.builders import cantilever, fd_check, tip_moment
@@ -74,21 +74,36 @@ def test_rectangle_outline_gives_mass_centre_and_inertia():
         np.testing.assert_allclose(centre, [0.5, 0.5])
 
 
-@pytest.mark.parametrize("edit, field", [
-    (lambda d: d["material"].update(density=1240.0), "material.density"),
-    (lambda d: d["material"].pop("density"), "bodies.2.outline"),
-    (lambda d: d["bodies"][0].update(mass=1e-6), "bodies.2.mass"),
-    (lambda d: d["bodies"].__setitem__(0, {"name": "2", "mass": 1e-6, "inertia": 1e-6}),
-     "bodies.2.center_of_mass"),
-    (lambda d: d["bodies"].__setitem__(0, {"name": "2", "mass": -1.0, "inertia": 1e-6,
-                                           "center_of_mass": [0.0, 0.0]}), "bodies.2.mass"),
-    (lambda d: d["bodies"].__setitem__(0, {"name": "1", "mass": 1.0, "inertia": 1e-6,
-                                           "center_of_mass": [0.0, 0.0]}), "bodies.1.mass"),
-    (lambda d: d["bodies"][0].update(outline=[[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]),
-     "bodies.2.outline"),
-    (lambda d: d["gravity"].update(acceleration=[0.0]), "gravity.acceleration"),
-    (lambda d: d["gravity"].update(g=1.0), "gravity.g"),
-])
+@pytest.mark.parametrize(
+    "edit, field",
+    [
+        (lambda d: d["material"].update(density=1240.0), "material.density"),
+        (lambda d: d["material"].pop("density"), "bodies.2.outline"),
+        (lambda d: d["bodies"][0].update(mass=1e-6), "bodies.2.mass"),
+        (
+            lambda d: d["bodies"].__setitem__(0, {"name": "2", "mass": 1e-6, "inertia": 1e-6}),
+            "bodies.2.center_of_mass",
+        ),
+        (
+            lambda d: d["bodies"].__setitem__(
+                0, {"name": "2", "mass": -1.0, "inertia": 1e-6, "center_of_mass": [0.0, 0.0]}
+            ),
+            "bodies.2.mass",
+        ),
+        (
+            lambda d: d["bodies"].__setitem__(
+                0, {"name": "1", "mass": 1.0, "inertia": 1e-6, "center_of_mass": [0.0, 0.0]}
+            ),
+            "bodies.1.mass",
+        ),
+        (
+            lambda d: d["bodies"][0].update(outline=[[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]),
+            "bodies.2.outline",
+        ),
+        (lambda d: d["gravity"].update(acceleration=[0.0]), "gravity.acceleration"),
+        (lambda d: d["gravity"].update(g=1.0), "gravity.g"),
+    ],
+)
 def test_bad_mass_data_names_the_field(edit, field):
     with pytest.raises(SceneError) as info:
         scene_with(edit)
@@ -117,8 +132,8 @@ def test_self_weight_sag_of_a_cantilever(model, rtol):
     L, b, h, E, rho, g = 10.0, 1.0, 0.1, 2100.0, 1.24e-9, 9810.0
     mech = cantilever(Segment((0.0, 0.0), (L, 0.0)), E=E, b=b, h=h, nu=0.3)
     mech = dataclasses.replace(mech, inertia=MassData(density=rho, gravity=np.array([0.0, -g])))
-    from flexval.validation.run import run_model
     from flexval.geometry import Scene
+    from flexval.validation.run import run_model
 
     scene = Scene("sag", "", mech, (tip_moment(0.0, levels=2),), (), frozenset(), "<sag>")
     lp = run_model(scene, parse_model(model), scene.load_cases[0])
@@ -133,8 +148,12 @@ def test_body_weight_at_an_offset_centre():
     exact for end loads; bound 1e-4."""
     L, E, m, g, d = 10.0, 2100.0, 1e-9, 9810.0, 2.0
     mech = cantilever(Segment((0.0, 0.0), (L, 0.0)), E=E)
-    mech = dataclasses.replace(mech, inertia=MassData(
-        gravity=np.array([0.0, -g]), bodies={"t": RigidMass(m, 1e-6, np.array([L + d, 0.0]))}))
+    mech = dataclasses.replace(
+        mech,
+        inertia=MassData(
+            gravity=np.array([0.0, -g]), bodies={"t": RigidMass(m, 1e-6, np.array([L + d, 0.0]))}
+        ),
+    )
     EI = E * 1.0 * 0.1**3 / 12.0
     lp = run_reduced(mech, parse_model("beam:40"), tip_moment(0.0, levels=2))
     P = m * g
@@ -145,8 +164,9 @@ def test_body_weight_at_an_offset_centre():
 
 def test_lumped_masses_add_up_to_the_flexure():
     """HRZ lumping: total mass rho A L and the first moment of a uniform chain."""
-    pts = chain_mass_points([[0, 1, 2], [6, 7, 8], [9, 10, 11], [3, 4, 5]], np.zeros((4, 2)),
-                            np.full(3, 2.0), 0.5)
+    pts = chain_mass_points(
+        [[0, 1, 2], [6, 7, 8], [9, 10, 11], [3, 4, 5]], np.zeros((4, 2)), np.full(3, 2.0), 0.5
+    )
     assert pts.mass.sum() == pytest.approx(3.0)
     np.testing.assert_allclose(pts.mass, [0.5, 1.0, 1.0, 0.5])
     np.testing.assert_allclose(pts.rotary, np.array([1, 2, 2, 1]) * 1.0 * 4.0 / 78.0)
@@ -166,8 +186,9 @@ def test_mass_matrix_is_the_rigid_body_kinetic_energy():
     c, s = math.cos(q[2]), math.sin(q[2])
     r = np.array([c * rel[0] - s * rel[1], s * rel[0] + c * rel[1]])
     v_g = v[:2] + v[2] * np.array([-r[1], r[0]])
-    assert 0.5 * v @ M @ v == pytest.approx(0.5 * body.mass * v_g @ v_g
-                                            + 0.5 * body.inertia * v[2] ** 2, rel=1e-13)
+    assert 0.5 * v @ M @ v == pytest.approx(
+        0.5 * body.mass * v_g @ v_g + 0.5 * body.inertia * v[2] ** 2, rel=1e-13
+    )
 
 
 def test_cli_modes_json_and_refusal(tmp_path):
@@ -176,8 +197,9 @@ def test_cli_modes_json_and_refusal(tmp_path):
     scene = tmp_path / "mass.toml"
     scene.write_text(SCENE, encoding="utf-8")
     out = tmp_path / "modes.json"
-    assert main(["modes", str(scene), "--model", "beam:10", "--count", "2",
-                 "--json", str(out)]) == 0
+    assert (
+        main(["modes", str(scene), "--model", "beam:10", "--count", "2", "--json", str(out)]) == 0
+    )
     record = json.loads(out.read_text())
     assert len(record["frequencies_hz"]) == 2 and record["frequencies_hz"][0] > 0.0
     assert main(["modes", "open_chain", "--model", "prbm"]) == 2
@@ -197,11 +219,13 @@ def test_ee_carries_the_weights_like_its_nonlinear_parent():
     from flexval.validation.run import run_model
 
     mech = cantilever(Arc((0.0, 0.0), 3.0, 0.4, 2.0), E=2100.0, b=1.0, h=0.1)
-    mech = dataclasses.replace(mech, inertia=MassData(density=1.24e-9,
-                                                      gravity=np.array([0.0, -9810.0])))
+    mech = dataclasses.replace(
+        mech, inertia=MassData(density=1.24e-9, gravity=np.array([0.0, -9810.0]))
+    )
     scene = Scene("sag", "", mech, (tip_moment(1e-5, levels=3),), (), frozenset(), "<sag>")
-    linear, nonlinear = (run_model(scene, parse_model(m), scene.load_cases[0])
-                         for m in ("ee", "dcmm:1"))
+    linear, nonlinear = (
+        run_model(scene, parse_model(m), scene.load_cases[0]) for m in ("ee", "dcmm:1")
+    )
     for k in range(3):
         d_lin = np.array([linear.dx[k], linear.dy[k]])
         d_non = np.array([nonlinear.dx[k], nonlinear.dy[k]])
@@ -216,8 +240,7 @@ RHO = 1.24e-9
 
 def arc_cantilever(**inertia):
     """A PLA cantilever arc of 240 deg (length 4 pi mm); ``inertia``: MassData fields."""
-    return dataclasses.replace(cantilever(ARC, E=2100.0, b=1.0, h=0.1),
-                               inertia=MassData(**inertia))
+    return dataclasses.replace(cantilever(ARC, E=2100.0, b=1.0, h=0.1), inertia=MassData(**inertia))
 
 
 def swept_inertia(u0: float, about: np.ndarray) -> float:
@@ -245,31 +268,41 @@ def test_lumped_pieces_move_like_the_flexure_they_carry(model):
     v = np.zeros(system.n_dofs)
     dofs = system.pose_dofs("t")
     v[dofs] = [-(q[dofs[1]] - about[1]), q[dofs[0]] - about[0], 1.0]
-    if model == "prbm":             # both links turn too; the ground's end piece stays
+    if model == "prbm":  # both links turn too; the ground's end piece stays
         v[3:5] = 1.0
         start = connector._fractions[1] * ARC.length
         hinge = connector.joints[0]
         # link h turns about its hinge R_a on the ground, not about O: its piece's share
-        link_h = swept_inertia(start, hinge) - swept_inertia(connector._fractions[2]
-                                                             * ARC.length, hinge)
+        link_h = swept_inertia(start, hinge) - swept_inertia(
+            connector._fractions[2] * ARC.length, hinge
+        )
         rest = swept_inertia(connector._fractions[2] * ARC.length, about)
         expected = 0.5 * (link_h + rest)
     else:
         n = int(model.split(":")[1])
-        for k in range(n - 1):                  # cut bodies turn with the rest
-            v[3 + 3 * k: 6 + 3 * k] = [-(q[4 + 3 * k] - about[1]), q[3 + 3 * k] - about[0], 1.0]
+        for k in range(n - 1):  # cut bodies turn with the rest
+            v[3 + 3 * k : 6 + 3 * k] = [-(q[4 + 3 * k] - about[1]), q[3 + 3 * k] - about[0], 1.0]
         expected = 0.5 * swept_inertia(0.5 * ARC.length / n, about)
     assert mass.kinetic_energy(q, v) == pytest.approx(expected, rel=1e-7)
     assert mass.points.mass.sum() == pytest.approx(
-        RHO * 0.1 * ARC.length * (1.0 - (0.0 if model == "prbm" else 0.5 / int(model[-1]))
-                                  - (connector._fractions[1] if model == "prbm" else 0.0)),
-        rel=1e-12)
+        RHO
+        * 0.1
+        * ARC.length
+        * (
+            1.0
+            - (0.0 if model == "prbm" else 0.5 / int(model[-1]))
+            - (connector._fractions[1] if model == "prbm" else 0.0)
+        ),
+        rel=1e-12,
+    )
 
 
-def lagrange_convective(mass: MassModel, q: np.ndarray, v: np.ndarray, coords,
-                        h: float = 1e-6) -> np.ndarray:
+def lagrange_convective(
+    mass: MassModel, q: np.ndarray, v: np.ndarray, coords, h: float = 1e-6
+) -> np.ndarray:
     """M'(q) v - 1/2 d(v^T M v)/dq by central differences of M(q), the gradient taken over
     ``coords`` only (M depends on no other coordinate)."""
+
     def matrix(x):
         return mass.matrix(x)
 
@@ -307,11 +340,18 @@ def test_convective_forces_are_the_lagrange_terms(model):
 def test_weights_on_links_derivatives():
     """The PRBM with its links' weights (pieces on hinged links) and a body's weight:
     energy, gradient and Hessian agree (central differences) at a turned state."""
-    mech = arc_cantilever(density=RHO, gravity=np.array([3000.0, -9810.0]),
-                          bodies={"t": RigidMass(1e-7, 1e-6, np.array([0.5, 0.5]))})
+    mech = arc_cantilever(
+        density=RHO,
+        gravity=np.array([3000.0, -9810.0]),
+        bodies={"t": RigidMass(1e-7, 1e-6, np.array([0.5, 0.5]))},
+    )
     connector = build_system(mech, parse_model("prbm")).connectors[0]
     assert isinstance(connector, Weighted)
     pose_b = np.array([0.3, -0.2, 0.4])
-    eg, eh, sym = fd_check(connector, np.zeros(3), pose_b + [*ARC.end_points[1], 0.0],
-                           np.array([0.2, -0.3, 1e-3, -2e-3]))
+    eg, eh, sym = fd_check(
+        connector,
+        np.zeros(3),
+        pose_b + [*ARC.end_points[1], 0.0],
+        np.array([0.2, -0.3, 1e-3, -2e-3]),
+    )
     assert eg < 1e-7 and eh < 1e-6 and sym < 1e-12

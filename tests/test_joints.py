@@ -8,13 +8,13 @@ import tomllib
 
 import numpy as np
 import pytest
-
 from builders import fd_check
+
 from flexval.geometry import Force, LoadCase, Material, SceneError, Section, Segment, load_scene
 from flexval.geometry.mechanism import FlexureSpec, PinSpec, assemble
-from flexval.reducedmodels.catalogue import parse_model
 from flexval.geometry.scene import parse_scene
 from flexval.reducedmodels import build_system, run_reduced, solve_path
+from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels.joints import PinConnector
 from flexval.validation.cli import main
 
@@ -77,13 +77,24 @@ def von_mises_truss(a: float = 100.0, h0: float = 20.0, E: float = 1000.0, t: fl
     Returns the mechanism and the exact load P(w) (N, downward) at apex
     deflection w (mm): P = 2 EA h (1/L - 1/L0), h = h0 - w, L = sqrt(a^2 + h^2).
     """
-    specs = [FlexureSpec("b1", Segment((-a, 0.0), (0.0, h0)), ("l", "c"), Section(1.0, t)),
-             FlexureSpec("b2", Segment((0.0, h0), (a, 0.0)), ("d", "r"), Section(1.0, t))]
-    pins = [PinSpec("pl", ("g", "l"), (-a, 0.0)),
-            PinSpec("apex", ("c", "d"), (0.0, h0)),
-            PinSpec("pr", ("r", "g"), (a, 0.0))]
-    mech = assemble(specs, "g", np.array([[-a, 0.0], [a, 0.0]]), Material(E, 0.3), "c",
-                    np.array([0.0, h0]), pin_specs=pins)
+    specs = [
+        FlexureSpec("b1", Segment((-a, 0.0), (0.0, h0)), ("l", "c"), Section(1.0, t)),
+        FlexureSpec("b2", Segment((0.0, h0), (a, 0.0)), ("d", "r"), Section(1.0, t)),
+    ]
+    pins = [
+        PinSpec("pl", ("g", "l"), (-a, 0.0)),
+        PinSpec("apex", ("c", "d"), (0.0, h0)),
+        PinSpec("pr", ("r", "g"), (a, 0.0)),
+    ]
+    mech = assemble(
+        specs,
+        "g",
+        np.array([[-a, 0.0], [a, 0.0]]),
+        Material(E, 0.3),
+        "c",
+        np.array([0.0, h0]),
+        pin_specs=pins,
+    )
     EA, L0 = E * t, math.hypot(a, h0)
 
     def load(w):
@@ -113,11 +124,12 @@ def test_pin_constraint_and_forces_are_the_gradient():
     mech = fourbar_scene().mechanism
     conn = PinConnector("p", "g", "a", np.array([0.0, 0.0]), mech, stiffness=7.0)
     pose_g = np.array([0.0, 0.0, 0.0])
-    pose_a = np.array([10.5, 60.2, 0.1])       # reference of a is (10, 60)
+    pose_a = np.array([10.5, 60.2, 0.1])  # reference of a is (10, 60)
     mu = np.array([0.3, -0.2])
     _, g, _ = conn.evaluate(pose_g, pose_a, mu)
-    xa = pose_a[:2] + np.array([[math.cos(0.1), -math.sin(0.1)],
-                                [math.sin(0.1), math.cos(0.1)]]) @ np.array([-10.0, -60.0])
+    xa = pose_a[:2] + np.array(
+        [[math.cos(0.1), -math.sin(0.1)], [math.sin(0.1), math.cos(0.1)]]
+    ) @ np.array([-10.0, -60.0])
     # gap = difference of O(60 mm) terms: round-off of order 1e-14 * 60 * s
     np.testing.assert_allclose(g[6:], 7.0 * (0.0 - xa), rtol=0, atol=1e-12 * 7.0 * 60.0)
     np.testing.assert_allclose(conn.force_on_b(mu), 7.0 * mu)
@@ -137,7 +149,7 @@ def test_pinned_truss_is_exact_below_the_limit_load(model):
     np.testing.assert_allclose(lp.dx, 0.0, atol=1e-9)
 
 
-@pytest.mark.parametrize("model", ["dcmm:2", "beam:10", "beam:40", "ee"])   # beam:40: sparse
+@pytest.mark.parametrize("model", ["dcmm:2", "beam:10", "beam:40", "ee"])  # beam:40: sparse
 def test_pinned_four_bar_solves_and_reactions_balance(model):
     scene = fourbar_scene()
     for case in scene.load_cases:
@@ -150,7 +162,7 @@ def test_pinned_four_bar_solves_and_reactions_balance(model):
             R = np.array(lp.reactions[k])
             if isinstance(comp, Force):
                 F = lam * comp.vector
-                p = scene.mechanism.target_point + [lp.dx[k], lp.dy[k]]   # ground ref is (0, 0)
+                p = scene.mechanism.target_point + [lp.dx[k], lp.dy[k]]  # ground ref is (0, 0)
                 moment = p[0] * F[1] - p[1] * F[0]
             else:
                 F, moment = np.zeros(2), lam * comp.value
@@ -197,8 +209,9 @@ def test_rigid_motion_moves_the_pins():
     np.testing.assert_allclose(moved_mech.pins[0].point, R @ [0.0, 0.0] + shift)
     np.testing.assert_allclose(moved_mech.pins[1].point, R @ [100.0, 0.0] + shift)
     moved = run_reduced(moved_mech, parse_model("dcmm:2"), case.transformed(angle, shift))
-    np.testing.assert_allclose(np.array([moved.dx, moved.dy]), R @ np.array([base.dx, base.dy]),
-                               atol=1e-9 * 15)
+    np.testing.assert_allclose(
+        np.array([moved.dx, moved.dy]), R @ np.array([base.dx, base.dy]), atol=1e-9 * 15
+    )
     np.testing.assert_allclose(moved.rotation, base.rotation, atol=1e-10)
 
 
@@ -238,31 +251,35 @@ def _set(path, value):
             del x[path[-1]]
         else:
             x[path[-1]] = value
+
     return mutate
 
 
 _DELETE = object()
 
 
-@pytest.mark.parametrize("path,value,field", [
-    (("pins",), {"name": "p"}, "pins"),
-    (("pins", 0), "pa", "pins[0]"),
-    (("pins", 0, "name"), _DELETE, "pins[0].name"),
-    (("pins", 0, "name"), True, "pins[0].name"),
-    (("pins", 0, "bodies"), "g", "pins.pa.bodies"),
-    (("pins", 0, "bodies"), ["g"], "pins.pa.bodies"),
-    (("pins", 0, "bodies"), ["a", "a"], "pins.pa.bodies"),
-    (("pins", 0, "bodies"), ["g", 1.5], "pins.pa.bodies.b"),
-    (("pins", 0, "point"), _DELETE, "pins.pa.point"),
-    (("pins", 0, "point"), [0.0], "pins.pa.point"),
-    (("pins", 0, "point"), [0.0, float("nan")], "pins.pa.point[1]"),
-    (("pins", 0, "point"), [0.0, 1e300], "pins.pa.point[1]"),
-    (("pins", 0, "radius"), 3.0, "pins.pa.radius"),
-    (("pins", 1, "name"), "pa", "pins.name"),
-    (("pins", 1, "name"), "coupler", "pins.name"),
-    # a misspelt body becomes a new body held by this pin only
-    (("pins", 1, "bodies"), ["bb", "g"], "pins.pb.bodies"),
-])
+@pytest.mark.parametrize(
+    "path,value,field",
+    [
+        (("pins",), {"name": "p"}, "pins"),
+        (("pins", 0), "pa", "pins[0]"),
+        (("pins", 0, "name"), _DELETE, "pins[0].name"),
+        (("pins", 0, "name"), True, "pins[0].name"),
+        (("pins", 0, "bodies"), "g", "pins.pa.bodies"),
+        (("pins", 0, "bodies"), ["g"], "pins.pa.bodies"),
+        (("pins", 0, "bodies"), ["a", "a"], "pins.pa.bodies"),
+        (("pins", 0, "bodies"), ["g", 1.5], "pins.pa.bodies.b"),
+        (("pins", 0, "point"), _DELETE, "pins.pa.point"),
+        (("pins", 0, "point"), [0.0], "pins.pa.point"),
+        (("pins", 0, "point"), [0.0, float("nan")], "pins.pa.point[1]"),
+        (("pins", 0, "point"), [0.0, 1e300], "pins.pa.point[1]"),
+        (("pins", 0, "radius"), 3.0, "pins.pa.radius"),
+        (("pins", 1, "name"), "pa", "pins.name"),
+        (("pins", 1, "name"), "coupler", "pins.name"),
+        # a misspelt body becomes a new body held by this pin only
+        (("pins", 1, "bodies"), ["bb", "g"], "pins.pb.bodies"),
+    ],
+)
 def test_bad_pins_name_the_field(path, value, field):
     err = _bad(_set(path, value))
     assert err.field == field, str(err)
@@ -309,8 +326,9 @@ def test_linear_response_numbers_and_assembles_as_the_system():
     from flexval.geometry.inertia import MassData
 
     scene = fourbar_scene()
-    mech = dataclasses.replace(scene.mechanism, inertia=MassData(
-        density=1.2e-9, gravity=np.array([0.0, -9810.0])))
+    mech = dataclasses.replace(
+        scene.mechanism, inertia=MassData(density=1.2e-9, gravity=np.array([0.0, -9810.0]))
+    )
     case = scene.load_case("fx")
     lp = run_reduced(mech, parse_model("ee"), case)
     system = build_system(mech, parse_model("ee"))
@@ -326,4 +344,4 @@ def test_linear_response_numbers_and_assembles_as_the_system():
         assert abs(dx - (d[0] - ry * d[2])) <= 1e-10 * scale * max(abs(rx), abs(ry))
         assert abs(dy - (d[1] + rx * d[2])) <= 1e-10 * scale * max(abs(rx), abs(ry))
         assert abs(rot - d[2]) <= 1e-10 * scale
-    assert abs(lp.dy[0]) > 0.0             # the weights alone move it at zero load
+    assert abs(lp.dy[0]) > 0.0  # the weights alone move it at zero load

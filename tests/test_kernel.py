@@ -13,14 +13,21 @@ import math
 
 import numpy as np
 import pytest
-
 from builders import cantilever, tip_force
-from flexval.geometry import Arc, Force, LoadCase, Moment, Segment
-from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels import (Connector, LoadControl, SolverSettings, System, build_system,
-                           solve_path, trace)
-from flexval.reducedmodels.continuation import ArcLength, arc_dot
 from test_continuation import deep_arch
+
+from flexval.geometry import Arc, Force, LoadCase, Moment, Segment
+from flexval.reducedmodels import (
+    Connector,
+    LoadControl,
+    SolverSettings,
+    System,
+    build_system,
+    solve_path,
+    trace,
+)
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.continuation import ArcLength, arc_dot
 
 K1, K2, KT = 40.0, 60.0, 500.0
 """Spring stiffnesses of :class:`SeriesSprings`: N/mm, N/mm, N mm/rad."""
@@ -49,8 +56,15 @@ class SeriesSprings(Connector):
         self.hessian[np.ix_([2, 5], [2, 5])] += KT * np.array([[1.0, -1.0], [-1.0, 1.0]])
 
     def evaluate(self, pose_a, pose_b, internal):
-        d = np.concatenate([pose_a[:2] - self.rest[0], [pose_a[2]],
-                            pose_b[:2] - self.rest[1], [pose_b[2]], internal])
+        d = np.concatenate(
+            [
+                pose_a[:2] - self.rest[0],
+                [pose_a[2]],
+                pose_b[:2] - self.rest[1],
+                [pose_b[2]],
+                internal,
+            ]
+        )
         grad = self.hessian @ d
         return 0.5 * float(d @ grad), grad, self.hessian
 
@@ -59,7 +73,7 @@ class SeriesSprings(Connector):
 
 
 def spring_system():
-    mech = cantilever(Segment((0.0, 0.0), (10.0, 0.0)))     # only its bodies are used
+    mech = cantilever(Segment((0.0, 0.0), (10.0, 0.0)))  # only its bodies are used
     references = {b: mech.bodies[b].reference for b in mech.bodies}
     return System(mech, [SeriesSprings(("g", "t"), references)], SolverSettings())
 
@@ -67,17 +81,23 @@ def spring_system():
 def test_a_connector_that_keeps_every_default_is_solved_exactly():
     system = spring_system()
     mech = system.mechanism
-    force, moment = 3.0, 20.0                                  # N, N mm
-    case = LoadCase("FM", (Force("t", mech.bodies["t"].reference, math.radians(30.0), force),
-                           Moment("t", moment)), 6)
+    force, moment = 3.0, 20.0  # N, N mm
+    case = LoadCase(
+        "FM",
+        (Force("t", mech.bodies["t"].reference, math.radians(30.0), force), Moment("t", moment)),
+        6,
+    )
     lp = solve_path(system, case)
     lam = np.linspace(0.0, 1.0, 6)
-    compliance = 1.0 / K1 + 1.0 / K2                           # springs in series, mm/N
+    compliance = 1.0 / K1 + 1.0 / K2  # springs in series, mm/N
     # the load acts at the reference point, which is offset from the target point
     rel = mech.target_point - mech.bodies["t"].reference
     turn = lam * moment / KT
-    expect_x = lam * force * compliance * math.cos(math.radians(30.0)) \
-        + rel[0] * (np.cos(turn) - 1) - rel[1] * np.sin(turn)
+    expect_x = (
+        lam * force * compliance * math.cos(math.radians(30.0))
+        + rel[0] * (np.cos(turn) - 1)
+        - rel[1] * np.sin(turn)
+    )
     np.testing.assert_allclose(lp.rotation, turn, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(lp.dx, expect_x, rtol=1e-10, atol=1e-14)
     assert lp.converged and lp.valid == [True] * 6 and lp.validity == [None] * 6
@@ -104,7 +124,7 @@ def test_the_tracer_yields_the_requested_levels_in_equilibrium():
     assert [p.factor for p in points] == list(factors)
     for p in points:
         _, g, _ = system.assemble(p.state, loads, p.factor)
-        assert system.residual(g, loads) < 1e-7          # converged (force_tol 1e-10 or step)
+        assert system.residual(g, loads) < 1e-7  # converged (force_tol 1e-10 or step)
     # every Newton iteration is attributed to exactly one yielded point
     totals = [p.counters.newton_iterations for p in points]
     assert totals == list(np.cumsum([p.iterations for p in points]))
@@ -123,9 +143,9 @@ def test_arc_length_points_lie_on_the_constraint_in_equilibrium_past_the_limit()
     for p in trace(system, loads, stepping):
         points.append(p)
         if len(points) >= 3 and points[-1].factor < points[-2].factor:
-            break                                          # past the first limit point
+            break  # past the first limit point
     factors = [p.factor for p in points]
-    assert max(factors) == pytest.approx(9.0, abs=0.1)     # the arch's limit, ~9.01 at N = 20
+    assert max(factors) == pytest.approx(9.0, abs=0.1)  # the arch's limit, ~9.01 at N = 20
     for prev, p in zip(points, points[1:]):
         d = p.state - prev.state
         assert math.sqrt(arc_dot(system, d, d)) == pytest.approx(p.step, rel=1e-6)
@@ -147,5 +167,6 @@ def test_hessian_product_equals_the_assembled_local_hessian(model):
         h = c.evaluate(*local)[2]
         x = rng.standard_normal(6 + c.n_internal)
         full = local_hessian(c, h) @ x
-        assert np.allclose(local_hessian_product(c, h, x), full,
-                           rtol=1e-12, atol=1e-12 * np.abs(full).max())
+        assert np.allclose(
+            local_hessian_product(c, h, x), full, rtol=1e-12, atol=1e-12 * np.abs(full).max()
+        )

@@ -33,16 +33,32 @@ DA_DEPPO_SCHMIDT = 8.97
 
 def _trace(tmp_path, scene: str, model: str, *extra: str) -> dict:
     out = tmp_path / "r.json"
-    assert main(["run", str(SCENES / scene), "--arclength", "--model", model,
-                 "--json", str(out), *extra]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(SCENES / scene),
+                "--arclength",
+                "--model",
+                model,
+                "--json",
+                str(out),
+                *extra,
+            ]
+        )
+        == 0
+    )
     (result,) = json.loads(out.read_text())["results"]
     return result
 
 
-@pytest.mark.parametrize("scene, model, scale, published", [
-    ("lee_frame.toml", "beam:20", 10.0, LEE_FRAME),        # value 2 N = 20 EI / L^2
-    ("deep_arch.toml", "beam:40", 1.0, DA_DEPPO_SCHMIDT),  # value 10 N = 10 EI / R^2
-])
+@pytest.mark.parametrize(
+    "scene, model, scale, published",
+    [
+        ("lee_frame.toml", "beam:20", 10.0, LEE_FRAME),  # value 2 N = 20 EI / L^2
+        ("deep_arch.toml", "beam:40", 1.0, DA_DEPPO_SCHMIDT),  # value 10 N = 10 EI / R^2
+    ],
+)
 def test_published_limit_loads_from_the_cli(tmp_path, scene, model, scale, published):
     r = _trace(tmp_path, scene, model)
     assert r["model"] == f"{model}:arclength" and r["converged"]
@@ -51,7 +67,7 @@ def test_published_limit_loads_from_the_cli(tmp_path, scene, model, scale, publi
     # traced through it: the load falls after the limit point and the trace ends at full load
     load = np.asarray(r["load"])
     k = first["index"]
-    assert load[k] == first["traced_load"] == load[:k + 2].max() > load[k + 1]
+    assert load[k] == first["traced_load"] == load[: k + 2].max() > load[k + 1]
     assert load[-1] == pytest.approx(load.max()) and r["stats"]["limit_points"][0] == k
     for key in ("dx", "dy", "rotation"):
         assert first[key] == r[key][k]
@@ -61,15 +77,18 @@ def test_published_limit_loads_from_the_cli(tmp_path, scene, model, scale, publi
 def test_max_load_factor_ends_the_trace_there(tmp_path):
     r = _trace(tmp_path, "lee_frame.toml", "dcmm:2", "--max-load-factor", "0.5", "--levels", "6")
     assert r["load"][-1] == pytest.approx(1.0) and "limit_points" in r
-    assert r["limit_points"] == []                      # 1 N is below the limit load
+    assert r["limit_points"] == []  # 1 N is below the limit load
 
 
-@pytest.mark.parametrize("args", [
-    ["--model", "beam:4", "--max-load-factor", "2"],                 # without --arclength
-    ["--model", "beam:4", "--arclength", "--max-load-factor", "0"],
-    ["--model", "beam:4", "--arclength", "--max-load-factor", "nan"],
-    ["--model", "ee", "--arclength"],                                # linear: no path to trace
-])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--model", "beam:4", "--max-load-factor", "2"],  # without --arclength
+        ["--model", "beam:4", "--arclength", "--max-load-factor", "0"],
+        ["--model", "beam:4", "--arclength", "--max-load-factor", "nan"],
+        ["--model", "ee", "--arclength"],  # linear: no path to trace
+    ],
+)
 def test_arclength_bad_input_is_exit_2(tmp_path, capsys, args):
     out = tmp_path / "r.json"
     assert main(["run", "open_chain", *args, "--json", str(out)]) == 2

@@ -65,8 +65,9 @@ def test_pre_cut_path_reaches_the_finely_stepped_states():
     three, far below anything the reports print (1e-4 mm on a 100 mm size).
     """
     system, points, _ = soft_stretch("dcmm:1")
-    fine = dataclasses.replace(SolverSettings(), max_rotation_step=0.125,
-                               max_translation_step=0.025)
+    fine = dataclasses.replace(
+        SolverSettings(), max_rotation_step=0.125, max_translation_step=0.025
+    )
     _, fine_points, _ = soft_stretch("dcmm:1", fine)
     for p, f in zip(points, fine_points, strict=True):
         assert np.max(np.abs(system.scaled(p.state - f.state))) <= 1e-9
@@ -132,7 +133,7 @@ def test_predictor_with_the_slope_reproduces_a_polynomial_path_one_degree_higher
         return q0 + sum(c * factor**k for k, c in enumerate(coefficients))
 
     def slope(factor):
-        return sum(k * c * factor**(k - 1) for k, c in enumerate(coefficients) if k)
+        return sum(k * c * factor ** (k - 1) for k, c in enumerate(coefficients) if k)
 
     factors = [0.1, 0.2, 0.25, 0.275, 0.3][-PREDICTOR_STATES:]
     history = [(state(f), f) for f in factors]
@@ -155,8 +156,10 @@ def test_motion_ratio_is_the_largest_body_motion_over_the_bounds(scene, model):
     q0 = system.initial_state()
     for scale in (1e-6, 1e-2, 1.0, 30.0):
         q1 = q0 + rng.normal(0.0, scale, q0.size)
-        d = (q1[:3 * bodies] - q0[:3 * bodies]).reshape(-1, 3)
-        expected = max(np.abs(d[:, 2]).max() / s.max_rotation_step,
-                       np.hypot(d[:, 0], d[:, 1]).max() / (s.max_translation_step * system.size))
+        d = (q1[: 3 * bodies] - q0[: 3 * bodies]).reshape(-1, 3)
+        expected = max(
+            np.abs(d[:, 2]).max() / s.max_rotation_step,
+            np.hypot(d[:, 0], d[:, 1]).max() / (s.max_translation_step * system.size),
+        )
         assert system.motion_ratio(q0, q1) == pytest.approx(expected, rel=2e-16)
         assert system.motion_ratio(q1, q1) == 0.0

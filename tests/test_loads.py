@@ -16,8 +16,7 @@ from flexval.geometry import Force, LoadCase, Moment
 from flexval.reducedmodels.loads import Loads
 
 BODIES = {"ground": -1, "a": 0, "b": 1}
-REFERENCE = {"ground": np.array([0.0, 0.0]), "a": np.array([10.0, 2.0]),
-             "b": np.array([-4.0, 7.0])}
+REFERENCE = {"ground": np.array([0.0, 0.0]), "a": np.array([10.0, 2.0]), "b": np.array([-4.0, 7.0])}
 SIZE = 20.0
 H = 1e-5
 """Central-difference step (mm, rad); the gradients' differences measured: 4e-10 N, N mm."""
@@ -44,11 +43,16 @@ def case(*components) -> LoadCase:
 CASES = {
     "one force": case(Force("a", np.array([12.0, 5.0]), 0.7, 3.0)),
     "two forces on one body and a moment": case(
-        Force("b", np.array([1.0, 9.0]), -2.1, 4.0), Force("b", np.array([-6.0, 3.0]), 0.3, -2.5),
-        Moment("a", 40.0)),
+        Force("b", np.array([1.0, 9.0]), -2.1, 4.0),
+        Force("b", np.array([-6.0, 3.0]), 0.3, -2.5),
+        Moment("a", 40.0),
+    ),
     "loads on the ground are dropped": case(
-        Force("ground", np.array([1.0, 1.0]), 0.0, 5.0), Moment("ground", 3.0),
-        Moment("b", -25.0), Force("a", np.array([0.0, 0.0]), 1.9, 1.5)),
+        Force("ground", np.array([1.0, 1.0]), 0.0, 5.0),
+        Moment("ground", 3.0),
+        Moment("b", -25.0),
+        Force("a", np.array([0.0, 0.0]), 1.9, 1.5),
+    ),
 }
 
 
@@ -59,7 +63,7 @@ def potential(load_case: LoadCase, q: np.ndarray, factor: float) -> float:
         k = BODIES[comp.body]
         if k < 0:
             continue
-        x, y, theta = q[3 * k:3 * k + 3]
+        x, y, theta = q[3 * k : 3 * k + 3]
         if isinstance(comp, Moment):
             total += comp.value * theta
             continue
@@ -79,12 +83,21 @@ def test_add_to_is_the_potential_and_its_derivatives(name: str) -> None:
     energy = loads.add_to(q, factor, grad, diagonal)
     assert energy == pytest.approx(potential(load_case, q, factor), rel=1e-14, abs=1e-12)
     step = np.eye(6) * H
-    fd_grad = [(potential(load_case, q + e, factor) - potential(load_case, q - e, factor)) / (2 * H)
-               for e in step]
+    fd_grad = [
+        (potential(load_case, q + e, factor) - potential(load_case, q - e, factor)) / (2 * H)
+        for e in step
+    ]
     np.testing.assert_allclose(grad, fd_grad, rtol=0, atol=FD_TOL)
     # the tangent diagonal holds the rotations' second derivatives (translations: zero)
-    fd_second = [(potential(load_case, q + e, factor) - 2 * potential(load_case, q, factor)
-                  + potential(load_case, q - e, factor)) / H2**2 for e in np.eye(6) * H2]
+    fd_second = [
+        (
+            potential(load_case, q + e, factor)
+            - 2 * potential(load_case, q, factor)
+            + potential(load_case, q - e, factor)
+        )
+        / H2**2
+        for e in np.eye(6) * H2
+    ]
     np.testing.assert_allclose(diagonal, fd_second, rtol=0, atol=FD2_TOL)
     # the load vector is minus the gradient's derivative in the factor (it is linear in it)
     np.testing.assert_allclose(loads.vector(q), -grad / factor, rtol=1e-14, atol=1e-14)

@@ -18,7 +18,7 @@ from tests.builders import cantilever, tip_force
 
 L, B, H, E, NU, RHO = 10.0, 1.0, 0.1, 2100.0, 0.3, 1.24e-9
 EI, MU = E * B * H**3 / 12.0, RHO * B * H
-BETA_L = (1.8751040687, 4.6940911330)       # clamped-free Euler-Bernoulli roots
+BETA_L = (1.8751040687, 4.6940911330)  # clamped-free Euler-Bernoulli roots
 ARC = Arc((0.0, 3.0), 3.0, math.radians(150.0), math.radians(240.0))
 
 
@@ -37,8 +37,9 @@ def beam_theory(beta_l) -> np.ndarray:
 def test_beam_cantilever_converges_to_euler_bernoulli(n):
     """HRZ-lumped beam:N: second order from below (measured: error x N^2 = 0.52, 2.0 for
     modes 1, 2 at N = 10..100); checked as error within 10 % of 0.52/N^2, 2.0/N^2."""
-    f = natural_modes(build_system(straight(density=RHO), parse_model(f"beam:{n}")),
-                      count=2).frequencies_hz
+    f = natural_modes(
+        build_system(straight(density=RHO), parse_model(f"beam:{n}")), count=2
+    ).frequencies_hz
     error = f / beam_theory(BETA_L) - 1.0
     assert np.all(error < 0.0)
     assert error * n**2 == pytest.approx([-0.52, -2.0], rel=0.1)
@@ -47,13 +48,20 @@ def test_beam_cantilever_converges_to_euler_bernoulli(n):
 def tip_mass_roots(ratio: float) -> list[float]:
     """The two lowest beta L of a cantilever with a tip point mass M = ratio mu L: roots of
     1 + cos cosh + (M / mu L) bL (cos sinh - sin cosh) = 0."""
+
     def equation(x):
-        return (1.0 + math.cos(x) * math.cosh(x)
-                + ratio * x * (math.cos(x) * math.sinh(x) - math.sin(x) * math.cosh(x)))
+        return (
+            1.0
+            + math.cos(x) * math.cosh(x)
+            + ratio * x * (math.cos(x) * math.sinh(x) - math.sin(x) * math.cosh(x))
+        )
 
     grid = np.linspace(0.1, 8.0, 400)
-    return [brentq(equation, a, b) for a, b in zip(grid[:-1], grid[1:])
-            if equation(a) * equation(b) < 0.0][:2]
+    return [
+        brentq(equation, a, b)
+        for a, b in zip(grid[:-1], grid[1:])
+        if equation(a) * equation(b) < 0.0
+    ][:2]
 
 
 def test_tip_mass_frequency_equation():
@@ -73,16 +81,16 @@ def test_dcmm_rigid_pieces_on_a_cantilever(n):
     linear limit (the tip piece's weight acts l/4 inside the tip, the consistent load
     l/6: a tip moment rho A g l^2 / 24 too many); measured within 2.3e-4 of it (the
     geometric nonlinearity), bound 1e-3."""
-    from flexval.validation.run import run_model
     from flexval.geometry import Scene
+    from flexval.validation.run import run_model
 
-    f = natural_modes(build_system(straight(density=RHO), parse_model(f"dcmm:{n}")),
-                      count=1).frequencies_hz[0]
+    f = natural_modes(
+        build_system(straight(density=RHO), parse_model(f"dcmm:{n}")), count=1
+    ).frequencies_hz[0]
     error = f / beam_theory(BETA_L[0]) - 1.0
     assert 0.0 < error < 0.036 / n**2
     mech = straight(density=RHO, gravity=np.array([0.0, -9810.0]))
-    scene = Scene("sag", "", mech, (tip_force(mech, 0.0, 0.0, levels=2),), (), frozenset(),
-                  "<sag>")
+    scene = Scene("sag", "", mech, (tip_force(mech, 0.0, 0.0, levels=2),), (), frozenset(), "<sag>")
     sag = run_model(scene, parse_model(f"dcmm:{n}"), scene.load_cases[0]).dy[0]
     expected = -MU * 9810.0 * L**4 / (8.0 * EI)
     assert (sag / expected - 1.0) * n**2 == pytest.approx(-1.0 / 6.0, rel=1e-3)
@@ -95,26 +103,32 @@ def test_prbm_pieces_on_links_match_a_cantilever():
     deflection under a uniform load weighs the compliance with (L - x)^3, and the
     symmetric chain matches the beam's compliance moments up to the third (measured
     -6e-7, the geometric nonlinearity; bound 1e-5)."""
-    from flexval.validation.run import run_model
     from flexval.geometry import Scene
+    from flexval.validation.run import run_model
 
     ratio = 2.0
-    bare = natural_modes(build_system(straight(density=RHO), parse_model("prbm")),
-                         count=1).frequencies_hz[0]
+    bare = natural_modes(
+        build_system(straight(density=RHO), parse_model("prbm")), count=1
+    ).frequencies_hz[0]
     assert bare / beam_theory(BETA_L[0]) - 1.0 == pytest.approx(0.0, abs=5e-4)
     tip = straight(density=RHO, bodies={"t": RigidMass(ratio * MU * L, 0.0, np.array([L, 0.0]))})
     loaded = natural_modes(build_system(tip, parse_model("prbm")), count=1).frequencies_hz[0]
     assert loaded / beam_theory(tip_mass_roots(ratio)[0]) - 1.0 == pytest.approx(0.0, abs=1e-4)
     mech = straight(density=RHO, gravity=np.array([0.0, -9810.0]))
-    scene = Scene("sag", "", mech, (tip_force(mech, 0.0, 0.0, levels=2),), (), frozenset(),
-                  "<sag>")
+    scene = Scene("sag", "", mech, (tip_force(mech, 0.0, 0.0, levels=2),), (), frozenset(), "<sag>")
     sag = run_model(scene, parse_model("prbm"), scene.load_cases[0]).dy[0]
     assert sag == pytest.approx(-MU * 9810.0 * L**4 / (8.0 * EI), rel=1e-5)
 
 
-@pytest.mark.parametrize("model, low, high", [("dcmm:1", 0.040, 0.047), ("dcmm:4", 0.040, 0.047),
-                                              ("dcmm:8", 0.040, 0.047),
-                                              ("prbm", -0.0040, -0.0030)])
+@pytest.mark.parametrize(
+    "model, low, high",
+    [
+        ("dcmm:1", 0.040, 0.047),
+        ("dcmm:4", 0.040, 0.047),
+        ("dcmm:8", 0.040, 0.047),
+        ("prbm", -0.0040, -0.0030),
+    ],
+)
 def test_lumped_models_on_a_cantilever_arc(model, low, high):
     """A 240-degree arc clamped at one end, against beam:400 (itself converged to 2e-5):
     dcmm:n's f1 error times n^2 measured 4.34, 4.37, 4.46 % at n = 1, 4, 8 (bounds
@@ -150,9 +164,10 @@ def test_rigid_body_on_one_arc_matches_ellipse_of_elasticity(model):
     arc = Arc((0.0, 3.0), 3.0, math.radians(150.0), math.radians(240.0))
     ellipse = arc.ellipse(EI)
     mass, inertia = 1e-6, 3e-5
-    mech = dataclasses.replace(cantilever(arc, E=E, b=B, h=H),
-                               inertia=MassData(bodies={"t": RigidMass(mass, inertia,
-                                                                       ellipse.center)}))
+    mech = dataclasses.replace(
+        cantilever(arc, E=E, b=B, h=H),
+        inertia=MassData(bodies={"t": RigidMass(mass, inertia, ellipse.center)}),
+    )
     stiffness = 1.0 / np.diag(ellipse.compliance())
     exact = np.sort(np.sqrt(stiffness / np.array([mass, mass, inertia]))) / (2.0 * math.pi)
     f = natural_modes(build_system(mech, parse_model(model)), count=3).frequencies_hz
@@ -164,14 +179,20 @@ def test_beam_rigid_body_converges_to_ellipse():
     (measured 0.45 % at N = 20, 0.014 % at N = 100)."""
     arc = Arc((0.0, 3.0), 3.0, math.radians(150.0), math.radians(240.0))
     ellipse = arc.ellipse(EI)
-    mech = dataclasses.replace(cantilever(arc, E=E, b=B, h=H),
-                               inertia=MassData(bodies={"t": RigidMass(1e-6, 3e-5,
-                                                                       ellipse.center)}))
+    mech = dataclasses.replace(
+        cantilever(arc, E=E, b=B, h=H),
+        inertia=MassData(bodies={"t": RigidMass(1e-6, 3e-5, ellipse.center)}),
+    )
     stiffness = 1.0 / np.diag(ellipse.compliance())
     exact = np.sort(np.sqrt(stiffness / np.array([1e-6, 1e-6, 3e-5]))) / (2.0 * math.pi)
-    errors = [np.abs(natural_modes(build_system(mech, parse_model(f"beam:{n}")),
-                                   count=3).frequencies_hz / exact - 1.0).max()
-              for n in (20, 40)]
+    errors = [
+        np.abs(
+            natural_modes(build_system(mech, parse_model(f"beam:{n}")), count=3).frequencies_hz
+            / exact
+            - 1.0
+        ).max()
+        for n in (20, 40)
+    ]
     assert errors[1] < 2e-4 * 25 and errors[0] / errors[1] == pytest.approx(4.0, rel=0.1)
 
 
@@ -185,8 +206,10 @@ def test_compression_lowers_the_first_frequency_to_zero_at_buckling():
     p_cr = math.pi**2 * EI / (4.0 * L**2)
     f0 = natural_modes(system, count=1).frequencies_hz[0]
     compression = tip_force(mech, -p_cr, 0.0)
-    ratios = [natural_modes(system, compression, a, count=1).frequencies_hz[0] / f0
-              for a in (0.25, 0.5, 0.9, 0.99)]
+    ratios = [
+        natural_modes(system, compression, a, count=1).frequencies_hz[0] / f0
+        for a in (0.25, 0.5, 0.9, 0.99)
+    ]
     tension = natural_modes(system, tip_force(mech, p_cr, 0.0), 0.5, count=1).frequencies_hz[0]
     assert tension > f0
     assert np.all(np.diff(ratios) < 0.0) and ratios[0] < 1.0
@@ -201,16 +224,19 @@ def test_sparse_and_dense_modes_agree_with_pins_and_multipliers():
     from flexval.geometry import load_scene
 
     scene = load_scene("closed_chain")
-    masses = {b: RigidMass(1e-6, 1e-5, scene.mechanism.bodies[b].reference + 1.0)
-              for b in scene.mechanism.moving_bodies}
+    masses = {
+        b: RigidMass(1e-6, 1e-5, scene.mechanism.bodies[b].reference + 1.0)
+        for b in scene.mechanism.moving_bodies
+    }
     mech = dataclasses.replace(scene.mechanism, inertia=MassData(density=RHO, bodies=masses))
     for model in ("prbm", "beam:10"):
         system = build_system(mech, parse_model(model))
         dense = natural_modes(system, count=4)
         q = system.initial_state()
         loads = system.loads(scene.load_cases[0])
-        sparse = sparse_modes(system, MassModel(system), q, sparse_tangent(system, q, loads, 0.0),
-                              4)
+        sparse = sparse_modes(
+            system, MassModel(system), q, sparse_tangent(system, q, loads, 0.0), 4
+        )
         np.testing.assert_allclose(sparse.frequencies_hz, dense.frequencies_hz, rtol=1e-6)
         M = MassModel(system).matrix(q).toarray()
         np.testing.assert_allclose(dense.shapes @ M @ dense.shapes.T, np.eye(4), atol=1e-8)

@@ -35,8 +35,9 @@ def half_bandwidth(perm: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> int:
     return int(np.abs(position[rows] - position[cols]).max(initial=0))
 
 
-def block_chain(n_blocks: int, block: int, closed: bool, rng: np.random.Generator
-                ) -> tuple[int, np.ndarray, np.ndarray]:
+def block_chain(
+    n_blocks: int, block: int, closed: bool, rng: np.random.Generator
+) -> tuple[int, np.ndarray, np.ndarray]:
     """Entries of a chain of elements each coupling two consecutive blocks of unknowns fully
     (beam elements: block 3), closed into a loop or not, in a shuffled numbering."""
     n = n_blocks * block
@@ -44,8 +45,9 @@ def block_chain(n_blocks: int, block: int, closed: bool, rng: np.random.Generato
     links = n_blocks if closed else n_blocks - 1
     rows, cols = [], []
     for e in range(links):
-        dofs = np.concatenate([np.arange(block) + block * e,
-                               np.arange(block) + block * ((e + 1) % n_blocks)])
+        dofs = np.concatenate(
+            [np.arange(block) + block * e, np.arange(block) + block * ((e + 1) % n_blocks)]
+        )
         rows.append(np.repeat(dofs, dofs.size)), cols.append(np.tile(dofs, dofs.size))
     rows, cols = np.concatenate(rows), np.concatenate(cols)
     return n, label[rows], label[cols]
@@ -61,7 +63,7 @@ def test_chains_and_loops_take_scipys_ordering_and_band(n_blocks, block, closed)
     np.testing.assert_array_equal(perm, reference)
     position, b, slots = orderkernel.band_slots(perm, rows, cols)
     assert b == half_bandwidth(reference, rows, cols)
-    if not closed:                    # an open chain's band: the two blocks of an element
+    if not closed:  # an open chain's band: the two blocks of an element
         assert b == 2 * block - 1
     np.testing.assert_array_equal(position[perm], np.arange(n))
 
@@ -79,8 +81,9 @@ def test_random_patterns_take_scipys_ordering(seed):
     else:
         rows, cols = r, c
     rows, cols = rows.astype(np.int64), cols.astype(np.int64)
-    np.testing.assert_array_equal(orderkernel.ordering(n, rows, cols),
-                                  scipy_ordering(n, rows, cols))
+    np.testing.assert_array_equal(
+        orderkernel.ordering(n, rows, cols), scipy_ordering(n, rows, cols)
+    )
 
 
 def test_band_slots_are_the_upper_band_storage():
@@ -91,20 +94,23 @@ def test_band_slots_are_the_upper_band_storage():
     perm = orderkernel.ordering(n, rows, cols)
     position, b, slots = orderkernel.band_slots(perm, rows, cols)
     full = rng.standard_normal((n, n))
-    values = (full + full.T)[rows, cols]       # a symmetric matrix on the (symmetric) pattern
+    values = (full + full.T)[rows, cols]  # a symmetric matrix on the (symmetric) pattern
     dense = sp.coo_matrix((values, (rows, cols)), shape=(n, n)).toarray()
     kept = slots >= 0
     band = np.bincount(slots[kept], weights=values[kept], minlength=(b + 1) * n).reshape(n, b + 1)
     i, j = position[rows], position[cols]
     upper = i <= j
     np.testing.assert_array_equal(kept, upper)
-    np.testing.assert_array_equal(band[j[upper], b + i[upper] - j[upper]],
-                                  dense[rows[upper], cols[upper]])
+    np.testing.assert_array_equal(
+        band[j[upper], b + i[upper] - j[upper]], dense[rows[upper], cols[upper]]
+    )
 
 
-SYSTEMS = [(scene, model) for scene in ("open_chain", "closed_chain")
-           for model in ("beam:10", "beam:20", "beam:100", "prbm",
-                         *(f"dcmm:{k}" for k in range(1, 9)))]
+SYSTEMS = [
+    (scene, model)
+    for scene in ("open_chain", "closed_chain")
+    for model in ("beam:10", "beam:20", "beam:100", "prbm", *(f"dcmm:{k}" for k in range(1, 9)))
+]
 
 
 @pytest.mark.parametrize("scene, model", SYSTEMS)
@@ -114,8 +120,9 @@ def test_built_in_systems_keep_the_layout_scipys_ordering_gives(scene, model):
     original = TangentLayout.__init__
 
     def capture(self, n, rows, cols, n_multipliers=0, compiled=False):
-        captured.update(n=n, rows=np.asarray(rows), cols=np.asarray(cols),
-                        n_multipliers=n_multipliers)
+        captured.update(
+            n=n, rows=np.asarray(rows), cols=np.asarray(cols), n_multipliers=n_multipliers
+        )
         original(self, n, rows, cols, n_multipliers, compiled)
 
     TangentLayout.__init__ = capture
@@ -125,7 +132,7 @@ def test_built_in_systems_keep_the_layout_scipys_ordering_gives(scene, model):
         TangentLayout.__init__ = original
     n, rows, cols = captured["n"], captured["rows"], captured["cols"]
     if layout.kind == "dense" and n < NARROW_MIN:
-        return                        # no ordering computed
+        return  # no ordering computed
     reference = scipy_ordering(n, rows, cols)
     b = half_bandwidth(reference, rows, cols)
     if layout.kind == "banded":

@@ -25,63 +25,81 @@ import flexval.validation.stress
 from flexval.geometry import load_scene
 from flexval.geometry.files import OutputError, atomic_path
 from flexval.validation.cli import EXIT_INPUT, EXIT_OUTPUT, main
-from flexval.validation.outputs import (check_file, check_folder, inside, json_safe, output_path,
-                                safe_name, write_json)
+from flexval.validation.outputs import (
+    check_file,
+    check_folder,
+    inside,
+    json_safe,
+    output_path,
+    safe_name,
+    write_json,
+)
 
 
 def _strict_loads(text: str):
     """json.loads that refuses NaN / Infinity tokens."""
+
     def refuse(token):
         raise ValueError(f"non-standard JSON token {token}")
+
     return json.loads(text, parse_constant=refuse)
 
 
 @pytest.fixture
 def no_work(monkeypatch):
     """Fail the test if any computation starts."""
+
     def forbidden(*args, **kwargs):
         raise AssertionError("computation started before the arguments were checked")
-    for module, name in ((flexval.validation.run, "run_model"), (flexval.validation.convergence, "study"),
-                         (flexval.validation.report, "build_report"),
-                         (flexval.validation.bench, "runtime_vs_error"),
-                         (flexval.validation.stress, "stress_report")):
+
+    for module, name in (
+        (flexval.validation.run, "run_model"),
+        (flexval.validation.convergence, "study"),
+        (flexval.validation.report, "build_report"),
+        (flexval.validation.bench, "runtime_vs_error"),
+        (flexval.validation.stress, "stress_report"),
+    ):
         monkeypatch.setattr(module, name, forbidden)
 
 
 def _exit_code(argv: list[str]) -> int:
     try:
         return main(argv)
-    except SystemExit as exc:      # argparse's own range errors
+    except SystemExit as exc:  # argparse's own range errors
         return exc.code
 
 
 # ---------------------------------------------------------------- numeric arguments
 
-@pytest.mark.parametrize("argv, shown", [
-    (["converge", "open_chain", "--model", "dcmm", "--levels", "0:4"], "0:4"),
-    (["converge", "open_chain", "--model", "beam", "--levels", "0:8"], "0:8"),
-    (["converge", "open_chain", "--model", "beam", "--levels", "0:0"], "0:0"),
-    (["converge", "open_chain", "--model", "beam", "--levels", "3:1"], "3:1"),
-    (["converge", "open_chain", "--model", "dcmm", "--levels=-4:2"], "-4:2"),
-    (["converge", "open_chain", "--model", "beam", "--levels", "5:1000000000"], "5:1000000000"),
-    (["converge", "open_chain", "--model", "continuum", "--levels", "0:9"], "0:9"),
-    (["converge", "open_chain", "--model", "continuum", "--levels=-1:2"], "-1:2"),
-    (["converge", "open_chain", "--model", "beam", "--levels", "8,4"], "8,4"),
-    (["converge", "open_chain", "--model", "beam", "--levels", "4,4"], "4,4"),
-    (["converge", "open_chain", "--model", "beam", "--levels", "0,4"], "0,4"),
-    (["converge", "open_chain", "--model", "beam", "--levels", "1:2:3"], "1:2:3"),
-    (["converge", "open_chain", "--model", "beam", "--levels", "a:b"], "a:b"),
-    (["run", "open_chain", "--model", "ee", "--levels", "20001"], "20001"),
-    (["run", "open_chain", "--model", "ee", "--levels", "1000000000"], "1000000000"),
-    (["run", "open_chain", "--model", "ee", "--levels", "1"], "1"),
-    (["run", "open_chain", "--model", "ee", "--levels", "0"], "0"),
-    (["run", "open_chain", "--model", "ee", "--levels=-3"], "-3"),
-    (["report", "--repeats", "0", "--out", "{tmp}"], "0"),
-    (["report", "--repeats=-2", "--out", "{tmp}"], "-2"),
-    (["report", "--repeats", "1001", "--out", "{tmp}"], "1001"),
-    (["bench", "open_chain", "--repeats", "0", "--out", "{tmp}"], "0"),
-    (["bench", "open_chain", "--repeats", "x", "--out", "{tmp}"], "x"),
-])
+
+@pytest.mark.parametrize(
+    "argv, shown",
+    [
+        (["converge", "open_chain", "--model", "dcmm", "--levels", "0:4"], "0:4"),
+        (["converge", "open_chain", "--model", "beam", "--levels", "0:8"], "0:8"),
+        (["converge", "open_chain", "--model", "beam", "--levels", "0:0"], "0:0"),
+        (["converge", "open_chain", "--model", "beam", "--levels", "3:1"], "3:1"),
+        (["converge", "open_chain", "--model", "dcmm", "--levels=-4:2"], "-4:2"),
+        (["converge", "open_chain", "--model", "beam", "--levels", "5:1000000000"], "5:1000000000"),
+        (["converge", "open_chain", "--model", "continuum", "--levels", "0:9"], "0:9"),
+        (["converge", "open_chain", "--model", "continuum", "--levels=-1:2"], "-1:2"),
+        (["converge", "open_chain", "--model", "beam", "--levels", "8,4"], "8,4"),
+        (["converge", "open_chain", "--model", "beam", "--levels", "4,4"], "4,4"),
+        (["converge", "open_chain", "--model", "beam", "--levels", "0,4"], "0,4"),
+        (["converge", "open_chain", "--model", "beam", "--levels", "1:2:3"], "1:2:3"),
+        (["converge", "open_chain", "--model", "beam", "--levels", "a:b"], "a:b"),
+        (["run", "open_chain", "--model", "ee", "--levels", "20001"], "20001"),
+        (["run", "open_chain", "--model", "ee", "--levels", "1000000000"], "1000000000"),
+        (["run", "open_chain", "--model", "ee", "--levels", "1"], "1"),
+        (["run", "open_chain", "--model", "ee", "--levels", "0"], "0"),
+        (["run", "open_chain", "--model", "ee", "--levels=-3"], "-3"),
+        (["report", "--repeats", "0", "--out", "{tmp}"], "0"),
+        (["report", "--repeats=-2", "--out", "{tmp}"], "-2"),
+        (["report", "--repeats", "1001", "--out", "{tmp}"], "1001"),
+        (["bench", "open_chain", "--repeats", "0", "--out", "{tmp}"], "0"),
+        (["bench", "open_chain", "--repeats", "x", "--out", "{tmp}"], "x"),
+    ],
+)
 def test_numeric_arguments_checked_before_work(argv, shown, tmp_path, no_work, capsys):
     argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
     assert _exit_code(argv) == EXIT_INPUT
@@ -92,52 +110,76 @@ def test_numeric_arguments_checked_before_work(argv, shown, tmp_path, no_work, c
 
 # ---------------------------------------------------------------- output paths
 
+
 def _bad_file_targets(tmp_path):
     regular = tmp_path / "regular.txt"
     regular.write_text("x")
-    return {"missing folder": tmp_path / "missing" / "out.json",
-            "a folder": tmp_path,
-            "trailing slash": f"{tmp_path}/",
-            "under a regular file": regular / "out.json",
-            "a device (/dev/full)": "/dev/full",
-            "read-only place (/proc)": "/proc/flexval-out.json"}
+    return {
+        "missing folder": tmp_path / "missing" / "out.json",
+        "a folder": tmp_path,
+        "trailing slash": f"{tmp_path}/",
+        "under a regular file": regular / "out.json",
+        "a device (/dev/full)": "/dev/full",
+        "read-only place (/proc)": "/proc/flexval-out.json",
+    }
 
 
 def _bad_folder_targets(tmp_path):
     regular = tmp_path / "regular.txt"
     regular.write_text("x")
-    return {"a regular file": regular,
-            "under a regular file": regular / "sub",
-            "a device (/dev/full)": "/dev/full",
-            "read-only place (/proc)": "/proc/flexval-out"}
+    return {
+        "a regular file": regular,
+        "under a regular file": regular / "sub",
+        "a device (/dev/full)": "/dev/full",
+        "read-only place (/proc)": "/proc/flexval-out",
+    }
 
 
-FILE_COMMANDS = [["info", "open_chain", "--json"], ["plot", "open_chain", "-o"],
-                 ["run", "open_chain", "--model", "ee", "--json"],
-                 ["converge", "open_chain", "--model", "dcmm", "--json"]]
-FOLDER_COMMANDS = [["report", "open_chain", "--out"], ["bench", "open_chain", "--out"],
-                   ["stress", "open_chain", "--out"]]
+FILE_COMMANDS = [
+    ["info", "open_chain", "--json"],
+    ["plot", "open_chain", "-o"],
+    ["run", "open_chain", "--model", "ee", "--json"],
+    ["converge", "open_chain", "--model", "dcmm", "--json"],
+]
+FOLDER_COMMANDS = [
+    ["report", "open_chain", "--out"],
+    ["bench", "open_chain", "--out"],
+    ["stress", "open_chain", "--out"],
+]
 
 
 @pytest.mark.parametrize("command", FILE_COMMANDS, ids=lambda c: c[0])
-@pytest.mark.parametrize("kind", ["missing folder", "a folder", "trailing slash",
-                                  "under a regular file", "a device (/dev/full)",
-                                  "read-only place (/proc)"])
-def test_bad_output_file_refused_before_work(command, kind, tmp_path, no_work, capsys,
-                                             monkeypatch):
+@pytest.mark.parametrize(
+    "kind",
+    [
+        "missing folder",
+        "a folder",
+        "trailing slash",
+        "under a regular file",
+        "a device (/dev/full)",
+        "read-only place (/proc)",
+    ],
+)
+def test_bad_output_file_refused_before_work(command, kind, tmp_path, no_work, capsys, monkeypatch):
     import flexval.validation.drawing
-    monkeypatch.setattr(flexval.validation.drawing, "plot_mechanism",
-                        lambda *a: pytest.fail("plotted before checking the output"))
+
+    monkeypatch.setattr(
+        flexval.validation.drawing,
+        "plot_mechanism",
+        lambda *a: pytest.fail("plotted before checking the output"),
+    )
     target = str(_bad_file_targets(tmp_path)[kind])
     assert _exit_code(command + [target]) == EXIT_INPUT
     err = capsys.readouterr().err
     assert command[-1] in err and target in err and "Traceback" not in err
-    assert not any(p.name.startswith(".") for p in tmp_path.iterdir())   # no temp files left
+    assert not any(p.name.startswith(".") for p in tmp_path.iterdir())  # no temp files left
 
 
 @pytest.mark.parametrize("command", FOLDER_COMMANDS, ids=lambda c: c[0])
-@pytest.mark.parametrize("kind", ["a regular file", "under a regular file",
-                                  "a device (/dev/full)", "read-only place (/proc)"])
+@pytest.mark.parametrize(
+    "kind",
+    ["a regular file", "under a regular file", "a device (/dev/full)", "read-only place (/proc)"],
+)
 def test_bad_output_folder_refused_before_work(command, kind, tmp_path, no_work, capsys):
     target = str(_bad_folder_targets(tmp_path)[kind])
     assert _exit_code(command + [target]) == EXIT_INPUT
@@ -146,8 +188,10 @@ def test_bad_output_folder_refused_before_work(command, kind, tmp_path, no_work,
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root may write into a read-only folder")
-@pytest.mark.parametrize("check", [lambda p: check_file(p / "x.json", "--json"),
-                                   lambda p: check_folder(p / "sub", "--out")])
+@pytest.mark.parametrize(
+    "check",
+    [lambda p: check_file(p / "x.json", "--json"), lambda p: check_folder(p / "sub", "--out")],
+)
 def test_read_only_folder_refused(check, tmp_path):
     ro = tmp_path / "ro"
     ro.mkdir()
@@ -162,7 +206,7 @@ def test_read_only_folder_refused(check, tmp_path):
 def test_missing_output_folder_is_created(tmp_path):
     folder = tmp_path / "a" / "b"
     assert check_folder(folder, "--out") == folder and folder.is_dir()
-    assert list(folder.iterdir()) == []          # the probe file is gone
+    assert list(folder.iterdir()) == []  # the probe file is gone
 
 
 def test_write_failure_after_check_is_exit_4(tmp_path, monkeypatch, capsys):
@@ -172,13 +216,26 @@ def test_write_failure_after_check_is_exit_4(tmp_path, monkeypatch, capsys):
 
     def full(fd):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
     monkeypatch.setattr(flexval.geometry.files.os, "fsync", full)
-    code = main(["run", "open_chain", "--model", "ee", "--load-case", "f+", "--levels", "3",
-                 "--json", str(out)])
+    code = main(
+        [
+            "run",
+            "open_chain",
+            "--model",
+            "ee",
+            "--load-case",
+            "f+",
+            "--levels",
+            "3",
+            "--json",
+            str(out),
+        ]
+    )
     assert code == EXIT_OUTPUT
     err = capsys.readouterr().err
     assert str(out) in err and os.strerror(errno.ENOSPC) in err
-    assert out.read_text() == "previous"                      # target untouched
+    assert out.read_text() == "previous"  # target untouched
     assert [p.name for p in tmp_path.iterdir()] == ["r.json"]  # temp file removed
 
 
@@ -206,6 +263,7 @@ def test_atomic_path_concurrent_writers_use_distinct_temporaries(tmp_path):
                 tmp.write_text(json.dumps({"writer": k}))
         except Exception as exc:  # noqa: BLE001 - collected and asserted below
             errors.append(exc)
+
     threads = [threading.Thread(target=writer, args=(k,)) for k in range(8)]
     for t in threads:
         t.start()
@@ -227,8 +285,18 @@ def test_written_file_has_umask_permissions(tmp_path):
 
 # ---------------------------------------------------------------- strict JSON
 
-@pytest.mark.parametrize("bad", [float("nan"), float("inf"), -float("inf"), np.float64("nan"),
-                                 np.float32("inf"), np.array([1.0, np.nan])])
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        float("nan"),
+        float("inf"),
+        -float("inf"),
+        np.float64("nan"),
+        np.float32("inf"),
+        np.array([1.0, np.nan]),
+    ],
+)
 def test_json_writer_turns_non_finite_into_null(bad, tmp_path):
     data = {"x": bad, "nested": [{"y": bad}, (bad, 1.5)], "ok": np.int64(3)}
     text = write_json(tmp_path / "d.json", data).read_text()
@@ -242,8 +310,23 @@ def test_json_writer_turns_non_finite_into_null(bad, tmp_path):
 @pytest.mark.parametrize("levels", ["1,3,4", "1,2,5", "1,2,6"])
 def test_converge_json_is_strict_and_ratio_null_when_undefined(levels, tmp_path):
     out = tmp_path / "c.json"
-    assert main(["converge", "open_chain", "--model", "dcmm", "--levels", levels,
-                 "--load-case", "m+", "--json", str(out)]) == 0
+    assert (
+        main(
+            [
+                "converge",
+                "open_chain",
+                "--model",
+                "dcmm",
+                "--levels",
+                levels,
+                "--load-case",
+                "m+",
+                "--json",
+                str(out),
+            ]
+        )
+        == 0
+    )
     study = _strict_loads(out.read_text())["studies"][0]
     assert study["ratio"] is None
     assert len(study["rows"]) == len(levels.split(","))
@@ -251,8 +334,24 @@ def test_converge_json_is_strict_and_ratio_null_when_undefined(levels, tmp_path)
 
 # ---------------------------------------------------------------- safe file names
 
-HOSTILE = ["../escaped", "a/b", "/etc/passwd", "..", ".", "", "~", "a\x00b", "..\\..\\x",
-           "-rf", ".hidden", "x" * 300, "über näme", "a/../../b", "CON", "f+"]
+HOSTILE = [
+    "../escaped",
+    "a/b",
+    "/etc/passwd",
+    "..",
+    ".",
+    "",
+    "~",
+    "a\x00b",
+    "..\\..\\x",
+    "-rf",
+    ".hidden",
+    "x" * 300,
+    "über näme",
+    "a/../../b",
+    "CON",
+    "f+",
+]
 
 
 @pytest.mark.parametrize("name", HOSTILE)
@@ -283,27 +382,37 @@ def test_inside_refuses_symlinks_and_dotdot(tmp_path):
 
 def _hostile_scene(name: str, case_name: str):
     sc = load_scene("open_chain")
-    cases = tuple(dataclasses.replace(lc, name=f"{case_name}{k}", levels=3)
-                  for k, lc in enumerate(sc.load_cases[:2]))
+    cases = tuple(
+        dataclasses.replace(lc, name=f"{case_name}{k}", levels=3)
+        for k, lc in enumerate(sc.load_cases[:2])
+    )
     return dataclasses.replace(sc, name=name, load_cases=cases)
 
 
-@pytest.mark.parametrize("name, case_name", [("../escaped", "../c"), ("a/b", "x/y"),
-                                             ("/abs/olute", ".."), ("..", "/")])
+@pytest.mark.parametrize(
+    "name, case_name", [("../escaped", "../c"), ("a/b", "x/y"), ("/abs/olute", ".."), ("..", "/")]
+)
 def test_report_writes_only_inside_its_folder(name, case_name, tmp_path, monkeypatch):
     scene = _hostile_scene(name, case_name)
     monkeypatch.setattr(flexval.validation.reportdata, "load_scene", lambda _: scene)
     out = tmp_path / "deep" / "out"
-    md = flexval.validation.report.build_report(["hostile"], out, ["beam:20", "ee"], repeats=1,
-                                        use_cache=False, progress=False, bench=False,
-                                        converge=False)
+    md = flexval.validation.report.build_report(
+        ["hostile"],
+        out,
+        ["beam:20", "ee"],
+        repeats=1,
+        use_cache=False,
+        progress=False,
+        bench=False,
+        converge=False,
+    )
     assert md.parent == out
     written = {p for p in tmp_path.rglob("*") if p.is_file()}
     assert written and all(out in p.parents for p in written)
     pngs = [p for p in written if p.suffix == ".png"]
     assert len(pngs) >= 3
     text = md.read_text()
-    for p in pngs:                      # every figure is linked under its safe name
+    for p in pngs:  # every figure is linked under its safe name
         assert f"({p.name})" in text
 
 
@@ -326,8 +435,12 @@ def test_bench_and_stress_files_stay_inside(name, tmp_path, monkeypatch):
 @pytest.mark.parametrize("name", ["m.xyz", "m.png.exe", "m.json"])
 def test_plot_refuses_unknown_picture_formats(name, tmp_path, capsys, monkeypatch):
     import flexval.validation.drawing
-    monkeypatch.setattr(flexval.validation.drawing, "plot_mechanism",
-                        lambda *a: pytest.fail("plotted before checking the output"))
+
+    monkeypatch.setattr(
+        flexval.validation.drawing,
+        "plot_mechanism",
+        lambda *a: pytest.fail("plotted before checking the output"),
+    )
     assert main(["plot", "open_chain", "-o", str(tmp_path / name)]) == EXIT_INPUT
     err = capsys.readouterr().err
     assert "--output" in err and name in err and "format" in err
@@ -340,36 +453,50 @@ def test_plot_writes_other_known_formats(name, tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == [name]
 
 
-@pytest.mark.parametrize("kind", ["a regular file", "under a regular file",
-                                  "a device (/dev/full)", "read-only place (/proc)"])
+@pytest.mark.parametrize(
+    "kind",
+    ["a regular file", "under a regular file", "a device (/dev/full)", "read-only place (/proc)"],
+)
 def test_run_out_dir_for_fields_refused_before_work(kind, tmp_path, no_work, capsys):
     from importlib import resources
 
     text = resources.files("flexval.geometry").joinpath("scenes", "closed_chain.toml").read_text()
     scene = tmp_path / "s.toml"
-    scene.write_text(text.replace('models = ["beam:100"',
-                                  'outputs = ["vtu", "png"]\nmodels = ["beam:100"'))
+    scene.write_text(
+        text.replace('models = ["beam:100"', 'outputs = ["vtu", "png"]\nmodels = ["beam:100"')
+    )
     target = str(_bad_folder_targets(tmp_path)[kind])
     assert main(["run", str(scene), "--model", "continuum:0", "--out-dir", target]) == EXIT_INPUT
     err = capsys.readouterr().err
     assert "--out-dir" in err and target in err
 
 
-@pytest.mark.parametrize("command", [["report", "no_such_scene"], ["bench", "no_such_scene"],
-                                     ["stress", "open_chain", "--model", "nonsense:3"]],
-                         ids=lambda c: c[0])
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["report", "no_such_scene"],
+        ["bench", "no_such_scene"],
+        ["stress", "open_chain", "--model", "nonsense:3"],
+    ],
+    ids=lambda c: c[0],
+)
 def test_bad_input_creates_no_output_folder(command, tmp_path, no_work):
     out = tmp_path / "new" / "out"
     assert main(command + ["--out", str(out)]) == EXIT_INPUT
     assert not (tmp_path / "new").exists()
 
 
-@pytest.mark.parametrize("option, name", [("--json", "x/none.json"), ("--plot", "m.xyz"),
-                                          ("--plot", "x/none.png")])
+@pytest.mark.parametrize(
+    "option, name", [("--json", "x/none.json"), ("--plot", "m.xyz"), ("--plot", "x/none.png")]
+)
 def test_modes_outputs_refused_before_work(option, name, tmp_path, capsys, monkeypatch):
     import flexval.validation.modes
-    monkeypatch.setattr(flexval.validation.modes, "run_modes",
-                        lambda *a: pytest.fail("computed before checking the output"))
+
+    monkeypatch.setattr(
+        flexval.validation.modes,
+        "run_modes",
+        lambda *a: pytest.fail("computed before checking the output"),
+    )
     target = str(tmp_path / name)
     assert main(["modes", "open_chain", "--model", "ee", option, target]) == EXIT_INPUT
     err = capsys.readouterr().err

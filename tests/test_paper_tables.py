@@ -62,8 +62,10 @@ def test_write_table_beside_the_paper(tables, tmp_path):
     checked = 0
     for name, res in tables.items():
         ours, paper = res.error_table("beam:100"), paper_percent(name, res.cases)
-        rows = {line.split("|")[1].strip(): [c.strip() for c in line.strip("|").split("|")[1:]]
-                for line in _paper_table(res)[2:]}
+        rows = {
+            line.split("|")[1].strip(): [c.strip() for c in line.strip("|").split("|")[1:]]
+            for line in _paper_table(res)[2:]
+        }
         for model, cells in rows.items():
             for k, case in enumerate(res.cases):
                 for j, (key, pk) in enumerate((("end_disp_vec", "disp"), ("end_rot", "rot"))):
@@ -77,8 +79,9 @@ def test_write_table_beside_the_paper(tables, tmp_path):
                         assert cell.endswith(f"({expect[pk]:.1f})"), (name, model, case, cell)
                         checked += 1
     # every figure of the data file's two tables appears beside ours
-    assert checked == sum(2 * len(per) for name in tables
-                          for per in paper_percent(name, tables[name].cases).values())
+    assert checked == sum(
+        2 * len(per) for name in tables for per in paper_percent(name, tables[name].cases).values()
+    )
 
 
 def test_fem20_is_within_discretisation_error(tables):

@@ -14,8 +14,8 @@ import dataclasses
 
 import numpy as np
 import pytest
-
 from builders import cantilever, tip_moment
+
 from flexval.geometry import Segment, load_scene
 from flexval.reducedmodels import LoadControl, build_system, trace
 from flexval.reducedmodels.catalogue import parse_model
@@ -29,8 +29,10 @@ def overloaded_states(model: str, factor: float):
     """The system of ``model`` on the open chain and its states along f- at ``factor`` times the load."""
     scene = load_scene("open_chain")
     case = next(c for c in scene.load_cases if c.name == "f-")
-    case = dataclasses.replace(case, components=tuple(
-        dataclasses.replace(c, value=c.value * factor) for c in case.components))
+    case = dataclasses.replace(
+        case,
+        components=tuple(dataclasses.replace(c, value=c.value * factor) for c in case.components),
+    )
     system = build_system(scene.mechanism, parse_model(model))
     points = trace(system, system.loads(case), LoadControl(case.factors()))
     return system, [p.state for p in points]
@@ -41,19 +43,22 @@ def test_one_pass_verdicts_and_forces_are_the_state_by_state_ones(model):
     system, states = overloaded_states(model, 30.0)
     levels = [system.local_states(q) for q in states]
     verdicts, forces = path_end_pass(system, states)
-    singles = [[f"{c.name}: {w}" for c, local in zip(system.connectors, lv)
-                for w in c.validity(*local)] for lv in levels]
+    singles = [
+        [f"{c.name}: {w}" for c, local in zip(system.connectors, lv) for w in c.validity(*local)]
+        for lv in levels
+    ]
     assert verdicts == singles
-    assert any(verdicts) and not all(verdicts)      # the path crosses a limit
+    assert any(verdicts) and not all(verdicts)  # the path crosses a limit
     assert [c for c, _ in forces] == list(system.connectors)
-    for k, (c, stacked) in enumerate(forces):      # the end pass's forces
+    for k, (c, stacked) in enumerate(forces):  # the end pass's forces
         check_stacked(c, [lv[k] for lv in levels], stacked)
-    for group, run in system.groups:           # all the group's connectors in one pass
-        for k, (c, stacked) in enumerate(zip(group.connectors, group.path_section_forces(
-                [lv[run] for lv in levels]))):
+    for group, run in system.groups:  # all the group's connectors in one pass
+        for k, (c, stacked) in enumerate(
+            zip(group.connectors, group.path_section_forces([lv[run] for lv in levels]))
+        ):
             states = [lv[run][k] for lv in levels]
             check_stacked(c, states, stacked)
-    for k, c in enumerate(system.connectors):     # each connector alone
+    for k, c in enumerate(system.connectors):  # each connector alone
         states = [lv[k] for lv in levels]
         check_stacked(c, states, c.path_section_forces(states))
 
@@ -71,7 +76,7 @@ def test_group_forces_of_given_gradients_are_each_connectors_own(model):
             assert np.array_equal(alone.at, forces.at)
             assert np.array_equal(alone.axial, forces.axial)
             assert np.array_equal(alone.moment, forces.moment)
-            assert np.ptp(alone.moment) > 0.0          # a load that bends the flexure
+            assert np.ptp(alone.moment) > 0.0  # a load that bends the flexure
 
 
 def check_stacked(c, states, stacked):
@@ -94,8 +99,11 @@ def test_dcmm_screen_defers_to_the_exact_check_on_the_limits(model):
     n = len(internal) // 3 + 1
     states = []
     # every sub-arc turned by the rotation limit, to the last bit
-    for t in (np.nextafter(MAX_RELATIVE_ROTATION, 0.0), MAX_RELATIVE_ROTATION,
-              np.nextafter(MAX_RELATIVE_ROTATION, 4.0)):
+    for t in (
+        np.nextafter(MAX_RELATIVE_ROTATION, 0.0),
+        MAX_RELATIVE_ROTATION,
+        np.nextafter(MAX_RELATIVE_ROTATION, 4.0),
+    ):
         cuts = internal.reshape(-1, 3).copy()
         cuts[:, 2] = t * np.arange(1, n)
         states.append((ground, np.array([length, 0.0, t * n]), cuts.ravel()))
@@ -117,10 +125,14 @@ def test_prbm_screen_defers_to_the_exact_check_on_the_limits():
     c = system.connectors[0]
     ground, _, internal = system.local_states(system.initial_state())[0]
     limit = c._fitted_rotation
-    states = [(ground, np.array([length, 0.0, t]), internal)
-              for t in (np.nextafter(limit, 0.0), limit, np.nextafter(limit, 4.0))]
-    states += [(ground, np.array([length * (1.0 + s), 0.0, 0.0]), internal)
-               for s in (np.nextafter(MAX_STRAIN, 0.0), MAX_STRAIN, np.nextafter(MAX_STRAIN, 1.0))]
+    states = [
+        (ground, np.array([length, 0.0, t]), internal)
+        for t in (np.nextafter(limit, 0.0), limit, np.nextafter(limit, 4.0))
+    ]
+    states += [
+        (ground, np.array([length * (1.0 + s), 0.0, 0.0]), internal)
+        for s in (np.nextafter(MAX_STRAIN, 0.0), MAX_STRAIN, np.nextafter(MAX_STRAIN, 1.0))
+    ]
     verdicts = c.path_validity(states)
     assert verdicts == [c.validity(*s) for s in states]
     assert any(verdicts) and not all(verdicts)

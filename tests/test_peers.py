@@ -18,13 +18,19 @@ import pytest
 
 from flexval.geometry import load_scene
 from flexval.geometry.inertia import MassData
-from flexval.validation.peers import (AGREEMENT_BAR, PeerRow, PeerUnavailable, agreement,
-                              compare_with_opensees)
+from flexval.validation.peers import (
+    AGREEMENT_BAR,
+    PeerRow,
+    PeerUnavailable,
+    agreement,
+    compare_with_opensees,
+)
 
 
 def _opensees_or_skip():
     try:
         from flexval.validation.peers import opensees
+
         return opensees()
     except PeerUnavailable as exc:
         pytest.skip(str(exc))
@@ -43,8 +49,9 @@ def test_opensees_and_flexval_beams_agree_on_every_paper_case(scene_name):
 
 def test_a_scene_with_gravity_is_refused_before_opensees_is_asked():
     scene = load_scene("open_chain")
-    mech = dataclasses.replace(scene.mechanism,
-                               inertia=MassData(density=7.85e-9, gravity=np.array([0.0, -9810.0])))
+    mech = dataclasses.replace(
+        scene.mechanism, inertia=MassData(density=7.85e-9, gravity=np.array([0.0, -9810.0]))
+    )
     heavy = dataclasses.replace(scene, mechanism=mech)
     with pytest.raises(PeerUnavailable, match="gravity"):
         compare_with_opensees(heavy, n=2, repeats=1)
@@ -52,14 +59,17 @@ def test_a_scene_with_gravity_is_refused_before_opensees_is_asked():
 
 def test_agreement_is_the_larger_relative_gap_of_displacement_and_rotation():
     assert agreement((3.0, 4.0, 0.5), (3.0, 4.0, 0.5)) == 0.0
-    assert agreement((3.0, 4.0, 0.5), (3.0, 4.05, 0.5)) == pytest.approx(1.0)     # 0.05 / 5
-    assert agreement((3.0, 4.0, 0.5), (3.0, 4.0, 0.51)) == pytest.approx(2.0)     # 0.01 / 0.5
+    assert agreement((3.0, 4.0, 0.5), (3.0, 4.05, 0.5)) == pytest.approx(1.0)  # 0.05 / 5
+    assert agreement((3.0, 4.0, 0.5), (3.0, 4.0, 0.51)) == pytest.approx(2.0)  # 0.01 / 0.5
 
 
 def test_a_case_opensees_cannot_follow_has_no_times_but_a_reason():
     row = PeerRow("f-", None, reason="OpenSees failed (See stderr output)")
-    assert row.to_dict() == {"load_case": "f-", "substeps": None,
-                             "reason": "OpenSees failed (See stderr output)"}
+    assert row.to_dict() == {
+        "load_case": "f-",
+        "substeps": None,
+        "reason": "OpenSees failed (See stderr output)",
+    }
 
 
 def test_an_opensees_error_is_a_row_not_a_crash(monkeypatch):
@@ -76,8 +86,9 @@ def test_an_opensees_error_is_a_row_not_a_crash(monkeypatch):
 
 def test_report_with_peers_says_when_opensees_is_missing(tmp_path, monkeypatch):
     """``flexval report --peers`` reaches the run times, and a missing peer is said there."""
-    import flexval.validation.peers as peers
     from test_report import TINY
+
+    import flexval.validation.peers as peers
     from flexval.validation.cli import main
 
     def missing():
@@ -87,8 +98,29 @@ def test_report_with_peers_says_when_opensees_is_missing(tmp_path, monkeypatch):
     scene = tmp_path / "tiny.toml"
     scene.write_text(TINY)
     out = tmp_path / "out"
-    assert main(["report", str(scene), "--out", str(out), "--model", "ee", "--repeats", "1",
-                 "--no-bench", "--no-converge", "--no-cache", "--quiet", "--jobs", "1",
-                 "--peers"]) == 0
-    assert ("Not timed: OpenSeesPy is missing or does not load (test)."
-            in (out / "timings.md").read_text())
+    assert (
+        main(
+            [
+                "report",
+                str(scene),
+                "--out",
+                str(out),
+                "--model",
+                "ee",
+                "--repeats",
+                "1",
+                "--no-bench",
+                "--no-converge",
+                "--no-cache",
+                "--quiet",
+                "--jobs",
+                "1",
+                "--peers",
+            ]
+        )
+        == 0
+    )
+    assert (
+        "Not timed: OpenSeesPy is missing or does not load (test)."
+        in (out / "timings.md").read_text()
+    )

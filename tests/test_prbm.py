@@ -11,21 +11,36 @@ Units: mm, N, MPa, N mm, rad.
 import numpy as np
 import pytest
 from builders import cantilever, fd_check, tip_moment
-from elastica import (arc_tip_compliance, cantilever_tip_force, circle_under_end_moment,
-                      curved_cantilever)
+from calibrate_prbm import (
+    FitSettings,
+    chain_cantilever,
+    elastica,
+    reference_paths,
+    relative_errors,
+    su2009_comparison,
+)
+from elastica import (
+    arc_tip_compliance,
+    cantilever_tip_force,
+    circle_under_end_moment,
+    curved_cantilever,
+)
 
 from flexval.geometry import Arc, Force, LoadCase, Moment, Segment, load_scene
 from flexval.geometry.shapes import arc_semi_axes
+from flexval.reducedmodels import build_system, run_reduced, solve_path
 from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels.core import local_hessian
-from flexval.reducedmodels import build_system, run_reduced, solve_path
-from flexval.reducedmodels.prbm import (PrbmConnector, PrbmParameters, load_table,
-                                shape_frame, table_parameters)
-from calibrate_prbm import (FitSettings, chain_cantilever, elastica, reference_paths,
-                            relative_errors, su2009_comparison)
+from flexval.reducedmodels.prbm import (
+    PrbmConnector,
+    PrbmParameters,
+    load_table,
+    shape_frame,
+    table_parameters,
+)
 
-LENGTH = 12.0          # mm, cantilever length in the dimensionless checks
-TEST_SET = FitSettings(n_directions=8, levels=5)   # a subset of the fit's samples
+LENGTH = 12.0  # mm, cantilever length in the dimensionless checks
+TEST_SET = FitSettings(n_directions=8, levels=5)  # a subset of the fit's samples
 
 
 def unit_arc(width_deg: float, length: float = LENGTH) -> Arc | Segment:
@@ -47,8 +62,9 @@ def prbm_cantilever_path(mech, load: np.ndarray, levels: int) -> np.ndarray:
     f = load[:2] * EI / L**2
     comps = []
     if np.hypot(*f) > 0.0:
-        comps.append(Force("t", mech.target_point, float(np.arctan2(f[1], f[0])),
-                           float(np.hypot(*f))))
+        comps.append(
+            Force("t", mech.target_point, float(np.arctan2(f[1], f[0])), float(np.hypot(*f)))
+        )
     if load[2] != 0.0:
         comps.append(Moment("t", float(load[2] * EI / L)))
     lp = solve_path(build_system(mech, parse_model("prbm")), LoadCase("c", tuple(comps), levels))
@@ -89,19 +105,26 @@ def test_straight_segment_is_inextensible_and_bends_like_the_fit():
     np.testing.assert_allclose(lp.reactions[-1][:2], -10 * EI / LENGTH**2 * axis, rtol=1e-10)
     # a transverse load (in the beam's frame) matches the fit's own PRBM solver
     normal = np.array([-axis[1], axis[0]])
-    lp = solve_path(build_system(mech, parse_model("prbm")),
-                    LoadCase("t", (Force("t", mech.target_point, 0.4 + 0.5 * np.pi,
-                                         2.0 * EI / LENGTH**2),), 5))
-    pose, ok = chain_cantilever(0.0, table_parameters(0.0),
-                                np.array([[[0.0, 2.0 * k / 4, 0.0] for k in range(1, 5)]]))
-    local = np.column_stack([np.array([lp.dx, lp.dy]).T[1:] @ np.column_stack([axis, normal]),
-                             lp.rotation[1:]]) / [LENGTH, LENGTH, 1.0]
+    lp = solve_path(
+        build_system(mech, parse_model("prbm")),
+        LoadCase("t", (Force("t", mech.target_point, 0.4 + 0.5 * np.pi, 2.0 * EI / LENGTH**2),), 5),
+    )
+    pose, ok = chain_cantilever(
+        0.0, table_parameters(0.0), np.array([[[0.0, 2.0 * k / 4, 0.0] for k in range(1, 5)]])
+    )
+    local = np.column_stack(
+        [np.array([lp.dx, lp.dy]).T[1:] @ np.column_stack([axis, normal]), lp.rotation[1:]]
+    ) / [LENGTH, LENGTH, 1.0]
     assert ok.all()
     np.testing.assert_allclose(local, pose[0], atol=1e-9)
     # the tangent is exact here too (the collinear chain is no special case)
     conn = PrbmConnector(mech.flexures[0], mech)
-    eg, eh, _ = fd_check(conn, np.array([2.0, 1.0, 0.0]), np.array([*mech.target_point, 0.0]),
-                         np.array([0.0, 0.0, 0.2, -0.1]))
+    eg, eh, _ = fd_check(
+        conn,
+        np.array([2.0, 1.0, 0.0]),
+        np.array([*mech.target_point, 0.0]),
+        np.array([0.0, 0.0, 0.2, -0.1]),
+    )
     assert eg < 1e-7 and eh < 1e-7
 
 
@@ -114,16 +137,22 @@ def test_chain_is_symmetric_about_the_arc_axis(scene):
         ra, r2, rb = conn.joints
         # the middle joint on the symmetry axis, the outer ones mirror images across it
         assert abs((r2 - center) @ e1) < 1e-12 * L
-        np.testing.assert_allclose([(ra - center) @ e1, (ra - center) @ e2],
-                                   [-(rb - center) @ e1, (rb - center) @ e2], atol=1e-12 * L)
+        np.testing.assert_allclose(
+            [(ra - center) @ e1, (ra - center) @ e2],
+            [-(rb - center) @ e1, (rb - center) @ e2],
+            atol=1e-12 * L,
+        )
         assert np.hypot(*(r2 - ra)) == pytest.approx(np.hypot(*(rb - r2)), rel=1e-13)
         assert conn.stiffness[0] == conn.stiffness[2] != conn.stiffness[1]
         # at rest the drawn chain starts and ends at the flexure's end points
         pa = np.array([*mech.bodies[conn.bodies[0]].reference, 0.0])
         pb = np.array([*mech.bodies[conn.bodies[1]].reference, 0.0])
         pts = conn.shape(pa, pb, conn.initial_internal())
-        np.testing.assert_allclose(pts[[0, -1]], [flex.end_point_of(conn.bodies[0]),
-                                                  flex.end_point_of(conn.bodies[1])], atol=1e-12)
+        np.testing.assert_allclose(
+            pts[[0, -1]],
+            [flex.end_point_of(conn.bodies[0]), flex.end_point_of(conn.bodies[1])],
+            atol=1e-12,
+        )
         np.testing.assert_allclose(pts[1:4], conn.joints, atol=1e-12)
 
 
@@ -136,9 +165,10 @@ def test_linear_compliance_equals_castigliano_exactly(width_deg):
     mech = cantilever(shape)
     EI = mech.flexures[0].bending_stiffness(mech.material)
     conn = PrbmConnector(mech.flexures[0], mech)
-    _, _, H = conn.evaluate(np.array([0.0, 0.0, 0.0]),
-                            np.array([*mech.target_point, 0.0]), conn.initial_internal())
-    K = local_hessian(conn, H).toarray()[3:, 3:]    # tip pose and internals; ground fixed
+    _, _, H = conn.evaluate(
+        np.array([0.0, 0.0, 0.0]), np.array([*mech.target_point, 0.0]), conn.initial_internal()
+    )
+    K = local_hessian(conn, H).toarray()[3:, 3:]  # tip pose and internals; ground fixed
     C = np.linalg.solve(K, np.vstack([np.eye(3), np.zeros((4, 3))]))[:3]
     exact = arc_tip_compliance(shape, EI, np.inf)
     np.testing.assert_allclose(C, exact, atol=1e-10 * np.abs(exact).max())
@@ -151,14 +181,15 @@ def test_small_loads_approach_the_elastica_linearly(width_deg):
     # 0.025 (270 deg) times the load (EI/L^2, EI/L), for loads 1e-3 .. 1e-1
     w = np.radians(width_deg)
     a = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
-    units = np.vstack([np.column_stack([np.cos(a), np.sin(a), np.zeros(8)]),
-                       [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]])
+    units = np.vstack(
+        [np.column_stack([np.cos(a), np.sin(a), np.zeros(8)]), [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]]
+    )
     for eps in (1e-3, 1e-1):
         loads = units * eps
         pose, ok = chain_cantilever(w, table_parameters(w), loads[:, None, :])
         ref, _, _ = elastica(w, loads)
         size = np.linalg.norm(ref, axis=1)
-        moving = size > 1e-6 * eps                  # axial loads on the straight beam do nothing
+        moving = size > 1e-6 * eps  # axial loads on the straight beam do nothing
         err = np.linalg.norm(pose[:, 0] - ref, axis=1)[moving] / size[moving]
         assert ok.all() and err.max() < 0.03 * eps
 
@@ -168,13 +199,19 @@ def test_pure_moment_rotation_is_exact_and_end_point_close(width_deg):
     shape = unit_arc(width_deg)
     mech = cantilever(shape)
     EI = mech.flexures[0].bending_stiffness(mech.material)
-    for m in (1.3, -1.3, 2.5):          # 75 deg both ways, and 143 deg
-        lp = solve_path(build_system(mech, parse_model("prbm")),
-                        tip_moment(m * EI / LENGTH, levels=6))
+    for m in (1.3, -1.3, 2.5):  # 75 deg both ways, and 143 deg
+        lp = solve_path(
+            build_system(mech, parse_model("prbm")), tip_moment(m * EI / LENGTH, levels=6)
+        )
         end, rot = circle_under_end_moment(shape, EI, m * EI / LENGTH)
         assert lp.rotation[-1] == pytest.approx(rot, rel=1e-10)
-        dp = np.hypot(lp.dx[-1] - (end - shape.end_points[1])[0],
-                      lp.dy[-1] - (end - shape.end_points[1])[1]) / LENGTH
+        dp = (
+            np.hypot(
+                lp.dx[-1] - (end - shape.end_points[1])[0],
+                lp.dy[-1] - (end - shape.end_points[1])[1],
+            )
+            / LENGTH
+        )
         # measured at these angles: <= 0.009 L within the fit range, <= 0.032 L at 143 deg
         assert dp < (0.01 if abs(m) < 2 else 0.035)
 
@@ -216,8 +253,9 @@ def test_connector_reproduces_the_fit_and_the_table_states_its_error(width_deg):
     loads, _, _ = reference_paths(w, TEST_SET)
     fit_pose, ok = chain_cantilever(w, table_parameters(w), loads)
     mech = cantilever(unit_arc(width_deg))
-    core_pose = np.array([prbm_cantilever_path(mech, path[-1], TEST_SET.levels + 1)
-                          for path in loads])
+    core_pose = np.array(
+        [prbm_cantilever_path(mech, path[-1], TEST_SET.levels + 1) for path in loads]
+    )
     # the connector in the core is the fitted model ...
     assert ok.all()
     np.testing.assert_allclose(core_pose, fit_pose, atol=1e-8)
@@ -233,8 +271,11 @@ def test_interpolation_at_an_untabulated_angle():
     rows = {r["width_deg"]: r for r in load_table()["table"]}
     p = table_parameters(np.radians(200.0))
     rho = 2.0 / p.kappa1
-    assert min(rows[195.0]["rho"], rows[210.0]["rho"]) - 0.01 < rho < \
-        max(rows[195.0]["rho"], rows[210.0]["rho"]) + 0.01
+    assert (
+        min(rows[195.0]["rho"], rows[210.0]["rho"]) - 0.01
+        < rho
+        < max(rows[195.0]["rho"], rows[210.0]["rho"]) + 0.01
+    )
     assert p == PrbmParameters.from_rho(np.radians(200.0), rho)
     w = np.radians(200.0)
     loads, _, _ = reference_paths(w, TEST_SET)
@@ -250,7 +291,7 @@ def test_interpolation_at_an_untabulated_angle():
 
 def test_params_option_selects_rho_or_explicit_chains():
     mech = load_scene("open_chain").mechanism
-    flex = mech.flexures[2]                               # 270 deg
+    flex = mech.flexures[2]  # 270 deg
     default = PrbmConnector(flex, mech)
     rho = 2.0 / default.params.kappa1
     assert PrbmConnector(flex, mech, params={"rho": rho}).params == default.params
@@ -273,9 +314,12 @@ def test_table_rows_are_consistent_and_cover_0_to_300_deg():
     assert widths[0] == 0.0 and widths[-1] >= 300.0 and np.all(np.diff(widths) > 0)
     for r in rows:
         p = PrbmParameters.from_rho(np.radians(r["width_deg"]), r["rho"])
-        np.testing.assert_allclose([p.x1, p.y1, p.y2, p.kappa1, p.kappa2],
-                                   [r["x1"], r["y1"], r["y2"], r["kappa1"], r["kappa2"]],
-                                   rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(
+            [p.x1, p.y1, p.y2, p.kappa1, p.kappa2],
+            [r["x1"], r["y1"], r["y2"], r["kappa1"], r["kappa2"]],
+            rtol=1e-9,
+            atol=1e-15,
+        )
         assert r["solved"] and r["rms_rel_error"] <= r["max_rel_error"]
 
 
@@ -298,8 +342,10 @@ def test_su2009_comparison_numbers():
     # Su's total compliance 1/3.51 + 1/2.99 + 1/2.58 = 1.0069: a moment overturns by 0.69 %
     assert rows["M = 1"]["su2009_rotation_error"] == pytest.approx(0.0069, abs=1e-4)
     assert rows["M = 2"]["this_fit_rotation_error"] < 1e-12
-    assert rows["F = 1 at 90 deg"]["this_fit_position_error"] < \
-        rows["F = 1 at 90 deg"]["su2009_position_error"] / 3
+    assert (
+        rows["F = 1 at 90 deg"]["this_fit_position_error"]
+        < rows["F = 1 at 90 deg"]["su2009_position_error"] / 3
+    )
 
 
 # --- mechanisms ------------------------------------------------------------
@@ -312,8 +358,9 @@ def test_invariance_to_a_rigid_motion_of_the_mechanism():
         a = run_reduced(scene.mechanism, parse_model("prbm"), case)
         b = run_reduced(moved, parse_model("prbm"), case.transformed(angle, shift))
         c, s = np.cos(angle), np.sin(angle)
-        back = np.array([c * np.array(b.dx) + s * np.array(b.dy),
-                         -s * np.array(b.dx) + c * np.array(b.dy)])
+        back = np.array(
+            [c * np.array(b.dx) + s * np.array(b.dy), -s * np.array(b.dx) + c * np.array(b.dy)]
+        )
         np.testing.assert_allclose(back, [a.dx, a.dy], atol=1e-9 * scene.mechanism.size())
         np.testing.assert_allclose(b.rotation, a.rotation, atol=1e-10)
 
@@ -326,8 +373,7 @@ def test_builtin_scenes_converge_near_dcmm3(scene):
         p = run_reduced(sc.mechanism, parse_model("prbm"), case)
         d = run_reduced(sc.mechanism, parse_model("dcmm:3"), case)
         assert p.converged
-        assert np.hypot(p.dx[-1], p.dy[-1]) == pytest.approx(np.hypot(d.dx[-1], d.dy[-1]),
-                                                             rel=0.03)
+        assert np.hypot(p.dx[-1], p.dy[-1]) == pytest.approx(np.hypot(d.dx[-1], d.dy[-1]), rel=0.03)
         assert p.rotation[-1] == pytest.approx(d.rotation[-1], rel=0.05)
 
 
@@ -356,13 +402,23 @@ def test_end_pass_kernels_against_the_generic_statics():
     for k, states in enumerate(levels):
         for j, (c, (pose_a, pose_b, internal)) in enumerate(zip(group.connectors, states)):
             joint_a = place(pose_a, c._r_a)
-            expected = np.array([place(pose_a, c._end_rel_a), joint_a,
-                                 place(np.array([*joint_a, internal[0]]), c._v_h),
-                                 place(pose_b, c._r_b), place(pose_b, c._end_rel_b)])
+            expected = np.array(
+                [
+                    place(pose_a, c._end_rel_a),
+                    joint_a,
+                    place(np.array([*joint_a, internal[0]]), c._v_h),
+                    place(pose_b, c._r_b),
+                    place(pose_b, c._end_rel_b),
+                ]
+            )
             np.testing.assert_allclose(lines[k, j], expected, rtol=1e-12, atol=1e-12)
-            generic = statics_section_forces(expected, c._fractions,
-                                             c.evaluate(pose_a, pose_b, internal)[1][3:6],
-                                             pose_b, reverse=not c._forward)
+            generic = statics_section_forces(
+                expected,
+                c._fractions,
+                c.evaluate(pose_a, pose_b, internal)[1][3:6],
+                pose_b,
+                reverse=not c._forward,
+            )
             np.testing.assert_array_equal(forces[j].at, generic.at)
             scale = np.abs(generic.moment).max()
             np.testing.assert_allclose(forces[j].moment[k], generic.moment, atol=1e-12 * scale)

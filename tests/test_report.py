@@ -57,23 +57,35 @@ def report(tmp_path_factory):
     d = tmp_path_factory.mktemp("rep")
     scene = d / "tiny.toml"
     scene.write_text(TINY)
-    md = build_report([str(scene)], d / "out", ["beam:100", "beam:10", "dcmm:1", "ee"],
-                      repeats=1, use_cache=False, progress=False, bench=False, converge=False)
+    md = build_report(
+        [str(scene)],
+        d / "out",
+        ["beam:100", "beam:10", "dcmm:1", "ee"],
+        repeats=1,
+        use_cache=False,
+        progress=False,
+        bench=False,
+        converge=False,
+    )
     return md
 
 
 def test_tables_match_results_json(report):
     text = report.read_text()
     paths = read_results(report.parent)["tiny"]
-    rows = re.findall(r"^\| (\S+) \| (up|twist) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| "
-                      r"([\d.]+) \| ([\d.]+) \|$", text, flags=re.M)
-    assert len(rows) == 3 * 2          # three models against beam:100, two cases
+    rows = re.findall(
+        r"^\| (\S+) \| (up|twist) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| "
+        r"([\d.]+) \| ([\d.]+) \|$",
+        text,
+        flags=re.M,
+    )
+    assert len(rows) == 3 * 2  # three models against beam:100, two cases
     size = load_scene(report.parent.parent / "tiny.toml").mechanism.size()
     for model, case, *vals in rows:
         e = errors(paths[(model, case)], paths[("beam:100", case)], size)
         expect = [e[k] for k in ("end_disp_vec", "end_disp", "end_rot", "path_disp", "path_rot")]
         for got, ref in zip(map(float, vals), expect):
-            assert got == pytest.approx(ref, abs=0.006)   # printed with 2 decimals
+            assert got == pytest.approx(ref, abs=0.006)  # printed with 2 decimals
 
 
 def test_results_json_holds_the_models_own_paths(report, tmp_path):
@@ -85,8 +97,13 @@ def test_results_json_holds_the_models_own_paths(report, tmp_path):
         direct = run_model(scene, parse_model(r["model"]), scene.load_case(r["load_case"]))
         for key in ("load", "dx", "dy", "rotation"):
             # deterministic solvers: equal up to round-off
-            np.testing.assert_allclose(r[key], getattr(direct, key), rtol=1e-9, atol=1e-12,
-                                       err_msg=f"{r['model']} {r['load_case']} {key}")
+            np.testing.assert_allclose(
+                r[key],
+                getattr(direct, key),
+                rtol=1e-9,
+                atol=1e-12,
+                err_msg=f"{r['model']} {r['load_case']} {key}",
+            )
 
 
 def test_timing_table_cells_are_each_paths_seconds(report):
@@ -98,7 +115,7 @@ def test_timing_table_cells_are_each_paths_seconds(report):
     start = next(k for k, line in enumerate(text) if "ours (s)" in line)
     header = [c.strip() for c in text[start].strip("|").split("|")]
     rows = {}
-    for line in text[start + 2:]:
+    for line in text[start + 2 :]:
         if not line.startswith("|"):
             break
         cells = [c.strip() for c in line.strip("|").split("|")]
@@ -129,10 +146,11 @@ def test_peak_stress_table_matches_results_json(report):
     for model, cells in rows:
         for case, cell in zip(("up", "twist"), cells.split(" | ")):
             lp, ref = paths[(model, case)], paths[("beam:100", case)]
-            value, err = re.match(r"([\d.e+-]+) MPa(?: at a@[\d.]+|, uniform) \(([+-][\d.]+) %\)",
-                                  cell).groups()
+            value, err = re.match(
+                r"([\d.e+-]+) MPa(?: at a@[\d.]+|, uniform) \(([+-][\d.]+) %\)", cell
+            ).groups()
             peak, ref_peak = lp.peak_stress["a"][-1], ref.peak_stress["a"][-1]
-            assert float(value) == pytest.approx(peak, rel=5e-4)       # 4 significant digits
+            assert float(value) == pytest.approx(peak, rel=5e-4)  # 4 significant digits
             assert float(err) == pytest.approx(100 * (peak - ref_peak) / ref_peak, abs=0.006)
     assert "Winkler-Bach" in section and "r/h = 10.0" in section
 
@@ -142,8 +160,16 @@ def test_limit_load_table_of_a_scene_with_a_limit_point(tmp_path):
     from pathlib import Path
 
     scene = Path(__file__).parent / "scenes" / "lee_frame.toml"
-    md = build_report([str(scene)], tmp_path / "out", ["beam:10", "prbm"], repeats=1,
-                      use_cache=False, progress=False, bench=False, converge=False)
+    md = build_report(
+        [str(scene)],
+        tmp_path / "out",
+        ["beam:10", "prbm"],
+        repeats=1,
+        use_cache=False,
+        progress=False,
+        bench=False,
+        converge=False,
+    )
     text = md.read_text()
     data = json.loads((md.parent / "results.json").read_text())["scenes"]["lee_frame"]
     limits = {f["model"]: f for f in data["failures"] if f["reason"] == "limit point"}
@@ -161,8 +187,15 @@ def builtin_report(tmp_path_factory):
     from flexval.validation.report import write_report
     from flexval.validation.reportdata import compute_report
 
-    data = compute_report(["open_chain", "closed_chain"], ["dcmm:1"], repeats=1,
-                          use_cache=False, progress=False, bench=False, converge=False)
+    data = compute_report(
+        ["open_chain", "closed_chain"],
+        ["dcmm:1"],
+        repeats=1,
+        use_cache=False,
+        progress=False,
+        bench=False,
+        converge=False,
+    )
     return data, write_report(data, tmp_path_factory.mktemp("builtin") / "out")
 
 
@@ -172,9 +205,12 @@ def _frequency_rows(text: str, scene: str) -> dict[str, list[tuple[str, float]]]
     table = part.split("### Natural frequencies against `beam:100`")[1].split("###")[0]
     rows = {}
     for model, cells in re.findall(r"^\| `(\S+)` \| (.+) \|$", table, flags=re.M):
-        rows[model] = [(v, float(e)) for v, e in
-                       (re.fullmatch(r"(\S+) \(([+-][\d.]+) %\)", c).groups()
-                        for c in cells.split(" | "))]
+        rows[model] = [
+            (v, float(e))
+            for v, e in (
+                re.fullmatch(r"(\S+) \(([+-][\d.]+) %\)", c).groups() for c in cells.split(" | ")
+            )
+        ]
     return rows
 
 
@@ -193,8 +229,10 @@ def test_frequency_table_equals_direct_modal_analysis(builtin_report, scene_name
     rows = _frequency_rows(md.read_text(), scene_name)
     assert list(rows) == ["beam:100", "dcmm:1"]
     mechanism = with_density(load_scene(scene_name), DEFAULT_DENSITY).mechanism
-    direct = {m: natural_modes(build_system(mechanism, parse_model(m)), count=MODE_COUNT)
-              .frequencies_hz for m in rows}
+    direct = {
+        m: natural_modes(build_system(mechanism, parse_model(m)), count=MODE_COUNT).frequencies_hz
+        for m in rows
+    }
     for model, cells in rows.items():
         for (value, err), f, f_ref in zip(cells, direct[model], direct["beam:100"]):
             assert value == f"{f:.5g}", (model, value, f)
@@ -216,15 +254,18 @@ def test_a_failed_modal_analysis_is_a_row_of_the_table(monkeypatch, tmp_path):
 
     monkeypatch.setattr(frequencies, "run_modes", failing_for_dcmm)
     (tmp_path / "tiny.toml").write_text(TINY)
-    table = frequencies.frequency_data(load_scene(tmp_path / "tiny.toml"), ["dcmm:1", "ee"],
-                                       "beam:100")
+    table = frequencies.frequency_data(
+        load_scene(tmp_path / "tiny.toml"), ["dcmm:1", "ee"], "beam:100"
+    )
     assert table.models == ["beam:100", "dcmm:1", "ee"]
     assert [(f.model, f.factor) for f in table.failures] == [("dcmm:1", 0.25)]
     assert set(table.frequencies) == {"beam:100", "ee"}
     text = "\n".join(frequencies.section(table))
     assert "| `dcmm:1` | fails (below) | — | — | — |" in text
-    assert "- `dcmm:1`: modal analysis failed: equilibrium for the modal analysis: " \
+    assert (
+        "- `dcmm:1`: modal analysis failed: equilibrium for the modal analysis: "
         "no convergence" in text
+    )
 
 
 def test_findings_name_the_levels_a_model_leaves_its_validity(tmp_path):
@@ -235,14 +276,24 @@ def test_findings_name_the_levels_a_model_leaves_its_validity(tmp_path):
 
     scene_file = tmp_path / "tiny.toml"
     scene_file.write_text(TINY.replace("value = 0.02", "value = 0.1"))
-    md = build_report([str(scene_file)], tmp_path / "out", ["beam:10", "ee"], repeats=1,
-                      use_cache=False, progress=False, bench=False, converge=False)
+    md = build_report(
+        [str(scene_file)],
+        tmp_path / "out",
+        ["beam:10", "ee"],
+        repeats=1,
+        use_cache=False,
+        progress=False,
+        bench=False,
+        converge=False,
+    )
     text = Path(md).read_text()
     scene = load_scene(scene_file)
     ee = run_model(scene, parse_model("ee"), scene.load_case("twist"))
     first = next(k for k, r in enumerate(ee.rotation) if abs(r) > MAX_LINEAR_ROTATION)
-    assert (f"- `ee` on `twist` leaves its range of validity from {ee.load[first]:.4g} N mm "
-            f"({len(ee.load) - first} of {len(ee.load)} levels)") in text
+    assert (
+        f"- `ee` on `twist` leaves its range of validity from {ee.load[first]:.4g} N mm "
+        f"({len(ee.load) - first} of {len(ee.load)} levels)"
+    ) in text
     assert "`beam:10` on `twist` leaves" not in text
 
 
@@ -267,19 +318,24 @@ def test_peak_stress_in_a_uniform_field_has_no_place():
 PROTOCOL_HEADING = "## Dynamics: the paper's protocol (open chain f−)"
 
 
-def test_protocol_section_sits_before_the_discussion_of_an_open_chain_report(builtin_report,
-                                                                             tmp_path):
+def test_protocol_section_sits_before_the_discussion_of_an_open_chain_report(
+    builtin_report, tmp_path
+):
     """Without --protocol the section says how to include it; with a protocol.json of this
     code version it renders it, links the table next to it and calls nothing stale."""
     from test_protocol_section import _document
+
     from flexval.validation.outputs import write_json
     from flexval.validation.report import render_markdown
 
     data, md = builtin_report
     text = md.read_text()
     assert text.count(PROTOCOL_HEADING) == 1
-    assert text.index("\n## closed_chain\n") < text.index(PROTOCOL_HEADING) < text.index(
-        "\n## Discussion\n")
+    assert (
+        text.index("\n## closed_chain\n")
+        < text.index(PROTOCOL_HEADING)
+        < text.index("\n## Discussion\n")
+    )
     assert "Not included in this report (no `--protocol` file)" in text
     path = tmp_path / "dynamics" / "protocol.json"
     path.parent.mkdir()

@@ -18,6 +18,7 @@ import re
 import pytest
 
 from flexval.geometry import load_scene
+from flexval.geometry.graph import independent_loops
 from flexval.reducedmodels import build_system, catalogue
 from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels.continuation import limit_loads, solve_arclength
@@ -25,7 +26,6 @@ from flexval.validation import figures
 from flexval.validation.cli import main
 from flexval.validation.failures import LIMIT_POINT, LIMIT_SETTINGS
 from flexval.validation.report import write_report
-from flexval.geometry.graph import independent_loops
 from flexval.validation.reportdata import compute_report
 
 ARCH = """
@@ -77,22 +77,30 @@ def arch(tmp_path_factory):
     d = tmp_path_factory.mktemp("arch")
     path = d / "arch.toml"
     path.write_text(ARCH)
-    data = compute_report([str(path)], MODELS, repeats=1, use_cache=False, progress=False,
-                          bench=False, converge=False)
+    data = compute_report(
+        [str(path)], MODELS, repeats=1, use_cache=False, progress=False, bench=False, converge=False
+    )
     return path, data, write_report(data, d / "out")
 
 
 def test_the_failure_is_recorded_with_its_limit_load(arch):
     path, data, _ = arch
-    res, = data.scenes
-    fail, = res.failures
+    (res,) = data.scenes
+    (fail,) = res.failures
     assert (fail.model, fail.load_case, fail.reason) == ("dcmm:2", "down", LIMIT_POINT)
     # independent: arc length through the limit point of the same model
     scene = load_scene(path)
     case = scene.load_case("down")
     system = build_system(scene.mechanism, parse_model("dcmm:2"), LIMIT_SETTINGS)
-    lp = solve_arclength(system, case, 1.0, 20, model="dcmm:2", max_steps=2000,
-                         stop=lambda p: bool(p.stats["limit_points"]))
+    lp = solve_arclength(
+        system,
+        case,
+        1.0,
+        20,
+        model="dcmm:2",
+        max_steps=2000,
+        stop=lambda p: bool(p.stats["limit_points"]),
+    )
     assert fail.load == pytest.approx(limit_loads(lp)[0], rel=1e-12)
     # load control stops just below the limit: the partial path ends at the load reached
     partial = res.paths[("dcmm:2", "down")]
@@ -113,8 +121,11 @@ def test_every_table_names_the_failure(arch):
     summary = fail.summary()
     assert re.fullmatch(r"fails at \d+ % \(limit point, [\d.]+ N\)", summary)
     timings = (md.parent / "timings.md").read_text()
-    rows = [line for line in (text + timings).splitlines() if line.startswith("| dcmm:2 |")
-            and not line.startswith("| dcmm:2 | follower |")]   # another model: it passes
+    rows = [
+        line
+        for line in (text + timings).splitlines()
+        if line.startswith("| dcmm:2 |") and not line.startswith("| dcmm:2 | follower |")
+    ]  # another model: it passes
     # paper-convention table, metrics table, frame table (leader row), timing table
     assert len(rows) == 4 and all(summary in r for r in rows), rows
     findings = text.split("### Findings")[1].split("## Discussion")[0]
@@ -127,7 +138,7 @@ def test_every_table_names_the_failure(arch):
 def test_results_json_carries_the_failure(arch):
     _, data, md = arch
     dump = json.loads((md.parent / "results.json").read_text())["scenes"]["arch"]
-    fail, = dump["failures"]
+    (fail,) = dump["failures"]
     assert fail == data.scenes[0].failures[0].to_dict()
     partial = next(r for r in dump["results"] if r["model"] == "dcmm:2")
     assert partial["converged"] is False and len(partial["load"]) >= 2
@@ -141,16 +152,29 @@ def test_rendering_runs_no_model(arch, tmp_path, monkeypatch):
     def broken(*args, **kwargs):
         raise AssertionError("a renderer ran a model")
 
-    monkeypatch.setattr(catalogue, "_FAMILIES", {f.name: dataclasses.replace(f, run=broken)
-                                                 for f in catalogue.families()})
+    monkeypatch.setattr(
+        catalogue,
+        "_FAMILIES",
+        {f.name: dataclasses.replace(f, run=broken) for f in catalogue.families()},
+    )
     again = write_report(data, tmp_path)
     assert again.read_text() == md.read_text()
 
 
 def test_report_from_the_command_line_exits_0(arch, tmp_path):
     path, _, _ = arch
-    args = ["report", str(path), "--out", str(tmp_path), "--no-bench", "--no-converge",
-            "--no-cache", "--quiet", "--repeats", "1"]
+    args = [
+        "report",
+        str(path),
+        "--out",
+        str(tmp_path),
+        "--no-bench",
+        "--no-converge",
+        "--no-cache",
+        "--quiet",
+        "--repeats",
+        "1",
+    ]
     for m in MODELS:
         args += ["--model", m]
     assert main(args) == 0
@@ -168,9 +192,11 @@ def test_topology_is_the_cycle_rank_of_the_body_graph(arch):
 def test_converge_records_the_failure_and_carries_on(arch, tmp_path):
     path, _, _ = arch
     out = tmp_path / "conv.json"
-    assert main(["converge", str(path), "--model", "dcmm", "--levels", "1,2,4",
-                 "--json", str(out)]) == 3
-    st, = json.loads(out.read_text())["studies"]
+    assert (
+        main(["converge", str(path), "--model", "dcmm", "--levels", "1,2,4", "--json", str(out)])
+        == 3
+    )
+    (st,) = json.loads(out.read_text())["studies"]
     assert [r["model"] for r in st["rows"]][0] == "dcmm:1"
     assert "dcmm:2" in [f["model"] for f in st["failures"]]
     assert len(st["rows"]) + len(st["failures"]) == 3
@@ -179,11 +205,11 @@ def test_converge_records_the_failure_and_carries_on(arch, tmp_path):
 def test_load_path_figure_draws_the_traced_branch(arch):
     """The arc-length path through dcmm:2's limit point is kept and drawn (dashed, labelled)."""
     _, data, _ = arch
-    res, = data.scenes
-    fail, = res.failures
+    (res,) = data.scenes
+    (fail,) = res.failures
     paths = {m: res.paths[(m, "down")] for m in res.models if (m, "down") in res.paths}
     curves = figures.load_path_curves(paths, res.traces("down"))
-    traced, = [c for c in curves if c["label"] == "dcmm:2 (arc length)"]
+    (traced,) = [c for c in curves if c["label"] == "dcmm:2 (arc length)"]
     assert traced["style"]["ls"] == "--"
     assert traced["style"]["color"] == figures.style("dcmm:2")["color"]
     assert list(traced["load"]) == [abs(v) for v in fail.trace.load]

@@ -15,12 +15,11 @@ import json
 import re
 
 import pytest
+from test_report import TINY
 
 from flexval.validation.peers import PeerRow
 from flexval.validation.report import write_report
 from flexval.validation.reportdata import LEFT_OUT, TIMING_STATS, compute_report, read_results
-
-from test_report import TINY
 
 MODELS = ["continuum:0", "beam:100", "beam:10", "dcmm:1", "ee"]
 RESULT_FILES = ("report.md", "results.json", "gates.json")
@@ -37,8 +36,9 @@ def _scene(tmp_path_factory):
 @pytest.fixture(scope="module")
 def computed(tmp_path_factory):
     scene = _scene(tmp_path_factory)
-    data = compute_report([scene], MODELS, repeats=2, use_cache=False, progress=False,
-                          bench=True, converge=True)
+    data = compute_report(
+        [scene], MODELS, repeats=2, use_cache=False, progress=False, bench=True, converge=True
+    )
     return scene, data
 
 
@@ -46,8 +46,9 @@ def _slower(data, factor: float):
     """``data`` with every run time multiplied by ``factor``."""
     data = copy.deepcopy(data)
     for res in data.scenes:
-        for lp in list(res.paths.values()) + (list(res.bracket.paths.values())
-                                               if res.bracket else []):
+        for lp in list(res.paths.values()) + (
+            list(res.bracket.paths.values()) if res.bracket else []
+        ):
             lp.seconds *= factor
             lp.stats["seconds_samples"] = [s * factor for s in lp.stats["seconds_samples"]]
         for row in res.bench_rows:
@@ -80,23 +81,31 @@ def test_the_opensees_comparison_goes_to_the_run_times_only(computed, tmp_path):
     write_report(data, tmp_path / "without")
     timed = copy.deepcopy(data)
     fast, slow = (0.004, 0.005, 0.006), (0.05, 0.06, 0.07)
-    timed.scenes[0].peers = [PeerRow("F", 1, fast, slow, fast, slow, fast, slow, 1e-4),
-                             PeerRow("G", None, reason="OpenSees did not converge")]
+    timed.scenes[0].peers = [
+        PeerRow("F", 1, fast, slow, fast, slow, fast, slow, 1e-4),
+        PeerRow("G", None, reason="OpenSees did not converge"),
+    ]
     write_report(timed, tmp_path / "with")
     for name in RESULT_FILES:
-        assert ((tmp_path / "without" / name).read_bytes()
-                == (tmp_path / "with" / name).read_bytes()), name
+        assert (tmp_path / "without" / name).read_bytes() == (
+            tmp_path / "with" / name
+        ).read_bytes(), name
     md = (tmp_path / "with" / "timings.md").read_text()
     assert "### beam:100 against OpenSeesPy" in md
-    assert "| F | 5.0 | 60.0 | 1 | 12.00x | 12.00x | 0.0001 |" in md      # medians: 60 / 5
+    assert "| F | 5.0 | 60.0 | 1 | 12.00x | 12.00x | 0.0001 |" in md  # medians: 60 / 5
     assert "| G | – | – | – | OpenSees did not converge |" in md
     peers = json.loads((tmp_path / "with" / "timings.json").read_text())["scenes"]["tiny"]["peers"]
     assert peers[0]["ratio"] == pytest.approx(12.0) and peers[1] == {
-        "load_case": "G", "substeps": None, "reason": "OpenSees did not converge"}
+        "load_case": "G",
+        "substeps": None,
+        "reason": "OpenSees did not converge",
+    }
     timed.scenes[0].peers = "OpenSeesPy is missing or does not load (no module)"
     write_report(timed, tmp_path / "missing")
-    assert ("Not timed: OpenSeesPy is missing or does not load (no module)."
-            in (tmp_path / "missing" / "timings.md").read_text())
+    assert (
+        "Not timed: OpenSeesPy is missing or does not load (no module)."
+        in (tmp_path / "missing" / "timings.md").read_text()
+    )
 
 
 def test_report_md_prints_no_run_time(computed, tmp_path):
@@ -122,22 +131,29 @@ def test_results_json_holds_no_time_nor_drawing_data(computed, tmp_path):
     assert all("seconds" not in row for row in results["bench"]) and results["bench"]
     # read back with the times of timings.json: the computed paths, less what is left out
     back = read_results(tmp_path)["tiny"]
-    res, = data.scenes
+    (res,) = data.scenes
     assert set(back) == set(res.paths)
     for key, lp in res.paths.items():
         assert back[key].seconds == lp.seconds
-        assert (back[key].dx, back[key].rotation, back[key].poses) == (lp.dx, lp.rotation,
-                                                                       lp.poses)
+        assert (back[key].dx, back[key].rotation, back[key].poses) == (lp.dx, lp.rotation, lp.poses)
 
 
 def test_two_workers_write_what_one_writes(computed, tmp_path):
     """Paths computed ahead on two processes: the same results, tables and order."""
     scene, data = computed
-    two = compute_report([scene], MODELS, repeats=2, use_cache=False, progress=False,
-                         bench=True, converge=True, workers=2)
+    two = compute_report(
+        [scene],
+        MODELS,
+        repeats=2,
+        use_cache=False,
+        progress=False,
+        bench=True,
+        converge=True,
+        workers=2,
+    )
     assert two.workers == 2
     write_report(data, tmp_path / "one")
-    write_report(two, tmp_path / "two")      # figures drawn on two processes too
+    write_report(two, tmp_path / "two")  # figures drawn on two processes too
     figures = sorted(p.name for p in (tmp_path / "one").glob("*.png"))
     assert figures == sorted(p.name for p in (tmp_path / "two").glob("*.png"))
     for name in RESULT_FILES + tuple(f for f in figures if not f.startswith("bench_")):

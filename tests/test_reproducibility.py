@@ -52,9 +52,17 @@ size decisions that amplify a difference in the last digits are exercised)."""
 
 def _run_twice_in_two_processes() -> list[dict]:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    procs = [subprocess.Popen([sys.executable, "-c", RUN], env=env, cwd=ROOT, text=True,
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-             for _ in range(2)]
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", RUN],
+            env=env,
+            cwd=ROOT,
+            text=True,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+        )
+        for _ in range(2)
+    ]
     outs = []
     for p in procs:
         out, err = p.communicate()
@@ -65,8 +73,8 @@ def _run_twice_in_two_processes() -> list[dict]:
 
 def test_dynamic_run_is_bit_identical_in_one_process_and_across_processes():
     first, second = _run_twice_in_two_processes()
-    assert first["sparse"]                           # the ARPACK path is the one exercised
-    assert first["rejected"] > 0                     # and step rejections happen
+    assert first["sparse"]  # the ARPACK path is the one exercised
+    assert first["rejected"] > 0  # and step rejections happen
     assert first["frequencies"] == second["frequencies"]
-    assert first["histories"][0] == first["histories"][1]      # same process
-    assert first["histories"] == second["histories"]           # another process
+    assert first["histories"][0] == first["histories"][1]  # same process
+    assert first["histories"] == second["histories"]  # another process

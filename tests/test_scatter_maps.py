@@ -42,17 +42,25 @@ def plain_entries(system) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([*rows, diagonal]), np.concatenate([*cols, diagonal])
 
 
-@pytest.mark.parametrize("scene, model", [("open_chain", "beam:4"), ("closed_chain", "beam:30"),
-                                          ("open_chain", "dcmm:3"), ("closed_chain", "dcmm:7"),
-                                          ("closed_chain", "prbm"),
-                                          (SCENES / "lee_frame.toml", "beam:12"),
-                                          (SCENES / "deep_arch.toml", "dcmm:4")])
+@pytest.mark.parametrize(
+    "scene, model",
+    [
+        ("open_chain", "beam:4"),
+        ("closed_chain", "beam:30"),
+        ("open_chain", "dcmm:3"),
+        ("closed_chain", "dcmm:7"),
+        ("closed_chain", "prbm"),
+        (SCENES / "lee_frame.toml", "beam:12"),
+        (SCENES / "deep_arch.toml", "dcmm:4"),
+    ],
+)
 @pytest.mark.parametrize("gravity", [False, True])
 def test_layout_is_the_one_of_the_connectors_own_entries(scene, model, gravity):
     mechanism = load_scene(scene).mechanism
-    if gravity:                    # the flexures' weights: connectors wrapped in Weighted
-        mechanism = dataclasses.replace(mechanism, inertia=MassData(
-            density=7.8e-9, gravity=np.array([0.0, -9810.0])))
+    if gravity:  # the flexures' weights: connectors wrapped in Weighted
+        mechanism = dataclasses.replace(
+            mechanism, inertia=MassData(density=7.8e-9, gravity=np.array([0.0, -9810.0]))
+        )
     system = build_system(mechanism, parse_model(model))
     compiled = any(group.compiled for group, _ in system.groups)
     rows, cols = plain_entries(system)
@@ -65,8 +73,9 @@ def test_layout_is_the_one_of_the_connectors_own_entries(scene, model, gravity):
         np.testing.assert_array_equal(layout.perm, reference.perm)
 
 
-@pytest.mark.parametrize("scene, model", [("open_chain", "beam:5"), ("closed_chain", "dcmm:2"),
-                                          ("open_chain", "prbm")])
+@pytest.mark.parametrize(
+    "scene, model", [("open_chain", "beam:5"), ("closed_chain", "dcmm:2"), ("open_chain", "prbm")]
+)
 def test_group_pattern_is_its_connectors_patterns_end_to_end(scene, model):
     """A group's pattern (beams: from the element table) is the concatenation of its
     connectors' own, each shifted by the connector's first local coordinate."""
@@ -82,9 +91,15 @@ def test_group_pattern_is_its_connectors_patterns_end_to_end(scene, model):
         np.testing.assert_array_equal(got_cols, np.concatenate(cols))
 
 
-@pytest.mark.parametrize("scene, model", [("open_chain", "beam:1"), ("open_chain", "beam:7"),
-                                          ("closed_chain", "beam:3"),
-                                          (SCENES / "lee_frame.toml", "beam:5")])
+@pytest.mark.parametrize(
+    "scene, model",
+    [
+        ("open_chain", "beam:1"),
+        ("open_chain", "beam:7"),
+        ("closed_chain", "beam:3"),
+        (SCENES / "lee_frame.toml", "beam:5"),
+    ],
+)
 def test_beam_group_tables_are_its_connectors_tables_end_to_end(scene, model):
     """The group's node and element tables, built for all its flexures at once, are each
     connector's own (its node dof table, elements node after node) shifted and laid end to end."""
@@ -110,8 +125,10 @@ def test_beam_group_tables_are_its_connectors_tables_end_to_end(scene, model):
             assert array.dtype == np.int64
 
 
-@pytest.mark.parametrize("scene, model", [("open_chain", "dcmm:1"), ("closed_chain", "beam:4"),
-                                          (SCENES / "lee_frame.toml", "prbm")])
+@pytest.mark.parametrize(
+    "scene, model",
+    [("open_chain", "dcmm:1"), ("closed_chain", "beam:4"), (SCENES / "lee_frame.toml", "prbm")],
+)
 def test_gather_maps_read_the_ground_pose_after_the_coordinates(scene, model):
     """Each connector's places in [q, ground pose]: its own dofs, and for a pose on the
     ground the ground pose's three entries after q."""

@@ -36,9 +36,12 @@ def _dump(data: dict) -> str:
             return "{" + ", ".join(f'"{k}" = {val(x)}' for k, x in v.items()) + "}"
         return repr(v)
 
-    out = [f'"{k}" = {val(v)}' for k, v in data.items()
-           if not isinstance(v, (dict, list)) or (isinstance(v, list) and not
-                                                  (v and isinstance(v[0], dict)))]
+    out = [
+        f'"{k}" = {val(v)}'
+        for k, v in data.items()
+        if not isinstance(v, (dict, list))
+        or (isinstance(v, list) and not (v and isinstance(v[0], dict)))
+    ]
     for k, v in data.items():
         if isinstance(v, dict):
             out.append(f"[{k}]")
@@ -94,7 +97,7 @@ def test_non_positive_modulus(tmp_path):
 
 def test_thickness_not_below_diameter(tmp_path):
     d = _base()
-    _flex(d, "e34")["thickness"] = 5.0   # r = 2.5
+    _flex(d, "e34")["thickness"] = 5.0  # r = 2.5
     _expect(tmp_path, d, "flexures.e34.thickness", "5.0")
 
 
@@ -124,8 +127,16 @@ def test_nan_inf_absurd(tmp_path, bad):
 
 def test_dangling_body(tmp_path):
     d = _base()
-    d["flexures"].append({"name": "e45", "bodies": ["4", "5"], "center": [22.0, 18.0],
-                          "radius": 1.0, "axis_deg": 0.0, "width_deg": 90.0})
+    d["flexures"].append(
+        {
+            "name": "e45",
+            "bodies": ["4", "5"],
+            "center": [22.0, 18.0],
+            "radius": 1.0,
+            "axis_deg": 0.0,
+            "width_deg": 90.0,
+        }
+    )
     _expect(tmp_path, d, "flexures", "'5'")
 
 
@@ -217,16 +228,24 @@ def test_cli_exit_code_2_without_traceback(tmp_path, capsys):
 def test_crossing_flexures_are_impossible_geometry(tmp_path):
     d = _base()
     # a half circle ending on link 2 at (2.598, 4.5) that swings left through e12's top
-    d["flexures"].append({"name": "ex", "bodies": ["2", "5"], "center": [2.598, 6.5],
-                          "radius": 2.0, "axis_deg": 180.0, "width_deg": 180.0,
-                          "start_body": "5"})
+    d["flexures"].append(
+        {
+            "name": "ex",
+            "bodies": ["2", "5"],
+            "center": [2.598, 6.5],
+            "radius": 2.0,
+            "axis_deg": 180.0,
+            "width_deg": 180.0,
+            "start_body": "5",
+        }
+    )
     d["load_cases"].append({"name": "m5", "kind": "moment", "body": "5", "value": 1e-3})
     _expect(tmp_path, d, "flexures.ex", "crosses flexure")
 
 
 def test_arc_closing_on_itself(tmp_path):
     d = _base()
-    _flex(d, "e34")["width_deg"] = 358.0       # ends 0.087 mm apart < h = 0.1 mm
+    _flex(d, "e34")["width_deg"] = 358.0  # ends 0.087 mm apart < h = 0.1 mm
     _expect(tmp_path, d, "flexures.e34.width_deg", "closes on itself")
 
 
@@ -238,5 +257,5 @@ def test_crossings_finds_a_proper_crossing_only():
     p = np.array([[0.0, 0.0], [2.0, 2.0]])
     q = np.array([[0.0, 2.0], [2.0, 0.0]])
     np.testing.assert_allclose(crossings(p, q), [[1.0, 1.0]])
-    assert len(crossings(p, q + [5.0, 0.0])) == 0      # disjoint
-    assert len(crossings(p, p + [0.0, 1.0])) == 0      # parallel
+    assert len(crossings(p, q + [5.0, 0.0])) == 0  # disjoint
+    assert len(crossings(p, p + [0.0, 1.0])) == 0  # parallel

@@ -13,24 +13,35 @@ from flexval.geometry.magnitudes import SMALLEST_NORMAL, is_degenerate
 from flexval.geometry.scene import parse_scene
 from flexval.validation.cli import main
 
-FOURBAR = {   # tests/test_joints.py's four-bar: a coupler arc between two pinned bodies
+FOURBAR = {  # tests/test_joints.py's four-bar: a coupler arc between two pinned bodies
     "name": "fourbar",
     "material": {"youngs_modulus": 2200.0, "poisson_ratio": 0.35},
     "section": {"depth": 5.0, "thickness": 1.2},
     "ground": {"name": "g", "points": [[0.0, 0.0], [100.0, 0.0]]},
     "target": {"body": "a", "point": [10.0, 60.0]},
-    "flexures": [{"name": "coupler", "bodies": ["a", "b"], "center": [50.0, 40.0],
-                  "radius": math.hypot(40.0, 20.0), "axis_deg": 90.0,
-                  "width_deg": 2 * math.degrees(math.atan2(40.0, 20.0))}],
-    "pins": [{"name": "pa", "bodies": ["g", "a"], "point": [0.0, 0.0]},
-             {"name": "pb", "bodies": ["b", "g"], "point": [100.0, 0.0]}],
-    "load_cases": [{"name": "fx", "kind": "force", "point": [10.0, 60.0], "angle_deg": 0.0,
-                    "value": 1.0}],
+    "flexures": [
+        {
+            "name": "coupler",
+            "bodies": ["a", "b"],
+            "center": [50.0, 40.0],
+            "radius": math.hypot(40.0, 20.0),
+            "axis_deg": 90.0,
+            "width_deg": 2 * math.degrees(math.atan2(40.0, 20.0)),
+        }
+    ],
+    "pins": [
+        {"name": "pa", "bodies": ["g", "a"], "point": [0.0, 0.0]},
+        {"name": "pb", "bodies": ["b", "g"], "point": [100.0, 0.0]},
+    ],
+    "load_cases": [
+        {"name": "fx", "kind": "force", "point": [10.0, 60.0], "angle_deg": 0.0, "value": 1.0}
+    ],
 }
 
 
 def _fourbar():
     import copy
+
     return copy.deepcopy(FOURBAR)
 
 
@@ -42,9 +53,17 @@ def test_the_fourbar_base_is_valid(tmp_path):
 
 # --- encodings and structure -------------------------------------------------------------
 
-@pytest.mark.parametrize("encoding,hint", [("latin-1", "Latin-1"), ("cp1252", "Latin-1"),
-                                           ("utf-16", "UTF-16"), ("utf-16-be", None),
-                                           ("utf-32", "UTF-32")])
+
+@pytest.mark.parametrize(
+    "encoding,hint",
+    [
+        ("latin-1", "Latin-1"),
+        ("cp1252", "Latin-1"),
+        ("utf-16", "UTF-16"),
+        ("utf-16-be", None),
+        ("utf-32", "UTF-32"),
+    ],
+)
 def test_a_scene_file_that_is_not_utf8_is_refused(tmp_path, encoding, hint):
     d = _base()
     d["description"] = "Chaîne ouverte, modèle réduit"
@@ -71,8 +90,11 @@ def test_utf8_with_a_byte_order_mark_is_read(tmp_path):
 def test_arrays_nested_thousands_deep_are_a_scene_error(tmp_path, depth, where):
     text = _dump(_base())
     nested = "[" * depth + "]" * depth
-    text = (text.replace('"points" = [[0.0, 0.0]]', f'"points" = {nested}')
-            if where == "ground_points" else f"deep = {nested}\n" + text)
+    text = (
+        text.replace('"points" = [[0.0, 0.0]]', f'"points" = {nested}')
+        if where == "ground_points"
+        else f"deep = {nested}\n" + text
+    )
     path = tmp_path / "deep.toml"
     path.write_text(text)
     with pytest.raises(SceneError) as info:
@@ -93,9 +115,19 @@ def test_cli_deep_nesting_exit_2_without_traceback(tmp_path, capsys):
 
 # --- degenerate positive numbers ---------------------------------------------------------
 
-@pytest.mark.parametrize("value,expected", [(0.0, True), (1e-320, True), (-5e-324, True),
-                                            (float("inf"), True), (float("nan"), True),
-                                            (SMALLEST_NORMAL, False), (-1e300, False)])
+
+@pytest.mark.parametrize(
+    "value,expected",
+    [
+        (0.0, True),
+        (1e-320, True),
+        (-5e-324, True),
+        (float("inf"), True),
+        (float("nan"), True),
+        (SMALLEST_NORMAL, False),
+        (-1e300, False),
+    ],
+)
 def test_is_degenerate(value, expected):
     assert is_degenerate(value) is expected
 
@@ -156,17 +188,21 @@ def test_cli_degenerate_number_exit_2(tmp_path, capsys):
 
 # --- mechanisms that are not structures --------------------------------------------------
 
+
 def _pins(*pins):
     """Pin tables from (name, two body letters, point) triples."""
     return [{"name": n, "bodies": list(b), "point": list(p)} for n, b, p in pins]
 
 
-@pytest.mark.parametrize("pins,moving", [
-    # b pinned to a instead of the ground: a-b turn about pa
-    (_pins(("pa", "ga", (0.0, 0.0)), ("pb", "ba", (100.0, 0.0))), "['a', 'b']"),
-    # both pins at the same ground point: the coupler turns about it
-    (_pins(("pa", "ga", (0.0, 0.0)), ("pb", "bg", (0.0, 0.0))), "['a', 'b']"),
-])
+@pytest.mark.parametrize(
+    "pins,moving",
+    [
+        # b pinned to a instead of the ground: a-b turn about pa
+        (_pins(("pa", "ga", (0.0, 0.0)), ("pb", "ba", (100.0, 0.0))), "['a', 'b']"),
+        # both pins at the same ground point: the coupler turns about it
+        (_pins(("pa", "ga", (0.0, 0.0)), ("pb", "bg", (0.0, 0.0))), "['a', 'b']"),
+    ],
+)
 def test_pins_that_leave_the_mechanism_mobile_are_refused(tmp_path, pins, moving):
     d = _fourbar()
     d["ground"]["points"] = [[0.0, 0.0]]
@@ -175,12 +211,15 @@ def test_pins_that_leave_the_mechanism_mobile_are_refused(tmp_path, pins, moving
     assert f"{moving} can move" in msg
 
 
-@pytest.mark.parametrize("extra,named", [
-    # the same body pinned twice to the ground at one point
-    (("pa2", ["g", "a"], [0.0, 0.0]), "['pa', 'pa2']"),
-    # the same body pinned to the ground at a second point: one constraint too many
-    (("pa2", ["a", "g"], [100.0, 0.0]), "['pa', 'pa2']"),
-])
+@pytest.mark.parametrize(
+    "extra,named",
+    [
+        # the same body pinned twice to the ground at one point
+        (("pa2", ["g", "a"], [0.0, 0.0]), "['pa', 'pa2']"),
+        # the same body pinned to the ground at a second point: one constraint too many
+        (("pa2", ["a", "g"], [100.0, 0.0]), "['pa', 'pa2']"),
+    ],
+)
 def test_redundant_pins_are_refused_by_name(tmp_path, extra, named):
     d = _fourbar()
     name, bodies, point = extra
@@ -193,10 +232,23 @@ def test_a_four_bar_of_pins_only_is_mobile(tmp_path):
     # rigid a, b, c pinned in a parallelogram to the ground; d hangs on b by a flexure
     d = _fourbar()
     d["ground"]["points"] = [[0.0, 0.0], [100.0, 0.0]]
-    d["pins"] = _pins(("p1", "ga", (0.0, 0.0)), ("p2", "ab", (0.0, 50.0)),
-                      ("p3", "bc", (100.0, 50.0)), ("p4", "cg", (100.0, 0.0)))
-    d["flexures"] = [{"name": "f", "bodies": ["b", "d"], "center": [50.0, 60.0], "radius": 5.0,
-                      "axis_deg": 90.0, "width_deg": 90.0, "start_body": "b"}]
+    d["pins"] = _pins(
+        ("p1", "ga", (0.0, 0.0)),
+        ("p2", "ab", (0.0, 50.0)),
+        ("p3", "bc", (100.0, 50.0)),
+        ("p4", "cg", (100.0, 0.0)),
+    )
+    d["flexures"] = [
+        {
+            "name": "f",
+            "bodies": ["b", "d"],
+            "center": [50.0, 60.0],
+            "radius": 5.0,
+            "axis_deg": 90.0,
+            "width_deg": 90.0,
+            "start_body": "b",
+        }
+    ]
     d["target"] = {"body": "d", "point": [50.0, 70.0]}
     d["load_cases"] = [{"name": "m", "kind": "moment", "body": "d", "value": 1.0}]
     msg = _expect(tmp_path, d, "pins", "can move")
@@ -216,12 +268,19 @@ def test_cli_redundant_pin_exit_2_for_every_model(tmp_path, capsys, model):
 
 # --- scene entries accepted but ignored --------------------------------------------------
 
-@pytest.mark.parametrize("bodies,field,text", [
-    ([{"name": "9", "points": [[1.0, 1.0]]}], "bodies.9", "no flexure or pin"),
-    ([{"name": "4", "points": [[20.0, 15.8]]}], "bodies.4.points", "meets this point"),
-    ([{"name": "2", "points": [[2.598, 4.5]]}, {"name": "2", "points": [[6.059, 6.5]]}],
-     "bodies.name", "duplicate"),
-])
+
+@pytest.mark.parametrize(
+    "bodies,field,text",
+    [
+        ([{"name": "9", "points": [[1.0, 1.0]]}], "bodies.9", "no flexure or pin"),
+        ([{"name": "4", "points": [[20.0, 15.8]]}], "bodies.4.points", "meets this point"),
+        (
+            [{"name": "2", "points": [[2.598, 4.5]]}, {"name": "2", "points": [[6.059, 6.5]]}],
+            "bodies.name",
+            "duplicate",
+        ),
+    ],
+)
 def test_body_entries_that_would_be_ignored_are_refused(tmp_path, bodies, field, text):
     d = _base()
     d["bodies"] = bodies
@@ -235,20 +294,27 @@ def test_ground_points_nothing_uses_are_refused(tmp_path, point):
     _expect(tmp_path, d, "ground.points", "no flexure end or pin")
 
 
-@pytest.mark.parametrize("key,value", [("levels", 3), ("name", "inner"),
-                                       ("loads", [{"kind": "moment", "value": 1e9}])])
+@pytest.mark.parametrize(
+    "key,value", [("levels", 3), ("name", "inner"), ("loads", [{"kind": "moment", "value": 1e9}])]
+)
 def test_case_fields_inside_a_combined_load_component_are_refused(tmp_path, key, value):
     d = _base()
-    d["load_cases"].append({"name": "both", "loads": [
-        {"kind": "moment", "value": 1e-3, key: value}, {"kind": "force", "value": 1e-3,
-                                                         "angle_deg": 0.0}]})
+    d["load_cases"].append(
+        {
+            "name": "both",
+            "loads": [
+                {"kind": "moment", "value": 1e-3, key: value},
+                {"kind": "force", "value": 1e-3, "angle_deg": 0.0},
+            ],
+        }
+    )
     _expect(tmp_path, d, f"load_cases.both.loads[0].{key}", "unknown field")
 
 
 @pytest.mark.parametrize("flexure,body", [("e12", "1")])
 def test_a_start_body_leaving_the_ground_end_off_every_ground_point(tmp_path, flexure, body):
     d = _base()
-    _flex(d, flexure)["start_body"] = body      # puts e12's far end on the ground
+    _flex(d, flexure)["start_body"] = body  # puts e12's far end on the ground
     _expect(tmp_path, d, f"flexures.{flexure}.start_body", "away from every ground point")
 
 
@@ -271,8 +337,24 @@ def test_a_start_body_on_a_closed_chain_ground_flexure(tmp_path):
 
 # --- the scene name is a file-name stem --------------------------------------------------
 
-@pytest.mark.parametrize("name", ["../escaped", "a/b", "a\\b", "", "  ", "..", ".", "x\ty",
-                                  "bell\u0007", "x" * 201, "c:drive", "q?"])
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "../escaped",
+        "a/b",
+        "a\\b",
+        "",
+        "  ",
+        "..",
+        ".",
+        "x\ty",
+        "bell\u0007",
+        "x" * 201,
+        "c:drive",
+        "q?",
+    ],
+)
 def test_names_unsafe_as_a_file_stem_are_refused(name):
     d = _base()
     d["name"] = name
@@ -305,10 +387,13 @@ def test_mechanism_size_does_not_change():
 
 # --- overlap check: the spatial index prunes nothing that can cross ------------------------
 
+
 def _random_polylines(seed: int, n: int) -> list[np.ndarray]:
     rng = np.random.default_rng(seed)
     starts = rng.uniform(-20.0, 20.0, size=(n, 1, 2))
-    return [s + np.cumsum(rng.normal(scale=1.5, size=(12, 2)), axis=0) for s in starts[:, 0][:, None]]
+    return [
+        s + np.cumsum(rng.normal(scale=1.5, size=(12, 2)), axis=0) for s in starts[:, 0][:, None]
+    ]
 
 
 @pytest.mark.parametrize("seed,n", [(0, 2), (1, 15), (2, 60), (3, 120)])
@@ -318,8 +403,12 @@ def test_candidate_pairs_are_exactly_the_overlapping_bounding_boxes(seed, n):
     lines = _random_polylines(seed, n)
     lo = [line.min(axis=0) for line in lines]
     hi = [line.max(axis=0) for line in lines]
-    brute = [(i, j) for i in range(n) for j in range(i + 1, n)
-             if np.all(lo[i] <= hi[j]) and np.all(lo[j] <= hi[i])]
+    brute = [
+        (i, j)
+        for i in range(n)
+        for j in range(i + 1, n)
+        if np.all(lo[i] <= hi[j]) and np.all(lo[j] <= hi[i])
+    ]
     assert candidate_pairs(lines) == brute
 
 
@@ -327,7 +416,7 @@ def test_candidate_pairs_are_exactly_the_overlapping_bounding_boxes(seed, n):
 def test_crossings_restricted_to_the_box_overlap_find_every_crossing(seed):
     from flexval.geometry.overlap import crossings
 
-    def all_pairs(p, q):     # the test on every pair of segments, no pruning
+    def all_pairs(p, q):  # the test on every pair of segments, no pruning
         found = []
         for a, b in zip(p[:-1], p[1:]):
             for c, d in zip(q[:-1], q[1:]):
@@ -348,4 +437,4 @@ def test_crossings_restricted_to_the_box_overlap_find_every_crossing(seed):
             expected = all_pairs(lines[i], lines[j])
             np.testing.assert_allclose(crossings(lines[i], lines[j]), expected, atol=1e-12)
             total += len(expected)
-    assert total > 0          # the random walks do cross, so the comparison means something
+    assert total > 0  # the random walks do cross, so the comparison means something

@@ -41,7 +41,7 @@ def test_pure_end_moment_gives_the_uniform_bending_stress(model):
     # at rest the internal forces are the solver's residual (~1e-11 MPa here)
     np.testing.assert_allclose(lp.peak_stress["f"], expected, rtol=1e-7, atol=1e-9)
     profile = np.asarray(lp.stress_profile["f"]["stress"])
-    np.testing.assert_allclose(profile, expected[-1], rtol=1e-7)   # the same all along
+    np.testing.assert_allclose(profile, expected[-1], rtol=1e-7)  # the same all along
     at = np.asarray(lp.stress_profile["f"]["at"])
     assert at[0] == 0.0 and at[-1] == 1.0 and np.all(np.diff(at) >= 0.0)
 
@@ -88,11 +88,16 @@ def test_large_tip_force_root_stress_matches_the_elastica():
 
 def test_statics_reports_fractions_from_the_first_end_when_reversed():
     pts = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
-    forward = statics_section_forces(pts, np.array([0.0, 0.5, 1.0]), np.array([0.0, 1.0, 0.0]),
-                                     np.array([2.0, 0.0, 0.0]))
-    backward = statics_section_forces(pts[::-1], np.array([0.0, 0.5, 1.0]),
-                                      np.array([0.0, -1.0, 0.0]), np.array([0.0, 0.0, 0.0]),
-                                      reverse=True)
+    forward = statics_section_forces(
+        pts, np.array([0.0, 0.5, 1.0]), np.array([0.0, 1.0, 0.0]), np.array([2.0, 0.0, 0.0])
+    )
+    backward = statics_section_forces(
+        pts[::-1],
+        np.array([0.0, 0.5, 1.0]),
+        np.array([0.0, -1.0, 0.0]),
+        np.array([0.0, 0.0, 0.0]),
+        reverse=True,
+    )
     # a unit transverse force at x = 2 (forward) / x = 0 (backward): |M| = distance to it
     np.testing.assert_allclose(np.abs(forward.moment), [2.0, 1.0, 1.0, 0.0])
     np.testing.assert_allclose(backward.at, [0.0, 0.5, 0.5, 1.0])
@@ -140,8 +145,8 @@ def test_self_weight_moment_follows_the_distributed_load(model):
     mech = dataclasses.replace(mech, inertia=MassData(density=rho, gravity=np.array([0.0, -g])))
     lp = _run(mech, tip_moment(0.0, levels=2), model)
     q = rho * B * 0.1 * g
-    moment = lambda s: q * (L - s) ** 2 / 2.0                       # noqa: E731
-    stress = lambda s: 6.0 * moment(s) / (B * 0.1**2)               # noqa: E731 (N ~ 1e-3 q L)
+    moment = lambda s: q * (L - s) ** 2 / 2.0  # noqa: E731
+    stress = lambda s: 6.0 * moment(s) / (B * 0.1**2)  # noqa: E731 (N ~ 1e-3 q L)
     assert lp.peak_stress_at["f"][-1] == 0.0
     ground_piece = 0.0 if model.startswith("beam") else (L / int(model.split(":")[1])) ** 2 / 8.0
     root = 6.0 * (moment(0.0) - q * ground_piece) / (B * 0.1**2)
@@ -149,8 +154,9 @@ def test_self_weight_moment_follows_the_distributed_load(model):
     if model.startswith("beam"):
         profile = lp.stress_profile["f"]
         at = np.asarray(profile["at"])
-        np.testing.assert_allclose(profile["stress"], stress(at * L), rtol=1e-5,
-                                   atol=1e-5 * stress(0.0))
+        np.testing.assert_allclose(
+            profile["stress"], stress(at * L), rtol=1e-5, atol=1e-5 * stress(0.0)
+        )
 
 
 @pytest.mark.parametrize("r_over_h", [2.0, 8.3, 30.0])
@@ -167,7 +173,7 @@ def test_curved_beam_factor_is_the_winkler_bach_inner_fibre_stress(r_over_h):
     r_i, r_o = r - h / 2, r + h / 2
     r_n = h / math.log(r_o / r_i)
     e = r - r_n
-    sigma = lambda x: M * (r_n - x) / (b * h * e * x)              # noqa: E731
+    sigma = lambda x: M * (r_n - x) / (b * h * e * x)  # noqa: E731
     assert abs(quad(sigma, r_i, r_o, epsabs=1e-13)[0] * b) < 1e-9
     assert quad(lambda x: sigma(x) * (r - x), r_i, r_o)[0] * b == pytest.approx(M, rel=1e-9)
     factor = curved_beam_factor(r, h)
@@ -185,8 +191,7 @@ def test_continuum_fibre_stress_of_a_thick_arc_is_the_curved_beam_value():
     from flexval.validation.strength import curved_beam_factor
 
     R, h = 4.0, 1.0
-    mech = cantilever(Arc((0.0, 0.0), R, math.radians(-60.0), math.radians(120.0)), E=E, b=1.0,
-                      h=h)
+    mech = cantilever(Arc((0.0, 0.0), R, math.radians(-60.0), math.radians(120.0)), E=E, b=1.0, h=h)
     straight = 6.0 * 1.0 / (1.0 * h**2)
     ratios = []
     for level in (0, 1, 2):
@@ -203,14 +208,17 @@ def test_a_quantity_converged_to_round_off_gets_no_observed_order():
     """Changes of 1e-8 of the value are the solver's tolerance: no order is computed from them."""
     from flexval.validation.convergence import ROUND_OFF_CHANGE, order_text
 
-    exact = richardson(3.0, 3.0 + 4.8e-8, 3.0 + 7.2e-8, 2.0)       # m+'s uniform peak stress
+    exact = richardson(3.0, 3.0 + 4.8e-8, 3.0 + 7.2e-8, 2.0)  # m+'s uniform peak stress
     assert exact["order"] is None and exact["extrapolated"] == 3.0 + 7.2e-8
     assert order_text(exact).startswith("n/a (converged to round-off")
-    converging = richardson(14.715042, 14.718397, 14.719104, 2.0)     # m+ displacement, levels 0-2
+    converging = richardson(14.715042, 14.718397, 14.719104, 2.0)  # m+ displacement, levels 0-2
     assert converging["order"] == pytest.approx(2.246, abs=1e-3)
     assert abs(14.719104 - 14.718397) > 10 * ROUND_OFF_CHANGE * 14.719104
     assert order_text(converging) == f"{converging['order']:.2f}"
-    assert order_text(richardson(1.0, 2.0, 1.5, 2.0)) == "n/a (the changes do not shrink monotonically)"
+    assert (
+        order_text(richardson(1.0, 2.0, 1.5, 2.0))
+        == "n/a (the changes do not shrink monotonically)"
+    )
 
 
 def test_the_report_and_the_cli_print_why_there_is_no_order(tmp_path):
@@ -221,8 +229,10 @@ def test_the_report_and_the_cli_print_why_there_is_no_order(tmp_path):
     from flexval.validation.report import _convergence_lines
 
     st = ConvergenceStudy("continuum", "m+", 2.0)
-    st.summary = {"peak_stress": richardson(3.0, 3.0 + 4.8e-8, 3.0 + 7.2e-8, 2.0),
-                  "displacement": richardson(14.715042, 14.718397, 14.719104, 2.0)}
+    st.summary = {
+        "peak_stress": richardson(3.0, 3.0 + 4.8e-8, 3.0 + 7.2e-8, 2.0),
+        "displacement": richardson(14.715042, 14.718397, 14.719104, 2.0),
+    }
     res = SimpleNamespace(scene=SimpleNamespace(name="open_chain"), convergence=[st])
     report = "\n".join(_convergence_lines(res, tmp_path, draw=None))
     assert "peak_stress: observed order n/a (converged to round-off" in report

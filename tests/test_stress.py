@@ -7,36 +7,41 @@ import math
 
 import numpy as np
 import pytest
-
 from builders import cantilever, tip_force, tip_moment
-from flexval.geometry import Arc, Scene, load_scene
-from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels import run_reduced
 from test_compare_scale import _arch
 from test_joints import fourbar_scene
+
+from flexval.geometry import Arc, Scene, load_scene
+from flexval.reducedmodels import run_reduced
+from flexval.reducedmodels.catalogue import parse_model
 from flexval.validation.compare import errors, scale_of
 from flexval.validation.run import run_model
 from flexval.validation.stress import rescale_lengths, scale_case, stress_report, write_stress
 
 
-@pytest.mark.parametrize("scene_fn,case_name", [(fourbar_scene, "fx"), (fourbar_scene, "mb"),
-                                                (lambda: load_scene("closed_chain"), "f-")])
+@pytest.mark.parametrize(
+    "scene_fn,case_name",
+    [(fourbar_scene, "fx"), (fourbar_scene, "mb"), (lambda: load_scene("closed_chain"), "f-")],
+)
 @pytest.mark.parametrize("model", ["dcmm:2", "beam:8", "ee"])
 def test_metres_give_the_same_answer(scene_fn, case_name, model):
     scene = scene_fn()
     case = scene.load_case(case_name)
     base = run_reduced(scene.mechanism, parse_model(model), case)
     mech_m, case_m = rescale_lengths(scene.mechanism, case, 1e-3)
-    assert mech_m.material.youngs_modulus == pytest.approx(1e6 * scene.mechanism.material
-                                                           .youngs_modulus, rel=1e-15)
+    assert mech_m.material.youngs_modulus == pytest.approx(
+        1e6 * scene.mechanism.material.youngs_modulus, rel=1e-15
+    )
     metres = run_reduced(mech_m, parse_model(model), case_m)
     # the solver's tests are dimensionless (size, load scale): the same iterations up to
     # round-off; 1e-9 leaves room for the force tolerance (1e-10) on a soft path
     d = np.array([base.dx, base.dy])
-    np.testing.assert_allclose(np.array([metres.dx, metres.dy]) / 1e-3, d,
-                               atol=1e-9 * np.abs(d).max())
-    np.testing.assert_allclose(metres.rotation, base.rotation,
-                               atol=1e-9 * np.abs(base.rotation).max())
+    np.testing.assert_allclose(
+        np.array([metres.dx, metres.dy]) / 1e-3, d, atol=1e-9 * np.abs(d).max()
+    )
+    np.testing.assert_allclose(
+        metres.rotation, base.rotation, atol=1e-9 * np.abs(base.rotation).max()
+    )
 
 
 def test_scale_case_scales_every_component():
@@ -70,7 +75,7 @@ def test_stress_report_on_a_tiny_scene(tiny_report):
             amp = res["amplification"]
             # a failure must be a SolverError, never a crash or non-finite output
             assert amp["failure"] is None or amp["failure"]["kind"] == "solver"
-            assert [row["factor"] for row in amp["rows"]] == r["amplifications"][:len(amp["rows"])]
+            assert [row["factor"] for row in amp["rows"]] == r["amplifications"][: len(amp["rows"])]
             # path independence and invariance: round-off and the 1e-10 force tolerance
             assert res["step_count"]["disp_rel"] < 1e-9 and res["step_count"]["rot_rel"] < 1e-9
             for kind in ("rigid_motion", "metres"):
@@ -94,7 +99,7 @@ def _table(text: str, title: str) -> list[list[str]]:
     k = next(i for i, line in enumerate(lines) if line.startswith("## ") and title in line)
     start = next(i for i in range(k, len(lines)) if lines[i].startswith("|"))
     rows = []
-    for line in lines[start + 2:]:
+    for line in lines[start + 2 :]:
         if not line.startswith("|"):
             break
         rows.append([c.strip() for c in line.strip("|").split("|")])
@@ -123,10 +128,12 @@ def test_stress_files_are_strict_json_and_markdown(tiny_report, tmp_path):
         assert float(a[4].split()[0]) == pytest.approx(last["errors"]["path_disp"], rel=5e-3)
         assert float(a[5]) == pytest.approx(last["errors"]["path_rot"], rel=5e-3, abs=1e-12)
         assert (a[6] == "none up to the cap") == (amp["failure"] is None)
-        for cell, value in ((b[2], res["step_count"]["disp_rel"]),
-                            (b[3], res["step_count"]["rot_rel"]),
-                            (c[2], res["invariance"]["rigid_motion"]["disp_rel"]),
-                            (c[5], res["invariance"]["metres"]["rot_rel"])):
+        for cell, value in (
+            (b[2], res["step_count"]["disp_rel"]),
+            (b[3], res["step_count"]["rot_rel"]),
+            (c[2], res["invariance"]["rigid_motion"]["disp_rel"]),
+            (c[5], res["invariance"]["metres"]["rot_rel"]),
+        ):
             assert float(cell) == pytest.approx(value, rel=5e-3, abs=1e-300)
 
 
@@ -154,7 +161,7 @@ def test_a_rotation_that_vanishes_by_symmetry_is_measured_against_its_scale(tmp_
     res = stress_report(scene, ["dcmm:1"], quick=True)["models"]["dcmm:1"]["down"]
     ref = run_model(scene, parse_model("beam:40"), case)
     lp = run_model(scene, parse_model("dcmm:1"), case)
-    assert abs(ref.rotation[-1]) < 1e-9 * scale_of(ref, L)["rot"]          # round-off
+    assert abs(ref.rotation[-1]) < 1e-9 * scale_of(ref, L)["rot"]  # round-off
     assert abs(lp.rotation[-1] - ref.rotation[-1]) > 0.01 * abs(ref.rotation[-1])
     row = res["amplification"]["rows"][0]
     assert row["factor"] == 1

@@ -46,8 +46,12 @@ def _write(tmp_path, text, name="sw.toml"):
 
 @pytest.fixture(scope="module")
 def client():
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
-                      dashboard_address=None) as cluster, Client(cluster) as c:
+    with (
+        LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cluster,
+        Client(cluster) as c,
+    ):
         yield c
 
 
@@ -74,10 +78,16 @@ def test_tiny_sweep_matches_a_plain_loop_and_resumes(tmp_path, client):
     for model in ("ee", "dcmm:1"):
         for case in ("m+", "f+"):
             lc = p.scene.load_case(case)
-            want = errors(run_model(p.scene, parse_model(model), lc),
-                          run_model(p.scene, parse_model("prbm"), lc), p.scene.mechanism.size())
-            got = next(r for r in rows if r["point"] == 2 and r["model"] == model
-                       and r["load_case"] == case)
+            want = errors(
+                run_model(p.scene, parse_model(model), lc),
+                run_model(p.scene, parse_model("prbm"), lc),
+                p.scene.mechanism.size(),
+            )
+            got = next(
+                r
+                for r in rows
+                if r["point"] == 2 and r["model"] == model and r["load_case"] == case
+            )
             assert got["param:section.thickness"] == 0.11
             for metric, value in want.items():
                 assert got[metric] == pytest.approx(value, rel=1e-9)
@@ -91,6 +101,7 @@ def test_tiny_sweep_matches_a_plain_loop_and_resumes(tmp_path, client):
     assert n_lost == 2 * 2 and again.rows_written == n_lost
     assert again.tasks == (1 if lost_rows[0]["model"] == "prbm" else 2)
     assert again.rows_skipped == len(rows) - n_lost
+
     def results(rs):  # everything but the run times
         return [{k: v for k, v in r.items() if k != "seconds"} for r in rs]
 
@@ -138,9 +149,11 @@ def test_a_failing_task_and_a_failing_model_are_recorded(tmp_path, client, monke
 
     monkeypatch.setattr(sweep_tasks, "run_model", crash_on_dcmm)
     text = TINY.replace('reference = "prbm"', 'reference = "beam:20"').replace(
-        '"dcmm:1"]', '"dcmm:1", "prbm"]')
+        '"dcmm:1"]', '"dcmm:1", "prbm"]'
+    )
     text = text.replace("values = [0.09, 0.11]", "values = [0.11]").replace(
-        "values = [2000.0, 2200.0]", "values = [2100.0]")
+        "values = [2000.0, 2200.0]", "values = [2100.0]"
+    )
     text = text.replace('load_cases = ["m+", "f+"]', 'load_cases = ["f+"]')
     sweep = load_sweep(_write(tmp_path, text))
     stats = run_sweep(sweep, tmp_path / "o", client, use_cache=False)
@@ -152,8 +165,11 @@ def test_a_failing_task_and_a_failing_model_are_recorded(tmp_path, client, monke
 
 def test_solver_failure_records_the_load_reached(tmp_path, client):
     # m+ of the open chain x1000: beam:20's load stepping gives up at 35 % of the load
-    text = TINY.replace('load_cases = ["m+", "f+"]', 'load_cases = ["m+"]').replace(
-        'reference = "prbm"', 'reference = "ee"').replace('["ee", "dcmm:1"]', '["beam:20"]')
+    text = (
+        TINY.replace('load_cases = ["m+", "f+"]', 'load_cases = ["m+"]')
+        .replace('reference = "prbm"', 'reference = "ee"')
+        .replace('["ee", "dcmm:1"]', '["beam:20"]')
+    )
     text = text.split("[[axes]]")[0] + textwrap.dedent("""
         [[axes]]
         path = "load_cases.m+.value"
@@ -173,13 +189,16 @@ def test_solver_failure_records_the_load_reached(tmp_path, client):
     section = scene.mechanism.flexures[0].section
     assert 0.0 < row["peak_stress_load"] <= row["load_reached"]
     m = row["peak_stress_load"] * scene.load_case("m+").magnitude
-    assert row["peak_stress"] == pytest.approx(6.0 * m / (section.depth * section.thickness**2),
-                                               rel=1e-9)
-    assert row["peak_stress_error"] is None        # errors compare full loads only
+    assert row["peak_stress"] == pytest.approx(
+        6.0 * m / (section.depth * section.thickness**2), rel=1e-9
+    )
+    assert row["peak_stress_error"] is None  # errors compare full loads only
     write_outputs(sweep, sweep_rows(sweep, tmp_path / "o"), tmp_path / "o")
     summary = (tmp_path / "o" / "summary.md").read_text()
-    assert (f"(load reached {row['load_reached']:.3g}; peak stress {row['peak_stress']:.4g} "
-            f"MPa at load {row['peak_stress_load']:.3g})") in summary
+    assert (
+        f"(load reached {row['load_reached']:.3g}; peak stress {row['peak_stress']:.4g} "
+        f"MPa at load {row['peak_stress_load']:.3g})"
+    ) in summary
 
 
 def test_a_reference_rotation_near_zero_is_measured_against_its_scale(tmp_path, client):
@@ -190,7 +209,7 @@ def test_a_reference_rotation_near_zero_is_measured_against_its_scale(tmp_path, 
 
     scene, case, _ = _arch(tmp_path, -90.0, 0.1)
     text = f"""
-    base = "{tmp_path / 'arch.toml'}"
+    base = "{tmp_path / "arch.toml"}"
     models = ["dcmm:1"]
     reference = "beam:20"
 
@@ -236,18 +255,21 @@ def test_generated_invalid_points_are_reported_not_fatal(tmp_path, client):
     assert sum(r["status"] == "invalid_point" for r in rows) == len(bad)
 
 
-@pytest.mark.parametrize("edit, field, words", [
-    (("section.thickness", "flexures.e99.thickness"), "axes[0].path", "e99"),
-    (("section.thickness", "material.colour"), "material.colour", "unknown field"),
-    (("values = [0.09, 0.11]", "values = [0.09, -0.11]"), "section.thickness", "point 2"),
-    (("values = [0.09, 0.11]", 'values = [0.09, "thin"]'), "axes[0].values", "thin"),
-    (("combine", "combine"), "combine", "'diagonal'"),
-    (("batch = 2", 'batch = 2\noutputs = ["peak_stress", "stress"]'), "outputs", "'stress'"),
-])
+@pytest.mark.parametrize(
+    "edit, field, words",
+    [
+        (("section.thickness", "flexures.e99.thickness"), "axes[0].path", "e99"),
+        (("section.thickness", "material.colour"), "material.colour", "unknown field"),
+        (("values = [0.09, 0.11]", "values = [0.09, -0.11]"), "section.thickness", "point 2"),
+        (("values = [0.09, 0.11]", 'values = [0.09, "thin"]'), "axes[0].values", "thin"),
+        (("combine", "combine"), "combine", "'diagonal'"),
+        (("batch = 2", 'batch = 2\noutputs = ["peak_stress", "stress"]'), "outputs", "'stress'"),
+    ],
+)
 def test_bad_sweep_files_exit_2_naming_the_field(tmp_path, capsys, edit, field, words):
     text = TINY.replace(*edit)
     if field == "combine":
-        text = text.replace('batch = 2', 'batch = 2\ncombine = "diagonal"')
+        text = text.replace("batch = 2", 'batch = 2\ncombine = "diagonal"')
     code = main(["sweep", str(_write(tmp_path, text)), "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
     assert code == 2 and field in err and words in err
@@ -255,22 +277,35 @@ def test_bad_sweep_files_exit_2_naming_the_field(tmp_path, capsys, edit, field, 
 
 
 def test_workers_with_an_existing_cluster_is_refused(tmp_path, capsys):
-    args = ["sweep", str(_write(tmp_path, TINY)), "--scheduler", "tcp://127.0.0.1:8786",
-            "--workers", "2", "--out", str(tmp_path / "o")]
+    args = [
+        "sweep",
+        str(_write(tmp_path, TINY)),
+        "--scheduler",
+        "tcp://127.0.0.1:8786",
+        "--workers",
+        "2",
+        "--out",
+        str(tmp_path / "o"),
+    ]
     assert main(args) == 2 and "--workers" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
 
 
 def test_cli_sweep_on_a_local_process_cluster(tmp_path, capsys):
-    text = TINY.replace('["ee", "dcmm:1"]', '["ee"]').replace('reference = "prbm"',
-                                                               'reference = "dcmm:1"')
+    text = TINY.replace('["ee", "dcmm:1"]', '["ee"]').replace(
+        'reference = "prbm"', 'reference = "dcmm:1"'
+    )
     out = tmp_path / "o"
-    args = ["sweep", str(_write(tmp_path, text)), "--out", str(out), "--workers", "1",
-            "--quiet"]
+    args = ["sweep", str(_write(tmp_path, text)), "--out", str(out), "--workers", "1", "--quiet"]
     assert main(args) == 0
     assert "Sweep `tiny`" in capsys.readouterr().out
-    assert {p.name for p in out.iterdir()} >= {"results", "summary.md", "timings.md",
-                                               "errors.png", "runtime.png"}
+    assert {p.name for p in out.iterdir()} >= {
+        "results",
+        "summary.md",
+        "timings.md",
+        "errors.png",
+        "runtime.png",
+    }
     assert main(args) == 0
     assert "0 tasks" in capsys.readouterr().err
 
@@ -316,7 +351,7 @@ def _peak(lp) -> float:
 
 def test_peak_stress_rows_against_the_closed_form_and_the_reference(tmp_path, client):
     sweep = load_sweep(_write(tmp_path, TINY))
-    assert sweep.outputs == ("peak_stress",)            # the default
+    assert sweep.outputs == ("peak_stress",)  # the default
     run_sweep(sweep, tmp_path / "o", client, use_cache=False)
     rows = sweep_rows(sweep, tmp_path / "o")
     assert len(rows) == 4 * 3 * 2 and {r["load_unit"] for r in rows} == {"N", "N mm"}
@@ -324,7 +359,7 @@ def test_peak_stress_rows_against_the_closed_form_and_the_reference(tmp_path, cl
         point = sweep.points[r["point"]]
         assert r["peak_stress"] > 0 and r["peak_stress_flexure"] in ("e12", "e23", "e34")
         assert 0.0 <= r["peak_stress_at"] <= 1.0 and r["peak_stress_load"] == 1.0
-        assert r["limit_load"] is None                    # not asked for
+        assert r["limit_load"] is None  # not asked for
         if r["load_case"] == "m+":
             # a pure end moment M bends every section alike: 6 M / (b h^2) whatever E and
             # whatever the model (measured spread ~1e-13 relative)
@@ -338,8 +373,9 @@ def test_peak_stress_rows_against_the_closed_form_and_the_reference(tmp_path, cl
     lc = p.scene.load_case("f+")
     ref = _peak(run_model(p.scene, parse_model("prbm"), lc))
     for model in ("ee", "dcmm:1"):
-        got = next(r for r in rows if r["point"] == 1 and r["model"] == model
-                   and r["load_case"] == "f+")
+        got = next(
+            r for r in rows if r["point"] == 1 and r["model"] == model and r["load_case"] == "f+"
+        )
         want = _peak(run_model(p.scene, parse_model(model), lc))
         assert got["peak_stress"] == pytest.approx(want, rel=1e-9)
         assert got["peak_stress_error"] == pytest.approx(100 * (want - ref) / ref, rel=1e-6)
@@ -354,7 +390,7 @@ def test_limit_loads_of_the_deep_arch(tmp_path, client):
     under 10 N: below E = 120 GPa load control stops at the limit point, which the sweep
     finds by arc length; the limit load is proportional to E; at 240 GPa 10 N is below it."""
     text = f"""
-    base = "{SCENES / 'deep_arch.toml'}"
+    base = "{SCENES / "deep_arch.toml"}"
     models = ["beam:10", "dcmm:2"]
     reference = "beam:40"
     outputs = ["errors", "limit_load"]
@@ -371,8 +407,7 @@ def test_limit_loads_of_the_deep_arch(tmp_path, client):
     assert ref["status"] == "solver_failure" and ref["load_unit"] == "N"
     assert ref["limit_load"] == pytest.approx(DA_DEPPO_SCHMIDT, rel=5e-3)
     # peak stresses were not asked for: none, even where a run reached full load
-    assert all(r["peak_stress"] is None and r["peak_stress_error"] is None
-               for r in rows.values())
+    assert all(r["peak_stress"] is None and r["peak_stress_error"] is None for r in rows.values())
     for model in ("beam:40", "beam:10", "dcmm:2"):
         half, full, double = (rows[(i, model)] for i in range(3))
         # the trace's parabola refinement is good to ~1e-5 (flexval.validation.failures)
@@ -380,7 +415,8 @@ def test_limit_loads_of_the_deep_arch(tmp_path, client):
         assert double["status"] == "ok" and double["limit_load"] is None
         if model != "beam:40":
             assert full["limit_load_error"] == pytest.approx(
-                100 * (full["limit_load"] - ref["limit_load"]) / ref["limit_load"], rel=1e-12)
+                100 * (full["limit_load"] - ref["limit_load"]) / ref["limit_load"], rel=1e-12
+            )
     # beam:10 overestimates the limit load by its discretisation error: 1.5 % (measured)
     assert 0.5 < rows[(1, "beam:10")]["limit_load_error"] < 3.0
     files = write_outputs(sweep, list(rows.values()), tmp_path / "o")
@@ -392,8 +428,11 @@ def test_limit_loads_of_the_deep_arch(tmp_path, client):
     # run left, and nothing else: a file of the user's and the other outputs stay
     (tmp_path / "o" / "stress.png").write_bytes(b"an earlier run's")
     (tmp_path / "o" / "mine.png").write_bytes(b"the user's")
-    files = write_outputs(sweep, [r | {"limit_load": None, "limit_load_error": None}
-                                  for r in rows.values()], tmp_path / "o")
+    files = write_outputs(
+        sweep,
+        [r | {"limit_load": None, "limit_load_error": None} for r in rows.values()],
+        tmp_path / "o",
+    )
     assert not (tmp_path / "o" / "limits.png").exists()
     assert not (tmp_path / "o" / "stress.png").exists()
     assert (tmp_path / "o" / "mine.png").read_bytes() == b"the user's"
@@ -401,8 +440,9 @@ def test_limit_loads_of_the_deep_arch(tmp_path, client):
 
 
 def test_an_older_dataset_is_refused_and_other_code_versions_left_out(tmp_path, capsys):
-    text = TINY.replace('["ee", "dcmm:1"]', '["ee"]').replace('reference = "prbm"',
-                                                               'reference = "dcmm:1"')
+    text = TINY.replace('["ee", "dcmm:1"]', '["ee"]').replace(
+        'reference = "prbm"', 'reference = "dcmm:1"'
+    )
     sweep_file = _write(tmp_path, text)
     sweep = load_sweep(sweep_file)
     out = tmp_path / "o"
@@ -434,20 +474,29 @@ def test_cli_sweep_on_an_existing_scheduler(tmp_path, capsys, client, monkeypatc
         raise AssertionError("a local cluster was started despite --scheduler")
 
     monkeypatch.setattr(flexval.validation.sweep, "local_cluster", no_local_cluster)
-    text = TINY.replace('["ee", "dcmm:1"]', '["ee"]').replace('reference = "prbm"',
-                                                               'reference = "dcmm:1"')
+    text = TINY.replace('["ee", "dcmm:1"]', '["ee"]').replace(
+        'reference = "prbm"', 'reference = "dcmm:1"'
+    )
     sweep_file = _write(tmp_path, text)
     address = client.scheduler.address
-    args = ["sweep", str(sweep_file), "--scheduler", address, "--out", str(tmp_path / "o"),
-            "--quiet"]
+    args = [
+        "sweep",
+        str(sweep_file),
+        "--scheduler",
+        address,
+        "--out",
+        str(tmp_path / "o"),
+        "--quiet",
+    ]
     assert main(args) == 0
     assert "4 tasks, 16 rows written (0 failed)" in capsys.readouterr().err
     rows = sweep_rows(load_sweep(sweep_file), tmp_path / "o")
     assert len(rows) == 16 and {r["status"] for r in rows} == {"ok"}
 
 
-@pytest.mark.parametrize("points, workers", [(1, 1), (6, 2), (30, 2), (200, 8), (1000, 2),
-                                             (100_000, 64)])
+@pytest.mark.parametrize(
+    "points, workers", [(1, 1), (6, 2), (30, 2), (200, 8), (1000, 2), (100_000, 64)]
+)
 def test_automatic_batches_keep_every_worker_fed(points, workers):
     """At most 25 points a task (Dask's ~5 ms a task stays ~1 % of the work), and at least 4
     tasks per worker and model where the points allow it within that cap."""

@@ -16,8 +16,9 @@ import scipy.sparse as sp
 from flexval.reducedmodels.tangent import TangentLayout
 
 
-def symmetric_pattern(n: int, reach: int, rng: np.random.Generator
-                      ) -> tuple[np.ndarray, np.ndarray]:
+def symmetric_pattern(
+    n: int, reach: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
     """Rows and columns of a symmetric pattern: each unknown coupled to a few within ``reach``
     in a shuffled numbering (so the band exists only after reordering), diagonal included."""
     label = rng.permutation(n)
@@ -35,8 +36,9 @@ def stored(layout: TangentLayout, rows, cols, values) -> np.ndarray:
     return np.bincount(slots[kept], weights=values[kept], minlength=layout.size)
 
 
-@pytest.mark.parametrize("n, reach, kind", [(40, 5, "dense"), (300, 3, "banded"),
-                                            (300, 150, "sparse")])
+@pytest.mark.parametrize(
+    "n, reach, kind", [(40, 5, "dense"), (300, 3, "banded"), (300, 150, "sparse")]
+)
 def test_stored_matrix_and_its_product_match_the_dense_matrix(n, reach, kind):
     rng = np.random.default_rng(7)
     rows, cols = symmetric_pattern(n, reach, rng)
@@ -61,9 +63,9 @@ def test_entries_without_a_place_in_the_storage_are_refused():
         layout = TangentLayout(300, rows, cols)
         assert layout.kind == kind
         assert layout.slots_of(rows, cols) is not None
-        if kind == "banded":          # the first and the last unknown of the reordering
+        if kind == "banded":  # the first and the last unknown of the reordering
             pair = (np.array([layout.perm[0]]), np.array([layout.perm[-1]]))
-        else:                         # an entry the pattern does not have
+        else:  # an entry the pattern does not have
             taken = set(zip(rows.tolist(), cols.tolist()))
             free = next((r, c) for r in range(300) for c in range(300) if (r, c) not in taken)
             pair = (np.array([free[0]]), np.array([free[1]]))

@@ -4,8 +4,8 @@ import pytest
 from threadpoolctl import threadpool_info
 
 from flexval.geometry import load_scene
-from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels import threads
+from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels.models import run_reduced
 from flexval.validation.cli import main
 
@@ -27,20 +27,27 @@ def restore_pools():
 def test_building_a_system_caps_every_blas_pool_at_one(restore_pools, monkeypatch):
     from threadpoolctl import threadpool_limits
 
-    threadpool_limits(limits=2)                 # as OpenBLAS starts on a 2-core machine
+    threadpool_limits(limits=2)  # as OpenBLAS starts on a 2-core machine
     monkeypatch.delenv(threads.ENV_VARIABLE, raising=False)
     threads.request_threads()
     scene = load_scene("open_chain")
-    run_reduced(scene.mechanism, parse_model("dcmm:1", "<test>", "--model"),
-                scene.load_case("f+"), 3)
+    run_reduced(
+        scene.mechanism, parse_model("dcmm:1", "<test>", "--model"), scene.load_case("f+"), 3
+    )
     blas = [i for i in threadpool_info() if i["user_api"] == "blas"]
     assert blas, "numpy and scipy load a BLAS: threadpoolctl must see it"
     assert {i["num_threads"] for i in blas} == {threads.DEFAULT_THREADS}
 
 
-@pytest.mark.parametrize("text, expected", [("0", 0), ("1", 1), (f" {threads.MAX_THREADS} ",
-                                                                   threads.MAX_THREADS),
-                                            (threads.MAX_THREADS, threads.MAX_THREADS)])
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        ("0", 0),
+        ("1", 1),
+        (f" {threads.MAX_THREADS} ", threads.MAX_THREADS),
+        (threads.MAX_THREADS, threads.MAX_THREADS),
+    ],
+)
 def test_requested_threads_reads_whole_numbers(text, expected):
     assert threads.requested_threads(text) == expected
 
@@ -52,8 +59,20 @@ def test_environment_variable_is_the_default(monkeypatch):
     assert threads.requested_threads() == threads.DEFAULT_THREADS
 
 
-@pytest.mark.parametrize("text", ["-1", "1.5", "two", "", "\u00b2", "\u0663",
-                                  str(threads.MAX_THREADS + 1), "100000000", str(2**63)])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "-1",
+        "1.5",
+        "two",
+        "",
+        "\u00b2",
+        "\u0663",
+        str(threads.MAX_THREADS + 1),
+        "100000000",
+        str(2**63),
+    ],
+)
 def test_bad_cap_is_refused_naming_source_and_value(text):
     with pytest.raises(ValueError, match="--blas-threads.*got"):
         threads.requested_threads(text)

@@ -16,8 +16,8 @@ import dataclasses
 import math
 
 import pytest
-
 from builders import cantilever, tip_force, tip_moment
+
 from flexval.geometry import Segment, load_scene
 from flexval.reducedmodels import LoadPath, run_reduced
 from flexval.reducedmodels.catalogue import parse_model
@@ -25,8 +25,8 @@ from flexval.reducedmodels.validity import MAX_CHORD_TURN, MAX_RELATIVE_ROTATION
 from flexval.validation.continuum import run_continuum
 from flexval.validation.run import run_model
 
-LENGTH, E, H = 10.0, 2100.0, 0.1         # mm, MPa, mm (b = 1 mm)
-EI = E * H**3 / 12.0                     # N mm^2
+LENGTH, E, H = 10.0, 2100.0, 0.1  # mm, MPa, mm (b = 1 mm)
+EI = E * H**3 / 12.0  # N mm^2
 
 
 def straight():
@@ -46,7 +46,7 @@ def test_beam_element_turn_switches_at_its_limit(share):
 
 @pytest.mark.parametrize("share", [0.9, 1.1])
 def test_dcmm_relative_rotation_switches_at_its_limit(share):
-    moment = share * MAX_RELATIVE_ROTATION * EI / LENGTH     # rotation M L / EI
+    moment = share * MAX_RELATIVE_ROTATION * EI / LENGTH  # rotation M L / EI
     lp = run_reduced(straight(), parse_model("dcmm:1"), tip_moment(moment, levels=3))
     assert lp.rotation[-1] == pytest.approx(share * MAX_RELATIVE_ROTATION, rel=1e-9)
     assert lp.valid[-1] is (share < 1.0)
@@ -84,8 +84,9 @@ def test_dcmm1_far_beyond_the_paper_loads_is_reported_invalid(factor, case_name)
     assert flexure in lengths
 
 
-@pytest.mark.parametrize("model", ["dcmm:1", "dcmm:2", "prbm", "beam:20", "beam:100",
-                                   "continuum:0"])
+@pytest.mark.parametrize(
+    "model", ["dcmm:1", "dcmm:2", "prbm", "beam:20", "beam:100", "continuum:0"]
+)
 @pytest.mark.parametrize("scene_name", ["open_chain", "closed_chain"])
 def test_every_model_is_valid_at_the_paper_loads(scene_name, model):
     scene = load_scene(scene_name)

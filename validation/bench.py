@@ -8,8 +8,8 @@ the time is the mean over load cases of the median wall time per load path.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from flexval.geometry import Scene
 from flexval.reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
@@ -22,8 +22,12 @@ from .figurejobs import draw_now
 from .outputs import output_path, write_json, write_text
 
 #: the reduced models of the study, every resolution of the paper's range and beyond
-SWEEP_MODELS = (*(f"beam:{n}" for n in (5, 10, 20, 40, 100, 200, 400)),
-                *(f"dcmm:{n}" for n in range(1, 9)), "prbm", "ee")
+SWEEP_MODELS = (
+    *(f"beam:{n}" for n in (5, 10, 20, 40, 100, 200, 400)),
+    *(f"dcmm:{n}" for n in range(1, 9)),
+    "prbm",
+    "ee",
+)
 
 
 def sweep_specs(reference: ModelSpec | None = None) -> list[ModelSpec]:
@@ -36,15 +40,21 @@ def sweep_specs(reference: ModelSpec | None = None) -> list[ModelSpec]:
     specs = [parse_model(m, "<bench>", "models") for m in SWEEP_MODELS]
     fam = reference.model_family if reference is not None else None
     if fam is not None and fam.has(REFERENCE) and fam.resolution is not None:
-        specs += [reference.with_resolution(n)
-                  for n in range(fam.resolution.low, reference.resolution)]
+        specs += [
+            reference.with_resolution(n) for n in range(fam.resolution.low, reference.resolution)
+        ]
     return specs
 
 
-def runtime_vs_error(scene: Scene, reference: ModelSpec, specs: list[ModelSpec],
-                     repeats: int = 3, cache: ResultCache | None = None,
-                     progress: bool = True, record_models: tuple[str, ...] = ()
-                     ) -> tuple[list[dict], list[Failure]]:
+def runtime_vs_error(
+    scene: Scene,
+    reference: ModelSpec,
+    specs: list[ModelSpec],
+    repeats: int = 3,
+    cache: ResultCache | None = None,
+    progress: bool = True,
+    record_models: tuple[str, ...] = (),
+) -> tuple[list[dict], list[Failure]]:
     """Rows {model, seconds, error, per_case} of the study, and the failures.
 
     A model that fails on some load case has no row (its error is not
@@ -56,8 +66,15 @@ def runtime_vs_error(scene: Scene, reference: ModelSpec, specs: list[ModelSpec],
     all_specs = [reference] + [s for s in specs if s.id != reference.id]
     bar = Progress(len(all_specs) * len(cases), enabled=progress)
     res, failures = run_campaign(
-        scene, all_specs, cases, repeats, cache, bar, record_models=record_models,
-        repeats_for=lambda s: 1 if s.model_family.has(REFERENCE) else repeats)
+        scene,
+        all_specs,
+        cases,
+        repeats,
+        cache,
+        bar,
+        record_models=record_models,
+        repeats_for=lambda s: 1 if s.model_family.has(REFERENCE) else repeats,
+    )
     rows = []
     for spec in all_specs:
         if spec.id == reference.id:
@@ -71,14 +88,25 @@ def runtime_vs_error(scene: Scene, reference: ModelSpec, specs: list[ModelSpec],
             per_case[case.name] = errors(lp, ref, scene.mechanism.size())
             secs.append(lp.seconds)
         if ok:
-            rows.append({"model": spec.id, "seconds": sum(secs) / len(secs),
-                         "error": max(e["path_disp"] for e in per_case.values()),
-                         "per_case": per_case})
+            rows.append(
+                {
+                    "model": spec.id,
+                    "seconds": sum(secs) / len(secs),
+                    "error": max(e["path_disp"] for e in per_case.values()),
+                    "per_case": per_case,
+                }
+            )
     return rows, failures
 
 
-def write_bench(scene: Scene, rows: list[dict], reference: str, out: Path,
-                failures: list[Failure] = (), draw: Callable = draw_now) -> Path:
+def write_bench(
+    scene: Scene,
+    rows: list[dict],
+    reference: str,
+    out: Path,
+    failures: list[Failure] = (),
+    draw: Callable = draw_now,
+) -> Path:
     """Table (Markdown), plot (PNG) and JSON of a runtime-versus-error study in ``out``.
 
     The files are ``bench_<scene>.md/.png/.json`` with the scene name made
@@ -86,26 +114,40 @@ def write_bench(scene: Scene, rows: list[dict], reference: str, out: Path,
     ``failures`` are listed below the table (a model that fails has no row).
     The plot is drawn with ``draw(fn, *args)`` (see :mod:`flexval.validation.figurejobs`).
     """
-    from .figures import pareto_front, runtime_vs_error as plot
+    from .figures import pareto_front
+    from .figures import runtime_vs_error as plot
 
     out.mkdir(parents=True, exist_ok=True)
     stem = f"bench_{scene.name}"
     front = set(pareto_front([(r["seconds"], r["error"]) for r in rows]))
-    lines = [f"# Runtime versus error: {scene.name}", "",
-             f"Reference: `{reference}`. Error: largest over load cases of the path "
-             "displacement error (percent); time: mean over load cases of the median wall "
-             "time per load path (s).", "",
-             "| model | seconds | error (%) | Pareto |", "|---|---:|---:|:---:|"]
+    lines = [
+        f"# Runtime versus error: {scene.name}",
+        "",
+        f"Reference: `{reference}`. Error: largest over load cases of the path "
+        "displacement error (percent); time: mean over load cases of the median wall "
+        "time per load path (s).",
+        "",
+        "| model | seconds | error (%) | Pareto |",
+        "|---|---:|---:|:---:|",
+    ]
     for k, r in enumerate(rows):
-        lines.append(f"| {r['model']} | {r['seconds']:.4f} | {r['error']:.3g} | "
-                     f"{'yes' if k in front else ''} |")
+        lines.append(
+            f"| {r['model']} | {r['seconds']:.4f} | {r['error']:.3g} | "
+            f"{'yes' if k in front else ''} |"
+        )
     png = output_path(out, stem, ".png")
     draw(plot, rows, f"{scene.name}: runtime vs error (reference {reference})", png)
     if failures:
         lines += ["", "Failures (no row above):", ""]
         lines += [f"- `{f.model}` on `{f.load_case}`: {f.summary()}" for f in failures]
     lines += ["", f"![runtime vs error]({png.name})", ""]
-    write_json(output_path(out, stem, ".json"), {"scene": scene.name, "reference": reference,
-                                             "rows": rows,
-                                             "failures": [f.to_dict() for f in failures]})
+    write_json(
+        output_path(out, stem, ".json"),
+        {
+            "scene": scene.name,
+            "reference": reference,
+            "rows": rows,
+            "failures": [f.to_dict() for f in failures],
+        },
+    )
     return write_text(output_path(out, stem, ".md"), "\n".join(lines))

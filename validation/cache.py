@@ -72,35 +72,51 @@ def exact(value) -> object:
         return {"float": float(value).hex()}
     if isinstance(value, np.ndarray):
         data = np.ascontiguousarray(value)
-        return {"array": str(data.dtype), "shape": list(data.shape),
-                "sha256": hashlib.sha256(data.tobytes()).hexdigest()}
+        return {
+            "array": str(data.dtype),
+            "shape": list(data.shape),
+            "sha256": hashlib.sha256(data.tobytes()).hexdigest(),
+        }
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return {"type": type(value).__qualname__,
-                "fields": {f.name: exact(getattr(value, f.name))
-                           for f in dataclasses.fields(value) if f.compare}}
+        return {
+            "type": type(value).__qualname__,
+            "fields": {
+                f.name: exact(getattr(value, f.name))
+                for f in dataclasses.fields(value)
+                if f.compare
+            },
+        }
     if isinstance(value, dict):
-        return {"dict": sorted(([exact(k), exact(v)] for k, v in value.items()),
-                               key=lambda kv: json.dumps(kv[0], sort_keys=True))}
+        return {
+            "dict": sorted(
+                ([exact(k), exact(v)] for k, v in value.items()),
+                key=lambda kv: json.dumps(kv[0], sort_keys=True),
+            )
+        }
     if isinstance(value, (list, tuple)):
         return [exact(v) for v in value]
     if isinstance(value, (set, frozenset)):
-        return {"set": sorted((exact(v) for v in value), key=lambda v: json.dumps(v,
-                                                                                   sort_keys=True))}
+        return {
+            "set": sorted((exact(v) for v in value), key=lambda v: json.dumps(v, sort_keys=True))
+        }
     raise TypeError(f"no exact cache-key form for {type(value).__name__}")
 
 
 def result_key(scene, model: str, case_name: str, levels: int | None, extra: dict) -> str:
     """Hash of what determines one LoadPath (exact values, see :func:`exact`)."""
-    payload = json.dumps({
-        "scene": scene.name,
-        "mechanism": exact(scene.mechanism),
-        "case": exact(scene.load_case(case_name)),
-        "model": model,
-        "levels": levels,
-        "extra": exact(extra),
-        "code": code_version(),
-        "format": ENTRY_FORMAT,
-    }, sort_keys=True)
+    payload = json.dumps(
+        {
+            "scene": scene.name,
+            "mechanism": exact(scene.mechanism),
+            "case": exact(scene.load_case(case_name)),
+            "model": model,
+            "levels": levels,
+            "extra": exact(extra),
+            "code": code_version(),
+            "format": ENTRY_FORMAT,
+        },
+        sort_keys=True,
+    )
     return hashlib.sha256(payload.encode()).hexdigest()[:32]
 
 
@@ -137,13 +153,19 @@ class ResultCache:
         except FileNotFoundError:
             return None
         except OSError as exc:
-            warnings.warn(f"cache entry {path} cannot be read ({exc.strerror or exc}); "
-                          "recomputing", CacheWarning, stacklevel=2)
+            warnings.warn(
+                f"cache entry {path} cannot be read ({exc.strerror or exc}); recomputing",
+                CacheWarning,
+                stacklevel=2,
+            )
             return None
         lp = _decode(key, data)
         if lp is None:
-            warnings.warn(f"cache entry {path} is damaged or foreign; discarded and recomputed",
-                          CacheWarning, stacklevel=2)
+            warnings.warn(
+                f"cache entry {path} is damaged or foreign; discarded and recomputed",
+                CacheWarning,
+                stacklevel=2,
+            )
             path.unlink(missing_ok=True)
         return lp
 
@@ -154,7 +176,7 @@ class ResultCache:
         body = lp.to_dict()
         try:
             checksum = _checksum(body)
-        except ValueError:          # NaN or inf: strict JSON could not hold it losslessly
+        except ValueError:  # NaN or inf: strict JSON could not hold it losslessly
             return
         doc = {"format": ENTRY_FORMAT, "key": key, "sha256": checksum, "loadpath": body}
         try:
@@ -168,8 +190,12 @@ def _decode(key: str, data: bytes) -> LoadPath | None:
     """The LoadPath of a cache entry, or None if it is not a sound entry for ``key``."""
     try:
         doc = json.loads(data.decode("utf-8"))
-        if (not isinstance(doc, dict) or doc.get("format") != ENTRY_FORMAT
-                or doc.get("key") != key or _checksum(doc["loadpath"]) != doc.get("sha256")):
+        if (
+            not isinstance(doc, dict)
+            or doc.get("format") != ENTRY_FORMAT
+            or doc.get("key") != key
+            or _checksum(doc["loadpath"]) != doc.get("sha256")
+        ):
             return None
         return LoadPath.from_dict(doc["loadpath"])
     except (UnicodeDecodeError, ValueError, KeyError, TypeError, RecursionError):

@@ -18,9 +18,9 @@ import os
 import statistics
 import sys
 import time
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
-from typing import Callable
 
 from flexval.geometry import LoadCase, Scene, SceneError
 from flexval.reducedmodels import LoadPath, ModelSpec, SolverError
@@ -34,7 +34,7 @@ def available_cores() -> int:
     """CPU cores this process may run on (the default number of report workers)."""
     try:
         return len(os.sched_getaffinity(0))
-    except AttributeError:          # not on Linux
+    except AttributeError:  # not on Linux
         return os.cpu_count() or 1
 
 
@@ -54,8 +54,12 @@ class Progress:
         bar = "#" * filled + "." * (self.width - filled)
         elapsed = time.perf_counter() - self.t0
         end = "\n" if self.done >= self.total else ""
-        print(f"\r[{bar}] {self.done:>3}/{self.total} {elapsed:7.1f} s  {label:<40.40}",
-              end=end, file=sys.stderr, flush=True)
+        print(
+            f"\r[{bar}] {self.done:>3}/{self.total} {elapsed:7.1f} s  {label:<40.40}",
+            end=end,
+            file=sys.stderr,
+            flush=True,
+        )
 
 
 def run_key(scene: Scene, spec: ModelSpec, case: LoadCase, repeats: int, record: bool) -> str:
@@ -141,8 +145,14 @@ def prefetch(jobs: list[Job], memo: RunMemo, workers: int, progress: bool = True
             bar.step(f"{job.scene.name} {job.spec.id} {job.case.name} {state}")
 
 
-def timed_run(scene: Scene, spec: ModelSpec, case: LoadCase, repeats: int = 1,
-              cache: ResultCache | None = None, record: bool = False) -> LoadPath:
+def timed_run(
+    scene: Scene,
+    spec: ModelSpec,
+    case: LoadCase,
+    repeats: int = 1,
+    cache: ResultCache | None = None,
+    record: bool = False,
+) -> LoadPath:
     """One model on one load case: cached, else run ``repeats`` times (median seconds).
 
     ``record`` also records body poses and deformed shapes (for figures).
@@ -166,11 +176,16 @@ def timed_run(scene: Scene, spec: ModelSpec, case: LoadCase, repeats: int = 1,
     return lp
 
 
-def run_campaign(scene: Scene, specs: list[ModelSpec], cases: list[LoadCase], repeats: int,
-                 cache: ResultCache | None, progress: Progress | None = None,
-                 record_models: tuple[str, ...] = (),
-                 repeats_for: Callable[[ModelSpec], int] | None = None,
-                 ) -> tuple[dict[tuple[str, str], LoadPath], list[Failure]]:
+def run_campaign(
+    scene: Scene,
+    specs: list[ModelSpec],
+    cases: list[LoadCase],
+    repeats: int,
+    cache: ResultCache | None,
+    progress: Progress | None = None,
+    record_models: tuple[str, ...] = (),
+    repeats_for: Callable[[ModelSpec], int] | None = None,
+) -> tuple[dict[tuple[str, str], LoadPath], list[Failure]]:
     """Every spec on every case: ({(model, case): LoadPath}, failures).
 
     A model that fails on a case is a result, not an error: its

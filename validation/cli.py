@@ -21,8 +21,15 @@ from pathlib import Path
 
 from flexval.geometry import SceneError, load_scene
 
-from .outputs import (OutputError, check_figure_file, check_file, check_folder, output_path,
-                      safe_name, write_json)
+from .outputs import (
+    OutputError,
+    check_figure_file,
+    check_file,
+    check_folder,
+    output_path,
+    safe_name,
+    write_json,
+)
 
 EXIT_OK, EXIT_INPUT, EXIT_SOLVER, EXIT_OUTPUT = 0, 2, 3, 4
 COMMAND_LINE = "<command line>"
@@ -35,6 +42,7 @@ than the logical CPUs only multiplies memory (about 100 MB a process)."""
 
 def _int_in(low: int, high: int):
     """argparse type: an integer from ``low`` to ``high`` (checked while parsing, exit 2)."""
+
     def parse(text: str) -> int:
         try:
             value = int(text)
@@ -43,6 +51,7 @@ def _int_in(low: int, high: int):
         if not low <= value <= high:
             raise argparse.ArgumentTypeError(f"must be from {low} to {high}, got {value}")
         return value
+
     return parse
 
 
@@ -52,9 +61,13 @@ def _check_load_levels(levels: int | None) -> None:
 
     cap = SolverSettings().max_substeps
     if levels is not None and not 2 <= levels <= cap:
-        raise SceneError(COMMAND_LINE, "--levels", levels,
-                         f"must be from 2 to {cap} (each of the levels - 1 load increments "
-                         f"takes at least one of the solver's {cap} sub-steps)")
+        raise SceneError(
+            COMMAND_LINE,
+            "--levels",
+            levels,
+            f"must be from 2 to {cap} (each of the levels - 1 load increments "
+            f"takes at least one of the solver's {cap} sub-steps)",
+        )
 
 
 def _parse_models(texts, source: str, field: str) -> list:
@@ -93,12 +106,20 @@ def _run_request(args: argparse.Namespace, scene) -> tuple[list, list, frozenset
     if not specs:
         specs = _parse_models(scene.models, scene.source, "request.models")
     if not specs:
-        raise SceneError(scene.source, "--model", None,
-                         "no model requested (give --model or request.models in the scene)")
+        raise SceneError(
+            scene.source,
+            "--model",
+            None,
+            "no model requested (give --model or request.models in the scene)",
+        )
     cases = [scene.load_case(n) for n in args.load_case] if args.load_case else scene.load_cases
     if args.max_load_factor is not None and not args.arclength:
-        raise SceneError("<command line>", "--max-load-factor", args.max_load_factor,
-                         "applies to --arclength traces only")
+        raise SceneError(
+            "<command line>",
+            "--max-load-factor",
+            args.max_load_factor,
+            "applies to --arclength traces only",
+        )
     if args.arclength:
         from .limits import check_arclength
 
@@ -107,8 +128,12 @@ def _run_request(args: argparse.Namespace, scene) -> tuple[list, list, frozenset
     fields = scene.outputs & {"vtu", "png"}
     if fields and not any(sp.model_family.has(FIELDS) for sp in specs):
         with_fields = [f.name for f in families() if f.has(FIELDS)]
-        raise SceneError(scene.source, "request.outputs", sorted(fields),
-                         f"VTU and PNG stress fields come from these models only: {with_fields}")
+        raise SceneError(
+            scene.source,
+            "request.outputs",
+            sorted(fields),
+            f"VTU and PNG stress fields come from these models only: {with_fields}",
+        )
     return specs, list(cases), frozenset(fields)
 
 
@@ -150,8 +175,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     specs, cases, fields = _run_request(args, scene)
     max_factor = 1.0 if args.max_load_factor is None else args.max_load_factor
     if not (math.isfinite(max_factor) and 0.0 < max_factor <= 1e6):
-        raise SceneError("<command line>", "--max-load-factor", max_factor,
-                         "must be a positive number up to 1e6")
+        raise SceneError(
+            "<command line>", "--max-load-factor", max_factor, "must be a positive number up to 1e6"
+        )
     if args.dynamic:
         return _run_dynamic(args, scene, specs, cases, json_path)
     out_dir = check_folder(args.out_dir, "--out-dir") if fields else None
@@ -169,15 +195,23 @@ def _cmd_run(args: argparse.Namespace) -> int:
             if "png" in fields:
                 stem = f"{scene.name}_{case.name}_{spec.id.replace(':', '')}"
                 extra["png"] = output_path(out_dir, stem, ".png")
-        if args.arclength:                  # arc-length traces are not cached
+        if args.arclength:  # arc-length traces are not cached
             from .limits import DEFAULT_STEPS, trace_arclength
 
-            return trace_arclength(scene, spec, case, max_factor,
-                                   args.levels - 1 if args.levels else DEFAULT_STEPS,
-                                   record_poses=record["record_poses"])
+            return trace_arclength(
+                scene,
+                spec,
+                case,
+                max_factor,
+                args.levels - 1 if args.levels else DEFAULT_STEPS,
+                record_poses=record["record_poses"],
+            )
         # field outputs need the solve
-        key = result_key(scene, spec.id, case.name, args.levels, record) \
-            if cache.enabled and not extra else None
+        key = (
+            result_key(scene, spec.id, case.name, args.levels, record)
+            if cache.enabled and not extra
+            else None
+        )
         lp = cache.get(key) if key else None
         if lp is not None:
             lp.stats["cached"] = True
@@ -190,21 +224,27 @@ def _cmd_run(args: argparse.Namespace) -> int:
     w = max(14, *(len(sp.id) for sp in specs))
 
     def row(lp) -> None:
-        print(f"{lp.model:<{w}} {lp.load_case:<6} {lp.load[-1]:>9.4g} {lp.load_unit:<2}"
-              f"{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} {lp.displacement[-1]:>10.4f} "
-              f"{math.degrees(lp.rotation[-1]):>9.3f} {_peak_column(lp)} "
-              f"{lp.stats.get('newton_iterations', 0):>6} {lp.seconds:>9.4f} "
-              f"{_valid_cell(lp):>7}")
+        print(
+            f"{lp.model:<{w}} {lp.load_case:<6} {lp.load[-1]:>9.4g} {lp.load_unit:<2}"
+            f"{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} {lp.displacement[-1]:>10.4f} "
+            f"{math.degrees(lp.rotation[-1]):>9.3f} {_peak_column(lp)} "
+            f"{lp.stats.get('newton_iterations', 0):>6} {lp.seconds:>9.4f} "
+            f"{_valid_cell(lp):>7}"
+        )
         note = _validity_note(lp)
         if note:
             print(note)
         for point in lp.limit_points or []:
-            print(f"{'':<{w}} limit point: load {point['load']:.6g} {lp.load_unit}, "
-                  f"dx {point['dx']:.6g} mm, dy {point['dy']:.6g} mm, "
-                  f"rot {math.degrees(point['rotation']):.6g} deg")
+            print(
+                f"{'':<{w}} limit point: load {point['load']:.6g} {lp.load_unit}, "
+                f"dx {point['dx']:.6g} mm, dy {point['dy']:.6g} mm, "
+                f"rot {math.degrees(point['rotation']):.6g} deg"
+            )
 
-    print(f"{'model':<{w}} {'case':<6} {'load':>11} {'dx mm':>10} {'dy mm':>10} {'|d| mm':>10} "
-          f"{'rot deg':>9} {'peak MPa':>9} {'at':<12} {'iters':>6} {'seconds':>9} {'valid':>7}")
+    print(
+        f"{'model':<{w}} {'case':<6} {'load':>11} {'dx mm':>10} {'dy mm':>10} {'|d| mm':>10} "
+        f"{'rot deg':>9} {'peak MPa':>9} {'at':<12} {'iters':>6} {'seconds':>9} {'valid':>7}"
+    )
     return _run_each(specs, cases, run_one, row, scene, json_path)
 
 
@@ -217,18 +257,30 @@ def _run_dynamic(args: argparse.Namespace, scene, specs, cases, json_path) -> in
         print(f"note: bodies without mass data (massless): {', '.join(massless)}")
 
     def run_one(spec, case):
-        return run_dynamic(scene, spec, case, args.duration, args.damping_ratio,
-                           args.rayleigh, args.rho_inf, "poses" in scene.outputs,
-                           args.error_tol)
+        return run_dynamic(
+            scene,
+            spec,
+            case,
+            args.duration,
+            args.damping_ratio,
+            args.rayleigh,
+            args.rho_inf,
+            "poses" in scene.outputs,
+            args.error_tol,
+        )
 
     def row(lp) -> None:
-        print(f"{lp.model:<14} {lp.load_case:<6} {lp.time[-1]:>9.4g} {lp.load[-1]:>9.4g} "
-              f"{lp.load_unit:<2}{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} "
-              f"{math.degrees(lp.rotation[-1]):>9.3f} {lp.stats['steps']:>6} "
-              f"{lp.stats['rejected_steps']:>8} {lp.seconds:>9.4f}")
+        print(
+            f"{lp.model:<14} {lp.load_case:<6} {lp.time[-1]:>9.4g} {lp.load[-1]:>9.4g} "
+            f"{lp.load_unit:<2}{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} "
+            f"{math.degrees(lp.rotation[-1]):>9.3f} {lp.stats['steps']:>6} "
+            f"{lp.stats['rejected_steps']:>8} {lp.seconds:>9.4f}"
+        )
 
-    print(f"{'model':<14} {'case':<6} {'t s':>9} {'load':>11} {'dx mm':>10} {'dy mm':>10} "
-          f"{'rot deg':>9} {'steps':>6} {'rejected':>8} {'seconds':>9}")
+    print(
+        f"{'model':<14} {'case':<6} {'t s':>9} {'load':>11} {'dx mm':>10} {'dy mm':>10} "
+        f"{'rot deg':>9} {'steps':>6} {'rejected':>8} {'seconds':>9}"
+    )
     return _run_each(specs, cases, run_one, row, scene, json_path)
 
 
@@ -242,8 +294,10 @@ def _validity_note(lp) -> str:
     if lp.valid is None or all(lp.valid):
         return ""
     k = lp.valid.index(False)
-    return (f"  ! {lp.model} {lp.load_case}: outside the model's range from level {k + 1} "
-            f"({lp.load[k]:.4g} {lp.load_unit}): {lp.validity[k]}")
+    return (
+        f"  ! {lp.model} {lp.load_case}: outside the model's range from level {k + 1} "
+        f"({lp.load[k]:.4g} {lp.load_unit}): {lp.validity[k]}"
+    )
 
 
 def _cmd_modes(args: argparse.Namespace) -> int:
@@ -257,8 +311,11 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     plot_path = check_figure_file(args.plot, "--plot") if args.plot is not None else None
     if args.density is not None:
         scene = with_density(scene, args.density)
-    case = scene.load_case(args.load_case) if args.load_case else (
-        scene.load_cases[0] if args.at > 0.0 else None)
+    case = (
+        scene.load_case(args.load_case)
+        if args.load_case
+        else (scene.load_cases[0] if args.at > 0.0 else None)
+    )
     massless = scene.mechanism.inertia.massless_bodies(scene.mechanism.moving_bodies)
     if massless:
         print(f"note: bodies without mass data (massless): {', '.join(massless)}")
@@ -297,20 +354,29 @@ def _parse_levels(text: str, spec) -> list[int]:
     try:
         vals = [int(x) for x in text.split(":" if ":" in text else ",")]
     except ValueError:
-        raise SceneError(COMMAND_LINE, "--levels", text,
-                         "expected LO:HI or a comma-separated list of integers") from None
+        raise SceneError(
+            COMMAND_LINE, "--levels", text, "expected LO:HI or a comma-separated list of integers"
+        ) from None
     if ":" in text and len(vals) != 2:
         raise SceneError(COMMAND_LINE, "--levels", text, "expected LO:HI")
     # range first: the series is built only from checked ends (a doubling from 0 never ends)
     if not vals or vals != sorted(set(vals)) or not res.low <= min(vals) <= max(vals) <= res.high:
-        raise SceneError(COMMAND_LINE, "--levels", text,
-                         f"resolutions must increase, within {res.low}..{res.high} for the "
-                         f"{res.name} of '{spec.family}' ({res.meaning})")
+        raise SceneError(
+            COMMAND_LINE,
+            "--levels",
+            text,
+            f"resolutions must increase, within {res.low}..{res.high} for the "
+            f"{res.name} of '{spec.family}' ({res.meaning})",
+        )
     series = res.series(*vals) if ":" in text else vals
     if len(series) < 2:
-        raise SceneError(COMMAND_LINE, "--levels", text,
-                         f"gives the single resolution {series[0]}: a study compares at least "
-                         f"two (three for the order and the Richardson value)")
+        raise SceneError(
+            COMMAND_LINE,
+            "--levels",
+            text,
+            f"gives the single resolution {series[0]}: a study compares at least "
+            f"two (three for the order and the Richardson value)",
+        )
     return series
 
 
@@ -319,12 +385,16 @@ def _cmd_converge(args: argparse.Namespace) -> int:
 
     from .convergence import format_study, study
 
-    spec, = _parse_models([args.model], "<command line>", "--model")
+    (spec,) = _parse_models([args.model], "<command line>", "--model")
     res = spec.model_family.resolution
     if res is None:
         refinable = [f.name for f in families() if f.resolution is not None]
-        raise SceneError("<command line>", "--model", args.model,
-                         f"convergence studies need a model with a resolution: {refinable}")
+        raise SceneError(
+            "<command line>",
+            "--model",
+            args.model,
+            f"convergence studies need a model with a resolution: {refinable}",
+        )
     resolutions = _parse_levels(args.levels or "{}:{}".format(*res.study), spec)
     json_path = check_file(args.json, "--json") if args.json is not None else None
     scene = load_scene(args.scene)
@@ -336,9 +406,16 @@ def _cmd_converge(args: argparse.Namespace) -> int:
             print(f"flexval: solver failure: {f.message}", file=sys.stderr)
             status = EXIT_SOLVER
         print(format_study(st) + "\n")
-        out.append({"family": st.family, "load_case": st.load_case, "ratio": st.ratio,
-                    "rows": st.rows, "summary": st.summary,
-                    "failures": [f.to_dict() for f in st.failures]})
+        out.append(
+            {
+                "family": st.family,
+                "load_case": st.load_case,
+                "ratio": st.ratio,
+                "rows": st.rows,
+                "summary": st.summary,
+                "failures": [f.to_dict() for f in st.failures],
+            }
+        )
     if json_path:
         write_json(json_path, {"scene": scene.name, "studies": out})
     return status
@@ -349,16 +426,23 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
     scenes = args.scene or ["open_chain", "closed_chain"]
     for name in scenes:
-        load_scene(name)        # bad input fails before any work
+        load_scene(name)  # bad input fails before any work
     models = args.model or list(DEFAULT_MODELS)
     _parse_models(models, "<command line>", "--model")
-    out = check_folder(args.out, "--out")     # created only once the rest is known good
-    path = build_report(scenes, out, models, repeats=args.repeats,
-                        use_cache=not args.no_cache, progress=not args.quiet,
-                        bench=not args.no_bench, converge=not args.no_converge,
-                        workers=args.jobs,
-                        protocol=Path(args.protocol) if args.protocol else None,
-                        peers=args.peers)
+    out = check_folder(args.out, "--out")  # created only once the rest is known good
+    path = build_report(
+        scenes,
+        out,
+        models,
+        repeats=args.repeats,
+        use_cache=not args.no_cache,
+        progress=not args.quiet,
+        bench=not args.no_bench,
+        converge=not args.no_converge,
+        workers=args.jobs,
+        protocol=Path(args.protocol) if args.protocol else None,
+        peers=args.peers,
+    )
     print(f"wrote {path}")
     return EXIT_OK
 
@@ -368,10 +452,16 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from .cache import ResultCache
 
     scene = load_scene(args.scene)
-    ref, = _parse_models([args.reference], "<command line>", "--reference")
+    (ref,) = _parse_models([args.reference], "<command line>", "--reference")
     out = check_folder(args.out, "--out")
-    rows, failures = runtime_vs_error(scene, ref, sweep_specs(ref), args.repeats,
-                                      ResultCache(enabled=not args.no_cache), not args.quiet)
+    rows, failures = runtime_vs_error(
+        scene,
+        ref,
+        sweep_specs(ref),
+        args.repeats,
+        ResultCache(enabled=not args.no_cache),
+        not args.quiet,
+    )
     for f in failures:
         print(f"flexval: {f.model} on {f.load_case} {f.summary()}: {f.message}", file=sys.stderr)
     md = write_bench(scene, rows, ref.id, out, failures)
@@ -400,22 +490,36 @@ def _cmd_stress(args: argparse.Namespace) -> int:
 def _cmd_sweep(args: argparse.Namespace) -> int:
     import dataclasses
 
-    from .sweep import (load_sweep, local_cluster, results_store, run_sweep, sweep_rows,
-                        write_outputs)
+    from .sweep import (
+        load_sweep,
+        local_cluster,
+        results_store,
+        run_sweep,
+        sweep_rows,
+        write_outputs,
+    )
 
     if args.scheduler and args.workers is not None:
-        raise SceneError(COMMAND_LINE, "--workers", args.workers,
-                         "sizes the local cluster; an existing one (--scheduler) has its own")
-    sweep = load_sweep(args.sweep)            # every point is checked before anything runs
+        raise SceneError(
+            COMMAND_LINE,
+            "--workers",
+            args.workers,
+            "sizes the local cluster; an existing one (--scheduler) has its own",
+        )
+    sweep = load_sweep(args.sweep)  # every point is checked before anything runs
     if args.batch is not None:
         sweep = dataclasses.replace(sweep, batch=args.batch)
-    out = check_folder(args.out if args.out is not None
-                       else os.path.join("sweeps", safe_name(sweep.name)), "--out")
-    results_store(sweep, out).check()         # a dataset of another format: refused up front
+    out = check_folder(
+        args.out if args.out is not None else os.path.join("sweeps", safe_name(sweep.name)), "--out"
+    )
+    results_store(sweep, out).check()  # a dataset of another format: refused up front
     invalid = len(sweep.points) - len(sweep.valid_points)
-    print(f"sweep {sweep.name}: {len(sweep.points)} points ({invalid} invalid), "
-          f"{len(sweep.models)} models + reference {sweep.reference.id}, "
-          f"{len(sweep.load_cases)} load cases -> {out}", file=sys.stderr)
+    print(
+        f"sweep {sweep.name}: {len(sweep.points)} points ({invalid} invalid), "
+        f"{len(sweep.models)} models + reference {sweep.reference.id}, "
+        f"{len(sweep.load_cases)} load cases -> {out}",
+        file=sys.stderr,
+    )
 
     def progress(line: str) -> None:
         if not args.quiet:
@@ -429,32 +533,45 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             try:
                 client = Client(args.scheduler, timeout="20s")
             except (OSError, TimeoutError) as exc:
-                raise SceneError(COMMAND_LINE, "--scheduler", args.scheduler,
-                                 f"cannot reach the Dask scheduler: {exc}") from None
+                raise SceneError(
+                    COMMAND_LINE,
+                    "--scheduler",
+                    args.scheduler,
+                    f"cannot reach the Dask scheduler: {exc}",
+                ) from None
         else:
             cluster = local_cluster(args.workers)
             client = Client(cluster)
         with client:
-            stats = run_sweep(sweep, out, client, use_cache=not args.no_cache,
-                              progress=progress)
+            stats = run_sweep(sweep, out, client, use_cache=not args.no_cache, progress=progress)
     finally:
         if cluster is not None:
             cluster.close()
     rows = sweep_rows(sweep, out)
     write_outputs(sweep, rows, out, stats.seconds)
     stale = len(results_store(sweep, out).keys()) - len(rows)
-    print(f"{stats.tasks} tasks, {stats.rows_written} rows written ({stats.rows_failed} failed), "
-          f"{stats.rows_skipped} already present; {stats.seconds:.1f} s"
-          + (f"; {stale} stored rows of an earlier code version or outputs left out of the "
-             "summary" if stale else ""), file=sys.stderr)
+    print(
+        f"{stats.tasks} tasks, {stats.rows_written} rows written ({stats.rows_failed} failed), "
+        f"{stats.rows_skipped} already present; {stats.seconds:.1f} s"
+        + (
+            f"; {stale} stored rows of an earlier code version or outputs left out of the summary"
+            if stale
+            else ""
+        ),
+        file=sys.stderr,
+    )
     print((out / "summary.md").read_text(encoding="utf-8"))
     return EXIT_OK
 
 
 def _campaign_options(q: argparse.ArgumentParser) -> None:
     """Options shared by the commands that run many models: timing, cache, progress."""
-    q.add_argument("--repeats", type=_int_in(1, MAX_REPEATS), default=3,
-                   help=f"timing repeats, 1 to {MAX_REPEATS} (median; default 3)")
+    q.add_argument(
+        "--repeats",
+        type=_int_in(1, MAX_REPEATS),
+        default=3,
+        help=f"timing repeats, 1 to {MAX_REPEATS} (median; default 3)",
+    )
     q.add_argument("--no-cache", action="store_true", help="recompute everything")
     q.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -464,22 +581,28 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="flexval",
         description="Validate flexibility models of planar compliant mechanisms "
-                    "(units: mm, N, N mm; angles in degrees on the command line and in files).")
+        "(units: mm, N, N mm; angles in degrees on the command line and in files).",
+    )
     from flexval import __version__
 
     p.add_argument("--version", action="version", version=f"flexval {__version__}")
-    p.add_argument("--blas-threads", metavar="N",
-                   help="threads of the BLAS/LAPACK pools (default: $FLEXVAL_BLAS_THREADS, else 1, "
-                        "which suits flexval's small banded systems; 0: leave them as the "
-                        "libraries set them up)")
+    p.add_argument(
+        "--blas-threads",
+        metavar="N",
+        help="threads of the BLAS/LAPACK pools (default: $FLEXVAL_BLAS_THREADS, else 1, "
+        "which suits flexval's small banded systems; 0: leave them as the "
+        "libraries set them up)",
+    )
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     from flexval.reducedmodels.catalogue import expected_ids, families
 
     ids = expected_ids()
-    refine = ", ".join(f"{f.name}:{f.resolution.name} ({f.resolution.meaning})"
-                       for f in families() if f.resolution)
-    defaults = ", ".join("{} {}:{}".format(f.name, *f.resolution.study)
-                         for f in families() if f.resolution)
+    refine = ", ".join(
+        f"{f.name}:{f.resolution.name} ({f.resolution.meaning})" for f in families() if f.resolution
+    )
+    defaults = ", ".join(
+        "{} {}:{}".format(f.name, *f.resolution.study) for f in families() if f.resolution
+    )
     scene_help = "built-in scene name (open_chain, closed_chain) or path to a scene TOML file"
 
     q = sub.add_parser("info", help="describe a scene: bodies, flexures, ellipse data, loads")
@@ -494,141 +617,270 @@ def build_parser() -> argparse.ArgumentParser:
 
     q = sub.add_parser("run", help="trace load paths with one or more models")
     q.add_argument("scene", help=scene_help)
-    q.add_argument("--model", action="append", metavar="MODEL",
-                   help=f"model id: {ids}; options in brackets, e.g. beam:100[shear], "
-                        "dcmm:2[frame=follower] (repeatable; default: the scene's "
-                        "request.models)")
-    q.add_argument("--load-case", action="append", metavar="NAME",
-                   help="load case name (repeatable; default: all)")
-    q.add_argument("--levels", type=int, metavar="N",
-                   help="number of equally spaced load levels from 0 (default: the scene's, 11)")
+    q.add_argument(
+        "--model",
+        action="append",
+        metavar="MODEL",
+        help=f"model id: {ids}; options in brackets, e.g. beam:100[shear], "
+        "dcmm:2[frame=follower] (repeatable; default: the scene's "
+        "request.models)",
+    )
+    q.add_argument(
+        "--load-case",
+        action="append",
+        metavar="NAME",
+        help="load case name (repeatable; default: all)",
+    )
+    q.add_argument(
+        "--levels",
+        type=int,
+        metavar="N",
+        help="number of equally spaced load levels from 0 (default: the scene's, 11)",
+    )
     q.add_argument("--json", metavar="PATH", help="write all LoadPaths as JSON")
-    q.add_argument("--cache", action="store_true",
-                   help="reuse and store results in the result cache ($FLEXVAL_CACHE or "
-                        "~/.cache/flexval; default: always compute, so timings are fresh; "
-                        "runs that write VTU/PNG fields always compute)")
-    q.add_argument("--arclength", action="store_true",
-                   help="trace by arc-length continuation, through limit points, up to the "
-                        "load case's full value (every converged point is reported; --levels N "
-                        "sets the initial arc length to reach it in N - 1 steps, default 20)")
-    q.add_argument("--max-load-factor", type=float, metavar="X",
-                   help="with --arclength: trace up to X times the load case's value (default 1)")
-    q.add_argument("--out-dir", default="flexval_out", metavar="DIR",
-                   help="folder for the continuum's VTU/PNG outputs when the scene requests "
-                        "them (request.outputs = [\"vtu\", \"png\"]; default flexval_out)")
-    q.add_argument("--dynamic", action="store_true",
-                   help="integrate in time (generalised-alpha) instead of tracing the static "
-                        "path; the JSON adds 'time' (s) to each result")
-    q.add_argument("--duration", type=float, metavar="T",
-                   help="--dynamic: end time in s (default: the load case's end_time, or 1.25 "
-                        "t1; without a time law the Eq. 15 ramp spans 0.8 T)")
-    q.add_argument("--damping-ratio", type=float, metavar="ZETA",
-                   help="--dynamic: Rayleigh damping giving this ratio at the two lowest "
-                        "natural frequencies at rest (default: no damping)")
-    q.add_argument("--rayleigh", type=float, nargs=2, metavar=("ALPHA", "BETA"),
-                   help="--dynamic: Rayleigh damping D = ALPHA M + BETA K (1/s, s)")
-    q.add_argument("--rho-inf", type=float, default=0.9, metavar="RHO",
-                   help="--dynamic: generalised-alpha spectral radius at infinite frequency, "
-                        "1 (no numerical dissipation) to 0 (default 0.9)")
-    q.add_argument("--error-tol", type=float, default=1e-5, metavar="TOL",
-                   help="--dynamic: local error bound per time step (displacement over the "
-                        "mechanism size, rotation in rad; default 1e-5): the history's error "
-                        "falls about 3-5 times per decade of it")
+    q.add_argument(
+        "--cache",
+        action="store_true",
+        help="reuse and store results in the result cache ($FLEXVAL_CACHE or "
+        "~/.cache/flexval; default: always compute, so timings are fresh; "
+        "runs that write VTU/PNG fields always compute)",
+    )
+    q.add_argument(
+        "--arclength",
+        action="store_true",
+        help="trace by arc-length continuation, through limit points, up to the "
+        "load case's full value (every converged point is reported; --levels N "
+        "sets the initial arc length to reach it in N - 1 steps, default 20)",
+    )
+    q.add_argument(
+        "--max-load-factor",
+        type=float,
+        metavar="X",
+        help="with --arclength: trace up to X times the load case's value (default 1)",
+    )
+    q.add_argument(
+        "--out-dir",
+        default="flexval_out",
+        metavar="DIR",
+        help="folder for the continuum's VTU/PNG outputs when the scene requests "
+        'them (request.outputs = ["vtu", "png"]; default flexval_out)',
+    )
+    q.add_argument(
+        "--dynamic",
+        action="store_true",
+        help="integrate in time (generalised-alpha) instead of tracing the static "
+        "path; the JSON adds 'time' (s) to each result",
+    )
+    q.add_argument(
+        "--duration",
+        type=float,
+        metavar="T",
+        help="--dynamic: end time in s (default: the load case's end_time, or 1.25 "
+        "t1; without a time law the Eq. 15 ramp spans 0.8 T)",
+    )
+    q.add_argument(
+        "--damping-ratio",
+        type=float,
+        metavar="ZETA",
+        help="--dynamic: Rayleigh damping giving this ratio at the two lowest "
+        "natural frequencies at rest (default: no damping)",
+    )
+    q.add_argument(
+        "--rayleigh",
+        type=float,
+        nargs=2,
+        metavar=("ALPHA", "BETA"),
+        help="--dynamic: Rayleigh damping D = ALPHA M + BETA K (1/s, s)",
+    )
+    q.add_argument(
+        "--rho-inf",
+        type=float,
+        default=0.9,
+        metavar="RHO",
+        help="--dynamic: generalised-alpha spectral radius at infinite frequency, "
+        "1 (no numerical dissipation) to 0 (default 0.9)",
+    )
+    q.add_argument(
+        "--error-tol",
+        type=float,
+        default=1e-5,
+        metavar="TOL",
+        help="--dynamic: local error bound per time step (displacement over the "
+        "mechanism size, rotation in rad; default 1e-5): the history's error "
+        "falls about 3-5 times per decade of it",
+    )
     q.set_defaults(func=_cmd_run)
 
     q = sub.add_parser("modes", help="natural frequencies and mode shapes about an equilibrium")
     q.add_argument("scene", help=scene_help)
-    q.add_argument("--model", required=True, metavar="MODEL",
-                   help="continuum[:LEVEL], beam:N, prbm, dcmm:N or ee")
-    q.add_argument("--at", type=float, default=0.0, metavar="FRACTION",
-                   help="load level as a fraction of the load case, 0 (unloaded; with gravity "
-                        "if the scene has it) to 1 (default 0)")
-    q.add_argument("--load-case", metavar="NAME",
-                   help="load case for --at (default: the scene's first)")
-    q.add_argument("--count", type=int, default=6, metavar="K",
-                   help="number of modes, lowest first (default 6)")
-    q.add_argument("--json", metavar="PATH",
-                   help="write frequencies_hz, eigenvalues and mode shapes as JSON")
+    q.add_argument(
+        "--model",
+        required=True,
+        metavar="MODEL",
+        help="continuum[:LEVEL], beam:N, prbm, dcmm:N or ee",
+    )
+    q.add_argument(
+        "--at",
+        type=float,
+        default=0.0,
+        metavar="FRACTION",
+        help="load level as a fraction of the load case, 0 (unloaded; with gravity "
+        "if the scene has it) to 1 (default 0)",
+    )
+    q.add_argument(
+        "--load-case", metavar="NAME", help="load case for --at (default: the scene's first)"
+    )
+    q.add_argument(
+        "--count",
+        type=int,
+        default=6,
+        metavar="K",
+        help="number of modes, lowest first (default 6)",
+    )
+    q.add_argument(
+        "--json", metavar="PATH", help="write frequencies_hz, eigenvalues and mode shapes as JSON"
+    )
     q.add_argument("--plot", metavar="FILE.png", help="draw the mode shapes")
-    q.add_argument("--density", type=float, metavar="RHO",
-                   help="flexure density in t/mm^3 instead of the scene's material.density "
-                        "(PLA: 1.24e-9), e.g. for the built-in scenes, whose links are then "
-                        "massless and carry the flexure pieces each model lumps on them")
+    q.add_argument(
+        "--density",
+        type=float,
+        metavar="RHO",
+        help="flexure density in t/mm^3 instead of the scene's material.density "
+        "(PLA: 1.24e-9), e.g. for the built-in scenes, whose links are then "
+        "massless and carry the flexure pieces each model lumps on them",
+    )
     q.set_defaults(func=_cmd_modes)
 
     q = sub.add_parser("converge", help="resolution study: order, Richardson value, GCI")
     q.add_argument("scene", help=scene_help)
-    q.add_argument("--model", default="continuum", metavar="MODEL",
-                   help="model to refine, a family with a resolution and any options, e.g. "
-                        f"beam[shear] ({refine}; default: continuum)")
-    q.add_argument("--levels", metavar="LO:HI",
-                   help="mesh levels LO..HI, or N from LO doubling up to HI; or a comma list "
-                        f"(defaults: {defaults})")
-    q.add_argument("--load-case", action="append", metavar="NAME",
-                   help="load case name (repeatable; default: all)")
+    q.add_argument(
+        "--model",
+        default="continuum",
+        metavar="MODEL",
+        help="model to refine, a family with a resolution and any options, e.g. "
+        f"beam[shear] ({refine}; default: continuum)",
+    )
+    q.add_argument(
+        "--levels",
+        metavar="LO:HI",
+        help="mesh levels LO..HI, or N from LO doubling up to HI; or a comma list "
+        f"(defaults: {defaults})",
+    )
+    q.add_argument(
+        "--load-case",
+        action="append",
+        metavar="NAME",
+        help="load case name (repeatable; default: all)",
+    )
     q.add_argument("--json", metavar="PATH", help="write the studies as JSON")
     q.set_defaults(func=_cmd_converge)
 
     q = sub.add_parser("report", help="build the validation report (Markdown, PNG, JSON)")
     q.add_argument("scene", nargs="*", help=f"{scene_help} (default: both built-in scenes)")
-    q.add_argument("--out", default="reports/paper", metavar="DIR",
-                   help="output folder (default: reports/paper)")
-    q.add_argument("--model", action="append", metavar="MODEL",
-                   help="models to compare (repeatable; default: continuum, beam:100, beam:20, "
-                        "prbm, dcmm:1, dcmm:2, dcmm:3, ee)")
+    q.add_argument(
+        "--out",
+        default="reports/paper",
+        metavar="DIR",
+        help="output folder (default: reports/paper)",
+    )
+    q.add_argument(
+        "--model",
+        action="append",
+        metavar="MODEL",
+        help="models to compare (repeatable; default: continuum, beam:100, beam:20, "
+        "prbm, dcmm:1, dcmm:2, dcmm:3, ee)",
+    )
     _campaign_options(q)
     q.add_argument("--no-bench", action="store_true", help="skip the runtime-vs-error study")
     q.add_argument("--no-converge", action="store_true", help="skip the mesh convergence study")
-    q.add_argument("--peers", action="store_true",
-                   help="also time beam:100 against OpenSeesPy on every load case, in the run "
-                        "times (optional extra [peers]; without it they say it is missing)")
-    q.add_argument("--protocol", metavar="PATH",
-                   help="protocol.json of benchmarks/paper_protocol.py, summarised in the "
-                        "report's dynamics section (default: none; a missing or stale file is "
-                        "said so in the report, never an error)")
-    q.add_argument("--jobs", type=_int_in(1, MAX_LOCAL_WORKERS), default=MAX_LOCAL_WORKERS,
-                   metavar="N",
-                   help="processes computing the load paths and drawing the scenes, 1 to "
-                        f"{MAX_LOCAL_WORKERS} (default: one per core; results are the same, "
-                        "run times are measured N at a time)")
+    q.add_argument(
+        "--peers",
+        action="store_true",
+        help="also time beam:100 against OpenSeesPy on every load case, in the run "
+        "times (optional extra [peers]; without it they say it is missing)",
+    )
+    q.add_argument(
+        "--protocol",
+        metavar="PATH",
+        help="protocol.json of benchmarks/paper_protocol.py, summarised in the "
+        "report's dynamics section (default: none; a missing or stale file is "
+        "said so in the report, never an error)",
+    )
+    q.add_argument(
+        "--jobs",
+        type=_int_in(1, MAX_LOCAL_WORKERS),
+        default=MAX_LOCAL_WORKERS,
+        metavar="N",
+        help="processes computing the load paths and drawing the scenes, 1 to "
+        f"{MAX_LOCAL_WORKERS} (default: one per core; results are the same, "
+        "run times are measured N at a time)",
+    )
     q.set_defaults(func=_cmd_report)
 
     q = sub.add_parser("bench", help="runtime-versus-error study of every model on a scene")
     q.add_argument("scene", help=scene_help)
-    q.add_argument("--reference", default="continuum", metavar="MODEL",
-                   help="reference model (default: continuum at its default level)")
+    q.add_argument(
+        "--reference",
+        default="continuum",
+        metavar="MODEL",
+        help="reference model (default: continuum at its default level)",
+    )
     q.add_argument("--out", default="reports/bench", metavar="DIR", help="output folder")
     _campaign_options(q)
     q.set_defaults(func=_cmd_bench)
 
     q = sub.add_parser("stress", help="stress tests: load amplification, step count, invariance")
     q.add_argument("scene", help=scene_help)
-    q.add_argument("--model", action="append", metavar="MODEL",
-                   help="models to stress (repeatable; default: ee, dcmm:1, dcmm:2, prbm, beam:20)")
-    q.add_argument("--quick", action="store_true",
-                   help="small study: loads up to x100, beam:40 reference, no 1001-level run")
+    q.add_argument(
+        "--model",
+        action="append",
+        metavar="MODEL",
+        help="models to stress (repeatable; default: ee, dcmm:1, dcmm:2, prbm, beam:20)",
+    )
+    q.add_argument(
+        "--quick",
+        action="store_true",
+        help="small study: loads up to x100, beam:40 reference, no 1001-level run",
+    )
     q.add_argument("--out", default="reports/stress", metavar="DIR", help="output folder")
     q.add_argument("--quiet", action="store_true", help="no progress lines")
     q.set_defaults(func=_cmd_stress)
 
-    q = sub.add_parser("sweep", help="parameter sweep of a scene on Dask (Parquet results, "
-                                     "resumable, error maps)")
-    q.add_argument("sweep", help="sweep file (TOML) or built-in sweep: open_chain_arcs, "
-                                 "slenderness, arc_angle")
-    q.add_argument("--out", metavar="DIR",
-                   help="output folder: results/ (Parquet), summary.md, timings.md, figures "
-                        "(default: sweeps/NAME)")
-    q.add_argument("--scheduler", metavar="ADDRESS",
-                   help="address of an existing Dask scheduler, e.g. tcp://HOST:8786 "
-                        "(default: a local cluster)")
-    q.add_argument("--workers", type=_int_in(1, MAX_LOCAL_WORKERS), metavar="N",
-                   help=f"local cluster size, 1 to {MAX_LOCAL_WORKERS} (the logical CPUs; "
-                        "default: one single-threaded process per core)")
-    q.add_argument("--batch", type=_int_in(1, 100_000), metavar="N",
-                   help="points per task of a reduced model (default: the sweep's, or about "
-                        "4 tasks per worker and model, at most 25 points each)")
-    q.add_argument("--no-cache", action="store_true",
-                   help="recompute reference paths even if cached")
+    q = sub.add_parser(
+        "sweep", help="parameter sweep of a scene on Dask (Parquet results, resumable, error maps)"
+    )
+    q.add_argument(
+        "sweep", help="sweep file (TOML) or built-in sweep: open_chain_arcs, slenderness, arc_angle"
+    )
+    q.add_argument(
+        "--out",
+        metavar="DIR",
+        help="output folder: results/ (Parquet), summary.md, timings.md, figures "
+        "(default: sweeps/NAME)",
+    )
+    q.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="address of an existing Dask scheduler, e.g. tcp://HOST:8786 "
+        "(default: a local cluster)",
+    )
+    q.add_argument(
+        "--workers",
+        type=_int_in(1, MAX_LOCAL_WORKERS),
+        metavar="N",
+        help=f"local cluster size, 1 to {MAX_LOCAL_WORKERS} (the logical CPUs; "
+        "default: one single-threaded process per core)",
+    )
+    q.add_argument(
+        "--batch",
+        type=_int_in(1, 100_000),
+        metavar="N",
+        help="points per task of a reduced model (default: the sweep's, or about "
+        "4 tasks per worker and model, at most 25 points each)",
+    )
+    q.add_argument(
+        "--no-cache", action="store_true", help="recompute reference paths even if cached"
+    )
     q.add_argument("--quiet", action="store_true", help="no progress lines")
     q.set_defaults(func=_cmd_sweep)
     return p
@@ -673,8 +925,12 @@ def _dispatch(args: argparse.Namespace) -> int:
             request_threads(args.blas_threads)
         except ValueError:
             if args.blas_threads is not None:
-                raise SceneError("<command line>", "--blas-threads", args.blas_threads, RULE) from None
-            raise SceneError("<environment>", ENV_VARIABLE, os.environ[ENV_VARIABLE], RULE) from None
+                raise SceneError(
+                    "<command line>", "--blas-threads", args.blas_threads, RULE
+                ) from None
+            raise SceneError(
+                "<environment>", ENV_VARIABLE, os.environ[ENV_VARIABLE], RULE
+            ) from None
         return args.func(args)
     except SceneError as exc:
         print(f"flexval: bad input: {exc}", file=sys.stderr)

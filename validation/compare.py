@@ -52,8 +52,14 @@ from flexval.reducedmodels import LoadPath
 METRICS = ("end_disp", "end_disp_vec", "end_rot", "path_disp", "path_rot")
 
 #: paper model names -> flexval model ids
-PAPER_MODELS = {"FEM100": "beam:100", "FEM20": "beam:20", "PRBM": "prbm", "DCMM1": "dcmm:1",
-                "DCMM2": "dcmm:2", "DCMM3": "dcmm:3"}
+PAPER_MODELS = {
+    "FEM100": "beam:100",
+    "FEM20": "beam:20",
+    "PRBM": "prbm",
+    "DCMM1": "dcmm:1",
+    "DCMM2": "dcmm:2",
+    "DCMM3": "dcmm:3",
+}
 
 
 def _on_reference_levels(model: LoadPath, ref: LoadPath) -> tuple[np.ndarray, ...]:
@@ -61,8 +67,9 @@ def _on_reference_levels(model: LoadPath, ref: LoadPath) -> tuple[np.ndarray, ..
     if lm.shape == lr.shape and np.allclose(lm, lr, rtol=1e-12, atol=0.0):
         return np.asarray(model.dx), np.asarray(model.dy), np.asarray(model.rotation)
     order = np.argsort(lm)
-    return tuple(np.interp(lr, lm[order], np.asarray(v)[order])
-                 for v in (model.dx, model.dy, model.rotation))
+    return tuple(
+        np.interp(lr, lm[order], np.asarray(v)[order]) for v in (model.dx, model.dy, model.rotation)
+    )
 
 
 #: a reference value below this fraction of its scale is near zero (see the module
@@ -109,8 +116,9 @@ def errors(model: LoadPath, ref: LoadPath, length: float) -> dict[str, float]:
         different load cases, or the reference did not reach full load.
     """
     if not (isinstance(length, (int, float, np.floating)) and 0 < length < np.inf):
-        raise ValueError(f"length must be the mechanism's size, a positive number of mm: "
-                         f"{length!r}")
+        raise ValueError(
+            f"length must be the mechanism's size, a positive number of mm: {length!r}"
+        )
     if model.load_case != ref.load_case:
         raise ValueError(f"load cases differ: {model.load_case!r} vs {ref.load_case!r}")
     if not ref.converged:
@@ -147,8 +155,9 @@ def paper_scene(scene: str) -> dict | None:
     return paper_results().get(scene)
 
 
-def paper_percent(scene: str, load_cases: list[str] | None = None
-                  ) -> dict[str, dict[str, dict[str, float]]]:
+def paper_percent(
+    scene: str, load_cases: list[str] | None = None
+) -> dict[str, dict[str, dict[str, float]]]:
     """The paper's percentages as {model id: {load case: {"disp": %, "rot": %}}} ("-" skipped).
 
     ``load_cases`` name the columns (default: the data file's own).
@@ -166,10 +175,11 @@ def paper_percent(scene: str, load_cases: list[str] | None = None
     return out
 
 
-def paper_seconds(scene: str, load_cases: list[str] | None = None
-                  ) -> dict[str, dict[str, float]]:
+def paper_seconds(scene: str, load_cases: list[str] | None = None) -> dict[str, dict[str, float]]:
     """The paper's run times as {model id: {load case: seconds}} ("-" skipped)."""
     data = paper_results()[scene]
     cases = load_cases or data["load_cases"]
-    return {PAPER_MODELS[name]: {c: float(v) for c, v in zip(cases, row) if v != "-"}
-            for name, row in data["seconds"].items()}
+    return {
+        PAPER_MODELS[name]: {c: float(v) for c, v in zip(cases, row) if v != "-"}
+        for name, row in data["seconds"].items()
+    }

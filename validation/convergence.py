@@ -24,8 +24,8 @@ last bits), so none is given and the text says why.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 from flexval.geometry import LoadCase, Scene
 from flexval.reducedmodels import LoadPath, SolverError
@@ -75,11 +75,19 @@ def richardson(f1: float, f2: float, f3: float, ratio: float) -> dict:
     """
     e21, e32 = f2 - f1, f3 - f2
     if max(abs(e21), abs(e32)) <= ROUND_OFF_CHANGE * abs(f3):
-        return {"order": None, "extrapolated": f3, "gci_percent": None,
-                "note": f"converged to round-off (changes within {ROUND_OFF_CHANGE:g} of the value)"}
+        return {
+            "order": None,
+            "extrapolated": f3,
+            "gci_percent": None,
+            "note": f"converged to round-off (changes within {ROUND_OFF_CHANGE:g} of the value)",
+        }
     if e32 == 0.0 or e21 == 0.0 or e21 * e32 < 0 or abs(e32) >= abs(e21):
-        return {"order": None, "extrapolated": f3, "gci_percent": None,
-                "note": "the changes do not shrink monotonically"}
+        return {
+            "order": None,
+            "extrapolated": f3,
+            "gci_percent": None,
+            "note": "the changes do not shrink monotonically",
+        }
     p = math.log(abs(e21) / abs(e32)) / math.log(ratio)
     ext = f3 + e32 / (ratio**p - 1.0)
     gci = 100.0 * 1.25 * abs(e32 / f3) / (ratio**p - 1.0) if f3 != 0 else None
@@ -93,9 +101,15 @@ def order_text(summary: dict) -> str:
     return f"{summary['order']:.2f}"
 
 
-def study(scene: Scene, model: ModelSpec, resolutions: list[int], case: LoadCase,
-          levels: int | None = None, progress=None,
-          run: Callable[[ModelSpec], LoadPath] | None = None) -> ConvergenceStudy:
+def study(
+    scene: Scene,
+    model: ModelSpec,
+    resolutions: list[int],
+    case: LoadCase,
+    levels: int | None = None,
+    progress=None,
+    run: Callable[[ModelSpec], LoadPath] | None = None,
+) -> ConvergenceStudy:
     """Run ``model`` (its options kept) at each resolution (increasing) on ``case`` and
     analyse convergence.
 
@@ -118,13 +132,21 @@ def study(scene: Scene, model: ModelSpec, resolutions: list[int], case: LoadCase
             if progress:
                 progress(spec.id)
             continue
-        st.rows.append({"model": spec.id, "resolution": res,
-                        "unknowns": lp.stats.get("unknowns"), "seconds": lp.seconds,
-                        "dx": lp.dx[-1], "dy": lp.dy[-1],
-                        "displacement": float(lp.displacement[-1]),
-                        "rotation": lp.rotation[-1],
-                        "peak_stress": (max(v[-1] for v in lp.peak_stress.values())
-                                        if lp.peak_stress else None)})
+        st.rows.append(
+            {
+                "model": spec.id,
+                "resolution": res,
+                "unknowns": lp.stats.get("unknowns"),
+                "seconds": lp.seconds,
+                "dx": lp.dx[-1],
+                "dy": lp.dy[-1],
+                "displacement": float(lp.displacement[-1]),
+                "rotation": lp.rotation[-1],
+                "peak_stress": (
+                    max(v[-1] for v in lp.peak_stress.values()) if lp.peak_stress else None
+                ),
+            }
+        )
         if progress:
             progress(spec.id)
     finest = [r["resolution"] for r in st.rows[-3:]]
@@ -139,19 +161,27 @@ def study(scene: Scene, model: ModelSpec, resolutions: list[int], case: LoadCase
 
 def format_study(st: ConvergenceStudy) -> str:
     """Plain-text table of a study (mm, deg, s)."""
-    lines = [f"{st.family} convergence on load case {st.load_case} (refinement ratio "
-             f"{st.ratio:g})",
-             f"{'model':<14} {'unknowns':>9} {'seconds':>9} {'|d| mm':>12} {'rot deg':>12}"]
+    lines = [
+        f"{st.family} convergence on load case {st.load_case} (refinement ratio {st.ratio:g})",
+        f"{'model':<14} {'unknowns':>9} {'seconds':>9} {'|d| mm':>12} {'rot deg':>12}",
+    ]
     for r in st.rows:
-        lines.append(f"{r['model']:<14} {r['unknowns']:>9} {r['seconds']:>9.3f} "
-                     f"{r['displacement']:>12.6f} {math.degrees(r['rotation']):>12.6f}")
-    for key, unit, conv in (("displacement", "mm", 1.0), ("rotation", "deg", math.degrees(1.0)),
-                            ("peak_stress", "MPa", 1.0)):
+        lines.append(
+            f"{r['model']:<14} {r['unknowns']:>9} {r['seconds']:>9.3f} "
+            f"{r['displacement']:>12.6f} {math.degrees(r['rotation']):>12.6f}"
+        )
+    for key, unit, conv in (
+        ("displacement", "mm", 1.0),
+        ("rotation", "deg", math.degrees(1.0)),
+        ("peak_stress", "MPa", 1.0),
+    ):
         s = st.summary.get(key)
         if not s:
             continue
         gci = "n/a" if s["gci_percent"] is None else f"{s['gci_percent']:.3g} %"
-        lines.append(f"{key}: observed order {order_text(s)}, extrapolated "
-                     f"{s['extrapolated'] * conv:.6f} {unit}, GCI {gci}")
+        lines.append(
+            f"{key}: observed order {order_text(s)}, extrapolated "
+            f"{s['extrapolated'] * conv:.6f} {unit}, GCI {gci}"
+        )
     lines += [f"{f.model}: {f.summary()}" for f in st.failures]
     return "\n".join(lines)

@@ -33,19 +33,29 @@ def _reference_bullet(data: ReportData) -> list[str]:
             continue
         disp = max(v["path_disp"] for v in e.values())
         rot = max(v["path_rot"] for v in e.values())
-        parts.append(f"{_pct(disp)} (displacement) and {_pct(rot)} (rotation) along every "
-                     f"path of {r.scene.name}")
-        ratios += [f.section.thickness / f.shape.radius for f in r.scene.mechanism.flexures
-                   if hasattr(f.shape, "radius")]
+        parts.append(
+            f"{_pct(disp)} (displacement) and {_pct(rot)} (rotation) along every "
+            f"path of {r.scene.name}"
+        )
+        ratios += [
+            f.section.thickness / f.shape.radius
+            for f in r.scene.mechanism.flexures
+            if hasattr(f.shape, "radius")
+        ]
     if not parts:
         return []
-    slender = (f" for arcs with h/r = {min(ratios):.2g} to {max(ratios):.2g}, where it enters "
-               f"at order (h/r)^2 = {min(ratios) ** 2:.1g} to {max(ratios) ** 2:.1g}"
-               if ratios else "")
-    return [f"- **The reference.** `{PAPER_REFERENCE}` and the continuum `{data.reference}` "
-            "differ by at most " + "; ".join(parts) + ": the continuum's extra physics (shear, "
-            f"Poisson, finite thickness) is small{slender}. Mesh convergence of the continuum is "
-            "reported per scene with its observed order and GCI."]
+    slender = (
+        f" for arcs with h/r = {min(ratios):.2g} to {max(ratios):.2g}, where it enters "
+        f"at order (h/r)^2 = {min(ratios) ** 2:.1g} to {max(ratios) ** 2:.1g}"
+        if ratios
+        else ""
+    )
+    return [
+        f"- **The reference.** `{PAPER_REFERENCE}` and the continuum `{data.reference}` "
+        "differ by at most " + "; ".join(parts) + ": the continuum's extra physics (shear, "
+        f"Poisson, finite thickness) is small{slender}. Mesh convergence of the continuum is "
+        "reported per scene with its observed order and GCI."
+    ]
 
 
 def _paper_entries(data: ReportData):
@@ -65,21 +75,29 @@ def _metric_bullet(data: ReportData) -> list[str]:
     entries = list(_paper_entries(data))
     if not entries:
         return []
-    closer = [x for x in entries
-              if abs(x[3]["end_disp_vec"] - x[4]["disp"]) <= abs(x[3]["end_disp"] - x[4]["disp"])]
-    text = (f"- **The metric.** The paper's 'disp' column is as close or closer to our "
-            f"end-of-ramp error of the displacement *vector* than to that of its magnitude in "
-            f"{len(closer)} of {len(entries)} entries")
+    closer = [
+        x
+        for x in entries
+        if abs(x[3]["end_disp_vec"] - x[4]["disp"]) <= abs(x[3]["end_disp"] - x[4]["disp"])
+    ]
+    text = (
+        f"- **The metric.** The paper's 'disp' column is as close or closer to our "
+        f"end-of-ramp error of the displacement *vector* than to that of its magnitude in "
+        f"{len(closer)} of {len(entries)} entries"
+    )
     matched = [x for x in entries if abs(x[3]["end_disp_vec"] - x[4]["disp"]) <= PRINTED]
     if matched:
         r, m, c, e, p = max(matched, key=lambda x: abs(x[3]["end_disp"] - x[4]["disp"]))
-        text += (f"; e.g. `{m}` on `{c}` of {r.scene.name}: vector {_pct(e['end_disp_vec'])}, "
-                 f"magnitude {_pct(e['end_disp'])}, paper {_pct(p['disp'])}")
+        text += (
+            f"; e.g. `{m}` on `{c}` of {r.scene.name}: vector {_pct(e['end_disp_vec'])}, "
+            f"magnitude {_pct(e['end_disp'])}, paper {_pct(p['disp'])}"
+        )
     return [text + "."]
 
 
-def _softest_stretch(ref_load: list[float], ref_dx: list[float], ref_dy: list[float]
-                     ) -> tuple[float, float]:
+def _softest_stretch(
+    ref_load: list[float], ref_dx: list[float], ref_dy: list[float]
+) -> tuple[float, float]:
     """Load interval (percent of full load) of the largest displacement increment per load."""
     lam = np.abs(np.asarray(ref_load)) / max(abs(ref_load[-1]), np.finfo(float).tiny)
     d = np.hypot(ref_dx, ref_dy)
@@ -101,11 +119,13 @@ def _path_bullet(data: ReportData) -> list[str]:
     _, r, m, c, e = best
     ref = r.converged(PAPER_REFERENCE, c)
     lo, hi = _softest_stretch(ref.load, ref.dx, ref.dy)
-    return [f"- **Path maxima.** The largest gap between a path maximum and the end-of-ramp "
-            f"error is `{m}` on `{c}` of {r.scene.name}: {_pct(e['path_disp'])} along the path, "
-            f"{_pct(e['end_disp_vec'])} at the end. There the reference is softest between "
-            f"{lo:.0f} % and {hi:.0f} % of the load (its largest displacement increment per "
-            "load step), where models disagree most."]
+    return [
+        f"- **Path maxima.** The largest gap between a path maximum and the end-of-ramp "
+        f"error is `{m}` on `{c}` of {r.scene.name}: {_pct(e['path_disp'])} along the path, "
+        f"{_pct(e['end_disp_vec'])} at the end. There the reference is softest between "
+        f"{lo:.0f} % and {hi:.0f} % of the load (its largest displacement increment per "
+        "load step), where models disagree most."
+    ]
 
 
 def _paper_above_bullet(data: ReportData) -> list[str]:
@@ -113,13 +133,18 @@ def _paper_above_bullet(data: ReportData) -> list[str]:
     above = [x for x in entries if x[4]["disp"] > x[3]["end_disp_vec"]][:N_LISTED]
     if not above:
         return []
-    named = "; ".join(f"`{m}` on `{c}` of {r.scene.name} (paper {_pct(p['disp'])}, ours "
-                      f"{_pct(e['end_disp_vec'])} at the end and {_pct(e['path_disp'])} at most "
-                      "along the path)" for r, m, c, e, p in above)
-    return [f"- **Where the paper's figures are above ours.** Most: {named}. A dynamic "
-            "quasi-static simulation (the paper used RecurDyn with damping) lags behind a steep "
-            "stretch of the path, so its errors can approach our path maxima rather than our "
-            "end-of-ramp errors."]
+    named = "; ".join(
+        f"`{m}` on `{c}` of {r.scene.name} (paper {_pct(p['disp'])}, ours "
+        f"{_pct(e['end_disp_vec'])} at the end and {_pct(e['path_disp'])} at most "
+        "along the path)"
+        for r, m, c, e, p in above
+    )
+    return [
+        f"- **Where the paper's figures are above ours.** Most: {named}. A dynamic "
+        "quasi-static simulation (the paper used RecurDyn with damping) lags behind a steep "
+        "stretch of the path, so its errors can approach our path maxima rather than our "
+        "end-of-ramp errors."
+    ]
 
 
 def _frame_bullet(data: ReportData) -> list[str]:
@@ -147,15 +172,20 @@ def _frame_bullet(data: ReportData) -> list[str]:
                     per_model.setdefault(m, []).append(gap_b < gap_a)
     if not spread:
         return []
-    text = ("- **Measuring frame.** The paper's text measures each element in its leading "
-            "body's displaced frame (our default).")
+    text = (
+        "- **Measuring frame.** The paper's text measures each element in its leading "
+        "body's displaced frame (our default)."
+    )
     if per_model:
         counts = ", ".join(f"`{m}` on {sum(v)} of {len(v)}" for m, v in per_model.items())
-        text += (f" Measuring in the `{other}` frame brings the end-of-ramp errors closer to "
-                 f"the paper's figures for {counts} entries.")
+        text += (
+            f" Measuring in the `{other}` frame brings the end-of-ramp errors closer to "
+            f"the paper's figures for {counts} entries."
+        )
     means = {m: float(np.mean(v)) for m, v in spread.items()}
-    text += (" The two frames' displacement errors differ on average by "
-             + ", ".join(f"{v:.2g} points for `{m}`" for m, v in means.items()))
+    text += " The two frames' displacement errors differ on average by " + ", ".join(
+        f"{v:.2g} points for `{m}`" for m, v in means.items()
+    )
     vals = list(means.values())
     if len(vals) > 1 and all(x > y for x, y in zip(vals, vals[1:])):
         text += ": the choice fades as the resolution grows"
@@ -167,38 +197,55 @@ def _at_or_below_bullet(data: ReportData) -> list[str]:
     for r, m, c, e, p in _paper_entries(data):
         if m == PAPER_REFERENCE:
             continue
-        counts.setdefault(m, []).append(e["end_disp_vec"] <= p["disp"] + PRINTED
-                                        and e["end_rot"] <= p["rot"] + PRINTED)
+        counts.setdefault(m, []).append(
+            e["end_disp_vec"] <= p["disp"] + PRINTED and e["end_rot"] <= p["rot"] + PRINTED
+        )
     if not counts:
         return []
-    return ["- **Ours against the paper's.** Entries where both our end-of-ramp errors are at "
-            "or below the paper's figures (within its rounding to 0.1): "
-            + ", ".join(f"`{m}` {sum(v)} of {len(v)}" for m, v in counts.items()) + "."]
+    return [
+        "- **Ours against the paper's.** Entries where both our end-of-ramp errors are at "
+        "or below the paper's figures (within its rounding to 0.1): "
+        + ", ".join(f"`{m}` {sum(v)} of {len(v)}" for m, v in counts.items())
+        + "."
+    ]
 
 
 def _times_bullet(data: ReportData) -> list[str]:
     if not any(r.paper for r in data.scenes):
         return []
-    return ["- **Run times.** Ours are static Newton solutions on one core path in Python, the "
-            "paper's are dynamic quasi-static runs in a commercial multibody code: compare the "
-            "speed-up columns of [timings.md](timings.md), not the seconds."]
+    return [
+        "- **Run times.** Ours are static Newton solutions on one core path in Python, the "
+        "paper's are dynamic quasi-static runs in a commercial multibody code: compare the "
+        "speed-up columns of [timings.md](timings.md), not the seconds."
+    ]
 
 
 def _failures_bullet(data: ReportData) -> list[str]:
     fails: list[tuple[SceneResults, Failure]] = [(r, f) for r in data.scenes for f in r.failures]
     if not fails:
         return ["- **Failures.** Every model reached the full load on every load case."]
-    return ["- **Failures.** "
-            + "; ".join(f"`{f.model}` on `{f.load_case}` of {r.scene.name} {f.summary()}"
-                        for r, f in fails)
-            + ". Their paths up to the last converged load are in the figures and "
-              "results.json; the tables show the failure in their place."]
+    return [
+        "- **Failures.** "
+        + "; ".join(
+            f"`{f.model}` on `{f.load_case}` of {r.scene.name} {f.summary()}" for r, f in fails
+        )
+        + ". Their paths up to the last converged load are in the figures and "
+        "results.json; the tables show the failure in their place."
+    ]
 
 
 def discussion(data: ReportData) -> list[str]:
     """The report's discussion section (Markdown lines)."""
     bullets = []
-    for make in (_reference_bullet, _metric_bullet, _path_bullet, _paper_above_bullet,
-                 _frame_bullet, _at_or_below_bullet, _times_bullet, _failures_bullet):
+    for make in (
+        _reference_bullet,
+        _metric_bullet,
+        _path_bullet,
+        _paper_above_bullet,
+        _frame_bullet,
+        _at_or_below_bullet,
+        _times_bullet,
+        _failures_bullet,
+    ):
         bullets += make(data)
     return ["## Discussion", ""] + bullets + [""]

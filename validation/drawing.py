@@ -37,8 +37,12 @@ def draw_mechanism(scene: Scene, ax=None, load_case: str | None = None):
         if b.is_ground:
             for p in pts:
                 ax.plot(*p, marker="s", ms=10, color="0.3")
-                ax.plot([p[0] - 0.03 * size, p[0] + 0.03 * size], [p[1] - 0.015 * size] * 2,
-                        color="0.3", lw=3)
+                ax.plot(
+                    [p[0] - 0.03 * size, p[0] + 0.03 * size],
+                    [p[1] - 0.015 * size] * 2,
+                    color="0.3",
+                    lw=3,
+                )
             label_at = pts.mean(axis=0) - [0, 0.05 * size]
         else:
             if len(pts) >= 3:
@@ -46,12 +50,18 @@ def draw_mechanism(scene: Scene, ax=None, load_case: str | None = None):
                 pts = np.vstack([pts, pts[:1]])
             ax.plot(pts[:, 0], pts[:, 1], color="0.15", lw=5, solid_capstyle="round", alpha=0.8)
             label_at = pts[:-1].mean(axis=0) if len(pts) > 3 else pts.mean(axis=0)
-        ax.annotate(f"{name}", label_at, fontsize=11, weight="bold", color="darkred",
-                    ha="center", va="center",
-                    bbox=dict(boxstyle="circle,pad=0.2", fc="white", ec="darkred"))
+        ax.annotate(
+            f"{name}",
+            label_at,
+            fontsize=11,
+            weight="bold",
+            color="darkred",
+            ha="center",
+            va="center",
+            bbox=dict(boxstyle="circle,pad=0.2", fc="white", ec="darkred"),
+        )
     ax.plot(*mech.target_point, marker="*", ms=14, color="gold", mec="k", zorder=5)
-    ax.annotate("target", mech.target_point, xytext=(6, 6), textcoords="offset points",
-                fontsize=9)
+    ax.annotate("target", mech.target_point, xytext=(6, 6), textcoords="offset points", fontsize=9)
     cases = [scene.load_case(load_case)] if load_case else scene.load_cases
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"][1:]
     for k, lc in enumerate(cases):
@@ -59,15 +69,25 @@ def draw_mechanism(scene: Scene, ax=None, load_case: str | None = None):
         for c in lc.components:
             if isinstance(c, Force):
                 d = np.sign(c.value) * np.array([np.cos(c.angle), np.sin(c.angle)]) * 0.12 * size
-                ax.annotate("", xy=c.point + d, xytext=c.point,
-                            arrowprops=dict(arrowstyle="-|>", color=col, lw=2))
+                ax.annotate(
+                    "",
+                    xy=c.point + d,
+                    xytext=c.point,
+                    arrowprops=dict(arrowstyle="-|>", color=col, lw=2),
+                )
                 ax.annotate(lc.name, c.point + d, color=col, fontsize=9)
                 ax.plot(*(c.point + 1.15 * d), alpha=0.0)  # keep the arrow inside the axes
             elif isinstance(c, Moment):
                 p = mech.bodies[c.body].points.mean(axis=0)
-                ax.annotate(f"{lc.name} ({'ccw' if c.value > 0 else 'cw'})", p,
-                            xytext=(0, -18 - 12 * k), textcoords="offset points", color=col,
-                            fontsize=9, ha="center")
+                ax.annotate(
+                    f"{lc.name} ({'ccw' if c.value > 0 else 'cw'})",
+                    p,
+                    xytext=(0, -18 - 12 * k),
+                    textcoords="offset points",
+                    color=col,
+                    fontsize=9,
+                    ha="center",
+                )
     ax.set_aspect("equal")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")

@@ -34,24 +34,37 @@ def time_law(case: LoadCase, duration: float | None, source: str) -> tuple[TimeL
 
     ``source`` names the scene file in the error raised for a time law too short to run."""
     if duration is not None and not (math.isfinite(duration) and MIN_DURATION <= duration <= 1e6):
-        raise SceneError("<command line>", "--duration", duration,
-                         f"must be a time in s from {MIN_DURATION:g} to 1e6 (the first time "
-                         "step of a shorter run falls below the integrator's smallest)")
+        raise SceneError(
+            "<command line>",
+            "--duration",
+            duration,
+            f"must be a time in s from {MIN_DURATION:g} to 1e6 (the first time "
+            "step of a shorter run falls below the integrator's smallest)",
+        )
     law = case.time_law
     if law is None:
         if duration is None:
-            raise SceneError("<command line>", "--duration", None,
-                             f"load case {case.name!r} has no time law (ramp, t0, t1): "
-                             "give the run's duration in s")
+            raise SceneError(
+                "<command line>",
+                "--duration",
+                None,
+                f"load case {case.name!r} has no time law (ramp, t0, t1): "
+                "give the run's duration in s",
+            )
         return TimeLaw("eq15", 0.0, DEFAULT_RAMP_FRACTION * duration), duration
     if duration is None:
         duration = law.duration
         if duration < MIN_DURATION:
-            field, value = ("end_time", law.end_time) if law.end_time is not None \
-                else ("t1", law.t1)
-            raise SceneError(source, f"load_cases.{case.name}.{field}", value,
-                             f"gives a run of {duration:g} s, shorter than {MIN_DURATION:g} s: "
-                             "its first time step would fall below the integrator's smallest")
+            field, value = (
+                ("end_time", law.end_time) if law.end_time is not None else ("t1", law.t1)
+            )
+            raise SceneError(
+                source,
+                f"load_cases.{case.name}.{field}",
+                value,
+                f"gives a run of {duration:g} s, shorter than {MIN_DURATION:g} s: "
+                "its first time step would fall below the integrator's smallest",
+            )
     return law, duration
 
 
@@ -61,8 +74,12 @@ def damping_of(system, ratio: float | None, rayleigh: tuple[float, float] | None
     if rayleigh is not None:
         alpha, beta = rayleigh
         if not (math.isfinite(alpha) and math.isfinite(beta) and alpha >= 0.0 and beta >= 0.0):
-            raise SceneError("<command line>", "--rayleigh", list(rayleigh),
-                             "alpha (1/s) and beta (s) must be finite and not negative")
+            raise SceneError(
+                "<command line>",
+                "--rayleigh",
+                list(rayleigh),
+                "alpha (1/s) and beta (s) must be finite and not negative",
+            )
         return Rayleigh(alpha, beta)
     if not ratio:
         return Rayleigh()
@@ -74,10 +91,17 @@ def damping_of(system, ratio: float | None, rayleigh: tuple[float, float] | None
     return Rayleigh.from_ratio(ratio, f[0], f[1])
 
 
-def run_dynamic(scene: Scene, spec: ModelSpec, case: LoadCase, duration: float | None = None,
-                damping_ratio: float | None = None, rayleigh: tuple[float, float] | None = None,
-                rho_inf: float = 0.9, record_poses: bool = False,
-                error_tol: float = DynamicSettings().error_tol) -> LoadPath:
+def run_dynamic(
+    scene: Scene,
+    spec: ModelSpec,
+    case: LoadCase,
+    duration: float | None = None,
+    damping_ratio: float | None = None,
+    rayleigh: tuple[float, float] | None = None,
+    rho_inf: float = 0.9,
+    record_poses: bool = False,
+    error_tol: float = DynamicSettings().error_tol,
+) -> LoadPath:
     """Integrate ``case`` of ``scene`` with model ``spec`` in time (see the module docstring).
 
     ``error_tol`` bounds each step's local displacement error (scaled: lengths
@@ -93,11 +117,19 @@ def run_dynamic(scene: Scene, spec: ModelSpec, case: LoadCase, duration: float |
     """
     if not 0.0 <= rho_inf <= 1.0:
         raise SceneError("<command line>", "--rho-inf", rho_inf, "must be from 0 to 1")
-    if not 1e-14 <= error_tol <= 0.1:        # NaN fails too
+    if not 1e-14 <= error_tol <= 0.1:  # NaN fails too
         raise SceneError("<command line>", "--error-tol", error_tol, "must be from 1e-14 to 0.1")
     law, end = time_law(case, duration, scene.source)
     system = modal_system(scene, spec)
-    lp = solve_dynamic(system, case, law, end, damping_of(system, damping_ratio, rayleigh),
-                       DynamicSettings(rho_inf=rho_inf, error_tol=error_tol), model=spec.id, scene=scene.name,
-                       record_poses=record_poses)
+    lp = solve_dynamic(
+        system,
+        case,
+        law,
+        end,
+        damping_of(system, damping_ratio, rayleigh),
+        DynamicSettings(rho_inf=rho_inf, error_tol=error_tol),
+        model=spec.id,
+        scene=scene.name,
+        record_poses=record_poses,
+    )
     return lp

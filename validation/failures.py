@@ -71,8 +71,7 @@ class Failure:
         return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "trace"}
 
 
-def first_limit(scene: Scene, spec: ModelSpec, case: LoadCase
-                ) -> tuple[float, LoadPath] | None:
+def first_limit(scene: Scene, spec: ModelSpec, case: LoadCase) -> tuple[float, LoadPath] | None:
     """The first limit point of ``case``'s path below full load: (load, arc-length path), or None.
 
     Arc-length continuation from rest with the step bounds of
@@ -85,16 +84,24 @@ def first_limit(scene: Scene, spec: ModelSpec, case: LoadCase
         return None
     system = build_system(scene.mechanism, spec, LIMIT_SETTINGS)
     try:
-        lp = solve_arclength(system, case, 1.0, 20, model=spec.id, max_steps=2000,
-                             stop=lambda p: bool(p.stats["limit_points"]))
+        lp = solve_arclength(
+            system,
+            case,
+            1.0,
+            20,
+            model=spec.id,
+            max_steps=2000,
+            stop=lambda p: bool(p.stats["limit_points"]),
+        )
     except SolverError:
         return None
     loads = limit_loads(lp)
     return (loads[0], lp) if loads else None
 
 
-def failure_of(exc: SolverError | SceneError, scene: Scene, spec: ModelSpec,
-               case: LoadCase) -> Failure:
+def failure_of(
+    exc: SolverError | SceneError, scene: Scene, spec: ModelSpec, case: LoadCase
+) -> Failure:
     """The :class:`Failure` of ``spec`` on ``case`` that raised ``exc``.
 
     A SceneError here means the model cannot represent a flexure of the

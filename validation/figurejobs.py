@@ -11,8 +11,8 @@ this process with one worker; :meth:`Figures.wait` (also on leaving the
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
-from typing import Callable
 
 
 def draw_now(fn: Callable, *args, **kwargs) -> None:

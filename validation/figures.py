@@ -36,9 +36,9 @@ def style(model: str) -> dict:
     """Line style of a model id or family name: its own, else the first of its family's
     (continuum levels share the continuum style), else a neutral one."""
     family = model.split(":")[0].split("[")[0]
-    return _STYLE.get(model) or next((s for k, s in _STYLE.items()
-                                      if k.split(":")[0] == family),
-                                     dict(color="tab:brown", lw=1.2))
+    return _STYLE.get(model) or next(
+        (s for k, s in _STYLE.items() if k.split(":")[0] == family), dict(color="tab:brown", lw=1.2)
+    )
 
 
 def _save(fig, path: Path) -> str:
@@ -56,14 +56,15 @@ def _finish_loglog(fig, ax, xlabel: str, ylabel: str, title: str, path: Path) ->
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3, which="both")
-    if ax.get_legend_handles_labels()[0]:      # nothing to plot (e.g. every run failed): no legend
+    if ax.get_legend_handles_labels()[0]:  # nothing to plot (e.g. every run failed): no legend
         ax.legend(fontsize=8)
     ax.set_title(title)
     return _save(fig, path)
 
 
-def load_path_curves(paths: dict[str, LoadPath], traces: dict[str, LoadPath] | None = None
-                     ) -> list[dict]:
+def load_path_curves(
+    paths: dict[str, LoadPath], traces: dict[str, LoadPath] | None = None
+) -> list[dict]:
     """The curves of the load-path figure: each model's path, then its arc-length trace.
 
     Each curve is ``{"label", "model", "load" (|load|, N or N mm), "displacement" (|d|, mm),
@@ -73,19 +74,38 @@ def load_path_curves(paths: dict[str, LoadPath], traces: dict[str, LoadPath] | N
     """
     curves = []
     for model, lp in paths.items():
-        curves.append(dict(label=model, model=model, load=np.abs(lp.load),
-                           displacement=np.asarray(lp.displacement),
-                           rotation=np.degrees(lp.rotation), style=style(model)))
+        curves.append(
+            dict(
+                label=model,
+                model=model,
+                load=np.abs(lp.load),
+                displacement=np.asarray(lp.displacement),
+                rotation=np.degrees(lp.rotation),
+                style=style(model),
+            )
+        )
     for model, lp in (traces or {}).items():
         st = dict(color=style(model).get("color"), lw=1.2, ls="--", marker=None)
-        curves.append(dict(label=f"{model} (arc length)", model=model, load=np.abs(lp.load),
-                           displacement=np.asarray(lp.displacement),
-                           rotation=np.degrees(lp.rotation), style=st))
+        curves.append(
+            dict(
+                label=f"{model} (arc length)",
+                model=model,
+                load=np.abs(lp.load),
+                displacement=np.asarray(lp.displacement),
+                rotation=np.degrees(lp.rotation),
+                style=st,
+            )
+        )
     return curves
 
 
-def load_paths(scene: Scene, case_name: str, paths: dict[str, LoadPath], path: Path,
-               traces: dict[str, LoadPath] | None = None) -> str:
+def load_paths(
+    scene: Scene,
+    case_name: str,
+    paths: dict[str, LoadPath],
+    path: Path,
+    traces: dict[str, LoadPath] | None = None,
+) -> str:
     """Target displacement magnitude and target-body rotation versus load, all models
     (and the arc-length traces through limit points, see :func:`load_path_curves`)."""
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
@@ -120,8 +140,7 @@ def deformed(scene: Scene, case_name: str, lp: LoadPath, path: Path) -> str:
             b = mech.bodies[body]
             if b.is_ground:
                 continue
-            pts = b.points if body != mech.target_body else np.vstack([b.points,
-                                                                       mech.target_point])
+            pts = b.points if body != mech.target_body else np.vstack([b.points, mech.target_point])
             q = place_points(np.asarray(poses[k]), pts - b.reference)
             ax.plot(q[:, 0], q[:, 1], color=col, lw=3, alpha=0.6)
     trace = mech.target_point + np.column_stack([lp.dx, lp.dy])
@@ -137,8 +156,13 @@ def relative_rotations(scene: Scene, case_name: str, lp: LoadPath, path: Path) -
     for f in scene.mechanism.flexures:
         ta = np.array(lp.poses[f.bodies[0]])[:, 2]
         tb = np.array(lp.poses[f.bodies[1]])[:, 2]
-        ax.plot(np.abs(lp.load), np.degrees(tb - ta), marker="o", ms=3,
-                label=f"{f.name}: body {f.bodies[1]} - body {f.bodies[0]}")
+        ax.plot(
+            np.abs(lp.load),
+            np.degrees(tb - ta),
+            marker="o",
+            ms=3,
+            label=f"{f.name}: body {f.bodies[1]} - body {f.bodies[0]}",
+        )
     ax.set_xlabel(f"|load| ({lp.load_unit})")
     ax.set_ylabel("relative rotation (deg)")
     ax.grid(alpha=0.3)
@@ -169,17 +193,20 @@ def runtime_vs_error(rows: list[dict], title: str, path: Path) -> str:
         st = style(fam)
         x = [r["seconds"] for r in rs]
         y = [max(r["error"], floor) for r in rs]
-        ax.plot(x, y, marker=st.get("marker") or "o", color=st["color"], ls="-", lw=0.8,
-                label=fam)
+        ax.plot(x, y, marker=st.get("marker") or "o", color=st["color"], ls="-", lw=0.8, label=fam)
         for r, xi, yi in zip(rs, x, y):
-            ax.annotate(r["model"].split(":")[-1] if ":" in r["model"] else r["model"],
-                        (xi, yi), fontsize=7, xytext=(3, 3), textcoords="offset points")
+            ax.annotate(
+                r["model"].split(":")[-1] if ":" in r["model"] else r["model"],
+                (xi, yi),
+                fontsize=7,
+                xytext=(3, 3),
+                textcoords="offset points",
+            )
     pts = [(r["seconds"], max(r["error"], floor)) for r in rows]
     front = pareto_front(pts)
     fx, fy = zip(*[pts[k] for k in front])
     ax.step(fx, fy, where="post", color="red", lw=2, alpha=0.4, label="Pareto front")
-    return _finish_loglog(fig, ax, "wall time per load path (s, median)", "error (%)", title,
-                          path)
+    return _finish_loglog(fig, ax, "wall time per load path (s, median)", "error (%)", title, path)
 
 
 def convergence(rows: list[dict], extrapolated: dict, title: str, path: Path) -> str:
@@ -192,5 +219,6 @@ def convergence(rows: list[dict], extrapolated: dict, title: str, path: Path) ->
             continue
         err = [max(abs(r[key] - ext) / abs(ext) * 100, 1e-6) for r in rows]
         ax.plot(n, err, marker="o", label=label)
-    return _finish_loglog(fig, ax, "unknowns", "difference from extrapolated value (%)", title,
-                          path)
+    return _finish_loglog(
+        fig, ax, "unknowns", "difference from extrapolated value (%)", title, path
+    )

@@ -86,8 +86,10 @@ def _rest_case(scene: Scene) -> LoadCase:
 def _percent(values: list[float], reference: list[float] | None) -> list[float | None]:
     if reference is None:
         return [None] * len(values)
-    return [100.0 * (f - reference[k]) / reference[k] if k < len(reference) else None
-            for k, f in enumerate(values)]
+    return [
+        100.0 * (f - reference[k]) / reference[k] if k < len(reference) else None
+        for k, f in enumerate(values)
+    ]
 
 
 def frequency_data(scene: Scene, models: list[str], reference: str) -> FrequencyTable:
@@ -109,49 +111,80 @@ def frequency_data(scene: Scene, models: list[str], reference: str) -> Frequency
         try:
             _, modes = run_modes(massive, parse_model(model), None, 0.0, MODE_COUNT)
         except (SolverError, SceneError, np.linalg.LinAlgError, ArpackError) as exc:
-            reason = (exc.reason if isinstance(exc, SceneError) else str(exc)
-                      if isinstance(exc, SolverError) else f"{type(exc).__name__}: {exc}")
+            reason = (
+                exc.reason
+                if isinstance(exc, SceneError)
+                else str(exc)
+                if isinstance(exc, SolverError)
+                else f"{type(exc).__name__}: {exc}"
+            )
             factor = exc.load_factor if isinstance(exc, SolverError) else 0.0
             failures.append(Failure(model, rest.name, factor, 0.0, rest.unit, reason, str(exc)))
             continue
         frequencies[model] = modes.frequencies_hz.tolist()
     ref = frequencies.get(reference)
-    return FrequencyTable(order, reference, density, given,
-                          inertia.massless_bodies(scene.mechanism.moving_bodies),
-                          inertia.gravity is not None, frequencies,
-                          {m: _percent(f, ref) for m, f in frequencies.items()}, failures)
+    return FrequencyTable(
+        order,
+        reference,
+        density,
+        given,
+        inertia.massless_bodies(scene.mechanism.moving_bodies),
+        inertia.gravity is not None,
+        frequencies,
+        {m: _percent(f, ref) for m, f in frequencies.items()},
+        failures,
+    )
 
 
 def frequency_table(table: FrequencyTable) -> list[str]:
     """Markdown: model x mode, frequency (Hz) and its error against the reference."""
-    lines = ["| model | " + " | ".join(f"f{k + 1} (Hz)" for k in range(MODE_COUNT)) + " |",
-             "|---|" + "---:|" * MODE_COUNT]
+    lines = [
+        "| model | " + " | ".join(f"f{k + 1} (Hz)" for k in range(MODE_COUNT)) + " |",
+        "|---|" + "---:|" * MODE_COUNT,
+    ]
     for m in table.models:
         fail = next((f for f in table.failures if f.model == m), None)
         if fail is not None:
             cells = ["fails (below)"] + ["—"] * (MODE_COUNT - 1)
         else:
             values, errs = table.frequencies[m], table.errors[m]
-            cells = [("—" if k >= len(values) else f"{values[k]:.5g}" if errs[k] is None
-                      else f"{values[k]:.5g} ({errs[k]:+.2f} %)") for k in range(MODE_COUNT)]
+            cells = [
+                (
+                    "—"
+                    if k >= len(values)
+                    else f"{values[k]:.5g}"
+                    if errs[k] is None
+                    else f"{values[k]:.5g} ({errs[k]:+.2f} %)"
+                )
+                for k in range(MODE_COUNT)
+            ]
         lines.append(f"| `{m}` | " + " | ".join(cells) + " |")
     return lines
 
 
 def section(table: FrequencyTable) -> list[str]:
     """The report's Markdown on the natural frequencies of one scene."""
-    density = (f"the scene's flexure density {table.density:g} t/mm³" if table.density_given
-               else f"flexures of PLA ({table.density:g} t/mm³, the scene gives no density)")
-    bodies = (f"; bodies without mass data ({', '.join(table.massless_bodies)}) are massless "
-              "and carry only the flexure pieces each model lumps on them"
-              if table.massless_bodies else "")
-    state = ("the equilibrium under the scene's gravity" if table.gravity
-             else "the undeformed state")
-    lines = [f"### Natural frequencies against `{table.reference}`", "",
-             f"The {MODE_COUNT} lowest natural frequencies (Hz) about {state}, as "
-             f"`flexval modes --count {MODE_COUNT}` gives them, with {density}{bodies}; in "
-             "parentheses each mode's error against the reference's mode of the same rank "
-             "(— where a model has fewer modes).", ""]
+    density = (
+        f"the scene's flexure density {table.density:g} t/mm³"
+        if table.density_given
+        else f"flexures of PLA ({table.density:g} t/mm³, the scene gives no density)"
+    )
+    bodies = (
+        f"; bodies without mass data ({', '.join(table.massless_bodies)}) are massless "
+        "and carry only the flexure pieces each model lumps on them"
+        if table.massless_bodies
+        else ""
+    )
+    state = "the equilibrium under the scene's gravity" if table.gravity else "the undeformed state"
+    lines = [
+        f"### Natural frequencies against `{table.reference}`",
+        "",
+        f"The {MODE_COUNT} lowest natural frequencies (Hz) about {state}, as "
+        f"`flexval modes --count {MODE_COUNT}` gives them, with {density}{bodies}; in "
+        "parentheses each mode's error against the reference's mode of the same rank "
+        "(— where a model has fewer modes).",
+        "",
+    ]
     lines += frequency_table(table) + [""]
     lines += [f"- `{f.model}`: modal analysis failed: {f.message}" for f in table.failures]
     return lines + ([""] if table.failures else [])

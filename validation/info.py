@@ -49,8 +49,15 @@ def scene_info(scene: Scene) -> dict:
             if isinstance(c, Moment):
                 comps.append({"kind": "moment", "body": c.body, "value_Nmm": c.value})
             elif isinstance(c, Force):
-                comps.append({"kind": "force", "body": c.body, "point": list(map(float, c.point)),
-                              "angle_deg": math.degrees(c.angle), "value_N": c.value})
+                comps.append(
+                    {
+                        "kind": "force",
+                        "body": c.body,
+                        "point": list(map(float, c.point)),
+                        "angle_deg": math.degrees(c.angle),
+                        "value_N": c.value,
+                    }
+                )
         cases.append({"name": lc.name, "levels": lc.levels, "loads": comps})
     return {
         "scene": scene.name,
@@ -58,8 +65,10 @@ def scene_info(scene: Scene) -> dict:
         "description": scene.description,
         "material": {"E_MPa": mech.material.youngs_modulus, "nu": mech.material.poisson_ratio},
         "ground": mech.ground,
-        "bodies": {n: {"ground": b.is_ground, "attachment_points": b.points.tolist()}
-                   for n, b in mech.bodies.items()},
+        "bodies": {
+            n: {"ground": b.is_ground, "attachment_points": b.points.tolist()}
+            for n, b in mech.bodies.items()
+        },
         "flexures": flexures,
         "target": {"body": mech.target_body, "point": mech.target_point.tolist()},
         "load_cases": cases,
@@ -84,14 +93,17 @@ def format_info(info: dict) -> str:
         pts = " -- ".join(_pt(p) for p in b["attachment_points"])
         lines.append(f"  {name:>6} {tag:<6} {pts}")
     lines.append("flexures")
-    lines.append(f"  {'name':<6} {'bodies':<8} {'start':>18} {'end':>18} {'L mm':>8} "
-                 f"{'EI N mm2':>10} {'w 1/Nmm':>10} {'C mm':>18} {'a mm':>7} {'b mm':>7}")
+    lines.append(
+        f"  {'name':<6} {'bodies':<8} {'start':>18} {'end':>18} {'L mm':>8} "
+        f"{'EI N mm2':>10} {'w 1/Nmm':>10} {'C mm':>18} {'a mm':>7} {'b mm':>7}"
+    )
     for f in info["flexures"]:
         e = f["ellipse"]
         lines.append(
             f"  {f['name']:<6} {f['start_body'] + '->' + f['end_body']:<8} {_pt(f['start']):>18} "
             f"{_pt(f['end']):>18} {f['length_mm']:8.3f} {f['EI_Nmm2']:10.4g} "
-            f"{e['w_per_Nmm']:10.4g} {_pt(e['C_mm']):>18} {e['a_mm']:7.3f} {e['b_mm']:7.3f}")
+            f"{e['w_per_Nmm']:10.4g} {_pt(e['C_mm']):>18} {e['a_mm']:7.3f} {e['b_mm']:7.3f}"
+        )
     t = info["target"]
     lines.append(f"target  body {t['body']} at {_pt(t['point'])} mm")
     lines.append("load cases")
@@ -101,8 +113,10 @@ def format_info(info: dict) -> str:
             if c["kind"] == "moment":
                 parts.append(f"moment {c['value_Nmm']:g} N mm on body {c['body']}")
             else:
-                parts.append(f"force {c['value_N']:g} N at {c['angle_deg']:g} deg on body "
-                             f"{c['body']} at {_pt(c['point'])}")
+                parts.append(
+                    f"force {c['value_N']:g} N at {c['angle_deg']:g} deg on body "
+                    f"{c['body']} at {_pt(c['point'])}"
+                )
         lines.append(f"  {lc['name']:<6} {'; '.join(parts)}  ({lc['levels']} levels from 0)")
     if info["models"]:
         lines.append(f"requested models: {', '.join(info['models'])}")

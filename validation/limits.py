@@ -25,8 +25,14 @@ DEFAULT_STEPS = 20
 """The tangent at rest would reach the end of the trace in this many steps (initial arc length)."""
 
 
-def trace_arclength(scene: Scene, spec: ModelSpec, case: LoadCase, max_load_factor: float = 1.0,
-                    n_steps: int = DEFAULT_STEPS, record_poses: bool = False) -> LoadPath:
+def trace_arclength(
+    scene: Scene,
+    spec: ModelSpec,
+    case: LoadCase,
+    max_load_factor: float = 1.0,
+    n_steps: int = DEFAULT_STEPS,
+    record_poses: bool = False,
+) -> LoadPath:
     """Trace ``case`` with ``spec`` by arc-length continuation up to ``max_load_factor``.
 
     Parameters
@@ -59,8 +65,16 @@ def trace_arclength(scene: Scene, spec: ModelSpec, case: LoadCase, max_load_fact
     check_arclength(spec)
     system = spec.model_family.system(scene.mechanism, spec, ARCLENGTH_SETTINGS)
     try:
-        lp = solve_arclength(system, case, max_load_factor, n_steps, model=spec.id,
-                             scene=scene.name, max_steps=100 * n_steps, record_poses=record_poses)
+        lp = solve_arclength(
+            system,
+            case,
+            max_load_factor,
+            n_steps,
+            model=spec.id,
+            scene=scene.name,
+            max_steps=100 * n_steps,
+            record_poses=record_poses,
+        )
     except SolverError as exc:
         if exc.path is not None:
             exc.path.limit_points = limit_points(exc.path)
@@ -73,9 +87,13 @@ def check_arclength(spec: ModelSpec) -> None:
     """Raise SceneError (naming ``--arclength`` and the model) unless ``spec`` can be traced."""
     if not spec.model_family.has(ARCLENGTH):
         able = [f.name for f in families() if f.has(ARCLENGTH)]
-        raise SceneError("<command line>", "--arclength", spec.id,
-                         f"arc-length continuation needs a model assembled as a nonlinear "
-                         f"system; families that have it: {able}")
+        raise SceneError(
+            "<command line>",
+            "--arclength",
+            spec.id,
+            f"arc-length continuation needs a model assembled as a nonlinear "
+            f"system; families that have it: {able}",
+        )
 
 
 def limit_points(path: LoadPath) -> list[dict]:
@@ -88,6 +106,14 @@ def limit_points(path: LoadPath) -> list[dict]:
     displacement (mm) and rotation (rad) at that traced point.
     """
     indices = path.stats.get("limit_points", [])
-    return [{"index": k, "load": load, "traced_load": path.load[k], "dx": path.dx[k],
-             "dy": path.dy[k], "rotation": path.rotation[k]}
-            for k, load in zip(indices, limit_loads(path))]
+    return [
+        {
+            "index": k,
+            "load": load,
+            "traced_load": path.load[k],
+            "dx": path.dx[k],
+            "dy": path.dy[k],
+            "rotation": path.rotation[k],
+        }
+        for k, load in zip(indices, limit_loads(path))
+    ]

@@ -28,10 +28,12 @@ def with_density(scene: Scene, density: float) -> Scene:
     def fail(field: str, value, reason: str) -> None:
         raise SceneError("<command line>", "--density", value, reason)
 
-    inertia = dataclasses.replace(scene.mechanism.inertia,
-                                  density=parse_density({"density": density}, fail))
-    return dataclasses.replace(scene, mechanism=dataclasses.replace(scene.mechanism,
-                                                                    inertia=inertia))
+    inertia = dataclasses.replace(
+        scene.mechanism.inertia, density=parse_density({"density": density}, fail)
+    )
+    return dataclasses.replace(
+        scene, mechanism=dataclasses.replace(scene.mechanism, inertia=inertia)
+    )
 
 
 def modal_system(scene: Scene, spec: ModelSpec):
@@ -42,8 +44,9 @@ def modal_system(scene: Scene, spec: ModelSpec):
     return build_system(scene.mechanism, spec)
 
 
-def run_modes(scene: Scene, spec: ModelSpec, case: LoadCase | None, fraction: float,
-              count: int) -> tuple[object, Modes]:
+def run_modes(
+    scene: Scene, spec: ModelSpec, case: LoadCase | None, fraction: float, count: int
+) -> tuple[object, Modes]:
     """The System and its ``count`` lowest modes at ``fraction`` of ``case``.
 
     Raises
@@ -54,36 +57,51 @@ def run_modes(scene: Scene, spec: ModelSpec, case: LoadCase | None, fraction: fl
         If the equilibrium cannot be reached.
     """
     if not 0.0 <= fraction <= 1.0 or not math.isfinite(fraction):
-        raise SceneError("<command line>", "--at", fraction,
-                         "must be a load fraction from 0 (unloaded) to 1 (full load)")
+        raise SceneError(
+            "<command line>",
+            "--at",
+            fraction,
+            "must be a load fraction from 0 (unloaded) to 1 (full load)",
+        )
     if spec.model_family.has(LINEAR) and fraction != 0.0:
-        raise SceneError("<command line>", "--at", fraction,
-                         f"{spec.id} is linear: its modes are those at rest (use --at 0)")
+        raise SceneError(
+            "<command line>",
+            "--at",
+            fraction,
+            f"{spec.id} is linear: its modes are those at rest (use --at 0)",
+        )
     if not 1 <= count <= 1000:
         raise SceneError("<command line>", "--count", count, "must be from 1 to 1000")
     system = modal_system(scene, spec)
     return system, natural_modes(system, case, fraction, count)
 
 
-def modes_record(scene: Scene, spec: ModelSpec, case: LoadCase | None, fraction: float,
-                 system, modes: Modes) -> dict:
+def modes_record(
+    scene: Scene, spec: ModelSpec, case: LoadCase | None, fraction: float, system, modes: Modes
+) -> dict:
     """The JSON record: frequencies (Hz), omega^2 (1/s^2) and each mode's body motions.
 
     ``mode_shapes[k][body]`` is (dx, dy, dtheta) of the body's reference
     point (mm, mm, rad) in mode k, normalised to unit modal mass (x^T M x = 1
     in t mm^2); only the direction and the ratios are physical.
     """
-    shapes = [{b: modes.shapes[k, system.pose_dofs(b)].tolist()
-               for b in system.mechanism.moving_bodies} for k in range(modes.eigenvalues.size)]
+    shapes = [
+        {b: modes.shapes[k, system.pose_dofs(b)].tolist() for b in system.mechanism.moving_bodies}
+        for k in range(modes.eigenvalues.size)
+    ]
     dx, dy, rot = system.target(modes.state)
     inertia = scene.mechanism.inertia
-    return {"scene": scene.name, "model": spec.id,
-            "load_case": None if case is None else case.name, "at": fraction,
-            "frequencies_hz": modes.frequencies_hz.tolist(),
-            "eigenvalues": modes.eigenvalues.tolist(),
-            "equilibrium": {"dx": dx, "dy": dy, "rotation": rot},
-            "massless_bodies": inertia.massless_bodies(system.mechanism.moving_bodies),
-            "mode_shapes": shapes}
+    return {
+        "scene": scene.name,
+        "model": spec.id,
+        "load_case": None if case is None else case.name,
+        "at": fraction,
+        "frequencies_hz": modes.frequencies_hz.tolist(),
+        "eigenvalues": modes.eigenvalues.tolist(),
+        "equilibrium": {"dx": dx, "dy": dy, "rotation": rot},
+        "massless_bodies": inertia.massless_bodies(system.mechanism.moving_bodies),
+        "mode_shapes": shapes,
+    }
 
 
 def plot_modes(system, modes: Modes, path: str | Path, title: str) -> None:
@@ -103,8 +121,10 @@ def plot_modes(system, modes: Modes, path: str | Path, title: str) -> None:
     for j, ax in enumerate(axes[0]):
         x = modes.shapes[j]
         scale = 0.1 * system.size / max(float(np.abs(x[translations]).max()), 1e-300)
-        for q, style in ((modes.state, dict(color="0.7", lw=1.5)),
-                         (modes.state + scale * x, dict(color="tab:red", lw=1.5))):
+        for q, style in (
+            (modes.state, dict(color="0.7", lw=1.5)),
+            (modes.state + scale * x, dict(color="tab:red", lw=1.5)),
+        ):
             for c, local in zip(system.connectors, system.local_states(q)):
                 pts = c.shape(*local)
                 ax.plot(pts[:, 0], pts[:, 1], **style)

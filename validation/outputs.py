@@ -31,8 +31,19 @@ import numpy as np
 from flexval.geometry import SceneError
 from flexval.geometry.files import OutputError, atomic_path, write_bytes
 
-__all__ = ["OutputError", "check_figure_file", "check_file", "check_folder", "inside", "json_safe", "safe_name",
-           "output_path", "save_figure", "write_json", "write_text"]
+__all__ = [
+    "OutputError",
+    "check_figure_file",
+    "check_file",
+    "check_folder",
+    "inside",
+    "json_safe",
+    "safe_name",
+    "output_path",
+    "save_figure",
+    "write_json",
+    "write_text",
+]
 
 _COMMAND_LINE = "<command line>"
 _UNSAFE = re.compile(r"[^A-Za-z0-9._+-]+")
@@ -66,8 +77,12 @@ def check_file(path: str | Path, option: str) -> Path:
     if target.is_dir():
         raise SceneError(_COMMAND_LINE, option, text, "is a folder, expected a file path")
     if target.exists() and not target.is_file():
-        raise SceneError(_COMMAND_LINE, option, text,
-                         "is not a regular file (a device, pipe or socket); give a file path")
+        raise SceneError(
+            _COMMAND_LINE,
+            option,
+            text,
+            "is not a regular file (a device, pipe or socket); give a file path",
+        )
     folder = target.parent
     if not folder.exists():
         raise SceneError(_COMMAND_LINE, option, text, f"folder {folder} does not exist")
@@ -95,9 +110,13 @@ def check_figure_file(path: str | Path, option: str) -> Path:
     fmt = target.suffix.lstrip(".").lower()
     formats = FigureCanvasAgg.get_supported_filetypes()
     if fmt and fmt not in formats:
-        raise SceneError(_COMMAND_LINE, option, str(path),
-                         f"unknown picture format '.{fmt}'; use one of "
-                         f"{', '.join('.' + f for f in sorted(formats))}")
+        raise SceneError(
+            _COMMAND_LINE,
+            option,
+            str(path),
+            f"unknown picture format '.{fmt}'; use one of "
+            f"{', '.join('.' + f for f in sorted(formats))}",
+        )
     return target
 
 
@@ -118,8 +137,9 @@ def check_folder(path: str | Path, option: str) -> Path:
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise SceneError(_COMMAND_LINE, option, text,
-                         f"cannot create the folder ({exc.strerror or exc})") from None
+        raise SceneError(
+            _COMMAND_LINE, option, text, f"cannot create the folder ({exc.strerror or exc})"
+        ) from None
     reason = _probe(folder)
     if reason:
         raise SceneError(_COMMAND_LINE, option, text, reason)

@@ -39,8 +39,8 @@ from __future__ import annotations
 
 import statistics
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -48,12 +48,12 @@ from flexval.geometry import Force, LoadCase, Mechanism, Scene
 from flexval.reducedmodels import run_reduced
 from flexval.reducedmodels.catalogue import parse_model
 
-RIGID_FACTOR = 1e8      # spokes' EA, EI over the flexures': the end values move 1e-4 % from
-                        # 1e8 to 1e10 (0.01 % from 1e6 to 1e8); 1e10 breaks the 1e-10 test
-TOLERANCE = 1e-10       # OpenSees NormDispIncr bound, mm and rad
-MAX_ITERATIONS = 50     # Newton iterations per OpenSees sub-step before it counts as failed
+RIGID_FACTOR = 1e8  # spokes' EA, EI over the flexures': the end values move 1e-4 % from
+# 1e8 to 1e10 (0.01 % from 1e6 to 1e8); 1e10 breaks the 1e-10 test
+TOLERANCE = 1e-10  # OpenSees NormDispIncr bound, mm and rad
+MAX_ITERATIONS = 50  # Newton iterations per OpenSees sub-step before it counts as failed
 SUBSTEP_CHOICES = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32)
-AGREEMENT_BAR = 0.01    # per cent: both solve the same discrete problem to 1e-10
+AGREEMENT_BAR = 0.01  # per cent: both solve the same discrete problem to 1e-10
 
 
 class PeerUnavailable(Exception):
@@ -73,9 +73,10 @@ def opensees():
     except (ImportError, RuntimeError, OSError) as exc:
         raise PeerUnavailable(
             f"OpenSeesPy is missing or does not load ({exc}); install the optional extra: "
-            "pip install -e \".[peers]\" (on Debian also: apt-get install libblas3 "
-            "liblapack3)") from None
-    ops.logFile("/dev/null", "-noEcho")     # its warnings on the sub-step search's failed tries
+            'pip install -e ".[peers]" (on Debian also: apt-get install libblas3 '
+            "liblapack3)"
+        ) from None
+    ops.logFile("/dev/null", "-noEcho")  # its warnings on the sub-step search's failed tries
     return ops
 
 
@@ -88,17 +89,20 @@ class OpenSeesModel:
         ops.model("basic", "-ndm", 2, "-ndf", 3)
         ops.geomTransf("Corotational", 1)
         self._nodes: dict[str, list[tuple[np.ndarray, int]]] = {}
-        self.hubs = {name: self._body_node(name, body.reference)
-                     for name, body in mechanism.bodies.items()}
+        self.hubs = {
+            name: self._body_node(name, body.reference) for name, body in mechanism.bodies.items()
+        }
         ops.fix(self.hubs[mechanism.ground], 1, 1, 1)
         material = mechanism.material
         for flexure in mechanism.flexures:
             section = flexure.section
             shape = flexure.shape
             points = shape.point(np.linspace(0.0, shape.length, n + 1))
-            chain = ([self._body_node(flexure.start_body, points[0])]
-                     + [self._new_node(p) for p in points[1:-1]]
-                     + [self._body_node(flexure.end_body, points[-1])])
+            chain = (
+                [self._body_node(flexure.start_body, points[0])]
+                + [self._new_node(p) for p in points[1:-1]]
+                + [self._body_node(flexure.end_body, points[-1])]
+            )
             for i, j in zip(chain[:-1], chain[1:]):
                 self._element(i, j, section.area, material.youngs_modulus, section.inertia)
         for pin in mechanism.pins:
@@ -109,8 +113,12 @@ class OpenSeesModel:
         # spokes: every body point to its hub, as stiff as the stiffest flexure times RIGID_FACTOR
         area = max(f.section.area for f in mechanism.flexures) * RIGID_FACTOR
         inertia = max(f.section.inertia for f in mechanism.flexures) * RIGID_FACTOR
-        loads = [(self._body_node(c.body, c.point), *c.vector, 0.0) if isinstance(c, Force)
-                 else (self.hubs[c.body], 0.0, 0.0, c.value) for c in case.components]
+        loads = [
+            (self._body_node(c.body, c.point), *c.vector, 0.0)
+            if isinstance(c, Force)
+            else (self.hubs[c.body], 0.0, 0.0, c.value)
+            for c in case.components
+        ]
         for name, nodes in self._nodes.items():
             for _, tag in nodes:
                 if tag != self.hubs[name]:
@@ -151,8 +159,11 @@ class OpenSeesModel:
         for _ in range(levels - 1):
             if ops.analyze(substeps) != 0:
                 return None
-        return (ops.nodeDisp(self.target, 1), ops.nodeDisp(self.target, 2),
-                ops.nodeDisp(self.target_hub, 3))
+        return (
+            ops.nodeDisp(self.target, 1),
+            ops.nodeDisp(self.target, 2),
+            ops.nodeDisp(self.target_hub, 3),
+        )
 
 
 def run_opensees(ops, mechanism: Mechanism, case: LoadCase, n: int, substeps: int):
@@ -221,19 +232,28 @@ class PeerRow:
         if self.substeps is None:
             out["reason"] = self.reason
         else:
-            out.update(flexval=list(self.ours), opensees=list(self.theirs),
-                       flexval_cpu=list(self.ours_cpu), opensees_cpu=list(self.theirs_cpu),
-                       flexval_b2b=list(self.ours_b2b), opensees_b2b=list(self.theirs_b2b),
-                       agreement_percent=self.agreement, ratio=self.ratio,
-                       cpu_ratio=self.cpu_ratio, b2b_ratio=self.b2b_ratio)
+            out.update(
+                flexval=list(self.ours),
+                opensees=list(self.theirs),
+                flexval_cpu=list(self.ours_cpu),
+                opensees_cpu=list(self.theirs_cpu),
+                flexval_b2b=list(self.ours_b2b),
+                opensees_b2b=list(self.theirs_b2b),
+                agreement_percent=self.agreement,
+                ratio=self.ratio,
+                cpu_ratio=self.cpu_ratio,
+                b2b_ratio=self.b2b_ratio,
+            )
         return out
 
 
-def _time_case(ops, mechanism: Mechanism, spec, case: LoadCase, n: int, substeps: int,
-               repeats: int) -> PeerRow:
+def _time_case(
+    ops, mechanism: Mechanism, spec, case: LoadCase, n: int, substeps: int, repeats: int
+) -> PeerRow:
     """Interleaved, then back-to-back runs of both codes on one load case."""
-    walls: dict[str, list[float]] = {k: [] for k in ("ours", "theirs", "ours_cpu",
-                                                       "theirs_cpu", "ours_b2b", "theirs_b2b")}
+    walls: dict[str, list[float]] = {
+        k: [] for k in ("ours", "theirs", "ours_cpu", "theirs_cpu", "ours_b2b", "theirs_b2b")
+    }
     ends: dict[str, tuple[float, float, float]] = {}
 
     def flexval(key: str) -> Callable[[], None]:
@@ -244,6 +264,7 @@ def _time_case(ops, mechanism: Mechanism, spec, case: LoadCase, n: int, substeps
                 walls["ours_cpu"].append(time.process_time() - c0)
             walls[key].append(lp.seconds)
             ends["ours"] = (lp.dx[-1], lp.dy[-1], lp.rotation[-1])
+
         return run
 
     def peer(key: str) -> Callable[[], None]:
@@ -253,6 +274,7 @@ def _time_case(ops, mechanism: Mechanism, spec, case: LoadCase, n: int, substeps
                 walls["theirs_cpu"].append(cpu)
             walls[key].append(seconds)
             ends["theirs"] = end
+
         return run
 
     for _ in range(repeats):
@@ -260,8 +282,12 @@ def _time_case(ops, mechanism: Mechanism, spec, case: LoadCase, n: int, substeps
         peer("theirs")()
     for run in [flexval("ours_b2b")] * repeats + [peer("theirs_b2b")] * repeats:
         run()
-    return PeerRow(case.name, substeps, *(tuple(walls[k]) for k in walls),
-                   agreement(ends["theirs"], ends["ours"]))
+    return PeerRow(
+        case.name,
+        substeps,
+        *(tuple(walls[k]) for k in walls),
+        agreement(ends["theirs"], ends["ours"]),
+    )
 
 
 def compare_with_opensees(scene: Scene, n: int = 100, repeats: int = 5) -> list[PeerRow]:
@@ -275,18 +301,26 @@ def compare_with_opensees(scene: Scene, n: int = 100, repeats: int = 5) -> list[
     """
     mech = scene.mechanism
     if mech.inertia.gravity is not None:
-        raise PeerUnavailable(f"scene {scene.name!r} has gravity, which the OpenSees model "
-                              "leaves out")
+        raise PeerUnavailable(
+            f"scene {scene.name!r} has gravity, which the OpenSees model leaves out"
+        )
     ops = opensees()
     spec = parse_model(f"beam:{n}", "<peers>", "n")
     rows = []
     for case in scene.load_cases:
         try:
             k = fewest_substeps(ops, mech, case, n)
-            rows.append(PeerRow(case.name, None, reason="OpenSees did not converge with up to "
-                                f"{SUBSTEP_CHOICES[-1]} sub-steps per level") if k is None
-                        else _time_case(ops, mech, spec, case, n, k, repeats))
-        except ops.OpenSeesError as exc:       # the peer's failure is a result, not a crash
+            rows.append(
+                PeerRow(
+                    case.name,
+                    None,
+                    reason="OpenSees did not converge with up to "
+                    f"{SUBSTEP_CHOICES[-1]} sub-steps per level",
+                )
+                if k is None
+                else _time_case(ops, mech, spec, case, n, k, repeats)
+            )
+        except ops.OpenSeesError as exc:  # the peer's failure is a result, not a crash
             rows.append(PeerRow(case.name, None, reason=f"OpenSees failed ({exc})"))
     return rows
 

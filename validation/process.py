@@ -75,12 +75,18 @@ def end_process(status: int) -> None:
     ``python -i`` (the prompt comes after the program), or when the output
     cannot be flushed (e.g. a closed pipe: the normal exit reports that).
     """
-    if (os.name != "posix" or threading.active_count() > 1 or sys.flags.inspect
-            or sys.gettrace() is not None or sys.getprofile() is not None or not _flushed()):
+    if (
+        os.name != "posix"
+        or threading.active_count() > 1
+        or sys.flags.inspect
+        or sys.gettrace() is not None
+        or sys.getprofile() is not None
+        or not _flushed()
+    ):
         return
-    atexit._run_exitfuncs()       # noqa: SLF001  (CPython's exit handlers; no public runner)
+    atexit._run_exitfuncs()  # noqa: SLF001  (CPython's exit handlers; no public runner)
     _flushed()
-    import ctypes                 # numpy has imported it already; C stdio buffers (printf)
+    import ctypes  # numpy has imported it already; C stdio buffers (printf)
 
     ctypes.CDLL(None).fflush(None)
     os._exit(status)

@@ -44,8 +44,10 @@ PROTOCOL_SCENE = "open_chain"
 """The scene whose f- case the protocol study runs (the section appears only with it)."""
 REQUIRED = ("code_version", "case", "reference", "match_points", "paper", "static", "cells")
 """Fields the section reads."""
-PRODUCE = ("`python benchmarks/paper_protocol.py` (writes `reports/dynamics/protocol.json`; "
-           "minutes), then `flexval report --protocol reports/dynamics/protocol.json`")
+PRODUCE = (
+    "`python benchmarks/paper_protocol.py` (writes `reports/dynamics/protocol.json`; "
+    "minutes), then `flexval report --protocol reports/dynamics/protocol.json`"
+)
 """How to produce the file the section is rendered from."""
 
 
@@ -86,10 +88,19 @@ def read_protocol(path: Path) -> tuple[dict | None, str | None]:
 
 
 def _cells(doc: dict) -> list[Cell]:
-    return [Cell(str(c["model"]), float(c["ramp_periods"]), float(c["ramp_s"]),
-                 float(c["damping_ratio"]), _num(c["disp"]), _num(c["rot"]), c.get("failure"),
-                 _largest(c.get("integration")))
-            for c in doc["cells"]]
+    return [
+        Cell(
+            str(c["model"]),
+            float(c["ramp_periods"]),
+            float(c["ramp_s"]),
+            float(c["damping_ratio"]),
+            _num(c["disp"]),
+            _num(c["rot"]),
+            c.get("failure"),
+            _largest(c.get("integration")),
+        )
+        for c in doc["cells"]
+    ]
 
 
 def _largest(change: dict | None) -> float | None:
@@ -116,8 +127,7 @@ def closest_cell(cells: list[Cell], model: str, paper_disp: float) -> Cell | Non
 
 
 def _cell_text(c: Cell) -> str:
-    return (f"ramp {c.ramp_periods:g} T1 ({c.ramp_s:.3f} s), damping ratio "
-            f"{c.damping_ratio:g}")
+    return f"ramp {c.ramp_periods:g} T1 ({c.ramp_s:.3f} s), damping ratio {c.damping_ratio:g}"
 
 
 def _model_lines(doc: dict, cells: list[Cell]) -> tuple[list[str], dict[str, set]]:
@@ -128,63 +138,92 @@ def _model_lines(doc: dict, cells: list[Cell]) -> tuple[list[str], dict[str, set
     for model, (p_disp, p_rot) in _by_model(doc, "paper").items():
         best = closest_cell(cells, model, p_disp)
         if best is None:
-            lines.append(f"- **{model}** (paper {p_disp:g} % disp, {p_rot:g} % rot): every "
-                         "run failed; not reproduced.")
+            lines.append(
+                f"- **{model}** (paper {p_disp:g} % disp, {p_rot:g} % rot): every "
+                "run failed; not reproduced."
+            )
             matching[model] = set()
             continue
-        hits = [c for c in cells if c.model == model and c.disp is not None
-                and abs(c.disp - p_disp) <= pts]
+        hits = [
+            c
+            for c in cells
+            if c.model == model and c.disp is not None and abs(c.disp - p_disp) <= pts
+        ]
         matching[model] = {(c.ramp_periods, c.damping_ratio) for c in hits}
         rot_ok = abs(best.rot - p_rot) <= pts
-        verdict = (f"**reproduced** (disp within {pts:g} points"
-                   f"{'; rot too' if rot_ok else f'; rot {best.rot:.1f} % is not'}), "
-                   f"by {len(hits)} of the grid's cells"
-                   if hits else f"**not reproduced** (no cell within {pts:g} points)")
-        static_text = (f"; static {statics[model][0]:.1f} % / {statics[model][1]:.1f} %"
-                       if model in statics else "")
-        lines.append(f"- **{model}** (paper {p_disp:g} % disp, {p_rot:g} % rot{static_text}): "
-                     f"closest "
-                     f"{_cell_text(best)}: {best.disp:.1f} % disp, {best.rot:.1f} % rot; "
-                     f"{verdict}.")
+        verdict = (
+            f"**reproduced** (disp within {pts:g} points"
+            f"{'; rot too' if rot_ok else f'; rot {best.rot:.1f} % is not'}), "
+            f"by {len(hits)} of the grid's cells"
+            if hits
+            else f"**not reproduced** (no cell within {pts:g} points)"
+        )
+        static_text = (
+            f"; static {statics[model][0]:.1f} % / {statics[model][1]:.1f} %"
+            if model in statics
+            else ""
+        )
+        lines.append(
+            f"- **{model}** (paper {p_disp:g} % disp, {p_rot:g} % rot{static_text}): "
+            f"closest "
+            f"{_cell_text(best)}: {best.disp:.1f} % disp, {best.rot:.1f} % rot; "
+            f"{verdict}."
+        )
     return lines, matching
 
 
 def protocol_section(path: Path | None, out: Path, code: str) -> list[str]:
     """Markdown lines of the section, from ``path`` (None: not given) for a report written to
     ``out`` by code version ``code``; the link to the full table is relative to ``out``."""
-    lines = ["## Dynamics: the paper's protocol (open chain f−)", "",
-             "The paper ran dynamic simulations (loads ramped by its Eq. 15, damping "
-             "\"adjusted to minimize dynamic effects\", errors read at the end of the ramp). "
-             "`benchmarks/paper_protocol.py` runs that protocol on a grid of ramp times and "
-             "damping ratios; it takes minutes, so the report reads its result file.", ""]
+    lines = [
+        "## Dynamics: the paper's protocol (open chain f−)",
+        "",
+        "The paper ran dynamic simulations (loads ramped by its Eq. 15, damping "
+        '"adjusted to minimize dynamic effects", errors read at the end of the ramp). '
+        "`benchmarks/paper_protocol.py` runs that protocol on a grid of ramp times and "
+        "damping ratios; it takes minutes, so the report reads its result file.",
+        "",
+    ]
     if path is None:
-        return lines + [f"Not included in this report (no `--protocol` file). Produce it with "
-                        f"{PRODUCE}.", ""]
+        return lines + [
+            f"Not included in this report (no `--protocol` file). Produce it with {PRODUCE}.",
+            "",
+        ]
     doc, why = read_protocol(path)
     if doc is None:
         return lines + [f"Not available: {why}. Produce it with {PRODUCE}.", ""]
     cells = _cells(doc)
     table = Path(os.path.relpath(path.parent / doc.get("table", "protocol.md"), out)).as_posix()
     if doc["code_version"] != code:
-        lines += [f"**Stale:** these results were computed by flexval code "
-                  f"{doc['code_version']}, this report by {code}; rerun "
-                  "`python benchmarks/paper_protocol.py` to refresh them.", ""]
-    lines += [f"Errors (percent) at the end of the ramp against `{doc['reference']}` run "
-              f"under the same protocol, on {doc['case']}; ramp times in T1, the first natural "
-              f"period at rest of `{doc['reference']}`. A paper figure counts as reproduced by a "
-              f"grid cell within {float(doc['match_points']):g} percentage points of it.", ""]
+        lines += [
+            f"**Stale:** these results were computed by flexval code "
+            f"{doc['code_version']}, this report by {code}; rerun "
+            "`python benchmarks/paper_protocol.py` to refresh them.",
+            "",
+        ]
+    lines += [
+        f"Errors (percent) at the end of the ramp against `{doc['reference']}` run "
+        f"under the same protocol, on {doc['case']}; ramp times in T1, the first natural "
+        f"period at rest of `{doc['reference']}`. A paper figure counts as reproduced by a "
+        f"grid cell within {float(doc['match_points']):g} percentage points of it.",
+        "",
+    ]
     model_lines, matching = _model_lines(doc, cells)
     lines += model_lines
     if len(matching) > 1:
         common = sorted(set.intersection(*matching.values()))
         both = ", ".join(f"{t:g} T1 / ratio {z:g}" for t, z in common)
-        lines.append(f"- One protocol for every model at once (as the paper ran it): "
-                     f"{both or 'no grid cell'}.")
+        lines.append(
+            f"- One protocol for every model at once (as the paper ran it): "
+            f"{both or 'no grid cell'}."
+        )
     checked = [c.integration for c in cells if c.integration is not None]
     if checked:
-        lines.append(f"- Integration error: at most {max(checked):.2f} points over the grid "
-                     f"(each cell's change when every run's error bound is "
-                     f"{float(doc.get('check_factor') or 0):g} times looser, an over-estimate).")
+        lines.append(
+            f"- Integration error: at most {max(checked):.2f} points over the grid "
+            f"(each cell's change when every run's error bound is "
+            f"{float(doc.get('check_factor') or 0):g} times looser, an over-estimate)."
+        )
     failed = sum(c.failure is not None for c in cells)
     if failed:
         lines.append(f"- {failed} of {len(cells)} runs failed (listed in the full table).")

@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from . import figures, frequencies, strength
 from .convergence import order_text
@@ -27,12 +27,24 @@ from .failures import Failure
 from .figurejobs import Figures, draw_now
 from .outputs import output_path, write_json, write_text
 from .protocolsection import PROTOCOL_SCENE, protocol_section
-from .reportdata import (DEFAULT_MODELS, PAPER_REFERENCE, FrameRow, ReportData, SceneResults,
-                         compute_report)
+from .reportdata import (
+    DEFAULT_MODELS,
+    PAPER_REFERENCE,
+    FrameRow,
+    ReportData,
+    SceneResults,
+    compute_report,
+)
 from .timings import BUDGETS, TIMINGS_MD, write_benches, write_timings
 
-__all__ = ["DEFAULT_MODELS", "PAPER_REFERENCE", "SceneResults", "build_report", "render_markdown",
-           "write_report"]
+__all__ = [
+    "DEFAULT_MODELS",
+    "PAPER_REFERENCE",
+    "SceneResults",
+    "build_report",
+    "render_markdown",
+    "write_report",
+]
 
 #: how many largest errors the findings list
 N_LARGEST = 3
@@ -57,8 +69,11 @@ def _paper_table(res: SceneResults) -> list[str]:
         for c in res.cases:
             e, p, fail = ours.get(m, {}).get(c), paper.get(m, {}).get(c), res.failure(m, c)
             for key, pk in (("end_disp_vec", "disp"), ("end_rot", "rot")):
-                txt = fail.summary() if fail and key == "end_disp_vec" else _fmt(
-                    e[key] if e else None)
+                txt = (
+                    fail.summary()
+                    if fail and key == "end_disp_vec"
+                    else _fmt(e[key] if e else None)
+                )
                 txt += f" ({_fmt(p[pk])})" if p else ""
                 cells.append(txt)
         lines.append(f"| {m} | " + " | ".join(cells) + " |")
@@ -68,16 +83,21 @@ def _paper_table(res: SceneResults) -> list[str]:
 def _metrics_table(res: SceneResults, reference: str) -> list[str]:
     """Markdown: all metrics against ``reference`` per model and load case (failures too)."""
     table = res.error_table(reference)
-    lines = ["| model | case | end disp vec (%) | end disp magnitude (%) | end rot (%) | "
-             "path disp (%) | path rot (%) |", "|---|---|---:|---:|---:|---:|---:|"]
+    lines = [
+        "| model | case | end disp vec (%) | end disp magnitude (%) | end rot (%) | "
+        "path disp (%) | path rot (%) |",
+        "|---|---|---:|---:|---:|---:|---:|",
+    ]
     for m in res.models:
         if m == reference:
             continue
         for c in res.cases:
             e, fail = table.get(m, {}).get(c), res.failure(m, c)
             if e is not None:
-                lines.append(f"| {m} | {c} | {e['end_disp_vec']:.2f} | {e['end_disp']:.2f} | "
-                             f"{e['end_rot']:.2f} | {e['path_disp']:.2f} | {e['path_rot']:.2f} |")
+                lines.append(
+                    f"| {m} | {c} | {e['end_disp_vec']:.2f} | {e['end_disp']:.2f} | "
+                    f"{e['end_rot']:.2f} | {e['path_disp']:.2f} | {e['path_rot']:.2f} |"
+                )
             elif fail is not None:
                 lines.append(f"| {m} | {c} | {fail.summary()} | – | – | – | – |")
     return lines
@@ -85,8 +105,10 @@ def _metrics_table(res: SceneResults, reference: str) -> list[str]:
 
 def _frame_table(rows: list[FrameRow], cases: list[str]) -> list[str]:
     """Markdown: end-of-ramp errors against beam:100 with each measuring frame (percent)."""
-    lines = ["| model | frame | " + " | ".join(f"{c} disp | {c} rot" for c in cases) + " |",
-             "|---|---|" + "---:|" * (2 * len(cases))]
+    lines = [
+        "| model | frame | " + " | ".join(f"{c} disp | {c} rot" for c in cases) + " |",
+        "|---|---|" + "---:|" * (2 * len(cases)),
+    ]
     for r in rows:
         cells = []
         for c in cases:
@@ -108,17 +130,23 @@ def _bracket_lines(res: SceneResults) -> list[str]:
     if not rows:
         return _failure_lines(res.bracket.failures) if res.bracket else []
     other = res.bracket.model
-    L = [f"### Plane-stress / plane-strain bracket (`{res.reference}` and `{other}`)", "",
-         "A flexure much wider than thick (b >> h) lies between plane stress and plane strain: "
-         "end-of-ramp target displacement |d| and rotation with both, and their relative "
-         "spread (percent of the reference's value).", "",
-         f"| case | disp. `{res.reference}` (mm) | disp. `{other}` (mm) | spread (%) | "
-         f"rotation `{res.reference}` (deg) | rotation `{other}` (deg) | spread (%) |",
-         "|---|---:|---:|---:|---:|---:|---:|"]
+    L = [
+        f"### Plane-stress / plane-strain bracket (`{res.reference}` and `{other}`)",
+        "",
+        "A flexure much wider than thick (b >> h) lies between plane stress and plane strain: "
+        "end-of-ramp target displacement |d| and rotation with both, and their relative "
+        "spread (percent of the reference's value).",
+        "",
+        f"| case | disp. `{res.reference}` (mm) | disp. `{other}` (mm) | spread (%) | "
+        f"rotation `{res.reference}` (deg) | rotation `{other}` (deg) | spread (%) |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
     for c, b in rows.items():
-        L.append(f"| {c} | {b['disp']:.6g} | {b['disp_other']:.6g} | {b['disp_spread']:.3g} | "
-                 f"{math.degrees(b['rot']):.6g} | {math.degrees(b['rot_other']):.6g} | "
-                 f"{b['rot_spread']:.3g} |")
+        L.append(
+            f"| {c} | {b['disp']:.6g} | {b['disp_other']:.6g} | {b['disp_spread']:.3g} | "
+            f"{math.degrees(b['rot']):.6g} | {math.degrees(b['rot_other']):.6g} | "
+            f"{b['rot_spread']:.3g} |"
+        )
     L += _failure_lines(res.bracket.failures)
     return L + ["", _bracket_verdict(res, rows), ""]
 
@@ -132,19 +160,25 @@ def _bracket_verdict(res: SceneResults, rows: dict[str, dict[str, float]]) -> st
         for c, e in per_case.items():
             if c not in rows:
                 continue
-            for key, spread, what in (("end_disp", "disp_spread", "|d|"),
-                                      ("end_rot", "rot_spread", "rotation")):
+            for key, spread, what in (
+                ("end_disp", "disp_spread", "|d|"),
+                ("end_rot", "rot_spread", "rotation"),
+            ):
                 side = larger if e[key] > rows[c][spread] else smaller
                 side.setdefault(m, []).append(f"{c} {what}")
     against = f"(end |d| and rotation, against `{res.reference}`)"
     if not larger and not smaller:
         return "No reduced model reached full load on a case where both planes did."
     if not smaller:
-        return (f"Every reduced model's error {against} is larger than the bracket's width: "
-                "the plane assumption does not explain the differences from the continuum.")
+        return (
+            f"Every reduced model's error {against} is larger than the bracket's width: "
+            "the plane assumption does not explain the differences from the continuum."
+        )
     if not larger:
-        return (f"Every reduced model's error {against} is smaller than the bracket's width: "
-                "the plane assumption matters more than the choice among these models.")
+        return (
+            f"Every reduced model's error {against} is smaller than the bracket's width: "
+            "the plane assumption matters more than the choice among these models."
+        )
     parts = []
     below = [f"`{m}`" for m in smaller if m not in larger]
     above = [f"`{m}`" for m in larger if m not in smaller]
@@ -155,8 +189,9 @@ def _bracket_verdict(res: SceneResults, rows: dict[str, dict[str, float]]) -> st
         parts.append("larger on every case: " + ", ".join(above))
     if mixed:
         parts.append("mixed: " + "; ".join(mixed))
-    return f"Reduced models' errors {against} against the bracket's width: " + "; ".join(
-        parts) + "."
+    return (
+        f"Reduced models' errors {against} against the bracket's width: " + "; ".join(parts) + "."
+    )
 
 
 def _failure_lines(failures: list[Failure]) -> list[str]:
@@ -175,9 +210,11 @@ def _validity_lines(res: SceneResults) -> list[str]:
         bad = [k for k, ok in enumerate(lp.valid or []) if ok is False]
         if bad:
             k = bad[0]
-            out.append(f"- `{model}` on `{case}` leaves its range of validity from "
-                       f"{lp.load[k]:.4g} {lp.load_unit} ({len(bad)} of {len(lp.valid)} "
-                       f"levels): {lp.validity[k]}.")
+            out.append(
+                f"- `{model}` on `{case}` leaves its range of validity from "
+                f"{lp.load[k]:.4g} {lp.load_unit} ({len(bad)} of {len(lp.valid)} "
+                f"levels): {lp.validity[k]}."
+            )
     return out
 
 
@@ -193,13 +230,16 @@ def _findings(res: SceneResults, reference: str) -> list[str]:
     for budget in BUDGETS:
         ok = sorted((r for r in rows if r[1] <= budget), key=lambda r: r[1])
         if ok:
-            out.append(f"- Within {budget:g} % of `{reference}` on every load case (largest "
-                       f"path displacement error){note}: "
-                       + ", ".join(f"`{m}` ({e:.2f} %)" for m, e, _ in ok)
-                       + "; the cheapest of them is named in [timings.md](timings.md).")
+            out.append(
+                f"- Within {budget:g} % of `{reference}` on every load case (largest "
+                f"path displacement error){note}: "
+                + ", ".join(f"`{m}` ({e:.2f} %)" for m, e, _ in ok)
+                + "; the cheapest of them is named in [timings.md](timings.md)."
+            )
         else:
-            out.append(f"- No model stays within {budget:g} % of `{reference}` on every "
-                       f"case{note}.")
+            out.append(
+                f"- No model stays within {budget:g} % of `{reference}` on every case{note}."
+            )
     for m, e, c in sorted(rows, key=lambda r: -r[1])[:N_LARGEST]:
         out.append(f"- Largest error: `{m}` on `{c}`, {e:.1f} % (path displacement).")
     return out
@@ -209,22 +249,33 @@ def _convergence_lines(res: SceneResults, out: Path, draw: Callable) -> list[str
     L = []
     name = res.scene.name
     for st in res.convergence:
-        L += [f"### {st.family} convergence ({st.load_case})", "",
-              "| model | unknowns | disp. (mm) | rotation (deg) |",
-              "|---|---:|---:|---:|"]
+        L += [
+            f"### {st.family} convergence ({st.load_case})",
+            "",
+            "| model | unknowns | disp. (mm) | rotation (deg) |",
+            "|---|---:|---:|---:|",
+        ]
         for r in st.rows:
-            L.append(f"| {r['model']} | {r['unknowns']} | "
-                     f"{r['displacement']:.6f} | {math.degrees(r['rotation']):.6f} |")
+            L.append(
+                f"| {r['model']} | {r['unknowns']} | "
+                f"{r['displacement']:.6f} | {math.degrees(r['rotation']):.6f} |"
+            )
         L += [f"| {f.model} | {f.summary()} | | |" for f in st.failures]
         for key, s in st.summary.items():
             gci = "n/a" if s["gci_percent"] is None else f"{s['gci_percent']:.3g} %"
-            L.append(f"\n{key}: observed order {order_text(s)}, Richardson value "
-                     f"{s['extrapolated']:.6g}, GCI {gci}.")
+            L.append(
+                f"\n{key}: observed order {order_text(s)}, Richardson value "
+                f"{s['extrapolated']:.6g}, GCI {gci}."
+            )
         if st.rows:
             png = output_path(out, f"{name}_{st.load_case}_{st.family}_convergence", ".png")
-            draw(figures.convergence, st.rows,
-                 {k: v["extrapolated"] for k, v in st.summary.items()},
-                 f"{name} {st.load_case}: {st.family} convergence", png)
+            draw(
+                figures.convergence,
+                st.rows,
+                {k: v["extrapolated"] for k, v in st.summary.items()},
+                f"{name} {st.load_case}: {st.family} convergence",
+                png,
+            )
             L += ["", f"![convergence]({png.name})"]
         L += [""]
     return L
@@ -243,56 +294,95 @@ def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
     mechanism_png = output_path(out, f"{name}_mechanism", ".png")
     draw(plot_mechanism, sc, mechanism_png)
     mech = sc.mechanism
-    chain = ("an open chain" if res.loops == 0 else
-             f"a closed chain ({res.loops} independent loop{'s' if res.loops > 1 else ''})")
-    L = [f"## {name}", "", sc.description, "",
-         f"![{name}]({mechanism_png.name})", "",
-         f"{len(mech.flexures)} flexures, {len(mech.pins)} pins, {len(mech.bodies)} bodies "
-         f"(ground included): {chain}. "
-         f"E = {mech.material.youngs_modulus:g} MPa, nu = {mech.material.poisson_ratio:g}; "
-         + "; ".join(f"{f.name}: b = {f.section.depth:g} mm, h = {f.section.thickness:g} mm, "
-                     f"L = {f.shape.length:.3f} mm" for f in mech.flexures) + ".", ""]
+    chain = (
+        "an open chain"
+        if res.loops == 0
+        else f"a closed chain ({res.loops} independent loop{'s' if res.loops > 1 else ''})"
+    )
+    L = [
+        f"## {name}",
+        "",
+        sc.description,
+        "",
+        f"![{name}]({mechanism_png.name})",
+        "",
+        f"{len(mech.flexures)} flexures, {len(mech.pins)} pins, {len(mech.bodies)} bodies "
+        f"(ground included): {chain}. "
+        f"E = {mech.material.youngs_modulus:g} MPa, nu = {mech.material.poisson_ratio:g}; "
+        + "; ".join(
+            f"{f.name}: b = {f.section.depth:g} mm, h = {f.section.thickness:g} mm, "
+            f"L = {f.shape.length:.3f} mm"
+            for f in mech.flexures
+        )
+        + ".",
+        "",
+    ]
     if res.failures:
-        L += ["**Failures** (the model's path up to its last converged load is kept in the "
-              "load-path figures and results.json; a path traced by arc length through a limit "
-              "point is drawn dashed in the load-path figure):", ""]
-        L += [f"- `{f.model}` on `{f.load_case}` {f.summary()}: {f.message}"
-              for f in res.failures] + [""]
-    paper_note = (f"; the paper's {res.paper.percent_table} value in parentheses"
-                  if res.paper else "")
-    L += [f"### Errors against `{PAPER_REFERENCE}` (the paper's convention)", "",
-          f"End-of-ramp displacement-vector error and rotation error in percent{paper_note}.",
-          ""]
+        L += [
+            "**Failures** (the model's path up to its last converged load is kept in the "
+            "load-path figures and results.json; a path traced by arc length through a limit "
+            "point is drawn dashed in the load-path figure):",
+            "",
+        ]
+        L += [
+            f"- `{f.model}` on `{f.load_case}` {f.summary()}: {f.message}" for f in res.failures
+        ] + [""]
+    paper_note = (
+        f"; the paper's {res.paper.percent_table} value in parentheses" if res.paper else ""
+    )
+    L += [
+        f"### Errors against `{PAPER_REFERENCE}` (the paper's convention)",
+        "",
+        f"End-of-ramp displacement-vector error and rotation error in percent{paper_note}.",
+        "",
+    ]
     L += _paper_table(res) + [""]
     L += [f"All metrics against `{PAPER_REFERENCE}`:", ""]
     L += _metrics_table(res, PAPER_REFERENCE) + [""]
     if res.frames:
-        L += ["Models with a measuring-frame option, each element's relative displacement "
-              "measured in the displaced frame of its leading body (body i of e_ij, the paper's "
-              "text and our default) or of the following body j (end-of-ramp errors against "
-              f"`{PAPER_REFERENCE}`, percent):", ""]
+        L += [
+            "Models with a measuring-frame option, each element's relative displacement "
+            "measured in the displaced frame of its leading body (body i of e_ij, the paper's "
+            "text and our default) or of the following body j (end-of-ramp errors against "
+            f"`{PAPER_REFERENCE}`, percent):",
+            "",
+        ]
         L += _frame_table(res.frames, res.cases) + [""]
     if res.has_reference():
         L += [f"### Errors against the continuum reference `{res.reference}`", ""]
         L += _metrics_table(res, res.reference) + [""]
         L += _bracket_lines(res)
-    L += strength.section(sc, res.paths, res.failures, res.models,
-                          res.reference if res.has_reference() else PAPER_REFERENCE, out, draw)
+    L += strength.section(
+        sc,
+        res.paths,
+        res.failures,
+        res.models,
+        res.reference if res.has_reference() else PAPER_REFERENCE,
+        out,
+        draw,
+    )
     if res.frequencies is not None:
         L += frequencies.section(res.frequencies)
     seconds_note = f" ({res.paper.seconds_table})" if res.paper else ""
-    L += [f"### Run times{seconds_note}", "",
-          f"In [{TIMINGS_MD}]({TIMINGS_MD}), with the speed-ups"
-          + (" and the paper's" if res.paper else "")
-          + ": they change from run to run, the results above do not.", ""]
+    L += [
+        f"### Run times{seconds_note}",
+        "",
+        f"In [{TIMINGS_MD}]({TIMINGS_MD}), with the speed-ups"
+        + (" and the paper's" if res.paper else "")
+        + ": they change from run to run, the results above do not.",
+        "",
+    ]
     L += ["### Load paths", ""]
     for c in res.cases:
         paths = {m: res.paths[(m, c)] for m in res.models if (m, c) in res.paths}
         png = output_path(out, f"{name}_{c}_paths", ".png")
         draw(figures.load_paths, sc, c, paths, png, res.traces(c))
         L += [f"![{name} {c}]({png.name})", ""]
-    rec = [m for m in (res.reference, PAPER_REFERENCE) if m and res.converged(m, res.cases[0])
-           and res.paths[(m, res.cases[0])].poses]
+    rec = [
+        m
+        for m in (res.reference, PAPER_REFERENCE)
+        if m and res.converged(m, res.cases[0]) and res.paths[(m, res.cases[0])].poses
+    ]
     if rec:
         L += [f"### Deformed configurations (`{rec[-1]}`)", ""]
         for c in res.cases:
@@ -302,8 +392,11 @@ def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
                 draw(figures.deformed, sc, c, lp, png)
                 L += [f"![{c}]({png.name})", ""]
         if res.loops > 0:
-            fig_note = (f" (paper {res.paper.relative_rotations_figure})"
-                        if res.paper and res.paper.relative_rotations_figure else "")
+            fig_note = (
+                f" (paper {res.paper.relative_rotations_figure})"
+                if res.paper and res.paper.relative_rotations_figure
+                else ""
+            )
             L += [f"Relative rotations of the links{fig_note}:", ""]
             for c in res.cases:
                 lp = res.converged(rec[-1], c)
@@ -312,9 +405,13 @@ def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
                     draw(figures.relative_rotations, sc, c, lp, png)
                     L += [f"![{c}]({png.name})", ""]
     if res.bench_rows or res.bench_failures:
-        L += ["### Runtime versus error", "",
-              f"Every model and resolution against `{res.bench_reference}`: in "
-              f"[{TIMINGS_MD}]({TIMINGS_MD}).", ""]
+        L += [
+            "### Runtime versus error",
+            "",
+            f"Every model and resolution against `{res.bench_reference}`: in "
+            f"[{TIMINGS_MD}]({TIMINGS_MD}).",
+            "",
+        ]
         L += _failure_lines(res.bench_failures) + [""]
     L += _convergence_lines(res, out, draw)
     ref = res.reference if res.has_reference() else PAPER_REFERENCE
@@ -323,38 +420,45 @@ def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
     return L
 
 
-def render_markdown(data: ReportData, out: Path, draw: Callable = draw_now,
-                    protocol: Path | None = None) -> str:
+def render_markdown(
+    data: ReportData, out: Path, draw: Callable = draw_now, protocol: Path | None = None
+) -> str:
     """The report's Markdown, drawing its figures into ``out`` with ``draw(fn, *args)``
     (default: at once; :meth:`flexval.validation.figurejobs.Figures.draw` on worker processes);
     ``protocol`` is the ``protocol.json`` of ``benchmarks/paper_protocol.py`` (None: not given),
     summarised in its own section when the scenes include the open chain."""
     from .discussion import discussion
 
-    lines = ["# flexval validation report", "",
-             "Flexibility models of planar compliant mechanisms with curved flexures: "
-             "the comparison of Sorgonà, Cirelli, Giannini, Verotti (Multibody Syst. Dyn., 2024) "
-             f"reproduced with `{PAPER_REFERENCE}` as reference (the paper's convention), and "
-             "extended with a continuum reference (2D plane-stress solid, geometrically "
-             "nonlinear hyperelastic, scikit-fem).", "",
-             "## Setup", "",
-             f"- Models: {', '.join(f'`{m}`' for m in data.models)}.",
-             f"- Loads: dead loads ramped from zero in {_levels_text(data)} equal levels; errors "
-             "are compared at matched load levels.",
-             "- Error metrics (percent): **end disp vec** = |d_model − d_ref| / |d_ref| at full "
-             "load (d = target point displacement vector); **end |d|** = relative difference of "
-             "the displacement magnitudes; **end rot** = |θ_model − θ_ref| / |θ_ref| at full load "
-             "(θ = target body rotation); **path disp** = max over levels of |d_model − d_ref| / "
-             "max over levels of |d_ref|; **path rot** likewise. *End disp vec* and *end rot* "
-             "are the metrics of the paper tables (see the discussion for how they compare "
-             "with the paper's figures).",
-             f"- Run times: in [{TIMINGS_MD}]({TIMINGS_MD}) with `timings.json`, apart from "
-             "the results (report.md, results.json and gates.json are the same from one run of "
-             "the same code to the next).",
-             "- A model that fails on a load case is reported where it appears: how far it got "
-             "(percent of the load), why (a limit point found by arc length, or the solver's "
-             "reason) and the load.",
-             f"- Tools: {data.versions}.", ""]
+    lines = [
+        "# flexval validation report",
+        "",
+        "Flexibility models of planar compliant mechanisms with curved flexures: "
+        "the comparison of Sorgonà, Cirelli, Giannini, Verotti (Multibody Syst. Dyn., 2024) "
+        f"reproduced with `{PAPER_REFERENCE}` as reference (the paper's convention), and "
+        "extended with a continuum reference (2D plane-stress solid, geometrically "
+        "nonlinear hyperelastic, scikit-fem).",
+        "",
+        "## Setup",
+        "",
+        f"- Models: {', '.join(f'`{m}`' for m in data.models)}.",
+        f"- Loads: dead loads ramped from zero in {_levels_text(data)} equal levels; errors "
+        "are compared at matched load levels.",
+        "- Error metrics (percent): **end disp vec** = |d_model − d_ref| / |d_ref| at full "
+        "load (d = target point displacement vector); **end |d|** = relative difference of "
+        "the displacement magnitudes; **end rot** = |θ_model − θ_ref| / |θ_ref| at full load "
+        "(θ = target body rotation); **path disp** = max over levels of |d_model − d_ref| / "
+        "max over levels of |d_ref|; **path rot** likewise. *End disp vec* and *end rot* "
+        "are the metrics of the paper tables (see the discussion for how they compare "
+        "with the paper's figures).",
+        f"- Run times: in [{TIMINGS_MD}]({TIMINGS_MD}) with `timings.json`, apart from "
+        "the results (report.md, results.json and gates.json are the same from one run of "
+        "the same code to the next).",
+        "- A model that fails on a load case is reported where it appears: how far it got "
+        "(percent of the load), why (a limit point found by arc length, or the solver's "
+        "reason) and the load.",
+        f"- Tools: {data.versions}.",
+        "",
+    ]
     for res in data.scenes:
         lines += _scene_section(res, out, draw)
     if any(res.scene.name == PROTOCOL_SCENE for res in data.scenes):
@@ -380,13 +484,23 @@ def write_report(data: ReportData, out: Path, protocol: Path | None = None) -> P
     return md
 
 
-def build_report(scene_names: list[str], out: Path, models: list[str] | None = None,
-                 repeats: int = 3, use_cache: bool = True, progress: bool = True,
-                 bench: bool = True, converge: bool = True, workers: int = 1,
-                 protocol: Path | None = None, peers: bool = False) -> Path:
+def build_report(
+    scene_names: list[str],
+    out: Path,
+    models: list[str] | None = None,
+    repeats: int = 3,
+    use_cache: bool = True,
+    progress: bool = True,
+    bench: bool = True,
+    converge: bool = True,
+    workers: int = 1,
+    protocol: Path | None = None,
+    peers: bool = False,
+) -> Path:
     """Compute everything (on ``workers`` processes), then write ``out/report.md``, its
     figures, JSON files and run times; ``protocol``: as in :func:`render_markdown`;
     ``peers``: time beam:100 against OpenSeesPy too (:func:`compute_report`)."""
-    data = compute_report(scene_names, models, repeats, use_cache, progress, bench, converge,
-                          workers, peers)
+    data = compute_report(
+        scene_names, models, repeats, use_cache, progress, bench, converge, workers, peers
+    )
     return write_report(data, out, protocol)

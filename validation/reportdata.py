@@ -38,8 +38,8 @@ from .campaign import Job, Progress, RunMemo, prefetch, run_campaign, timed_run
 from .compare import errors, paper_percent, paper_scene, paper_seconds
 from .convergence import ConvergenceStudy, study
 from .failures import Failure
-from .peers import PeerRow, PeerUnavailable, compare_with_opensees
 from .frequencies import FrequencyTable, frequency_data
+from .peers import PeerRow, PeerUnavailable, compare_with_opensees
 
 DEFAULT_MODELS = ("continuum", "beam:100", "beam:20", "prbm", "dcmm:1", "dcmm:2", "dcmm:3", "ee")
 #: the paper's reference (its FEM100): every scene is compared against it
@@ -71,10 +71,14 @@ class PaperData:
             return None
         cases = [c.name for c in scene.load_cases]
         if list(data["load_cases"]) != cases:
-            return None                 # a scene of the same name but other load cases
-        return cls(paper_percent(scene.name, cases), paper_seconds(scene.name, cases),
-                   data["percent_table"], data["seconds_table"],
-                   data.get("relative_rotations_figure"))
+            return None  # a scene of the same name but other load cases
+        return cls(
+            paper_percent(scene.name, cases),
+            paper_seconds(scene.name, cases),
+            data["percent_table"],
+            data["seconds_table"],
+            data.get("relative_rotations_figure"),
+        )
 
 
 @dataclass
@@ -129,7 +133,7 @@ class SceneResults:
     convergence: list[ConvergenceStudy] = field(default_factory=list)
     frequencies: FrequencyTable | None = None
     bracket: PlaneBracket | None = None
-    peers: list[PeerRow] | str | None = None   # the OpenSees comparison, why not, or not asked
+    peers: list[PeerRow] | str | None = None  # the OpenSees comparison, why not, or not asked
 
     @property
     def cases(self) -> list[str]:
@@ -148,13 +152,13 @@ class SceneResults:
 
     def failure(self, model: str, case: str) -> Failure | None:
         """The failure of ``model`` on ``case``, or None."""
-        return next((f for f in self.failures if f.model == model and f.load_case == case),
-                    None)
+        return next((f for f in self.failures if f.model == model and f.load_case == case), None)
 
     def traces(self, case: str) -> dict[str, LoadPath]:
         """{model: arc-length path through its limit point} of the models failing on ``case``."""
-        return {f.model: f.trace for f in self.failures
-                if f.load_case == case and f.trace is not None}
+        return {
+            f.model: f.trace for f in self.failures if f.load_case == case and f.trace is not None
+        }
 
     def converged(self, model: str, case: str) -> LoadPath | None:
         """The path of ``model`` on ``case`` if it reached full load, else None."""
@@ -204,10 +208,14 @@ class SceneResults:
             if ref is None or other is None or not other.converged:
                 continue
             e = errors(other, ref, self.scene.mechanism.size())
-            out[c] = {"disp": float(ref.displacement[-1]),
-                      "disp_other": float(other.displacement[-1]),
-                      "rot": float(ref.rotation[-1]), "rot_other": float(other.rotation[-1]),
-                      "disp_spread": float(e["end_disp"]), "rot_spread": float(e["end_rot"])}
+            out[c] = {
+                "disp": float(ref.displacement[-1]),
+                "disp_other": float(other.displacement[-1]),
+                "rot": float(ref.rotation[-1]),
+                "rot_other": float(other.rotation[-1]),
+                "disp_spread": float(e["end_disp"]),
+                "rot_spread": float(e["end_rot"]),
+            }
         return out
 
     def has_reference(self) -> bool:
@@ -235,8 +243,9 @@ class ReportData:
 
     def gates(self) -> dict:
         """{scene: {reference: error table}}: the baseline of the CI accuracy gates."""
-        return {r.scene.name: {ref: r.error_table(ref) for ref in self.references}
-                for r in self.scenes}
+        return {
+            r.scene.name: {ref: r.error_table(ref) for ref in self.references} for r in self.scenes
+        }
 
     def results(self) -> dict:
         """Every LoadPath, failure and bench row, JSON-ready, without run times.
@@ -246,12 +255,19 @@ class ReportData:
         bench rows lose their ``seconds``. The same code gives the same text,
         whatever the machine's load (:func:`timings` holds the times).
         """
-        return {"code_version": self.code, "scenes": {
-            r.scene.name: {"results": [_stable(lp) for lp in r.paths.values()],
-                           "failures": [f.to_dict() for f in r.failures],
-                           "bench": [{k: v for k, v in row.items() if k != "seconds"}
-                                     for row in r.bench_rows]}
-            for r in self.scenes}}
+        return {
+            "code_version": self.code,
+            "scenes": {
+                r.scene.name: {
+                    "results": [_stable(lp) for lp in r.paths.values()],
+                    "failures": [f.to_dict() for f in r.failures],
+                    "bench": [
+                        {k: v for k, v in row.items() if k != "seconds"} for row in r.bench_rows
+                    ],
+                }
+                for r in self.scenes
+            },
+        }
 
     def timings(self) -> dict:
         """Every run time of the report, JSON-ready (s): per path the median and its
@@ -260,22 +276,47 @@ class ReportData:
         scenes = {}
         for r in self.scenes:
             scenes[r.scene.name] = {
-                "paths": [{"model": lp.model, "load_case": lp.load_case, "seconds": lp.seconds,
-                           "samples": lp.stats.get("seconds_samples", [lp.seconds]),
-                           "cached": bool(lp.stats.get("cached", False))}
-                          for lp in r.paths.values()],
-                "bench": [{"model": row["model"], "seconds": row["seconds"]}
-                          for row in r.bench_rows],
-                "bracket": ({"model": r.bracket.model, "seconds": r.bracket.seconds()}
-                            if r.bracket else None),
-                "convergence": [{"family": st.family, "load_case": st.load_case,
-                                 "rows": [{"model": row["model"], "seconds": row["seconds"]}
-                                          for row in st.rows]}
-                                for st in r.convergence],
-                "peers": (r.peers if isinstance(r.peers, str) or r.peers is None
-                          else [row.to_dict() for row in r.peers])}
-        return {"code_version": self.code, "repeats": self.repeats, "workers": self.workers,
-                "wall_seconds": self.wall_seconds, "scenes": scenes}
+                "paths": [
+                    {
+                        "model": lp.model,
+                        "load_case": lp.load_case,
+                        "seconds": lp.seconds,
+                        "samples": lp.stats.get("seconds_samples", [lp.seconds]),
+                        "cached": bool(lp.stats.get("cached", False)),
+                    }
+                    for lp in r.paths.values()
+                ],
+                "bench": [
+                    {"model": row["model"], "seconds": row["seconds"]} for row in r.bench_rows
+                ],
+                "bracket": (
+                    {"model": r.bracket.model, "seconds": r.bracket.seconds()}
+                    if r.bracket
+                    else None
+                ),
+                "convergence": [
+                    {
+                        "family": st.family,
+                        "load_case": st.load_case,
+                        "rows": [
+                            {"model": row["model"], "seconds": row["seconds"]} for row in st.rows
+                        ],
+                    }
+                    for st in r.convergence
+                ],
+                "peers": (
+                    r.peers
+                    if isinstance(r.peers, str) or r.peers is None
+                    else [row.to_dict() for row in r.peers]
+                ),
+            }
+        return {
+            "code_version": self.code,
+            "repeats": self.repeats,
+            "workers": self.workers,
+            "wall_seconds": self.wall_seconds,
+            "scenes": scenes,
+        }
 
 
 #: LoadPath fields left out of results.json: the run time (in timings.json) and the
@@ -302,9 +343,12 @@ def read_results(folder: Path) -> dict[str, dict[tuple[str, str], LoadPath]]:
     out: dict[str, dict[tuple[str, str], LoadPath]] = {}
     for scene, data in results.items():
         secs = {(t["model"], t["load_case"]): t["seconds"] for t in times[scene]["paths"]}
-        out[scene] = {(r["model"], r["load_case"]): LoadPath.from_dict(
-                          {**r, "seconds": secs[(r["model"], r["load_case"])]})
-                      for r in data["results"]}
+        out[scene] = {
+            (r["model"], r["load_case"]): LoadPath.from_dict(
+                {**r, "seconds": secs[(r["model"], r["load_case"])]}
+            )
+            for r in data["results"]
+        }
     return out
 
 
@@ -316,7 +360,9 @@ def versions() -> str:
             vs.append(f"{p} {metadata.version(p)}")
         except metadata.PackageNotFoundError:
             vs.append(f"{p} (not installed)")
-    return f"Python {platform.python_version()}; " + ", ".join(vs) + f"; flexval code {code_version()}"
+    return (
+        f"Python {platform.python_version()}; " + ", ".join(vs) + f"; flexval code {code_version()}"
+    )
 
 
 def _frame_variants(spec: ModelSpec) -> list[tuple[str, ModelSpec]]:
@@ -335,17 +381,23 @@ def _frame_rows(res: SceneResults, specs: list[ModelSpec], cache: RunMemo) -> li
             if variant.id == spec.id:
                 paths, fails = res.paths, res.failures
             else:
-                paths, fails = run_campaign(res.scene, [variant], list(res.scene.load_cases), 1,
-                                            cache)
+                paths, fails = run_campaign(
+                    res.scene, [variant], list(res.scene.load_cases), 1, cache
+                )
             cells: dict = {}
             for c in res.cases:
                 ref = res.converged(PAPER_REFERENCE, c)
                 lp = paths.get((variant.id, c))
-                fail = next((f for f in fails if f.model == variant.id and f.load_case == c),
-                            None)
-                cells[c] = (None if ref is None else fail if fail is not None
-                            else errors(lp, ref, res.scene.mechanism.size())
-                            if lp is not None else None)
+                fail = next((f for f in fails if f.model == variant.id and f.load_case == c), None)
+                cells[c] = (
+                    None
+                    if ref is None
+                    else fail
+                    if fail is not None
+                    else errors(lp, ref, res.scene.mechanism.size())
+                    if lp is not None
+                    else None
+                )
             rows.append(FrameRow(spec.id, frame, cells))
     return rows
 
@@ -360,8 +412,7 @@ def _plane_variant(reference: ModelSpec) -> ModelSpec | None:
     return reference.with_options(**{PLANE_OPTION: other})
 
 
-def _plane_bracket(res: SceneResults, reference: ModelSpec, cache: RunMemo
-                   ) -> PlaneBracket | None:
+def _plane_bracket(res: SceneResults, reference: ModelSpec, cache: RunMemo) -> PlaneBracket | None:
     """The reference with its other :data:`PLANE_OPTION` value on every case, or None
     (a reference without that option)."""
     variant = _plane_variant(reference)
@@ -369,8 +420,9 @@ def _plane_bracket(res: SceneResults, reference: ModelSpec, cache: RunMemo
         return None
     paths, fails = run_campaign(res.scene, [variant], list(res.scene.load_cases), 1, cache)
     failed = {f.load_case for f in fails}
-    return PlaneBracket(variant.id, {c: lp for (_, c), lp in paths.items() if c not in failed},
-                        fails)
+    return PlaneBracket(
+        variant.id, {c: lp for (_, c), lp in paths.items() if c not in failed}, fails
+    )
 
 
 def _convergence_specs(reference: ModelSpec) -> list[ModelSpec]:
@@ -417,15 +469,25 @@ def _longest_first(jobs: list[Job]) -> list[Job]:
     """``jobs`` ordered for a process pool: the reference family's finest resolutions
     first (a continuum level costs several times the one below; reduced models take
     milliseconds), otherwise as listed."""
+
     def cost(job: Job) -> tuple[int, int]:
         fam = job.spec.model_family
         return (1, job.spec.resolution) if fam.has(REFERENCE) else (0, 0)
+
     return sorted(jobs, key=cost, reverse=True)
 
 
-def compute_report(scene_names: list[str], models: list[str] | None = None, repeats: int = 3,
-                   use_cache: bool = True, progress: bool = True, bench: bool = True,
-                   converge: bool = True, workers: int = 1, peers: bool = False) -> ReportData:
+def compute_report(
+    scene_names: list[str],
+    models: list[str] | None = None,
+    repeats: int = 3,
+    use_cache: bool = True,
+    progress: bool = True,
+    bench: bool = True,
+    converge: bool = True,
+    workers: int = 1,
+    peers: bool = False,
+) -> ReportData:
     """Run and compare everything the report shows (see the module docstring).
 
     With ``peers``, :data:`PAPER_REFERENCE` is also timed against OpenSeesPy
@@ -449,16 +511,27 @@ def compute_report(scene_names: list[str], models: list[str] | None = None, repe
     memo = RunMemo(ResultCache(enabled=use_cache))
     reference = next((s for s in specs if s.model_family.has(REFERENCE)), None)
     ref_id = reference.id if reference else None
-    plan = _Plan(specs, reference, (reference or parse_model(BENCH_REFERENCE)) if bench else None,
-                 converge, repeats)
-    prefetch(_longest_first([j for sc in scenes for j in plan.jobs(sc)]), memo, workers,
-             progress)
+    plan = _Plan(
+        specs,
+        reference,
+        (reference or parse_model(BENCH_REFERENCE)) if bench else None,
+        converge,
+        repeats,
+    )
+    prefetch(_longest_first([j for sc in scenes for j in plan.jobs(sc)]), memo, workers, progress)
     bar = Progress(sum(len(specs) * len(s.load_cases) for s in scenes), enabled=progress)
     out: list[SceneResults] = []
     for sc in scenes:
-        paths, failures = run_campaign(sc, specs, list(sc.load_cases), repeats, memo, bar,
-                                       record_models=plan.record,
-                                       repeats_for=plan.repeats_for)
+        paths, failures = run_campaign(
+            sc,
+            specs,
+            list(sc.load_cases),
+            repeats,
+            memo,
+            bar,
+            record_models=plan.record,
+            repeats_for=plan.repeats_for,
+        )
         res = SceneResults(sc, paths, failures, [s.id for s in specs], ref_id)
         res.frames = _frame_rows(res, specs, memo)
         res.frequencies = frequency_data(sc, res.models, ref_id or PAPER_REFERENCE)
@@ -467,14 +540,22 @@ def compute_report(scene_names: list[str], models: list[str] | None = None, repe
         if plan.bench_reference is not None:
             bref = plan.bench_reference
             res.bench_rows, res.bench_failures = runtime_vs_error(
-                sc, bref, sweep_specs(bref), repeats, memo, progress, plan.record)
+                sc, bref, sweep_specs(bref), repeats, memo, progress, plan.record
+            )
             res.bench_reference = bref.id
         if converge and reference:
             case = sc.load_cases[0]
-            res.convergence.append(study(
-                sc, reference, [s.resolution for s in _convergence_specs(reference)], case,
-                run=lambda spec, sc=sc, case=case: timed_run(
-                    sc, spec, case, 1, memo, record=spec.id in plan.record)))
+            res.convergence.append(
+                study(
+                    sc,
+                    reference,
+                    [s.resolution for s in _convergence_specs(reference)],
+                    case,
+                    run=lambda spec, sc=sc, case=case: timed_run(
+                        sc, spec, case, 1, memo, record=spec.id in plan.record
+                    ),
+                )
+            )
         out.append(res)
     wall = {"models": time.perf_counter() - t0}
     if peers:
@@ -486,5 +567,6 @@ def compute_report(scene_names: list[str], models: list[str] | None = None, repe
             except PeerUnavailable as exc:
                 res.peers = str(exc)
         wall["peers"] = time.perf_counter() - t1
-    return ReportData(out, [s.id for s in specs], ref_id, repeats, versions(), code_version(),
-                      workers, wall)
+    return ReportData(
+        out, [s.id for s in specs], ref_id, repeats, versions(), code_version(), workers, wall
+    )

@@ -12,8 +12,15 @@ from flexval.geometry import LoadCase, Scene
 from flexval.reducedmodels import LoadPath, ModelSpec
 
 
-def run_model(scene: Scene, spec: ModelSpec, case: LoadCase, levels: int | None = None,
-              record_poses: bool = False, record_shapes: bool = False, **extra) -> LoadPath:
+def run_model(
+    scene: Scene,
+    spec: ModelSpec,
+    case: LoadCase,
+    levels: int | None = None,
+    record_poses: bool = False,
+    record_shapes: bool = False,
+    **extra,
+) -> LoadPath:
     """Trace ``case`` of ``scene`` with model ``spec``.
 
     Parameters
@@ -32,5 +39,13 @@ def run_model(scene: Scene, spec: ModelSpec, case: LoadCase, levels: int | None 
     reducedmodels.SolverError
         If the solver cannot reach the full load (carries the load reached).
     """
-    return spec.model_family.run(scene.mechanism, spec, case, levels=levels, scene=scene.name,
-                                 record_poses=record_poses, record_shapes=record_shapes, **extra)
+    return spec.model_family.run(
+        scene.mechanism,
+        spec,
+        case,
+        levels=levels,
+        scene=scene.name,
+        record_poses=record_poses,
+        record_shapes=record_shapes,
+        **extra,
+    )

@@ -18,8 +18,8 @@ Units: MPa, N or N mm, mm.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import matplotlib
 
@@ -78,12 +78,12 @@ def peak_at_full_load(lp: LoadPath) -> dict | None:
     if lp.stress_profile and peak > 0.0:
         least = min(min(p["stress"]) for p in lp.stress_profile.values())
         uniform = (peak - least) / peak < UNIFORM_SPREAD
-    return {"stress": peak, "flexure": name, "at": lp.peak_stress_at[name][-1],
-            "uniform": uniform}
+    return {"stress": peak, "flexure": name, "at": lp.peak_stress_at[name][-1], "uniform": uniform}
 
 
-def peak_stress_data(paths: dict[tuple[str, str], LoadPath], models: list[str],
-                     cases: list[str], reference: str) -> dict[str, dict[str, dict]]:
+def peak_stress_data(
+    paths: dict[tuple[str, str], LoadPath], models: list[str], cases: list[str], reference: str
+) -> dict[str, dict[str, dict]]:
     """{model: {case: peak_at_full_load + "error_percent"}} of the paths that reached full load.
 
     The error is (model - reference) / reference in percent (None without a reference).
@@ -97,8 +97,11 @@ def peak_stress_data(paths: dict[tuple[str, str], LoadPath], models: list[str],
                 continue
             ref = paths.get((reference, c))
             ref_peak = peak_at_full_load(ref) if ref is not None and ref.converged else None
-            peak["error_percent"] = (100.0 * (peak["stress"] - ref_peak["stress"])
-                                     / ref_peak["stress"] if ref_peak else None)
+            peak["error_percent"] = (
+                100.0 * (peak["stress"] - ref_peak["stress"]) / ref_peak["stress"]
+                if ref_peak
+                else None
+            )
             out.setdefault(m, {})[c] = peak
     return out
 
@@ -127,7 +130,7 @@ def _cell(v: dict | None, value: str) -> str:
 
 
 def _peak_text(peak: dict) -> str:
-    """"8.583 MPa at e34@0.47", or "3 MPa, uniform" when the stress has no single place."""
+    """ "8.583 MPa at e34@0.47", or "3 MPa, uniform" when the stress has no single place."""
     if peak.get("uniform"):
         return f"{peak['stress']:.4g} MPa, uniform"
     return f"{peak['stress']:.4g} MPa at {peak['flexure']}@{peak['at']:.2f}"
@@ -146,14 +149,17 @@ def limit_load_table(data: dict[str, dict[str, dict]], cases: list[str]) -> list
     """Markdown: model x load case, first limit load and its error against the reference."""
     lines = ["| model | " + " | ".join(cases) + " |", "|---|" + "---:|" * len(cases)]
     for m, row in data.items():
-        cells = [_cell(row[c], f"{row[c]['load']:.5g} {row[c]['unit']}") if c in row else "—"
-                 for c in cases]
+        cells = [
+            _cell(row[c], f"{row[c]['load']:.5g} {row[c]['unit']}") if c in row else "—"
+            for c in cases
+        ]
         lines.append(f"| `{m}` | " + " | ".join(cells) + " |")
     return lines
 
 
-def fibre_table(scene: Scene, paths: dict[tuple[str, str], LoadPath], reference: str,
-                cases: list[str]) -> list[str]:
+def fibre_table(
+    scene: Scene, paths: dict[tuple[str, str], LoadPath], reference: str, cases: list[str]
+) -> list[str]:
     """Markdown comparing the reference continuum's own fibre stress with its beam-formula value.
 
     Per load case, the flexure with the largest fibre stress at full load
@@ -173,18 +179,27 @@ def fibre_table(scene: Scene, paths: dict[tuple[str, str], LoadPath], reference:
         margin = fibre["layer"] / length[name]
         inside = (at >= margin) & (at <= 1.0 - margin)
         beam = float(np.max(np.asarray(lp.stress_profile[name]["stress"])[inside]))
-        rows.append(f"| {c} | {name} | {beam:.4g} | {fibre['stress']:.4g} | "
-                    f"{100 * (fibre['stress'] - beam) / beam:+.1f} % |")
+        rows.append(
+            f"| {c} | {name} | {beam:.4g} | {fibre['stress']:.4g} | "
+            f"{100 * (fibre['stress'] - beam) / beam:+.1f} % |"
+        )
     if not rows:
         return []
     from .continuum.fibre import LAYER_THICKNESSES
 
-    return ([f"Outside a boundary layer of {LAYER_THICKNESSES:g} thicknesses at each clamped "
-             "end face (where the continuum's stress is singular), the continuum's own fibre "
-             "normal stress against the beam formula applied to its section resultants over the "
-             "same stretch (the flexure with the largest fibre stress):", "",
-             "| case | flexure | beam formula (MPa) | continuum fibre (MPa) | difference |",
-             "|---|---|---:|---:|---:|"] + rows + [""])
+    return (
+        [
+            f"Outside a boundary layer of {LAYER_THICKNESSES:g} thicknesses at each clamped "
+            "end face (where the continuum's stress is singular), the continuum's own fibre "
+            "normal stress against the beam formula applied to its section resultants over the "
+            "same stretch (the flexure with the largest fibre stress):",
+            "",
+            "| case | flexure | beam formula (MPa) | continuum fibre (MPa) | difference |",
+            "|---|---|---:|---:|---:|",
+        ]
+        + rows
+        + [""]
+    )
 
 
 def stress_profiles(scene: Scene, case_name: str, paths: dict[str, LoadPath], path: Path) -> str:
@@ -197,13 +212,17 @@ def stress_profiles(scene: Scene, case_name: str, paths: dict[str, LoadPath], pa
         for model, lp in paths.items():
             profile = (lp.stress_profile or {}).get(name)
             if profile and lp.converged:
-                ax.plot(profile["at"], profile["stress"], label=model,
-                        **{**style(model), "marker": None})
+                ax.plot(
+                    profile["at"],
+                    profile["stress"],
+                    label=model,
+                    **{**style(model), "marker": None},
+                )
         ax.set_title(name)
         ax.set_xlabel("arc-length fraction from the first end")
         ax.set_ylabel("outer-fibre stress (MPa)")
         ax.grid(alpha=0.3)
-    for ax in axes.ravel()[len(names):]:
+    for ax in axes.ravel()[len(names) :]:
         ax.axis("off")
     if axes[0, 0].get_legend_handles_labels()[0]:
         axes[0, 0].legend(fontsize=7)
@@ -211,32 +230,51 @@ def stress_profiles(scene: Scene, case_name: str, paths: dict[str, LoadPath], pa
     return _save(fig, path)
 
 
-def section(scene: Scene, paths: dict[tuple[str, str], LoadPath], failures: list[Failure],
-            models: list[str], reference: str, out: Path, draw: Callable = draw_now
-            ) -> list[str]:
+def section(
+    scene: Scene,
+    paths: dict[tuple[str, str], LoadPath],
+    failures: list[Failure],
+    models: list[str],
+    reference: str,
+    out: Path,
+    draw: Callable = draw_now,
+) -> list[str]:
     """The report's Markdown on peak stresses and limit loads of one scene (figures into
     ``out``, drawn with ``draw(fn, *args)``: see :mod:`flexval.validation.figurejobs`)."""
     cases = [c.name for c in scene.load_cases]
     name = scene.name
-    lines = [f"### Peak stress against `{reference}`", "",
-             "Largest outer-fibre normal stress |N|/A + |M| h/(2I) over the flexures at full "
-             "load, from each model's own section forces (the wrench a flexure transmits, carried "
-             "by statics along the model's displaced centre line; for the continuum the section "
-             "resultants of its stresses), where it occurs (flexure@fraction of its length from "
-             "its first end; \"uniform\" where every section carries it, as under a pure end "
-             "moment) and its error against the reference.", ""]
+    lines = [
+        f"### Peak stress against `{reference}`",
+        "",
+        "Largest outer-fibre normal stress |N|/A + |M| h/(2I) over the flexures at full "
+        "load, from each model's own section forces (the wrench a flexure transmits, carried "
+        "by statics along the model's displaced centre line; for the continuum the section "
+        "resultants of its stresses), where it occurs (flexure@fraction of its length from "
+        'its first end; "uniform" where every section carries it, as under a pure end '
+        "moment) and its error against the reference.",
+        "",
+    ]
     lines += peak_stress_table(peak_stress_data(paths, models, cases, reference), cases) + [""]
-    curved = [(f.name, f.shape.radius, f.section.thickness,
-               curved_beam_factor(f.shape.radius, f.section.thickness))
-              for f in scene.mechanism.flexures if hasattr(f.shape, "radius")]
+    curved = [
+        (
+            f.name,
+            f.shape.radius,
+            f.section.thickness,
+            curved_beam_factor(f.shape.radius, f.section.thickness),
+        )
+        for f in scene.mechanism.flexures
+        if hasattr(f.shape, "radius")
+    ]
     if curved:
-        lines += ["These are beam formulas: they treat each section as straight. Under pure "
-                  "bending the inner fibre of a curved section carries more (Winkler-Bach "
-                  "curved-beam theory): "
-                  + ", ".join(f"{100 * (k - 1):.1f} % ({n}, r/h = {r / h:.1f})"
-                              for n, r, h, k in curved)
-                  + ". Where the continuum's own fibre stress can be compared, the table below "
-                  "says how much it differs.", ""]
+        lines += [
+            "These are beam formulas: they treat each section as straight. Under pure "
+            "bending the inner fibre of a curved section carries more (Winkler-Bach "
+            "curved-beam theory): "
+            + ", ".join(f"{100 * (k - 1):.1f} % ({n}, r/h = {r / h:.1f})" for n, r, h, k in curved)
+            + ". Where the continuum's own fibre stress can be compared, the table below "
+            "says how much it differs.",
+            "",
+        ]
     lines += fibre_table(scene, paths, reference, cases)
     for c in cases:
         full = {m: paths[(m, c)] for m in models if (m, c) in paths}
@@ -245,9 +283,13 @@ def section(scene: Scene, paths: dict[tuple[str, str], LoadPath], failures: list
         lines += [f"![{name} {c} stress]({png.name})", ""]
     data = limit_load_data(failures, reference)
     if data:
-        lines += [f"### Limit loads against `{reference}`", "",
-                  "Models that stopped at a limit point under load control, traced by arc "
-                  "length: first limit load on the path and its error against the reference's "
-                  "(— where the reference has none in range).", ""]
+        lines += [
+            f"### Limit loads against `{reference}`",
+            "",
+            "Models that stopped at a limit point under load control, traced by arc "
+            "length: first limit load on the path and its error against the reference's "
+            "(— where the reference has none in range).",
+            "",
+        ]
         lines += limit_load_table(data, cases) + [""]
     return lines

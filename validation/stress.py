@@ -34,8 +34,8 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Callable, Sequence
 
 import numpy as np
 
@@ -53,20 +53,23 @@ AMPLIFICATIONS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
 QUICK_CAP = 100
 STEP_COUNTS = (2, 11, 101, 1001)
 """Level counts of study (b); quick mode omits 1001."""
-RIGID_ANGLE = 2.1                      # rad
-RIGID_SHIFT = (-40.0, 17.0)            # mm
-METRE = 1e-3                           # length of 1 mm in the rescaled scene (m)
+RIGID_ANGLE = 2.1  # rad
+RIGID_SHIFT = (-40.0, 17.0)  # mm
+METRE = 1e-3  # length of 1 mm in the rescaled scene (m)
 REFERENCE, QUICK_REFERENCE = "beam:100", "beam:40"
 
 
 def scale_case(case: LoadCase, factor: float) -> LoadCase:
     """``case`` with every component's value multiplied by ``factor`` (same name and levels)."""
-    return dataclasses.replace(case, components=tuple(
-        dataclasses.replace(c, value=c.value * factor) for c in case.components))
+    return dataclasses.replace(
+        case,
+        components=tuple(dataclasses.replace(c, value=c.value * factor) for c in case.components),
+    )
 
 
-def rescale_lengths(mechanism: Mechanism, case: LoadCase, length: float
-                    ) -> tuple[Mechanism, LoadCase]:
+def rescale_lengths(
+    mechanism: Mechanism, case: LoadCase, length: float
+) -> tuple[Mechanism, LoadCase]:
     """The same problem with the unit of length changed so that 1 mm becomes ``length``.
 
     Every length (shapes, sections, points) is multiplied by ``length``,
@@ -74,23 +77,36 @@ def rescale_lengths(mechanism: Mechanism, case: LoadCase, length: float
     unchanged and moments multiplied by ``length``. The answer is the same
     problem: displacements scale by ``length``, rotations are unchanged.
     """
+
     def pt(p) -> np.ndarray:
         return np.asarray(p, float) * length
 
-    flexures = tuple(dataclasses.replace(
-        f, shape=f.shape.scaled(length),
-        section=Section(f.section.depth * length, f.section.thickness * length))
-        for f in mechanism.flexures)
+    flexures = tuple(
+        dataclasses.replace(
+            f,
+            shape=f.shape.scaled(length),
+            section=Section(f.section.depth * length, f.section.thickness * length),
+        )
+        for f in mechanism.flexures
+    )
     mech = dataclasses.replace(
-        mechanism, flexures=flexures,
-        bodies={n: dataclasses.replace(b, points=pt(b.points))
-                for n, b in mechanism.bodies.items()},
-        material=Material(mechanism.material.youngs_modulus / length**2,
-                          mechanism.material.poisson_ratio),
+        mechanism,
+        flexures=flexures,
+        bodies={
+            n: dataclasses.replace(b, points=pt(b.points)) for n, b in mechanism.bodies.items()
+        },
+        material=Material(
+            mechanism.material.youngs_modulus / length**2, mechanism.material.poisson_ratio
+        ),
         target_point=pt(mechanism.target_point),
-        pins=tuple(dataclasses.replace(p, point=pt(p.point)) for p in mechanism.pins))
-    comps = tuple(dataclasses.replace(c, point=pt(c.point)) if isinstance(c, Force)
-                  else dataclasses.replace(c, value=c.value * length) for c in case.components)
+        pins=tuple(dataclasses.replace(p, point=pt(p.point)) for p in mechanism.pins),
+    )
+    comps = tuple(
+        dataclasses.replace(c, point=pt(c.point))
+        if isinstance(c, Force)
+        else dataclasses.replace(c, value=c.value * length)
+        for c in case.components
+    )
     return mech, dataclasses.replace(case, components=comps)
 
 
@@ -110,16 +126,23 @@ def _attempt(run: Callable[[], LoadPath]) -> tuple[LoadPath | None, dict | None]
     except SolverError as exc:
         return exc.path, {"kind": "solver", "message": str(exc), "load_factor": exc.load_factor}
     except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
-        return None, {"kind": "error", "message": f"{type(exc).__name__}: {exc}",
-                      "load_factor": None}
+        return None, {
+            "kind": "error",
+            "message": f"{type(exc).__name__}: {exc}",
+            "load_factor": None,
+        }
     if not _finite(lp):
-        return None, {"kind": "non-finite", "message": "non-finite values in a converged path",
-                      "load_factor": None}
+        return None, {
+            "kind": "non-finite",
+            "message": "non-finite values in a converged path",
+            "load_factor": None,
+        }
     return lp, None
 
 
-def _path_difference(a: LoadPath, b: LoadPath, size: float, turn: float = 0.0,
-                     length: float = 1.0) -> dict[str, float]:
+def _path_difference(
+    a: LoadPath, b: LoadPath, size: float, turn: float = 0.0, length: float = 1.0
+) -> dict[str, float]:
     """Largest relative differences of path ``b`` from ``a`` (same levels).
 
     ``b``'s displacements are turned back by ``-turn`` (rad) and divided by
@@ -131,9 +154,12 @@ def _path_difference(a: LoadPath, b: LoadPath, size: float, turn: float = 0.0,
     da = np.array([a.dx, a.dy])
     ra, rb = np.asarray(a.rotation), np.asarray(b.rotation)
     scale = scale_of(a, size)
-    return {"disp_rel": float(np.hypot(*(back - da)).max()
-                              / denominator(np.hypot(*da).max(), scale["disp"])),
-            "rot_rel": float(np.abs(rb - ra).max() / denominator(np.abs(ra).max(), scale["rot"]))}
+    return {
+        "disp_rel": float(
+            np.hypot(*(back - da)).max() / denominator(np.hypot(*da).max(), scale["disp"])
+        ),
+        "rot_rel": float(np.abs(rb - ra).max() / denominator(np.abs(ra).max(), scale["rot"])),
+    }
 
 
 class _Reference:
@@ -154,8 +180,9 @@ class _Reference:
             return None, failure
         key = (case.name, factor)
         if key not in self.paths:
-            lp, failure = _attempt(lambda: run_model(self.scene, self.spec,
-                                                     scale_case(case, factor)))
+            lp, failure = _attempt(
+                lambda: run_model(self.scene, self.spec, scale_case(case, factor))
+            )
             if failure is not None:
                 self.failed[case.name] = {**failure, "factor": factor}
                 return None, self.failed[case.name]
@@ -163,9 +190,14 @@ class _Reference:
         return self.paths[key], None
 
 
-def _amplification(scene: Scene, spec: ModelSpec, case: LoadCase, factors: Sequence[float],
-                   reference: _Reference, progress: Callable[[str], None] | None
-                   ) -> tuple[dict, LoadPath | None]:
+def _amplification(
+    scene: Scene,
+    spec: ModelSpec,
+    case: LoadCase,
+    factors: Sequence[float],
+    reference: _Reference,
+    progress: Callable[[str], None] | None,
+) -> tuple[dict, LoadPath | None]:
     """Study (a) of one model and case; also returns the path at multiple 1 (or None)."""
     rows, failure, first = [], None, None
     reached = 0.0
@@ -182,15 +214,23 @@ def _amplification(scene: Scene, spec: ModelSpec, case: LoadCase, factors: Seque
         first = lp if first is None else first
         reached = k
         ref, ref_failure = reference.get(case, k)
-        row = {"factor": k, "load": k * case.magnitude, "seconds": lp.seconds,
-               "newton_iterations": lp.stats.get("newton_iterations", 0),
-               "step_cuts": lp.stats.get("step_cuts", 0),
-               "errors": (errors(lp, ref, scene.mechanism.size()) if ref is not None
-                          else None),
-               "reference_failure": ref_failure["message"] if ref_failure else None}
+        row = {
+            "factor": k,
+            "load": k * case.magnitude,
+            "seconds": lp.seconds,
+            "newton_iterations": lp.stats.get("newton_iterations", 0),
+            "step_cuts": lp.stats.get("step_cuts", 0),
+            "errors": (errors(lp, ref, scene.mechanism.size()) if ref is not None else None),
+            "reference_failure": ref_failure["message"] if ref_failure else None,
+        }
         rows.append(row)
-    return {"largest_factor": reached, "largest_load": reached * case.magnitude,
-            "unit": case.unit, "failure": failure, "rows": rows}, first
+    return {
+        "largest_factor": reached,
+        "largest_load": reached * case.magnitude,
+        "unit": case.unit,
+        "failure": failure,
+        "rows": rows,
+    }, first
 
 
 def _step_count(scene: Scene, spec: ModelSpec, case: LoadCase, counts: Sequence[int]) -> dict:
@@ -203,9 +243,16 @@ def _step_count(scene: Scene, spec: ModelSpec, case: LoadCase, counts: Sequence[
             failures.append({"levels": n, **failure})
             continue
         scale = scale or scale_of(lp, scene.mechanism.size())
-        ends.append({"levels": n, "dx": lp.dx[-1], "dy": lp.dy[-1], "rotation": lp.rotation[-1],
-                     "newton_iterations": lp.stats.get("newton_iterations", 0),
-                     "seconds": lp.seconds})
+        ends.append(
+            {
+                "levels": n,
+                "dx": lp.dx[-1],
+                "dy": lp.dy[-1],
+                "rotation": lp.rotation[-1],
+                "newton_iterations": lp.stats.get("newton_iterations", 0),
+                "seconds": lp.seconds,
+            }
+        )
     out: dict = {"ends": ends, "failures": failures, "disp_rel": None, "rot_rel": None}
     if len(ends) >= 2:
         d = np.array([[e["dx"], e["dy"]] for e in ends])
@@ -222,22 +269,28 @@ def _invariance(scene: Scene, spec: ModelSpec, case: LoadCase, base: LoadPath | 
         return {"rigid_motion": None, "metres": None, "failure": "base case failed"}
     shift = np.array(RIGID_SHIFT)
     moved_scene = dataclasses.replace(
-        scene, mechanism=scene.mechanism.transformed(RIGID_ANGLE, shift))
-    moved, f1 = _attempt(lambda: run_model(moved_scene, spec,
-                                           case.transformed(RIGID_ANGLE, shift)))
+        scene, mechanism=scene.mechanism.transformed(RIGID_ANGLE, shift)
+    )
+    moved, f1 = _attempt(lambda: run_model(moved_scene, spec, case.transformed(RIGID_ANGLE, shift)))
     mech_m, case_m = rescale_lengths(scene.mechanism, case, METRE)
-    metres, f2 = _attempt(lambda: run_model(dataclasses.replace(scene, mechanism=mech_m),
-                                            spec, case_m))
+    metres, f2 = _attempt(
+        lambda: run_model(dataclasses.replace(scene, mechanism=mech_m), spec, case_m)
+    )
     fails = [f["message"] for f in (f1, f2) if f is not None]
     size = scene.mechanism.size()
-    return {"rigid_motion": (_path_difference(base, moved, size, turn=RIGID_ANGLE)
-                             if moved else None),
-            "metres": _path_difference(base, metres, size, length=METRE) if metres else None,
-            "failure": "; ".join(fails) or None}
+    return {
+        "rigid_motion": (_path_difference(base, moved, size, turn=RIGID_ANGLE) if moved else None),
+        "metres": _path_difference(base, metres, size, length=METRE) if metres else None,
+        "failure": "; ".join(fails) or None,
+    }
 
 
-def stress_report(scene: Scene, models: Sequence[ModelSpec | str], quick: bool = False,
-                  progress: Callable[[str], None] | None = None) -> dict:
+def stress_report(
+    scene: Scene,
+    models: Sequence[ModelSpec | str],
+    quick: bool = False,
+    progress: Callable[[str], None] | None = None,
+) -> dict:
     """Run the three stress studies of every model on every load case of ``scene``.
 
     Parameters
@@ -265,8 +318,9 @@ def stress_report(scene: Scene, models: Sequence[ModelSpec | str], quick: bool =
         ``limit_load``: the load at the path's first limit point or None.
     """
     t0 = time.perf_counter()
-    specs = [m if isinstance(m, ModelSpec) else parse_model(m, "<stress>", "models")
-             for m in models]
+    specs = [
+        m if isinstance(m, ModelSpec) else parse_model(m, "<stress>", "models") for m in models
+    ]
     ref_spec = parse_model(QUICK_REFERENCE if quick else REFERENCE)
     factors = [k for k in AMPLIFICATIONS if not quick or k <= QUICK_CAP]
     counts = [n for n in STEP_COUNTS if not quick or n < 1001]
@@ -279,13 +333,21 @@ def stress_report(scene: Scene, models: Sequence[ModelSpec | str], quick: bool =
             amp, base = _amplification(scene, spec, case, factors, reference, progress)
             if progress:
                 progress(f"stress {scene.name}: {spec.id} on {case.name}: step count, invariance")
-            per_case[case.name] = {"amplification": amp,
-                                   "step_count": _step_count(scene, spec, case, counts),
-                                   "invariance": _invariance(scene, spec, case, base)}
+            per_case[case.name] = {
+                "amplification": amp,
+                "step_count": _step_count(scene, spec, case, counts),
+                "invariance": _invariance(scene, spec, case, base),
+            }
         out_models[spec.id] = per_case
-    return {"scene": scene.name, "quick": quick, "reference": ref_spec.id,
-            "amplifications": factors, "step_counts": counts, "models": out_models,
-            "seconds": time.perf_counter() - t0}
+    return {
+        "scene": scene.name,
+        "quick": quick,
+        "reference": ref_spec.id,
+        "amplifications": factors,
+        "step_counts": counts,
+        "models": out_models,
+        "seconds": time.perf_counter() - t0,
+    }
 
 
 def _num(x: float | None, fmt: str = ".3g") -> str:
@@ -294,59 +356,82 @@ def _num(x: float | None, fmt: str = ".3g") -> str:
 
 def format_markdown(report: dict) -> str:
     """The stress report as Markdown: one table per study."""
-    lines = [f"# Stress tests: {report['scene']}", "",
-             f"Reference: `{report['reference']}`; load multiples "
-             f"{', '.join(str(k) for k in report['amplifications'])}; "
-             f"{'quick' if report['quick'] else 'full'} mode; "
-             f"{report['seconds']:.1f} s.", "",
-             "## (a) Load amplification", "",
-             "Largest multiple of each load case reached, the failure that stopped the "
-             "next one, and the error against the reference at the largest multiple both "
-             "reached (`path_disp`, `path_rot`, percent).", "",
-             "| model | case | largest × | load | path_disp % | path_rot % | failure |",
-             "|---|---|---:|---:|---:|---:|---|"]
+    lines = [
+        f"# Stress tests: {report['scene']}",
+        "",
+        f"Reference: `{report['reference']}`; load multiples "
+        f"{', '.join(str(k) for k in report['amplifications'])}; "
+        f"{'quick' if report['quick'] else 'full'} mode; "
+        f"{report['seconds']:.1f} s.",
+        "",
+        "## (a) Load amplification",
+        "",
+        "Largest multiple of each load case reached, the failure that stopped the "
+        "next one, and the error against the reference at the largest multiple both "
+        "reached (`path_disp`, `path_rot`, percent).",
+        "",
+        "| model | case | largest × | load | path_disp % | path_rot % | failure |",
+        "|---|---|---:|---:|---:|---:|---|",
+    ]
     for model, cases in report["models"].items():
         for case, r in cases.items():
             amp = r["amplification"]
             last = next((row for row in reversed(amp["rows"]) if row["errors"]), None)
             fail = amp["failure"]
-            fail_text = (f"×{fail['factor']:g}: {fail['message']}" if fail
-                         else "none up to the cap")
+            fail_text = f"×{fail['factor']:g}: {fail['message']}" if fail else "none up to the cap"
             if fail and fail.get("limit_load") is not None:
-                fail_text = (f"limit point at {fail['limit_load']:.4g} {amp['unit']} "
-                             f"(arc-length); {fail_text}")
+                fail_text = (
+                    f"limit point at {fail['limit_load']:.4g} {amp['unit']} "
+                    f"(arc-length); {fail_text}"
+                )
             lines.append(
                 f"| {model} | {case} | {amp['largest_factor']:g} | "
                 f"{amp['largest_load']:.4g} {amp['unit']} | "
                 f"{_num(last['errors']['path_disp'] if last else None)} "
                 f"{'(×' + format(last['factor'], 'g') + ')' if last else ''} | "
                 f"{_num(last['errors']['path_rot'] if last else None)} | "
-                f"{fail_text.replace('|', '/')} |")
-    lines += ["", "## (b) Step count", "",
-              "End state with " + ", ".join(str(n) for n in report["step_counts"])
-              + " load levels: largest relative spread of the end displacement vector and "
-                "rotation (path independence asks for round-off).", "",
-              "| model | case | disp spread | rot spread | iterations per run | failures |",
-              "|---|---|---:|---:|---|---|"]
+                f"{fail_text.replace('|', '/')} |"
+            )
+    lines += [
+        "",
+        "## (b) Step count",
+        "",
+        "End state with "
+        + ", ".join(str(n) for n in report["step_counts"])
+        + " load levels: largest relative spread of the end displacement vector and "
+        "rotation (path independence asks for round-off).",
+        "",
+        "| model | case | disp spread | rot spread | iterations per run | failures |",
+        "|---|---|---:|---:|---|---|",
+    ]
     for model, cases in report["models"].items():
         for case, r in cases.items():
             sc = r["step_count"]
             its = ", ".join(f"{e['levels']}: {e['newton_iterations']}" for e in sc["ends"])
             fails = "; ".join(f"{f['levels']} levels: {f['message']}" for f in sc["failures"])
-            lines.append(f"| {model} | {case} | {_num(sc['disp_rel'])} | {_num(sc['rot_rel'])} "
-                         f"| {its} | {fails.replace('|', '/') or 'none'} |")
-    lines += ["", "## (c) Invariance", "",
-              f"Largest relative path difference after a rigid motion ({RIGID_ANGLE} rad, "
-              f"{RIGID_SHIFT} mm) and after rewriting the scene in metres.", "",
-              "| model | case | rigid disp | rigid rot | metres disp | metres rot | failures |",
-              "|---|---|---:|---:|---:|---:|---|"]
+            lines.append(
+                f"| {model} | {case} | {_num(sc['disp_rel'])} | {_num(sc['rot_rel'])} "
+                f"| {its} | {fails.replace('|', '/') or 'none'} |"
+            )
+    lines += [
+        "",
+        "## (c) Invariance",
+        "",
+        f"Largest relative path difference after a rigid motion ({RIGID_ANGLE} rad, "
+        f"{RIGID_SHIFT} mm) and after rewriting the scene in metres.",
+        "",
+        "| model | case | rigid disp | rigid rot | metres disp | metres rot | failures |",
+        "|---|---|---:|---:|---:|---:|---|",
+    ]
     for model, cases in report["models"].items():
         for case, r in cases.items():
             inv = r["invariance"]
             rm, me = inv["rigid_motion"] or {}, inv["metres"] or {}
-            lines.append(f"| {model} | {case} | {_num(rm.get('disp_rel'))} | "
-                         f"{_num(rm.get('rot_rel'))} | {_num(me.get('disp_rel'))} | "
-                         f"{_num(me.get('rot_rel'))} | {(inv['failure'] or 'none')} |")
+            lines.append(
+                f"| {model} | {case} | {_num(rm.get('disp_rel'))} | "
+                f"{_num(rm.get('rot_rel'))} | {_num(me.get('disp_rel'))} | "
+                f"{_num(me.get('rot_rel'))} | {(inv['failure'] or 'none')} |"
+            )
     return "\n".join(lines) + "\n"
 
 

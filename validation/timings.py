@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import platform
 import statistics
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from .bench import write_bench
 from .campaign import available_cores
@@ -41,9 +41,12 @@ def _fmt(v: float | None, digits: int = 2) -> str:
 def timing_table(res: SceneResults) -> list[str]:
     """Markdown: our median seconds per load path beside the paper's, and the speed-ups."""
     paper = res.paper.seconds if res.paper else {}
-    lines = ["| model | " + " | ".join(f"{c} ours (s) | {c} paper (s)" for c in res.cases)
-             + f" | speed-up vs {PAPER_REFERENCE}, ours | paper |",
-             "|---|" + "---:|" * (2 * len(res.cases) + 2)]
+    lines = [
+        "| model | "
+        + " | ".join(f"{c} ours (s) | {c} paper (s)" for c in res.cases)
+        + f" | speed-up vs {PAPER_REFERENCE}, ours | paper |",
+        "|---|" + "---:|" * (2 * len(res.cases) + 2),
+    ]
 
     def mean_time(m: str, table: dict | None = None) -> float | None:
         if table is not None:
@@ -72,21 +75,30 @@ def _cheapest_lines(res: SceneResults, reference: str) -> list[str]:
     rows = res.worst_errors(reference)
     out = []
     for budget in BUDGETS:
-        ok = [(sum(res.paths[(m, c)].seconds for c in res.cases) / len(res.cases), m, e)
-              for m, e, _ in rows if e <= budget]
+        ok = [
+            (sum(res.paths[(m, c)].seconds for c in res.cases) / len(res.cases), m, e)
+            for m, e, _ in rows
+            if e <= budget
+        ]
         if ok:
             s, m, e = min(ok)
-            out.append(f"- Cheapest model within {budget:g} % of `{reference}` on every load "
-                       f"case (largest path displacement error): **{m}** ({e:.2f} %, "
-                       f"{s * 1e3:.1f} ms per load path).")
+            out.append(
+                f"- Cheapest model within {budget:g} % of `{reference}` on every load "
+                f"case (largest path displacement error): **{m}** ({e:.2f} %, "
+                f"{s * 1e3:.1f} ms per load path)."
+            )
     return out
 
 
 def _convergence_lines(res: SceneResults) -> list[str]:
     L = []
     for st in res.convergence:
-        L += [f"{st.family} convergence ({st.load_case}), wall time of each run:", "",
-              "| model | unknowns | seconds |", "|---|---:|---:|"]
+        L += [
+            f"{st.family} convergence ({st.load_case}), wall time of each run:",
+            "",
+            "| model | unknowns | seconds |",
+            "|---|---:|---:|",
+        ]
         L += [f"| {r['model']} | {r['unknowns']} | {r['seconds']:.2f} |" for r in st.rows]
         L += [""]
     return L
@@ -99,28 +111,38 @@ def _peer_lines(res: SceneResults) -> list[str]:
     title = f"### {PAPER_REFERENCE} against OpenSeesPy"
     if isinstance(res.peers, str):
         return [title, "", f"Not timed: {res.peers}.", ""]
-    L = [title, "",
-         "The same mechanism in OpenSeesPy (corotational `elasticBeamColumn`, the same "
-         "elements per flexure, rigid bodies as very stiff corotational spokes, load control "
-         "with the fewest sub-steps per level that converge), timed in this process after "
-         "everything else (`validation/peers.py`, `benchmarks/bench_peers.py`). Interleaved: "
-         "the two codes alternate, each run with the other's caches; back to back: all of "
-         "one code's runs, then the other's. Median wall times, model build included; "
-         f"agreement of the end values (the bar: {AGREEMENT_BAR} %).", "",
-         "| case | ours (ms) | OpenSees (ms) | sub-steps | OpenSees / ours | back to back | "
-         "agreement (%) |", "|---|---:|---:|---:|---:|---:|---:|"]
+    L = [
+        title,
+        "",
+        "The same mechanism in OpenSeesPy (corotational `elasticBeamColumn`, the same "
+        "elements per flexure, rigid bodies as very stiff corotational spokes, load control "
+        "with the fewest sub-steps per level that converge), timed in this process after "
+        "everything else (`validation/peers.py`, `benchmarks/bench_peers.py`). Interleaved: "
+        "the two codes alternate, each run with the other's caches; back to back: all of "
+        "one code's runs, then the other's. Median wall times, model build included; "
+        f"agreement of the end values (the bar: {AGREEMENT_BAR} %).",
+        "",
+        "| case | ours (ms) | OpenSees (ms) | sub-steps | OpenSees / ours | back to back | "
+        "agreement (%) |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
     timed = [r for r in res.peers if r.substeps is not None]
     for r in res.peers:
         if r.substeps is None:
             L.append(f"| {r.case} | – | – | – | {r.reason} | – | – |")
             continue
-        L.append(f"| {r.case} | {1e3 * statistics.median(r.ours):.1f} | "
-                 f"{1e3 * statistics.median(r.theirs):.1f} | {r.substeps} | {r.ratio:.2f}x | "
-                 f"{r.b2b_ratio:.2f}x | {r.agreement:.4f} |")
+        L.append(
+            f"| {r.case} | {1e3 * statistics.median(r.ours):.1f} | "
+            f"{1e3 * statistics.median(r.theirs):.1f} | {r.substeps} | {r.ratio:.2f}x | "
+            f"{r.b2b_ratio:.2f}x | {r.agreement:.4f} |"
+        )
     if timed:
-        L += ["", f"- Geometric mean OpenSees / ours: "
-              f"{geometric_mean([r.ratio for r in timed]):.2f}x interleaved, "
-              f"{geometric_mean([r.b2b_ratio for r in timed]):.2f}x back to back."]
+        L += [
+            "",
+            f"- Geometric mean OpenSees / ours: "
+            f"{geometric_mean([r.ratio for r in timed]):.2f}x interleaved, "
+            f"{geometric_mean([r.b2b_ratio for r in timed]):.2f}x back to back.",
+        ]
     return L + [""]
 
 
@@ -128,34 +150,54 @@ def _scene_lines(res: SceneResults, bench_md: Path | None) -> list[str]:
     """Markdown of one scene's run times (``bench_md``: its runtime-versus-error table)."""
     seconds_note = f" (the paper's {res.paper.seconds_table})" if res.paper else ""
     levels = " or ".join(str(n) for n in sorted({lc.levels for lc in res.scene.load_cases}))
-    L = [f"## {res.scene.name}", "", f"### Run times{seconds_note}", "",
-         f"Ours: median wall time of the whole load path ({levels} levels, model build "
-         "included) on this machine"
-         + ("; the paper's: RecurDyn quasi-static simulations (compare the speed-up columns, "
-            "not the seconds)." if res.paper else "."), ""]
+    L = [
+        f"## {res.scene.name}",
+        "",
+        f"### Run times{seconds_note}",
+        "",
+        f"Ours: median wall time of the whole load path ({levels} levels, model build "
+        "included) on this machine"
+        + (
+            "; the paper's: RecurDyn quasi-static simulations (compare the speed-up columns, "
+            "not the seconds)."
+            if res.paper
+            else "."
+        ),
+        "",
+    ]
     L += timing_table(res) + [""]
     ref = res.reference if res.has_reference() else PAPER_REFERENCE
     L += _cheapest_lines(res, ref)
     if res.bracket and res.bracket.paths:
-        L += [f"- Computing the `{res.bracket.model}` paths (the plane bracket) takes "
-              f"{res.bracket.seconds():.3g} s (wall time of its runs, the report's added cost "
-              "when they are not cached)."]
+        L += [
+            f"- Computing the `{res.bracket.model}` paths (the plane bracket) takes "
+            f"{res.bracket.seconds():.3g} s (wall time of its runs, the report's added cost "
+            "when they are not cached)."
+        ]
     L += [""] + _peer_lines(res) + _convergence_lines(res)
     if bench_md is not None:
-        L += ["### Runtime versus error", "",
-              f"Every model and resolution against `{res.bench_reference}`; details in "
-              f"[{bench_md.name}]({bench_md.name}).", "",
-              f"![runtime vs error]({bench_md.with_suffix('.png').name})", ""]
+        L += [
+            "### Runtime versus error",
+            "",
+            f"Every model and resolution against `{res.bench_reference}`; details in "
+            f"[{bench_md.name}]({bench_md.name}).",
+            "",
+            f"![runtime vs error]({bench_md.with_suffix('.png').name})",
+            "",
+        ]
     return L
 
 
-def write_benches(data: ReportData, out: Path, draw: Callable = draw_now
-                  ) -> dict[str, Path]:
+def write_benches(data: ReportData, out: Path, draw: Callable = draw_now) -> dict[str, Path]:
     """Each scene's runtime-versus-error files (:func:`flexval.validation.bench.write_bench`, the
     plot drawn with ``draw``): {scene: its Markdown path}, for the scenes that have one."""
-    return {res.scene.name: write_bench(res.scene, res.bench_rows, res.bench_reference, out,
-                                        res.bench_failures, draw)
-            for res in data.scenes if res.bench_rows or res.bench_failures}
+    return {
+        res.scene.name: write_bench(
+            res.scene, res.bench_rows, res.bench_reference, out, res.bench_failures, draw
+        )
+        for res in data.scenes
+        if res.bench_rows or res.bench_failures
+    }
 
 
 def render_timings(data: ReportData, benches: dict[str, Path], render_seconds: float) -> str:
@@ -167,26 +209,33 @@ def render_timings(data: ReportData, benches: dict[str, Path], render_seconds: f
     wall, peers = data.wall_seconds.get("models"), data.wall_seconds.get("peers")
     total = f"{wall:.1f} s computing, " if wall is not None else ""
     total += f"{peers:.1f} s timing OpenSeesPy, " if peers is not None else ""
-    lines = ["# flexval validation report: run times", "",
-             "The run times of [report.md](report.md), apart from its results because they "
-             "change from run to run (machine, load, cache).", "",
-             f"- Ours: median of {data.repeats} runs per load path (reference models: one run), "
-             f"wall clock, on {data.workers} worker process(es) at a time "
-             f"({available_cores()} cores, {platform.machine()}, Python "
-             f"{platform.python_version()}). A path read from the result cache keeps the time "
-             "of the run that computed it (`cached` in timings.json).",
-             f"- This report: {total}{render_seconds:.1f} s writing report.md, its figures "
-             "and JSON files.", ""]
+    lines = [
+        "# flexval validation report: run times",
+        "",
+        "The run times of [report.md](report.md), apart from its results because they "
+        "change from run to run (machine, load, cache).",
+        "",
+        f"- Ours: median of {data.repeats} runs per load path (reference models: one run), "
+        f"wall clock, on {data.workers} worker process(es) at a time "
+        f"({available_cores()} cores, {platform.machine()}, Python "
+        f"{platform.python_version()}). A path read from the result cache keeps the time "
+        "of the run that computed it (`cached` in timings.json).",
+        f"- This report: {total}{render_seconds:.1f} s writing report.md, its figures "
+        "and JSON files.",
+        "",
+    ]
     for res in data.scenes:
         lines += _scene_lines(res, benches.get(res.scene.name))
     return "\n".join(lines) + "\n"
 
 
-def write_timings(data: ReportData, out: Path, benches: dict[str, Path],
-                  render_seconds: float) -> Path:
+def write_timings(
+    data: ReportData, out: Path, benches: dict[str, Path], render_seconds: float
+) -> Path:
     """Write ``timings.md`` (linking the ``benches`` files) and ``timings.json`` into ``out``."""
     md = write_text(out / TIMINGS_MD, render_timings(data, benches, render_seconds))
-    write_json(out / TIMINGS_JSON, {**data.timings(),
-                                    "wall_seconds": {**data.wall_seconds,
-                                                     "render": render_seconds}})
+    write_json(
+        out / TIMINGS_JSON,
+        {**data.timings(), "wall_seconds": {**data.wall_seconds, "render": render_seconds}},
+    )
     return md

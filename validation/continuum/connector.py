@@ -19,7 +19,7 @@ built once, only the rotation coefficients change. Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 import functools
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -29,9 +29,13 @@ from flexval.geometry.kinematics import rigid_points
 from flexval.geometry.mesh import FlexureMesh, mesh_flexure
 from flexval.reducedmodels.connector import Connector, ConnectorGroup, LocalState
 from flexval.reducedmodels.inertia import MassPoints
+from flexval.reducedmodels.sections import (
+    SectionForces,
+    polyline_axes,
+    polyline_fractions,
+    statics_section_forces,
+)
 from flexval.reducedmodels.validity import MIN_DET_F, stretch_reasons
-from flexval.reducedmodels.sections import (SectionForces, polyline_axes, polyline_fractions,
-                                   statics_section_forces)
 
 from .group import ContinuumGroup
 from .mass import face_accelerations, node_jacobian, scalar_mass
@@ -63,35 +67,47 @@ class ContinuumConnector(Connector):
     leaves a stretch of ~5e-5, forces tens of times the open chain's loads;
     updating always cut open-chain f+ from 77 to 54 Newton iterations."""
 
-    def __init__(self, flexure: Flexure, mechanism: Mechanism, level: int, law: str = "svk",
-                 plane: str = "stress", mesh: FlexureMesh | None = None):
+    def __init__(
+        self,
+        flexure: Flexure,
+        mechanism: Mechanism,
+        level: int,
+        law: str = "svk",
+        plane: str = "stress",
+        mesh: FlexureMesh | None = None,
+    ):
         self.name = flexure.name
         self.bodies = tuple(flexure.bodies)
-        self.mesh = mesh_flexure(flexure.shape, flexure.section.thickness, level) \
-            if mesh is None else mesh
+        self.mesh = (
+            mesh_flexure(flexure.shape, flexure.section.thickness, level) if mesh is None else mesh
+        )
         self.law, self.plane, self.material = law, plane, mechanism.material
-        self.solid = Solid(self.mesh.nodes, self.mesh.elements,
-                           make_law(law, plane, self.material.youngs_modulus,
-                                    self.material.poisson_ratio),
-                           flexure.section.depth)
+        self.solid = Solid(
+            self.mesh.nodes,
+            self.mesh.elements,
+            make_law(law, plane, self.material.youngs_modulus, self.material.poisson_ratio),
+            flexure.section.depth,
+        )
         faces = [self.mesh.start_face, self.mesh.end_face]
         if flexure.start_body != self.bodies[0]:
             faces.reverse()
-        self._face = faces                     # end-face nodes held by body a, by body b
+        self._face = faces  # end-face nodes held by body a, by body b
         role = np.full(self.mesh.nodes.shape[0], -1)
         role[faces[0]], role[faces[1]] = 0, 1
-        self._rel = [self.mesh.nodes[faces[s]] - mechanism.bodies[self.bodies[s]].reference
-                     for s in (0, 1)]
+        self._rel = [
+            self.mesh.nodes[faces[s]] - mechanism.bodies[self.bodies[s]].reference for s in (0, 1)
+        ]
         self._free = np.flatnonzero(role < 0)
         self._end_slot = self.bodies.index(flexure.end_body)
         self._centre_fractions = polyline_fractions(self.mesh.nodes[self.mesh.centre_line])
         end_face = self._face[self._end_slot]
         self._end_kernel = self.solid.kernel.subset(
-            np.flatnonzero(np.isin(self.mesh.elements, end_face).any(axis=1)))
+            np.flatnonzero(np.isin(self.mesh.elements, end_face).any(axis=1))
+        )
         self.n_internal = 2 * self._free.size
         self._n = 6 + self.n_internal
         self.sections = cross_sections(self.mesh)
-        self._unit_mass = None                 # kron(scalar mass, I2), on first use
+        self._unit_mass = None  # kron(scalar mass, I2), on first use
         self._build_expansion(role)
 
     # --- the fixed index structure of T ------------------------------------
@@ -101,7 +117,7 @@ class ContinuumConnector(Connector):
         ``role`` is -1 for a free node, 0 or 1 for a node held by body a or b.
         """
         n_nodes = role.size
-        counts = np.where(role < 0, 1, 2).repeat(2)                     # per nodal dof
+        counts = np.where(role < 0, 1, 2).repeat(2)  # per nodal dof
         start = np.concatenate([[0], np.cumsum(counts)])
         exp_dof = np.repeat(np.arange(2 * n_nodes), counts)
         exp_z = np.empty(start[-1], np.int64)
@@ -109,12 +125,12 @@ class ContinuumConnector(Connector):
         exp_z[start[free_dofs]] = 6 + np.arange(free_dofs.size)
         theta_pos = []
         for s in (0, 1):
-            d = (2 * self._face[s][:, None] + np.arange(2)).ravel()    # (x, y) per face node
+            d = (2 * self._face[s][:, None] + np.arange(2)).ravel()  # (x, y) per face node
             exp_z[start[d]] = 3 * s + np.tile([0, 1], self._face[s].size)
             exp_z[start[d] + 1] = 3 * s + 2
             theta_pos.append(start[d] + 1)
         self._exp_dof, self._exp_z = exp_dof, exp_z
-        self._theta_pos = theta_pos            # positions of the rotation coefficients
+        self._theta_pos = theta_pos  # positions of the rotation coefficients
         # element-matrix entries -> pairs of expansions
         r, c = self.solid.rows, self.solid.cols
         nr, nc = counts[r], counts[c]
@@ -126,13 +142,13 @@ class ContinuumConnector(Connector):
         plain = (counts[r][t] == 1) & (counts[c][t] == 1)
         self._plain_src = t[plain]
         self._mixed = (t[~plain], p[~plain], q[~plain])
-        self._mixed_first = within[~plain] == 0    # both first expansions: coefficient 1
+        self._mixed_first = within[~plain] == 0  # both first expansions: coefficient 1
         rows = np.concatenate([exp_z[p[plain]], exp_z[p[~plain]], [2, 5]])
         cols = np.concatenate([exp_z[q[plain]], exp_z[q[~plain]], [2, 5]])
         self._rows, self._cols = rows, cols
 
     @classmethod
-    def group(cls, connectors: Sequence["ContinuumConnector"]) -> ConnectorGroup:
+    def group(cls, connectors: Sequence[ContinuumConnector]) -> ConnectorGroup:
         """One :class:`.group.ContinuumGroup` when the flexures share law, plane and material
         (the run's case: one stacked element kernel), else one by one."""
         first = connectors[0]
@@ -152,8 +168,7 @@ class ContinuumConnector(Connector):
         return self._free
 
     # --- Connector protocol --------------------------------------------------
-    def positions(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                  ) -> np.ndarray:
+    def positions(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Current positions of all mesh nodes (n_nodes, 2), mm."""
         x = self.mesh.nodes.copy()
         x[self._free] += internal.reshape(-1, 2)
@@ -165,8 +180,9 @@ class ContinuumConnector(Connector):
         """Local (rows, cols) of the Hessian values :meth:`evaluate` returns (duplicates sum)."""
         return self._rows, self._cols
 
-    def evaluate(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> tuple[float, np.ndarray, np.ndarray]:
+    def evaluate(
+        self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+    ) -> tuple[float, np.ndarray, np.ndarray]:
         """Energy (N mm), gradient (6 + n) and Hessian values over [pose_a, pose_b, internal].
 
         The Hessian values belong to the entries of :meth:`hessian_pattern`.
@@ -186,8 +202,13 @@ class ContinuumConnector(Connector):
         hess = np.concatenate([ke[self._plain_src], ke[t] * coef[p] * coef[q], second])
         return energy, grad, hess
 
-    def predict_internal(self, states: Sequence[LocalState], weights: Sequence[float],
-                         pose_a: np.ndarray, pose_b: np.ndarray) -> np.ndarray:
+    def predict_internal(
+        self,
+        states: Sequence[LocalState],
+        weights: Sequence[float],
+        pose_a: np.ndarray,
+        pose_b: np.ndarray,
+    ) -> np.ndarray:
         """Interior nodes extrapolated section by section (mm; the load stepping's predictor).
 
         Chord lengths and directions between the section centres, section
@@ -196,8 +217,9 @@ class ContinuumConnector(Connector):
         (:mod:`.polar`), and the sections are rebuilt between the end faces
         at the bodies' predicted poses ``pose_a``, ``pose_b``.
         """
-        return self._alone.predict_internal([[state] for state in states], weights,
-                                            [(pose_a, pose_b)])
+        return self._alone.predict_internal(
+            [[state] for state in states], weights, [(pose_a, pose_b)]
+        )
 
     def update_internal(self, old: LocalState, new: LocalState) -> np.ndarray:
         """Interior nodes after a Newton correction, turned section by section (mm).
@@ -207,8 +229,7 @@ class ContinuumConnector(Connector):
         """
         return self._alone.update_internal([old], [new])
 
-    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-                 ) -> list[str]:
+    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> list[str]:
         """Centre-line fibre stretch beyond MAX_STRAIN; elements near inversion (det F < MIN_DET_F).
 
         See :mod:`flexval.reducedmodels.validity`.
@@ -216,14 +237,16 @@ class ContinuumConnector(Connector):
         x = self.positions(pose_a, pose_b, internal)
         line = self.mesh.centre_line
         d, d0 = np.diff(x[line], axis=0), np.diff(self.mesh.nodes[line], axis=0)
-        reasons = stretch_reasons("centre-line segment", np.hypot(d[:, 0], d[:, 1]),
-                                  np.hypot(d0[:, 0], d0[:, 1]))
+        reasons = stretch_reasons(
+            "centre-line segment", np.hypot(d[:, 0], d[:, 1]), np.hypot(d0[:, 0], d0[:, 1])
+        )
         F = self.solid.deformation_gradient(x)
         det = (F[..., 0, 0] * F[..., 1, 1] - F[..., 0, 1] * F[..., 1, 0]).min(axis=1)
         k = int(np.argmin(det))
         if det[k] < MIN_DET_F:
-            reasons.append(f"element {k + 1} near inversion: det F {det[k]:.3g} "
-                           f"(limit {MIN_DET_F:.3g})")
+            reasons.append(
+                f"element {k + 1} near inversion: det F {det[k]:.3g} (limit {MIN_DET_F:.3g})"
+            )
         return reasons
 
     # --- optional mass hook (flexval.reducedmodels.inertia) ---------------------------
@@ -239,39 +262,55 @@ class ContinuumConnector(Connector):
             rel[self._face[s]] = self._rel[s]
         return MassPoints(dofs, rel, lumped, np.zeros(lumped.size))
 
-    def _mass_kinematics(self, density: float, pose_a: np.ndarray, pose_b: np.ndarray
-                         ) -> tuple[sp.csr_matrix, list[np.ndarray], sp.csr_matrix]:
+    def _mass_kinematics(
+        self, density: float, pose_a: np.ndarray, pose_b: np.ndarray
+    ) -> tuple[sp.csr_matrix, list[np.ndarray], sp.csr_matrix]:
         """The nodal consistent mass (t), the end faces' rotated offsets (mm) and T = dx/dq."""
-        if self._unit_mass is None:          # density-free, assembled once
+        if self._unit_mass is None:  # density-free, assembled once
             self._unit_mass = sp.kron(scalar_mass(self.solid), sp.identity(2), format="csr")
-        rotated = [rigid_points(np.asarray(p, float), r)[0] - np.asarray(p, float)[:2]
-                   for p, r in zip((pose_a, pose_b), self._rel)]
+        rotated = [
+            rigid_points(np.asarray(p, float), r)[0] - np.asarray(p, float)[:2]
+            for p, r in zip((pose_a, pose_b), self._rel)
+        ]
         T = node_jacobian(self.mesh.nodes.shape[0], self._free, self._face, rotated)
         return self._unit_mass * density, rotated, T
 
-    def mass_matrix(self, density: float, pose_a: np.ndarray, pose_b: np.ndarray,
-                    internal: np.ndarray) -> sp.csr_matrix:
+    def mass_matrix(
+        self, density: float, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+    ) -> sp.csr_matrix:
         """Consistent mass T^T M T (t, t mm, t mm^2) over [pose_a, pose_b, internal]."""
         m, _, T = self._mass_kinematics(density, pose_a, pose_b)
         return (T.T @ m @ T).tocsr()
 
-    def convective_forces(self, density: float, pose_a: np.ndarray, pose_b: np.ndarray,
-                          internal: np.ndarray, velocity: np.ndarray) -> np.ndarray:
+    def convective_forces(
+        self,
+        density: float,
+        pose_a: np.ndarray,
+        pose_b: np.ndarray,
+        internal: np.ndarray,
+        velocity: np.ndarray,
+    ) -> np.ndarray:
         """T^T M a_c (N, N mm): the end faces' centripetal inertia (see :mod:`.mass`).
 
         ``velocity`` holds the local coordinates' rates (mm/s, rad/s).
         """
         m, rotated, T = self._mass_kinematics(density, pose_a, pose_b)
-        a_c = face_accelerations(self.mesh.nodes.shape[0], self._face, rotated,
-                                 (float(velocity[2]), float(velocity[5])))
+        a_c = face_accelerations(
+            self.mesh.nodes.shape[0], self._face, rotated, (float(velocity[2]), float(velocity[5]))
+        )
         return T.T @ (m @ a_c)
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed centre line (nodes at mid-thickness, start to end), mm."""
         return self.positions(pose_a, pose_b, internal)[self.mesh.centre_line]
 
-    def section_forces(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray,
-                       gradient: np.ndarray | None = None) -> SectionForces:
+    def section_forces(
+        self,
+        pose_a: np.ndarray,
+        pose_b: np.ndarray,
+        internal: np.ndarray,
+        gradient: np.ndarray | None = None,
+    ) -> SectionForces:
         """Section resultants N (N) and M (N mm) along the deformed mid-thickness line.
 
         By equilibrium of the part of the solid beyond a cut, the resultant
@@ -284,14 +323,16 @@ class ContinuumConnector(Connector):
         s = self._end_slot
         pose = np.asarray((pose_a, pose_b)[s], float)
         if gradient is not None:
-            wrench = gradient[3 * s:3 * s + 3]
-        else:      # the end face's nodal forces: only its elements contribute
+            wrench = gradient[3 * s : 3 * s + 3]
+        else:  # the end face's nodal forces: only its elements contribute
             x = self.positions(pose_a, pose_b, internal)
             face = self._face[s]
             f = self._end_kernel.forces(x).reshape(-1, 2)[face]
             arm = x[face] - pose[:2]
-            wrench = np.array([f[:, 0].sum(), f[:, 1].sum(),
-                               np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0])])
+            wrench = np.array(
+                [f[:, 0].sum(), f[:, 1].sum(), np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0])]
+            )
         line = self.shape(pose_a, pose_b, internal)
-        return statics_section_forces(line, self._centre_fractions, wrench, pose,
-                                      axes=polyline_axes(line))
+        return statics_section_forces(
+            line, self._centre_fractions, wrench, pose, axes=polyline_axes(line)
+        )

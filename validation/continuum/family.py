@@ -10,8 +10,16 @@ from __future__ import annotations
 from flexval.geometry import LoadCase, Mechanism
 from flexval.geometry.mesh import MAX_LEVEL
 from flexval.reducedmodels import LoadPath
-from flexval.reducedmodels.catalogue import (ARCLENGTH, FIELDS, REFERENCE, Family, ModelSpec, Option,
-                                     Resolution, register)
+from flexval.reducedmodels.catalogue import (
+    ARCLENGTH,
+    FIELDS,
+    REFERENCE,
+    Family,
+    ModelSpec,
+    Option,
+    Resolution,
+    register,
+)
 
 from .material import LAWS, PLANES
 
@@ -44,9 +52,17 @@ from .material import LAWS, PLANES
 DEFAULT_LEVEL = 1
 
 
-def run(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int | None = None,
-        scene: str = "", record_poses: bool = False, record_shapes: bool = False,
-        record_reactions: bool = False, **extra) -> LoadPath:
+def run(
+    mechanism: Mechanism,
+    spec: ModelSpec,
+    case: LoadCase,
+    levels: int | None = None,
+    scene: str = "",
+    record_poses: bool = False,
+    record_shapes: bool = False,
+    record_reactions: bool = False,
+    **extra,
+) -> LoadPath:
     """Trace ``case`` with the continuum model ``spec`` (see :func:`.run.run_continuum`).
 
     ``record_poses`` and ``record_reactions`` are accepted for a uniform
@@ -56,8 +72,16 @@ def run(mechanism: Mechanism, spec: ModelSpec, case: LoadCase, levels: int | Non
     """
     from .run import run_continuum
 
-    return run_continuum(mechanism, case, level=spec.resolution, levels=levels, scene=scene,
-                         record_shapes=record_shapes, model=spec.id, **{**spec.kwargs, **extra})
+    return run_continuum(
+        mechanism,
+        case,
+        level=spec.resolution,
+        levels=levels,
+        scene=scene,
+        record_shapes=record_shapes,
+        model=spec.id,
+        **{**spec.kwargs, **extra},
+    )
 
 
 def system(mechanism: Mechanism, spec: ModelSpec, settings=None, **options):
@@ -65,19 +89,40 @@ def system(mechanism: Mechanism, spec: ModelSpec, settings=None, **options):
     (for arc-length traces; see :func:`.run.build_system`)."""
     from .run import build_system
 
-    return build_system(mechanism, spec.resolution, settings=settings,
-                        **{**spec.kwargs, **options})
+    return build_system(mechanism, spec.resolution, settings=settings, **{**spec.kwargs, **options})
 
 
-CONTINUUM = register(Family(
-    "continuum", "flexures meshed as 2D solids (Gmsh, quadratic quadrilaterals), geometrically "
-    "nonlinear hyperelastic, scikit-fem; the end faces follow the rigid bodies exactly",
-    run,
-    Resolution("LEVEL", "mesh level: 0 is the coarsest, each level halves the element size",
-               DEFAULT_LEVEL, 0, MAX_LEVEL, False, (0, 3)),
-    (Option.choice("law", "hyperelastic law: Saint Venant-Kirchhoff or compressible "
-                   "neo-Hookean", LAWS, "svk"),
-     Option.choice("plane", "plane stress (free out-of-plane faces) or plane strain (no "
-                   "out-of-plane strain); a wide flexure (depth b >> thickness h) lies between",
-                   PLANES, "stress")),
-    frozenset({FIELDS, REFERENCE, ARCLENGTH}), system))
+CONTINUUM = register(
+    Family(
+        "continuum",
+        "flexures meshed as 2D solids (Gmsh, quadratic quadrilaterals), geometrically "
+        "nonlinear hyperelastic, scikit-fem; the end faces follow the rigid bodies exactly",
+        run,
+        Resolution(
+            "LEVEL",
+            "mesh level: 0 is the coarsest, each level halves the element size",
+            DEFAULT_LEVEL,
+            0,
+            MAX_LEVEL,
+            False,
+            (0, 3),
+        ),
+        (
+            Option.choice(
+                "law",
+                "hyperelastic law: Saint Venant-Kirchhoff or compressible neo-Hookean",
+                LAWS,
+                "svk",
+            ),
+            Option.choice(
+                "plane",
+                "plane stress (free out-of-plane faces) or plane strain (no "
+                "out-of-plane strain); a wide flexure (depth b >> thickness h) lies between",
+                PLANES,
+                "stress",
+            ),
+        ),
+        frozenset({FIELDS, REFERENCE, ARCLENGTH}),
+        system,
+    )
+)

@@ -29,8 +29,13 @@ from .material import out_of_plane
 from .polar import nearest
 
 
-def fibre_stress_peak(conn: ContinuumConnector, pose_a: np.ndarray, pose_b: np.ndarray,
-                      internal: np.ndarray, layer: float) -> tuple[float, float]:
+def fibre_stress_peak(
+    conn: ContinuumConnector,
+    pose_a: np.ndarray,
+    pose_b: np.ndarray,
+    internal: np.ndarray,
+    layer: float,
+) -> tuple[float, float]:
     """Largest |fibre normal stress| (MPa) outside ``layer`` mm of each end, and where.
 
     Parameters
@@ -58,18 +63,20 @@ def fibre_stress_peak(conn: ContinuumConnector, pose_a: np.ndarray, pose_b: np.n
     fractions = polyline_fractions(line)
     length = float(np.sum(np.hypot(*np.diff(line, axis=0).T)))
     if 2.0 * layer >= length:
-        raise ValueError(f"boundary layers of {layer:g} mm cover the whole flexure "
-                         f"({length:g} mm long)")
+        raise ValueError(
+            f"boundary layers of {layer:g} mm cover the whole flexure ({length:g} mm long)"
+        )
     solid = conn.solid
-    X = np.asarray(solid.basis.global_coordinates()).transpose(1, 2, 0)       # (n_el, n_q, 2)
+    X = np.asarray(solid.basis.global_coordinates()).transpose(1, 2, 0)  # (n_el, n_q, 2)
     # nearest centre-line vertex: the arc length and the tangent of each point
-    closest = nearest(X, line)                                           # (n_el, n_q)
+    closest = nearest(X, line)  # (n_el, n_q)
     tangent = np.gradient(line, axis=0)
     tangent /= np.hypot(tangent[:, 0], tangent[:, 1])[:, None]
-    T = tangent[closest]                                                 # (n_el, n_q, 2)
+    T = tangent[closest]  # (n_el, n_q, 2)
     st = solid.state(conn.positions(pose_a, pose_b, internal))
-    c33, _ = out_of_plane(conn.law, conn.plane, conn.material.youngs_modulus,
-                          conn.material.poisson_ratio, st.C)
+    c33, _ = out_of_plane(
+        conn.law, conn.plane, conn.material.youngs_modulus, conn.material.poisson_ratio, st.C
+    )
     J = (st.F[..., 0, 0] * st.F[..., 1, 1] - st.F[..., 0, 1] * st.F[..., 1, 0]) * np.sqrt(c33)
     sigma = np.matmul(np.matmul(st.F, st.S), np.swapaxes(st.F, -1, -2)) / J[..., None, None]
     t = np.einsum("...ij,...j->...i", st.F, T)

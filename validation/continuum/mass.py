@@ -35,12 +35,13 @@ def _mass_form(u, v, _):
 def scalar_mass(solid: Solid) -> sp.csr_matrix:
     """int N_a N_b b dA over the mesh, in the mesh's node numbering (mm^3)."""
     m = _mass_form.assemble(solid.basis).tocsr() * solid.depth
-    order = solid.node_dofs                      # skfem dof of each mesh node
+    order = solid.node_dofs  # skfem dof of each mesh node
     return m[order][:, order].tocsr()
 
 
-def node_jacobian(n_nodes: int, free: np.ndarray, faces: list[np.ndarray],
-                  rotated: list[np.ndarray]) -> sp.csr_matrix:
+def node_jacobian(
+    n_nodes: int, free: np.ndarray, faces: list[np.ndarray], rotated: list[np.ndarray]
+) -> sp.csr_matrix:
     """dx/dq (2 n_nodes, 6 + 2 n_free) of the node positions with respect to the coordinates.
 
     Free node j's (x, y) are the coordinates 6 + 2 j + i; an end-face node
@@ -57,12 +58,15 @@ def node_jacobian(n_nodes: int, free: np.ndarray, faces: list[np.ndarray],
             rows += [2 * face + i, 2 * face + i]
             cols += [np.full(face.size, 3 * s + i), np.full(face.size, 3 * s + 2)]
             vals += [np.ones(face.size), -r[:, 1] if i == 0 else r[:, 0]]
-    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                         shape=(2 * n_nodes, 6 + 2 * free.size))
+    return sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(2 * n_nodes, 6 + 2 * free.size),
+    )
 
 
-def face_accelerations(n_nodes: int, faces: list[np.ndarray], rotated: list[np.ndarray],
-                       rates: tuple[float, float]) -> np.ndarray:
+def face_accelerations(
+    n_nodes: int, faces: list[np.ndarray], rotated: list[np.ndarray], rates: tuple[float, float]
+) -> np.ndarray:
     """a_c = T' q' (2 n_nodes, mm/s^2): -omega_s^2 r on the nodes of end face s, 0 elsewhere.
 
     ``rotated`` holds each face's current offsets r = R(theta_s) rel (mm) and
@@ -70,6 +74,6 @@ def face_accelerations(n_nodes: int, faces: list[np.ndarray], rotated: list[np.n
     """
     a = np.zeros(2 * n_nodes)
     for face, r, omega in zip(faces, rotated, rates):
-        a[2 * face] = -omega**2 * r[:, 0]
-        a[2 * face + 1] = -omega**2 * r[:, 1]
+        a[2 * face] = -(omega**2) * r[:, 0]
+        a[2 * face + 1] = -(omega**2) * r[:, 1]
     return a

@@ -57,9 +57,10 @@ def svk(C: np.ndarray, lam: float, mu: float) -> tuple[np.ndarray, np.ndarray, n
     """
     E = 0.5 * (C - _I2)
     tr = E[..., 0, 0] + E[..., 1, 1]
-    W = 0.5 * lam * tr**2 + mu * (E[..., 0, 0]**2 + E[..., 0, 1]**2
-                                  + E[..., 1, 0]**2 + E[..., 1, 1]**2)
-    S = 2.0 * mu * E                  # + lam tr I, added on the diagonal (keeps C's layout)
+    W = 0.5 * lam * tr**2 + mu * (
+        E[..., 0, 0] ** 2 + E[..., 0, 1] ** 2 + E[..., 1, 0] ** 2 + E[..., 1, 1] ** 2
+    )
+    S = 2.0 * mu * E  # + lam tr I, added on the diagonal (keeps C's layout)
     S[..., 0, 0] += lam * tr
     S[..., 1, 1] += lam * tr
     CC = np.broadcast_to(lam * _IXI + 2.0 * mu * _SYM, C.shape[:-2] + (2, 2, 2, 2))
@@ -82,7 +83,7 @@ def neo_hookean_c33(C: np.ndarray, lam: float, mu: float) -> np.ndarray:
     """
     _, det = _inverse_det(C)
     logdet = np.log(det)
-    s = -lam / (lam + 2.0 * mu) * logdet          # small-strain value
+    s = -lam / (lam + 2.0 * mu) * logdet  # small-strain value
     for _ in range(50):
         es = np.exp(s)
         ds = -(mu * (es - 1.0) + 0.5 * lam * (logdet + s)) / (mu * es + 0.5 * lam)
@@ -92,8 +93,9 @@ def neo_hookean_c33(C: np.ndarray, lam: float, mu: float) -> np.ndarray:
     raise ArithmeticError("plane-stress neo-Hookean: C33 did not converge")
 
 
-def neo_hookean(C: np.ndarray, lam: float, mu: float, plane: str = "stress"
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def neo_hookean(
+    C: np.ndarray, lam: float, mu: float, plane: str = "stress"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Compressible neo-Hookean in plane stress or plane strain (3D lam, mu in MPa).
 
     Parameters
@@ -110,11 +112,14 @@ def neo_hookean(C: np.ndarray, lam: float, mu: float, plane: str = "stress"
     W = 0.5 * mu * (C[..., 0, 0] + C[..., 1, 1] + c33 - 3.0) - mu * logJ + 0.5 * lam * logJ**2
     S = mu * (_I2 - Ci) + (lam * logJ)[..., None, None] * Ci
     cixci = np.einsum("...ij,...kl->...ijkl", Ci, Ci)
-    sym = 0.5 * (np.einsum("...ik,...jl->...ijkl", Ci, Ci)
-                 + np.einsum("...il,...jk->...ijkl", Ci, Ci))
+    sym = 0.5 * (
+        np.einsum("...ik,...jl->...ijkl", Ci, Ci) + np.einsum("...il,...jk->...ijkl", Ci, Ci)
+    )
     coef = lam - lam**2 / (lam + 2.0 * mu * c33) if plane == "stress" else np.full_like(det, lam)
-    CC = coef[..., None, None, None, None] * cixci \
+    CC = (
+        coef[..., None, None, None, None] * cixci
         + (2.0 * (mu - lam * logJ))[..., None, None, None, None] * sym
+    )
     return W, S, CC
 
 
@@ -144,10 +149,13 @@ class Law(ABC):
         weights (mm^3). Shape (..., 2, 3, 2).
         """
         shape = F.shape[:-2]
-        pairs = (F[..., BLOCK_ROWS, :, None] * F[..., BLOCK_COLS, None, :]
-                 * weight[..., None, None, None]).reshape(shape + (3, 4))        # c, (M, N)
+        pairs = (
+            F[..., BLOCK_ROWS, :, None]
+            * F[..., BLOCK_COLS, None, :]
+            * weight[..., None, None, None]
+        ).reshape(shape + (3, 4))  # c, (M, N)
         by_mn = CC.transpose(*range(len(shape)), -4, -2, -3, -1).reshape(shape + (4, 4))
-        blocks = np.matmul(pairs, by_mn).reshape(shape + (3, 2, 2))          # c, J, L
+        blocks = np.matmul(pairs, by_mn).reshape(shape + (3, 2, 2))  # c, J, L
         return np.ascontiguousarray(np.swapaxes(blocks, -3, -2))
 
 
@@ -171,9 +179,9 @@ class SvkLaw(Law):
         f = [[F[..., i, J] for J in (0, 1)] for i in (0, 1)]
         wf = [[weight * f[i][J] for J in (0, 1)] for i in (0, 1)]
         shape = F.shape[:-2]
-        blocks = np.empty((2, 3, 2) + shape)                                # [J, c, L, ...]
+        blocks = np.empty((2, 3, 2) + shape)  # [J, c, L, ...]
         for c, (i, k) in enumerate(zip(BLOCK_ROWS, BLOCK_COLS)):
-            gram = mu * (wf[i][0] * f[k][0] + wf[i][1] * f[k][1])            # mu (F F^T)_ik w
+            gram = mu * (wf[i][0] * f[k][0] + wf[i][1] * f[k][1])  # mu (F F^T)_ik w
             for J in (0, 1):
                 for L in (0, 1):
                     value = lam * wf[i][J] * f[k][L] + mu * wf[k][J] * f[i][L]
@@ -211,8 +219,9 @@ def make_law(name: str, plane: str, youngs_modulus: float, poisson_ratio: float)
     return NeoHookeanLaw(lam, mu, plane)
 
 
-def out_of_plane(name: str, plane: str, youngs_modulus: float, poisson_ratio: float,
-                 C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def out_of_plane(
+    name: str, plane: str, youngs_modulus: float, poisson_ratio: float, C: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Out-of-plane C33 and S33 (MPa) of law ``name`` at C (for stress post-processing)."""
     lam, mu = lame(youngs_modulus, poisson_ratio)
     tr = 0.5 * (C[..., 0, 0] + C[..., 1, 1] - 2.0)

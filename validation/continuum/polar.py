@@ -31,7 +31,8 @@ Units: mm, rad.
 
 from __future__ import annotations
 
-from typing import NamedTuple, Sequence
+from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 
@@ -41,10 +42,10 @@ from flexval.geometry.mesh import FlexureMesh
 class PolarShape(NamedTuple):
     """A deformed mesh section by section (see the module docstring)."""
 
-    ell: np.ndarray      # (n_chords,) lengths of the chords between section centres, mm
-    alpha: np.ndarray    # (n_chords,) their directions, rad
-    phi: np.ndarray      # (n_sections,) section rotations, rad
-    offset: np.ndarray   # (n_sections, 2 n_t + 1, 2) node offsets in the section frame, mm
+    ell: np.ndarray  # (n_chords,) lengths of the chords between section centres, mm
+    alpha: np.ndarray  # (n_chords,) their directions, rad
+    phi: np.ndarray  # (n_sections,) section rotations, rad
+    offset: np.ndarray  # (n_sections, 2 n_t + 1, 2) node offsets in the section frame, mm
 
 
 def nearest(points: np.ndarray, candidates: np.ndarray, rows: int = 512) -> np.ndarray:
@@ -61,8 +62,8 @@ def nearest(points: np.ndarray, candidates: np.ndarray, rows: int = 512) -> np.n
     c2 = np.einsum("ij,ij->i", candidates, candidates)
     index = np.empty(flat.shape[0], np.int64)
     for start in range(0, flat.shape[0], rows):
-        block = flat[start:start + rows]
-        index[start:start + rows] = np.argmin(c2 - 2.0 * block @ candidates.T, axis=1)
+        block = flat[start : start + rows]
+        index[start : start + rows] = np.argmin(c2 - 2.0 * block @ candidates.T, axis=1)
     return index.reshape(points.shape[:-1])
 
 
@@ -94,11 +95,14 @@ def cross_sections(mesh: FlexureMesh) -> np.ndarray:
     if np.any(np.bincount(station, minlength=line.size) != width):
         raise RuntimeError(f"mesh is not a stack of {line.size} sections of {width} nodes")
     sections = np.lexsort((across, station)).reshape(line.size, width)
-    if not (np.array_equal(sections[:, mesh.n_t], line)
-            and np.array_equal(np.sort(sections[0]), np.sort(mesh.start_face))
-            and np.array_equal(np.sort(sections[-1]), np.sort(mesh.end_face))):
-        raise RuntimeError("mesh sections do not run from the start face to the end face "
-                           "through the centre line")
+    if not (
+        np.array_equal(sections[:, mesh.n_t], line)
+        and np.array_equal(np.sort(sections[0]), np.sort(mesh.start_face))
+        and np.array_equal(np.sort(sections[-1]), np.sort(mesh.end_face))
+    ):
+        raise RuntimeError(
+            "mesh sections do not run from the start face to the end face through the centre line"
+        )
     return sections
 
 
@@ -138,21 +142,27 @@ def stack_sections(parts: Sequence[np.ndarray], node_offsets: Sequence[int]) -> 
     is_end = np.zeros(counts.sum(), bool)
     is_end[first] = is_end[last] = True
     starts = np.setdiff1d(np.arange(counts.sum()), last)
-    return SectionStack(np.vstack([p + o for p, o in zip(parts, node_offsets)]), first, last,
-                        starts, section_flexure[starts], section_flexure,
-                        np.flatnonzero(~is_end))
+    return SectionStack(
+        np.vstack([p + o for p, o in zip(parts, node_offsets)]),
+        first,
+        last,
+        starts,
+        section_flexure[starts],
+        section_flexure,
+        np.flatnonzero(~is_end),
+    )
 
 
 class _Frames(NamedTuple):
     """The section geometry of node positions that the polar description and its change share."""
 
-    xs: np.ndarray       # (n_sections, 2 n_t + 1, 2) node positions by section, mm
-    chord: np.ndarray    # (n_chords, 2) chords between section centres, mm
-    across: np.ndarray   # (n_sections, 2) first-to-last node of every section, mm
-    phi: np.ndarray      # (n_sections,) section rotations, rad
-    cos: np.ndarray      # (n_sections, 1) cos phi
-    sin: np.ndarray      # (n_sections, 1) sin phi
-    rel: np.ndarray      # (n_sections, 2 n_t + 1, 2) nodes relative to their section centre, mm
+    xs: np.ndarray  # (n_sections, 2 n_t + 1, 2) node positions by section, mm
+    chord: np.ndarray  # (n_chords, 2) chords between section centres, mm
+    across: np.ndarray  # (n_sections, 2) first-to-last node of every section, mm
+    phi: np.ndarray  # (n_sections,) section rotations, rad
+    cos: np.ndarray  # (n_sections, 1) cos phi
+    sin: np.ndarray  # (n_sections, 1) sin phi
+    rel: np.ndarray  # (n_sections, 2 n_t + 1, 2) nodes relative to their section centre, mm
 
 
 def _frames(x: np.ndarray, stack: SectionStack) -> _Frames:
@@ -160,15 +170,26 @@ def _frames(x: np.ndarray, stack: SectionStack) -> _Frames:
     centre = xs[:, stack.nodes.shape[1] // 2]
     across = xs[:, -1] - xs[:, 0]
     phi = np.arctan2(across[:, 1], across[:, 0])
-    return _Frames(xs, centre[stack.starts + 1] - centre[stack.starts], across, phi,
-                   np.cos(phi)[:, None], np.sin(phi)[:, None], xs - centre[:, None])
+    return _Frames(
+        xs,
+        centre[stack.starts + 1] - centre[stack.starts],
+        across,
+        phi,
+        np.cos(phi)[:, None],
+        np.sin(phi)[:, None],
+        xs - centre[:, None],
+    )
 
 
 def _polar(fr: _Frames) -> PolarShape:
     c, s, rel = fr.cos, fr.sin, fr.rel
     offset = np.stack([c * rel[..., 0] + s * rel[..., 1], c * rel[..., 1] - s * rel[..., 0]], -1)
-    return PolarShape(np.hypot(fr.chord[:, 0], fr.chord[:, 1]),
-                      np.arctan2(fr.chord[:, 1], fr.chord[:, 0]), fr.phi, offset)
+    return PolarShape(
+        np.hypot(fr.chord[:, 0], fr.chord[:, 1]),
+        np.arctan2(fr.chord[:, 1], fr.chord[:, 0]),
+        fr.phi,
+        offset,
+    )
 
 
 def to_polar(x: np.ndarray, stack: SectionStack) -> PolarShape:
@@ -203,15 +224,19 @@ def _change(fr: _Frames, dx: np.ndarray, stack: SectionStack) -> PolarShape:
     dchord = dcentre[stack.starts + 1] - dcentre[stack.starts]
     dacross = dxs[:, -1] - dxs[:, 0]
     ell2 = np.einsum("ij,ij->i", chord, chord)
-    dphi = (across[:, 0] * dacross[:, 1] - across[:, 1] * dacross[:, 0]) \
-        / np.einsum("ij,ij->i", across, across)
+    dphi = (across[:, 0] * dacross[:, 1] - across[:, 1] * dacross[:, 0]) / np.einsum(
+        "ij,ij->i", across, across
+    )
     c, s, rel = fr.cos, fr.sin, fr.rel
     # d(R(-phi) rel) = R(-phi) (d rel - dphi k x rel)
     d0 = dxs[..., 0] - dcentre[:, None, 0] + dphi[:, None] * rel[..., 1]
     d1 = dxs[..., 1] - dcentre[:, None, 1] - dphi[:, None] * rel[..., 0]
-    return PolarShape(np.einsum("ij,ij->i", chord, dchord) / np.sqrt(ell2),
-                      (chord[:, 0] * dchord[:, 1] - chord[:, 1] * dchord[:, 0]) / ell2,
-                      dphi, np.stack([c * d0 + s * d1, c * d1 - s * d0], -1))
+    return PolarShape(
+        np.einsum("ij,ij->i", chord, dchord) / np.sqrt(ell2),
+        (chord[:, 0] * dchord[:, 1] - chord[:, 1] * dchord[:, 0]) / ell2,
+        dphi,
+        np.stack([c * d0 + s * d1, c * d1 - s * d0], -1),
+    )
 
 
 def _near(angle: np.ndarray, reference: np.ndarray) -> np.ndarray:
@@ -226,24 +251,36 @@ def extrapolate(shapes: Sequence[PolarShape], weights: Sequence[float]) -> Polar
     crossing +-pi between two states is extrapolated through its turn.
     """
     last = shapes[-1]
-    return PolarShape(*(sum(w * (_near(getattr(p, name), getattr(last, name))
-                                 if name in ("alpha", "phi") else getattr(p, name))
-                            for w, p in zip(weights, shapes))
-                        for name in PolarShape._fields))
+    return PolarShape(
+        *(
+            sum(
+                w
+                * (
+                    _near(getattr(p, name), getattr(last, name))
+                    if name in ("alpha", "phi")
+                    else getattr(p, name)
+                )
+                for w, p in zip(weights, shapes)
+            )
+            for name in PolarShape._fields
+        )
+    )
 
 
 def _chained(steps: np.ndarray, stack: SectionStack) -> np.ndarray:
     """Running sums of per-chord ``steps`` along each flexure, 0 at its first section."""
     total = np.cumsum(steps, axis=0)
     before = np.concatenate([np.zeros((1,) + steps.shape[1:]), total])[
-        np.searchsorted(stack.starts, stack.first)]
+        np.searchsorted(stack.starts, stack.first)
+    ]
     out = np.zeros((stack.nodes.shape[0],) + steps.shape[1:])
     out[stack.starts + 1] = total - before[stack.chord_flexure]
     return out
 
 
-def interior(shape: PolarShape, stack: SectionStack, start: np.ndarray, end: np.ndarray
-             ) -> np.ndarray:
+def interior(
+    shape: PolarShape, stack: SectionStack, start: np.ndarray, end: np.ndarray
+) -> np.ndarray:
     """Node positions (n_interior, 2 n_t + 1, 2) of ``shape``'s interior sections, mm.
 
     The section centres are chained from each start face's centre ``start``
@@ -258,8 +295,9 @@ def interior(shape: PolarShape, stack: SectionStack, start: np.ndarray, end: np.
     inner = stack.interior
     c, s = np.cos(shape.phi[inner])[:, None], np.sin(shape.phi[inner])[:, None]
     off = shape.offset[inner]
-    return centre[inner, None] + np.stack([c * off[..., 0] - s * off[..., 1],
-                                           s * off[..., 0] + c * off[..., 1]], -1)
+    return centre[inner, None] + np.stack(
+        [c * off[..., 0] - s * off[..., 1], s * off[..., 0] + c * off[..., 1]], -1
+    )
 
 
 def from_polar(shape: PolarShape, stack: SectionStack, x_ends: np.ndarray) -> np.ndarray:
@@ -271,6 +309,6 @@ def from_polar(shape: PolarShape, stack: SectionStack, x_ends: np.ndarray) -> np
     mid = stack.nodes.shape[1] // 2
     x = x_ends.copy()
     x[stack.nodes[stack.interior].ravel()] = interior(
-        shape, stack, x_ends[stack.nodes[stack.first, mid]],
-        x_ends[stack.nodes[stack.last, mid]]).reshape(-1, 2)
+        shape, stack, x_ends[stack.nodes[stack.first, mid]], x_ends[stack.nodes[stack.last, mid]]
+    ).reshape(-1, 2)
     return x

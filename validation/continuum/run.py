@@ -30,22 +30,36 @@ from .connector import ContinuumConnector
 from .family import DEFAULT_LEVEL
 
 
-
-def build_system(mechanism: Mechanism, level: int, law: str = "svk", plane: str = "stress",
-                 settings: SolverSettings | None = None) -> System:
+def build_system(
+    mechanism: Mechanism,
+    level: int,
+    law: str = "svk",
+    plane: str = "stress",
+    settings: SolverSettings | None = None,
+) -> System:
     """The multibody System with every flexure meshed at ``level`` (pins as exact joints)."""
     from flexval.reducedmodels.joints import pin_connectors
 
-    conns = [ContinuumConnector(f, mechanism, level, law=law, plane=plane)
-             for f in mechanism.flexures]
+    conns = [
+        ContinuumConnector(f, mechanism, level, law=law, plane=plane) for f in mechanism.flexures
+    ]
     conns += pin_connectors(mechanism)
     return System(mechanism, with_weights(mechanism, conns), settings or SolverSettings())
 
 
-def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None,
-                  levels: int | None = None, scene: str = "", record_shapes: bool = False,
-                  law: str = "svk", plane: str = "stress", vtu_dir: str | Path | None = None,
-                  png: str | Path | None = None, model: str | None = None) -> LoadPath:
+def run_continuum(
+    mechanism: Mechanism,
+    case: LoadCase,
+    level: int | None = None,
+    levels: int | None = None,
+    scene: str = "",
+    record_shapes: bool = False,
+    law: str = "svk",
+    plane: str = "stress",
+    vtu_dir: str | Path | None = None,
+    png: str | Path | None = None,
+    model: str | None = None,
+) -> LoadPath:
     """Trace ``case`` with the continuum model (wall time includes meshing and set-up).
 
     Parameters
@@ -79,29 +93,38 @@ def run_continuum(mechanism: Mechanism, case: LoadCase, level: int | None = None
     reducedmodels.SolverError
         If the path cannot be followed to full load.
     """
-    limit_threads()         # a per-process cost (threadpoolctl's library scan), not the model's
+    limit_threads()  # a per-process cost (threadpoolctl's library scan), not the model's
     t0 = time.perf_counter()
     level = DEFAULT_LEVEL if level is None else int(level)
     system = build_system(mechanism, level, law, plane)
     model = model or f"continuum:{level}"
-    settings = {"level": level, "law": law, "plane": plane, "element_order": ELEMENT_ORDER,
-                "aspect_ratio": ASPECT_RATIO, "mesh_version": MESH_VERSION}
+    settings = {
+        "level": level,
+        "law": law,
+        "plane": plane,
+        "element_order": ELEMENT_ORDER,
+        "aspect_ratio": ASPECT_RATIO,
+        "mesh_version": MESH_VERSION,
+    }
     recorder = PathRecorder(system, case, model, scene, settings, record_shapes=record_shapes)
-    lp, full_load = recorder.run(trace(system, system.loads(case),
-                                       LoadControl(case.factors(levels))))
+    lp, full_load = recorder.run(
+        trace(system, system.loads(case), LoadControl(case.factors(levels)))
+    )
     lp.seconds = time.perf_counter() - t0
     from .fibre import fibre_stresses
 
     lp.fibre_stress = fibre_stresses(system, full_load.state)
     if vtu_dir is not None or png is not None:
-        from .output import render_png, write_vtu
-
         from ..outputs import output_path
+        from .output import render_png, write_vtu
 
         stem = f"{scene + '_' if scene else ''}{case.name}_{model.replace(':', '')}"
         folder = Path(vtu_dir) if vtu_dir is not None else Path(png).parent
-        vtu = write_vtu(output_path(folder, stem, ".vtu"), system.connectors,
-                        system.local_states(full_load.state))
+        vtu = write_vtu(
+            output_path(folder, stem, ".vtu"),
+            system.connectors,
+            system.local_states(full_load.state),
+        )
         if png is not None:
             render_png(vtu, png, f"{scene} {case.name} {model}")
     return lp

@@ -31,7 +31,7 @@ from skfem import CellBasis, ElementQuad2, MeshQuad2
 
 from .material import BLOCK_COLS, BLOCK_ROWS, Law
 
-_QUADRATURE_ORDER = 4   # 3 x 3 Gauss points: full integration of quad9
+_QUADRATURE_ORDER = 4  # 3 x 3 Gauss points: full integration of quad9
 
 
 def _block_layout() -> tuple[np.ndarray, np.ndarray]:
@@ -56,11 +56,11 @@ BLOCK_ENTRY, BLOCK_MIRROR = _block_layout()
 class ElementState:
     """Kinematics and stresses at the quadrature points (all shaped (n_el, n_q, ...))."""
 
-    F: np.ndarray     # deformation gradient (2, 2)
-    C: np.ndarray     # right Cauchy-Green tensor (2, 2)
-    W: np.ndarray     # energy density, MPa
-    S: np.ndarray     # second Piola-Kirchhoff stress (2, 2), MPa
-    CC: np.ndarray    # material tangent (2, 2, 2, 2), MPa
+    F: np.ndarray  # deformation gradient (2, 2)
+    C: np.ndarray  # right Cauchy-Green tensor (2, 2)
+    W: np.ndarray  # energy density, MPa
+    S: np.ndarray  # second Piola-Kirchhoff stress (2, 2), MPa
+    CC: np.ndarray  # material tangent (2, 2, 2, 2), MPa
 
 
 class ElementKernel:
@@ -79,29 +79,40 @@ class ElementKernel:
     n_nodes : int
     """
 
-    def __init__(self, elements: np.ndarray, grad: np.ndarray, weight: np.ndarray, law: Law,
-                 n_nodes: int):
+    def __init__(
+        self, elements: np.ndarray, grad: np.ndarray, weight: np.ndarray, law: Law, n_nodes: int
+    ):
         self.elements, self.grad, self.weight, self.law = elements, grad, weight, law
         n_el, n_q = weight.shape
         self._grad_aq = np.ascontiguousarray(
-            grad.transpose(0, 2, 1, 3).reshape(n_el, 9, 2 * n_q))          # [a, (q, J)]
-        self._grad_lb = np.ascontiguousarray(grad.transpose(0, 1, 3, 2))    # [q, L, b]
+            grad.transpose(0, 2, 1, 3).reshape(n_el, 9, 2 * n_q)
+        )  # [a, (q, J)]
+        self._grad_lb = np.ascontiguousarray(grad.transpose(0, 1, 3, 2))  # [q, L, b]
         self.element_dofs = (2 * elements[:, :, None] + np.arange(2)).reshape(n_el, 18)
         self.n_dofs = 2 * n_nodes
 
     @classmethod
-    def stack(cls, kernels: "list[ElementKernel]") -> "ElementKernel":
+    def stack(cls, kernels: list[ElementKernel]) -> ElementKernel:
         """One kernel over the elements of all ``kernels`` (their nodes numbered one after the
         other, in order); the first kernel's law serves all."""
         offsets = np.cumsum([0] + [k.n_dofs // 2 for k in kernels])
-        return cls(np.concatenate([k.elements + o for k, o in zip(kernels, offsets)]),
-                   np.concatenate([k.grad for k in kernels]),
-                   np.concatenate([k.weight for k in kernels]), kernels[0].law, int(offsets[-1]))
+        return cls(
+            np.concatenate([k.elements + o for k, o in zip(kernels, offsets)]),
+            np.concatenate([k.grad for k in kernels]),
+            np.concatenate([k.weight for k in kernels]),
+            kernels[0].law,
+            int(offsets[-1]),
+        )
 
-    def subset(self, elements: np.ndarray) -> "ElementKernel":
+    def subset(self, elements: np.ndarray) -> ElementKernel:
         """The kernel of some of the elements (indices ``elements``), same node numbering."""
-        return ElementKernel(self.elements[elements], self.grad[elements], self.weight[elements],
-                             self.law, self.n_dofs // 2)
+        return ElementKernel(
+            self.elements[elements],
+            self.grad[elements],
+            self.weight[elements],
+            self.law,
+            self.n_dofs // 2,
+        )
 
     def deformation_gradient(self, x: np.ndarray) -> np.ndarray:
         """Deformation gradient F (n_el, n_q, 2, 2) at the quadrature points; x: node positions, mm.
@@ -111,9 +122,9 @@ class ElementKernel:
         runs over long contiguous vectors, not over innermost axes of length 2.
         """
         xe = x[self.elements]
-        xe = xe - xe[:, :1]            # sum_a dN_a = 0: removes a translation, limits round-off
+        xe = xe - xe[:, :1]  # sum_a dN_a = 0: removes a translation, limits round-off
         n_el, n_q = self.weight.shape
-        F = np.matmul(xe.transpose(0, 2, 1), self._grad_aq)                # [i, (q, J)]
+        F = np.matmul(xe.transpose(0, 2, 1), self._grad_aq)  # [i, (q, J)]
         by_component = np.empty((2, 2, n_el, n_q))
         by_component[...] = F.reshape(n_el, 2, n_q, 2).transpose(1, 3, 0, 2)
         return by_component.transpose(2, 3, 0, 1)
@@ -127,11 +138,11 @@ class ElementKernel:
             If an element is inverted (det F <= 0 at a quadrature point): the
             multibody core then treats the state as refused and cuts the step.
         """
-        F = self.deformation_gradient(x)                                   # (n_el, n_q, 2, 2)
+        F = self.deformation_gradient(x)  # (n_el, n_q, 2, 2)
         F00, F01, F10, F11 = F[..., 0, 0], F[..., 0, 1], F[..., 1, 0], F[..., 1, 1]
         if not np.all(F00 * F11 - F01 * F10 > 0.0):
             raise ValueError("continuum: inverted element (det F <= 0)")
-        C = np.empty_like(F)                                                # F^T F, F's layout
+        C = np.empty_like(F)  # F^T F, F's layout
         C[..., 0, 0] = F00 * F00 + F10 * F10
         C[..., 1, 1] = F01 * F01 + F11 * F11
         C[..., 0, 1] = C[..., 1, 0] = F00 * F01 + F10 * F11
@@ -141,11 +152,11 @@ class ElementKernel:
     def _nodal_forces(self, F: np.ndarray, sw: np.ndarray) -> np.ndarray:
         """Nodal forces (n_dofs,) in N, sum_q dN_a/dX_J P_iJ w, from F and weighted stresses sw."""
         n_el, n_q = self.weight.shape
-        pw = np.empty((n_el, n_q, 2, 2))                                    # P^T w: [J, i]
+        pw = np.empty((n_el, n_q, 2, 2))  # P^T w: [J, i]
         for i in (0, 1):
             for J in (0, 1):
                 pw[..., J, i] = F[..., i, 0] * sw[..., 0, J] + F[..., i, 1] * sw[..., 1, J]
-        fe = np.matmul(self._grad_aq, pw.reshape(n_el, 2 * n_q, 2))        # (n_el, 9, 2)
+        fe = np.matmul(self._grad_aq, pw.reshape(n_el, 2 * n_q, 2))  # (n_el, 9, 2)
         return np.bincount(self.element_dofs.ravel(), weights=fe.ravel(), minlength=self.n_dofs)
 
     def forces(self, x: np.ndarray) -> np.ndarray:
@@ -169,13 +180,13 @@ class ElementKernel:
         w = self.weight
         n_el, n_q = w.shape
         sw = st.S * w[..., None, None]
-        blocks = self.law.tangent_blocks(st.F, st.CC, w)                   # [q, J, c, L]
-        for J in (0, 1):                                                    # delta_ik S_JL
+        blocks = self.law.tangent_blocks(st.F, st.CC, w)  # [q, J, c, L]
+        for J in (0, 1):  # delta_ik S_JL
             for L in (0, 1):
                 blocks[..., J, 0, L] += sw[..., J, L]
                 blocks[..., J, 2, L] += sw[..., J, L]
         blocks = np.ascontiguousarray(blocks).reshape(n_el, n_q, 6, 2)
-        ag = np.matmul(blocks, self._grad_lb)                               # [q, (J, c), b]
+        ag = np.matmul(blocks, self._grad_lb)  # [q, (J, c), b]
         tangent = np.matmul(self._grad_aq, ag.reshape(n_el, 2 * n_q, 27))  # [a, (c, b)]
         return float(np.sum(st.W * w)), self._nodal_forces(st.F, sw), tangent
 
@@ -211,23 +222,23 @@ class Solid:
         self.elements = np.asarray(elements, np.int64)
         self.law = law
         self.depth = float(depth)
-        self.mesh = MeshQuad2(np.ascontiguousarray(self.nodes.T),
-                              np.ascontiguousarray(self.elements.T))
+        self.mesh = MeshQuad2(
+            np.ascontiguousarray(self.nodes.T), np.ascontiguousarray(self.elements.T)
+        )
         self.basis = CellBasis(self.mesh, ElementQuad2(), intorder=_QUADRATURE_ORDER)
         # skfem renumbers nodes (vertices first); keep the mesh's own numbering
         # and check that skfem's local basis order is the quad9 order
-        locs = self.basis.doflocs[:, self.basis.element_dofs].T        # (n_el, 9, 2)
+        locs = self.basis.doflocs[:, self.basis.element_dofs].T  # (n_el, 9, 2)
         if not np.allclose(locs, self.nodes[self.elements], rtol=0.0, atol=1e-12 * self.scale):
             raise RuntimeError("skfem local node order differs from quad9 order")
-        self.node_dofs = np.empty(self.nodes.shape[0], np.int64)   # skfem dof of each node
+        self.node_dofs = np.empty(self.nodes.shape[0], np.int64)  # skfem dof of each node
         self.node_dofs[self.elements] = self.basis.element_dofs.T
-        grads = np.stack([self.basis.basis[a][0].grad for a in range(9)])   # (9, 2, n_el, n_q)
-        self.grad = np.ascontiguousarray(grads.transpose(2, 3, 0, 1))       # (n_el, n_q, 9, 2)
-        self.weight = self.depth * self.basis.dx                            # (n_el, n_q), mm^3
-        self.kernel = ElementKernel(self.elements, self.grad, self.weight, law,
-                                    self.nodes.shape[0])
+        grads = np.stack([self.basis.basis[a][0].grad for a in range(9)])  # (9, 2, n_el, n_q)
+        self.grad = np.ascontiguousarray(grads.transpose(2, 3, 0, 1))  # (n_el, n_q, 9, 2)
+        self.weight = self.depth * self.basis.dx  # (n_el, n_q), mm^3
+        self.kernel = ElementKernel(self.elements, self.grad, self.weight, law, self.nodes.shape[0])
         self.element_dofs = edofs = self.kernel.element_dofs
-        self.rows = np.repeat(edofs, 18, axis=1).ravel()          # COO pattern of evaluate()
+        self.rows = np.repeat(edofs, 18, axis=1).ravel()  # COO pattern of evaluate()
         self.cols = np.tile(edofs, (1, 18)).ravel()
         self.n_dofs = self.kernel.n_dofs
 

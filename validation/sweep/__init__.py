@@ -10,5 +10,17 @@ from .engine import SweepStats, current_keys, local_cluster, results_store, run_
 from .spec import Axis, Point, Sweep, load_sweep, parse_sweep
 from .summary import write_outputs
 
-__all__ = ["Axis", "Point", "Sweep", "SweepStats", "current_keys", "load_sweep", "local_cluster",
-           "parse_sweep", "results_store", "run_sweep", "sweep_rows", "write_outputs"]
+__all__ = [
+    "Axis",
+    "Point",
+    "Sweep",
+    "SweepStats",
+    "current_keys",
+    "load_sweep",
+    "local_cluster",
+    "parse_sweep",
+    "results_store",
+    "run_sweep",
+    "sweep_rows",
+    "write_outputs",
+]

@@ -20,13 +20,13 @@ from importlib import resources
 
 import numpy as np
 
-RADIUS = 10.0                       # mm
-DEPTH = 1.0                         # mm
-LINEAR_ROTATION = 0.3               # rad
+RADIUS = 10.0  # mm
+DEPTH = 1.0  # mm
+LINEAR_ROTATION = 0.3  # rad
 LEVELS = 6
 SLENDERNESS_RATIOS = (1 / 3, 1 / 10, 1 / 30, 1 / 100, 1 / 300, 1 / 1000)
 """h / R of the slenderness sweep (120 deg arc)."""
-SLENDERNESS_WIDTH = 120.0           # deg
+SLENDERNESS_WIDTH = 120.0  # deg
 ARC_WIDTHS = (30.0, 90.0, 180.0, 270.0, 330.0, 350.0)
 """Arc angles (deg) of the arc-angle sweep (h / R = :data:`ARC_RATIO`); a much shorter arc
 would be a stub thicker than its length, which the scene loader refuses."""
@@ -55,20 +55,42 @@ def cantilever_scene(width_deg: float, thickness: float) -> dict:
         "section": {"depth": DEPTH, "thickness": thickness},
         "ground": {"name": "g", "points": [[0.0, 0.0]]},
         "target": {"body": "t", "point": tip},
-        "flexures": [{"name": "f", "bodies": ["g", "t"], "start_body": "g",
-                      "center": [0.0, RADIUS], "radius": RADIUS,
-                      "axis_deg": -90.0 + width_deg / 2.0, "width_deg": width_deg}],
-        "load_cases": [{"name": "F", "kind": "force", "body": "t", "angle_deg": angle,
-                        "value": 1.0, "levels": LEVELS}],
+        "flexures": [
+            {
+                "name": "f",
+                "bodies": ["g", "t"],
+                "start_body": "g",
+                "center": [0.0, RADIUS],
+                "radius": RADIUS,
+                "axis_deg": -90.0 + width_deg / 2.0,
+                "width_deg": width_deg,
+            }
+        ],
+        "load_cases": [
+            {
+                "name": "F",
+                "kind": "force",
+                "body": "t",
+                "angle_deg": angle,
+                "value": 1.0,
+                "levels": LEVELS,
+            }
+        ],
     }
 
 
 def _cantilever_sweep(name: str, description: str, axes: list[dict], combine: str) -> dict:
     width = SLENDERNESS_WIDTH if name == "slenderness" else ARC_WIDTHS[0]
-    return {"name": name, "description": description,
-            "base": cantilever_scene(width, ARC_RATIO * RADIUS),
-            "models": list(CANTILEVER_MODELS), "reference": "continuum:0",
-            "combine": combine, "linear_rotation": LINEAR_ROTATION, "axes": axes}
+    return {
+        "name": name,
+        "description": description,
+        "base": cantilever_scene(width, ARC_RATIO * RADIUS),
+        "models": list(CANTILEVER_MODELS),
+        "reference": "continuum:0",
+        "combine": combine,
+        "linear_rotation": LINEAR_ROTATION,
+        "axes": axes,
+    }
 
 
 def builtin_sweep(name: str) -> dict:
@@ -78,17 +100,24 @@ def builtin_sweep(name: str) -> dict:
         return tomllib.loads(text.read_text(encoding="utf-8"))
     if name == "slenderness":
         return _cantilever_sweep(
-            name, f"Slenderness h/R of a {SLENDERNESS_WIDTH:g} deg cantilever arc",
-            [{"path": "section.thickness",
-              "values": [q * RADIUS for q in SLENDERNESS_RATIOS]}], "grid")
+            name,
+            f"Slenderness h/R of a {SLENDERNESS_WIDTH:g} deg cantilever arc",
+            [{"path": "section.thickness", "values": [q * RADIUS for q in SLENDERNESS_RATIOS]}],
+            "grid",
+        )
     if name == "arc_angle":
         widths = np.array(ARC_WIDTHS)
         tips = [_tip(w) for w in ARC_WIDTHS]
         return _cantilever_sweep(
-            name, f"Arc angle of a cantilever arc, h/R = {ARC_RATIO:.4g}",
-            [{"path": "flexures.f.width_deg", "values": widths.tolist()},
-             {"path": "flexures.f.axis_deg", "values": (-90.0 + widths / 2.0).tolist()},
-             {"path": "target.point.0", "values": [t[0][0] for t in tips]},
-             {"path": "target.point.1", "values": [t[0][1] for t in tips]},
-             {"path": "load_cases.F.angle_deg", "values": [t[1] for t in tips]}], "zip")
+            name,
+            f"Arc angle of a cantilever arc, h/R = {ARC_RATIO:.4g}",
+            [
+                {"path": "flexures.f.width_deg", "values": widths.tolist()},
+                {"path": "flexures.f.axis_deg", "values": (-90.0 + widths / 2.0).tolist()},
+                {"path": "target.point.0", "values": [t[0][0] for t in tips]},
+                {"path": "target.point.1", "values": [t[0][1] for t in tips]},
+                {"path": "load_cases.F.angle_deg", "values": [t[1] for t in tips]},
+            ],
+            "zip",
+        )
     raise KeyError(name)

@@ -21,9 +21,9 @@ Units: times in s.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterator
 
 from flexval.reducedmodels import ModelSpec
 from flexval.reducedmodels.catalogue import REFERENCE
@@ -54,7 +54,7 @@ class SweepStats:
 def chunks(points: list[Point], size: int) -> Iterator[list[Point]]:
     """``points`` in consecutive runs of ``size`` (the last may be shorter)."""
     for k in range(0, len(points), size):
-        yield points[k:k + size]
+        yield points[k : k + size]
 
 
 MAX_AUTO_BATCH = 25
@@ -92,8 +92,12 @@ def current_keys(sweep: Sweep) -> set[str]:
     info = task_info(sweep)
     models = [sweep.reference.id, *(s.id for s in sweep.models)]
     keys = {base_row(p, "-", "-", info)["key"] for p in sweep.points if p.scene is None}
-    keys.update(base_row(p, m, c, info)["key"] for p in sweep.valid_points for m in models
-                for c in sweep.load_cases)
+    keys.update(
+        base_row(p, m, c, info)["key"]
+        for p in sweep.valid_points
+        for m in models
+        for c in sweep.load_cases
+    )
     return keys
 
 
@@ -110,8 +114,14 @@ def local_cluster(workers: int | None = None):
     from distributed import LocalCluster
 
     n = workers or os.cpu_count() or 1
-    return LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                        dashboard_address=":0", env=BLAS_ENV, silence_logs=logging.ERROR)
+    return LocalCluster(
+        n_workers=n,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=":0",
+        env=BLAS_ENV,
+        silence_logs=logging.ERROR,
+    )
 
 
 class _Progress:
@@ -128,12 +138,19 @@ class _Progress:
             return
         elapsed = time.perf_counter() - self.t0
         eta = elapsed / self.done * (self.total - self.done)
-        self.emit(f"sweep: {self.done}/{self.total} tasks, {self.failed} failed rows, "
-                  f"{elapsed:.0f} s elapsed, ETA {eta:.0f} s")
+        self.emit(
+            f"sweep: {self.done}/{self.total} tasks, {self.failed} failed rows, "
+            f"{elapsed:.0f} s elapsed, ETA {eta:.0f} s"
+        )
 
 
-def run_sweep(sweep: Sweep, out_dir: str | Path, client, use_cache: bool = True,
-              progress: Callable[[str], None] | None = None) -> SweepStats:
+def run_sweep(
+    sweep: Sweep,
+    out_dir: str | Path,
+    client,
+    use_cache: bool = True,
+    progress: Callable[[str], None] | None = None,
+) -> SweepStats:
     """Run what is missing of ``sweep`` on the Dask ``client``; rows go to ``out_dir/results``.
 
     Parameters
@@ -155,36 +172,59 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, client, use_cache: bool = True,
     info = task_info(sweep)
     stats = SweepStats()
 
-    invalid = [base_row(p, "-", "-", info) | {"status": "invalid_point", "reason": p.reason}
-               for p in sweep.points if p.scene is None]
+    invalid = [
+        base_row(p, "-", "-", info) | {"status": "invalid_point", "reason": p.reason}
+        for p in sweep.points
+        if p.scene is None
+    ]
     fresh_invalid = [r for r in invalid if r["key"] not in done]
     if fresh_invalid:
         stats.parts.append(store.append(fresh_invalid))
     stats.rows_written += len(fresh_invalid)
 
     def missing(model: str) -> list[Point]:
-        return [p for p in sweep.valid_points
-                if any(base_row(p, model, c, info)["key"] not in done for c in sweep.load_cases)]
+        return [
+            p
+            for p in sweep.valid_points
+            if any(base_row(p, model, c, info)["key"] not in done for c in sweep.load_cases)
+        ]
 
     todo = {spec: missing(spec.id) for spec in (sweep.reference, *sweep.models)}
-    stats.rows_skipped = ((len(sweep.valid_points) * (len(sweep.models) + 1)
-                           - sum(len(v) for v in todo.values())) * len(sweep.load_cases))
+    stats.rows_skipped = (
+        len(sweep.valid_points) * (len(sweep.models) + 1) - sum(len(v) for v in todo.values())
+    ) * len(sweep.load_cases)
     need_ref = {p.index for pts in todo.values() for p in pts}
     ref_points = [p for p in sweep.valid_points if p.index in need_ref]
     tasks = {}
     ref_future = {}
     workers = sum(client.nthreads().values())
     for chunk in chunks(ref_points, _batch_size(sweep, sweep.reference, workers)):
-        fut = client.submit(run_reference, chunk, sweep.reference, sweep.load_cases, info,
-                            use_cache, retries=RETRIES, pure=False)
+        fut = client.submit(
+            run_reference,
+            chunk,
+            sweep.reference,
+            sweep.load_cases,
+            info,
+            use_cache,
+            retries=RETRIES,
+            pure=False,
+        )
         tasks[fut] = (chunk, sweep.reference.id)
         for p in chunk:
             ref_future[p.index] = fut
     for spec in sweep.models:
         for chunk in chunks(todo[spec], _batch_size(sweep, spec, workers)):
             refs = list({id(ref_future[p.index]): ref_future[p.index] for p in chunk}.values())
-            fut = client.submit(run_model_batch, chunk, spec, sweep.load_cases, info, refs,
-                                retries=RETRIES, pure=False)
+            fut = client.submit(
+                run_model_batch,
+                chunk,
+                spec,
+                sweep.load_cases,
+                info,
+                refs,
+                retries=RETRIES,
+                pure=False,
+            )
             tasks[fut] = (chunk, spec.id)
     stats.tasks = len(tasks)
     bar = _Progress(len(tasks), progress)
@@ -195,8 +235,11 @@ def run_sweep(sweep: Sweep, out_dir: str | Path, client, use_cache: bool = True,
             rows = result["rows"] if isinstance(result, dict) else result
         except Exception as exc:  # a lost task is a recorded failure, not a lost sweep
             reason = f"task failed: {type(exc).__name__}: {exc}"
-            rows = [base_row(p, model, c, info) | {"status": "error", "reason": reason}
-                    for p in chunk for c in sweep.load_cases]
+            rows = [
+                base_row(p, model, c, info) | {"status": "error", "reason": reason}
+                for p in chunk
+                for c in sweep.load_cases
+            ]
         rows = [r for r in rows if r["key"] not in done]
         failed = sum(r["status"] != "ok" for r in rows)
         part = store.append(rows)

@@ -65,8 +65,7 @@ from ..compare import METRICS
 from ..stress import scale_case
 
 COMBINE = ("grid", "zip")
-SAMPLES = {"uniform": ("low", "high"), "normal": ("mean", "std"),
-           "lognormal": ("median", "sigma")}
+SAMPLES = {"uniform": ("low", "high"), "normal": ("mean", "std"), "lognormal": ("median", "sigma")}
 SUMMARY_METRICS = ("worst",) + METRICS
 """``worst`` is max(end_disp_vec, end_rot): a model is as good as its worse end error."""
 ALWAYS_OUTPUTS = ("errors", "times")
@@ -77,10 +76,30 @@ reference's (free: every model records it); ``limit_load``: the first limit poin
 that stops below full load, found by arc length (costly: only on request)."""
 DEFAULT_OUTPUTS = ("peak_stress",)
 NAMED_ARRAYS = ("flexures", "load_cases", "bodies", "pins")
-_SWEEP_KEYS = {"name", "description", "base", "models", "reference", "load_cases", "combine",
-               "metric", "linear_rotation", "batch", "outputs", "axes"}
-_AXIS_KEYS = {"path", "values", "linspace", "logspace", "sample", "count", "seed",
-              *{k for pair in SAMPLES.values() for k in pair}}
+_SWEEP_KEYS = {
+    "name",
+    "description",
+    "base",
+    "models",
+    "reference",
+    "load_cases",
+    "combine",
+    "metric",
+    "linear_rotation",
+    "batch",
+    "outputs",
+    "axes",
+}
+_AXIS_KEYS = {
+    "path",
+    "values",
+    "linspace",
+    "logspace",
+    "sample",
+    "count",
+    "seed",
+    *{k for pair in SAMPLES.values() for k in pair},
+}
 
 
 @dataclass(frozen=True)
@@ -159,8 +178,12 @@ def _axis(source: str, k: int, a: Any) -> Axis:
         _fail(source, where, a, "must be a table [[axes]]")
     for key in a:
         if key not in _AXIS_KEYS:
-            _fail(source, f"{where}.{key}", a[key],
-                  f"unknown field; expected one of {sorted(_AXIS_KEYS)}")
+            _fail(
+                source,
+                f"{where}.{key}",
+                a[key],
+                f"unknown field; expected one of {sorted(_AXIS_KEYS)}",
+            )
     path = a.get("path")
     if not isinstance(path, str) or not path.strip():
         _fail(source, f"{where}.path", path, "must be a scene field path, e.g. section.thickness")
@@ -181,8 +204,7 @@ def _axis(source: str, k: int, a: Any) -> Axis:
         lo = _number(source, field, spec[0], positive=kind == "logspace")
         hi = _number(source, field, spec[1], positive=kind == "logspace")
         n = _count(source, field, spec[2])
-        vals = (np.linspace(lo, hi, n) if kind == "linspace"
-                else np.geomspace(lo, hi, n))
+        vals = np.linspace(lo, hi, n) if kind == "linspace" else np.geomspace(lo, hi, n)
         return Axis(path, tuple(float(v) for v in vals), False)
     dist = a["sample"]
     if dist not in SAMPLES:
@@ -197,9 +219,11 @@ def _axis(source: str, k: int, a: Any) -> Axis:
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         _fail(source, f"{where}.seed", seed, "must be a non-negative integer (repeatable draws)")
     rng = np.random.default_rng(seed)
-    vals = {"uniform": lambda: rng.uniform(x1, x2, n),
-            "normal": lambda: rng.normal(x1, x2, n),
-            "lognormal": lambda: rng.lognormal(math.log(x1), x2, n)}[dist]()
+    vals = {
+        "uniform": lambda: rng.uniform(x1, x2, n),
+        "normal": lambda: rng.normal(x1, x2, n),
+        "lognormal": lambda: rng.lognormal(math.log(x1), x2, n),
+    }[dist]()
     return Axis(path, tuple(float(v) for v in vals), True)
 
 
@@ -228,11 +252,13 @@ def _slot(data: dict, path: str, source: str, field: str) -> tuple[Any, Any]:
         where = ".".join(walked) or "<scene>"
         if isinstance(node, dict):
             if last:
-                if part in node and (isinstance(node[part], bool)
-                                     or not isinstance(node[part], (int, float))):
+                if part in node and (
+                    isinstance(node[part], bool) or not isinstance(node[part], (int, float))
+                ):
                     _fail(source, field, path, f"'{part}' of {where} is not a number")
-                if part not in node and (not walked or walked[0] not in
-                                         ("section", "material", *NAMED_ARRAYS)):
+                if part not in node and (
+                    not walked or walked[0] not in ("section", "material", *NAMED_ARRAYS)
+                ):
                     _fail(source, field, path, f"{where} has no field '{part}'")
                 return node, part
             if part not in node:
@@ -242,18 +268,28 @@ def _slot(data: dict, path: str, source: str, field: str) -> tuple[Any, Any]:
             if walked and walked[-1] in NAMED_ARRAYS and all(isinstance(x, dict) for x in node):
                 match = [x for x in node if str(x.get("name")) == part]
                 if not match:
-                    _fail(source, field, path, f"{where} has no entry named '{part}'; names are "
-                          f"{[str(x.get('name')) for x in node]}")
+                    _fail(
+                        source,
+                        field,
+                        path,
+                        f"{where} has no entry named '{part}'; names are "
+                        f"{[str(x.get('name')) for x in node]}",
+                    )
                 if last:
                     _fail(source, field, path, f"{where}.{part} is a table, not a number")
                 node = match[0]
             else:
                 if not part.isdigit() or int(part) >= len(node):
-                    _fail(source, field, path,
-                          f"{where} is an array of {len(node)}: expected an index")
+                    _fail(
+                        source,
+                        field,
+                        path,
+                        f"{where} is an array of {len(node)}: expected an index",
+                    )
                 if last:
-                    if isinstance(node[int(part)], bool) or not isinstance(node[int(part)],
-                                                                           (int, float)):
+                    if isinstance(node[int(part)], bool) or not isinstance(
+                        node[int(part)], (int, float)
+                    ):
                         _fail(source, field, path, f"{where}[{part}] is not a number")
                     return node, int(part)
                 node = node[int(part)]
@@ -270,14 +306,17 @@ def _combine(axes: tuple[Axis, ...], combine: str, source: str) -> list[tuple[fl
     if combine == "zip":
         lengths = {len(a.values) for a in axes}
         if len(lengths) != 1:
-            _fail(source, "axes", [len(a.values) for a in axes],
-                  "zipped axes must have the same number of values")
+            _fail(
+                source,
+                "axes",
+                [len(a.values) for a in axes],
+                "zipped axes must have the same number of values",
+            )
         return list(zip(*(a.values for a in axes)))
     return list(itertools.product(*(a.values for a in axes)))
 
 
-def _normalise(scene: Scene, data: dict, cases: tuple[str, ...], rotation: float
-               ) -> Scene:
+def _normalise(scene: Scene, data: dict, cases: tuple[str, ...], rotation: float) -> Scene:
     """``scene`` with each load case scaled so that the ee end rotation is ``rotation`` (rad).
 
     The case values in ``data`` are scaled alike, so the digest sees them.
@@ -313,13 +352,18 @@ def _base_data(base: Any, source: str, folder: Path) -> tuple[str, dict]:
         return base, read_scene_data(base)[1]
     path = Path(base) if Path(base).is_absolute() else folder / base
     if not path.is_file():
-        _fail(source, "base", base,
-              f"no such scene file, and not a built-in scene {list(BUILTIN_SCENES)}")
+        _fail(
+            source,
+            "base",
+            base,
+            f"no such scene file, and not a built-in scene {list(BUILTIN_SCENES)}",
+        )
     return str(path), read_scene_data(path)[1]
 
 
-def parse_sweep(data: dict, source: str, folder: Path = Path("."),
-                default_name: str = "sweep") -> Sweep:
+def parse_sweep(
+    data: dict, source: str, folder: Path = Path("."), default_name: str = "sweep"
+) -> Sweep:
     """Check a parsed sweep file and build every point (nothing is run but ee scaling).
 
     Raises
@@ -392,8 +436,22 @@ def parse_sweep(data: dict, source: str, folder: Path = Path("."),
         if rotation is not None:
             scene = _normalise(scene, pdata, tuple(cases), rotation)
         points.append(Point(i, params, scene, digest(pdata)))
-    return Sweep(name, str(data.get("description", "")), source, label, axes, combine, specs,
-                 reference, tuple(cases), metric, rotation, batch, tuple(points), outputs)
+    return Sweep(
+        name,
+        str(data.get("description", "")),
+        source,
+        label,
+        axes,
+        combine,
+        specs,
+        reference,
+        tuple(cases),
+        metric,
+        rotation,
+        batch,
+        tuple(points),
+        outputs,
+    )
 
 
 def load_sweep(name_or_path: str | Path) -> Sweep:
@@ -408,12 +466,17 @@ def load_sweep(name_or_path: str | Path) -> Sweep:
 
     text_id = str(name_or_path)
     if text_id in BUILTIN_SWEEPS:
-        return parse_sweep(builtin_sweep(text_id), f"<builtin sweep {text_id}>",
-                           default_name=text_id)
+        return parse_sweep(
+            builtin_sweep(text_id), f"<builtin sweep {text_id}>", default_name=text_id
+        )
     path = Path(text_id)
     if not path.is_file():
-        _fail(text_id, "sweep", text_id,
-              f"no such file, and not a built-in sweep {sorted(BUILTIN_SWEEPS)}")
+        _fail(
+            text_id,
+            "sweep",
+            text_id,
+            f"no such file, and not a built-in sweep {sorted(BUILTIN_SWEEPS)}",
+        )
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:

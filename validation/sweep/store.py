@@ -40,15 +40,30 @@ the geometry (e.g. PRBM outside its fitted range); ``error``: an unexpected exce
 lost task; ``invalid_point``: a generated point that the scene loader refuses.
 Independently, ``valid`` says whether the validity monitor found every level of a converged
 path inside the model's range of meaning, and ``validity`` gives its first reason."""
-_FIXED = [("key", pa.string()), ("sweep", pa.string()), ("point", pa.int64()),
-          ("model", pa.string()), ("reference", pa.string()), ("load_case", pa.string()),
-          ("status", pa.string()), ("reason", pa.string()), ("load_reached", pa.float64()),
-          *[(m, pa.float64()) for m in METRICS], ("seconds", pa.float64()),
-          ("newton_iterations", pa.int64()), ("valid", pa.bool_()), ("validity", pa.string()),
-          ("load_unit", pa.string()), ("peak_stress", pa.float64()),
-          ("peak_stress_flexure", pa.string()), ("peak_stress_at", pa.float64()),
-          ("peak_stress_load", pa.float64()), ("peak_stress_error", pa.float64()), ("limit_load", pa.float64()),
-          ("limit_load_error", pa.float64())]
+_FIXED = [
+    ("key", pa.string()),
+    ("sweep", pa.string()),
+    ("point", pa.int64()),
+    ("model", pa.string()),
+    ("reference", pa.string()),
+    ("load_case", pa.string()),
+    ("status", pa.string()),
+    ("reason", pa.string()),
+    ("load_reached", pa.float64()),
+    *[(m, pa.float64()) for m in METRICS],
+    ("seconds", pa.float64()),
+    ("newton_iterations", pa.int64()),
+    ("valid", pa.bool_()),
+    ("validity", pa.string()),
+    ("load_unit", pa.string()),
+    ("peak_stress", pa.float64()),
+    ("peak_stress_flexure", pa.string()),
+    ("peak_stress_at", pa.float64()),
+    ("peak_stress_load", pa.float64()),
+    ("peak_stress_error", pa.float64()),
+    ("limit_load", pa.float64()),
+    ("limit_load_error", pa.float64()),
+]
 """The columns of every row besides the parameters. ``peak_stress``: the largest outer-fibre
 stress over the flexures (MPa) at the load ``peak_stress_load`` (fraction of full load: 1
 for a converged row; for a ``solver_failure``, the last recorded level of the path, at or
@@ -66,8 +81,9 @@ def schema(paths: list[str]) -> pa.Schema:
 
 def _clean(row: dict) -> dict:
     """Non-finite floats become null."""
-    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-            for k, v in row.items()}
+    return {
+        k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()
+    }
 
 
 class ResultStore:
@@ -89,11 +105,15 @@ class ResultStore:
                 continue
             missing = [n for n in self.schema.names if n not in found.names]
             extra = [n for n in found.names if n not in self.schema.names]
-            raise SceneError(str(self.folder), "results", part.name,
-                             "holds a sweep dataset of another format (missing columns "
-                             f"{missing or 'none'}, other columns {extra or 'none'}; written by "
-                             "an older flexval or for other parameters): choose another --out "
-                             "or remove this folder")
+            raise SceneError(
+                str(self.folder),
+                "results",
+                part.name,
+                "holds a sweep dataset of another format (missing columns "
+                f"{missing or 'none'}, other columns {extra or 'none'}; written by "
+                "an older flexval or for other parameters): choose another --out "
+                "or remove this folder",
+            )
 
     def keys(self) -> set[str]:
         """Keys of every row already stored (after :meth:`check`)."""

@@ -21,8 +21,8 @@ parameters in their field's unit.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -51,8 +51,9 @@ def stress_metric(row: dict) -> float | None:
     return None if e is None else abs(e)
 
 
-def point_values(sweep: Sweep, rows: list[dict], value: RowValue
-                 ) -> dict[str, dict[int, float | None]]:
+def point_values(
+    sweep: Sweep, rows: list[dict], value: RowValue
+) -> dict[str, dict[int, float | None]]:
     """{model: {point: largest ``value`` over the load cases, or None if a case has none}}
     of the compared models."""
     out: dict[str, dict[int, float | None]] = {s.id: {} for s in sweep.models}
@@ -90,7 +91,7 @@ def _ranges(sweep: Sweep, pts: list[int]) -> str:
     if not pts or not sweep.axes:
         return ""
     spans = []
-    for a in (sweep.axes[:1] if sweep.combine == "zip" else sweep.axes):
+    for a in sweep.axes[:1] if sweep.combine == "zip" else sweep.axes:
         v = [_point(sweep, i).params[a.path] for i in pts]
         spans.append(f"{a.path} {min(v):.4g}..{max(v):.4g}")
     return "; ".join(spans)
@@ -107,21 +108,25 @@ def _agreement(sweep: Sweep, metrics: dict[str, dict[int, float | None]]) -> lis
         for t in THRESHOLDS:
             inside = [i for i, v in per.items() if v is not None and v < t]
             cells.append(f"{len(inside)}/{n_valid} {_ranges(sweep, inside)}".strip())
-        lines.append(f"| {model} | {len(vals)}/{n_valid} | "
-                     f"{_fmt(float(np.median(vals)) if vals else None)} | "
-                     f"{_fmt(max(vals) if vals else None)} | {cells[0]} | {cells[1]} |")
+        lines.append(
+            f"| {model} | {len(vals)}/{n_valid} | "
+            f"{_fmt(float(np.median(vals)) if vals else None)} | "
+            f"{_fmt(max(vals) if vals else None)} | {cells[0]} | {cells[1]} |"
+        )
     return lines
 
 
-def _per_point(sweep: Sweep, metrics: dict, first: tuple[str, dict] | None = None
-               ) -> list[str]:
+def _per_point(sweep: Sweep, metrics: dict, first: tuple[str, dict] | None = None) -> list[str]:
     """Per-point table of ``metrics`` (``first``: an extra leading column, name and values)."""
     extra = [first[0]] if first else []
-    lines = ["| point | parameters | " + " | ".join(extra + list(metrics)) + " |",
-             "|---:|---|" + "---:|" * (len(extra) + len(metrics))]
+    lines = [
+        "| point | parameters | " + " | ".join(extra + list(metrics)) + " |",
+        "|---:|---|" + "---:|" * (len(extra) + len(metrics)),
+    ]
     for p in sweep.points:
         cells = ([_fmt(first[1].get(p.index))] if first else []) + [
-            _fmt(metrics[m].get(p.index)) for m in metrics]
+            _fmt(metrics[m].get(p.index)) for m in metrics
+        ]
         lines.append(f"| {p.index} | {_params(sweep, p.index)} | " + " | ".join(cells) + " |")
     return lines
 
@@ -130,8 +135,11 @@ def _reference_peaks(sweep: Sweep, rows: list[dict]) -> dict[int, float]:
     """{point: the reference's largest peak stress at full load over the load cases (MPa)}."""
     out: dict[int, float] = {}
     for r in rows:
-        if (r["model"] == sweep.reference.id and r["status"] == "ok"
-                and r["peak_stress"] is not None):
+        if (
+            r["model"] == sweep.reference.id
+            and r["status"] == "ok"
+            and r["peak_stress"] is not None
+        ):
             out[r["point"]] = max(r["peak_stress"], out.get(r["point"], 0.0))
     return out
 
@@ -141,62 +149,100 @@ def _stress_section(sweep: Sweep, rows: list[dict]) -> list[str]:
     ref = sweep.reference.id
     metrics = point_values(sweep, rows, stress_metric)
     peaks = _reference_peaks(sweep, rows)
-    lines = ["", f"## Peak stress against `{ref}`", "",
-             "Largest outer-fibre normal stress |N|/A + |M| h/(2I) over the flexures at full "
-             "load, from each model's own section forces (MPa). Metric: |model - reference| / "
-             "reference (percent), the largest over the load cases at each point."]
+    lines = [
+        "",
+        f"## Peak stress against `{ref}`",
+        "",
+        "Largest outer-fibre normal stress |N|/A + |M| h/(2I) over the flexures at full "
+        "load, from each model's own section forces (MPa). Metric: |model - reference| / "
+        "reference (percent), the largest over the load cases at each point.",
+    ]
     if peaks:
-        lines.append(f"The reference's peak stress spans {min(peaks.values()):.4g} .. "
-                     f"{max(peaks.values()):.4g} MPa over the points.")
-    lines += ["", "| model | points with errors | median % | max % | within 1 % | within 5 % |",
-              "|---|---:|---:|---:|---|---|"] + _agreement(sweep, metrics)
+        lines.append(
+            f"The reference's peak stress spans {min(peaks.values()):.4g} .. "
+            f"{max(peaks.values()):.4g} MPa over the points."
+        )
+    lines += [
+        "",
+        "| model | points with errors | median % | max % | within 1 % | within 5 % |",
+        "|---|---:|---:|---:|---|---|",
+    ] + _agreement(sweep, metrics)
     if len(sweep.points) <= MAX_LISTED:
-        lines += ["", "Per point: the reference's peak stress (MPa) and each model's error (%).",
-                  ""] + _per_point(sweep, metrics, (f"{ref} MPa", peaks))
+        lines += [
+            "",
+            "Per point: the reference's peak stress (MPa) and each model's error (%).",
+            "",
+        ] + _per_point(sweep, metrics, (f"{ref} MPa", peaks))
     return lines
 
 
 def _limit_section(sweep: Sweep, rows: list[dict]) -> list[str]:
     """Markdown: the limit loads found (runs that stopped at a limit point below full load)."""
-    lines = ["", f"## Limit loads against `{sweep.reference.id}`", "",
-             "Runs that stopped below full load were traced by arc length: the first limit "
-             "point's load, and its error against the reference's on the same point and case "
-             "(percent) where the reference has one too.", ""]
+    lines = [
+        "",
+        f"## Limit loads against `{sweep.reference.id}`",
+        "",
+        "Runs that stopped below full load were traced by arc length: the first limit "
+        "point's load, and its error against the reference's on the same point and case "
+        "(percent) where the reference has one too.",
+        "",
+    ]
     found = [r for r in rows if r["limit_load"] is not None]
     if not found:
         return lines + ["No run stopped at a limit point below full load."]
-    lines += ["| model | limit points | with the reference's | median |error| % | max |error| % |",
-              "|---|---:|---:|---:|---:|"]
+    lines += [
+        "| model | limit points | with the reference's | median |error| % | max |error| % |",
+        "|---|---:|---:|---:|---:|",
+    ]
     for model in (sweep.reference.id, *(s.id for s in sweep.models)):
         mine = [r for r in found if r["model"] == model]
         errs = [abs(r["limit_load_error"]) for r in mine if r["limit_load_error"] is not None]
         if mine:
             paired = "–" if model == sweep.reference.id else str(len(errs))
-            lines.append(f"| {model} | {len(mine)} | {paired} | "
-                         f"{_fmt(float(np.median(errs)) if errs else None)} | "
-                         f"{_fmt(max(errs) if errs else None)} |")
+            lines.append(
+                f"| {model} | {len(mine)} | {paired} | "
+                f"{_fmt(float(np.median(errs)) if errs else None)} | "
+                f"{_fmt(max(errs) if errs else None)} |"
+            )
     return lines
 
 
 def format_summary(sweep: Sweep, rows: list[dict]) -> str:
     """The machine-independent Markdown summary of the sweep's rows."""
     metrics = point_metrics(sweep, rows)
-    axes = "\n".join(f"- `{a.path}`: {len(a.values)} {'random ' if a.random else ''}values, "
-                     f"{min(a.values):.4g} .. {max(a.values):.4g}" for a in sweep.axes)
+    axes = "\n".join(
+        f"- `{a.path}`: {len(a.values)} {'random ' if a.random else ''}values, "
+        f"{min(a.values):.4g} .. {max(a.values):.4g}"
+        for a in sweep.axes
+    )
     n_valid = len(sweep.valid_points)
     intro = [sweep.description, ""] if sweep.description else []
-    lines = [f"# Sweep `{sweep.name}`", "", *intro,
-             f"Base scene `{sweep.base}`; reference `{sweep.reference.id}`; load cases "
-             f"{', '.join(sweep.load_cases)}; axes combined as a {sweep.combine}"
-             + (f"; loads scaled to a linear end rotation of {sweep.linear_rotation:g} rad"
-                if sweep.linear_rotation else "") + ".", "", axes or "- no axis: the base scene",
-             "", f"{len(sweep.points)} points, {n_valid} valid; {len(rows)} result rows.", "",
-             f"## Agreement with `{sweep.reference.id}`", "",
-             f"Metric: `{sweep.metric}` (percent), the largest over the load cases at each "
-             "point; *within x %* counts the points where it is below x, with the span of "
-             "each parameter over those points.", "",
-             "| model | points with errors | median % | max % | within 1 % | within 5 % |",
-             "|---|---:|---:|---:|---|---|"]
+    lines = [
+        f"# Sweep `{sweep.name}`",
+        "",
+        *intro,
+        f"Base scene `{sweep.base}`; reference `{sweep.reference.id}`; load cases "
+        f"{', '.join(sweep.load_cases)}; axes combined as a {sweep.combine}"
+        + (
+            f"; loads scaled to a linear end rotation of {sweep.linear_rotation:g} rad"
+            if sweep.linear_rotation
+            else ""
+        )
+        + ".",
+        "",
+        axes or "- no axis: the base scene",
+        "",
+        f"{len(sweep.points)} points, {n_valid} valid; {len(rows)} result rows.",
+        "",
+        f"## Agreement with `{sweep.reference.id}`",
+        "",
+        f"Metric: `{sweep.metric}` (percent), the largest over the load cases at each "
+        "point; *within x %* counts the points where it is below x, with the span of "
+        "each parameter over those points.",
+        "",
+        "| model | points with errors | median % | max % | within 1 % | within 5 % |",
+        "|---|---:|---:|---:|---|---|",
+    ]
     lines += _agreement(sweep, metrics)
     if len(sweep.points) <= MAX_LISTED:
         lines += ["", "## Per point", ""] + _per_point(sweep, metrics)
@@ -209,15 +255,23 @@ def format_summary(sweep: Sweep, rows: list[dict]) -> str:
     if not failed:
         lines.append("None: every run reached full load.")
     for r in failed[:MAX_LISTED]:
-        reached = (f" (load reached {r['load_reached']:.3g}"
-                   + (f"; peak stress {r['peak_stress']:.4g} MPa at load "
-                      f"{r['peak_stress_load']:.3g}" if r["peak_stress"] is not None else "")
-                   + ")"
-                   if r["load_reached"] is not None else "")
+        reached = (
+            f" (load reached {r['load_reached']:.3g}"
+            + (
+                f"; peak stress {r['peak_stress']:.4g} MPa at load {r['peak_stress_load']:.3g}"
+                if r["peak_stress"] is not None
+                else ""
+            )
+            + ")"
+            if r["load_reached"] is not None
+            else ""
+        )
         if r["limit_load"] is not None:
             reached += f" (limit point at {r['limit_load']:.5g} {r['load_unit']})"
-        lines.append(f"- point {r['point']} ({_params(sweep, r['point'])}), {r['model']}, "
-                     f"{r['load_case']}: {r['status']}{reached}: {r['reason']}")
+        lines.append(
+            f"- point {r['point']} ({_params(sweep, r['point'])}), {r['model']}, "
+            f"{r['load_case']}: {r['status']}{reached}: {r['reason']}"
+        )
     if len(failed) > MAX_LISTED:
         lines.append(f"- ... and {len(failed) - MAX_LISTED} more (see the Parquet dataset)")
     flagged = [r for r in rows if r["valid"] is False]
@@ -233,19 +287,28 @@ def format_summary(sweep: Sweep, rows: list[dict]) -> str:
 
 def format_timings(sweep: Sweep, rows: list[dict], wall: float | None) -> str:
     """Markdown run-time distribution of each model (s per run of one load case)."""
-    lines = [f"# Run times of sweep `{sweep.name}` (s per load path)", "",
-             "Machine-dependent; from the stored rows (a resumed sweep keeps earlier times)."]
+    lines = [
+        f"# Run times of sweep `{sweep.name}` (s per load path)",
+        "",
+        "Machine-dependent; from the stored rows (a resumed sweep keeps earlier times).",
+    ]
     if wall is not None:
         lines.append(f"Wall time of the last `flexval sweep` call: {wall:.1f} s.")
-    lines += ["", "| model | runs | median | 10 % | 90 % | max | total |",
-              "|---|---:|---:|---:|---:|---:|---:|"]
+    lines += [
+        "",
+        "| model | runs | median | 10 % | 90 % | max | total |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
     for model in (sweep.reference.id, *(s.id for s in sweep.models)):
-        t = np.array([r["seconds"] for r in rows if r["model"] == model
-                      and r["seconds"] is not None])
+        t = np.array(
+            [r["seconds"] for r in rows if r["model"] == model and r["seconds"] is not None]
+        )
         if t.size:
             q = np.percentile(t, [50, 10, 90])
-            lines.append(f"| {model} | {t.size} | {q[0]:.3g} | {q[1]:.3g} | {q[2]:.3g} | "
-                         f"{t.max():.3g} | {t.sum():.3g} |")
+            lines.append(
+                f"| {model} | {t.size} | {q[0]:.3g} | {q[1]:.3g} | {q[2]:.3g} | "
+                f"{t.max():.3g} | {t.sum():.3g} |"
+            )
     return "\n".join(lines) + "\n"
 
 
@@ -287,14 +350,20 @@ def _lines(sweep: Sweep, rows: list[dict], path: Path, value: RowValue, label: s
     fig, axs = plt.subplots(1, len(cases), figsize=(4.2 * len(cases), 3.4), squeeze=False)
     for ax, case in zip(axs[0], cases):
         for spec in sweep.models:
-            pts = sorted((_point(sweep, r["point"]).params.get(axis.path, 0.0) if axis else 0.0,
-                          value(r)) for r in rows
-                         if r["model"] == spec.id and r["load_case"] == case
-                         and value(r) is not None)
+            pts = sorted(
+                (_point(sweep, r["point"]).params.get(axis.path, 0.0) if axis else 0.0, value(r))
+                for r in rows
+                if r["model"] == spec.id and r["load_case"] == case and value(r) is not None
+            )
             if pts:
                 x, y = zip(*pts)
-                ax.plot(x, np.maximum(y, 1e-6), "o" if axis and axis.random else "o-",
-                        ms=3, label=spec.id)
+                ax.plot(
+                    x,
+                    np.maximum(y, 1e-6),
+                    "o" if axis and axis.random else "o-",
+                    ms=3,
+                    label=spec.id,
+                )
         ax.set_title(f"load case {case}")
         _error_axes(ax, axis.path if axis else "point", f"{label} vs {sweep.reference.id} (%)")
     _finish(fig, axs, path)
@@ -325,11 +394,19 @@ def _heatmaps(sweep: Sweep, metrics: dict, path: Path, label: str) -> None:
     norm = LogNorm(vmin=max(finite.min(), 1e-3), vmax=max(finite.max(), 10.0))
     for k, (model, z) in enumerate(grids.items()):
         ax = axs[k // cols][k % cols]
-        mesh = ax.pcolormesh(x, y, np.ma.masked_invalid(z), norm=norm, shading="nearest",
-                             cmap="viridis")
+        mesh = ax.pcolormesh(
+            x, y, np.ma.masked_invalid(z), norm=norm, shading="nearest", cmap="viridis"
+        )
         if np.isfinite(z).sum() >= 4 and len(x) > 1 and len(y) > 1:
-            ax.contour(x, y, np.ma.masked_invalid(z), levels=list(THRESHOLDS), colors="w",
-                       linestyles=[":", "--"], linewidths=1.0)
+            ax.contour(
+                x,
+                y,
+                np.ma.masked_invalid(z),
+                levels=list(THRESHOLDS),
+                colors="w",
+                linestyles=[":", "--"],
+                linewidths=1.0,
+            )
         ax.set_title(model)
         ax.set_xlabel(ax0.path)
         ax.set_ylabel(ax1.path)
@@ -345,8 +422,7 @@ def _scatter(sweep: Sweep, metrics: dict, path: Path, label: str) -> None:
     """The point metrics (percent) against each parameter."""
     import matplotlib.pyplot as plt
 
-    fig, axs = plt.subplots(1, len(sweep.axes), figsize=(4.2 * len(sweep.axes), 3.4),
-                            squeeze=False)
+    fig, axs = plt.subplots(1, len(sweep.axes), figsize=(4.2 * len(sweep.axes), 3.4), squeeze=False)
     for ax, a in zip(axs[0], sweep.axes):
         for model, per in metrics.items():
             pts = [(_point(sweep, i).params[a.path], v) for i, v in per.items() if v is not None]
@@ -357,8 +433,7 @@ def _scatter(sweep: Sweep, metrics: dict, path: Path, label: str) -> None:
     _finish(fig, axs, path)
 
 
-def _error_figure(sweep: Sweep, rows: list[dict], path: Path, value: RowValue,
-                  label: str) -> Path:
+def _error_figure(sweep: Sweep, rows: list[dict], path: Path, value: RowValue, label: str) -> Path:
     """Lines, heat maps or scatter plots (see the module docstring) of ``value`` (percent)."""
     if len(sweep.axes) == 2 and sweep.combine == "grid" and not any(a.random for a in sweep.axes):
         _heatmaps(sweep, point_values(sweep, rows, value), path, label)
@@ -379,12 +454,20 @@ def _limits(sweep: Sweep, rows: list[dict], path: Path) -> Path:
     for ax, case in zip(axs[0], cases):
         unit = ""
         for model in (sweep.reference.id, *(s.id for s in sweep.models)):
-            found = [r for r in rows if r["model"] == model and r["load_case"] == case
-                     and r["limit_load"] is not None]
+            found = [
+                r
+                for r in rows
+                if r["model"] == model and r["load_case"] == case and r["limit_load"] is not None
+            ]
             if found:
                 unit = found[0]["load_unit"]
-                pts = sorted((_point(sweep, r["point"]).params.get(axis.path, 0.0)
-                              if axis else 0.0, r["limit_load"]) for r in found)
+                pts = sorted(
+                    (
+                        _point(sweep, r["point"]).params.get(axis.path, 0.0) if axis else 0.0,
+                        r["limit_load"],
+                    )
+                    for r in found
+                )
                 ax.plot(*zip(*pts), "o", ms=3, label=model)
         ax.set_title(f"load case {case}")
         ax.set_xlabel(axis.path if axis else "point")
@@ -398,8 +481,9 @@ def _runtimes(sweep: Sweep, rows: list[dict], path: Path) -> None:
     import matplotlib.pyplot as plt
 
     models = [sweep.reference.id, *(s.id for s in sweep.models)]
-    data = [[r["seconds"] for r in rows if r["model"] == m and r["seconds"] is not None]
-            for m in models]
+    data = [
+        [r["seconds"] for r in rows if r["model"] == m and r["seconds"] is not None] for m in models
+    ]
     keep = [(m, d) for m, d in zip(models, data) if d]
     fig, ax = plt.subplots(figsize=(6, 0.5 * len(keep) + 1.5))
     if keep:
@@ -416,8 +500,9 @@ def _runtimes(sweep: Sweep, rows: list[dict], path: Path) -> None:
 OPTIONAL_FIGURES = ("stress.png", "limits.png")
 
 
-def write_outputs(sweep: Sweep, rows: list[dict], out_dir: str | Path,
-                  wall: float | None = None) -> list[Path]:
+def write_outputs(
+    sweep: Sweep, rows: list[dict], out_dir: str | Path, wall: float | None = None
+) -> list[Path]:
     """Write summary.md, timings.md, errors.png, runtime.png, stress.png (with the
     ``peak_stress`` output) and limits.png (when a limit load was found) into ``out_dir``.
 
@@ -430,16 +515,26 @@ def write_outputs(sweep: Sweep, rows: list[dict], out_dir: str | Path,
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = []
-    for name, text in (("summary.md", format_summary(sweep, rows)),
-                       ("timings.md", format_timings(sweep, rows, wall))):
+    for name, text in (
+        ("summary.md", format_summary(sweep, rows)),
+        ("timings.md", format_timings(sweep, rows, wall)),
+    ):
         written.append(write_text(out / name, text))
-    written.append(_error_figure(sweep, rows, out / "errors.png",
-                                 lambda r: row_metric(r, sweep.metric), f"{sweep.metric} error"))
+    written.append(
+        _error_figure(
+            sweep,
+            rows,
+            out / "errors.png",
+            lambda r: row_metric(r, sweep.metric),
+            f"{sweep.metric} error",
+        )
+    )
     _runtimes(sweep, rows, out / "runtime.png")
     written.append(out / "runtime.png")
     if "peak_stress" in sweep.outputs:
-        written.append(_error_figure(sweep, rows, out / "stress.png", stress_metric,
-                                     "|peak stress error|"))
+        written.append(
+            _error_figure(sweep, rows, out / "stress.png", stress_metric, "|peak stress error|")
+        )
     if any(r["limit_load"] is not None for r in rows):
         written.append(_limits(sweep, rows, out / "limits.png"))
     for name in OPTIONAL_FIGURES:

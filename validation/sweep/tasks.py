@@ -58,14 +58,30 @@ def row_key(digest: str, model: str, case: str, info: TaskInfo) -> str:
 
 def base_row(point: Point, model: str, case: str, info: TaskInfo) -> dict:
     """A row with the point's identity and parameters and every result field empty."""
-    row = {"key": row_key(point.digest, model, case, info), "sweep": info.sweep,
-           "point": point.index, "model": model, "reference": info.reference,
-           "load_case": case, "status": "ok", "reason": None, "load_reached": None,
-           "seconds": None, "newton_iterations": None, "valid": None, "validity": None,
-           "load_unit": point.scene.load_case(case).unit if point.scene is not None else None,
-           "peak_stress": None, "peak_stress_flexure": None, "peak_stress_at": None,
-           "peak_stress_load": None, "peak_stress_error": None, "limit_load": None, "limit_load_error": None,
-           **{m: None for m in METRICS}}
+    row = {
+        "key": row_key(point.digest, model, case, info),
+        "sweep": info.sweep,
+        "point": point.index,
+        "model": model,
+        "reference": info.reference,
+        "load_case": case,
+        "status": "ok",
+        "reason": None,
+        "load_reached": None,
+        "seconds": None,
+        "newton_iterations": None,
+        "valid": None,
+        "validity": None,
+        "load_unit": point.scene.load_case(case).unit if point.scene is not None else None,
+        "peak_stress": None,
+        "peak_stress_flexure": None,
+        "peak_stress_at": None,
+        "peak_stress_load": None,
+        "peak_stress_error": None,
+        "limit_load": None,
+        "limit_load_error": None,
+        **{m: None for m in METRICS},
+    }
     row.update({PARAM_PREFIX + k: v for k, v in point.params.items()})
     return row
 
@@ -74,8 +90,14 @@ def _finite(lp: LoadPath) -> bool:
     return bool(np.all(np.isfinite(np.concatenate([lp.load, lp.dx, lp.dy, lp.rotation]))))
 
 
-def attempt(point: Point, spec: ModelSpec, case: str, row: dict, info: TaskInfo,
-            cache: ResultCache | None = None) -> LoadPath | None:
+def attempt(
+    point: Point,
+    spec: ModelSpec,
+    case: str,
+    row: dict,
+    info: TaskInfo,
+    cache: ResultCache | None = None,
+) -> LoadPath | None:
     """Run ``spec`` on ``case`` of the point; fill ``row`` (status, reason, time, peak
     stress, limit load if asked for); the path or None."""
     scene = point.scene
@@ -103,8 +125,11 @@ def attempt(point: Point, spec: ModelSpec, case: str, row: dict, info: TaskInfo,
     if not _finite(lp):
         row.update(status="error", reason="non-finite values in a converged path")
         return None
-    row.update(load_reached=1.0, seconds=lp.seconds,
-               newton_iterations=int(lp.stats.get("newton_iterations", 0)))
+    row.update(
+        load_reached=1.0,
+        seconds=lp.seconds,
+        newton_iterations=int(lp.stats.get("newton_iterations", 0)),
+    )
     if lp.valid is not None:
         row["valid"] = all(lp.valid)
         row["validity"] = next((v for v in lp.validity or () if v), None)
@@ -119,8 +144,12 @@ def _peak(lp: LoadPath, case: LoadCase, row: dict, info: TaskInfo) -> None:
     peak = peak_at_full_load(lp) if "peak_stress" in info.outputs else None
     if peak is not None:
         reached = 1.0 if lp.converged else abs(lp.load[-1]) / case.magnitude
-        row.update(peak_stress=peak["stress"], peak_stress_flexure=peak["flexure"],
-                   peak_stress_at=peak["at"], peak_stress_load=reached)
+        row.update(
+            peak_stress=peak["stress"],
+            peak_stress_flexure=peak["flexure"],
+            peak_stress_at=peak["at"],
+            peak_stress_load=reached,
+        )
 
 
 def _limit_load(point: Point, spec: ModelSpec, case: LoadCase, row: dict) -> float | None:
@@ -129,8 +158,7 @@ def _limit_load(point: Point, spec: ModelSpec, case: LoadCase, row: dict) -> flo
     length); a search that itself fails adds its reason to ``row``."""
     try:
         limit = first_limit(point.scene, spec, case)
-    except (SceneError, ArithmeticError, ValueError, RuntimeError,
-            np.linalg.LinAlgError) as exc:
+    except (SceneError, ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
         row["reason"] = f"{row['reason']}; limit-point search failed: {type(exc).__name__}: {exc}"
         return None
     return limit[0] if limit is not None and limit[0] <= case.magnitude else None
@@ -143,8 +171,13 @@ def _relative(value: float | None, reference: float | None) -> float | None:
     return 100.0 * (value - reference) / reference
 
 
-def run_reference(points: list[Point], spec: ModelSpec, cases: tuple[str, ...],
-                  info: TaskInfo, use_cache: bool = True) -> dict:
+def run_reference(
+    points: list[Point],
+    spec: ModelSpec,
+    cases: tuple[str, ...],
+    info: TaskInfo,
+    use_cache: bool = True,
+) -> dict:
     """The reference on every point and case: {"rows": [...], "paths": {(point, case): path},
     "limits": {(point, case): limit load}}.
 
@@ -165,8 +198,13 @@ def run_reference(points: list[Point], spec: ModelSpec, cases: tuple[str, ...],
     return {"rows": rows, "paths": paths, "limits": limits}
 
 
-def run_model_batch(points: list[Point], spec: ModelSpec, cases: tuple[str, ...],
-                    info: TaskInfo, references: list[dict]) -> list[dict]:
+def run_model_batch(
+    points: list[Point],
+    spec: ModelSpec,
+    cases: tuple[str, ...],
+    info: TaskInfo,
+    references: list[dict],
+) -> list[dict]:
     """Rows of ``spec`` on every point and case, with errors (of the paths, the peak stress
     and the limit load) against the reference's, found in ``references`` (results of
     :func:`run_reference`)."""
@@ -185,10 +223,10 @@ def run_model_batch(points: list[Point], spec: ModelSpec, cases: tuple[str, ...]
                 row.update(errors(lp, ref, p.scene.mechanism.size()))
                 ref_peak = peak_at_full_load(ref) if row["peak_stress"] is not None else None
                 row["peak_stress_error"] = _relative(
-                    row["peak_stress"], ref_peak["stress"] if ref_peak else None)
+                    row["peak_stress"], ref_peak["stress"] if ref_peak else None
+                )
             elif lp is not None:
                 row["reason"] = f"no errors: the reference {info.reference} failed here"
-            row["limit_load_error"] = _relative(row["limit_load"],
-                                                ref_limits.get((p.index, case)))
+            row["limit_load_error"] = _relative(row["limit_load"], ref_limits.get((p.index, case)))
             rows.append(row)
     return rows
