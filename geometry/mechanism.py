@@ -27,6 +27,7 @@ from .inertia import MassData
 from .magnitudes import check_magnitudes
 from .mobility import check_structure
 from .overlap import check_overlaps
+from .profiles import ThicknessProfile
 from .shapes import Shape
 
 
@@ -45,28 +46,71 @@ class Material:
 
 @dataclass(frozen=True)
 class Section:
-    """Rectangular flexure cross-section.
+    """Rectangular flexure cross-section, uniform or varying along the flexure.
 
     Parameters
     ----------
     depth : float
         b, out-of-plane depth, mm.
     thickness : float
-        h, in-plane thickness, mm.
+        h, in-plane thickness, mm; for a varying section its smallest value
+        (the one that bounds the stress and the validity of thin-beam models).
+    profile : ThicknessProfile or None
+        h(s) along the flexure (:mod:`flexval.geometry.profiles`: a linear
+        taper or a notch contour); None for a uniform section.
     """
 
     depth: float
     thickness: float
+    profile: ThicknessProfile | None = None
+
+    @property
+    def is_uniform(self) -> bool:
+        """True when the thickness is the same all along the flexure."""
+        return self.profile is None
+
+    def _uniform_only(self, what: str) -> None:
+        if self.profile is not None:
+            raise ValueError(
+                f"the section varies along the flexure ({self.profile.kind}): "
+                f"use {what}_at(s) for its {what} at arc length s"
+            )
 
     @property
     def area(self) -> float:
-        """A = b h, mm^2."""
+        """A = b h, mm^2 (a uniform section's; see :meth:`area_at`)."""
+        self._uniform_only("area")
         return self.depth * self.thickness
 
     @property
     def inertia(self) -> float:
-        """Second moment of area I = b h^3 / 12, mm^4 (in-plane bending)."""
+        """I = b h^3 / 12, mm^4 (a uniform section's; see :meth:`inertia_at`)."""
+        self._uniform_only("inertia")
         return self.depth * self.thickness**3 / 12.0
+
+    def thickness_at(self, s: np.ndarray | float) -> np.ndarray:
+        """h at arc length s (mm) from the flexure's first end, mm."""
+        if self.profile is None:
+            return np.full(np.shape(s), self.thickness)
+        return self.profile.thickness(s)
+
+    def area_at(self, s: np.ndarray | float) -> np.ndarray:
+        """A(s) = b h(s), mm^2."""
+        return self.depth * self.thickness_at(s)
+
+    def inertia_at(self, s: np.ndarray | float) -> np.ndarray:
+        """I(s) = b h(s)^3 / 12, mm^4."""
+        return self.depth * self.thickness_at(s) ** 3 / 12.0
+
+    @property
+    def max_thickness(self) -> float:
+        """The largest thickness along the flexure, mm."""
+        return self.thickness if self.profile is None else self.profile.max_thickness
+
+    def scaled(self, factor: float) -> Section:
+        """The section with every length (depth, thickness, profile) multiplied by ``factor``."""
+        profile = None if self.profile is None else self.profile.scaled(factor)
+        return Section(self.depth * factor, self.thickness * factor, profile)
 
 
 @dataclass(frozen=True)
@@ -103,12 +147,20 @@ class Flexure:
         return p[0] if body == self.start_body else p[1]
 
     def bending_stiffness(self, material: Material) -> float:
-        """EI, N mm^2."""
+        """EI of a uniform flexure, N mm^2 (see :meth:`bending_stiffness_at`)."""
         return material.youngs_modulus * self.section.inertia
 
     def axial_stiffness(self, material: Material) -> float:
-        """EA, N."""
+        """EA of a uniform flexure, N (see :meth:`axial_stiffness_at`)."""
         return material.youngs_modulus * self.section.area
+
+    def bending_stiffness_at(self, material: Material, s: np.ndarray | float) -> np.ndarray:
+        """EI(s) at arc length s (mm) from the first end, N mm^2."""
+        return material.youngs_modulus * self.section.inertia_at(s)
+
+    def axial_stiffness_at(self, material: Material, s: np.ndarray | float) -> np.ndarray:
+        """EA(s) at arc length s (mm) from the first end, N."""
+        return material.youngs_modulus * self.section.area_at(s)
 
 
 @dataclass(frozen=True)
