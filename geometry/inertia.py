@@ -29,15 +29,95 @@ from typing import Any
 
 import numpy as np
 
+from .fields import ABSENT, Field, Table
 from .magnitudes import SMALLEST_NORMAL
 
 PLA_DENSITY = 1.24e-9
 """Density of PLA, t/mm^3 (1240 kg/m^3): the default of studies on scenes without mass data."""
+MAX_DENSITY = 1e-3
+"""Largest accepted density, t/mm^3: a value in kg/m^3 or g/cm^3 by mistake is above it."""
+MASS_LIMIT = 1e12
+"""Largest accepted mass (t), inertia (t mm^2) or outline depth (mm)."""
+GRAVITY_LIMIT = 1e9
+"""Largest accepted gravity component, mm/s^2."""
 
-MASS_KEYS = frozenset({"mass", "inertia", "center_of_mass", "outline", "depth"})
+DENSITY_FIELD = Field(
+    "density",
+    "number",
+    "density of the flexures' material (PLA: about 1.24e-9, steel 7.85e-9); "
+    "needed by body outlines",
+    unit="t/mm³",
+    default=ABSENT,
+    positive=True,
+    maximum=MAX_DENSITY,
+)
+"""``material.density``: optional; without it the flexures are massless."""
+
+MASS_FIELDS = (
+    Field(
+        "mass",
+        "number",
+        "mass of the body; give mass, inertia and center_of_mass together",
+        unit="t",
+        default=ABSENT,
+        positive=True,
+        limit=MASS_LIMIT,
+    ),
+    Field(
+        "inertia",
+        "number",
+        "polar moment of inertia about the centre of mass (≥ 0)",
+        unit="t mm²",
+        default=ABSENT,
+        limit=MASS_LIMIT,
+    ),
+    Field(
+        "center_of_mass",
+        "point",
+        "centre of mass in the undeformed configuration",
+        unit="mm",
+        default=ABSENT,
+    ),
+    Field(
+        "outline",
+        "points",
+        "the body as a simple polygon of at least 3 points, of material.density: "
+        "instead of mass, inertia and center_of_mass",
+        unit="mm",
+        default=ABSENT,
+    ),
+    Field(
+        "depth",
+        "number",
+        "out-of-plane depth of an outline",
+        unit="mm",
+        default=ABSENT,
+        default_text="[section] depth",
+        positive=True,
+        limit=MASS_LIMIT,
+    ),
+)
 """Fields of a ``[[bodies]]`` table that describe its mass."""
 
-GRAVITY_KEYS = frozenset({"acceleration"})
+MASS_KEYS = frozenset(f.name for f in MASS_FIELDS)
+"""Names of :data:`MASS_FIELDS`."""
+
+GRAVITY = Table(
+    "gravity",
+    "Optional: a uniform gravity field. Without it the mechanism is weightless.",
+    (
+        Field(
+            "acceleration",
+            "point",
+            "gravitational acceleration [gx, gy] (Earth, downwards: [0.0, -9810.0])",
+            unit="mm/s²",
+            limit=GRAVITY_LIMIT,
+        ),
+    ),
+)
+"""The ``[gravity]`` table."""
+
+GRAVITY_KEYS = GRAVITY.keys()
 """Fields of the ``[gravity]`` table."""
 
 
@@ -135,8 +215,8 @@ def _positive(fail: Fail, field_name: str, value: Any, allow_zero: bool = False)
             f"is below the smallest normal double ({SMALLEST_NORMAL:g}): "
             "masses and frequencies computed from it lose all precision or vanish",
         )
-    if value > 1e12:
-        fail(field_name, value, "absurd magnitude (> 1e12)")
+    if value > MASS_LIMIT:
+        fail(field_name, value, f"absurd magnitude (> {MASS_LIMIT:g})")
     return float(value)
 
 
@@ -159,7 +239,7 @@ def parse_density(material: dict, fail: Fail) -> float | None:
     if "density" not in material:
         return None
     value = _positive(fail, "material.density", material["density"])
-    if value > 1e-3:
+    if value > DENSITY_FIELD.maximum:
         fail(
             "material.density",
             value,
@@ -185,8 +265,12 @@ def parse_gravity(data: dict, fail: Fail) -> np.ndarray | None:
     if "acceleration" not in table:
         fail("gravity.acceleration", None, "missing value [gx, gy] in mm/s^2")
     g = _point(fail, "gravity.acceleration", table["acceleration"])
-    if np.abs(g).max() > 1e9:
-        fail("gravity.acceleration", table["acceleration"], "absurd magnitude (> 1e9 mm/s^2)")
+    if np.abs(g).max() > GRAVITY_LIMIT:
+        fail(
+            "gravity.acceleration",
+            table["acceleration"],
+            f"absurd magnitude (> {GRAVITY_LIMIT:g} mm/s^2)",
+        )
     return g
 
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .fields import ABSENT, Field
 from .kinematics import rotation
 from .timelaw import TimeLaw
 
@@ -21,6 +22,57 @@ MAX_LOAD_SUBSTEPS = 20_000
 
 Each of a load case's ``levels - 1`` increments takes at least one sub-step, so a load
 case may have at most this many levels; more would run long and then stop at the cap."""
+
+LOAD_KINDS = ("moment", "force")
+LOAD_VALUE_LIMIT = 1e9
+"""Largest magnitude of a load's value (N or N mm) a scene may give."""
+
+LOAD_FIELDS = (
+    Field("kind", "choice", "what the load is", choices=LOAD_KINDS),
+    Field(
+        "value",
+        "number",
+        "full value at load factor 1: N mm for a moment (counterclockwise positive), "
+        "N for a force (may be negative)",
+        unit="N or N mm",
+        limit=LOAD_VALUE_LIMIT,
+    ),
+    Field(
+        "body",
+        "name",
+        "the loaded body",
+        default=ABSENT,
+        default_text="the target body",
+    ),
+    Field(
+        "point",
+        "point",
+        "point of application in the undeformed configuration (force only); it moves with the body",
+        unit="mm",
+        default=ABSENT,
+        default_text="the target point",
+    ),
+    Field(
+        "angle_deg",
+        "number",
+        "direction of a force, from the x axis, counterclockwise (force only; "
+        "required for a force); the force keeps it (dead load)",
+        unit="deg",
+        default=ABSENT,
+    ),
+)
+"""Fields of one load: a ``[[load_cases]]`` entry of a single load, or an element of its
+``loads`` array."""
+
+LEVELS_FIELD = Field(
+    "levels",
+    "integer",
+    "number of equally spaced load levels from 0 to full load (each of the levels - 1 "
+    "increments takes at least one solver sub-step)",
+    default=DEFAULT_LEVELS,
+    minimum=2,
+    maximum=MAX_LOAD_SUBSTEPS,
+)
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,10 @@ checked; a bad one raises :class:`SceneError` naming the file, the field and
 the value. Angles are degrees in the file and radians in memory; lengths mm,
 moduli MPa, forces N, moments N mm.
 
-The format (see README.md for a full example)::
+Every table's fields are declared once in :mod:`flexval.geometry.scenefields`
+(kind, unit, default, allowed values); the parser takes its known fields,
+defaults and range checks from there, and the scene file reference is
+generated from the same declarations (:func:`field_reference`). In short::
 
     name = "..."                      # optional, defaults to the file stem
     [material]  youngs_modulus, poisson_ratio
@@ -43,15 +46,48 @@ from typing import Any
 import numpy as np
 
 from .errors import SceneError
-from .inertia import MASS_KEYS, MassData, parse_body_mass, parse_density, parse_gravity
-from .loads import DEFAULT_LEVELS, MAX_LOAD_SUBSTEPS, Force, LoadCase, Moment
+from .fields import REQUIRED, Field, Table
+from .inertia import MassData, parse_body_mass, parse_density, parse_gravity
+from .loads import Force, LoadCase, Moment
 from .magnitudes import SMALLEST_NORMAL
 from .mechanism import FlexureSpec, Material, Mechanism, PinSpec, Section, assemble
+from .scenefields import (
+    BODIES,
+    COORDINATE_LIMIT,
+    FLEXURES,
+    GROUND,
+    LOAD_CASES,
+    LOAD_COMPONENTS,
+    MATERIAL,
+    MAX_NAME_LENGTH,
+    NUMBER_LIMIT,
+    OUTPUTS,
+    PINS,
+    REQUEST,
+    SCENE,
+    SECTION,
+    TARGET,
+    field_reference,
+)
 from .shapes import Arc, Segment
-from .timelaw import TIME_LAW_KEYS, parse_time_law
+from .timelaw import parse_time_law
 
 BUILTIN_SCENES = ("open_chain", "closed_chain")
-OUTPUTS = {"poses", "shape", "vtu", "png"}
+
+__all__ = [
+    "BUILTIN_SCENES",
+    "MAX_NAME_LENGTH",
+    "OUTPUTS",
+    "Scene",
+    "field_reference",
+    "load_scene",
+    "parse_scene",
+    "read_scene_data",
+]
+
+_UNIT_WORDS = {"deg": "degrees"}
+"""How a range check's message names a unit, where not by its symbol."""
+_UNSET: Any = object()
 
 
 @dataclass(frozen=True)
@@ -110,7 +146,7 @@ class _Reader:
         *,
         default: float | None = None,
         positive: bool = False,
-        limit: float = 1e12,
+        limit: float = NUMBER_LIMIT,
     ) -> float:
         field = f"{where}{key}"
         if key not in data:
@@ -144,7 +180,7 @@ class _Reader:
             self.fail(field, v, "must be a point [x, y] in mm")
         return np.array(
             [
-                self.number({f"{key}[{i}]": c}, f"{key}[{i}]", where, limit=1e9)
+                self.number({f"{key}[{i}]": c}, f"{key}[{i}]", where, limit=COORDINATE_LIMIT)
                 for i, c in enumerate(v)
             ]
         )
@@ -181,50 +217,82 @@ class _Reader:
             self.fail(f"{where}bodies", bodies, f"a {what} must join two different bodies")
         return bodies
 
-    def known_keys(self, data: dict, allowed: set[str], where: str) -> None:
+    def known_keys(
+        self, data: dict, table: Table | set[str], where: str, variant: str | None = None
+    ) -> None:
+        """Refuse a field of ``data`` that ``table`` (of ``variant``) does not declare."""
+        allowed = table.keys(variant) if isinstance(table, Table) else table
         for k in data:
             if k not in allowed:
                 self.fail(
                     f"{where}{k}", data[k], f"unknown field; expected one of {sorted(allowed)}"
                 )
 
+    def value(self, data: dict, field: Field, where: str, default: Any = _UNSET) -> Any:
+        """``data``'s value of the declared ``field``, read and checked as declared.
+
+        ``default`` overrides the declared default (a default the parser computes,
+        such as a flexure's section). Fields of kind number, point, name and choice
+        are read here; a field of another kind is read by its table's own code.
+        """
+        d = field.default if default is _UNSET else default
+        if field.name not in data and d is not REQUIRED:
+            return d
+        kind = field.kind
+        if kind == "number":
+            v = self.number(
+                data,
+                field.name,
+                where,
+                positive=field.positive,
+                limit=NUMBER_LIMIT if field.limit is None else field.limit,
+            )
+            self.in_range(field, v, where)
+            return v
+        if kind == "point":
+            return self.point(data, field.name, where)
+        if kind == "name":
+            return self.name(data, field.name, where)
+        if kind == "choice":
+            v = data.get(field.name)
+            if v not in field.choices:
+                words = [repr(c) for c in field.choices]
+                text = " or ".join([", ".join(words[:-1]), words[-1]] if len(words) > 1 else words)
+                self.fail(f"{where}{field.name}", v, f"must be {text}")
+            return v
+        raise TypeError(f"field {field.name!r} ({kind}) is read by its table's own code")
+
+    def in_range(self, field: Field, v: float, where: str) -> None:
+        """Refuse a number outside ``field``'s declared interval or bounds."""
+        unit = _UNIT_WORDS.get(field.unit, field.unit)
+        unit = f" {unit}" if unit else ""
+        if field.interval is not None:
+            lo, hi = field.interval
+            if not lo < v < hi:
+                self.fail(f"{where}{field.name}", v, f"must be in ({lo:g}, {hi:g}){unit}")
+        lo = -math.inf if field.minimum is None else field.minimum
+        hi = math.inf if field.maximum is None else field.maximum
+        if not lo <= v <= hi:
+            self.fail(f"{where}{field.name}", v, f"must be from {lo:g} to {hi:g}{unit}")
+
 
 def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> FlexureSpec:
     if not isinstance(f, dict):
         rd.fail(f"flexures[{k}]", f, "must be a table")
-    name = rd.name(f, "name", f"flexures[{k}].")
+    name = rd.value(f, FLEXURES["name"], f"flexures[{k}].")
     where = f"flexures.{name}."
-    rd.known_keys(
-        f,
-        {
-            "name",
-            "bodies",
-            "shape",
-            "center",
-            "radius",
-            "axis_deg",
-            "width_deg",
-            "start",
-            "end",
-            "start_body",
-            "depth",
-            "thickness",
-        },
-        where,
-    )
+    rd.known_keys(f, FLEXURES, where)
     bodies = rd.body_pair(f, where, "flexure")
     section = Section(
-        rd.number(f, "depth", where, default=default_section.depth, positive=True),
-        rd.number(f, "thickness", where, default=default_section.thickness, positive=True),
+        rd.value(f, FLEXURES["depth"], where, default=default_section.depth),
+        rd.value(f, FLEXURES["thickness"], where, default=default_section.thickness),
     )
-    kind = f.get("shape", "arc")
+    kind = rd.value(f, FLEXURES["shape"], where)
     if kind == "arc":
-        center = rd.point(f, "center", where)
-        radius = rd.number(f, "radius", where, positive=True)
-        axis = rd.number(f, "axis_deg", where)
-        width = rd.number(f, "width_deg", where)
-        if not 0.0 < width < 360.0:
-            rd.fail(f"{where}width_deg", width, "must be in (0, 360) degrees")
+        center = rd.value(f, FLEXURES["center"], where)
+        radius = rd.value(f, FLEXURES["radius"], where)
+        axis = rd.value(f, FLEXURES["axis_deg"], where)
+        width = rd.value(f, FLEXURES["width_deg"], where)
         if section.thickness >= 2.0 * radius:
             rd.fail(
                 f"{where}thickness",
@@ -234,16 +302,12 @@ def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> Fle
         shape = Arc(
             (float(center[0]), float(center[1])), radius, math.radians(axis), math.radians(width)
         )
-    elif kind == "segment":
-        a, b = rd.point(f, "start", where), rd.point(f, "end", where)
+    else:  # segment
+        a, b = rd.value(f, FLEXURES["start"], where), rd.value(f, FLEXURES["end"], where)
         if np.hypot(*(b - a)) <= 0.0:
             rd.fail(f"{where}end", list(b), "segment has zero length")
         shape = Segment(tuple(map(float, a)), tuple(map(float, b)))
-    else:
-        rd.fail(f"{where}shape", kind, "must be 'arc' or 'segment'")
-    start_body = f.get("start_body")
-    if start_body is not None:
-        start_body = rd.name(f, "start_body", where)
+    start_body = rd.value(f, FLEXURES["start_body"], where)
     return FlexureSpec(name, shape, tuple(bodies), section, start_body)
 
 
@@ -251,25 +315,28 @@ def _pin_spec(rd: _Reader, p: dict, k: int) -> PinSpec:
     """One ``[[pins]]`` table: a revolute joint between two different bodies at a point."""
     if not isinstance(p, dict):
         rd.fail(f"pins[{k}]", p, "must be a table")
-    name = rd.name(p, "name", f"pins[{k}].")
+    name = rd.value(p, PINS["name"], f"pins[{k}].")
     where = f"pins.{name}."
-    rd.known_keys(p, {"name", "bodies", "point"}, where)
+    rd.known_keys(p, PINS, where)
     bodies = rd.body_pair(p, where, "pin")
-    point = rd.point(p, "point", where)
+    point = rd.value(p, PINS["point"], where)
     return PinSpec(name, tuple(bodies), (float(point[0]), float(point[1])))
 
 
-_COMPONENT_KEYS = {"kind", "body", "point", "angle_deg", "value"}
-"""Fields of one load; a load case adds ``name`` and ``levels`` (or ``loads`` to combine)."""
-
-
 def _load_component(
-    rd: _Reader, c: dict, where: str, target_body: str, target_point: np.ndarray, allowed: set[str]
+    rd: _Reader,
+    c: dict,
+    where: str,
+    target_body: str,
+    target_point: np.ndarray,
+    table: Table,
+    variant: str | None = None,
 ) -> Moment | Force:
-    rd.known_keys(c, allowed, where)
+    """One load: the fields of ``table`` (of ``variant``) in ``c``."""
+    rd.known_keys(c, table, where, variant)
     kind = c.get("kind")
-    value = rd.number(c, "value", where, limit=1e9)
-    body = rd.name(c, "body", where) if "body" in c else target_body
+    value = rd.value(c, table["value"], where)
+    body = rd.value(c, table["body"], where, default=target_body)
     if kind == "moment":
         for key in ("point", "angle_deg"):
             if key in c:
@@ -281,15 +348,14 @@ def _load_component(
                 )
         return Moment(body, value)
     if kind == "force":
-        point = rd.point(c, "point", where) if "point" in c else target_point
-        return Force(body, point, math.radians(rd.number(c, "angle_deg", where)), value)
+        point = rd.value(c, table["point"], where, default=target_point)
+        angle = rd.value(c, table["angle_deg"], where, default=REQUIRED)
+        return Force(body, point, math.radians(angle), value)
     rd.fail(f"{where}kind", kind, "must be 'moment' or 'force'")
 
 
 _UNSAFE_NAME_CHARACTERS = set('/\\<>:"|?*')
 """Characters that are path separators or not allowed in file names on common systems."""
-MAX_NAME_LENGTH = 200
-"""Longest scene name (characters): it must fit a file name (255 bytes) with a suffix."""
 
 
 def _scene_name(rd: _Reader, value: Any) -> str:
@@ -320,29 +386,27 @@ def _scene_name(rd: _Reader, value: Any) -> str:
 def _material(rd: _Reader, data: dict) -> tuple[Material, dict]:
     """``[material]``: E (MPa) and nu, and the raw table (its density is read later)."""
     mat = rd.table(data, "material", "")
-    rd.known_keys(mat, {"youngs_modulus", "poisson_ratio", "density"}, "material.")
-    E = rd.number(mat, "youngs_modulus", "material.", positive=True)
-    nu = rd.number(mat, "poisson_ratio", "material.", default=0.3)
-    if not -1.0 < nu < 0.5:
-        rd.fail("material.poisson_ratio", nu, "must be in (-1, 0.5)")
+    rd.known_keys(mat, MATERIAL, "material.")
+    E = rd.value(mat, MATERIAL["youngs_modulus"], "material.")
+    nu = rd.value(mat, MATERIAL["poisson_ratio"], "material.")
     return Material(E, nu), mat
 
 
 def _section(rd: _Reader, data: dict) -> Section:
     """``[section]``: the default depth b and thickness h of every flexure, mm."""
     sec = rd.table(data, "section", "")
-    rd.known_keys(sec, {"depth", "thickness"}, "section.")
+    rd.known_keys(sec, SECTION, "section.")
     return Section(
-        rd.number(sec, "depth", "section.", positive=True),
-        rd.number(sec, "thickness", "section.", positive=True),
+        rd.value(sec, SECTION["depth"], "section."),
+        rd.value(sec, SECTION["thickness"], "section."),
     )
 
 
 def _ground(rd: _Reader, data: dict) -> tuple[str, np.ndarray]:
     """``[ground]``: its name and the points (mm) where it holds flexures."""
     ground_t = rd.table(data, "ground", "")
-    rd.known_keys(ground_t, {"name", "points"}, "ground.")
-    ground = rd.name(ground_t, "name", "ground.")
+    rd.known_keys(ground_t, GROUND, "ground.")
+    ground = rd.value(ground_t, GROUND["name"], "ground.")
     gpts = ground_t.get("points")
     if not (isinstance(gpts, list) and gpts):
         rd.fail(
@@ -356,8 +420,10 @@ def _ground(rd: _Reader, data: dict) -> tuple[str, np.ndarray]:
 def _target(rd: _Reader, data: dict) -> tuple[str, np.ndarray]:
     """``[target]``: the target body and its tracing point, mm."""
     target_t = rd.table(data, "target", "")
-    rd.known_keys(target_t, {"body", "point"}, "target.")
-    return rd.name(target_t, "body", "target."), rd.point(target_t, "point", "target.")
+    rd.known_keys(target_t, TARGET, "target.")
+    return rd.value(target_t, TARGET["body"], "target."), rd.value(
+        target_t, TARGET["point"], "target."
+    )
 
 
 def _bodies(
@@ -367,8 +433,8 @@ def _bodies(
     body_points, body_masses = {}, {}
     for k, b in enumerate(rd.array(data, "bodies", "", "tables [[bodies]]")):
         b = rd.item_table(b, f"bodies[{k}]")
-        bname = rd.name(b, "name", f"bodies[{k}].")
-        rd.known_keys(b, {"name", "points", *MASS_KEYS}, f"bodies.{bname}.")
+        bname = rd.value(b, BODIES["name"], f"bodies[{k}].")
+        rd.known_keys(b, BODIES, f"bodies.{bname}.")
         if bname in body_points:
             rd.fail("bodies.name", bname, "duplicate [[bodies]] entry: list a body's points once")
         rigid_mass = parse_body_mass(b, f"bodies.{bname}.", density, depth, rd.fail)
@@ -426,24 +492,25 @@ def _mechanism(rd: _Reader, data: dict, source: str) -> Mechanism:
 def _load_case(rd: _Reader, c: Any, k: int, mech: Mechanism) -> LoadCase:
     """One ``[[load_cases]]`` entry (a single load, or ``loads`` combined) on ``mech``."""
     c = rd.item_table(c, f"load_cases[{k}]")
-    lname = rd.name(c, "name", f"load_cases[{k}].")
+    lname = rd.value(c, LOAD_CASES["name"], f"load_cases[{k}].")
     where = f"load_cases.{lname}."
-    levels = c.get("levels", DEFAULT_LEVELS)
+    spec = LOAD_CASES["levels"]
+    levels = c.get("levels", spec.default)
     if (
         isinstance(levels, bool)
         or not isinstance(levels, int)
-        or not 2 <= levels <= MAX_LOAD_SUBSTEPS
+        or not spec.minimum <= levels <= spec.maximum
     ):
         rd.fail(
             f"{where}levels",
             levels,
-            f"must be an integer from 2 to {MAX_LOAD_SUBSTEPS} (each of the levels - 1 "
-            f"load increments takes at least one of the solver's {MAX_LOAD_SUBSTEPS} "
-            "sub-steps)",
+            f"must be an integer from {spec.minimum} to {spec.maximum} (each of the "
+            f"levels - 1 load increments takes at least one of the solver's "
+            f"{spec.maximum} sub-steps)",
         )
     target_body, target_point = mech.target_body, mech.target_point
     if "loads" in c:
-        rd.known_keys(c, {"name", "levels", "loads", *TIME_LAW_KEYS}, where)
+        rd.known_keys(c, LOAD_CASES, where, "combined")
         comps = tuple(
             _load_component(
                 rd,
@@ -451,7 +518,7 @@ def _load_case(rd: _Reader, c: Any, k: int, mech: Mechanism) -> LoadCase:
                 f"{where}loads[{i}].",
                 target_body,
                 target_point,
-                _COMPONENT_KEYS,
+                LOAD_COMPONENTS,
             )
             for i, x in enumerate(rd.array(c, "loads", where, "load tables"))
         )
@@ -465,7 +532,8 @@ def _load_case(rd: _Reader, c: Any, k: int, mech: Mechanism) -> LoadCase:
                 where,
                 target_body,
                 target_point,
-                _COMPONENT_KEYS | {"name", "levels", *TIME_LAW_KEYS},
+                LOAD_CASES,
+                "single",
             ),
         )
     for comp in comps:
@@ -506,7 +574,7 @@ def _refuse_dangling_bodies(rd: _Reader, mech: Mechanism, cases: list[LoadCase])
 def _request(rd: _Reader, data: dict) -> tuple[tuple, list]:
     """``[request]``: model ids (text, parsed by the model catalogue when used) and outputs."""
     req = rd.table(data, "request", "", required=False)
-    rd.known_keys(req, {"models", "outputs"}, "request.")
+    rd.known_keys(req, REQUEST, "request.")
     models = tuple(rd.array(req, "models", "request.", "model names"))
     for m in models:
         if not isinstance(m, str):
@@ -527,24 +595,7 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
     value is checked where it is read (:class:`SceneError` names the field).
     """
     rd = _Reader(source)
-    rd.known_keys(
-        data,
-        {
-            "name",
-            "description",
-            "material",
-            "section",
-            "ground",
-            "target",
-            "flexures",
-            "bodies",
-            "pins",
-            "load_cases",
-            "request",
-            "gravity",
-        },
-        "",
-    )
+    rd.known_keys(data, SCENE, "")
     name = _scene_name(rd, data.get("name", default_name))
     mech = _mechanism(rd, data, source)
     cases = _load_cases(rd, data, mech)

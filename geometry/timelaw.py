@@ -21,8 +21,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-TIME_LAW_KEYS = frozenset({"ramp", "t0", "t1", "end_time"})
-"""Fields of a ``[[load_cases]]`` table that set its time law."""
+from .fields import ABSENT, Field
+
+TIME_LIMIT = 1e9
+"""Largest time (s) a time law may name."""
 
 
 def eq15_ramp(t: float, t0: float, t1: float) -> float:
@@ -47,6 +49,49 @@ def linear_ramp(t: float, t0: float, t1: float) -> float:
 
 RAMPS = {"eq15": eq15_ramp, "linear": linear_ramp}
 
+TIME_LAW_FIELDS = (
+    Field(
+        "ramp",
+        "choice",
+        "how the load factor grows in a dynamic run: the paper's Eq. 15 smooth step or a "
+        "straight line (static runs ignore the time law)",
+        default="eq15",
+        choices=tuple(RAMPS),
+    ),
+    Field(
+        "t0",
+        "number",
+        "load factor 0 until this time",
+        unit="s",
+        default=0.0,
+        minimum=0.0,
+        maximum=TIME_LIMIT,
+    ),
+    Field(
+        "t1",
+        "number",
+        "load factor 1 from this time on; required once any time-law field is given; > t0",
+        unit="s",
+        default=ABSENT,
+        minimum=0.0,
+        maximum=TIME_LIMIT,
+    ),
+    Field(
+        "end_time",
+        "number",
+        "default duration of a dynamic run",
+        unit="s",
+        default=ABSENT,
+        default_text="1.25 t1",
+        minimum=0.0,
+        maximum=TIME_LIMIT,
+    ),
+)
+"""Fields of a ``[[load_cases]]`` table that set its time law."""
+
+TIME_LAW_KEYS = frozenset(f.name for f in TIME_LAW_FIELDS)
+"""Names of :data:`TIME_LAW_FIELDS`."""
+
 
 @dataclass(frozen=True)
 class TimeLaw:
@@ -70,12 +115,13 @@ def parse_time_law(case: dict, where: str, fail: Callable[[str, Any, str], None]
     """The time law of one ``[[load_cases]]`` table (``where`` is its field prefix), or None."""
     if not TIME_LAW_KEYS & set(case):
         return None
-    ramp = case.get("ramp", "eq15")
+    ramp = case.get("ramp", TIME_LAW_FIELDS[0].default)
     if ramp not in RAMPS:
         fail(f"{where}ramp", ramp, f"must be one of {sorted(RAMPS)}")
     values = {}
-    for key, default in (("t0", 0.0), ("t1", None), ("end_time", None)):
-        v = case.get(key, default)
+    for f in TIME_LAW_FIELDS[1:]:
+        key = f.name
+        v = case.get(key, f.default)
         if v is None:
             if key == "t1":
                 fail(f"{where}t1", None, "a ramp needs its end time t1 (s)")
@@ -85,8 +131,8 @@ def parse_time_law(case: dict, where: str, fail: Callable[[str, Any, str], None]
             isinstance(v, bool)
             or not isinstance(v, (int, float))
             or not math.isfinite(v)
-            or v < 0.0
-            or v > 1e9
+            or v < f.minimum
+            or v > f.maximum
         ):
             fail(f"{where}{key}", v, "must be a time in s, from 0 to 1e9")
         values[key] = float(v)
