@@ -20,6 +20,7 @@ from .compare import errors
 from .failures import Failure
 from .figurejobs import draw_now
 from .outputs import output_path, write_json, write_text
+from .tables import Column, markdown_table, sig
 
 #: the reduced models of the study, every resolution of the paper's range and beyond
 SWEEP_MODELS = (
@@ -127,14 +128,14 @@ def write_bench(
         "displacement error (percent); time: mean over load cases of the median wall "
         "time per load path (s).",
         "",
-        "| model | seconds | error (%) | Pareto |",
-        "|---|---:|---:|:---:|",
     ]
-    for k, r in enumerate(rows):
-        lines.append(
-            f"| {r['model']} | {r['seconds']:.4f} | {r['error']:.3g} | "
-            f"{'yes' if k in front else ''} |"
-        )
+    lines += markdown_table(
+        [Column("model", "<"), Column("seconds"), Column("error (%)"), Column("Pareto", "<")],
+        [
+            [r["model"], sig(r["seconds"], 3), sig(r["error"], 3), "yes" if k in front else ""]
+            for k, r in enumerate(rows)
+        ],
+    )
     png = output_path(out, stem, ".png")
     draw(plot, rows, f"{scene.name}: runtime vs error (reference {reference})", png)
     if failures:

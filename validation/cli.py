@@ -30,6 +30,7 @@ from .outputs import (
     safe_name,
     write_json,
 )
+from .tables import GAP, SIG_WIDTH, Column, header, sig, text_row, text_table
 
 EXIT_OK, EXIT_INPUT, EXIT_SOLVER, EXIT_OUTPUT = 0, 2, 3, 4
 COMMAND_LINE = "<command line>"
@@ -85,6 +86,16 @@ def _cmd_info(args: argparse.Namespace) -> int:
     print(format_info(info))
     if json_path:
         write_json(json_path, info)
+    return EXIT_OK
+
+
+def _cmd_models(args: argparse.Namespace) -> int:
+    from .modelinfo import catalogue_record, format_models
+
+    json_path = check_file(args.json, "--json") if args.json is not None else None
+    print(format_models())
+    if json_path:
+        write_json(json_path, catalogue_record())
     return EXIT_OK
 
 
@@ -221,30 +232,54 @@ def _cmd_run(args: argparse.Namespace) -> int:
             cache.put(key, lp)
         return lp
 
-    w = max(14, *(len(sp.id) for sp in specs))
+    flexures = scene.mechanism.flexures
+    columns = [
+        _model_column(specs, ":arclength" if args.arclength else ""),
+        _case_column(cases),
+        Column("load", width=SIG_WIDTH),
+        Column("unit", "<", width=4),
+        Column("dx mm", width=9),
+        Column("dy mm", width=9),
+        Column("|d| mm", width=9),
+        Column("rot deg", width=8),
+        Column("peak MPa", width=SIG_WIDTH),
+        Column("at", "<", width=max((len(f.name) for f in flexures), default=0) + 5),
+        Column("iters", width=5),
+        Column("seconds", width=8),
+        Column("valid", width=2 * len(str(_most_levels(args, cases))) + 1),
+    ]
 
     def row(lp) -> None:
         print(
-            f"{lp.model:<{w}} {lp.load_case:<6} {lp.load[-1]:>9.4g} {lp.load_unit:<2}"
-            f"{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} {lp.displacement[-1]:>10.4f} "
-            f"{math.degrees(lp.rotation[-1]):>9.3f} {_peak_column(lp)} "
-            f"{lp.stats.get('newton_iterations', 0):>6} {lp.seconds:>9.4f} "
-            f"{_valid_cell(lp):>7}"
+            text_row(
+                columns,
+                [
+                    lp.model,
+                    lp.load_case,
+                    sig(lp.load[-1]),
+                    lp.load_unit,
+                    f"{lp.dx[-1]:.4f}",
+                    f"{lp.dy[-1]:.4f}",
+                    f"{lp.displacement[-1]:.4f}",
+                    f"{math.degrees(lp.rotation[-1]):.3f}",
+                    *_peak_cells(lp),
+                    str(lp.stats.get("newton_iterations", 0)),
+                    sig(lp.seconds, 3),
+                    _valid_cell(lp),
+                ],
+            )
         )
         note = _validity_note(lp)
         if note:
             print(note)
         for point in lp.limit_points or []:
             print(
-                f"{'':<{w}} limit point: load {point['load']:.6g} {lp.load_unit}, "
-                f"dx {point['dx']:.6g} mm, dy {point['dy']:.6g} mm, "
+                f"{'':<{columns[0].size}}{GAP}limit point: load {point['load']:.6g} "
+                f"{lp.load_unit}, dx {point['dx']:.6g} mm, dy {point['dy']:.6g} mm, "
                 f"rot {math.degrees(point['rotation']):.6g} deg"
             )
 
-    print(
-        f"{'model':<{w}} {'case':<6} {'load':>11} {'dx mm':>10} {'dy mm':>10} {'|d| mm':>10} "
-        f"{'rot deg':>9} {'peak MPa':>9} {'at':<12} {'iters':>6} {'seconds':>9} {'valid':>7}"
-    )
+    print(header(columns))
     return _run_each(specs, cases, run_one, row, scene, json_path)
 
 
@@ -269,19 +304,62 @@ def _run_dynamic(args: argparse.Namespace, scene, specs, cases, json_path) -> in
             args.error_tol,
         )
 
+    columns = [
+        _model_column(specs),
+        _case_column(cases),
+        Column("t s", width=SIG_WIDTH),
+        Column("load", width=SIG_WIDTH),
+        Column("unit", "<", width=4),
+        Column("dx mm", width=9),
+        Column("dy mm", width=9),
+        Column("rot deg", width=8),
+        Column("steps", width=5),
+        Column("rejected", width=8),
+        Column("seconds", width=8),
+    ]
+
     def row(lp) -> None:
         print(
-            f"{lp.model:<14} {lp.load_case:<6} {lp.time[-1]:>9.4g} {lp.load[-1]:>9.4g} "
-            f"{lp.load_unit:<2}{lp.dx[-1]:>9.4f} {lp.dy[-1]:>10.4f} "
-            f"{math.degrees(lp.rotation[-1]):>9.3f} {lp.stats['steps']:>6} "
-            f"{lp.stats['rejected_steps']:>8} {lp.seconds:>9.4f}"
+            text_row(
+                columns,
+                [
+                    lp.model,
+                    lp.load_case,
+                    sig(lp.time[-1]),
+                    sig(lp.load[-1]),
+                    lp.load_unit,
+                    f"{lp.dx[-1]:.4f}",
+                    f"{lp.dy[-1]:.4f}",
+                    f"{math.degrees(lp.rotation[-1]):.3f}",
+                    str(lp.stats["steps"]),
+                    str(lp.stats["rejected_steps"]),
+                    sig(lp.seconds, 3),
+                ],
+            )
         )
 
-    print(
-        f"{'model':<14} {'case':<6} {'t s':>9} {'load':>11} {'dx mm':>10} {'dy mm':>10} "
-        f"{'rot deg':>9} {'steps':>6} {'rejected':>8} {'seconds':>9}"
-    )
+    print(header(columns))
     return _run_each(specs, cases, run_one, row, scene, json_path)
+
+
+def _model_column(specs, suffix: str = "") -> Column:
+    """The ``model`` column of a run table: as wide as the longest canonical id (and the
+    ``suffix`` its results carry, e.g. ``:arclength``)."""
+    return Column("model", "<", width=max((len(sp.id + suffix) for sp in specs), default=0))
+
+
+def _case_column(cases) -> Column:
+    """The ``case`` column of a run table: as wide as the longest load case name."""
+    return Column("case", "<", width=max((len(c.name) for c in cases), default=0))
+
+
+def _most_levels(args: argparse.Namespace, cases) -> int:
+    """The most load levels a run line can count in its ``valid`` cell."""
+    if args.arclength:
+        from .limits import DEFAULT_STEPS
+
+        return max(1000, args.levels or DEFAULT_STEPS)
+    return args.levels or max((c.levels for c in cases), default=0)
 
 
 def _valid_cell(lp) -> str:
@@ -325,9 +403,13 @@ def _cmd_modes(args: argparse.Namespace) -> int:
         print(f"flexval: solver failure: {exc}", file=sys.stderr)
         return EXIT_SOLVER
     where = "at rest" if case is None or args.at == 0.0 else f"at {args.at:g} of {case.name}"
-    print(f"{spec.id}: natural frequencies {where} (Hz)")
-    for k, f in enumerate(modes.frequencies_hz, 1):
-        print(f"  mode {k:>3}: {f:>14.6g}" + ("   (unstable)" if f < 0.0 else ""))
+    print(f"{spec.id}: natural frequencies {where}")
+    rows = [
+        [str(k), sig(f, 6), "unstable" if f < 0.0 else ""]
+        for k, f in enumerate(modes.frequencies_hz, 1)
+    ]
+    for line in text_table([Column("mode"), Column("f Hz"), Column("", "<")], rows, "  "):
+        print(line)
     record = modes_record(scene, spec, case, args.at, system, modes)
     if json_path:
         write_json(json_path, record)
@@ -336,14 +418,13 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _peak_column(lp) -> str:
+def _peak_cells(lp) -> tuple[str, str]:
     """``peak MPa`` and ``at`` of a run line: the largest outer-fibre stress over the flexures
     at the last level and where (``flexure@fraction`` of its length from its first end)."""
     if not lp.peak_stress:
-        return f"{'-':>9} {'':<12}"
+        return "-", ""
     name = max(lp.peak_stress, key=lambda f: lp.peak_stress[f][-1])
-    where = f"{name}@{lp.peak_stress_at[name][-1]:.2f}"
-    return f"{lp.peak_stress[name][-1]:>9.4g} {where:<12}"
+    return sig(lp.peak_stress[name][-1]), f"{name}@{lp.peak_stress_at[name][-1]:.2f}"
 
 
 def _parse_levels(text: str, spec) -> list[int]:
@@ -609,6 +690,13 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("scene", help=scene_help)
     q.add_argument("--json", metavar="PATH", help="also write the description as JSON")
     q.set_defaults(func=_cmd_info)
+
+    q = sub.add_parser(
+        "models",
+        help="list the model families: id syntax, resolutions, options, capabilities",
+    )
+    q.add_argument("--json", metavar="PATH", help="also write the listing as JSON")
+    q.set_defaults(func=_cmd_models)
 
     q = sub.add_parser("plot", help="draw the undeformed mechanism to a PNG")
     q.add_argument("scene", help=scene_help)

@@ -33,6 +33,7 @@ from flexval.reducedmodels.catalogue import ModelSpec
 
 from .failures import Failure, failure_of
 from .run import run_model
+from .tables import Column, sig, text_table
 
 ROUND_OFF_CHANGE = 1e-6
 """Relative change between resolutions below which a quantity is converged to round-off.
@@ -161,15 +162,27 @@ def study(
 
 def format_study(st: ConvergenceStudy) -> str:
     """Plain-text table of a study (mm, deg, s)."""
-    lines = [
-        f"{st.family} convergence on load case {st.load_case} (refinement ratio {st.ratio:g})",
-        f"{'model':<14} {'unknowns':>9} {'seconds':>9} {'|d| mm':>12} {'rot deg':>12}",
+    lines = [f"{st.family} convergence on load case {st.load_case} (refinement ratio {st.ratio:g})"]
+    columns = [
+        Column("model", "<"),
+        Column("unknowns"),
+        Column("seconds"),
+        Column("|d| mm"),
+        Column("rot deg"),
+        Column("peak MPa"),
     ]
-    for r in st.rows:
-        lines.append(
-            f"{r['model']:<14} {r['unknowns']:>9} {r['seconds']:>9.3f} "
-            f"{r['displacement']:>12.6f} {math.degrees(r['rotation']):>12.6f}"
-        )
+    rows = [
+        [
+            r["model"],
+            str(r["unknowns"]),
+            sig(r["seconds"], 3),
+            f"{r['displacement']:.6f}",
+            f"{math.degrees(r['rotation']):.6f}",
+            sig(r["peak_stress"], 6),
+        ]
+        for r in st.rows
+    ]
+    lines += text_table(columns, rows)
     for key, unit, conv in (
         ("displacement", "mm", 1.0),
         ("rotation", "deg", math.degrees(1.0)),

@@ -10,6 +10,8 @@ import math
 from flexval.geometry import Force, Moment, Scene
 from flexval.reducedmodels.catalogue import parse_model
 
+from .tables import Column, sig, text_table
+
 
 def scene_info(scene: Scene) -> dict:
     """A JSON-ready description of ``scene`` (lengths mm, angles deg, EI N mm^2, w 1/(N mm))."""
@@ -87,26 +89,57 @@ def format_info(info: dict) -> str:
         lines.append(f"  {info['description']}")
     m = info["material"]
     lines.append(f"material  E = {m['E_MPa']:g} MPa, nu = {m['nu']:g}")
-    lines.append("bodies (attachment points, mm)")
-    for name, b in info["bodies"].items():
-        tag = "ground" if b["ground"] else "link"
-        pts = " -- ".join(_pt(p) for p in b["attachment_points"])
-        lines.append(f"  {name:>6} {tag:<6} {pts}")
-    lines.append("flexures")
-    lines.append(
-        f"  {'name':<6} {'bodies':<8} {'start':>18} {'end':>18} {'L mm':>8} "
-        f"{'EI N mm2':>10} {'w 1/Nmm':>10} {'C mm':>18} {'a mm':>7} {'b mm':>7}"
+    lines.append("bodies")
+    lines += text_table(
+        [Column("name", "<"), Column("kind", "<"), Column("attachment points mm", "<")],
+        [
+            [
+                name,
+                "ground" if b["ground"] else "link",
+                " -- ".join(_pt(p) for p in b["attachment_points"]),
+            ]
+            for name, b in info["bodies"].items()
+        ],
+        "  ",
     )
+    lines.append("flexures")
+    rows = []
     for f in info["flexures"]:
         e = f["ellipse"]
-        lines.append(
-            f"  {f['name']:<6} {f['start_body'] + '->' + f['end_body']:<8} {_pt(f['start']):>18} "
-            f"{_pt(f['end']):>18} {f['length_mm']:8.3f} {f['EI_Nmm2']:10.4g} "
-            f"{e['w_per_Nmm']:10.4g} {_pt(e['C_mm']):>18} {e['a_mm']:7.3f} {e['b_mm']:7.3f}"
+        rows.append(
+            [
+                f["name"],
+                f"{f['start_body']}->{f['end_body']}",
+                _pt(f["start"]),
+                _pt(f["end"]),
+                f"{f['length_mm']:.3f}",
+                sig(f["EI_Nmm2"]),
+                sig(e["w_per_Nmm"]),
+                _pt(e["C_mm"]),
+                f"{e['a_mm']:.3f}",
+                f"{e['b_mm']:.3f}",
+            ]
         )
+    lines += text_table(
+        [
+            Column("name", "<"),
+            Column("bodies", "<"),
+            Column("start mm"),
+            Column("end mm"),
+            Column("L mm"),
+            Column("EI N mm2"),
+            Column("w 1/(N mm)"),
+            Column("C mm"),
+            Column("a mm"),
+            Column("b mm"),
+        ],
+        rows,
+        "  ",
+    )
     t = info["target"]
     lines.append(f"target  body {t['body']} at {_pt(t['point'])} mm")
     lines.append("load cases")
+    cases = []
     for lc in info["load_cases"]:
         parts = []
         for c in lc["loads"]:
@@ -117,7 +150,8 @@ def format_info(info: dict) -> str:
                     f"force {c['value_N']:g} N at {c['angle_deg']:g} deg on body "
                     f"{c['body']} at {_pt(c['point'])}"
                 )
-        lines.append(f"  {lc['name']:<6} {'; '.join(parts)}  ({lc['levels']} levels from 0)")
+        cases.append([lc["name"], str(lc["levels"]), "; ".join(parts)])
+    lines += text_table([Column("name", "<"), Column("levels"), Column("loads", "<")], cases, "  ")
     if info["models"]:
         lines.append(f"requested models: {', '.join(info['models'])}")
     return "\n".join(lines)

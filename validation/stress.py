@@ -47,6 +47,7 @@ from .compare import denominator, errors, scale_of
 from .failures import first_limit
 from .outputs import output_path, write_json, write_text
 from .run import run_model
+from .tables import Column, markdown_table, sig
 
 AMPLIFICATIONS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
 """Load multiples of study (a); quick mode stops at :data:`QUICK_CAP`."""
@@ -350,12 +351,9 @@ def stress_report(
     }
 
 
-def _num(x: float | None, fmt: str = ".3g") -> str:
-    return "–" if x is None else format(x, fmt)
-
-
 def format_markdown(report: dict) -> str:
     """The stress report as Markdown: one table per study."""
+    models = report["models"]
     lines = [
         f"# Stress tests: {report['scene']}",
         "",
@@ -370,10 +368,9 @@ def format_markdown(report: dict) -> str:
         "next one, and the error against the reference at the largest multiple both "
         "reached (`path_disp`, `path_rot`, percent).",
         "",
-        "| model | case | largest × | load | path_disp % | path_rot % | failure |",
-        "|---|---|---:|---:|---:|---:|---|",
     ]
-    for model, cases in report["models"].items():
+    rows = []
+    for model, cases in models.items():
         for case, r in cases.items():
             amp = r["amplification"]
             last = next((row for row in reversed(amp["rows"]) if row["errors"]), None)
@@ -381,17 +378,33 @@ def format_markdown(report: dict) -> str:
             fail_text = f"×{fail['factor']:g}: {fail['message']}" if fail else "none up to the cap"
             if fail and fail.get("limit_load") is not None:
                 fail_text = (
-                    f"limit point at {fail['limit_load']:.4g} {amp['unit']} "
+                    f"limit point at {sig(fail['limit_load'])} {amp['unit']} "
                     f"(arc-length); {fail_text}"
                 )
-            lines.append(
-                f"| {model} | {case} | {amp['largest_factor']:g} | "
-                f"{amp['largest_load']:.4g} {amp['unit']} | "
-                f"{_num(last['errors']['path_disp'] if last else None)} "
-                f"{'(×' + format(last['factor'], 'g') + ')' if last else ''} | "
-                f"{_num(last['errors']['path_rot'] if last else None)} | "
-                f"{fail_text.replace('|', '/')} |"
+            at = f" (×{last['factor']:g})" if last else ""
+            rows.append(
+                [
+                    model,
+                    case,
+                    f"{amp['largest_factor']:g}",
+                    f"{sig(amp['largest_load'])} {amp['unit']}",
+                    sig(last["errors"]["path_disp"] if last else None, 3) + at,
+                    sig(last["errors"]["path_rot"] if last else None, 3),
+                    fail_text,
+                ]
             )
+    lines += markdown_table(
+        [
+            Column("model", "<"),
+            Column("case", "<"),
+            Column("largest ×"),
+            Column("load"),
+            Column("path_disp %"),
+            Column("path_rot %"),
+            Column("failure", "<"),
+        ],
+        rows,
+    )
     lines += [
         "",
         "## (b) Step count",
@@ -401,18 +414,27 @@ def format_markdown(report: dict) -> str:
         + " load levels: largest relative spread of the end displacement vector and "
         "rotation (path independence asks for round-off).",
         "",
-        "| model | case | disp spread | rot spread | iterations per run | failures |",
-        "|---|---|---:|---:|---|---|",
     ]
-    for model, cases in report["models"].items():
+    rows = []
+    for model, cases in models.items():
         for case, r in cases.items():
             sc = r["step_count"]
             its = ", ".join(f"{e['levels']}: {e['newton_iterations']}" for e in sc["ends"])
             fails = "; ".join(f"{f['levels']} levels: {f['message']}" for f in sc["failures"])
-            lines.append(
-                f"| {model} | {case} | {_num(sc['disp_rel'])} | {_num(sc['rot_rel'])} "
-                f"| {its} | {fails.replace('|', '/') or 'none'} |"
+            rows.append(
+                [model, case, sig(sc["disp_rel"], 3), sig(sc["rot_rel"], 3), its, fails or "none"]
             )
+    lines += markdown_table(
+        [
+            Column("model", "<"),
+            Column("case", "<"),
+            Column("disp spread"),
+            Column("rot spread"),
+            Column("iterations per run", "<"),
+            Column("failures", "<"),
+        ],
+        rows,
+    )
     lines += [
         "",
         "## (c) Invariance",
@@ -420,18 +442,35 @@ def format_markdown(report: dict) -> str:
         f"Largest relative path difference after a rigid motion ({RIGID_ANGLE} rad, "
         f"{RIGID_SHIFT} mm) and after rewriting the scene in metres.",
         "",
-        "| model | case | rigid disp | rigid rot | metres disp | metres rot | failures |",
-        "|---|---|---:|---:|---:|---:|---|",
     ]
-    for model, cases in report["models"].items():
+    rows = []
+    for model, cases in models.items():
         for case, r in cases.items():
             inv = r["invariance"]
             rm, me = inv["rigid_motion"] or {}, inv["metres"] or {}
-            lines.append(
-                f"| {model} | {case} | {_num(rm.get('disp_rel'))} | "
-                f"{_num(rm.get('rot_rel'))} | {_num(me.get('disp_rel'))} | "
-                f"{_num(me.get('rot_rel'))} | {(inv['failure'] or 'none')} |"
+            rows.append(
+                [
+                    model,
+                    case,
+                    sig(rm.get("disp_rel"), 3),
+                    sig(rm.get("rot_rel"), 3),
+                    sig(me.get("disp_rel"), 3),
+                    sig(me.get("rot_rel"), 3),
+                    inv["failure"] or "none",
+                ]
             )
+    lines += markdown_table(
+        [
+            Column("model", "<"),
+            Column("case", "<"),
+            Column("rigid disp"),
+            Column("rigid rot"),
+            Column("metres disp"),
+            Column("metres rot"),
+            Column("failures", "<"),
+        ],
+        rows,
+    )
     return "\n".join(lines) + "\n"
 
 
