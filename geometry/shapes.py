@@ -1,10 +1,14 @@
-"""Flexure centre-line shapes: uniform circular arcs and straight segments.
+"""Flexure centre-line shapes: circular arcs, straight segments and free-form splines.
 
 A shape is parametrised by arc length ``s`` in mm, from its *start* point to
 its *end* point. For an arc the start is at polar angle ``axis - width/2``
 around the centre and the curve runs counterclockwise (paper, Sect. 2.3,
-Fig. 3). Each shape also gives its ellipse of elasticity (paper Eqs. 1-4),
-the linear bending compliance data used by the DCMM and EE models.
+Fig. 3). A :class:`Spline` is the C2 cubic spline through given points,
+parametrised by its true arc length. Each shape also gives its ellipse of
+elasticity (paper Eqs. 1-4) for a uniform section, the linear bending
+compliance data used by the DCMM and EE models (closed forms for arcs and
+segments, quadrature for splines; any section law:
+:func:`flexval.geometry.compliance.curve_compliance`).
 
 All lengths are mm and all angles are radians.
 """
@@ -13,11 +17,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import ClassVar, Protocol, Union
+from functools import cached_property
+from typing import ClassVar, Protocol
 
 import numpy as np
 
+from .arclength import ArcLengthMap
 from .kinematics import rotate
+from .profiles import quadrature_panels
 
 _SERIES_TOP = 1.0
 """Largest half-angle gamma (rad) for which :func:`arc_semi_axes` sums Taylor series."""
@@ -146,6 +153,8 @@ class Shape(Protocol):
 
     def tangent(self, s: np.ndarray | float) -> np.ndarray: ...
 
+    def curvature_at(self, s: np.ndarray | float) -> np.ndarray: ...
+
     def split(self, n: int) -> list[Shape]: ...
 
     def ellipse(self, bending_stiffness: float) -> Ellipse: ...
@@ -203,6 +212,10 @@ class Arc:
     def curvature(self) -> float:
         """Signed initial curvature 1/r, 1/mm (counterclockwise positive)."""
         return 1.0 / self.radius
+
+    def curvature_at(self, s: np.ndarray | float) -> np.ndarray:
+        """Signed curvature 1/r at arc length(s) s (mm), 1/mm (constant)."""
+        return np.full(np.shape(s), 1.0 / self.radius)
 
     def _polar(self, s: np.ndarray | float) -> np.ndarray:
         return self.start_angle + np.asarray(s, dtype=float) / self.radius
@@ -329,6 +342,10 @@ class Segment:
         """Initial curvature, 0 (1/mm)."""
         return 0.0
 
+    def curvature_at(self, s: np.ndarray | float) -> np.ndarray:
+        """Curvature at arc length(s) s (mm): 0, 1/mm."""
+        return np.zeros(np.shape(s))
+
     def point(self, s: np.ndarray | float) -> np.ndarray:
         """Point(s) at arc length s (mm) from the start, shape (..., 2), mm."""
         s = np.asarray(s, dtype=float)
@@ -385,7 +402,7 @@ class Segment:
         return False
 
     def moved(self, angle: float, shift: np.ndarray) -> Segment:
-        """The segment rotated by ``angle`` (rad) about the origin, then shifted by ``shift`` (mm)."""
+        """The segment rotated by ``angle`` (rad) about the origin, then shifted (mm)."""
         a = rotate(angle, np.asarray(self.start)) + shift
         b = rotate(angle, np.asarray(self.end)) + shift
         return Segment(tuple(map(float, a)), tuple(map(float, b)))
@@ -402,4 +419,247 @@ class Segment:
         return {"start": list(map(float, self.start)), "end": list(map(float, self.end))}
 
 
-FlexureShape = Union[Arc, Segment]
+UNWRAP_SAMPLES = 8
+"""Samples per arc-length panel on which a free curve's tangent angle is unwrapped."""
+
+CURVATURE_SAMPLES = 2048
+"""Samples of a free curve's curvature for its largest value (:attr:`_FreeCurve.max_thickness`)."""
+
+
+def quadrature_ellipse(shape: Shape, bending_stiffness: float, start: float, end: float) -> Ellipse:
+    """Ellipse of elasticity of ``shape`` between arc lengths ``start``, ``end`` (mm), uniform EI.
+
+    Paper Eqs. 1-4 by Gauss quadrature (:func:`flexval.geometry.profiles.quadrature_panels`):
+    w = (end - start) / EI, C the centroid of the centre line, a^2 and b^2
+    its variances along and across the principal axes. e1 is the axis of
+    larger spread (a >= b), turned to point towards the start end; e2 =
+    R(90 deg) e1 (as for an arc, where e2 points to the apex).
+    """
+    u, wq = quadrature_panels(end - start, ())
+    r = np.asarray(shape.point(start + u), float)
+    length = float(wq.sum())
+    center = wq @ r / length
+    d = r - center
+    values, vectors = np.linalg.eigh((d * wq[:, None]).T @ d / length)  # ascending
+    e1 = vectors[:, 1]
+    if float(e1 @ (np.asarray(shape.point(start), float) - center)) < 0.0:
+        e1 = -e1
+    e2 = np.array([-e1[1], e1[0]])
+    return Ellipse(
+        weight=(end - start) / bending_stiffness,
+        center=center,
+        a=float(np.sqrt(max(values[1], 0.0))),
+        b=float(np.sqrt(max(values[0], 0.0))),
+        axes=np.column_stack([e1, e2]),
+    )
+
+
+class _FreeCurve:
+    """What a free-form centre line derives from its point, tangent and curvature (mm, rad).
+
+    Subclasses provide ``length``, ``point``, ``tangent_angle``,
+    ``curvature_at`` and ``end_points``.
+    """
+
+    @property
+    def width(self) -> float:
+        """Net turning of the tangent from start to end, rad (an arc's angle)."""
+        return float(self.tangent_angle(self.length) - self.tangent_angle(0.0))
+
+    @property
+    def curvature(self) -> float:
+        """Mean signed curvature, net turning / length, 1/mm (see :meth:`curvature_at`)."""
+        return self.width / self.length
+
+    def tangent(self, s: np.ndarray | float) -> np.ndarray:
+        """Unit tangent(s) at arc length s, shape (..., 2)."""
+        return _directions(self.tangent_angle(s))
+
+    @property
+    def max_thickness(self) -> float:
+        """Twice the smallest radius of curvature, mm: a thicker band has no inner edge there."""
+        s = np.linspace(0.0, self.length, CURVATURE_SAMPLES + 1)
+        top = float(np.abs(self.curvature_at(s)).max())
+        return math.inf if top == 0.0 else 2.0 / top
+
+    def ellipse(self, bending_stiffness: float) -> Ellipse:
+        """Ellipse of elasticity for a uniform EI (N mm^2), by :func:`quadrature_ellipse`."""
+        return quadrature_ellipse(self, bending_stiffness, 0.0, self.length)
+
+    def symmetry_frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Centre of elasticity C (mm) and the principal axes e1 (towards the start), e2."""
+        ell = self.ellipse(1.0)
+        return ell.center, ell.axes[:, 0], ell.axes[:, 1]
+
+    def closes_on_itself(self, thickness: float) -> bool:
+        """True if the ends are at most ``thickness`` (mm) apart: the solid band would close."""
+        start, end = self.end_points
+        return float(np.hypot(*(start - end))) <= thickness
+
+
+@dataclass(frozen=True)
+class Spline(_FreeCurve):
+    """Free-form centre line: the C2 cubic spline through ``points`` (mm), by arc length.
+
+    The spline is ``scipy.interpolate.CubicSpline`` through the points,
+    parameterised by cumulative chord length, with not-a-knot ends (its
+    default: three points give the parabola through them). Its true arc
+    length s comes from :class:`flexval.geometry.arclength.ArcLengthMap`
+    (to about 1e-13 of the length), so ``point(s)`` is at arc length s from
+    the first point, like every other shape.
+
+    Parameters
+    ----------
+    points : sequence of (float, float)
+        At least three points, mm; consecutive points distinct.
+
+    Raises
+    ------
+    ValueError
+        If there are fewer than three points, two consecutive ones coincide,
+        or the curve has a cusp.
+    """
+
+    points: tuple[tuple[float, float], ...]
+
+    kind: ClassVar[str] = "spline"
+
+    def __post_init__(self) -> None:
+        pts = np.asarray(self.points, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 2 or pts.shape[0] < 3:
+            raise ValueError(f"a spline needs at least 3 points [x, y], got {self.points!r}")
+        if np.any(np.hypot(*np.diff(pts, axis=0).T) == 0.0):
+            raise ValueError("consecutive spline points must be distinct")
+        object.__setattr__(self, "points", tuple((float(x), float(y)) for x, y in pts))
+
+    def __getstate__(self) -> dict:
+        return {"points": self.points}  # the curve is rebuilt on first use
+
+    def __setstate__(self, state: dict) -> None:
+        object.__setattr__(self, "points", state["points"])
+
+    @cached_property
+    def _curve(self):
+        """(spline r(u), its derivative, the arc-length map, unwrapped tangent-angle samples)."""
+        from scipy.interpolate import CubicSpline  # only scenes with splines pay its import
+
+        pts = np.asarray(self.points)
+        knots = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
+        spline = CubicSpline(knots, pts, axis=0)
+        derivative = spline.derivative()
+        arc = ArcLengthMap(derivative, knots)
+        fractions = np.arange(UNWRAP_SAMPLES) / UNWRAP_SAMPLES
+        u = np.append(arc.edges[:-1, None] + np.diff(arc.edges)[:, None] * fractions, knots[-1])
+        d = derivative(u.ravel())
+        angles = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
+        return spline, derivative, arc, (arc.arc_length(u.ravel()), angles)
+
+    @property
+    def length(self) -> float:
+        """Arc length, mm."""
+        return self._curve[2].length
+
+    def parameter(self, s: np.ndarray | float) -> np.ndarray:
+        """Chord-length parameter u (mm) of the points at arc length(s) s (mm)."""
+        return self._curve[2].parameter(s)
+
+    def point(self, s: np.ndarray | float) -> np.ndarray:
+        """Point(s) at arc length s (mm) from the start, shape (..., 2), mm."""
+        return self._curve[0](self.parameter(s))
+
+    def tangent_angle(self, s: np.ndarray | float) -> np.ndarray:
+        """Direction of the unit tangent at s, rad, continuous along the curve from the start's."""
+        _, derivative, _, (grid, angles) = self._curve
+        d = derivative(self.parameter(s))
+        raw = np.arctan2(d[..., 1], d[..., 0])
+        near = np.interp(s, grid, angles)
+        return raw + 2.0 * np.pi * np.round((near - raw) / (2.0 * np.pi))
+
+    def curvature_at(self, s: np.ndarray | float) -> np.ndarray:
+        """Signed curvature (x' y'' - y' x'') / |r'|^3 at arc length(s) s (mm), 1/mm."""
+        spline, derivative, _, _ = self._curve
+        u = self.parameter(s)
+        d1, d2 = derivative(u), spline(u, 2)
+        speed = np.hypot(d1[..., 0], d1[..., 1])
+        return (d1[..., 0] * d2[..., 1] - d1[..., 1] * d2[..., 0]) / speed**3
+
+    @property
+    def end_points(self) -> np.ndarray:
+        """The first and last points, shape (2, 2), mm."""
+        return np.array([self.points[0], self.points[-1]])
+
+    def split(self, n: int) -> list[SplinePiece]:
+        """The spline cut into n parts of equal arc length, from start to end."""
+        L = self.length
+        cuts = [L * k / n for k in range(n)] + [L]
+        return [SplinePiece(self, a, b) for a, b in zip(cuts[:-1], cuts[1:])]
+
+    def moved(self, angle: float, shift: np.ndarray) -> Spline:
+        """The spline rotated by ``angle`` (rad) about the origin, then shifted (mm)."""
+        pts = rotate(angle, np.asarray(self.points)) + np.asarray(shift, float)
+        return Spline(tuple(map(tuple, pts.tolist())))
+
+    def scaled(self, factor: float) -> Spline:
+        """The spline through the points multiplied by ``factor``."""
+        return Spline(tuple(map(tuple, (np.asarray(self.points) * factor).tolist())))
+
+    def parameters(self) -> dict:
+        """The scene-file parameters: the points, mm."""
+        return {"points": [list(p) for p in self.points]}
+
+
+@dataclass(frozen=True)
+class SplinePiece(_FreeCurve):
+    """The part of a :class:`Spline` between arc lengths ``start`` and ``end`` (mm).
+
+    Its own arc length s runs from 0 at the parent's ``start``; a piece of a
+    flexure cut by :meth:`Spline.split`.
+    """
+
+    parent: Spline
+    start: float
+    end: float
+
+    kind: ClassVar[str] = "spline"
+
+    @property
+    def length(self) -> float:
+        """end - start, mm."""
+        return self.end - self.start
+
+    def point(self, s: np.ndarray | float) -> np.ndarray:
+        """Point(s) at arc length s (mm) from the piece's start, mm."""
+        return self.parent.point(self.start + np.asarray(s, float))
+
+    def tangent_angle(self, s: np.ndarray | float) -> np.ndarray:
+        """The parent's tangent angle at the same point, rad."""
+        return self.parent.tangent_angle(self.start + np.asarray(s, float))
+
+    def curvature_at(self, s: np.ndarray | float) -> np.ndarray:
+        """The parent's curvature at the same point, 1/mm."""
+        return self.parent.curvature_at(self.start + np.asarray(s, float))
+
+    @property
+    def end_points(self) -> np.ndarray:
+        """Start and end points, shape (2, 2), mm."""
+        return self.parent.point(np.array([self.start, self.end]))
+
+    def split(self, n: int) -> list[SplinePiece]:
+        """The piece cut into n parts of equal arc length."""
+        cuts = [self.start + self.length * k / n for k in range(n)] + [self.end]
+        return [SplinePiece(self.parent, a, b) for a, b in zip(cuts[:-1], cuts[1:])]
+
+    def moved(self, angle: float, shift: np.ndarray) -> SplinePiece:
+        """The same piece of the moved parent (rad, mm)."""
+        return SplinePiece(self.parent.moved(angle, shift), self.start, self.end)
+
+    def scaled(self, factor: float) -> SplinePiece:
+        """The same piece of the scaled parent."""
+        return SplinePiece(self.parent.scaled(factor), self.start * factor, self.end * factor)
+
+    def parameters(self) -> dict:
+        """The parent's points and the piece's arc-length window [start, end], mm."""
+        return {**self.parent.parameters(), "window_mm": [self.start, self.end]}
+
+
+FlexureShape = Arc | Segment | Spline
