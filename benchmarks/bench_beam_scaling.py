@@ -4,7 +4,8 @@ Traces one load case (11 levels) of the open chain with beam:N for
 N = 10 ... 2000 elements per flexure and prints, per N, the unknowns, the
 Newton iterations, the median wall time of the whole load path over the
 repeats (model build included; after one warm-up path that loads the
-compiled kernels, see README), the path time per Newton iteration, and the
+compiled kernels, see README.md here, "Compiled kernels"), the path time per
+Newton iteration, and the
 time of one Newton iteration alone (assembly, factorisation and solve of the
 correction at the path's end state, fastest of many) in total and per
 unknown. Wall time per path is what the validation reports compare; the

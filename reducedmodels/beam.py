@@ -660,8 +660,8 @@ class BeamConnector(Connector):
         its body's turn); the chain is then closed between the end bodies'
         nodes as in :meth:`predict_internal`. This agrees with the linear
         update to first order, so Newton keeps its quadratic convergence,
-        but a turning chord no longer comes out stretched by (turn)^2 / 2,
-        which EA would turn into spurious forces.
+        but a turning chord does not come out stretched by (turn)^2 / 2, as
+        after a linear update, which EA would turn into spurious forces.
         """
         return self._alone.update_internal([old], [new])
 

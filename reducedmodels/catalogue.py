@@ -9,9 +9,9 @@ e.g. ``beam:100``, ``beam:100[shear]``, ``dcmm:2[frame=follower]``,
 resolution takes none; a family with one uses its default when none is given
 (``beam`` is ``beam:20``). An option given by its bare name takes its "bare"
 value (``shear`` is ``shear=true``). The *canonical* id lists the options that
-differ from their defaults, sorted by name, so ids without options read
-exactly as before options existed, and the canonical id is what every output
-(JSON ``model``, tables, cache keys) carries.
+differ from their defaults, sorted by name (``beam:100[shear=false]`` is
+``beam:100``), and the canonical id is what every output (JSON ``model``,
+tables, cache keys) carries.
 
 A :class:`Family` holds everything the commands need to know about a model:
 its id syntax (:class:`Resolution`), its :class:`Option` set, a runner that
@@ -103,7 +103,7 @@ class Option:
     name : str
         Name in the id.
     doc : str
-        What it does (for the README table and help texts).
+        What it does (for ``flexval models``, the documentation and help texts).
     values : tuple of (str, object)
         Allowed text values and the Python value each passes to the runner.
     default : str

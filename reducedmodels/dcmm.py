@@ -254,7 +254,7 @@ class DcmmConnector(Connector):
         n = 1 and 3.6 % / n^2 as n grows (half of each sub-arc on each end
         cross-section, HRZ: -32 % / n^2), and the self-weight sag is off by
         exactly -1 / (6 n^2) in the linear limit (HRZ: +1 / (3 n^2)); see the
-        README's frequency comparison, which also gives the cost (the closed
+        documentation's frequency comparison, which also gives the cost (the closed
         chain's modes 2-4, where massless links get all their inertia from
         these pieces). ``dcmm:1`` has no cut body: the half next to the
         ground is lost to it, and a single sub-arc has one elastic mode per

@@ -13,7 +13,8 @@ float lists, whose cost on a few sub-arcs was interpreter overhead, not
 arithmetic; one call per path replaces some forty small array operations.
 
 Compiled with :data:`flexval.reducedmodels.jit.kernel` (numba, cached on disk; the
-first run of an installation pays the compilation, see README, "Speed"), whose
+first run of an installation pays the compilation, see benchmarks/README.md,
+"Compiled kernels"), whose
 docstring gives the floating-point policy.
 
 Units: mm, N, N mm, rad.

@@ -8,11 +8,11 @@ with grad Pi the System's gradient (elastic forces, weights, load case at the
 load factor lambda(t) of the time law), M and c the mass matrix and
 convective forces of :class:`flexval.reducedmodels.inertia.MassModel`, and Rayleigh
 damping D = alpha M + beta K(q), K the tangent at the same state q as every
-other force (equilibrium at t_(n+1)). Freezing K at the start of the step made
-the damping force first-order in h: on the beams the error estimate saw that
-lag and every other step was rejected, and the open chain's end-of-ramp dx was
+other force (equilibrium at t_(n+1)). K frozen at the start of the step would
+make the damping force first-order in h: on the beams the error estimate sees
+that lag and rejects every other step, and the open chain's end-of-ramp dx is
 0.8 mm (5 %) from its converged value at ``error_tol`` 1e-5, against 0.02 mm
-now with a third of the steps (README, "Dynamics"). Coordinates without mass
+with K at the step's end, in a third of the steps. Coordinates without mass
 (Lagrange multipliers, massless internal coordinates) keep static rows.
 
 Integrator: generalised-alpha in the form of Arnold and Bruls (2007, Multibody

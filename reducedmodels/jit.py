@@ -6,8 +6,8 @@ beam, band, DCMM and PRBM kernels (:mod:`flexval.reducedmodels.beamkernel`,
 :mod:`~flexval.reducedmodels.prbmkernel`) cannot drift apart:
 
 * ``cache=True``: compiled on first use and cached on disk next to the
-  module (``__pycache__``); later processes load the machine code (README,
-  "Speed", gives both costs);
+  module (``__pycache__``); later processes load the machine code
+  (benchmarks/README.md, "Compiled kernels", gives both costs);
 * ``error_model="numpy"``: numpy's floating-point semantics (a zero-length
   chord gives inf or nan, which the Newton iteration reports as a
   non-finite residual, instead of raising inside compiled code);

@@ -362,10 +362,10 @@ class PrbmConnector(Connector):
         link l (hinged at R_b, turning with phi_l), end body b. So the
         pseudo-links' angles carry inertia and the chain moves as the rigid
         members it is made of. On a clamped-free beam f1 comes out +0.02 %
-        from Euler-Bernoulli (the previous end-bodies-only HRZ lumping:
-        -32 %) and the self-weight sag is exact in the linear limit (the
-        symmetric chain matches the beam's compliance moments up to the
-        third); see the README's frequency comparison.
+        from Euler-Bernoulli (HRZ lumping on the end bodies only: -32 %) and
+        the self-weight sag is exact in the linear limit (the symmetric chain
+        matches the beam's compliance moments up to the third); see the
+        documentation's frequency comparison.
         """
         bounds = self._fractions * self.length
         hinges = np.array([self._ref[0], self.joints[0], self.joints[2], self._ref[1]])

@@ -12,7 +12,8 @@ Newton iteration replaces one Python call per flexure and the scatter of
 their float lists.
 
 Compiled with :data:`flexval.reducedmodels.jit.kernel` (numba, cached on disk; the
-first run of an installation pays the compilation, see README, "Speed"), whose
+first run of an installation pays the compilation, see benchmarks/README.md,
+"Compiled kernels"), whose
 docstring gives the floating-point policy.
 
 Units: mm, N, N mm, rad.

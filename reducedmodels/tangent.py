@@ -38,7 +38,7 @@ from .threads import limit_threads
 DENSE_LIMIT = 96  # above ~100 unknowns, multithreaded LAPACK stalls on a loaded 2-core machine
 BAND_LIMIT = 64  # band storage beats SuperLU up to at least this half-bandwidth, measured on
 # the continuum meshes: banded LU was 2x faster at b = 29, even at b = 61, 2x
-# slower at b = 117; the banded Cholesky now used makes whole level-2 paths
+# slower at b = 117; the banded Cholesky makes whole level-2 paths
 # (b = 61 on both scenes) 1.6x faster than SuperLU; b = 117 is not measured
 NARROW_BAND = 8  # compiled banded Cholesky up to this half-bandwidth, LAPACK's above: at b = 5
 # (beam chains) the loop takes half of dpbtrf's time, at b = 29 three times it

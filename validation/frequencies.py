@@ -31,7 +31,8 @@ from flexval.reducedmodels.catalogue import parse_model
 from .failures import Failure
 from .modes import run_modes, with_density
 
-#: flexure density (t/mm^3) of a scene that gives none: PLA, as in the README's frequency table
+#: flexure density (t/mm^3) of a scene that gives none: PLA, as in the documentation's
+#: frequency table
 DEFAULT_DENSITY = PLA_DENSITY
 #: how many of the lowest natural frequencies the report tabulates
 MODE_COUNT = 4

@@ -7,8 +7,8 @@ and skips what is there. Failed runs are rows too (``status`` and
 ``reason``), with empty (null) errors: a Parquet file never holds a NaN.
 
 Every part of a dataset has the same schema (:func:`schema`). A folder
-whose parts have another one (written by an older flexval, before the
-peak-stress, limit-load or peak-stress load columns, or by a sweep over other parameters) is
+whose parts have another one (written by a flexval version with other
+columns, or by a sweep over other parameters) is
 refused with a :class:`SceneError` naming the folder and the differing
 columns, rather than mixed into a dataset that Parquet readers would
 silently truncate to the first part's columns.
@@ -111,7 +111,7 @@ class ResultStore:
                 part.name,
                 "holds a sweep dataset of another format (missing columns "
                 f"{missing or 'none'}, other columns {extra or 'none'}; written by "
-                "an older flexval or for other parameters): choose another --out "
+                "another flexval version or for other parameters): choose another --out "
                 "or remove this folder",
             )
 
