@@ -11,7 +11,8 @@ the scatter of the concatenated local Hessians, whose cost on a few hundred
 elements was interpreter overhead, not arithmetic.
 
 Compiled with :data:`flexval.reducedmodels.jit.kernel` (numba, cached on disk; the
-first run of an installation pays the compilation, see README, "Speed"), whose
+first run of an installation pays the compilation, see benchmarks/README.md,
+"Compiled kernels"), whose
 docstring gives the floating-point policy.
 
 Units: mm, N, N mm, rad.
