@@ -3,7 +3,7 @@
 Runs one load path in a worker process alone, then in two worker processes
 started together, and reports each worker's median time and the slow-down
 (concurrent time / time alone; about 1 is ideal when the machine has a free
-core for each worker, and the issue's bar is 1.5). Each worker first runs
+core for each worker, and 1.5 is the bar). Each worker first runs
 the path once untimed (imports, mesh cache), reports that it is ready and
 waits; the parent starts the timed ``--repeats`` runs of all workers at
 once, so the timed phases overlap whatever each worker's start-up took.

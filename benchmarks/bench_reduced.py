@@ -3,8 +3,9 @@
 Run: ``python benchmarks/bench_reduced.py [--repeats 7]``. Prints, for each
 built-in scene, load case and model, the median seconds of the whole load
 path (model build included), Newton iterations and the end values, so time
-is always read next to what it buys. Targets (issue 11): dcmm:1, dcmm:2 and
-prbm at most 1 ms, ee at most 0.2 ms on every case.
+is always read next to what it buys. The figures to aim at: dcmm:1, dcmm:2
+and prbm at most 1 ms, ee at most 0.2 ms on every case (README.md here has
+the current ones).
 """
 
 from __future__ import annotations

@@ -69,7 +69,7 @@ ERROR_TOL = 1e-8
 Tighter than ``flexval run``'s 1e-5: a cell compares two end-of-ramp states
 and divides by the reference's own end displacement, which on a short,
 strongly damped ramp is a tenth of the static one, so integration errors
-are magnified. Measured (session 6, ramp 4 T1, ratio 1): `beam:100`'s end dx
+are magnified. Measured at ramp 4 T1, ratio 1: `beam:100`'s end dx
 moved 0.038, 0.020, 0.0088, 0.0041 mm per decade of the bound from 1e-5 to
 1e-9, and cells by up to 15 points between 1e-5 and 1e-7, 6 between 1e-6
 and 1e-7. Each cell's remaining integration error is estimated by the check

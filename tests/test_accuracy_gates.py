@@ -8,8 +8,8 @@ baseline within
 
 Why GATE_TOL = 1e-6 points. The solvers are deterministic: rerunning every
 gated figure (either order, 1 or 2 BLAS threads) gives identical figures,
-and the kernel and ellipse refactors of issue 10 moved them from gates.json
-by at most 4e-11 points. What legitimately moves a figure is the solver's
+and a rewrite of a kernel in another operation order moves them by round-off
+(4e-11 points). What legitimately moves a figure is the solver's
 path to the same equilibrium: tracing every reduced model with sub-step
 bounds 5 times finer and a 100 times tighter Newton tolerance (``error_tol``
 1e-12), or 2 times coarser with ``error_tol`` 1e-9 (10 to 90 sub-steps per

@@ -307,7 +307,7 @@ def _spawn(argv: list[str], cache: Path) -> subprocess.Popen:
 
 def test_two_reports_share_an_empty_cache(tmp_path):
     """Two identical ``flexval report`` runs started together on one empty cache both succeed
-    with identical results (fixed temporary names made one of them fail 5 times in 6)."""
+    with identical results (with fixed temporary names one of them would fail 5 times in 6)."""
     cache = tmp_path / "cache"
     outs = [tmp_path / f"out{k}" for k in range(2)]
     argv = [

@@ -282,7 +282,7 @@ def test_measuring_frame_matters_less_as_n_grows():
 
 
 def test_one_big_step_does_not_land_on_an_unstable_branch():
-    """Open chain f-: a single load step from rest used to converge to an unstable
+    """Open chain f-: a single load step from rest can converge to an unstable
     equilibrium (103 % off); the stability check cuts it and the end state is the
     one the 11-level path reaches."""
     scene = load_scene("open_chain")

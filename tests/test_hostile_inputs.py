@@ -1,6 +1,6 @@
-"""Hostile input found by generating a few hundred bad and extreme inputs (issue #12):
-each class below once ran long, crashed or was accepted silently; each now fails up front
-with a message naming the field and the value (exit 2), over several values each."""
+"""Hostile input, found by generating a few hundred bad and extreme inputs: each class
+below could run long, crash or be accepted silently; each must fail up front with a
+message naming the field and the value (exit 2), over several values each."""
 
 import pytest
 from test_scene_errors import _base, _dump

@@ -1,4 +1,4 @@
-"""Limit loads from the command line: ``flexval run --arclength`` (issue #13, item 2).
+"""Limit loads from the command line: ``flexval run --arclength``.
 
 Published limit loads, each traced through its limit point from the CLI and
 read from the JSON result:

@@ -1,8 +1,8 @@
 """``benchmarks/paper_protocol.py`` on a tiny grid: its table is consistent with its inputs.
 
 A very slow (40 first periods), critically damped (ratio 1) Eq. 15 ramp must
-end at the static end state within 0.1 % (the quasi-static limit the issue
-asks of dynamic runs); the script's end-of-ramp error must equal
+end at the static end state within 0.1 % (the quasi-static limit asked of
+dynamic runs); the script's end-of-ramp error must equal
 ``flexval.validation.compare.errors``' ``end_disp_vec`` and ``end_rot`` on static paths.
 Its ``protocol.json`` is strict JSON (a failed run's errors are null), carries
 the code version and reads back through the report's reader with the table's
@@ -37,7 +37,7 @@ def protocol():
 
 
 QUASI_STATIC = 0.1
-"""%: the issue's bound on a slow damped ramp's distance from the static path."""
+"""%: the bound on a slow damped ramp's distance from the static path."""
 
 
 def _strict(path):

@@ -1,6 +1,6 @@
-"""Scene input that once crashed, hung or was silently ignored: each class is refused
+"""Scene input that could crash, hang or be silently ignored: each class is refused
 with a SceneError naming the file and the field (CLI exit 2, no traceback), over
-several values each (issue #12)."""
+several values each."""
 
 import math
 

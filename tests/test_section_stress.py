@@ -1,4 +1,4 @@
-"""Peak outer-fibre stress from each model's own section forces (issue #13, item 1).
+"""Peak outer-fibre stress from each model's own section forces.
 
 References: a pure end moment on an arc (M uniform and equal to the applied
 moment, N = 0: sigma = 6 M / (b h^2) everywhere); a cantilever arc under a

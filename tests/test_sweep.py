@@ -311,7 +311,7 @@ def test_cli_sweep_on_a_local_process_cluster(tmp_path, capsys):
 
 
 def test_cantilever_geometry_extremes(tmp_path, client):
-    """The former `flexval stress --sweeps` checks, now built-in sweeps on the same engine."""
+    """The geometry extremes (slenderness, arc angle) as built-in sweeps on the sweep engine."""
     slender = load_sweep("slenderness")
     thinnest = min(slender.points, key=lambda p: p.params["section.thickness"])
     angle = load_sweep("arc_angle")

@@ -6,7 +6,7 @@
   monitor must switch on the limit (tested at 0.9 and 1.1 of it);
 * a continuum strip pulled to 1 % and 3 % axial strain against the 2 %
   fibre-stretch limit;
-* the issue's example: DCMM_1 at 100x and 1000x the paper's loads on the
+* DCMM_1 at 100x and 1000x the paper's loads on the
   open chain reports levels outside its range (a flexure whose ends are
   hundreds of mm apart), while every model at the paper's loads stays inside;
 * the verdict round-trips through JSON.
