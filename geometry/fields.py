@@ -30,6 +30,7 @@ KINDS = {
     "number": "number",
     "integer": "integer",
     "pair": "[a, b]",
+    "numbers": "array of numbers",
     "point": "[x, y]",
     "points": "array of [x, y]",
     "name": "name",
@@ -222,7 +223,9 @@ class Table:
 
 
 def number_text(x: float) -> str:
-    """``x`` as the reference prints it: ``1e12``, ``0.5``, ``20000``."""
+    """``x`` as the reference prints it: ``1e12``, ``0.5``, ``20000``, ``1000000``."""
+    if float(x).is_integer() and abs(x) < 1e7:
+        return str(int(x))
     return format(x, "g").replace("e+", "e")
 
 

@@ -131,6 +131,11 @@ class Connector(ABC):
     ) -> np.ndarray:
         """Internal coordinates predicted for the next load step (predictor of the stepping).
 
+        Default: the same Lagrange extrapolation the core applies to every
+        coordinate, ``sum(w_k internal_k)``. Override it when extrapolating
+        coordinates one by one is poor (e.g. nearly inextensible chords that
+        turn come out stretched).
+
         Parameters
         ----------
         states : sequence of (pose_a, pose_b, internal)
@@ -139,12 +144,7 @@ class Connector(ABC):
             Lagrange extrapolation weights of those states at the new load
             factor (they sum to 1).
         pose_a, pose_b : array (3,)
-            The bodies' predicted poses.
-
-        Default: the same Lagrange extrapolation the core applies to every
-        coordinate, ``sum(w_k internal_k)``. Override it when extrapolating
-        coordinates one by one is poor (e.g. nearly inextensible chords that
-        turn come out stretched).
+            The bodies' predicted poses (x, y mm; theta rad).
         """
         return sum(w * state[2] for w, state in zip(weights, states))
 
@@ -236,16 +236,15 @@ class Connector(ABC):
         typically passes its energy gradient on the end body's pose and its
         displaced centre line to
         :func:`flexval.reducedmodels.sections.statics_section_forces`.
+        Default: None, the connector reports no section forces (a pin).
 
         Parameters
         ----------
-        pose_a, pose_b, internal :
+        pose_a, pose_b, internal : ndarray
             The local state (internal coordinates in equilibrium).
         gradient : array (6 + n_internal,), optional
             The local energy gradient at this state if already known (e.g.
             the linear response's K0 dq); default: from :meth:`evaluate`.
-
-        Default: None, the connector reports no section forces (a pin).
         """
         return None
 

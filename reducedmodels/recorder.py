@@ -29,6 +29,15 @@ from .tracer import LoadControl, PathPoint, TraceFailure, trace
 class PathRecorder:
     """Builds the LoadPath of ``system`` on ``case`` from the points of a trace.
 
+    Every point is checked by the validity monitor (:meth:`System.validity`):
+    ``LoadPath.valid`` and ``LoadPath.validity`` say, per point, whether the
+    state is inside every model's range of meaning and if not why; the run
+    goes on either way. The monitor's verdicts and the section stresses are
+    computed when the path ends (:meth:`finish` or :meth:`failure`), for all
+    its points at once: a connector's section forces then take one
+    vectorised pass per path (:meth:`Connector.path_section_forces`)
+    instead of one call per level.
+
     Parameters
     ----------
     system : System
@@ -44,15 +53,6 @@ class PathRecorder:
     limit_points : bool
         Record the indices of the local extrema of the load
         (``stats['limit_points']``), for paths whose load rises and falls.
-
-    Every point is checked by the validity monitor (:meth:`System.validity`):
-    ``LoadPath.valid`` and ``LoadPath.validity`` say, per point, whether the
-    state is inside every model's range of meaning and if not why; the run
-    goes on either way. The monitor's verdicts and the section stresses are
-    computed when the path ends (:meth:`finish` or :meth:`failure`), for all
-    its points at once: a connector's section forces then take one
-    vectorised pass per path (:meth:`Connector.path_section_forces`)
-    instead of one call per level.
     """
 
     def __init__(

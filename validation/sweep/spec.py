@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 
 from flexval.geometry import BUILTIN_SCENES, Scene, SceneError
+from flexval.geometry.fields import ABSENT, Field, Table, markdown_table
 from flexval.geometry.scene import parse_scene, read_scene_data
 from flexval.reducedmodels import ModelSpec, parse_model, run_reduced
 
@@ -76,30 +77,181 @@ reference's (free: every model records it); ``limit_load``: the first limit poin
 that stops below full load, found by arc length (costly: only on request)."""
 DEFAULT_OUTPUTS = ("peak_stress",)
 NAMED_ARRAYS = ("flexures", "load_cases", "bodies", "pins")
-_SWEEP_KEYS = {
-    "name",
-    "description",
-    "base",
-    "models",
-    "reference",
-    "load_cases",
-    "combine",
-    "metric",
-    "linear_rotation",
-    "batch",
-    "outputs",
+MAX_COUNT = 1_000_000
+"""Most values of one axis, and most points of one task (``batch``)."""
+
+SWEEP = Table(
+    "",
+    "What is swept, with which models, against which reference.",
+    (
+        Field("name", "text", "the sweep's name", default=ABSENT, default_text="the file's stem"),
+        Field("description", "text", "one line for the summary", default=""),
+        Field(
+            "base",
+            "any",
+            "the base scene: a built-in scene name, a scene file path (relative to the "
+            "sweep file) or an inline table of scene fields",
+        ),
+        Field("models", "texts", "model ids to compare with the reference (each once)"),
+        Field(
+            "reference",
+            "text",
+            "model id every error is measured against (not one of models)",
+            default="beam:100",
+        ),
+        Field(
+            "load_cases",
+            "texts",
+            "load cases of the base scene to run",
+            default=ABSENT,
+            default_text="all of the base scene's",
+        ),
+        Field(
+            "combine",
+            "choice",
+            "grid: every combination of the axes' values; zip: the i-th value of each axis "
+            "together (axes of equal length)",
+            default=COMBINE[0],
+            choices=COMBINE,
+        ),
+        Field(
+            "metric",
+            "choice",
+            "the summary's metric: worst = max(end_disp_vec, end_rot), or one error metric",
+            default=SUMMARY_METRICS[0],
+            choices=SUMMARY_METRICS,
+        ),
+        Field(
+            "linear_rotation",
+            "number",
+            "scale each load case at every point so that the linear (ee) end rotation is this",
+            unit="rad",
+            default=ABSENT,
+            positive=True,
+        ),
+        Field(
+            "batch",
+            "integer",
+            "points per task of a reduced model",
+            default=ABSENT,
+            default_text="automatic: points / (4 workers), 1 to 25",
+            minimum=1,
+            maximum=MAX_COUNT,
+        ),
+        Field(
+            "outputs",
+            "choices",
+            "what each row holds besides errors and times (always there): peak_stress "
+            "(free) and limit_load (an arc-length search on each run that stops early)",
+            default=ABSENT,
+            default_text="`" + str(list(DEFAULT_OUTPUTS)).replace("'", '"') + "`",
+            choices=ALWAYS_OUTPUTS + OPTIONAL_OUTPUTS,
+        ),
+        Field("axes", "tables", "the swept parameters", default=ABSENT, default_text="none"),
+    ),
+)
+"""The top level of a sweep file."""
+
+AXIS_KINDS = ("values", "linspace", "logspace", "sample")
+"""How an axis gives its values: exactly one of these fields."""
+
+AXES = Table(
     "axes",
-}
-_AXIS_KEYS = {
-    "path",
-    "values",
-    "linspace",
-    "logspace",
-    "sample",
-    "count",
-    "seed",
-    *{k for pair in SAMPLES.values() for k in pair},
-}
+    "One swept parameter: a scene field path and its values, given by exactly one of "
+    "`values`, `linspace`, `logspace` or `sample` (random draws with `count` and "
+    "`seed`, and the distribution's two parameters).",
+    (
+        Field(
+            "path",
+            "text",
+            "the scene field, e.g. section.thickness, flexures.e12.thickness, "
+            "load_cases.f+.value, ground.points.0.1 (arrays of tables by name, plain "
+            "arrays by index)",
+        ),
+        Field(
+            "values",
+            "numbers",
+            "the values, listed (numbers, in the field's unit)",
+            default=ABSENT,
+            variants=("values",),
+        ),
+        Field(
+            "linspace",
+            "numbers",
+            "[first, last, count]: count evenly spaced values",
+            default=ABSENT,
+            variants=("linspace",),
+        ),
+        Field(
+            "logspace",
+            "numbers",
+            "[first, last, count]: count values in geometric progression (first, last > 0)",
+            default=ABSENT,
+            variants=("logspace",),
+        ),
+        Field(
+            "sample",
+            "choice",
+            "random draws: uniform (low, high), normal (mean, std), lognormal (median, sigma)",
+            default=ABSENT,
+            choices=tuple(SAMPLES),
+            variants=("sample",),
+        ),
+        Field(
+            "count",
+            "integer",
+            "number of draws",
+            default=ABSENT,
+            minimum=1,
+            maximum=MAX_COUNT,
+            variants=("sample",),
+        ),
+        Field(
+            "seed",
+            "integer",
+            "seed of the draws (repeatable)",
+            default=ABSENT,
+            minimum=0,
+            variants=("sample",),
+        ),
+        Field("low", "number", "lower end of a uniform draw", default=ABSENT, variants=("sample",)),
+        Field(
+            "high",
+            "number",
+            "upper end of a uniform draw (> low)",
+            default=ABSENT,
+            variants=("sample",),
+        ),
+        Field("mean", "number", "mean of a normal draw", default=ABSENT, variants=("sample",)),
+        Field(
+            "std",
+            "number",
+            "standard deviation of a normal draw",
+            default=ABSENT,
+            positive=True,
+            variants=("sample",),
+        ),
+        Field(
+            "median",
+            "number",
+            "median of a lognormal draw",
+            default=ABSENT,
+            positive=True,
+            variants=("sample",),
+        ),
+        Field(
+            "sigma",
+            "number",
+            "standard deviation of the logarithm of a lognormal draw",
+            default=ABSENT,
+            positive=True,
+            variants=("sample",),
+        ),
+    ),
+    array=True,
+    selector="how",
+)
+"""One ``[[axes]]`` entry of a sweep file."""
 
 
 @dataclass(frozen=True)
@@ -166,8 +318,8 @@ def _number(source: str, field: str, v: Any, positive: bool = False) -> float:
 
 
 def _count(source: str, field: str, v: Any) -> int:
-    if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 1_000_000:
-        _fail(source, field, v, "must be an integer from 1 to 1000000")
+    if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= MAX_COUNT:
+        _fail(source, field, v, f"must be an integer from 1 to {MAX_COUNT}")
     return v
 
 
@@ -176,18 +328,19 @@ def _axis(source: str, k: int, a: Any) -> Axis:
     where = f"axes[{k}]"
     if not isinstance(a, dict):
         _fail(source, where, a, "must be a table [[axes]]")
+    known = AXES.keys()
     for key in a:
-        if key not in _AXIS_KEYS:
+        if key not in known:
             _fail(
                 source,
                 f"{where}.{key}",
                 a[key],
-                f"unknown field; expected one of {sorted(_AXIS_KEYS)}",
+                f"unknown field; expected one of {sorted(known)}",
             )
     path = a.get("path")
     if not isinstance(path, str) or not path.strip():
         _fail(source, f"{where}.path", path, "must be a scene field path, e.g. section.thickness")
-    kinds = [x for x in ("values", "linspace", "logspace", "sample") if x in a]
+    kinds = [x for x in AXIS_KINDS if x in a]
     if len(kinds) != 1:
         _fail(source, where, kinds, "give exactly one of values, linspace, logspace, sample")
     kind = kinds[0]
@@ -372,9 +525,10 @@ def parse_sweep(
         For a bad field of the sweep file, or a listed point that the scene
         loader refuses (the message names the point, its values and the field).
     """
+    known = SWEEP.keys()
     for key in data:
-        if key not in _SWEEP_KEYS:
-            _fail(source, key, data[key], f"unknown field; expected one of {sorted(_SWEEP_KEYS)}")
+        if key not in known:
+            _fail(source, key, data[key], f"unknown field; expected one of {sorted(known)}")
     name = str(data.get("name", default_name))
     if "base" not in data:
         _fail(source, "base", None, "missing: the base scene (built-in name or path)")
@@ -386,7 +540,7 @@ def parse_sweep(
     specs = tuple(parse_model(m, source, "models") for m in models)
     if len({s.id for s in specs}) != len(specs):
         _fail(source, "models", models, "lists a model twice")
-    reference = parse_model(data.get("reference", "beam:100"), source, "reference")
+    reference = parse_model(data.get("reference", SWEEP["reference"].default), source, "reference")
     if reference in specs:
         _fail(source, "models", reference.id, "the reference is not compared with itself")
     names = [c.name for c in base_scene.load_cases]
@@ -396,10 +550,10 @@ def parse_sweep(
     for c in cases:
         if c not in names:
             _fail(source, "load_cases", c, f"unknown load case; the base scene has {names}")
-    combine = data.get("combine", "grid")
+    combine = data.get("combine", SWEEP["combine"].default)
     if combine not in COMBINE:
         _fail(source, "combine", combine, f"must be one of {list(COMBINE)}")
-    metric = data.get("metric", "worst")
+    metric = data.get("metric", SWEEP["metric"].default)
     if metric not in SUMMARY_METRICS:
         _fail(source, "metric", metric, f"must be one of {list(SUMMARY_METRICS)}")
     rotation = data.get("linear_rotation")
@@ -482,3 +636,41 @@ def load_sweep(name_or_path: str | Path) -> Sweep:
     except tomllib.TOMLDecodeError as exc:
         _fail(str(path), "toml", None, f"malformed TOML: {exc}")
     return parse_sweep(data, str(path), path.parent, default_name=path.stem)
+
+
+_RULES = """\
+Units are those of the scene fields an axis addresses (mm, MPa, N, N mm,
+degrees). Every point is the base scene with the axes' values written in,
+loaded through the scene loader, so every scene check applies: a listed value
+that makes an invalid scene stops the sweep before anything runs (naming the
+point and the field); a random draw that does is recorded as an invalid point.
+A field no table declares is refused, naming it and the fields expected.
+"""
+
+
+def field_reference(level: int = 2) -> str:
+    """The sweep file reference: every field of :data:`SWEEP` and :data:`AXES`, as Markdown.
+
+    Parameters
+    ----------
+    level : int
+        Heading level of each table's section.
+
+    Returns
+    -------
+    str
+        The rules, then one section per table with its fields (kind, unit,
+        default, allowed values, description).
+    """
+    h = "#" * level
+    return "\n\n".join(
+        [
+            _RULES,
+            f"{h} Top level {{#sweep-top}}",
+            SWEEP.description,
+            markdown_table(SWEEP),
+            f"{h} `[[axes]]` {{#sweep-axes}}",
+            AXES.description,
+            markdown_table(AXES),
+        ]
+    )
