@@ -183,25 +183,26 @@ def test_curved_beam_factor_is_the_winkler_bach_inner_fibre_stress(r_over_h):
 
 
 def test_continuum_fibre_stress_of_a_thick_arc_is_the_curved_beam_value():
-    """Pure moment on a thick arc (r/h = 4): away from the clamped faces the continuum's own
-    fibre stress is Winkler-Bach's inner-fibre value, 9.0 % above the beam formula the
-    section resultants give. Measured (levels 0, 1, 2): 1.1336, 1.1009, 1.0904 times
-    6 M / (b h^2) against 1.0905; bound 0.5 % at level 2, and the differences shrink."""
+    """Small pure moment on a thick arc (r/h = 4): away from the clamped faces the continuum's
+    own fibre stress is Winkler-Bach's inner-fibre value, 9.0 % above the beam formula the
+    section resultants give (exact elasticity, Golovin: 9.14 %, tests/test_stress_recovery.py).
+    Measured (levels 0, 1, 2): 1.0857, 1.0899, 1.0912 times 6 M / (b h^2) against 1.0905;
+    bound 0.2 % at level 2, and the differences shrink."""
     from flexval.validation.continuum.run import run_continuum
     from flexval.validation.strength import curved_beam_factor
 
-    R, h = 4.0, 1.0
+    R, h, moment = 4.0, 1.0, 1e-3
     mech = cantilever(Arc((0.0, 0.0), R, math.radians(-60.0), math.radians(120.0)), E=E, b=1.0, h=h)
-    straight = 6.0 * 1.0 / (1.0 * h**2)
+    straight = 6.0 * moment / (1.0 * h**2)
     ratios = []
     for level in (0, 1, 2):
-        lp = run_continuum(mech, tip_moment(1.0, levels=2), level=level)
+        lp = run_continuum(mech, tip_moment(moment, levels=2), level=level)
         assert lp.peak_stress["f"][-1] == pytest.approx(straight, rel=1e-8)
         fibre = lp.fibre_stress["f"]
         assert fibre["layer"] == 2.0 * h and 0.1 < fibre["at"] < 0.9
         ratios.append(fibre["stress"] / straight)
     assert abs(ratios[2] - ratios[1]) < abs(ratios[1] - ratios[0])
-    assert ratios[2] == pytest.approx(curved_beam_factor(R, h), rel=5e-3)
+    assert ratios[2] == pytest.approx(curved_beam_factor(R, h), rel=2e-3)
 
 
 def test_a_quantity_converged_to_round_off_gets_no_observed_order():

@@ -41,6 +41,7 @@ from .group import ContinuumGroup
 from .mass import face_accelerations, node_jacobian, scalar_mass
 from .material import make_law
 from .polar import cross_sections
+from .recovery import PatchRecovery
 from .solid import Solid
 
 
@@ -161,6 +162,11 @@ class ContinuumConnector(Connector):
     def _alone(self) -> ContinuumGroup:
         """A group of this connector alone: its predictor and Newton update."""
         return ContinuumGroup([self])
+
+    @functools.cached_property
+    def recovery(self) -> PatchRecovery:
+        """Stress recovery at the nodes (:mod:`.recovery`), built on first use."""
+        return PatchRecovery(self.solid.mesh, self.mesh.elements, self.sections)
 
     @property
     def free_nodes(self) -> np.ndarray:
