@@ -710,8 +710,8 @@ def build_parser() -> argparse.ArgumentParser:
         action="append",
         metavar="MODEL",
         help=f"model id: {ids}; options in brackets, e.g. beam:100[shear], "
-        "dcmm:2[frame=follower] (repeatable; default: the scene's "
-        "request.models)",
+        "dcmm:2[frame=follower]; flexval models lists them (repeatable; default: the "
+        "scene's request.models)",
     )
     q.add_argument(
         "--load-case",
@@ -805,7 +805,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--model",
         required=True,
         metavar="MODEL",
-        help="continuum[:LEVEL], beam:N, prbm, dcmm:N or ee",
+        help=f"model id: {ids} (see flexval models)",
     )
     q.add_argument(
         "--at",
