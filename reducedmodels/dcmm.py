@@ -34,12 +34,14 @@ from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.kinematics import rotate_xy
 
 from .connector import Connector, ConnectorGroup
-from .inertia import MassPoints, rigid_pieces
+from .inertia import MassPoints, line_density, rigid_pieces
 from .sections import SectionForces
+from .subarcs import sub_arcs
 from .validity import (
     MAX_RELATIVE_ROTATION,
     MAX_STRAIN,
     SCREEN_MARGIN,
+    bending_strain_reasons,
     rotation_reasons,
     stretch_reasons,
 )
@@ -183,13 +185,12 @@ class DcmmConnector(Connector):
         self.name = flexure.name
         self.bodies = tuple(flexure.bodies)
         self.n_internal = 3 * (n - 1)
-        EI = flexure.bending_stiffness(mechanism.material)
-        EA = flexure.axial_stiffness(mechanism.material)
         shape = flexure.shape
-        parts = shape.split(n)
+        subs = sub_arcs(flexure, mechanism.material, n)
         forward = flexure.start_body == self.bodies[0]  # chain runs start -> end
         if not forward:
-            parts = parts[::-1]
+            subs = subs[::-1]
+        parts = [sub.shape for sub in subs]
         self._layout = layout = _chain_layout(n, forward)
         # chain of reference points: body a, cuts (in chain order), body b (float pairs, mm)
         cuts = [(p.end_points[1] if forward else p.end_points[0]).tolist() for p in parts[:-1]]
@@ -203,12 +204,8 @@ class DcmmConnector(Connector):
         # each sub-arc's parameters of flexval.reducedmodels.dcmmkernel.sub_arc: offsets of its centre
         # of elasticity from its two bodies (mm), ellipse axes, inverse compliances
         parameters = []
-        for (lx, ly), (fx, fy), part in zip(refs, refs[1:], parts):
-            ell = part.ellipse(EI)
-            w = ell.weight
-            compliance = [w * ell.b**2, w * ell.a**2, w]  # Ellipse.compliance()
-            if ell.b == 0.0:
-                compliance[0] = part.length / EA
+        for (lx, ly), (fx, fy), sub in zip(refs, refs[1:], subs):
+            ell, compliance = sub.ellipse, sub.compliance
             cx, cy = ell.center.tolist()
             parameters.append(
                 [
@@ -228,7 +225,12 @@ class DcmmConnector(Connector):
         self._end_rel = [
             (ex - rx, ey - ry) for (ex, ey), (rx, ry) in zip(ends, (refs[0], refs[-1]))
         ]
-        self._area, self._sub_lengths = flexure.section.area, np.array(self._arc_lengths)
+        self._section, self._sub_lengths = flexure.section, np.array(self._arc_lengths)
+        # each sub-arc's relative rotation limits (chain order, rad): the thinnest fibre's
+        # strain (infinite for a uniform section) and, the screen's, the smallest of all
+        self._strain_limits = [sub.strain_limit for sub in subs]
+        self._turn_limits = [sub.turn_limit for sub in subs]
+        self._turn_limit = min(self._turn_limits)
         self._centre_line, self._refs, self._forward = shape, np.array(refs), forward
         # each sample's point at rest (all sub-arcs' at once: they are equal parts of the
         # centre line) as offsets from its sub-arc's leading and following bodies (mm), and
@@ -265,7 +267,11 @@ class DcmmConnector(Connector):
         l = self._sub_lengths[0]  # equal sub-arcs
         bounds = np.clip((np.arange(n + 2) - 0.5) * l, 0.0, n * l)
         mass, rel, rotary = rigid_pieces(
-            self._centre_line, self._forward, bounds, self._refs, density * self._area
+            self._centre_line,
+            self._forward,
+            bounds,
+            self._refs,
+            line_density(density, self._section),
         )
         dofs = np.vstack(
             [np.arange(3), 6 + np.arange(self.n_internal).reshape(-1, 3), np.arange(3, 6)]
@@ -338,14 +344,18 @@ class DcmmConnector(Connector):
         chain, points = self._points(pose_a, pose_b, internal)
         chords = [math.dist(p, r) for p, r in zip(points, points[1:])]
         turns = [f[2] - lead[2] for lead, f in zip(chain, chain[1:])]
-        if (
-            max(c / a for c, a in zip(chords, self._arc_lengths)) - 1.0 <= MAX_STRAIN
-            and max(map(abs, turns)) <= MAX_RELATIVE_ROTATION
+        if max(c / a for c, a in zip(chords, self._arc_lengths)) - 1.0 <= MAX_STRAIN and all(
+            abs(t) <= limit for t, limit in zip(turns, self._turn_limits)
         ):
             return []
-        return stretch_reasons(
+        reasons = stretch_reasons(
             "sub-arc chord", np.array(chords), np.array(self._arc_lengths), one_sided=True
         ) + rotation_reasons("sub-arc", np.array(turns), MAX_RELATIVE_ROTATION)
+        if self._turn_limit < MAX_RELATIVE_ROTATION:
+            reasons += bending_strain_reasons(
+                "sub-arc", np.array(turns), np.array(self._strain_limits)
+            )
+        return reasons
 
     def path_validity(self, states) -> list[list[str]]:
         """:meth:`validity` at k states, screened in one vectorised pass (see :class:`DcmmGroup`)."""
@@ -637,9 +647,8 @@ class DcmmGroup(ConnectorGroup):
             stack.lengths,
             tables.sub_arc_start,
         )
-        near = (
-            (strain > MAX_STRAIN - SCREEN_MARGIN) | (turn > MAX_RELATIVE_ROTATION - SCREEN_MARGIN)
-        ).T.tolist()
+        limits = np.array([c._turn_limit for c in self.connectors])
+        near = ((strain > MAX_STRAIN - SCREEN_MARGIN) | (turn > limits - SCREEN_MARGIN)).T.tolist()
         levels = levels_of() if any(map(any, near)) else [None] * len(poses)
         return [
             [c.validity(*states[j]) if flag else [] for states, flag in zip(levels, flags)]

@@ -13,12 +13,16 @@ reference point p_ref) the end body exerts on the flexure, x(s) the section's
 current position and t(s) its current axis (pointing towards the end body).
 The peak normal stress of the rectangular section is the outer-fibre value
 
-    sigma(s) = |N| / A + |M| h / (2 I)       (MPa).
+    sigma(s) = |N| / A + |M| h / (2 I)       (MPa),
+
+with h, A and I those of the station for a section that varies along the
+flexure (a taper or a notch).
 
 Every flexure connector reports its section forces from its own internal
 forces (the gradient of its energy on the end body's pose) along its own
 displaced centre line (beam nodes, DCMM displaced sub-arcs, PRBM links,
-continuum mid-thickness nodes): see :meth:`flexval.reducedmodels.connector.Connector.section_forces`.
+continuum mid-thickness nodes): see
+:meth:`flexval.reducedmodels.connector.Connector.section_forces`.
 
 Units: mm, N, N mm, MPa.
 """
@@ -56,10 +60,19 @@ class SectionForces:
     moment: np.ndarray
 
     def fibre_stress(self, section: Section) -> np.ndarray:
-        """Outer-fibre normal stress |N|/A + |M| h/(2 I) at each station (and state), MPa."""
-        return np.abs(self.axial) / section.area + np.abs(self.moment) * section.thickness / (
-            2.0 * section.inertia
-        )
+        """Outer-fibre normal stress |N|/A + |M| h/(2 I) at each station (and state), MPa.
+
+        A varying section (``section.profile``) takes h(s), A(s) and I(s) at
+        each station's arc length s = at L (L the profile's length, the
+        flexure's).
+        """
+        if section.profile is None:
+            return np.abs(self.axial) / section.area + np.abs(self.moment) * section.thickness / (
+                2.0 * section.inertia
+            )
+        s = np.asarray(self.at, float) * section.profile.length
+        h, area, inertia = section.thickness_at(s), section.area_at(s), section.inertia_at(s)
+        return np.abs(self.axial) / area + np.abs(self.moment) * h / (2.0 * inertia)
 
     def peak(self, section: Section) -> tuple[float, float]:
         """Largest outer-fibre stress (MPa) and its arc-length fraction from the first end."""

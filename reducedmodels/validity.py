@@ -23,6 +23,10 @@ typed in:
   response (``ee``), whose kinematics are linearised.
 * the PRBM is meaningful within the end rotations its table was fitted on
   (:func:`flexval.reducedmodels.prbm.fitted_rotation`).
+* a flexure whose section varies (a notch hinge, a taper) reaches the
+  strain limit in bending at its thinnest section long before a uniform
+  one: :func:`bending_rotation_limit` turns :data:`MAX_STRAIN` into the
+  rotation of a notch's pivot or of a DCMM part of it.
 
 ``tests/test_validity.py`` checks that every model's states at the paper's
 loads are inside, and that DCMM_1 at 100 and 1000 times them is not.
@@ -93,6 +97,47 @@ from its scalar :meth:`~flexval.reducedmodels.connector.Connector.validity` in t
 last bits (``np.hypot`` against ``math.dist``): states within this margin
 of a limit, and beyond it, are judged by the scalar check, so the verdicts
 are the scalar check's exactly."""
+
+
+def bending_rotation_limit(
+    weight: float, youngs_modulus: float, depth: float, thickness: float
+) -> float:
+    """Rotation (rad) at which a part's thinnest outer fibre reaches :data:`MAX_STRAIN` in bending.
+
+    A moment M turns a part of rotational compliance w = ∫ ds / EI by
+    phi = M w and strains the outer fibre of a section of thickness h by
+    M h / (2 E I) = 6 M / (E b h^2), largest at the thinnest section t. So
+
+        phi_max = MAX_STRAIN E b t^2 w / 6
+
+    (for a uniform part of length L, w = L / EI and phi_max = 2 MAX_STRAIN L / h:
+    the curvature 2 MAX_STRAIN / h of the limit strain over its length). A
+    notch hinge, whose compliance gathers at its thinnest section, reaches
+    it at a few degrees (the literature's notch-hinge rotation range).
+
+    Parameters
+    ----------
+    weight : float
+        w, 1/(N mm).
+    youngs_modulus : float
+        E, MPa.
+    depth, thickness : float
+        b and the smallest thickness t of the part, mm.
+    """
+    return MAX_STRAIN * youngs_modulus * depth * thickness**2 * weight / 6.0
+
+
+def bending_strain_reasons(what: str, angles: np.ndarray, limits: np.ndarray) -> list[str]:
+    """The rotation (rad) farthest beyond its own limit (rad), at most one reason naming it."""
+    ratio = np.abs(np.asarray(angles, float)) / np.asarray(limits, float)
+    k = int(np.argmax(ratio))
+    if not ratio[k] > 1.0:
+        return []
+    return [
+        f"{_label(what, k, ratio.size)} turned {math.degrees(abs(angles[k])):.3g} deg, beyond "
+        f"the {math.degrees(limits[k]):.3g} deg at which its thinnest section's outer fibre "
+        f"reaches the {100.0 * MAX_STRAIN:g} % strain limit"
+    ]
 
 
 def stretch_reasons(
