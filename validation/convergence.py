@@ -12,7 +12,10 @@ the three finest resolutions f1 (coarse), f2, f3 (fine) give
   (percent), an error band on the finest value.
 
 The same analysis is made of the largest peak outer-fibre stress over the
-flexures at full load (MPa, ``peak_stress``) for models that report it.
+flexures at full load (MPa, ``peak_stress``) for models that report it, and
+of the continuum's own largest fibre stress outside the end faces' boundary
+layers (MPa, ``fibre_stress``: :attr:`flexval.reducedmodels.LoadPath.fibre_stress`,
+recovered from the solid's stresses by :mod:`flexval.validation.continuum.fibre`).
 
 A quantity whose changes between resolutions are below ``ROUND_OFF_CHANGE``
 of its value is converged to the solver's tolerance: an order computed from
@@ -45,6 +48,10 @@ level 0 to 1 to 2 (the converged states' own tolerance;
 smallest discretisation change in the report's studies is 4.8e-5 (the same
 study's displacement, levels 1 to 2): the threshold sits some 50 times above
 the one and below the other."""
+
+
+STRESSES = ("peak_stress", "fibre_stress")
+"""The stresses (MPa) a study's rows hold, None for a model that does not report one."""
 
 
 @dataclass
@@ -146,6 +153,9 @@ def study(
                 "peak_stress": (
                     max(v[-1] for v in lp.peak_stress.values()) if lp.peak_stress else None
                 ),
+                "fibre_stress": (
+                    max(v["stress"] for v in lp.fibre_stress.values()) if lp.fibre_stress else None
+                ),
             }
         )
         if progress:
@@ -154,8 +164,7 @@ def study(
     if len(st.rows) >= 3 and finest == resolutions[-3:] and math.isfinite(ratio):
         f = st.rows[-3:]
         keys = ["displacement", "rotation"]
-        if all(r["peak_stress"] is not None for r in f):
-            keys.append("peak_stress")
+        keys += [k for k in STRESSES if all(r.get(k) is not None for r in f)]
         st.summary = {key: richardson(f[0][key], f[1][key], f[2][key], ratio) for key in keys}
     return st
 
@@ -171,6 +180,9 @@ def format_study(st: ConvergenceStudy) -> str:
         Column("rot deg"),
         Column("peak MPa"),
     ]
+    fibre = any(r.get("fibre_stress") is not None for r in st.rows)
+    if fibre:
+        columns.append(Column("fibre MPa"))
     rows = [
         [
             r["model"],
@@ -180,6 +192,7 @@ def format_study(st: ConvergenceStudy) -> str:
             f"{math.degrees(r['rotation']):.6f}",
             sig(r["peak_stress"], 6),
         ]
+        + ([sig(r.get("fibre_stress"), 6)] if fibre else [])
         for r in st.rows
     ]
     lines += text_table(columns, rows)
@@ -187,6 +200,7 @@ def format_study(st: ConvergenceStudy) -> str:
         ("displacement", "mm", 1.0),
         ("rotation", "deg", math.degrees(1.0)),
         ("peak_stress", "MPa", 1.0),
+        ("fibre_stress", "MPa", 1.0),
     ):
         s = st.summary.get(key)
         if not s:

@@ -213,9 +213,13 @@ def convergence(rows: list[dict], extrapolated: dict, title: str, path: Path) ->
     """Relative difference from the Richardson value versus unknowns (log-log)."""
     fig, ax = plt.subplots(figsize=(6.5, 4.2))
     n = [r["unknowns"] for r in rows]
-    for key, label in (("displacement", "|d|"), ("rotation", "rotation")):
+    for key, label in (
+        ("displacement", "|d|"),
+        ("rotation", "rotation"),
+        ("fibre_stress", "fibre stress"),
+    ):
         ext = extrapolated.get(key)
-        if ext is None or ext == 0:
+        if ext is None or ext == 0 or any(r.get(key) is None for r in rows):
             continue
         err = [max(abs(r[key] - ext) / abs(ext) * 100, 1e-6) for r in rows]
         ax.plot(n, err, marker="o", label=label)

@@ -35,6 +35,7 @@ from .reportdata import (
     SceneResults,
     compute_report,
 )
+from .tables import sig
 from .timings import BUDGETS, TIMINGS_MD, write_benches, write_timings
 
 __all__ = [
@@ -249,18 +250,21 @@ def _convergence_lines(res: SceneResults, out: Path, draw: Callable) -> list[str
     L = []
     name = res.scene.name
     for st in res.convergence:
+        fibre = any(r.get("fibre_stress") is not None for r in st.rows)
         L += [
             f"### {st.family} convergence ({st.load_case})",
             "",
-            "| model | unknowns | disp. (mm) | rotation (deg) |",
-            "|---|---:|---:|---:|",
+            "| model | unknowns | disp. (mm) | rotation (deg) |"
+            + (" fibre stress (MPa) |" if fibre else ""),
+            "|---|---:|---:|---:|" + ("---:|" if fibre else ""),
         ]
         for r in st.rows:
             L.append(
                 f"| {r['model']} | {r['unknowns']} | "
                 f"{r['displacement']:.6f} | {math.degrees(r['rotation']):.6f} |"
+                + (f" {sig(r.get('fibre_stress'), 6)} |" if fibre else "")
             )
-        L += [f"| {f.model} | {f.summary()} | | |" for f in st.failures]
+        L += [f"| {f.model} | {f.summary()} | | |" + (" |" if fibre else "") for f in st.failures]
         for key, s in st.summary.items():
             gci = "n/a" if s["gci_percent"] is None else f"{s['gci_percent']:.3g} %"
             L.append(
@@ -360,6 +364,7 @@ def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
         res.reference if res.has_reference() else PAPER_REFERENCE,
         out,
         draw,
+        res.convergence,
     )
     if res.frequencies is not None:
         L += frequencies.section(res.frequencies)

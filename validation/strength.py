@@ -18,7 +18,7 @@ Units: MPa, N or N mm, mm.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import matplotlib
@@ -30,6 +30,7 @@ import numpy as np  # noqa: E402
 from flexval.geometry import Scene  # noqa: E402
 from flexval.reducedmodels import LoadPath  # noqa: E402
 
+from .convergence import ConvergenceStudy, order_text  # noqa: E402
 from .failures import LIMIT_POINT, Failure  # noqa: E402
 from .figurejobs import draw_now  # noqa: E402
 from .figures import _save, style  # noqa: E402
@@ -158,7 +159,11 @@ def limit_load_table(data: dict[str, dict[str, dict]], cases: list[str]) -> list
 
 
 def fibre_table(
-    scene: Scene, paths: dict[tuple[str, str], LoadPath], reference: str, cases: list[str]
+    scene: Scene,
+    paths: dict[tuple[str, str], LoadPath],
+    reference: str,
+    cases: list[str],
+    convergence: Sequence[ConvergenceStudy] = (),
 ) -> list[str]:
     """Markdown comparing the reference continuum's own fibre stress with its beam-formula value.
 
@@ -166,7 +171,9 @@ def fibre_table(
     (:attr:`reducedmodels.LoadPath.fibre_stress`, outside the end faces'
     boundary layers) against the largest outer-fibre stress of its section
     resultants over the same stretch of that flexure (outside the same
-    layers); empty when the reference reports no fibre stress.
+    layers), then the fibre stress's mesh convergence from the studies in
+    ``convergence`` that have it (observed order, Richardson value, GCI);
+    empty when the reference reports no fibre stress.
     """
     length = {f.name: f.shape.length for f in scene.mechanism.flexures}
     rows = []
@@ -199,7 +206,26 @@ def fibre_table(
         ]
         + rows
         + [""]
+        + _fibre_convergence_lines(convergence)
     )
+
+
+def _fibre_convergence_lines(convergence: Sequence[ConvergenceStudy]) -> list[str]:
+    """One sentence per study with a fibre-stress summary: its mesh convergence."""
+    out = []
+    for st in convergence:
+        s = st.summary.get("fibre_stress")
+        if not s:
+            continue
+        models = ", ".join(f"`{r['model']}`" for r in st.rows[-3:])
+        gci = "n/a" if s["gci_percent"] is None else f"{s['gci_percent']:.3g} %"
+        out += [
+            f"Mesh convergence of the continuum's fibre stress on {st.load_case} ({models}): "
+            f"observed order {order_text(s)}, Richardson value {s['extrapolated']:.6g} MPa, "
+            f"GCI {gci}.",
+            "",
+        ]
+    return out
 
 
 def stress_profiles(scene: Scene, case_name: str, paths: dict[str, LoadPath], path: Path) -> str:
@@ -238,9 +264,11 @@ def section(
     reference: str,
     out: Path,
     draw: Callable = draw_now,
+    convergence: Sequence[ConvergenceStudy] = (),
 ) -> list[str]:
     """The report's Markdown on peak stresses and limit loads of one scene (figures into
-    ``out``, drawn with ``draw(fn, *args)``: see :mod:`flexval.validation.figurejobs`)."""
+    ``out``, drawn with ``draw(fn, *args)``: see :mod:`flexval.validation.figurejobs`;
+    the fibre stress's mesh convergence from the studies in ``convergence``)."""
     cases = [c.name for c in scene.load_cases]
     name = scene.name
     lines = [
@@ -275,7 +303,7 @@ def section(
             "says how much it differs.",
             "",
         ]
-    lines += fibre_table(scene, paths, reference, cases)
+    lines += fibre_table(scene, paths, reference, cases, convergence)
     for c in cases:
         full = {m: paths[(m, c)] for m in models if (m, c) in paths}
         png = output_path(out, f"{name}_{c}_stress", ".png")
