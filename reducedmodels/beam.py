@@ -1,7 +1,9 @@
 """Geometrically exact 2D beam FEM (``beam:N``): corotational two-node elements.
 
 Each flexure's centre line is cut into N straight two-node elements whose
-nodes lie exactly on the centre line, at arc lengths s_k = k L / N. A node
+nodes lie exactly on the centre line, at arc lengths s_k = k L / N (a
+section that varies along the flexure grades them instead, shorter where
+it is thin: :mod:`flexval.reducedmodels.beamvarying`). A node
 carries (x, y, theta): its position (mm) and its rotation increment (rad)
 from the initial configuration. The two end nodes are rigidly attached to
 the bodies the flexure joins; the N - 1 interior nodes are the connector's
@@ -30,7 +32,11 @@ The local energy is
 
 or, with ``shear=True``, the Timoshenko beam's condensed bending stiffness
 k_b = EI / (l0 (1 + phi)) [[4 + phi, 2 - phi], [2 - phi, 4 + phi]] with
-phi = 12 EI / (kappa G A l0^2), kappa = 5/6. Gradient and tangent are
+phi = 12 EI / (kappa G A l0^2), kappa = 5/6. A varying section (a taper,
+a notch) gives each element the inverse of its exact flexibility instead,
+integrated over its part of the flexure, k_b = [[k11, k12], [k12, k22]]
+and EA/l0 replaced by 1 / integral of ds / EA
+(:mod:`flexval.reducedmodels.beamvarying`). Gradient and tangent are
 exact (material plus geometric parts); the elements of all flexures are
 evaluated in one compiled call (:mod:`flexval.reducedmodels.beamkernel`), which adds
 them straight into the global gradient and tangent, and a connector's own
@@ -39,7 +45,10 @@ Hessian is the values of a fixed sparse pattern.
 Accuracy: the elements bend over their chords, so an arc's bending length
 is the chord polygon's, shorter than the arc by ~(width/N)^2 / 24; end
 rotations and positions converge at O(1/N^2) (exact rotation under a pure
-end moment only for a straight flexure).
+end moment only for a straight flexure). A straight flexure of varying
+section has the exact linear compliance at any N (the element's
+flexibility is exact), and its large deflections converge at O(1/N^2)
+(observed orders 2.02-2.12 on four notch contours, tests/test_beam_varying.py).
 
 Units: mm, N, MPa, N mm, rad.
 """
@@ -55,6 +64,7 @@ import numpy as np
 from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.kinematics import rotate_xy
 
+from .beamvarying import element_stiffness, graded_stations
 from .connector import Connector, ConnectorGroup, LocalState
 from .inertia import MassPoints, chain_mass_points
 from .sections import SectionForces, statics_section_forces, unit_vectors
@@ -150,14 +160,18 @@ class BeamGroup(ConnectorGroup):
             np.arange(len(n_nodes), dtype=np.int64), n_elements
         )
         ends = np.array([[s, s + n - 1] for s, n in zip(node_start, n_nodes)], np.intp).ravel()
-        self._chord0, self._l0, self._k_axial, self._k11, self._k12, self._flexibility = (
+        self._chord0, self._l0, self._k_axial, self._k11, self._k12, self._k22 = (
             np.concatenate([getattr(c, name) for c in self.connectors])
-            for name in ("_chord0", "_l0", "_k_axial", "_k11", "_k12", "_flexibility")
+            for name in ("_chord0", "_l0", "_k_axial", "_k11", "_k12", "_k22")
         )
-        # the chain closure's element flexibilities, l0 / EI and l0 / EA (beamkernel.close_chains)
+        self._flexibility = np.concatenate([c._flexibility for c in self.connectors])
+        # the chain closure's element flexibilities, l0 / EI and l0 / EA for a uniform section
+        # (beamkernel.close_chains)
         self._chain_tables = (self._chain_nodes, self._flexibility, 1.0 / self._k_axial)
         # the element kernel's per-element numbers in one table (one argument, not five)
-        self._terms = np.column_stack([self._chord0, self._l0, self._k_axial, self._k11, self._k12])
+        self._terms = np.column_stack(
+            [self._chord0, self._l0, self._k_axial, self._k11, self._k12, self._k22]
+        )
         # the kernel's node tables in the concatenated local coordinates: where each node's
         # (x, y, theta) or its body's pose is read, its offset on the body, whether attached
         # (BeamConnector._node_dof_table laid end to end: interior node i of a flexure at
@@ -305,15 +319,15 @@ class BeamGroup(ConnectorGroup):
         the kernel as they are; each element's chord frame at each level
         serves both (:func:`flexval.reducedmodels.beamkernel.path_element_ends`).
         """
-        lengths, turns, axial, moment = self._element_ends(coordinates)
-        return self._verdicts(lengths, turns), self._section_forces(axial, moment)
+        ends = self._element_ends(coordinates)
+        return self._verdicts(*ends), self._section_forces(*ends[2:])
 
     def path_validity(self, levels: Sequence[Sequence[LocalState]]) -> list[list[list[str]]]:
         """Each connector's :meth:`BeamConnector.validity` at each level, in one compiled pass.
 
         Reasons are worded only for the (connector, level) pairs found invalid.
         """
-        return self._verdicts(*self._element_ends(_levels(levels))[:2])
+        return self._verdicts(*self._element_ends(_levels(levels)))
 
     def path_section_forces(self, levels: Sequence[Sequence[LocalState]]) -> list[SectionForces]:
         """Each connector's :meth:`BeamConnector.section_forces` at k levels, stacked (k, m).
@@ -342,25 +356,47 @@ class BeamGroup(ConnectorGroup):
             self._k_axial,
             self._k11,
             self._k12,
+            self._k22,
         )
 
-    def _verdicts(self, lengths: np.ndarray, turns: np.ndarray) -> list[list[list[str]]]:
-        """The validity reasons per connector and level from the elements' chord measures."""
+    def _verdicts(
+        self, lengths: np.ndarray, turns: np.ndarray, axial: np.ndarray, moment: np.ndarray
+    ) -> list[list[list[str]]]:
+        """The validity reasons per connector and level from the elements' chord measures.
+
+        A flexure whose section varies also has its outer-fibre strain
+        (|N| / EA + |M| / (E b h^2 / 6) at every element's end nodes, from
+        the element end forces ``axial`` and ``moment``) checked against
+        MAX_STRAIN: its thinnest section reaches the limit in bending long
+        before its elements stretch or turn that far.
+        """
         strain = np.maximum.reduceat(np.abs(lengths / self._l0 - 1.0), self._element_start, axis=1)
         turn = np.maximum.reduceat(turns, self._element_start, axis=1)
         valid = ((strain <= MAX_STRAIN) & (turn <= MAX_CHORD_TURN)).T.tolist()
+        fibres = [
+            None
+            if c._fibre_compliance is None
+            else np.abs(axial[:, index]) * c._fibre_compliance[0]
+            + np.abs(moment[:, index]) * c._fibre_compliance[1]
+            for c, index in zip(self.connectors, self._section_index)
+        ]
         ends = [*self._element_start[1:], lengths.shape[1]]
         return [
             [
-                []
-                if ok
-                else (
-                    stretch_reasons("element", length[e0:e1], c._l0)
-                    + rotation_reasons("element", turn_e[e0:e1], MAX_CHORD_TURN)
+                (
+                    []
+                    if ok
+                    else (
+                        stretch_reasons("element", length[e0:e1], c._l0)
+                        + rotation_reasons("element", turn_e[e0:e1], MAX_CHORD_TURN)
+                    )
                 )
-                for ok, length, turn_e in zip(flags, lengths, turns)
+                + ([] if fibre is None else fibre_strain_reasons(fibre[level], c._section_s))
+                for level, (ok, length, turn_e) in enumerate(zip(flags, lengths, turns))
             ]
-            for c, flags, e0, e1 in zip(self.connectors, valid, self._element_start, ends)
+            for c, flags, e0, e1, fibre in zip(
+                self.connectors, valid, self._element_start, ends, fibres
+            )
         ]
 
     def _section_forces(self, axial: np.ndarray, moment: np.ndarray) -> list[SectionForces]:
@@ -414,6 +450,17 @@ class BeamGroup(ConnectorGroup):
             self._attached,
             *self._chain_tables,
         )
+
+
+def fibre_strain_reasons(strain: np.ndarray, stations: np.ndarray) -> list[str]:
+    """The largest outer-fibre strain beyond MAX_STRAIN and where it is (mm from the start)."""
+    k = int(np.argmax(strain))
+    if not strain[k] > MAX_STRAIN:
+        return []
+    return [
+        f"outer fibre strained {100.0 * strain[k]:.3g} % at {stations[k]:.4g} mm from the "
+        f"flexure's start, beyond the {100.0 * MAX_STRAIN:g} % strain limit"
+    ]
 
 
 def _starts(counts: Sequence[int]) -> list[int]:
@@ -503,25 +550,53 @@ class BeamConnector(Connector):
         self.n_internal = 3 * (n_elements - 1)
         self._n_nodes = n_elements + 1
         length = flexure.shape.length
-        self._nodes0 = flexure.shape.point(evenly_spaced(length, n_elements))
-        self._node_fractions = evenly_spaced(1.0, n_elements)
+        section = flexure.section
+        if section.is_uniform:
+            self._nodes0 = flexure.shape.point(evenly_spaced(length, n_elements))
+            self._node_fractions = evenly_spaced(1.0, n_elements)
+            stations = self._node_fractions * length
+        else:  # elements graded by the section (beamvarying.graded_stations)
+            stations = graded_stations(flexure.shape, section, n_elements)
+            self._nodes0 = flexure.shape.point(stations)
+            self._node_fractions = stations / length
         # section forces at every element's start then end node, in arc-length order
         at = np.concatenate([self._node_fractions[:-1], self._node_fractions[1:]])
         self._section_order = np.argsort(at, kind="stable")
         self._section_at = at[self._section_order]
-        self._node_tangent0 = flexure.shape.tangent_angle(self._node_fractions * length)
+        self._node_tangent0 = flexure.shape.tangent_angle(stations)
         chord = self._nodes0[1:] - self._nodes0[:-1]
         l0 = np.hypot(chord[:, 0], chord[:, 1])
         self._l0 = l0
         self._chord0 = chord / l0[:, None]
         material = mechanism.material
-        self._k_axial = flexure.axial_stiffness(material) / l0
-        bending = flexure.bending_stiffness(material)
-        self._flexibility = l0 / bending  # 1/(N mm)
-        shear_stiffness = (
-            SHEAR_CORRECTION * material.shear_modulus * flexure.section.area if shear else None
-        )
-        self._k11, self._k12 = bending_stiffness_terms(bending, l0, shear_stiffness)
+        if section.is_uniform:
+            self._k_axial = flexure.axial_stiffness(material) / l0
+            bending = flexure.bending_stiffness(material)
+            self._flexibility = l0 / bending  # 1/(N mm)
+            shear_stiffness = (
+                SHEAR_CORRECTION * material.shear_modulus * section.area if shear else None
+            )
+            self._k11, self._k12 = bending_stiffness_terms(bending, l0, shear_stiffness)
+            self._k22 = self._k11
+            self._piece_lengths = np.full(n_elements, length / n_elements)
+            self._line_area = section.area
+            self._fibre_compliance = None
+        else:  # each element's stiffness integrated over its arc (beamvarying.element_stiffness)
+            stiffness = element_stiffness(
+                section, material, stations, l0, SHEAR_CORRECTION if shear else None
+            )
+            self._k_axial, self._flexibility = stiffness.k_axial, stiffness.bending_flexibility
+            self._k11, self._k12, self._k22 = stiffness.k11, stiffness.k12, stiffness.k22
+            self._piece_lengths = np.diff(stations)
+            self._line_area = stiffness.mean_area
+            # outer-fibre strain per |N| and per |M| at the section stations, 1/N and 1/(N mm)
+            self._section_s = self._section_at * length
+            h = section.thickness_at(self._section_s)
+            E = material.youngs_modulus
+            self._fibre_compliance = (
+                1.0 / (E * section.area_at(self._section_s)),
+                6.0 / (E * section.depth * h * h),
+            )
         # which pose (0: pose_a, 1: pose_b) carries the start node and the end node
         self._end_pose = (
             self.bodies.index(flexure.start_body),
@@ -534,7 +609,6 @@ class BeamConnector(Connector):
             ]
         )
         self._end_offsets = tuple(map(tuple, self._end_rel.tolist()))
-        self._area, self._arc_length = flexure.section.area, length
 
     @functools.cached_property
     def _alone(self) -> BeamGroup:
@@ -562,17 +636,16 @@ class BeamConnector(Connector):
         energy stays exact and frame-independent at any rotation (a
         consistent Hermite mass would have to turn with each chord). Each
         element gives m/2 and m l^2/78 to each end node
-        (:func:`flexval.reducedmodels.inertia.chain_mass_points`); the end nodes'
-        masses sit on the end bodies at the flexure's end points.
+        (:func:`flexval.reducedmodels.inertia.chain_mass_points`), m the
+        density times the integral of A(s) over its arc, l the arc's length;
+        the end nodes' masses sit on the end bodies at the flexure's end points.
         """
         n = self._n_nodes - 1
         frames = [np.arange(3 * s, 3 * s + 3) for s in self._end_pose]
         node_dofs = [frames[0], *(6 + np.arange(self.n_internal).reshape(-1, 3)), frames[1]]
         rel = np.zeros((n + 1, 2))
         rel[0], rel[-1] = self._end_rel
-        return chain_mass_points(
-            node_dofs, rel, np.full(n, self._arc_length / n), density * self._area
-        )
+        return chain_mass_points(node_dofs, rel, self._piece_lengths, density * self._line_area)
 
     def initial_internal(self) -> np.ndarray:
         """Interior nodes at rest: (x, y, 0) each, mm and rad."""
@@ -669,7 +742,9 @@ class BeamConnector(Connector):
         """Reasons: element stretch over MAX_STRAIN, end turns from the chord over MAX_CHORD_TURN.
 
         See :mod:`flexval.reducedmodels.validity`: the first is material strain, the
-        second an element too coarse for the curvature it carries.
+        second an element too coarse for the curvature it carries. A varying
+        section adds its outer-fibre strain over MAX_STRAIN (at the element
+        ends, with h(s) there: :meth:`BeamGroup.path_validity`).
         """
         return self.path_validity([(pose_a, pose_b, internal)])[0]
 

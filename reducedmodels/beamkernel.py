@@ -33,10 +33,10 @@ def tangent_layout() -> tuple[np.ndarray, np.ndarray]:
     """Where each entry of a row-major 6x6 element tangent comes from: (source, sign), (36,) each.
 
     In element coordinates [x1, y1, theta1, x2, y2, theta2] the tangent is,
-    by node and dof kind, [[A, w, -A, w], [w^T, k11, -w^T, k12],
-    [-A, -w, A, -w], [w^T, k12, -w^T, k11]] with A symmetric 2x2, so every
-    entry is +- one of the independent entries [Axx, Axy, Ayy, wx, wy, k11, k12]
-    (:func:`element`).
+    by node and dof kind, [[A, w1, -A, w2], [w1^T, k11, -w1^T, k12],
+    [-A, -w1, A, -w2], [w2^T, k12, -w2^T, k22]] with A symmetric 2x2, so every
+    entry is +- one of the ten independent entries
+    [Axx, Axy, Ayy, w1x, w1y, k11, k12, w2x, w2y, k22] (:func:`element`).
     """
     source = np.empty((6, 6), dtype=np.intp)
     sign = np.ones((6, 6))
@@ -45,16 +45,19 @@ def tangent_layout() -> tuple[np.ndarray, np.ndarray]:
         for j, tj in enumerate(translations):
             source[np.ix_(ti, tj)] = [[0, 1], [1, 2]]
             sign[np.ix_(ti, tj)] = 1.0 if i == j else -1.0
-        for r in rotations:
-            source[ti, r] = source[r, ti] = [3, 4]
+        for r, w in zip(rotations, ([3, 4], [7, 8])):
+            source[ti, r] = source[r, ti] = w
             sign[ti, r] = sign[r, ti] = 1.0 if i == 0 else -1.0
-    source[2, 2] = source[5, 5] = 5
+    source[2, 2], source[5, 5] = 5, 9
     source[2, 5] = source[5, 2] = 6
     return source.ravel(), sign.ravel()
 
 
 SOURCE, SIGN = tangent_layout()
 """The layout of the element tangent, frozen into the kernels as constants."""
+
+ENTRIES = 10
+"""Independent entries of an element tangent (:func:`tangent_layout`)."""
 
 
 @kernel
@@ -100,6 +103,7 @@ def element(
     k_axial: float,
     k11: float,
     k12: float,
+    k22: float,
     grad: np.ndarray,
     entries: np.ndarray,
 ) -> float:
@@ -107,20 +111,24 @@ def element(
 
     The element joins node 1 (x1, y1, theta1) to node 2 (x2, y2, theta2)
     (mm, rad increments from the initial configuration); (c0x, c0y) is its
-    initial unit chord, l0 its initial length (mm), k_axial = EA/l0 (N/mm),
-    k11, k12 the entries of the local bending stiffness k_b (N mm).
+    initial unit chord, l0 its initial length (mm), k_axial its axial
+    stiffness (EA/l0 for a uniform section, N/mm), k11, k12, k22 the entries
+    of the local bending stiffness k_b = [[k11, k12], [k12, k22]] (N mm;
+    k22 = k11 for a uniform section, not for a varying one).
 
     ``grad`` (6,) receives the internal forces [f, M1, -f, M2] with
     f = -N e + V n (e = (c, s) the current chord direction, n = (-s, c),
-    V = (M1 + M2)/l); ``entries`` (7,) the independent entries
-    [Axx, Axy, Ayy, wx, wy, k11, k12] of the consistent tangent (see
-    :func:`tangent_layout`): Crisfield's
+    V = (M1 + M2)/l); ``entries`` (10,) the independent entries
+    [Axx, Axy, Ayy, w1x, w1y, k11, k12, w2x, w2y, k22] of the consistent
+    tangent (see :func:`tangent_layout`): Crisfield's
     B^T D B + N z z^T / l + (M1 + M2)(r z^T + z r^T) / l^2 with
-    A = EA/l0 e e^T + (2 (k11 + k12)/l^2 + N/l) n n^T + (M1 + M2)/l^2 (e n^T + n e^T),
-    written in double-angle form (cos 2b = c^2 - s^2, sin 2b = 2 c s).
+    A = k_axial e e^T + ((k11 + 2 k12 + k22)/l^2 + N/l) n n^T
+    + (M1 + M2)/l^2 (e n^T + n e^T), w1 = (k11 + k12)/l n and
+    w2 = (k12 + k22)/l n, written in double-angle form
+    (cos 2b = c^2 - s^2, sin 2b = 2 c s).
     """
     length, c, s, a1, a2 = chord_frame(x1, y1, x2, y2, theta1, theta2, c0x, c0y)
-    return element_in_frame(length, c, s, a1, a2, l0, k_axial, k11, k12, grad, entries)
+    return element_in_frame(length, c, s, a1, a2, l0, k_axial, k11, k12, k22, grad, entries)
 
 
 @kernel
@@ -134,20 +142,27 @@ def element_in_frame(
     k_axial: float,
     k11: float,
     k12: float,
+    k22: float,
     grad: np.ndarray,
     entries: np.ndarray,
 ) -> float:
-    """:func:`element` from the element's :func:`chord_frame` (same arguments otherwise)."""
+    """:func:`element` from the element's :func:`chord_frame` (same arguments otherwise).
+
+    With k22 = k11 the numbers are those of the symmetric element bit for
+    bit: k11 + k12 and k12 + k22 are then the same sum, and their sum is
+    twice it exactly.
+    """
     u = length - l0
     axial = k_axial * u
     m1 = k11 * a1 + k12 * a2
-    m2 = k12 * a1 + k11 * a2
+    m2 = k12 * a1 + k22 * a2
     shear = (m1 + m2) / length
     fx, fy = -axial * c - shear * s, -axial * s + shear * c
     grad[0], grad[1], grad[2], grad[3], grad[4], grad[5] = fx, fy, m1, -fx, -fy, m2
-    k_normal = 2.0 * (k11 + k12) / (length * length) + axial / length
+    row1, row2 = k11 + k12, k12 + k22
+    k_normal = (row1 + row2) / (length * length) + axial / length
     k_cross = shear / length
-    k_rot = (k11 + k12) / length
+    k_rot, k_rot2 = row1 / length, row2 / length
     cos2, sin2 = c * c - s * s, 2.0 * c * s
     mean, half = 0.5 * (k_axial + k_normal), 0.5 * (k_axial - k_normal)
     diagonal = half * cos2 - k_cross * sin2
@@ -158,6 +173,9 @@ def element_in_frame(
     entries[4] = k_rot * c
     entries[5] = k11
     entries[6] = k12
+    entries[7] = -k_rot2 * s
+    entries[8] = k_rot2 * c
+    entries[9] = k22
     return 0.5 * (axial * u + m1 * a1 + m2 * a2)
 
 
@@ -241,9 +259,9 @@ def assemble_elements(
         Whether the node is a material point of a rigid body (an end node).
     first : int array (elements,)
         Each element's first node; its second is the next one.
-    terms : array (elements, 6)
-        Each element's initial unit chord (2), length (mm), EA/l0 (N/mm) and
-        k_b entries k11, k12 (N mm).
+    terms : array (elements, 7)
+        Each element's initial unit chord (2), length (mm), axial stiffness
+        (N/mm) and k_b entries k11, k12, k22 (N mm).
     grad_slot : int array (elements, 6)
         Where each element coordinate's force is added in ``grad_out`` (-1: nowhere).
     tangent_slot, tangent_pick : int arrays (elements, w)
@@ -251,15 +269,15 @@ def assemble_elements(
         6x6 tangent, padded with slot -1: where each is added in
         ``tangent_out``, and which value it is (:func:`scatter_tables`):
         for an end element (transported to its bodies) its index in the
-        row-major 6x6 tangent, for an interior one its index in the seven
+        row-major 6x6 tangent, for an interior one its index in the ten
         independent entries followed by their negatives (every entry is
         +- one of them, :func:`tangent_layout`).
     """
     x, theta, t = place_nodes(coordinates, node_dof, node_rel, attached)
     energy = 0.0
     grad = np.empty(6)
-    entries = np.empty(7)
-    signed = np.empty(14)
+    entries = np.empty(ENTRIES)
+    signed = np.empty(2 * ENTRIES)
     tangent = np.empty(36)
     width = tangent_slot.shape[1]
     for e in range(first.size):
@@ -278,6 +296,7 @@ def assemble_elements(
             terms[e, 3],
             terms[e, 4],
             terms[e, 5],
+            terms[e, 6],
             grad,
             entries,
         )
@@ -293,9 +312,9 @@ def assemble_elements(
                 if slot < 0:
                     break
                 tangent_out[slot] += tangent[tangent_pick[e, m]]
-        else:  # an interior one: added from its seven entries
-            for k in range(7):
-                signed[k], signed[7 + k] = entries[k], -entries[k]
+        else:  # an interior one: added from its ten entries
+            for k in range(ENTRIES):
+                signed[k], signed[ENTRIES + k] = entries[k], -entries[k]
             for m in range(width):
                 slot = tangent_slot[e, m]
                 if slot < 0:
@@ -372,7 +391,7 @@ def scatter_tables(tangent_slot: np.ndarray, ends: np.ndarray) -> tuple[np.ndarr
     picks), (elements, w) each, w the most entries any element keeps: the
     kept entries in row-major order, padded with slot -1, and their values'
     index, for an end element in its 6x6 tangent, for an interior one in
-    its seven independent entries followed by their negatives
+    its ten independent entries followed by their negatives
     (:func:`tangent_layout`). The kernel then adds the same numbers in the
     same order as over all 36 entries with their signs, without the ones
     it would skip.
@@ -392,7 +411,7 @@ def scatter_tables(tangent_slot: np.ndarray, ends: np.ndarray) -> tuple[np.ndarr
         for k in range(36):
             if tangent_slot[e, k] >= 0:
                 slots[e, m] = tangent_slot[e, k]
-                picks[e, m] = k if ends[e] else SOURCE[k] + (7 if SIGN[k] < 0.0 else 0)
+                picks[e, m] = k if ends[e] else SOURCE[k] + (ENTRIES if SIGN[k] < 0.0 else 0)
                 m += 1
     return slots, picks
 
@@ -416,7 +435,8 @@ def close_chains(
     moment linear in position, M = M0 + (r - r_end) x F (and, for a nearly
     straight chain, the axial force F . e), found by Newton on the three
     unknowns (M0, F) with the flexibilities l0 / EI and l0 / EA of the
-    elements (``bending_flexibility`` 1/(N mm), ``axial_flexibility`` mm/N).
+    elements (``bending_flexibility`` 1/(N mm), ``axial_flexibility`` mm/N;
+    the integrals of ds / EI and ds / EA over an element of varying section).
     The chords turn by the rotations this bending gives, and the interior
     nodes (rotations from ``theta``) turn with them; the chords keep their
     lengths to within F l0 / EA. Spreading the gap as a uniform stretch
@@ -659,6 +679,7 @@ def path_element_ends(
     k_axial: np.ndarray,
     k11: np.ndarray,
     k12: np.ndarray,
+    k22: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Each element's chord and end forces at k states: what the end pass of a load path needs.
 
@@ -684,7 +705,7 @@ def path_element_ends(
     length, turn = np.empty((k, n)), np.empty((k, n))
     axial, moment = np.empty((k, 2 * n)), np.empty((k, 2 * n))
     grad = np.empty(6)
-    entries = np.empty(7)
+    entries = np.empty(ENTRIES)
     cos_axis, sin_axis = np.empty(node_dof.size), np.empty(node_dof.size)
     for state in range(k):
         x, theta, _ = place_nodes(coordinates[state], node_dof, node_rel, attached)
@@ -699,7 +720,9 @@ def path_element_ends(
             )
             length[state, e] = chord
             turn[state, e] = max(abs(a1), abs(a2))
-            element_in_frame(chord, c, s, a1, a2, l0[e], k_axial[e], k11[e], k12[e], grad, entries)
+            element_in_frame(
+                chord, c, s, a1, a2, l0[e], k_axial[e], k11[e], k12[e], k22[e], grad, entries
+            )
             axial[state, e] = -(grad[0] * cos_axis[i] + grad[1] * sin_axis[i])
             axial[state, n + e] = grad[3] * cos_axis[j] + grad[4] * sin_axis[j]
             moment[state, e], moment[state, n + e] = grad[2], -grad[5]
@@ -730,7 +753,7 @@ def warm_up() -> None:
         rel,
         attached,
         first,
-        np.ones((2, 6)),
+        np.ones((2, 7)),
         grad_slot,
         slots,
         picks,
@@ -754,5 +777,16 @@ def warm_up() -> None:
         0.0,
     )
     path_element_ends(
-        np.zeros((1, 9)), chain, rel, attached, first, np.zeros(3), chord0, ones, ones, ones, ones
+        np.zeros((1, 9)),
+        chain,
+        rel,
+        attached,
+        first,
+        np.zeros(3),
+        chord0,
+        ones,
+        ones,
+        ones,
+        ones,
+        ones,
     )
