@@ -102,7 +102,7 @@ def chain_mass_points(
     node_dofs: Sequence[Sequence[int]],
     node_rel: np.ndarray,
     lengths: np.ndarray,
-    line_density: float,
+    line_density: float | np.ndarray,
 ) -> MassPoints:
     """HRZ-lumped masses of a chain of segments between consecutive nodes.
 
@@ -120,8 +120,9 @@ def chain_mass_points(
         Each node's offset from its frame's origin, mm.
     lengths : array (n,)
         Segment lengths, mm.
-    line_density : float
-        rho A, t/mm.
+    line_density : float or array (n,)
+        rho A, t/mm: one value, or each segment's mean over its length (a
+        section that varies along the flexure).
     """
     seg_mass = line_density * np.asarray(lengths, float)
     seg_rotary = HRZ_ROTARY * seg_mass * np.asarray(lengths, float) ** 2
