@@ -80,9 +80,10 @@ def run_continuum(
         Plane stress (default) or plane strain.
     vtu_dir : path, optional
         Write the deformed flexures at full load as VTU (displacement,
-        Green-Lagrange strain, von Mises Cauchy stress).
+        Green-Lagrange strain, von Mises and fibre Cauchy stress).
     png : path, optional
-        Render the deformed flexures at full load, coloured by von Mises stress.
+        Draw the deformed mechanism at full load, its flexures coloured by the
+        fibre stress (:func:`.output.render_png`).
     model : str, optional
         Model id of the result and of the VTU file's name (default
         ``continuum:LEVEL``; the catalogue passes the canonical id with its
@@ -120,11 +121,11 @@ def run_continuum(
 
         stem = f"{scene + '_' if scene else ''}{case.name}_{model.replace(':', '')}"
         folder = Path(vtu_dir) if vtu_dir is not None else Path(png).parent
-        vtu = write_vtu(
+        write_vtu(
             output_path(folder, stem, ".vtu"),
             system.connectors,
             system.local_states(full_load.state),
         )
         if png is not None:
-            render_png(vtu, png, f"{scene} {case.name} {model}")
+            render_png(png, system, full_load.state, case, f"{scene} {case.name} {model}")
     return lp
