@@ -5,8 +5,10 @@ pairs whose bounding boxes overlap (found by a sweep, so the check scales
 about linearly with the number of flexures) are tested for proper segment
 crossings, vectorised over the pairs of their segments that lie in the
 overlap of the two boxes. Crossings within ``tol`` of a point where both
-flexures meet the same body (a shared attachment) are allowed. An arc whose two ends come closer
-than its thickness h would have overlapping end faces as a solid. Lengths mm.
+flexures meet the same body (a shared attachment) are allowed. An arc (or a
+spline) whose two ends come closer than its thickness h would have
+overlapping end faces as a solid. :func:`self_crossings` finds where one
+polyline crosses itself (a spline's centre line). Lengths mm.
 """
 
 from __future__ import annotations
@@ -52,6 +54,38 @@ def crossings(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     return (a + t[..., None] * r)[hit]
 
 
+SELF_CHUNK = 32
+"""Segments per chunk in :func:`self_crossings` (chunks far apart are tested by their boxes)."""
+
+
+def _chunk_crossings(line: np.ndarray) -> np.ndarray:
+    """Proper crossings (k, 2) of the non-adjacent segments of one short polyline."""
+    a, r = line[:-1], np.diff(line, axis=0)
+    i, j = np.triu_indices(len(a), k=2)
+    den = _cross(r[i], r[j])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = _cross(a[j] - a[i], r[j]) / den
+        u = _cross(a[j] - a[i], r[i]) / den
+    hit = (den != 0) & (t > 0) & (t < 1) & (u > 0) & (u < 1)
+    return a[i][hit] + t[hit, None] * r[i][hit]
+
+
+def self_crossings(line: np.ndarray) -> np.ndarray:
+    """Points (k, 2) where a polyline (m + 1, 2) crosses itself (proper crossings, mm).
+
+    Cut into chunks of :data:`SELF_CHUNK` segments: every two neighbouring
+    chunks are tested together segment by segment, chunks farther apart by
+    :func:`crossings` where their bounding boxes overlap.
+    """
+    line = np.asarray(line, float)
+    m = len(line) - 1
+    starts = list(range(0, m, SELF_CHUNK))
+    chunks = [line[k : k + SELF_CHUNK + 1] for k in starts]
+    found = [_chunk_crossings(line[k : min(k + 2 * SELF_CHUNK, m) + 1]) for k in starts]
+    found += [crossings(chunks[i], chunks[j]) for i, j in candidate_pairs(chunks) if j - i >= 2]
+    return np.concatenate([np.empty((0, 2)), *found])
+
+
 def candidate_pairs(lines: list[np.ndarray]) -> list[tuple[int, int]]:
     """Index pairs (i < j) of polylines whose bounding boxes overlap, sorted.
 
@@ -78,14 +112,15 @@ def check_overlaps(flexures, source: str, tol: float) -> None:
     """Raise SceneError if two flexures cross or an arc's ends nearly touch."""
     lines = [f.shape.point(np.linspace(0.0, f.shape.length, SAMPLES + 1)) for f in flexures]
     for f in flexures:
-        if f.shape.closes_on_itself(f.section.thickness):
+        if f.shape.closes_on_itself(f.section.max_thickness):
             gap = float(np.hypot(*(f.shape.end_points[0] - f.shape.end_points[1])))
+            arc = f.shape.kind == "arc"
             raise SceneError(
                 source,
-                f"flexures.{f.name}.width_deg",
-                f.shape.width * 180 / np.pi,
-                f"the arc's ends are {gap:.3g} mm apart, less than its "
-                f"thickness {f.section.thickness:g} mm: the solid closes on itself",
+                f"flexures.{f.name}.{'width_deg' if arc else 'points'}",
+                f.shape.width * 180 / np.pi if arc else f.shape.parameters()["points"],
+                f"the {f.shape.kind}'s ends are {gap:.3g} mm apart, less than its "
+                f"thickness {f.section.max_thickness:g} mm: the solid closes on itself",
             )
     for i, j in candidate_pairs(lines):
         f, g = flexures[i], flexures[j]

@@ -19,7 +19,10 @@ generated from the same declarations (:func:`field_reference`). In short::
     [[flexures]] name, bodies = [i, j], and either
                  center, radius, axis_deg, width_deg         (arc)
               or shape = "segment", start, end               (straight)
-                 optional: start_body, depth, thickness
+              or shape = "notch", start, end, contour, thickness (t), height (H),
+                 fillet_radius (corner-filleted), exponent (power)
+              or shape = "spline", points = [[x, y], ...]   (free form, >= 3 points)
+                 optional: start_body, depth, thickness (h, or [h_start, h_end]: a taper)
     [[bodies]]  name, points   (optional: known points of a link)
     [[pins]]    name, bodies = [i, j], point = [x, y]
                 (optional revolute joints; either body may be the ground)
@@ -47,6 +50,7 @@ import numpy as np
 
 from .errors import SceneError
 from .fields import REQUIRED, Field, Table
+from .flexurefields import check_thickness_fits, read_notch, read_spline, read_thickness, section_of
 from .inertia import MassData, parse_body_mass, parse_density, parse_gravity
 from .loads import Force, LoadCase, Moment
 from .magnitudes import SMALLEST_NORMAL
@@ -283,30 +287,33 @@ def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> Fle
     where = f"flexures.{name}."
     rd.known_keys(f, FLEXURES, where)
     bodies = rd.body_pair(f, where, "flexure")
-    section = Section(
-        rd.value(f, FLEXURES["depth"], where, default=default_section.depth),
-        rd.value(f, FLEXURES["thickness"], where, default=default_section.thickness),
-    )
+    depth = rd.value(f, FLEXURES["depth"], where, default=default_section.depth)
     kind = rd.value(f, FLEXURES["shape"], where)
-    if kind == "arc":
-        center = rd.value(f, FLEXURES["center"], where)
-        radius = rd.value(f, FLEXURES["radius"], where)
-        axis = rd.value(f, FLEXURES["axis_deg"], where)
-        width = rd.value(f, FLEXURES["width_deg"], where)
-        if section.thickness >= 2.0 * radius:
-            rd.fail(
-                f"{where}thickness",
-                section.thickness,
-                f"thickness h must be smaller than 2 r = {2 * radius:g} mm",
+    if kind == "notch":
+        shape, section = read_notch(rd, f, where, depth, default_section.thickness)
+    else:
+        thickness = read_thickness(rd, f, where, default_section.thickness)
+        if kind == "arc":
+            center = rd.value(f, FLEXURES["center"], where)
+            radius = rd.value(f, FLEXURES["radius"], where)
+            axis = rd.value(f, FLEXURES["axis_deg"], where)
+            width = rd.value(f, FLEXURES["width_deg"], where)
+            shape = Arc(
+                (float(center[0]), float(center[1])),
+                radius,
+                math.radians(axis),
+                math.radians(width),
             )
-        shape = Arc(
-            (float(center[0]), float(center[1])), radius, math.radians(axis), math.radians(width)
-        )
-    else:  # segment
-        a, b = rd.value(f, FLEXURES["start"], where), rd.value(f, FLEXURES["end"], where)
-        if np.hypot(*(b - a)) <= 0.0:
-            rd.fail(f"{where}end", list(b), "segment has zero length")
-        shape = Segment(tuple(map(float, a)), tuple(map(float, b)))
+        elif kind == "segment":
+            a, b = rd.value(f, FLEXURES["start"], where), rd.value(f, FLEXURES["end"], where)
+            if np.hypot(*(b - a)) <= 0.0:
+                rd.fail(f"{where}end", list(b), "segment has zero length")
+            shape = Segment(tuple(map(float, a)), tuple(map(float, b)))
+        else:
+            shape = read_spline(rd, f, where)
+        section = section_of(depth, thickness, shape)
+        value = list(thickness) if isinstance(thickness, tuple) else thickness
+        check_thickness_fits(rd, where, value, shape, section)
     start_body = rd.value(f, FLEXURES["start_body"], where)
     return FlexureSpec(name, shape, tuple(bodies), section, start_body)
 

@@ -19,6 +19,7 @@ import dataclasses
 from .fields import ABSENT, Field, Table, markdown_table, number_text
 from .inertia import DENSITY_FIELD, GRAVITY, MASS_FIELDS
 from .loads import LEVELS_FIELD, LOAD_FIELDS
+from .profiles import NOTCH_CONTOURS
 from .timelaw import TIME_LAW_FIELDS
 
 NUMBER_LIMIT = 1e12
@@ -107,15 +108,21 @@ TARGET = Table(
     ),
 )
 
-FLEXURE_SHAPES = ("arc", "segment")
+FLEXURE_SHAPES = ("arc", "segment", "notch", "spline")
 """The flexure shapes a scene may name (``shape = ...``)."""
 
 FLEXURES = Table(
     "flexures",
     "One entry per flexure: the two bodies it joins and its centre line. An arc is "
     "given by its centre, radius, the direction of its axis of symmetry and its "
-    "angular width (it spans axis ± width/2); a segment by its two ends. Fields of "
-    "another shape are accepted and ignored.",
+    "angular width (it spans axis ± width/2); a segment by its two ends; a notch "
+    "hinge by the two ends of its straight axis and its thickness contour, "
+    "symmetric about the axis and the middle, thinnest (`thickness` = t) at the "
+    "middle and `height` = H at both ends; a spline by the points its centre line "
+    "passes through (the C² cubic spline by chord length, not-a-knot ends). An arc, "
+    "a segment or a spline may taper: `thickness = [h_start, h_end]` varies linearly "
+    "in arc length from the centre line's first end. Fields of another shape are "
+    "accepted and ignored.",
     (
         Field("name", "name", "the flexure's name (unique)"),
         Field(
@@ -149,13 +156,65 @@ FLEXURES = Table(
             interval=(0.0, 360.0),
             variants=("arc",),
         ),
-        Field("start", "point", "first end of the segment", unit="mm", variants=("segment",)),
+        Field(
+            "start",
+            "point",
+            "first end of the segment or of the notch's axis",
+            unit="mm",
+            variants=("segment", "notch"),
+        ),
         Field(
             "end",
             "point",
-            "second end of the segment (not equal to start)",
+            "second end of the segment or of the notch's axis (not equal to start)",
             unit="mm",
-            variants=("segment",),
+            variants=("segment", "notch"),
+        ),
+        Field(
+            "contour",
+            "choice",
+            "the notch's thickness contour: circular cut-outs through the ends and the "
+            "middle, elliptical (semi-axes L/2 and (H - t)/2), quarter-circle fillets of "
+            "radius r at a flat of thickness t, or t + (H - t) |2 s / L - 1|^n",
+            choices=NOTCH_CONTOURS,
+            variants=("notch",),
+        ),
+        Field(
+            "height",
+            "number",
+            "the notch's thickness H at both ends (H > t)",
+            unit="mm",
+            default=ABSENT,
+            default_text="t + 2 fillet_radius (corner-filleted); required otherwise",
+            positive=True,
+            variants=("notch",),
+        ),
+        Field(
+            "fillet_radius",
+            "number",
+            "radius r of a corner-filleted notch's fillets (r <= L/2)",
+            unit="mm",
+            default=ABSENT,
+            default_text="required for corner-filleted",
+            positive=True,
+            variants=("notch",),
+        ),
+        Field(
+            "exponent",
+            "number",
+            "exponent n of a power-law notch",
+            default=ABSENT,
+            default_text="required for power",
+            positive=True,
+            variants=("notch",),
+        ),
+        Field(
+            "points",
+            "points",
+            "the points the spline passes through, in order (at least 3, all different, "
+            "the curve not crossing itself)",
+            unit="mm",
+            variants=("spline",),
         ),
         Field(
             "start_body",
@@ -175,8 +234,10 @@ FLEXURES = Table(
         ),
         Field(
             "thickness",
-            "number",
-            "in-plane thickness h of this flexure (arcs: h < 2 r)",
+            "number | pair",
+            "in-plane thickness h of this flexure, or [h_start, h_end] for a linear taper "
+            "(arc, segment, spline); a notch's smallest thickness t (a number). Smaller "
+            "than twice the radius of curvature everywhere (arcs: h < 2 r)",
             unit="mm",
             default=ABSENT,
             default_text="[section] thickness",

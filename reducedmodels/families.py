@@ -49,9 +49,9 @@ def _ee(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
 
 
 def _prbm(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
-    from .prbm import PrbmConnector
+    from .prbm import prbm_connector
 
-    return PrbmConnector(flexure, mechanism, **options)
+    return prbm_connector(flexure, mechanism, **options)
 
 
 _CONNECTOR_MODULES = {"beam": ".beam", "dcmm": ".dcmm", "ee": ".dcmm", "prbm": ".prbm"}

@@ -1,4 +1,11 @@
-"""3R pseudo-rigid-body model ``prbm`` of uniform arcs and straight beams (paper Sect. 2.2).
+"""3R pseudo-rigid-body model ``prbm`` of arcs and straight beams (paper Sect. 2.2).
+
+Which flexures it models (:func:`prbm_connector`): uniform arcs and
+segments as below; tapered ones by the same chain built on their own
+ellipse of elasticity (see "Tapered flexures"); a notch hinge by the
+classic one-pivot model (:mod:`flexval.reducedmodels.pivot`); a free-form
+(spline) centre line not at all: it is refused with a SceneError that
+names the flexure and points to ``beam``, ``dcmm`` and ``continuum``.
 
 Each flexure joining bodies a and b becomes the serial chain
 
@@ -38,6 +45,18 @@ fitted per arc angle to the large-deflection response of a nonlinear beam
 by a cubic spline in the arc angle; since only rho is interpolated, the
 linear exactness holds at every angle, tabulated or not. For a straight
 segment (b = 0) all joints lie on the segment.
+
+Tapered flexures
+----------------
+The exactness conditions above hold for any ellipse of elasticity, so a
+tapered arc or segment gets the chain of its own ellipse, computed by
+quadrature (:func:`tapered_frame`: centre C, principal axes with e1 the one
+nearer the uniform arc's, semi-axes a, b, weight w = ∫ ds / EI), with the
+stiffnesses kappa_i / w in place of kappa_i EI / L (equal for a uniform
+section). It reproduces the tapered flexure's linear (EE) bending
+compliance exactly; rho is the fitted value at the arc's angle, which was
+calibrated on uniform arcs: the large-deflection accuracy of a strongly
+tapered flexure is not calibrated.
 
 Formulation: link rotations and an exact closure multiplier
 ------------------------------------------------------------
@@ -92,11 +111,12 @@ from types import ModuleType
 import numpy as np
 
 from flexval.geometry import Flexure, Mechanism
+from flexval.geometry.compliance import curve_compliance
 from flexval.geometry.kinematics import rotate_xy
 from flexval.geometry.shapes import Shape, arc_semi_axes
 
 from .connector import Connector, ConnectorGroup
-from .inertia import MassPoints, rigid_pieces
+from .inertia import MassPoints, line_density, rigid_pieces
 from .sections import SectionForces, polyline_fractions
 from .spline import NotAKnotSpline
 from .validity import MAX_STRAIN, SCREEN_MARGIN, rotation_reasons, stretch_reasons
@@ -149,9 +169,18 @@ class PrbmParameters:
             2 c1 / (c_total) in (0, 1): fraction of the rotational compliance
             L/EI lumped in the two outer joints.
         """
+        a, b = arc_semi_axes(width)  # floats (math.sqrt rounds as np.sqrt does)
+        return cls.from_semi_axes(a, b, rho)
+
+    @classmethod
+    def from_semi_axes(cls, a: float, b: float, rho: float) -> PrbmParameters:
+        """The chain with the linear compliance of an ellipse of semi-axes a, b (units of L).
+
+        The four exactness conditions of the module text for any ellipse of
+        elasticity (a across e2, b along it), with outer-joint share rho in (0, 1).
+        """
         if not 0.0 < rho < 1.0:
             raise ValueError(f"prbm: rho must lie in (0, 1), got {rho}")
-        a, b = arc_semi_axes(width)  # floats (math.sqrt rounds as np.sqrt does)
         return cls(
             x1=a / math.sqrt(rho),
             y1=-b * math.sqrt((1.0 - rho) / rho),
@@ -187,13 +216,24 @@ def table_parameters(width: float) -> PrbmParameters:
     ValueError
         If ``width`` lies outside the tabulated range.
     """
+    return PrbmParameters.from_rho(width, table_rho(width))
+
+
+def table_rho(width: float) -> float:
+    """The fitted outer-joint share rho at an arc angle ``width`` (rad), cubic spline of the table.
+
+    Raises
+    ------
+    ValueError
+        If ``width`` lies outside the tabulated range.
+    """
     spline, top = _rho_spline()
     if not 0.0 <= width <= top + 1e-12:
         raise ValueError(
             f"prbm: arc angle {np.degrees(width):.6g} deg is outside the fitted "
             f"range 0 .. {np.degrees(top):.6g} deg of {TABLE_RESOURCE}"
         )
-    return PrbmParameters.from_rho(width, float(spline(width)))
+    return float(spline(width))
 
 
 def fitted_rotation() -> float:
@@ -212,11 +252,89 @@ def shape_frame(shape: Shape) -> tuple[np.ndarray, np.ndarray, np.ndarray, float
     return center, e1, e2, shape.length, shape.width
 
 
+def _local_joints(params: PrbmParameters) -> np.ndarray:
+    """The joints [R_start, R_2, R_end] in the ellipse frame, units of L, (3, 2)."""
+    return np.array([[params.x1, params.y1], [0.0, params.y2], [-params.x1, params.y1]])
+
+
 def joint_positions(shape: Shape, params: PrbmParameters) -> np.ndarray:
     """Initial joints [R_start, R_2, R_end] of the chain for ``shape``, shape (3, 2), mm."""
     center, e1, e2, length, _ = shape_frame(shape)
-    local = np.array([[params.x1, params.y1], [0.0, params.y2], [-params.x1, params.y1]])
-    return center + length * local @ np.array([e1, e2])  # rows e1, e2
+    return center + length * _local_joints(params) @ np.array([e1, e2])  # rows e1, e2
+
+
+@dataclass(frozen=True)
+class TaperedFrame:
+    """The ellipse of elasticity of a tapered arc or segment, as the chain needs it.
+
+    Attributes
+    ----------
+    center : ndarray (2,)
+        Centre of elasticity C, mm.
+    axes : ndarray (2, 2)
+        Rows e1 (towards the start end) and e2 = R(90 deg) e1.
+    a, b : float
+        Semi-axes along e1 and e2 in units of the length L.
+    w : float
+        Rotational compliance ∫ ds / EI, 1/(N mm).
+    """
+
+    center: np.ndarray
+    axes: np.ndarray
+    a: float
+    b: float
+    w: float
+
+
+def tapered_frame(flexure: Flexure, material) -> TaperedFrame:
+    """The chain frame of a tapered arc or segment from its ellipse by quadrature.
+
+    e1 is the ellipse's principal axis nearer to the uniform arc's e1 (across
+    the symmetry axis, :meth:`flexval.geometry.shapes.Arc.symmetry_frame`),
+    turned towards the start end; a straight segment keeps b = 0.
+    """
+    shape = flexure.shape
+    found = curve_compliance(shape, flexure.section, material).ellipse
+    _, uniform_e1, _ = shape.symmetry_frame()
+    axes = found.axes.T  # rows: principal directions, spreads a^2, b^2
+    spreads = [found.a**2, found.b**2]
+    k = int(np.argmax(np.abs(axes @ uniform_e1)))
+    e1 = axes[k] if axes[k] @ uniform_e1 > 0.0 else -axes[k]
+    L = shape.length
+    a = math.sqrt(spreads[k]) / L
+    b = 0.0 if shape.kind == "segment" else math.sqrt(spreads[1 - k]) / L
+    return TaperedFrame(found.center, np.array([e1, [-e1[1], e1[0]]]), a, b, found.weight)
+
+
+def prbm_connector(flexure: Flexure, mechanism: Mechanism, **options) -> Connector:
+    """The ``prbm`` connector of one flexure: the 3R chain, or a notch hinge's pivot.
+
+    Arcs and segments, uniform or tapered, take :class:`PrbmConnector`; a
+    notch hinge takes the one-pivot model
+    (:class:`flexval.reducedmodels.pivot.NotchPivotConnector`).
+
+    Raises
+    ------
+    ValueError
+        For a free-form (spline) centre line, which has no pseudo-rigid-body
+        model here (its flexibility is not lumped at a few joints without a
+        calibration of its own), or options a notch pivot does not take.
+    """
+    if flexure.shape.kind == "spline":
+        raise ValueError(
+            f"prbm has no pseudo-rigid-body model of the free-form (spline) flexure "
+            f"{flexure.name!r}: use beam, dcmm or continuum for it"
+        )
+    profile = flexure.section.profile
+    if profile is not None and profile.kind == "notch":
+        if options:
+            raise ValueError(
+                f"prbm: the notch hinge's pivot model takes no options, got {sorted(options)}"
+            )
+        from .pivot import NotchPivotConnector
+
+        return NotchPivotConnector(flexure, mechanism)
+    return PrbmConnector(flexure, mechanism, **options)
 
 
 @cache
@@ -288,24 +406,41 @@ class PrbmConnector(Connector):
         self.n_multipliers = 2  # the closure multiplier mu
         shape = flexure.shape
         length, width = shape.length, shape.width
-        if params is None:
-            params = table_parameters(width)
-        elif not isinstance(params, PrbmParameters):
-            params = (
-                PrbmParameters.from_rho(width, float(params["rho"]))
-                if set(params) == {"rho"}
-                else PrbmParameters(**params)
-            )
+        if flexure.section.is_uniform:
+            if params is None:
+                params = table_parameters(width)
+            elif not isinstance(params, PrbmParameters):
+                params = (
+                    PrbmParameters.from_rho(width, float(params["rho"]))
+                    if set(params) == {"rho"}
+                    else PrbmParameters(**params)
+                )
+            EI = flexure.bending_stiffness(mechanism.material)
+            stiffness = [
+                params.kappa1 * EI / length,
+                params.kappa2 * EI / length,
+                params.kappa1 * EI / length,
+            ]
+            self.closure_scale = EI / length**3
+            joints = joint_positions(shape, params)
+        else:  # a taper: the chain of the tapered ellipse, with the rho of the arc's angle
+            if params is None:
+                rho = table_rho(width)
+            elif not isinstance(params, PrbmParameters) and set(params) == {"rho"}:
+                rho = float(params["rho"])
+            else:
+                raise ValueError(
+                    "prbm: a tapered flexure's chain follows from its ellipse and rho "
+                    f"alone; give params={{'rho': value}}, not {params!r}"
+                )
+            frame = tapered_frame(flexure, mechanism.material)
+            params = PrbmParameters.from_semi_axes(frame.a, frame.b, rho)
+            # kappa EI / L with EI / L -> 1 / w, w = ∫ ds / EI (equal for a uniform section)
+            stiffness = [params.kappa1 / frame.w, params.kappa2 / frame.w, params.kappa1 / frame.w]
+            self.closure_scale = 1.0 / (frame.w * length**2)
+            joints = frame.center + length * _local_joints(params) @ frame.axes
         self.params = params
-        EI = flexure.bending_stiffness(mechanism.material)
-        stiffness = [
-            params.kappa1 * EI / length,
-            params.kappa2 * EI / length,
-            params.kappa1 * EI / length,
-        ]
         self.stiffness = np.array(stiffness)
-        self.closure_scale = EI / length**3
-        joints = joint_positions(shape, params)
         ends = shape.end_points  # [start, end]
         self._forward = flexure.start_body == self.bodies[0]
         if not self._forward:
@@ -326,7 +461,7 @@ class PrbmConnector(Connector):
             [*self._r_a, *self._r_b, *self._v_h, *self._v_l, *stiffness, self.closure_scale]
         )
         self._fitted_rotation = fitted_rotation()
-        self._area = flexure.section.area
+        self._section = flexure.section
         self._shape = shape
         self._rest = np.array([ea, ra, r2, rb, eb])  # polyline, mm
         self._fractions = polyline_fractions(self._rest)
@@ -370,7 +505,7 @@ class PrbmConnector(Connector):
         bounds = self._fractions * self.length
         hinges = np.array([self._ref[0], self.joints[0], self.joints[2], self._ref[1]])
         mass, rel, rotary = rigid_pieces(
-            self._shape, self._forward, bounds, hinges, density * self._area
+            self._shape, self._forward, bounds, hinges, line_density(density, self._section)
         )
         on_link = np.array([0.0, 1.0, 1.0, 0.0])[:, None]
         hinge_rel = np.array([[0.0, 0.0], self._r_a, self._r_b, [0.0, 0.0]])

@@ -1,0 +1,160 @@
+"""``prbm`` of the new flexures: a notch hinge's one-pivot model against the Euler-Bernoulli
+integrals by quad (any rotation under a moment, small loads under a force), its exact
+derivatives, mass, stress and strain limit; a tapered arc's 3R chain against the tapered
+ellipse (linear exactness); the refusal of a spline."""
+
+import math
+
+import numpy as np
+import pytest
+from builders import fd_check
+from scipy.integrate import quad
+from test_varying_linear import (
+    DEPTH,
+    MATERIAL,
+    NOTCHES,
+    clamped,
+    notch_rotational_compliance,
+    response,
+    tip_force,
+    tip_moment,
+)
+
+from flexval.geometry import Arc, SceneError, Section, Segment
+from flexval.geometry.compliance import SHEAR_CORRECTION
+from flexval.geometry.profiles import LinearTaper
+from flexval.geometry.shapes import Spline
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.models import run_reduced
+from flexval.reducedmodels.pivot import NotchPivotConnector
+from flexval.reducedmodels.validity import MAX_STRAIN
+
+
+def notch(contour: str, angle: float = 0.0, origin=(0.0, 0.0)):
+    """The notch clamped at its start, its axis at ``angle`` (rad)."""
+    profile = NOTCHES[contour]
+    start = np.asarray(origin, float)
+    end = start + profile.length * np.array([math.cos(angle), math.sin(angle)])
+    return clamped(Segment(tuple(start), tuple(end)), Section(DEPTH, profile.t, profile))
+
+
+@pytest.mark.parametrize("contour", NOTCHES)
+def test_pivot_turns_by_the_euler_bernoulli_integral_at_any_rotation(contour):
+    """Under a pure moment the pivot's springs carry no force: rotation M c_theta exactly,
+    small (1e-3 rad) or large (0.3 rad); measured within 7e-11 (circular) and 2e-15."""
+    mech = notch(contour, angle=0.6, origin=(1.0, -2.0))
+    c_theta = notch_rotational_compliance(NOTCHES[contour])
+    for rotation in (1e-3, 0.3):
+        lp = run_reduced(mech, parse_model("prbm"), tip_moment(rotation / c_theta, levels=3))
+        assert lp.converged
+        assert lp.rotation[-1] == pytest.approx(rotation, rel=1e-9)
+
+
+def test_pivot_under_a_transverse_force_bends_about_its_centre():
+    """A force F across the axis at the free end (lever l = L/2 from the pivot): the pivot
+    gives F (l^2 ∫ ds/EI + ∫ ds/(k G A)), the classic model's compliance; the exact linear
+    compliance (ee) adds the hinge's own w a^2 = ∫ (s - L/2)^2 / EI and has no shear."""
+    profile = NOTCHES["circular"]
+    mech = notch("circular")
+    L, lever = profile.length, 0.5 * profile.length
+    G = MATERIAL.shear_modulus
+
+    def integral(f):
+        return quad(f, 0.0, L, points=[lever], epsabs=0.0, epsrel=1e-12, limit=400)[0]
+
+    def EI(s):
+        return MATERIAL.youngs_modulus * DEPTH * float(profile.thickness(s)) ** 3 / 12.0
+
+    w = integral(lambda s: 1.0 / EI(s))
+    shear = integral(lambda s: 1.0 / (SHEAR_CORRECTION * G * DEPTH * float(profile.thickness(s))))
+    spread = integral(lambda s: (s - lever) ** 2 / EI(s))
+    force = 1e-6
+    uy = response(mech, "prbm", tip_force(mech, 0.0, force, levels=2))[1]
+    assert uy == pytest.approx(force * (lever * lever * w + shear), rel=1e-6)
+    ee = response(mech, "ee", tip_force(mech, 0.0, force, levels=2))[1]
+    assert ee == pytest.approx(force * (lever * lever * w + spread), rel=1e-6)
+    # the axial spring: ∫ ds / EA
+    ux = response(mech, "prbm", tip_force(mech, force, 0.0, levels=2))[0]
+    axial = integral(
+        lambda s: 1.0 / (MATERIAL.youngs_modulus * DEPTH * float(profile.thickness(s)))
+    )
+    assert ux == pytest.approx(force * axial, rel=1e-6)
+
+
+def test_pivot_gradient_and_hessian_match_differences():
+    mech = notch("elliptical", angle=0.4, origin=(0.5, 0.2))
+    connector = NotchPivotConnector(mech.flexures[0], mech)
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        pose_a = np.concatenate([rng.normal(0.0, 0.01, 2), rng.normal(0.0, 0.3, 1)])
+        end = mech.bodies["t"].reference
+        pose_b = np.concatenate([end + rng.normal(0.0, 0.01, 2), rng.normal(0.0, 0.3, 1)])
+        g_err, h_err, asym = fd_check(connector, pose_a, pose_b, np.zeros(0))
+        assert g_err < 1e-7 and h_err < 1e-7 and asym < 1e-14
+
+
+def test_pivot_strain_limit_flags_rotations_beyond_it():
+    """The limit is the rotation at which 6 M / (E b t^2) = MAX_STRAIN with M = rotation / w."""
+    mech = notch("circular")
+    connector = NotchPivotConnector(mech.flexures[0], mech)
+    profile = NOTCHES["circular"]
+    w = notch_rotational_compliance(profile)
+    limit = MAX_STRAIN * MATERIAL.youngs_modulus * DEPTH * profile.t**2 / 6.0 * w
+    assert connector.rotation_limit == pytest.approx(limit, rel=1e-12)
+    lp = run_reduced(mech, parse_model("prbm"), tip_moment(1.2 * limit / w, levels=4))
+    assert lp.valid == [True, True, True, False]
+    assert "strain limit" in lp.validity[-1]
+    # DCMM knows the same limit per sub-arc: dcmm:1 is the whole hinge
+    lp = run_reduced(mech, parse_model("dcmm:1"), tip_moment(1.2 * limit / w, levels=4))
+    assert lp.valid == [True, True, True, False]
+
+
+def test_pivot_stress_peaks_at_the_thinnest_section_and_mass_is_the_integral():
+    mech = notch("power")
+    profile = NOTCHES["power"]
+    moment = 1e-3
+    lp = run_reduced(mech, parse_model("prbm"), tip_moment(moment, levels=2))
+    assert lp.peak_stress["f"][-1] == pytest.approx(6.0 * moment / (DEPTH * profile.t**2))
+    assert lp.peak_stress_at["f"][-1] == pytest.approx(0.5)
+    density = 2.7e-9
+    points = NotchPivotConnector(mech.flexures[0], mech).mass_points(density)
+    area = quad(
+        lambda s: DEPTH * float(profile.thickness(s)),
+        0.0,
+        profile.length,
+        points=[1.0],
+        epsrel=1e-13,
+    )[0]
+    assert points.mass.sum() == pytest.approx(density * area, rel=1e-12)
+    np.testing.assert_allclose(points.mass, 0.5 * density * area, rtol=1e-12)  # symmetric
+
+
+def test_tapered_arc_chain_is_exact_in_the_linear_limit():
+    """The 3R chain on the tapered ellipse: its small-load 3x3 tip compliance differs from
+    ee's in proportion to the load (measured 6.5e-6, 6.5e-7 at loads 1e-6, 1e-7 N), i.e.
+    only by the geometric nonlinearity: exact in the limit, like a uniform arc's chain
+    (2.7e-5, 2.7e-6 on the same arc uniform)."""
+    arc = Arc((0.0, 0.0), 8.0, math.radians(80.0), math.radians(140.0))
+    mech = clamped(arc, Section(DEPTH, 0.2, LinearTaper(0.5, 0.2, arc.length)))
+    gaps = []
+    for load in (1e-6, 1e-7):
+        matrices = []
+        for model in ("ee", "prbm"):
+            columns = [
+                response(mech, model, tip_force(mech, load, 0.0, levels=2)),
+                response(mech, model, tip_force(mech, 0.0, load, levels=2)),
+                response(mech, model, tip_moment(load, levels=2)),
+            ]
+            matrices.append(np.array(columns).T / load)
+        gaps.append(np.abs(matrices[1] - matrices[0]).max() / np.abs(matrices[0]).max())
+    assert gaps[1] < 1e-5
+    assert gaps[0] / gaps[1] == pytest.approx(10.0, rel=0.05)
+
+
+def test_a_spline_has_no_prbm():
+    spline = Spline(((0.0, 0.0), (3.0, 1.0), (6.0, 0.0)))
+    mech = clamped(spline, Section(DEPTH, 0.2))
+    with pytest.raises(SceneError) as info:
+        run_reduced(mech, parse_model("prbm"), tip_moment(1e-3, levels=2))
+    assert info.value.field == "flexures.f"
+    assert "beam, dcmm or continuum" in str(info.value)
