@@ -1,12 +1,13 @@
 # Two commands on a fresh machine with only Python and pip:
 #   make report   -> creates .venv, installs flexval, builds reports/paper/
 #   make test     -> creates/refreshes .venv the same way, runs the test suite
+#   make docs     -> the documentation site in site/ (strict: a warning fails it)
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: report test venv bench clean
+.PHONY: report test venv bench docs clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -21,6 +22,12 @@ $(PEERS): $(STAMP)
 	$(BIN)/python -m pip install -e ".[test,peers]" || echo "OpenSeesPy not installed"
 	touch $(PEERS)
 
+# the documentation site's tools (optional extra [docs])
+DOCS   := $(VENV)/.docs
+$(DOCS): $(STAMP)
+	$(BIN)/python -m pip install -e ".[test,docs]"
+	touch $(DOCS)
+
 venv: $(STAMP)
 
 report: $(PEERS)
@@ -31,6 +38,12 @@ report: $(PEERS)
 test: $(STAMP)
 	$(BIN)/python -m pytest
 
+# strict: a warning (a broken link, a docstring griffe cannot read) fails the build;
+# then the built pages are checked for every scene field, CLI command and key API name
+docs: $(DOCS)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict -f docs/mkdocs.yml
+	$(BIN)/python docs/check_site.py site
+
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_reduced.py
 	$(BIN)/python benchmarks/bench_beam_scaling.py
@@ -39,4 +52,4 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_sweep.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache
+	rm -rf $(VENV) .pytest_cache site
