@@ -42,12 +42,22 @@ from .connector import Connector
 
 
 def characteristic_stiffness(mechanism: Mechanism) -> float:
-    """Geometric mean of EI / L^3 over the flexures, N/mm (a cantilever's bending stiffness / 3)."""
-    logs = [
-        math.log(f.bending_stiffness(mechanism.material) / f.shape.length**3)
-        for f in mechanism.flexures
-    ]
+    """Geometric mean of EI / L^3 over the flexures, N/mm (a cantilever's bending stiffness / 3).
+
+    A flexure whose section varies takes 1 / (w L^2), w = ∫ ds / EI (the same for a uniform one).
+    """
+    logs = [math.log(_bending_scale(f, mechanism.material)) for f in mechanism.flexures]
     return math.exp(sum(logs) / len(logs))
+
+
+def _bending_scale(flexure, material) -> float:
+    """EI / L^3 of a flexure (N/mm), or 1 / (w L^2) where its section varies."""
+    if flexure.section.is_uniform:
+        return flexure.bending_stiffness(material) / flexure.shape.length**3
+    from flexval.geometry.compliance import curve_compliance
+
+    weight = curve_compliance(flexure.shape, flexure.section, material).ellipse.weight
+    return 1.0 / (weight * flexure.shape.length**2)
 
 
 class PinConnector(Connector):

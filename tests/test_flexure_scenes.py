@@ -201,3 +201,42 @@ def test_the_new_scenes_run_their_requested_models(capsys):
     assert main(["run", str(SPLINE)]) == 0
     out = capsys.readouterr().out
     assert "prbm" in out and "dcmm:4" in out
+
+
+def test_info_describes_a_notch_by_its_law_and_compliance_stiffnesses(tmp_path, capsys):
+    """flexval info: t, H and contour, and 1 / ∫ ds / EI against quad."""
+    from scipy.integrate import quad
+
+    out = tmp_path / "info.json"
+    assert main(["info", str(NOTCH), "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "circular notch, t = 0.1 mm at the middle, H = 1 mm at the ends" in text
+    import json
+
+    section = json.loads(out.read_text())["flexures"][0]["section"]
+    profile = load_scene(NOTCH).mechanism.flexures[0].section.profile
+    E, b = 70000.0, 5.0
+    w = quad(lambda s: 12.0 / (E * b * float(profile.thickness(s)) ** 3), 0.0, 2.0, epsrel=1e-12)[0]
+    assert section["rotational_stiffness_Nmm"] == pytest.approx(1.0 / w, rel=1e-10)
+    assert section["contour"] == "circular" and section["height"] == 1.0
+
+
+def test_plot_draws_the_true_outline(tmp_path):
+    from flexval.validation.drawing import flexure_outline
+
+    flexure = load_scene(NOTCH).mechanism.flexures[0]
+    outline = flexure_outline(flexure)
+    # the outline's half-width is h(x) / 2 along the straight axis
+    profile = flexure.section.profile
+    np.testing.assert_allclose(np.abs(outline[:, 1]), 0.5 * profile.thickness(outline[:, 0]))
+    assert np.abs(outline[:, 1]).min() == pytest.approx(0.05)  # t / 2 at the middle
+    png = tmp_path / "notch.png"
+    assert main(["plot", str(NOTCH), "-o", str(png)]) == 0 and png.stat().st_size > 0
+
+
+def test_opensees_peer_names_a_varying_section_instead_of_running():
+    from flexval.validation.peers import compare_with_opensees
+
+    rows = compare_with_opensees(load_scene(NOTCH))
+    assert [r.case for r in rows] == ["moment", "force"]
+    assert all("uniform sections only" in r.reason and "'hinge'" in r.reason for r in rows)

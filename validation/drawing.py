@@ -1,4 +1,5 @@
-"""Pictures of a mechanism: the undeformed outline (paper Figs. 6 and 12 in outline) and the
+"""Pictures of a mechanism: the undeformed outline (paper Figs. 6 and 12 in outline, each
+flexure at its true thickness: :func:`flexure_outline`) and the
 pieces every mechanism picture shares: rigid links (at any poses), the hatched ground, pins,
 the target point and the loads.
 
@@ -349,6 +350,31 @@ def draw_load(
     return reach
 
 
+OUTLINE_SAMPLES = 400
+"""Points along each side of a flexure's drawn outline (more near a notch's ends and middle)."""
+
+
+def flexure_outline(flexure) -> np.ndarray:
+    """The flexure's solid outline as a closed polygon (m, 2), mm.
+
+    The centre line offset by +-h(s)/2 along its normal, with the true
+    thickness h(s) of a taper or a notch; samples cluster where a notch's
+    contour turns fastest (its ends and, for some contours, its middle) by a
+    cosine spacing between the profile's breakpoints.
+    """
+    shape, section = flexure.shape, flexure.section
+    length = shape.length
+    breaks = () if section.profile is None else section.profile.breakpoints
+    cuts = [0.0, *sorted(b for b in {*breaks, 0.5 * length} if 0.0 < b < length), length]
+    per = max(8, OUTLINE_SAMPLES // (len(cuts) - 1))
+    u = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, per)))
+    s = np.unique(np.concatenate([a + (b - a) * u for a, b in zip(cuts[:-1], cuts[1:])]))
+    centre = shape.point(s)
+    tangent = shape.tangent(s)
+    half = 0.5 * section.thickness_at(s)[:, None] * np.column_stack([-tangent[:, 1], tangent[:, 0]])
+    return np.concatenate([centre + half, (centre - half)[::-1]])
+
+
 def draw_mechanism(scene: Scene, ax=None, load_case: str | None = None):
     """Draw flexures, rigid links, the ground, body labels, target point and load arrows on
     ``ax`` (the undeformed mechanism; lengths in mm)."""
@@ -358,7 +384,10 @@ def draw_mechanism(scene: Scene, ax=None, load_case: str | None = None):
     for f in mech.flexures:
         s = np.linspace(0.0, f.shape.length, 200)
         p = f.shape.point(s)
-        ax.plot(p[:, 0], p[:, 1], color="tab:blue", lw=2)
+        ax.add_patch(
+            Polygon(flexure_outline(f), closed=True, facecolor="tab:blue", alpha=0.35, lw=0)
+        )
+        ax.plot(p[:, 0], p[:, 1], color="tab:blue", lw=1)
         mid = f.shape.point(0.5 * f.shape.length)
         ax.annotate(f.name, mid, color="tab:blue", fontsize=9, ha="center", va="bottom")
     for p in draw_ground(ax, mech):

@@ -18,8 +18,12 @@ def scene_info(scene: Scene) -> dict:
     mech = scene.mechanism
     flexures = []
     for f in mech.flexures:
-        EI = f.bending_stiffness(mech.material)
-        ell = f.shape.ellipse(EI)
+        varying = None if f.section.is_uniform else varying_section(f, mech.material)
+        if varying is None:
+            EI, EA = f.bending_stiffness(mech.material), f.axial_stiffness(mech.material)
+            ell = f.shape.ellipse(EI)
+        else:
+            EI, EA, ell = varying["EI_Nmm2"], varying["EA_N"], varying.pop("ellipse")
         entry = {
             "name": f.name,
             "bodies": list(f.bodies),
@@ -32,7 +36,7 @@ def scene_info(scene: Scene) -> dict:
             "b_mm": f.section.depth,
             "h_mm": f.section.thickness,
             "EI_Nmm2": EI,
-            "EA_N": f.axial_stiffness(mech.material),
+            "EA_N": EA,
             "ellipse": {
                 "w_per_Nmm": ell.weight,
                 "C_mm": ell.center.tolist(),
@@ -43,6 +47,8 @@ def scene_info(scene: Scene) -> dict:
             },
         }
         entry.update(f.shape.parameters())
+        if varying is not None:
+            entry["section"] = varying
         flexures.append(entry)
     cases = []
     for lc in scene.load_cases:
@@ -76,6 +82,60 @@ def scene_info(scene: Scene) -> dict:
         "load_cases": cases,
         "models": [parse_model(m, scene.source, "request.models").id for m in scene.models],
     }
+
+
+def varying_section(flexure, material) -> dict:
+    """A varying section's thickness law and its compliance-based stiffnesses.
+
+    EI and EA of a varying section are the uniform-equivalent ones, L / ∫ ds / EI
+    and L / ∫ ds / EA (N mm^2, N: a uniform flexure of the same length with
+    these has the same rotational and axial compliance), beside the
+    stiffnesses themselves, 1 / ∫ ds / EI (N mm per rad) and 1 / ∫ ds / EA
+    (N/mm), from :func:`flexval.geometry.compliance.curve_compliance`. The
+    ellipse (key ``ellipse``) is that of the varying section.
+    """
+    from flexval.geometry.compliance import curve_compliance
+    from flexval.geometry.profiles import quadrature_panels
+
+    profile = flexure.section.profile
+    found = curve_compliance(flexure.shape, flexure.section, material)
+    length = flexure.shape.length
+    s, weights = quadrature_panels(length, profile.breakpoints)
+    axial = float(weights @ (1.0 / flexure.axial_stiffness_at(material, s)))  # ∫ ds / EA
+    out = {
+        "profile": profile.kind,
+        **profile.parameters(),
+        "min_thickness_mm": profile.min_thickness,
+        "max_thickness_mm": profile.max_thickness,
+        "rotational_stiffness_Nmm": 1.0 / found.ellipse.weight,
+        "axial_stiffness_N_per_mm": 1.0 / axial,
+        "EI_Nmm2": length / found.ellipse.weight,
+        "EA_N": length / axial,
+        "ellipse": found.ellipse,
+    }
+    return out
+
+
+def _section_line(f: dict) -> str:
+    """One line on a varying section: its law and compliance-based stiffnesses."""
+    sec = f["section"]
+    if sec["profile"] == "notch":
+        law = (
+            f"{sec['contour']} notch, t = {sec['thickness']:g} mm at the middle, "
+            f"H = {sec['height']:g} mm at the ends"
+        )
+        if "fillet_radius" in sec:
+            law += f", fillet radius {sec['fillet_radius']:g} mm"
+        if "exponent" in sec:
+            law += f", exponent {sec['exponent']:g}"
+    else:
+        h0, h1 = sec["thickness"]
+        law = f"taper from h = {h0:g} mm to {h1:g} mm"
+    return (
+        f"  {f['name']}: {law}; stiffness 1/∫ds/EI = {sig(sec['rotational_stiffness_Nmm'])} "
+        f"N mm/rad, 1/∫ds/EA = {sig(sec['axial_stiffness_N_per_mm'])} N/mm (EI, EA above: "
+        "L over these integrals)"
+    )
 
 
 def _pt(p) -> str:
@@ -136,6 +196,7 @@ def format_info(info: dict) -> str:
         rows,
         "  ",
     )
+    lines += [_section_line(f) for f in info["flexures"] if "section" in f]
     t = info["target"]
     lines.append(f"target  body {t['body']} at {_pt(t['point'])} mm")
     lines.append("load cases")

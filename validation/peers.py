@@ -298,12 +298,25 @@ def compare_with_opensees(scene: Scene, n: int = 100, repeats: int = 5) -> list[
     PeerUnavailable
         When OpenSeesPy cannot be imported, or the scene has gravity (not in
         the OpenSees model).
+
+    A flexure whose section varies along it (a taper, a notch) has no
+    counterpart in the model's uniform ``elasticBeamColumn`` elements (and
+    ``beam:n`` grades its elements there): every case is then a row whose
+    ``reason`` says so.
     """
     mech = scene.mechanism
     if mech.inertia.gravity is not None:
         raise PeerUnavailable(
             f"scene {scene.name!r} has gravity, which the OpenSees model leaves out"
         )
+    varying = [f for f in mech.flexures if not f.section.is_uniform]
+    if varying:  # a row per case saying why, like a failure: the report goes on
+        f = varying[0]
+        reason = (
+            f"the OpenSees model has uniform sections only; flexure {f.name!r} has a "
+            f"{f.section.profile.kind} thickness profile"
+        )
+        return [PeerRow(case.name, None, reason=reason) for case in scene.load_cases]
     ops = opensees()
     spec = parse_model(f"beam:{n}", "<peers>", "n")
     rows = []

@@ -290,6 +290,20 @@ def _levels_text(data: ReportData) -> str:
     return " or ".join(str(n) for n in levels)
 
 
+def _thickness_words(section) -> str:
+    """``h = 0.5 mm``, or a varying section's law (a taper's ends, a notch's t and H)."""
+    profile = section.profile
+    if profile is None:
+        return f"h = {section.thickness:g} mm"
+    if profile.kind == "notch":
+        return (
+            f"{profile.contour} notch t = {profile.min_thickness:g} mm, "
+            f"H = {profile.max_thickness:g} mm"
+        )
+    start, end = profile.parameters()["thickness"]
+    return f"h = {start:g} to {end:g} mm (taper)"
+
+
 def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
     """Markdown of one scene; draws its figures into ``out`` with ``draw(fn, *args)``."""
     from .drawing import plot_mechanism
@@ -314,7 +328,7 @@ def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
         f"(ground included): {chain}. "
         f"E = {mech.material.youngs_modulus:g} MPa, nu = {mech.material.poisson_ratio:g}; "
         + "; ".join(
-            f"{f.name}: b = {f.section.depth:g} mm, h = {f.section.thickness:g} mm, "
+            f"{f.name}: b = {f.section.depth:g} mm, {_thickness_words(f.section)}, "
             f"L = {f.shape.length:.3f} mm"
             for f in mech.flexures
         )

@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flexval.geometry import Force, LoadCase, Material, Mechanism, Scene, Section, rotation
+from flexval.geometry import Force, LoadCase, Material, Mechanism, Scene, rotation
 from flexval.reducedmodels import LoadPath, SolverError
 from flexval.reducedmodels.catalogue import ModelSpec, parse_model
 
@@ -86,7 +86,7 @@ def rescale_lengths(
         dataclasses.replace(
             f,
             shape=f.shape.scaled(length),
-            section=Section(f.section.depth * length, f.section.thickness * length),
+            section=f.section.scaled(length),
         )
         for f in mechanism.flexures
     )
