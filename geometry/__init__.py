@@ -9,7 +9,7 @@ from .kinematics import rotation
 from .loads import Force, LoadCase, Moment
 from .mechanism import Body, Flexure, FlexureSpec, Material, Mechanism, PinSpec, Section
 from .scene import BUILTIN_SCENES, Scene, load_scene
-from .shapes import Arc, Ellipse, Segment
+from .shapes import Arc, Ellipse, Segment, Spline
 
 __all__ = [
     "Arc",
@@ -30,6 +30,7 @@ __all__ = [
     "SceneError",
     "Section",
     "Segment",
+    "Spline",
     "load_scene",
     "rotation",
 ]

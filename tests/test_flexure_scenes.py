@@ -240,3 +240,10 @@ def test_opensees_peer_names_a_varying_section_instead_of_running():
     rows = compare_with_opensees(load_scene(NOTCH))
     assert [r.case for r in rows] == ["moment", "force"]
     assert all("uniform sections only" in r.reason and "'hinge'" in r.reason for r in rows)
+
+
+def test_a_notch_too_thin_to_compute_with_is_refused_by_name(tmp_path):
+    """t = 1e-110 mm is a normal number, but b t^3 / 12 underflows: the magnitude check
+    of a varying section names the flexure and the quantity."""
+    error = _refused(tmp_path, _edit_flexure(NOTCH, thickness=1e-110), "flexures.hinge")
+    assert "second moment" in error.reason
