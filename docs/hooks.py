@@ -53,6 +53,10 @@ PACKAGE_PARTS = ("__init__.py", "geometry", "reducedmodels", "validation")
 API_SOURCES = ROOT / "build" / "docs-src"
 """Holds ``flexval/``, links to :data:`PACKAGE_PARTS` only (see :func:`_link_package`)."""
 
+_ROLE = re.compile(
+    r":(?:py:)?(?:mod|func|class|meth|attr|data|exc|obj|const):<code>(~?)([\w.]+?)(\(\))?</code>"
+)
+"""A docstring's Sphinx cross-reference role as Markdown renders it: ``:meth:<code>x</code>``."""
 _MARKER = re.compile(r"^<!-- flexval:([a-z-]+)(?: (.*?))? -->$", re.MULTILINE)
 _examples: dict[str, dict] = {}
 
@@ -271,6 +275,23 @@ def on_post_build(config) -> None:
 
     for run in _examples.values():
         shutil.rmtree(run["folder"], ignore_errors=True)
+
+
+def on_page_content(html: str, page, config, files) -> str:
+    """Turn the docstrings' Sphinx roles into cross-references (plain code where unresolved).
+
+    ``:meth:`~pkg.Class.method``` becomes a link to the documented object
+    when mkdocs-autorefs knows the identifier, shown as ``method`` (``~``) or
+    in full, and inline code otherwise: the roles are left for Sphinx-style
+    readers of the source, and mkdocstrings does not interpret them.
+    """
+
+    def link(match: re.Match) -> str:
+        tilde, target, call = match.groups()
+        shown = (target.rsplit(".", 1)[-1] if tilde else target) + (call or "")
+        return f'<autoref identifier="{target}" optional><code>{shown}</code></autoref>'
+
+    return _ROLE.sub(link, html)
 
 
 def on_page_markdown(markdown: str, page, config, files) -> str:
