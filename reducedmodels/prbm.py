@@ -56,7 +56,11 @@ stiffnesses kappa_i / w in place of kappa_i EI / L (equal for a uniform
 section). It reproduces the tapered flexure's linear (EE) bending
 compliance exactly; rho is the fitted value at the arc's angle, which was
 calibrated on uniform arcs: the large-deflection accuracy of a strongly
-tapered flexure is not calibrated.
+tapered flexure is not calibrated. The centre of elasticity moves towards
+the thin end, and with it the joints: on a segment tapered from 0.4 to
+0.15 mm over 12 mm the end-side joint lies 0.65 mm beyond the thin end (the
+end body's rigid piece then reaches back to it), which changes nothing in
+the linear limit.
 
 Formulation: link rotations and an exact closure multiplier
 ------------------------------------------------------------
