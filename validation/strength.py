@@ -171,7 +171,7 @@ def fibre_table(
     (:attr:`reducedmodels.LoadPath.fibre_stress`, outside the end faces'
     boundary layers) against the largest outer-fibre stress of its section
     resultants over the same stretch of that flexure (outside the same
-    layers), then the fibre stress's mesh convergence from the studies in
+    layers, their edges included), then the fibre stress's mesh convergence from the studies in
     ``convergence`` that have it (observed order, Richardson value, GCI);
     empty when the reference reports no fibre stress.
     """
@@ -183,9 +183,12 @@ def fibre_table(
             continue
         name, fibre = max(lp.fibre_stress.items(), key=lambda kv: kv[1]["stress"])
         at = np.asarray(lp.stress_profile[name]["at"])
-        margin = fibre["layer"] / length[name]
-        inside = (at >= margin) & (at <= 1.0 - margin)
-        beam = float(np.max(np.asarray(lp.stress_profile[name]["stress"])[inside]))
+        first = fibre["layer"] / length[name]
+        last = fibre.get("layer_end", fibre["layer"]) / length[name]
+        stress = np.asarray(lp.stress_profile[name]["stress"])
+        inside = (at >= first) & (at <= 1.0 - last)
+        edges = np.interp([first, 1.0 - last], at, stress)  # the window's edges, like the fibre's
+        beam = float(max(np.max(stress[inside], initial=0.0), edges.max()))
         rows.append(
             f"| {c} | {name} | {beam:.4g} | {fibre['stress']:.4g} | "
             f"{100 * (fibre['stress'] - beam) / beam:+.1f} % |"

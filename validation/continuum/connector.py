@@ -26,7 +26,7 @@ import scipy.sparse as sp
 
 from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.kinematics import rigid_points
-from flexval.geometry.mesh import FlexureMesh, mesh_flexure
+from flexval.geometry.mesh import FlexureMesh, flexure_mesh
 from flexval.reducedmodels.connector import Connector, ConnectorGroup, LocalState
 from flexval.reducedmodels.inertia import MassPoints
 from flexval.reducedmodels.sections import (
@@ -58,7 +58,8 @@ class ContinuumConnector(Connector):
     law : {'svk', 'neo-hookean'}
     plane : {'stress', 'strain'}
     mesh : FlexureMesh, optional
-        A ready mesh (default: :func:`flexval.geometry.mesh.mesh_flexure` of the flexure).
+        A ready mesh (default: :func:`flexval.geometry.mesh.flexure_mesh` of the flexure:
+        the true outline of a varying section or a free-form centre line).
     """
 
     update_above = 0.0
@@ -79,9 +80,7 @@ class ContinuumConnector(Connector):
     ):
         self.name = flexure.name
         self.bodies = tuple(flexure.bodies)
-        self.mesh = (
-            mesh_flexure(flexure.shape, flexure.section.thickness, level) if mesh is None else mesh
-        )
+        self.mesh = flexure_mesh(flexure.shape, flexure.section, level) if mesh is None else mesh
         self.law, self.plane, self.material = law, plane, mechanism.material
         self.solid = Solid(
             self.mesh.nodes,

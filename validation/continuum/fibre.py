@@ -14,7 +14,7 @@ recovered at the nodes by superconvergent patch recovery
 (:mod:`.recovery`; the peak lies on a surface, where there are nodes but no
 Gauss points). Measured on a curved bar in pure bending (r/h = 10), whose
 exact inner-fibre stress (Golovin) is 3.455 % above M h/(2I): the recovered
-peak is 3.352, 3.431, 3.451 and 3.454 % above it at mesh levels 0 to 3,
+peak is 3.352, 3.462, 3.456 and 3.454 % above it at mesh levels 0 to 3,
 where an L2 projection of the 3 x 3 quadrature values onto the nodes gives
 5.83, 4.09, 3.62 and 3.50 % (second order). Its largest magnitude is taken
 outside a boundary
@@ -65,63 +65,136 @@ def fibre_stress_peak(
     pose_a: np.ndarray,
     pose_b: np.ndarray,
     internal: np.ndarray,
-    layer: float,
+    layer: float | tuple[float, float],
 ) -> tuple[float, float]:
     """Largest |fibre normal stress| (MPa) outside ``layer`` mm of each end, and where.
+
+    The window between the layers holds the nodes inside it and, on every
+    fibre, the recovered field interpolated (quadratic in arc length, the
+    elements' own interpolation) at the window's two edges, so that a peak
+    at an edge is the field's value there, not that of the node nearest to it.
 
     Parameters
     ----------
     conn : ContinuumConnector
     pose_a, pose_b, internal :
         A converged local state.
-    layer : float
-        Width of the excluded boundary layer at each end face, as arc length
-        along the centre line (mm); typically the flexure's thickness.
+    layer : float or (float, float)
+        Width of the excluded boundary layer at each end face (or at the
+        first and at the second end), as arc length along the centre line
+        (mm); typically twice the end face's thickness.
 
     Returns
     -------
     stress : float
         MPa.
     at : float
-        Arc-length fraction of that node from the flexure's first end.
+        Arc-length fraction of that point from the flexure's first end.
 
     Raises
     ------
     ValueError
         If the layers cover the whole flexure.
     """
+    first, last = (layer, layer) if np.isscalar(layer) else map(float, layer)
     line = conn.mesh.nodes[conn.mesh.centre_line]
     fractions = polyline_fractions(line)
     length = float(np.sum(np.hypot(*np.diff(line, axis=0).T)))
-    if 2.0 * layer >= length:
+    if first + last >= length:
         raise ValueError(
-            f"boundary layers of {layer:g} mm cover the whole flexure ({length:g} mm long)"
+            f"boundary layers of {first:g} and {last:g} mm cover the whole flexure "
+            f"({length:g} mm long)"
         )
-    nodal = np.abs(fibre_stress_field(conn, pose_a, pose_b, internal))
-    s_node = fractions[conn.recovery.node_along.astype(np.int64)]
-    inside = (s_node * length >= layer) & ((1.0 - s_node) * length >= layer)
-    k = int(np.argmax(np.where(inside, nodal, -1.0)))
-    return float(nodal[k]), float(s_node[k])
+    nodal = np.abs(fibre_stress_field(conn, pose_a, pose_b, internal))[conn.sections]
+    s = fractions * length  # of every section, mm
+    per_section = nodal.max(axis=1)
+    candidates = [
+        (float(_interpolated(nodal, s, edge).max()), edge / length)
+        for edge in (first, length - last)
+    ]
+    inside = np.flatnonzero((s >= first) & (s <= length - last))
+    if inside.size:
+        k = inside[np.argmax(per_section[inside])]
+        candidates.append((float(per_section[k]), float(fractions[k])))
+    return max(candidates)
+
+
+def _interpolated(values: np.ndarray, s: np.ndarray, at: float) -> np.ndarray:
+    """Values (n_sections, width) at the sections' arc lengths ``s`` (2 n_l + 1,),
+    interpolated to arc length ``at`` by the quadratic through the three sections of the
+    element holding it (one value per fibre)."""
+    vertices = s[0::2]
+    i = int(np.clip(np.searchsorted(vertices, at) - 1, 0, vertices.size - 2))
+    x = s[2 * i : 2 * i + 3]
+    weights = [np.prod([(at - x[b]) / (x[a] - x[b]) for b in range(3) if b != a]) for a in range(3)]
+    return np.tensordot(weights, values[2 * i : 2 * i + 3], axes=1)
 
 
 LAYER_THICKNESSES = 2.0
-"""Boundary layer excluded at each end face, in flexure thicknesses: with one thickness the
-peak of a thick arc under a pure moment still sat at the layer's edge (end-face influence);
-with two it lies inside the flexure and matches Winkler-Bach to 0.01 % at r/h = 4 (mesh level 2)."""
+"""Boundary layer excluded at each end face, in thicknesses of that face: with one thickness
+the peak of a thick arc under a pure moment still sat at the layer's edge (end-face
+influence); with two it lies inside the flexure and matches the exact (Golovin) inner-fibre
+stress to 0.02 % at r/h = 4 (mesh level 2)."""
+
+SHORT_FLEXURE_SHARE = 0.5
+"""Largest share of a varying section's length its two boundary layers may take together."""
+
+
+def boundary_layers(flexure) -> tuple[float, float]:
+    """Widths (mm) of the boundary layers excluded at a flexure's first and second end.
+
+    :data:`LAYER_THICKNESSES` times each end face's thickness h(0), h(L). A
+    varying section may be short against its end faces (a notch hinge's ends
+    are as thick as its blank, often more than a quarter of its length, and
+    the stress there is a small part of the root's): its layers are then
+    scaled down together to :data:`SHORT_FLEXURE_SHARE` of its length. A
+    uniform flexure keeps them (too short a one is refused by
+    :func:`fibre_stress_peak`).
+    """
+    section, length = flexure.section, flexure.shape.length
+    if section.profile is None:
+        layer = LAYER_THICKNESSES * section.thickness
+        return layer, layer
+    first, last = LAYER_THICKNESSES * np.asarray(section.thickness_at([0.0, length]), float)
+    scale = min(1.0, SHORT_FLEXURE_SHARE * length / (first + last))
+    return float(first * scale), float(last * scale)
+
+
+def notch_concentration(
+    conn: ContinuumConnector, local, flexure, stress: float
+) -> dict[str, float]:
+    """The fibre peak ``stress`` (MPa) against the beam formula at a flexure's thinnest section.
+
+    ``nominal``: |N|/A + |M| h/(2I) of the continuum's own section resultants
+    at the centre-line station of smallest thickness (MPa), ``thinnest``: that
+    station's arc-length fraction, ``concentration``: stress / nominal (the
+    stress-concentration factor of a notch hinge).
+    """
+    forces = conn.section_forces(*local)
+    s = np.asarray(forces.at, float) * flexure.shape.length
+    k = int(np.argmin(flexure.section.thickness_at(s)))
+    nominal = float(forces.fibre_stress(flexure.section)[k])
+    return {"nominal": nominal, "thinnest": float(forces.at[k]), "concentration": stress / nominal}
 
 
 def fibre_stresses(system, state: np.ndarray) -> dict[str, dict]:
     """Each continuum flexure's peak fibre stress at a converged ``state`` of ``system``.
 
-    Returns {flexure: {"stress": MPa, "at": fraction from its first end, "layer": mm}},
-    the layer being :data:`LAYER_THICKNESSES` times the flexure's thickness.
+    Returns {flexure: {"stress": MPa, "at": fraction from its first end, "layer": mm,
+    "layer_end": mm}}, the layers excluded at the first and second end being
+    :func:`boundary_layers`; a notch hinge's entry adds its stress concentration
+    (:func:`notch_concentration`: "nominal" MPa, "thinnest", "concentration").
     """
-    thickness = {f.name: f.section.thickness for f in system.mechanism.flexures}
+    flexures = {f.name: f for f in system.mechanism.flexures}
     out = {}
     for conn, local in zip(system.connectors, system.local_states(state)):
-        if conn.name not in thickness or not hasattr(conn, "solid"):
+        if conn.name not in flexures or not hasattr(conn, "solid"):
             continue
-        layer = LAYER_THICKNESSES * thickness[conn.name]
-        stress, at = fibre_stress_peak(conn, *local, layer)
-        out[conn.name] = {"stress": stress, "at": at, "layer": layer}
+        flexure = flexures[conn.name]
+        first, last = boundary_layers(flexure)
+        stress, at = fibre_stress_peak(conn, *local, (first, last))
+        out[conn.name] = {"stress": stress, "at": at, "layer": first, "layer_end": last}
+        profile = flexure.section.profile
+        if profile is not None and profile.kind == "notch":
+            out[conn.name].update(notch_concentration(conn, local, flexure, stress))
     return out

@@ -8,9 +8,20 @@ bar in pure bending, r/h = 10, mesh levels 0, 1, 2: largest error 4.2e-4,
 5.4e-3, 1.4e-3 at the 3 x 3 quadrature points). At a free surface, where a
 flexure's peak stress lies, there are nodes but no such points, and a plain
 L2 projection of the 3 x 3 values onto the nodes keeps the lower order. The
-recovery here fits, per patch of 2 x 2 elements, a polynomial of the
-element's order (biquadratic) to the values at the patch's 16 Barlow
-points by least squares and evaluates it at the nodes.
+recovery here fits, per patch of 2 x 2 elements, a polynomial to the values
+at the patch's 16 Barlow points by least squares and evaluates it at the
+nodes: of the element's order (quadratic) along the flexure, one order
+higher (cubic, through the four Barlow points of each fibre-normal line)
+across it, where a flexure's stress varies most. The cubic term carries
+what is not linear across a section: at the root of a notch hinge the
+stress concentration sits in it, and with two elements across (mesh level
+1, one patch through the whole thickness) a quadratic fit sees only the
+linear part and returns the beam formula's value. Measured on a circular
+notch (t/R = 0.2) under a pure moment, peak over the nominal 6 M/(b t^2) at
+levels 1, 2, 3: 1.0587, 1.0421, 1.0397 with the cubic, 0.9988, 1.0336,
+1.0384 with a quadratic (extrapolated 1.039); on the curved bar (r/h = 10)
+the cubic's level-1 error is 0.008 % of the exact inner-fibre stress, the
+quadratic's 0.022 %.
 
 The mesh is a structured stack of cross-sections (:func:`.polar.cross_sections`),
 so the fit is made in the mesh's logical coordinates: a node of section k
@@ -158,8 +169,8 @@ def _recovery_matrix(
         raise RuntimeError(f"expected the 2 x 2 Barlow points, got {n_q} points per element")
     first_l, centre_l, span_l = _patches(n_l)
     first_t, centre_t, span_t = _patches(n_t)
-    # a biquadratic fit, linear in a direction of one element (two Barlow points)
-    powers = [(a, b) for a in range(min(3, 2 * span_l)) for b in range(min(3, 2 * span_t))]
+    # quadratic along, cubic across; linear in a direction of one element (two Barlow points)
+    powers = [(a, b) for a in range(min(3, 2 * span_l)) for b in range(min(4, 2 * span_t))]
     element_at = np.full((n_l, n_t), -1)
     element_at[i, j] = np.arange(n_el)
     pl, pt = (
