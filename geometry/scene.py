@@ -76,10 +76,18 @@ from .scenefields import (
 from .shapes import Arc, Segment
 from .timelaw import parse_time_law
 
-BUILTIN_SCENES = ("open_chain", "closed_chain")
+PAPER_SCENES = ("open_chain", "closed_chain")
+"""The reference paper's two case studies (Sorgonà et al. 2024, Sect. 4)."""
+FLEXURE_SCENES = ("notch_fourbar", "filleted_stage", "tapered_leaf", "spline_flexure")
+"""Mechanisms of varying-section and free-form flexures: circular notch hinges,
+corner-filleted notch hinges, tapered leaves and an S-shaped spline."""
+BUILTIN_SCENES = PAPER_SCENES + FLEXURE_SCENES
+"""Every scene ``load_scene`` knows by name (files in ``flexval/geometry/scenes``)."""
 
 __all__ = [
     "BUILTIN_SCENES",
+    "FLEXURE_SCENES",
+    "PAPER_SCENES",
     "MAX_NAME_LENGTH",
     "OUTPUTS",
     "Scene",
