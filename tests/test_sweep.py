@@ -14,6 +14,7 @@ from flexval.validation.compare import errors
 from flexval.validation.run import run_model
 from flexval.validation.sweep import load_sweep, results_store, run_sweep, sweep_rows, write_outputs
 from flexval.validation.sweep import tasks as sweep_tasks
+from flexval.validation.sweep.builtin import BUILTIN_SWEEPS
 from flexval.validation.sweep.engine import MAX_AUTO_BATCH, TASKS_PER_WORKER, auto_batch
 
 SCENES = Path(__file__).parent / "scenes"
@@ -335,13 +336,22 @@ def test_cantilever_geometry_extremes(tmp_path, client):
     assert "outside the fitted range" in closed["prbm"]["reason"]
 
 
-@pytest.mark.parametrize("name", ["open_chain_arcs", "slenderness", "arc_angle"])
+@pytest.mark.parametrize("name", BUILTIN_SWEEPS)
 def test_builtin_sweeps_load(name):
     """Each built-in sweep loads from a fresh checkout (the example's file once was ignored
     by git), with every point valid."""
     sweep = load_sweep(name)
     assert sweep.name == name and sweep.points
     assert len(sweep.valid_points) == len(sweep.points)
+
+
+def test_cli_help_names_every_builtin_sweep():
+    from flexval.validation.cli import build_parser
+
+    sweep_parser = build_parser()._subparsers._group_actions[0].choices["sweep"]
+    help_text = sweep_parser.format_help().replace("\n", " ")
+    for name in BUILTIN_SWEEPS:
+        assert name in help_text
 
 
 def _peak(lp) -> float:

@@ -938,7 +938,9 @@ def build_parser() -> argparse.ArgumentParser:
         "sweep", help="parameter sweep of a scene on Dask (Parquet results, resumable, error maps)"
     )
     q.add_argument(
-        "sweep", help="sweep file (TOML) or built-in sweep: open_chain_arcs, slenderness, arc_angle"
+        "sweep",
+        help="sweep file (TOML) or built-in sweep: open_chain_arcs, slenderness, arc_angle, "
+        "notch_ratio",
     )
     q.add_argument(
         "--out",

@@ -1,4 +1,4 @@
-"""Built-in sweeps: the open-chain example and the cantilever geometry sweeps.
+"""Built-in sweeps: the open-chain example, the cantilever geometry sweeps and the notch chart.
 
 ``open_chain_arcs`` is a sweep file shipped in ``validation/data/sweeps``.
 ``slenderness`` and ``arc_angle`` sweep a single clamped arc (radius
@@ -8,6 +8,15 @@ force perpendicular to its chord, scaled at every point so that the linear
 at every geometry. Their base scene and axis values are computed here (the
 arc starts at the origin, where it is clamped, whatever its angle), and
 they run through the same engine as any sweep file.
+
+``notch_ratio`` is the design chart of circular notch hinges: one hinge of
+axis length L = 2 R (:data:`NOTCH_RADIUS`), clamped at one end and carrying
+a lever, its neck thickness t swept over :data:`NOTCH_RATIOS` of R with the
+blank H = t + 2 R (semicircular cut-outs of radius R), under an end moment
+and a transverse force at the lever's tip, each scaled to the same small
+linear rotation (:data:`NOTCH_ROTATION`, inside an aluminium hinge's
+elastic range): where do ``beam:N``, ``dcmm:N``, the one-pivot ``prbm`` and
+``ee`` stay within 1 % / 5 % of the continuum?
 
 Units: mm, MPa, N, degrees (scene-file convention), rad for the rotation.
 """
@@ -32,8 +41,14 @@ ARC_WIDTHS = (30.0, 90.0, 180.0, 270.0, 330.0, 350.0)
 would be a stub thicker than its length, which the scene loader refuses."""
 ARC_RATIO = 1 / 30
 CANTILEVER_MODELS = ("beam:40", "dcmm:1", "dcmm:2", "prbm", "ee")
+NOTCH_RADIUS = 2.5  # mm
+NOTCH_LEVER = 10.0  # mm, from the hinge's free end to the loaded tip
+NOTCH_RATIOS = (0.05, 0.1, 0.2, 0.5, 1.0)
+"""t / R of the notch sweep: from a slender neck to one as thick as the cut-outs' radius."""
+NOTCH_ROTATION = 0.02  # rad
+NOTCH_MODELS = ("beam:20", "dcmm:1", "dcmm:2", "prbm", "ee")
 FILE_SWEEPS = ("open_chain_arcs",)
-BUILTIN_SWEEPS = FILE_SWEEPS + ("slenderness", "arc_angle")
+BUILTIN_SWEEPS = FILE_SWEEPS + ("slenderness", "arc_angle", "notch_ratio")
 
 
 def _tip(width_deg: float) -> tuple[list[float], float]:
@@ -93,6 +108,70 @@ def _cantilever_sweep(name: str, description: str, axes: list[dict], combine: st
     }
 
 
+def notch_scene(t_over_r: float) -> dict:
+    """Scene data (parsed-TOML form) of the clamped circular notch hinge with a lever.
+
+    Axis from the origin along x, L = 2 R, neck t = ``t_over_r`` R, blank
+    H = t + 2 R; aluminium (E = 71700 MPa, nu = 0.33, density 2.81e-9 t/mm^3),
+    depth 5 mm; the lever's tip L + :data:`NOTCH_LEVER` from the clamp.
+    """
+    t = t_over_r * NOTCH_RADIUS
+    length = 2.0 * NOTCH_RADIUS
+    tip = [length + NOTCH_LEVER, 0.0]
+    return {
+        "name": "notch",
+        "description": f"Clamped circular notch hinge, R = {NOTCH_RADIUS:g} mm, lever "
+        f"{NOTCH_LEVER:g} mm",
+        "material": {"youngs_modulus": 71700.0, "poisson_ratio": 0.33},
+        "section": {"depth": 5.0, "thickness": t},
+        "ground": {"name": "g", "points": [[0.0, 0.0]]},
+        "target": {"body": "lever", "point": tip},
+        "flexures": [
+            {
+                "name": "h",
+                "bodies": ["g", "lever"],
+                "shape": "notch",
+                "start": [0.0, 0.0],
+                "end": [length, 0.0],
+                "contour": "circular",
+                "thickness": t,
+                "height": t + 2.0 * NOTCH_RADIUS,
+            }
+        ],
+        "load_cases": [
+            {"name": "M", "kind": "moment", "body": "lever", "value": 1.0, "levels": LEVELS},
+            {
+                "name": "F",
+                "kind": "force",
+                "body": "lever",
+                "point": tip,
+                "angle_deg": 90.0,
+                "value": 1.0,
+                "levels": LEVELS,
+            },
+        ],
+    }
+
+
+def _notch_sweep() -> dict:
+    ratios = np.array(NOTCH_RATIOS)
+    return {
+        "name": "notch_ratio",
+        "description": f"Neck thickness t/R of a circular notch hinge (R = {NOTCH_RADIUS:g} mm, "
+        "H = t + 2 R)",
+        "base": notch_scene(NOTCH_RATIOS[0]),
+        "models": list(NOTCH_MODELS),
+        "reference": "continuum:2",
+        "combine": "zip",
+        "linear_rotation": NOTCH_ROTATION,
+        "outputs": ["peak_stress"],
+        "axes": [
+            {"path": "flexures.h.thickness", "values": (ratios * NOTCH_RADIUS).tolist()},
+            {"path": "flexures.h.height", "values": ((ratios + 2.0) * NOTCH_RADIUS).tolist()},
+        ],
+    }
+
+
 def builtin_sweep(name: str) -> dict:
     """The sweep data (parsed-TOML form) of the built-in sweep ``name``."""
     if name in FILE_SWEEPS:
@@ -120,4 +199,6 @@ def builtin_sweep(name: str) -> dict:
             ],
             "zip",
         )
+    if name == "notch_ratio":
+        return _notch_sweep()
     raise KeyError(name)
