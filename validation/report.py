@@ -448,14 +448,27 @@ def render_markdown(
     summarised in its own section when the scenes include the open chain."""
     from .discussion import discussion
 
+    if any(r.paper for r in data.scenes):
+        scope = (
+            "Flexibility models of planar compliant mechanisms with curved flexures: "
+            "the comparison of Sorgonà, Cirelli, Giannini, Verotti (Multibody Syst. Dyn., "
+            f"2024) reproduced with `{PAPER_REFERENCE}` as reference (the paper's "
+            "convention), and extended with a continuum reference (2D plane-stress solid, "
+            "geometrically nonlinear hyperelastic, scikit-fem)."
+        )
+    else:
+        scope = (
+            "Flexibility models of planar compliant mechanisms against a continuum reference "
+            "(2D plane-stress solid of each flexure's true outline, geometrically nonlinear "
+            "hyperelastic, scikit-fem), with the paper's fine beam model "
+            f"`{PAPER_REFERENCE}` as a second reference: the models and tables of Sorgonà, "
+            "Cirelli, Giannini, Verotti (Multibody Syst. Dyn., 2024) applied to mechanisms "
+            "of their own."
+        )
     lines = [
         "# flexval validation report",
         "",
-        "Flexibility models of planar compliant mechanisms with curved flexures: "
-        "the comparison of Sorgonà, Cirelli, Giannini, Verotti (Multibody Syst. Dyn., 2024) "
-        f"reproduced with `{PAPER_REFERENCE}` as reference (the paper's convention), and "
-        "extended with a continuum reference (2D plane-stress solid, geometrically "
-        "nonlinear hyperelastic, scikit-fem).",
+        scope,
         "",
         "## Setup",
         "",
