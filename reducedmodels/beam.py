@@ -83,7 +83,8 @@ CHAIN_HALF_BANDWIDTH = 2 * NODE_COORDINATES - 1
 
 @functools.cache
 def beam_kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.beamkernel`, imported and loaded on first use (see its ``warm_up``).
+    """:mod:`flexval.reducedmodels.beamkernel`, imported and loaded on first use
+    (see its ``warm_up``).
 
     A System of beams asks for it when it is built (:meth:`BeamGroup.assembler`),
     so numba's import and the kernels' machine code (~0.5 s) are paid before
@@ -204,7 +205,8 @@ class BeamGroup(ConnectorGroup):
         ]
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        """The connectors' :meth:`BeamConnector.hessian_pattern` laid end to end (as the base class).
+        """The connectors' :meth:`BeamConnector.hessian_pattern` laid end to end
+        (as the base class).
 
         Each element's row-major 6 x 6 block over its two nodes' coordinates,
         from the element table, in one pass over all the flexures.
@@ -506,7 +508,8 @@ def _levels(levels: Sequence[Sequence[LocalState]]) -> np.ndarray:
 
 
 class BeamConnector(Connector):
-    """Corotational beam model of one flexure with N elements (a :class:`~flexval.reducedmodels.connector.Connector`).
+    """Corotational beam model of one flexure with N elements
+    (a :class:`~flexval.reducedmodels.connector.Connector`).
 
     Parameters
     ----------
@@ -785,5 +788,6 @@ class BeamConnector(Connector):
         return SectionForces(forces.at, forces.axial[0], forces.moment[0])
 
     def path_section_forces(self, states: Sequence[LocalState]) -> SectionForces:
-        """:meth:`section_forces` at k states (a load path), stacked (k, m), in one compiled pass."""
+        """:meth:`section_forces` at k states (a load path), stacked (k, m), in one
+        compiled pass."""
         return self._alone.path_section_forces([[state] for state in states])[0]

@@ -314,7 +314,8 @@ class ConnectorGroup:
         return energy, np.concatenate(grads), np.concatenate(hessians)
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        """(rows, cols) of :meth:`evaluate`'s concatenated Hessian values in the concatenated local coordinates.
+        """(rows, cols) of :meth:`evaluate`'s concatenated Hessian values in the
+        concatenated local coordinates.
 
         Each connector's :meth:`Connector.hessian_pattern` (a dense Hessian:
         every entry, row by row) shifted by the connector's first local
@@ -393,7 +394,8 @@ class ConnectorGroup:
     def path_section_forces(
         self, levels: Sequence[Sequence[LocalState]]
     ) -> list[SectionForces | None]:
-        """Each connector's :meth:`Connector.path_section_forces` at k levels (as ``path_validity``)."""
+        """Each connector's :meth:`Connector.path_section_forces` at k levels
+        (as ``path_validity``)."""
         return [
             c.path_section_forces([states[j] for states in levels])
             for j, c in enumerate(self.connectors)
@@ -415,7 +417,8 @@ class ConnectorGroup:
         return self.path_validity(levels), self.path_section_forces(levels)
 
     def local_levels(self, coordinates: np.ndarray) -> list[list[LocalState]]:
-        """The connectors' local states at each level from their coordinates laid end to end (k, m)."""
+        """The connectors' local states at each level from their coordinates laid
+        end to end (k, m)."""
         sizes = [6 + c.n_internal for c in self.connectors]
         levels = []
         for row in coordinates:

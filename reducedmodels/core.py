@@ -89,8 +89,8 @@ class SolverSettings:
     Newton converges quadratically, the error left after a correction of
     1e-8 is of order 1e-16. ``error_tol`` bounds the error left after a
     correction as estimated from the contraction of the last two (see
-    :func:`flexval.reducedmodels.newton.solve_step`); 1e-10 keeps equilibrium to ~1e-8 of the load even on
-    stiff (axial) modes.
+    :func:`flexval.reducedmodels.newton.solve_step`); 1e-10 keeps equilibrium
+    to ~1e-8 of the load even on stiff (axial) modes.
     ``max_rotation_step`` (rad) and ``max_translation_step`` (fraction of the
     mechanism size) bound how far any body may move in one sub-step, so the
     stepping follows soft stretches of the path instead of leaping over them.
@@ -370,7 +370,8 @@ class System:
     def assemble_storage(
         self, q: np.ndarray, loads: Loads, factor: float
     ) -> tuple[float, np.ndarray, np.ndarray]:
-        """Total potential (N mm), its gradient and the tangent's values in :attr:`layout`'s storage.
+        """Total potential (N mm), its gradient and the tangent's values in
+        :attr:`layout`'s storage.
 
         Every connector is evaluated once, each run of consecutive connectors
         of one class through its :meth:`~Connector.group`: a group with an

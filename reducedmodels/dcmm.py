@@ -57,7 +57,8 @@ three coordinates (x, y, theta) of two neighbouring bodies."""
 
 @functools.cache
 def dcmm_kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.dcmmkernel`, imported and loaded on first use (see its ``warm_up``).
+    """:mod:`flexval.reducedmodels.dcmmkernel`, imported and loaded on first use
+    (see its ``warm_up``).
 
     The DCMM and EE families ask for it before a path's clock starts
     (:mod:`flexval.reducedmodels.families`), so numba's import and the kernels'
@@ -201,8 +202,9 @@ class DcmmConnector(Connector):
         ]
         self._cuts = np.array(cuts).reshape(-1, 2)
         self._arc_lengths = [p.length for p in parts]  # chain order, mm
-        # each sub-arc's parameters of flexval.reducedmodels.dcmmkernel.sub_arc: offsets of its centre
-        # of elasticity from its two bodies (mm), ellipse axes, inverse compliances
+        # each sub-arc's parameters of flexval.reducedmodels.dcmmkernel.sub_arc:
+        # offsets of its centre of elasticity from its two bodies (mm), ellipse
+        # axes, inverse compliances
         parameters = []
         for (lx, ly), (fx, fy), sub in zip(refs, refs[1:], subs):
             ell, compliance = sub.ellipse, sub.compliance
@@ -264,8 +266,8 @@ class DcmmConnector(Connector):
         (its second bending frequency is 39 % low on a cantilever).
         """
         n = len(self._sub_lengths)
-        l = self._sub_lengths[0]  # equal sub-arcs
-        bounds = np.clip((np.arange(n + 2) - 0.5) * l, 0.0, n * l)
+        sub_length = self._sub_lengths[0]  # equal sub-arcs
+        bounds = np.clip((np.arange(n + 2) - 0.5) * sub_length, 0.0, n * sub_length)
         mass, rel, rotary = rigid_pieces(
             self._centre_line,
             self._forward,
@@ -358,7 +360,8 @@ class DcmmConnector(Connector):
         return reasons
 
     def path_validity(self, states) -> list[list[str]]:
-        """:meth:`validity` at k states, screened in one vectorised pass (see :class:`DcmmGroup`)."""
+        """:meth:`validity` at k states, screened in one vectorised pass
+        (see :class:`DcmmGroup`)."""
         return DcmmGroup([self]).path_validity([[state] for state in states])[0]
 
     def shape(self, pose_a, pose_b, internal) -> np.ndarray:
@@ -377,8 +380,9 @@ class DcmmConnector(Connector):
         rigidly by each of its bodies, w the fraction along the sub-arc (it
         leaves the leading body's cut and reaches the following body's; a
         cut, shared by two sub-arcs, is sampled once), and its sections turn
-        with the same blend of the two bodies' rotations. ``gradient`` (a linear response's K0 dq) gives the
-        flexure's end wrench instead, carried along every sub-arc.
+        with the same blend of the two bodies' rotations. ``gradient`` (a
+        linear response's K0 dq) gives the flexure's end wrench instead,
+        carried along every sub-arc.
         """
         group, state = DcmmGroup([self]), (pose_a, pose_b, internal)
         if gradient is not None:

@@ -84,7 +84,8 @@ class Rayleigh:
 
 @dataclass(frozen=True)
 class GeneralizedAlpha:
-    """Chung-Hulbert parameters from the spectral radius at infinite frequency, rho_inf in [0, 1]."""
+    """Chung-Hulbert parameters from the spectral radius at infinite frequency,
+    rho_inf in [0, 1]."""
 
     rho_inf: float = 0.9
 

@@ -523,7 +523,8 @@ class MassModel:
         self.points = MassPoints(*(getattr(merged, f)[moving] for f in MassPoints._fields))
 
     def matrix(self, q: np.ndarray) -> sp.csr_matrix:
-        """Mass matrix M(q) (t, t mm, t mm^2) over all coordinates of the System (see :meth:`entries`)."""
+        """Mass matrix M(q) (t, t mm, t mm^2) over all coordinates of the System
+        (see :meth:`entries`)."""
         rows, cols, values = self.entries(q)
         return sp.csr_matrix((values, (rows, cols)), shape=(self.n, self.n))
 

@@ -61,7 +61,8 @@ def _bending_scale(flexure, material) -> float:
 
 
 class PinConnector(Connector):
-    """A pin between ``body_a`` and ``body_b`` at ``point`` (a :class:`~flexval.reducedmodels.connector.Connector`).
+    """A pin between ``body_a`` and ``body_b`` at ``point``
+    (a :class:`~flexval.reducedmodels.connector.Connector`).
 
     Parameters
     ----------

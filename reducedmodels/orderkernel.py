@@ -1,4 +1,5 @@
-"""Compiled reverse Cuthill-McKee ordering and band slots of a tangent's pattern (numba, on-disk cache).
+"""Compiled reverse Cuthill-McKee ordering and band slots of a tangent's pattern
+(numba, on-disk cache).
 
 :class:`flexval.reducedmodels.tangent.TangentLayout` orders the unknowns of a
 banded tangent by reverse Cuthill-McKee (RCM). For a system that already

@@ -343,7 +343,8 @@ def prbm_connector(flexure: Flexure, mechanism: Mechanism, **options) -> Connect
 
 @cache
 def prbm_kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.prbmkernel`, imported and loaded on first use (see its ``warm_up``).
+    """:mod:`flexval.reducedmodels.prbmkernel`, imported and loaded on first use
+    (see its ``warm_up``).
 
     The PRBM family asks for it before a path's clock starts
     (:mod:`flexval.reducedmodels.families`), so numba's import and the kernel's
@@ -360,7 +361,8 @@ _LOCAL = np.arange(10, dtype=np.int64)[None]
 
 
 def _hessian_pattern() -> tuple[np.ndarray, np.ndarray]:
-    """Local (rows, cols) of the PRBM Hessian entries, in the order :meth:`PrbmConnector.evaluate` fills them.
+    """Local (rows, cols) of the PRBM Hessian entries, in the order
+    :meth:`PrbmConnector.evaluate` fills them.
 
     Springs and gap curvature on the angles (theta_a 2, theta_b 5, phi_h 6,
     phi_l 7): the chain theta_a - phi_h - phi_l - theta_b is tridiagonal.
@@ -527,12 +529,14 @@ class PrbmConnector(Connector):
         return np.array([True, True, False, False])
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        """Local (rows, cols) of the Hessian values :meth:`evaluate` returns (see _HESSIAN_PATTERN)."""
+        """Local (rows, cols) of the Hessian values :meth:`evaluate` returns
+        (see _HESSIAN_PATTERN)."""
         return _HESSIAN_ROWS, _HESSIAN_COLS
 
     @classmethod
     def group(cls, connectors) -> PrbmGroup:
-        """The PRBM connectors of a run, evaluated into one array of each kind (:class:`PrbmGroup`)."""
+        """The PRBM connectors of a run, evaluated into one array of each kind
+        (:class:`PrbmGroup`)."""
         return PrbmGroup(connectors)
 
     def evaluate(
@@ -578,7 +582,8 @@ class PrbmConnector(Connector):
         ) + rotation_reasons("end rotation", np.array([turn]), self._fitted_rotation)
 
     def path_validity(self, states) -> list[list[str]]:
-        """:meth:`validity` at k states, screened in one vectorised pass (:meth:`PrbmGroup.path_validity`)."""
+        """:meth:`validity` at k states, screened in one vectorised pass
+        (:meth:`PrbmGroup.path_validity`)."""
         return PrbmGroup([self]).path_validity([[state] for state in states])[0]
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
@@ -669,7 +674,8 @@ class PrbmGroup(ConnectorGroup):
     def path_end_pass(
         self, coordinates: np.ndarray
     ) -> tuple[list[list[list[str]]], list[SectionForces]]:
-        """:meth:`path_validity` and :meth:`path_section_forces` on the stacked coordinates as they are.
+        """:meth:`path_validity` and :meth:`path_section_forces` on the stacked
+        coordinates as they are.
 
         ``coordinates`` (k, 10 c): the connectors' local coordinates at each
         level (:meth:`ConnectorGroup.path_end_pass`), which are this group's
@@ -689,7 +695,8 @@ class PrbmGroup(ConnectorGroup):
         return self._verdicts(self._local(levels), lambda: levels)
 
     def _verdicts(self, local: np.ndarray, levels_of: Callable[[], list]) -> list[list[list[str]]]:
-        """:meth:`path_validity` from the (k, c, 10) table; ``levels_of()`` gives the local states."""
+        """:meth:`path_validity` from the (k, c, 10) table; ``levels_of()`` gives
+        the local states."""
         lines = prbm_kernels().chain_polylines(local, self._parameters, self._end_rel)
         chord = lines[:, :, 4] - lines[:, :, 0]
         turn = np.abs(local[..., 5] - local[..., 2])

@@ -36,7 +36,8 @@ link vectors v_h, v_l (2 each, mm, initial), the joint stiffnesses k1, k2, k3 (N
 closure scale c (N/mm)."""
 
 HESSIAN_VALUES = 34
-"""Hessian values of one chain, in the order of :func:`flexval.reducedmodels.prbm._hessian_pattern`."""
+"""Hessian values of one chain, in the order of
+:func:`flexval.reducedmodels.prbm._hessian_pattern`."""
 
 
 @kernel

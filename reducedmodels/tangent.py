@@ -9,10 +9,10 @@ adds them as it computes them):
 * ``dense``  -- small systems (at most ``DENSE_LIMIT`` unknowns; see ``NARROW_MIN``), LAPACK;
 * ``banded`` -- chains of beams and bodies: after a reverse Cuthill-McKee
   ordering (scipy's, or for a compiled system the same one computed by
-  :mod:`flexval.reducedmodels.orderkernel`) their bandwidth is small whatever the number of elements, so a
-  banded LU (LAPACK ``dgbtrf``) costs O(n b^2), and so does the inertia
-  (a banded Cholesky, or banded bisection when that fails, saddle points
-  included);
+  :mod:`flexval.reducedmodels.orderkernel`) their bandwidth is small
+  whatever the number of elements, so a banded LU (LAPACK ``dgbtrf``) costs
+  O(n b^2), and so does the inertia (a banded Cholesky, or banded bisection
+  when that fails, saddle points included);
 * ``sparse`` -- wide bands (2D continuum meshes): SuperLU.
 
 Every :class:`Tangent` solves K x = b and counts its negative eigenvalues
@@ -60,7 +60,8 @@ def narrow_kernels(b: int) -> tuple[ModuleType, tuple[int, ...]]:
 
 @functools.cache
 def band_kernels(b: int) -> ModuleType:
-    """:mod:`flexval.reducedmodels.bandkernel`, its kernels of half-bandwidth b loaded (see ``warm_up``).
+    """:mod:`flexval.reducedmodels.bandkernel`, its kernels of half-bandwidth b
+    loaded (see ``warm_up``).
 
     A layout that will use them asks for them when it is built, so that
     loading them is not charged to a path's time.
