@@ -73,7 +73,8 @@ for name in scenes:
             rows.append({"path": f"{name} {case.name} {model}", "seconds": min(seconds),
                          "newton": lp.stats.get("newton_iterations"),
                          "end": [lp.displacement[-1], lp.rotation[-1]]})
-print(json.dumps({"imported": [flexval.reducedmodels.__file__, flexval.geometry.__file__], "rows": rows}))
+print(json.dumps({"imported": [flexval.reducedmodels.__file__, flexval.geometry.__file__],
+                  "rows": rows}))
 """
 
 

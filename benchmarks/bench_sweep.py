@@ -2,7 +2,8 @@
 
 Run: ``python benchmarks/bench_sweep.py [--n 1000] [--continuum-n 10] [--batch N]
 [--cases f+]`` (about 4.5 minutes on the quiet 2-core machine with the defaults; the
-batch defaults to the engine's automatic choice, :func:`flexval.validation.sweep.engine.auto_batch`).
+batch defaults to the engine's automatic choice,
+:func:`flexval.validation.sweep.engine.auto_batch`).
 
 The sweep: ``--n`` random variants of the open chain (flexure thickness h
 uniform in 0.08..0.12 mm, Young's modulus lognormal about 2100 MPa with

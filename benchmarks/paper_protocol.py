@@ -201,7 +201,7 @@ def run_protocol(
         static, path = static_end(system, case, m)
         runs[m] = ModelRuns(system, (float(f[0]), float(f[1])), static, path, {})
     period = 1.0 / runs[reference].frequencies[0]
-    for m, r in runs.items():
+    for r in runs.values():
         for p in grid:
             damping = Rayleigh.from_ratio(p.damping_ratio, *r.frequencies)
             r.dynamic[p] = dynamic_end(r.system, case, p.ramp_periods * period, damping, error_tol)
@@ -263,7 +263,10 @@ def reference_scale(runs: dict[str, ModelRuns], reference: str) -> dict[str, flo
 def static_errors(
     runs: dict[str, ModelRuns], reference: str, models: list[str]
 ) -> dict[str, tuple[float, float]]:
-    """Static end-of-ramp errors (disp vector, rot; percent) by model, via flexval.validation.compare."""
+    """Static end-of-ramp errors (disp vector, rot; percent) by model.
+
+    Computed with :mod:`flexval.validation.compare`.
+    """
     out = {}
     for m in models:
         e = errors(

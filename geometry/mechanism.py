@@ -579,7 +579,11 @@ def _check_ground_end(
     tol: float,
     source: str,
 ) -> None:
-    """Refuse a ground flexure whose ground end (or, if not yet known, either end) meets no ground point."""
+    """Refuse a ground flexure whose ground end meets no ground point.
+
+    While the ground end is not yet known, the flexure is refused when
+    neither end meets one.
+    """
     ends = spec.shape.end_points
     candidates = ends if start_body is None else [ends[0] if start_body == ground else ends[1]]
     gaps = [min(np.hypot(*(e - p)) for p in ground_points) for e in candidates]

@@ -27,7 +27,8 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 def _segments_meeting(
     line: np.ndarray, lo: np.ndarray, hi: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Start and end points of the segments of ``line`` whose bounding boxes meet [lo, hi], in order."""
+    """Start and end points of the segments of ``line`` whose bounding boxes meet
+    [lo, hi], in order."""
     a, b = line[:-1], line[1:]
     keep = np.all((np.maximum(a, b) >= lo) & (np.minimum(a, b) <= hi), axis=1)
     return a[keep], b[keep]
