@@ -136,28 +136,36 @@ the peak of a thick arc under a pure moment still sat at the layer's edge (end-f
 influence); with two it lies inside the flexure and matches the exact (Golovin) inner-fibre
 stress to 0.02 % at r/h = 4 (mesh level 2)."""
 
-SHORT_FLEXURE_SHARE = 0.5
-"""Largest share of a varying section's length its two boundary layers may take together."""
+THINNEST = 1e-9
+"""Relative thickness above the smallest within which a station counts as the thinnest."""
+
+LAYER_SAMPLES = 4096
+"""Points along a varying section at which its thinnest part is looked for."""
 
 
 def boundary_layers(flexure) -> tuple[float, float]:
     """Widths (mm) of the boundary layers excluded at a flexure's first and second end.
 
-    :data:`LAYER_THICKNESSES` times each end face's thickness h(0), h(L). A
-    varying section may be short against its end faces (a notch hinge's ends
-    are as thick as its blank, often more than a quarter of its length, and
-    the stress there is a small part of the root's): its layers are then
-    scaled down together to :data:`SHORT_FLEXURE_SHARE` of its length. A
-    uniform flexure keeps them (too short a one is refused by
-    :func:`fibre_stress_peak`).
+    :data:`LAYER_THICKNESSES` times each end face's thickness h(0), h(L). On
+    a varying section a layer stops half-way to the thinnest part when that
+    part does not reach its end: a notch hinge's ends are as thick as its
+    blank (twice their thickness is often more than the notch is long), the
+    rigid face's perturbation there is a small part of the stress at the
+    root (it scales with 1/h^2 at the face), and a fillet's stress
+    concentration lies where the fillet meets the thin stretch. A layer at
+    an end that is the thinnest part (a taper's thin end) is kept whole.
     """
     section, length = flexure.section, flexure.shape.length
     if section.profile is None:
         layer = LAYER_THICKNESSES * section.thickness
         return layer, layer
-    first, last = LAYER_THICKNESSES * np.asarray(section.thickness_at([0.0, length]), float)
-    scale = min(1.0, SHORT_FLEXURE_SHARE * length / (first + last))
-    return float(first * scale), float(last * scale)
+    s = np.union1d(np.linspace(0.0, length, LAYER_SAMPLES + 1), section.profile.breakpoints)
+    h = np.asarray(section.thickness_at(s), float)
+    thin = np.flatnonzero(h <= h.min() * (1.0 + THINNEST))
+    reach = (s[thin[0]], length - s[thin[-1]])  # from each end to the thinnest part
+    ends = LAYER_THICKNESSES * np.asarray(section.thickness_at([0.0, length]), float)
+    first, last = (float(e if d == 0.0 else min(e, 0.5 * d)) for e, d in zip(ends, reach))
+    return first, last
 
 
 def notch_concentration(
@@ -165,15 +173,18 @@ def notch_concentration(
 ) -> dict[str, float]:
     """The fibre peak ``stress`` (MPa) against the beam formula at a flexure's thinnest section.
 
-    ``nominal``: |N|/A + |M| h/(2I) of the continuum's own section resultants
-    at the centre-line station of smallest thickness (MPa), ``thinnest``: that
-    station's arc-length fraction, ``concentration``: stress / nominal (the
-    stress-concentration factor of a notch hinge).
+    ``nominal``: the largest |N|/A + |M| h/(2I) of the continuum's own section
+    resultants over the centre-line stations of smallest thickness (MPa; one
+    station at a rounded notch's root, the flat stretch of a corner-filleted
+    one), ``thinnest``: that station's arc-length fraction, ``concentration``:
+    stress / nominal (the stress-concentration factor of a notch hinge).
     """
     forces = conn.section_forces(*local)
-    s = np.asarray(forces.at, float) * flexure.shape.length
-    k = int(np.argmin(flexure.section.thickness_at(s)))
-    nominal = float(forces.fibre_stress(flexure.section)[k])
+    h = flexure.section.thickness_at(np.asarray(forces.at, float) * flexure.shape.length)
+    beam = forces.fibre_stress(flexure.section)
+    thinnest = np.flatnonzero(h <= h.min() * (1.0 + THINNEST))
+    k = int(thinnest[np.argmax(beam[thinnest])])
+    nominal = float(beam[k])
     return {"nominal": nominal, "thinnest": float(forces.at[k]), "concentration": stress / nominal}
 
 

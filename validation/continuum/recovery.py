@@ -14,14 +14,14 @@ nodes: of the element's order (quadratic) along the flexure, one order
 higher (cubic, through the four Barlow points of each fibre-normal line)
 across it, where a flexure's stress varies most. The cubic term carries
 what is not linear across a section: at the root of a notch hinge the
-stress concentration sits in it, and with two elements across (mesh level
-1, one patch through the whole thickness) a quadratic fit sees only the
-linear part and returns the beam formula's value. Measured on a circular
-notch (t/R = 0.2) under a pure moment, peak over the nominal 6 M/(b t^2) at
-levels 1, 2, 3: 1.0587, 1.0421, 1.0397 with the cubic, 0.9988, 1.0336,
-1.0384 with a quadratic (extrapolated 1.039); on the curved bar (r/h = 10)
-the cubic's level-1 error is 0.008 % of the exact inner-fibre stress, the
-quadratic's 0.022 %.
+stress concentration sits in it, and with two elements across (one patch
+through the whole thickness) a quadratic fit sees only the linear part and
+returns about the beam formula's value. Measured on a circular notch
+(t/R = 0.2, two elements across at mesh level 0) under a pure moment, peak
+over the nominal 6 M/(b t^2) at levels 0 to 3: 1.0411, 1.0400, 1.0395,
+1.0392 with the cubic, 0.9816, 1.0320, 1.0382, 1.0391 with a quadratic; on
+the curved bar (r/h = 10) the cubic's level-1 error is 0.008 % of the exact
+inner-fibre stress, the quadratic's 0.022 %.
 
 The mesh is a structured stack of cross-sections (:func:`.polar.cross_sections`),
 so the fit is made in the mesh's logical coordinates: a node of section k
