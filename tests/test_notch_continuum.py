@@ -187,3 +187,21 @@ def test_spline_cantilever_is_the_linear_timoshenko_beam(tapered):
     moved = np.array([lp.dx[-1], lp.dy[-1]])
     assert np.hypot(*(moved - beam[:2])) < 1e-3 * np.hypot(*beam[:2])
     assert lp.rotation[-1] == pytest.approx(beam[2], rel=1e-3)
+
+
+def test_report_names_the_notch_stress_concentrations():
+    """The report's fibre-stress table of a notch mechanism (the built-in four-bar of
+    circular notch hinges, level 1) says each hinge's stress concentration, above 1, with
+    its peak at the root."""
+    from flexval.geometry import load_scene
+    from flexval.validation.continuum.run import run_continuum
+    from flexval.validation.strength import fibre_table
+
+    scene = load_scene("notch_fourbar")
+    case = scene.load_cases[0]
+    lp = run_continuum(scene.mechanism, case, level=1, model="continuum:1")
+    table = fibre_table(scene, {("continuum:1", case.name): lp}, "continuum:1", [case.name])
+    line = next(t for t in table if t.startswith("Stress concentration of the notch hinges"))
+    for name, fibre in lp.fibre_stress.items():
+        assert fibre["concentration"] > 1.0 and fibre["at"] == pytest.approx(0.5)
+        assert f"{name} {fibre['concentration']:.4g}" in line

@@ -171,12 +171,14 @@ def fibre_table(
     (:attr:`reducedmodels.LoadPath.fibre_stress`, outside the end faces'
     boundary layers) against the largest outer-fibre stress of its section
     resultants over the same stretch of that flexure (outside the same
-    layers, their edges included), then the fibre stress's mesh convergence from the studies in
+    layers, their edges included), the stress concentration of every notch hinge
+    (:func:`flexval.validation.continuum.fibre.notch_concentration`), then the
+    fibre stress's mesh convergence from the studies in
     ``convergence`` that have it (observed order, Richardson value, GCI);
     empty when the reference reports no fibre stress.
     """
     length = {f.name: f.shape.length for f in scene.mechanism.flexures}
-    rows = []
+    rows, notches = [], []
     for c in cases:
         lp = paths.get((reference, c))
         if lp is None or not lp.converged or not lp.fibre_stress:
@@ -193,22 +195,39 @@ def fibre_table(
             f"| {c} | {name} | {beam:.4g} | {fibre['stress']:.4g} | "
             f"{100 * (fibre['stress'] - beam) / beam:+.1f} % |"
         )
+        notches += [
+            f"{c}: {n} {v['concentration']:.4g} ({v['stress']:.4g} MPa at {v['at']:.2f})"
+            for n, v in lp.fibre_stress.items()
+            if "concentration" in v
+        ]
     if not rows:
         return []
     from .continuum.fibre import LAYER_THICKNESSES
 
+    scf = (
+        [
+            "Stress concentration of the notch hinges (the continuum's peak fibre stress over "
+            "the beam formula at the thinnest section, from its own section resultants; peak "
+            "and where): " + "; ".join(notches) + ".",
+            "",
+        ]
+        if notches
+        else []
+    )
     return (
         [
             f"Outside a boundary layer of {LAYER_THICKNESSES:g} thicknesses at each clamped "
-            "end face (where the continuum's stress is singular), the continuum's own fibre "
-            "normal stress against the beam formula applied to its section resultants over the "
-            "same stretch (the flexure with the largest fibre stress):",
+            "end face (where the continuum's stress is singular; on a notch hinge it stops "
+            "half-way to the thinnest part), the continuum's own fibre normal stress against "
+            "the beam formula applied to its section resultants over the same stretch (the "
+            "flexure with the largest fibre stress):",
             "",
             "| case | flexure | beam formula (MPa) | continuum fibre (MPa) | difference |",
             "|---|---|---:|---:|---:|",
         ]
         + rows
         + [""]
+        + scf
         + _fibre_convergence_lines(convergence)
     )
 
