@@ -194,7 +194,7 @@ def _frame_bullet(data: ReportData) -> list[str]:
 
 def _at_or_below_bullet(data: ReportData) -> list[str]:
     counts: dict[str, list[bool]] = {}
-    for r, m, c, e, p in _paper_entries(data):
+    for _, m, _, e, p in _paper_entries(data):
         if m == PAPER_REFERENCE:
             continue
         counts.setdefault(m, []).append(

@@ -1,4 +1,5 @@
-"""The general-purpose peer: OpenSeesPy's corotational beams on a flexval mechanism, timed beside ``beam:N``.
+"""The general-purpose peer: OpenSeesPy's corotational beams on a flexval mechanism,
+timed beside ``beam:N``.
 
 Both solve the same mechanism with N two-node corotational Euler-Bernoulli
 elements per flexure, nodes on the centre line at arc lengths k L / N, along

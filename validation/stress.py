@@ -205,7 +205,7 @@ def _amplification(
     for k in factors:
         if progress:
             progress(f"stress {scene.name}: {spec.id} on {case.name} x{k:g}")
-        lp, failure = _attempt(lambda: run_model(scene, spec, scale_case(case, k)))
+        lp, failure = _attempt(lambda k=k: run_model(scene, spec, scale_case(case, k)))
         if failure is not None:
             failure["factor"] = k
             if failure["kind"] == "solver":
@@ -239,7 +239,7 @@ def _step_count(scene: Scene, spec: ModelSpec, case: LoadCase, counts: Sequence[
     (against the scales of the first path that converged where an end value is near zero)."""
     ends, failures, scale = [], [], None
     for n in counts:
-        lp, failure = _attempt(lambda: run_model(scene, spec, case, levels=n))
+        lp, failure = _attempt(lambda n=n: run_model(scene, spec, case, levels=n))
         if failure is not None:
             failures.append({"levels": n, **failure})
             continue

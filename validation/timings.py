@@ -105,7 +105,8 @@ def _convergence_lines(res: SceneResults) -> list[str]:
 
 
 def _peer_lines(res: SceneResults) -> list[str]:
-    """Markdown: :data:`PAPER_REFERENCE` against OpenSeesPy (:mod:`flexval.validation.peers`), or why not."""
+    """Markdown: :data:`PAPER_REFERENCE` against OpenSeesPy
+    (:mod:`flexval.validation.peers`), or why not."""
     if res.peers is None:
         return []
     title = f"### {PAPER_REFERENCE} against OpenSeesPy"
