@@ -49,7 +49,8 @@ def tip_moment(value: float, levels: int = 11, name: str = "M") -> LoadCase:
 
 
 def fd_check(connector, pose_a, pose_b, internal, h: float = 1e-6):
-    """Largest relative errors of gradient vs energy and Hessian vs gradient (central differences)."""
+    """Largest relative errors of gradient vs energy and Hessian vs gradient
+    (central differences)."""
     q = np.concatenate([pose_a, pose_b, internal])
     n = q.size
 

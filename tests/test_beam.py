@@ -449,7 +449,7 @@ def test_elliptic_elastica_reference_agrees_with_shooting():
     # s in [0, 1] from the clamp and shoot on phi'(0) until phi'(1) = 0
     for p in (1, 2, 5, 10):
 
-        def rhs(s, z):
+        def rhs(s, z, p=p):
             return [z[1], -p * np.cos(z[0]), np.cos(z[0]), np.sin(z[0])]
 
         def ivp(k0):

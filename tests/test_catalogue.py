@@ -254,7 +254,8 @@ def test_info_imports_no_model_code():
     code = (
         "import sys; from flexval.validation.cli import main; main(['info', 'closed_chain']); "
         "print(sorted(m for m in sys.modules if m.startswith(('flexval.reducedmodels.beam', "
-        "'flexval.reducedmodels.dcmm', 'flexval.reducedmodels.prbm', 'flexval.validation.continuum.run', "
+        "'flexval.reducedmodels.dcmm', 'flexval.reducedmodels.prbm', "
+        "'flexval.validation.continuum.run', "
         "'flexval.validation.continuum.connector', 'skfem'))))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -1,4 +1,5 @@
-"""The continuum's group assembly (flexval.validation.continuum.group) against the per-connector chain rule.
+"""The continuum's group assembly (flexval.validation.continuum.group) against the
+per-connector chain rule.
 
 Reference: each ContinuumConnector's own gradient and Hessian over its local
 coordinates (checked by finite differences in tests/test_continuum.py),

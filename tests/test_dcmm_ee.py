@@ -166,7 +166,9 @@ def _castigliano_tip_compliance(shape, EI, point):
     C = np.zeros((3, 3))
     for i in range(3):
         for j in range(3):
-            C[i, j] = quad(lambda s: m(s)[i] * m(s)[j], 0.0, shape.length, limit=200)[0] / EI
+            C[i, j] = (
+                quad(lambda s, i=i, j=j: m(s)[i] * m(s)[j], 0.0, shape.length, limit=200)[0] / EI
+            )
     return C
 
 
@@ -178,9 +180,7 @@ def test_ee_equals_castigliano_compliance_of_an_arc(width_deg):
     C = _castigliano_tip_compliance(arc, EI, mech.target_point)
     spec = parse_model("ee")
     got = []
-    for k, case in enumerate(
-        [tip_force(mech, 1e-3, 0.0), tip_force(mech, 0.0, 1e-3), tip_moment(1e-3)]
-    ):
+    for case in [tip_force(mech, 1e-3, 0.0), tip_force(mech, 0.0, 1e-3), tip_moment(1e-3)]:
         lp = run_reduced(mech, spec, case)
         got.append([lp.dx[-1], lp.dy[-1], lp.rotation[-1]])
     # exact up to round-off: both are the same linear bending compliance

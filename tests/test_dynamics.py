@@ -1,4 +1,5 @@
-"""Time integration (flexval.reducedmodels.dynamics) and load time laws (flexval.geometry.timelaw)."""
+"""Time integration (flexval.reducedmodels.dynamics) and load time laws
+(flexval.geometry.timelaw)."""
 
 from __future__ import annotations
 

@@ -98,7 +98,7 @@ def test_ellipse_compliance_is_the_castigliano_compliance_at_the_centre():
     for k, expected in enumerate([ell.weight * ell.b**2, ell.weight * ell.a**2]):
         F = ell.axes[:, k]
         # M(s) = (p(s) - C) x F ; delta.F = int M^2 / EI ds
-        m2 = quad(lambda s: _cross(arc.point(s) - ell.center, F) ** 2, 0, arc.length)[0]
+        m2 = quad(lambda s, F=F: _cross(arc.point(s) - ell.center, F) ** 2, 0, arc.length)[0]
         assert m2 / EI == pytest.approx(expected, rel=1e-10)
 
 

@@ -1,4 +1,5 @@
-"""Mass data in scenes (flexval.geometry.inertia) and gravity as dead loads (flexval.reducedmodels.inertia)."""
+"""Mass data in scenes (flexval.geometry.inertia) and gravity as dead loads
+(flexval.reducedmodels.inertia)."""
 
 from __future__ import annotations
 

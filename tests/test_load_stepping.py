@@ -91,7 +91,8 @@ def test_first_substep_starts_on_the_linear_solution():
 
 @pytest.mark.parametrize("model", ["dcmm:1", "beam:20"])
 def test_predictor_reproduces_a_polynomial_path_of_its_degree(model):
-    """From PREDICTOR_STATES states on a polynomial path of one degree less, the prediction is exact.
+    """From PREDICTOR_STATES states on a polynomial path of one degree less, the
+    prediction is exact.
 
     Body poses follow a quartic in the load factor (internal coordinates of
     beams follow the bodies' end nodes through their own chord-wise

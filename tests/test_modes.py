@@ -1,4 +1,5 @@
-"""Natural frequencies against closed forms (flexval.reducedmodels.modes, flexval.reducedmodels.inertia)."""
+"""Natural frequencies against closed forms (flexval.reducedmodels.modes,
+flexval.reducedmodels.inertia)."""
 
 from __future__ import annotations
 

@@ -26,7 +26,8 @@ MODELS = ["dcmm:1", "dcmm:3", "dcmm:2[frame=follower]", "prbm", "beam:6"]
 
 
 def overloaded_states(model: str, factor: float):
-    """The system of ``model`` on the open chain and its states along f- at ``factor`` times the load."""
+    """The system of ``model`` on the open chain and its states along f- at
+    ``factor`` times the load."""
     scene = load_scene("open_chain")
     case = next(c for c in scene.load_cases if c.name == "f-")
     case = dataclasses.replace(
@@ -65,7 +66,8 @@ def test_one_pass_verdicts_and_forces_are_the_state_by_state_ones(model):
 
 @pytest.mark.parametrize("model", MODELS)
 def test_group_forces_of_given_gradients_are_each_connectors_own(model):
-    """A group's section forces from known gradients (the linear response's) are each connector's, bit for bit."""
+    """A group's section forces from known gradients (the linear response's) are
+    each connector's, bit for bit."""
     system, states = overloaded_states(model, 1.0)
     states = system.local_states(states[-1])
     gradients = [c.evaluate(*local)[1] for c, local in zip(system.connectors, states)]

@@ -1,9 +1,10 @@
 """The 3R PRBM connector (``prbm``) and its fitted table.
 
 References independent of the PRBM: the curved elastica by shooting
-(``benchmarks/calibrate_prbm.py``, the offline calibration, itself checked here against the Bisshopp-Drucker
-closed form), Castigliano's linear compliance and the exact circle under an
-end moment (``tests/elastica.py``), and the beam FEM when it is available.
+(``benchmarks/calibrate_prbm.py``, the offline calibration, itself checked here
+against the Bisshopp-Drucker closed form), Castigliano's linear compliance and
+the exact circle under an end moment (``tests/elastica.py``), and the beam FEM
+when it is available.
 Dimensionless loads are in EI/L^2 (forces) and EI/L (moments).
 Units: mm, N, MPa, N mm, rad.
 """

@@ -142,8 +142,9 @@ def test_results_of_another_code_version_are_called_stale(files):
         ('{"format": "something-else/1"}', f"is not a {PROTOCOL_FORMAT} file"),
         (f'{{"format": "{PROTOCOL_FORMAT}", "cells": []}}', "lacks code_version, case, reference"),
         (
-            f'{{"format": "{PROTOCOL_FORMAT}", "code_version": "x", "case": "f-", "reference": "r", '
-            '"match_points": 2, "paper": {}, "static": {}, "cells": [{"model": "m"}]}',
+            f'{{"format": "{PROTOCOL_FORMAT}", "code_version": "x", "case": "f-", '
+            '"reference": "r", "match_points": 2, "paper": {}, "static": {}, '
+            '"cells": [{"model": "m"}]}',
             "has a malformed entry (KeyError",
         ),
     ],

@@ -93,7 +93,8 @@ def segment_lines(length: float) -> tuple[str, Segment]:
 
 def force_case(name: str, tip: np.ndarray, fx: float, fy: float) -> str:
     return (
-        f'[[load_cases]]\nname = "{name}"\nkind = "force"\npoint = [{float(tip[0])!r}, {float(tip[1])!r}]\n'
+        f'[[load_cases]]\nname = "{name}"\nkind = "force"\n'
+        f"point = [{float(tip[0])!r}, {float(tip[1])!r}]\n"
         f"angle_deg = {math.degrees(math.atan2(fy, fx))!r}\nvalue = {float(math.hypot(fx, fy))!r}"
     )
 

@@ -102,7 +102,7 @@ def test_continuum_with_cached_meshes_loads_no_mesher(tmp_path):
     assert _loaded(modules, COMPILED | MESHING | PLOTTING | DISTRIBUTED | RARE_SCIPY) == set()
 
 
-# -- the end of a flexval process (flexval.validation.process.end_process) ---------------------------
+# -- the end of a flexval process (flexval.validation.process.end_process) -------------------------
 
 
 def _program(code: str, tmp_path: Path, *argv: str) -> subprocess.CompletedProcess:
@@ -169,7 +169,8 @@ def test_main_returns_while_another_thread_runs(tmp_path):
 
 
 def test_a_profiled_run_keeps_its_profile(tmp_path):
-    """``python -m cProfile -o FILE -m flexval.validation.cli ...`` writes FILE after the program."""
+    """``python -m cProfile -o FILE -m flexval.validation.cli ...`` writes FILE
+    after the program."""
     env = {**os.environ, "FLEXVAL_CACHE": str(tmp_path / "cache")}
     stats = tmp_path / "cli.prof"
     proc = subprocess.run(

@@ -1,4 +1,4 @@
-"""Thread control of the BLAS pools: the cap reaches the loaded libraries, bad values are refused."""
+"""BLAS thread control: the cap reaches the loaded libraries, bad values are refused."""
 
 import pytest
 from threadpoolctl import threadpool_info
