@@ -184,7 +184,10 @@ def _recovery_matrix(
     centre_k, centre_m = centre_l[pl], centre_t[pt]
     u = (along.ravel()[samples] - centre_k[:, None]) / 2.0
     v = (across.ravel()[samples] - centre_m[:, None]) / 2.0
-    fit = np.linalg.pinv(np.stack([u**a * v**b for a, b in powers], axis=-1))
+    design = np.stack([u**a * v**b for a, b in powers], axis=-1)  # (n_patch, n_samples, n_terms)
+    # least squares by the normal equations: coordinates within +-1, condition at most 3.3e3
+    transposed = design.transpose(0, 2, 1)
+    fit = np.linalg.solve(transposed @ design, transposed)
     # each node: the mean over its patches along times its patches across (4 terms)
     rows, cols, vals = [], [], []
     for shift_l in (0, 1):
