@@ -1,7 +1,9 @@
 """Scene files (TOML): a mechanism, its load cases and what is requested.
 
 A scene is the one input of every flexval command. ``load_scene`` accepts a
-built-in name (``open_chain``, ``closed_chain``) or a path. Every value is
+built-in name (:data:`BUILTIN_SCENES`: the paper's ``open_chain`` and
+``closed_chain`` and the flexure scenes ``notch_fourbar``, ``filleted_stage``,
+``tapered_leaf``, ``spline_flexure``) or a path. Every value is
 checked; a bad one raises :class:`SceneError` naming the file, the field and
 the value. Angles are degrees in the file and radians in memory; lengths mm,
 moduli MPa, forces N, moments N mm.

@@ -19,7 +19,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from flexval.geometry import SceneError, load_scene
+from flexval.geometry import BUILTIN_SCENES, SceneError, load_scene
 
 from .outputs import (
     OutputError,
@@ -684,7 +684,7 @@ def build_parser() -> argparse.ArgumentParser:
     defaults = ", ".join(
         "{} {}:{}".format(f.name, *f.resolution.study) for f in families() if f.resolution
     )
-    scene_help = "built-in scene name (open_chain, closed_chain) or path to a scene TOML file"
+    scene_help = f"built-in scene name ({', '.join(BUILTIN_SCENES)}) or path to a scene TOML file"
 
     q = sub.add_parser("info", help="describe a scene: bodies, flexures, ellipse data, loads")
     q.add_argument("scene", help=scene_help)
