@@ -1,5 +1,6 @@
 """Report figures (Matplotlib, Agg): load paths, deformed shapes, link rotations,
-runtime versus error, mesh convergence. Axes carry units: mm, deg, N or N mm, s."""
+runtime versus error, mesh convergence, and the field model's stress picture at full load
+(solved again where it is drawn). Axes carry units: mm, deg, N or N mm, s, MPa."""
 
 from __future__ import annotations
 
@@ -169,6 +170,28 @@ def relative_rotations(scene: Scene, case_name: str, lp: LoadPath, path: Path) -
     ax.legend(fontsize=8)
     ax.set_title(f"{scene.name} {case_name}: relative rotations of the links ({lp.model})")
     return _save(fig, path)
+
+
+def field_picture(scene: Scene, model: str, case_name: str, path: Path) -> str:
+    """The picture of ``model`` (a family with stress fields, e.g. ``continuum:1``) at full
+    load on ``case_name``: the deformed mechanism, its flexures coloured by the fibre stress
+    (MPa), a zoom on the most stressed section (the family's own PNG output, e.g.
+    :func:`flexval.validation.continuum.output.render_png`).
+
+    A load path keeps no state, so the model is solved again on the case's load levels: the
+    same deterministic path as the report's, ending in the state drawn.
+
+    Raises
+    ------
+    reducedmodels.SolverError
+        If the model does not reach full load (the report draws only cases it reached).
+    """
+    from flexval.reducedmodels.catalogue import parse_model
+
+    from .run import run_model
+
+    run_model(scene, parse_model(model), scene.load_case(case_name), png=path)
+    return path.name
 
 
 def pareto_front(points: list[tuple[float, float]]) -> list[int]:

@@ -7,8 +7,11 @@ followed by :func:`write_report`, whose renderers only format that data into
 failure) and ``gates.json`` (every error figure, the baseline of the CI
 accuracy gates). Every number in the text is filled in from the data: the
 tables against ``beam:100`` (with the paper's figures beside ours where the
-paper has the scene) and against the continuum reference, failures ("fails at 84 % (limit point, 0.126 N)") wherever the model
-appears, the natural frequencies at rest, the findings and the discussion.
+paper has the scene) and against the continuum reference, failures ("fails at
+84 % (limit point, 0.126 N)") wherever the model appears, the natural
+frequencies at rest, the findings and the discussion. The continuum
+reference's stress picture at full load is the one figure that computes: it
+solves its load case again on a figure worker (a load path keeps no state).
 The run times are written apart (:mod:`flexval.validation.timings`), so that the
 report, results.json and gates.json are the same from one run of the same
 code to the next.
@@ -20,6 +23,8 @@ import math
 import time
 from collections.abc import Callable
 from pathlib import Path
+
+from flexval.reducedmodels.catalogue import FIELDS, parse_model
 
 from . import figures, frequencies, strength
 from .convergence import order_text
@@ -285,6 +290,47 @@ def _convergence_lines(res: SceneResults, out: Path, draw: Callable) -> list[str
     return L
 
 
+def _field_picture_lines(res: SceneResults, out: Path, draw: Callable) -> list[str]:
+    """Markdown: the continuum reference's stress picture at full load on every load case,
+    or a sentence saying why it is not drawn (no reference with stress fields, or one that
+    does not reach full load on the case).
+
+    The report's load paths keep no state, so each picture solves its case again
+    (:func:`flexval.validation.figures.field_picture`, on the figure workers).
+    """
+    L = ["### Continuum stress at full load", ""]
+    ref = res.reference
+    if ref is None:
+        return L + [
+            "Not drawn: the report's models include no continuum reference "
+            "(a model with stress fields, e.g. `continuum`).",
+            "",
+        ]
+    if not parse_model(ref).model_family.has(FIELDS):
+        return L + [f"Not drawn: the reference `{ref}` computes no stress field.", ""]
+    L += [
+        f"Each load case solved again with `{ref}` up to full load (the tables' path; "
+        "the stored paths keep no state): the mechanism deformed at true scale over its "
+        "undeformed outline (grey), each flexure at its true thickness coloured by the "
+        "fibre stress along it (MPa, tension positive), and a zoom on the most stressed "
+        "section (at a notch, its neck). The colour range is the largest stress beyond the "
+        "boundary layers at each flexure's clamped end faces, where the continuum's stress "
+        "is singular; the colour bar says how high those layers reach.",
+        "",
+    ]
+    name = res.scene.name
+    for c in res.cases:
+        if res.converged(ref, c) is None:
+            fail = res.failure(ref, c)
+            why = fail.summary() if fail else "does not reach full load"
+            L += [f"`{c}`: not drawn, `{ref}` {why}: there is no state at full load.", ""]
+            continue
+        png = output_path(out, f"{name}_{c}_continuum_stress", ".png")
+        draw(figures.field_picture, res.scene, ref, c, png)
+        L += [f"![{name} {c}: continuum stress]({png.name})", ""]
+    return L
+
+
 def _levels_text(data: ReportData) -> str:
     levels = sorted({lc.levels for r in data.scenes for lc in r.scene.load_cases})
     return " or ".join(str(n) for n in levels)
@@ -423,6 +469,7 @@ def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
                     png = output_path(out, f"{name}_{c}_relrot", ".png")
                     draw(figures.relative_rotations, sc, c, lp, png)
                     L += [f"![{c}]({png.name})", ""]
+    L += _field_picture_lines(res, out, draw)
     if res.bench_rows or res.bench_failures:
         L += [
             "### Runtime versus error",

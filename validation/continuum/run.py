@@ -80,10 +80,11 @@ def run_continuum(
         Plane stress (default) or plane strain.
     vtu_dir : path, optional
         Write the deformed flexures at full load as VTU (displacement,
-        Green-Lagrange strain, von Mises and fibre Cauchy stress).
+        Green-Lagrange strain, von Mises and fibre Cauchy stress) into this folder.
     png : path, optional
         Draw the deformed mechanism at full load, its flexures coloured by the
-        fibre stress (:func:`.output.render_png`).
+        fibre stress (:func:`.output.render_png`), into this file (with or
+        without ``vtu_dir``).
     model : str, optional
         Model id of the result and of the VTU file's name (default
         ``continuum:LEVEL``; the catalogue passes the canonical id with its
@@ -115,17 +116,18 @@ def run_continuum(
     from .fibre import fibre_stresses
 
     lp.fibre_stress = fibre_stresses(system, full_load.state)
-    if vtu_dir is not None or png is not None:
+    if vtu_dir is not None:
         from ..outputs import output_path
-        from .output import render_png, write_vtu
+        from .output import write_vtu
 
         stem = f"{scene + '_' if scene else ''}{case.name}_{model.replace(':', '')}"
-        folder = Path(vtu_dir) if vtu_dir is not None else Path(png).parent
         write_vtu(
-            output_path(folder, stem, ".vtu"),
+            output_path(Path(vtu_dir), stem, ".vtu"),
             system.connectors,
             system.local_states(full_load.state),
         )
-        if png is not None:
-            render_png(png, system, full_load.state, case, f"{scene} {case.name} {model}")
+    if png is not None:
+        from .output import render_png
+
+        render_png(png, system, full_load.state, case, f"{scene} {case.name} {model}")
     return lp
