@@ -1,13 +1,13 @@
 # Two commands on a fresh machine with only Python and pip:
-#   make report   -> creates .venv, installs flexval, builds reports/paper/
-#   make test     -> creates/refreshes .venv the same way, runs the test suite
+#   make report   -> creates .venv, installs flexval, builds reports/paper/ and reports/flexures/
+#   make test     -> creates/refreshes .venv the same way, lints (ruff), runs the test suite
 #   make docs     -> the documentation site in site/ (strict: a warning fails it)
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: report test venv bench docs clean
+.PHONY: report test lint venv bench docs clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -34,9 +34,15 @@ report: $(PEERS)
 	$(BIN)/flexval info open_chain
 	$(BIN)/flexval info closed_chain
 	$(BIN)/flexval report --out reports/paper --protocol reports/dynamics/protocol.json --peers
+	$(BIN)/flexval report notch_fourbar filleted_stage tapered_leaf spline_flexure --out reports/flexures
 
-test: $(STAMP)
+# lint and format check first (ruff, configured in pyproject.toml), then the suite
+test: lint
 	$(BIN)/python -m pytest
+
+lint: $(STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
 
 # strict: a warning (a broken link, a docstring griffe cannot read) fails the build;
 # then the built pages are checked for every scene field, CLI command and key API name

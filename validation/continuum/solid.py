@@ -248,7 +248,10 @@ class Solid:
         return float(np.ptp(self.nodes, axis=0).max())
 
     def deformation_gradient(self, x: np.ndarray) -> np.ndarray:
-        """Deformation gradient F (n_el, n_q, 2, 2) at the quadrature points; x: node positions, mm."""
+        """Deformation gradient F (n_el, n_q, 2, 2) at the quadrature points.
+
+        ``x`` holds the node positions, mm.
+        """
         return self.kernel.deformation_gradient(x)
 
     def state(self, x: np.ndarray) -> ElementState:
