@@ -12,8 +12,8 @@
   fails the build.
 - The package as it installs is linked under ``build/docs-src`` for
   mkdocstrings (see :func:`_link_package`).
-- The published reports (``reports/paper``, ``reports/dynamics``,
-  ``reports/sweep_example``: Markdown and figures) are added to the site under
+- The published reports (``reports/paper``, ``reports/flexures``,
+  ``reports/dynamics``, ``reports/sweep_example``: Markdown and figures) are added to the site under
   ``validation/`` as they are, so their relative links resolve.
 - Every script in ``examples/`` is run with this Python in a scratch folder;
   the gallery page shows its description, its source, what it printed and any
@@ -39,6 +39,7 @@ ROOT = Path(__file__).resolve().parent.parent
 """The repository."""
 REPORTS = {
     "paper": "reports/paper",
+    "flexures": "reports/flexures",
     "dynamics": "reports/dynamics",
     "sweep_example": "reports/sweep_example",
 }
