@@ -53,7 +53,7 @@ import json
 import math
 import warnings
 import zipfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -193,22 +193,37 @@ def mesh_flexure(
         raise ValueError(
             f"thickness {thickness} must be smaller than the diameter {shape.max_thickness}"
         )
-    key = _key(shape, thickness, level)
-    root = cache_dir() if use_cache else None
+
+    def build() -> FlexureMesh:
+        nodes, elements, faces = _gmsh_band(shape, thickness, n_t, n_l)
+        if isinstance(shape, Arc):
+            nodes = _snap_polar(nodes, elements, shape)
+        elements = _counterclockwise(nodes, elements)
+        start, end = (
+            _face_nodes(nodes, faces[k], _face_segment(shape, thickness, k), thickness)
+            for k in (0, 1)
+        )
+        centre = _centre_line(nodes, shape, thickness, 2 * n_l + 1)
+        return FlexureMesh(nodes, elements, start, end, centre, level, n_t, n_l)
+
+    return cached_mesh(_key(shape, thickness, level), level, n_t, n_l, build, use_cache)
+
+
+def cached_mesh(
+    key: str, level: int, n_t: int, n_l: int, build: Callable[[], FlexureMesh], use_cache: bool
+) -> FlexureMesh:
+    """The mesh stored under ``key`` in the cache folder, else ``build()`` (then stored).
+
+    A stored mesh is used only if its level and divisions are those asked
+    for; with ``use_cache`` False the cache is neither read nor written.
+    """
+    root = cache_dir() if use_cache else None  # None also when the folder cannot be used
     path = root / "meshes" / f"{key}.npz" if root is not None else None
     if path is not None:
         cached = _load(path, key, level, n_t, n_l)
         if cached is not None:
             return cached
-    nodes, elements, faces = _gmsh_band(shape, thickness, n_t, n_l)
-    if isinstance(shape, Arc):
-        nodes = _snap_polar(nodes, elements, shape)
-    elements = _counterclockwise(nodes, elements)
-    start, end = (
-        _face_nodes(nodes, faces[k], _face_segment(shape, thickness, k), thickness) for k in (0, 1)
-    )
-    centre = _centre_line(nodes, shape, thickness, 2 * n_l + 1)
-    mesh = FlexureMesh(nodes, elements, start, end, centre, level, n_t, n_l)
+    mesh = build()
     if path is not None:
         _save(path, key, mesh)
     return mesh

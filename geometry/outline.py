@@ -53,7 +53,6 @@ import math
 
 import numpy as np
 
-from .files import cache_dir
 from .mesh import (
     ASPECT_RATIO,
     CACHE_FORMAT,
@@ -61,8 +60,7 @@ from .mesh import (
     MAX_LEVEL,
     FlexureMesh,
     _counterclockwise,
-    _load,
-    _save,
+    cached_mesh,
 )
 
 OUTLINE_VERSION = 2
@@ -198,17 +196,14 @@ def mesh_outline(shape, section, level: int, use_cache: bool = True) -> FlexureM
             f"diameter of curvature there ({2.0 * h[k] / (2.0 * folds[k]):.6g} mm): "
             "the outline folds over"
         )
-    key = _key(shape, section, level)
-    root = cache_dir() if use_cache else None
-    path = root / "meshes" / f"{key}.npz" if root is not None else None
-    if path is not None:
-        cached = _load(path, key, level, n_t, n_l)
-        if cached is not None:
-            return cached
-    mesh = _build(shape, s, h, n_t, n_l, level)
-    if path is not None:
-        _save(path, key, mesh)
-    return mesh
+    return cached_mesh(
+        _key(shape, section, level),
+        level,
+        n_t,
+        n_l,
+        lambda: _build(shape, s, h, n_t, n_l, level),
+        use_cache,
+    )
 
 
 def _build(shape, s: np.ndarray, h: np.ndarray, n_t: int, n_l: int, level: int) -> FlexureMesh:
