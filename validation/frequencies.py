@@ -6,8 +6,10 @@ state, or the equilibrium under gravity if the scene has gravity), exactly as
 ``flexval modes SCENE --model M --count 4`` gives them
 (:func:`flexval.validation.modes.run_modes`), and each mode's error against the
 reference's mode of the same rank. The scene's mass data are used as given;
-a scene without a flexure density gets :data:`DEFAULT_DENSITY` (PLA), as
-``flexval modes --density`` would, and its bodies without mass data stay
+the flexure density is chosen by :func:`flexval.validation.modes.choose_density`,
+the function behind ``flexval modes`` and ``flexval run --dynamic``: a scene without
+one gets :data:`DEFAULT_DENSITY` (PLA), as ``flexval modes --density`` would, and the
+section says which density it assumed and why; bodies without mass data stay
 massless (they then carry only the flexure pieces each model lumps on
 them: see the models' ``mass_points``). A model whose modal
 analysis fails (a massless moving body, no equilibrium, a singular mass
@@ -29,7 +31,7 @@ from flexval.reducedmodels import SolverError
 from flexval.reducedmodels.catalogue import parse_model
 
 from .failures import Failure
-from .modes import run_modes, with_density
+from .modes import DensityChoice, choose_density, run_modes
 
 #: flexure density (t/mm^3) of a scene that gives none: PLA, as in the documentation's
 #: frequency table
@@ -49,10 +51,9 @@ class FrequencyTable:
         the report does not run it).
     reference : str
         Model id the errors are computed against.
-    density : float
-        Flexure density used, t/mm^3.
-    density_given : bool
-        Whether ``density`` is the scene's own (else :data:`DEFAULT_DENSITY`).
+    density : DensityChoice
+        Flexure density used (t/mm^3) and where it comes from (the scene's, or
+        :data:`DEFAULT_DENSITY`).
     massless_bodies : list of str
         Moving bodies without mass data.
     gravity : bool
@@ -70,8 +71,7 @@ class FrequencyTable:
 
     models: list[str]
     reference: str
-    density: float
-    density_given: bool
+    density: DensityChoice
     massless_bodies: list[str]
     gravity: bool
     frequencies: dict[str, list[float]]
@@ -101,9 +101,7 @@ def frequency_data(scene: Scene, models: list[str], reference: str) -> Frequency
     raised.
     """
     inertia = scene.mechanism.inertia
-    given = inertia.density is not None
-    density = inertia.density if given else DEFAULT_DENSITY
-    massive = scene if given else with_density(scene, DEFAULT_DENSITY)
+    massive, density = choose_density(scene, None, DEFAULT_DENSITY)
     rest = _rest_case(scene)
     order = ([] if reference in models else [reference]) + list(models)
     frequencies: dict[str, list[float]] = {}
@@ -128,7 +126,6 @@ def frequency_data(scene: Scene, models: list[str], reference: str) -> Frequency
         order,
         reference,
         density,
-        given,
         inertia.massless_bodies(scene.mechanism.moving_bodies),
         inertia.gravity is not None,
         frequencies,
@@ -165,11 +162,7 @@ def frequency_table(table: FrequencyTable) -> list[str]:
 
 def section(table: FrequencyTable) -> list[str]:
     """The report's Markdown on the natural frequencies of one scene."""
-    density = (
-        f"the scene's flexure density {table.density:g} t/mm³"
-        if table.density_given
-        else f"flexures of PLA ({table.density:g} t/mm³, the scene gives no density)"
-    )
+    density = table.density.describe("t/mm³")
     bodies = (
         f"; bodies without mass data ({', '.join(table.massless_bodies)}) are massless "
         "and carry only the flexure pieces each model lumps on them"

@@ -8,15 +8,92 @@ modes come from :func:`flexval.reducedmodels.modes.natural_modes`. Units: Hz, mm
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from flexval.geometry import LoadCase, Scene, SceneError
+from flexval.geometry.inertia import PLA_DENSITY
 from flexval.reducedmodels.catalogue import LINEAR, ModelSpec
 from flexval.reducedmodels.modes import Modes, natural_modes
 
 from .outputs import save_figure
+
+COMMAND_LINE = "<command line>"
+
+
+@dataclass(frozen=True)
+class DensityChoice:
+    """The flexure density an analysis with masses uses, and where it comes from.
+
+    Attributes
+    ----------
+    density : float or None
+        Flexure density, t/mm^3 (None: the flexures are massless).
+    source : str
+        ``"scene"`` (its ``material.density``), ``"--density"`` (the command line's,
+        replacing the scene's if it has one), ``"default"`` (:data:`PLA_DENSITY`, the
+        report's choice for a scene without one) or ``"none"``.
+    """
+
+    density: float | None
+    source: str
+
+    def describe(self, unit: str = "t/mm^3") -> str:
+        """The choice in words, for a command's output (or a report's, ``unit="t/mm³"``)."""
+        if self.source == "scene":
+            return f"the scene's flexure density {self.density:g} {unit} (material.density)"
+        if self.source == "--density":
+            return f"the flexure density {self.density:g} {unit} given by --density"
+        if self.source == "default":
+            return (
+                f"flexures of PLA ({self.density:g} {unit}, the default: the scene "
+                "gives no material.density)"
+            )
+        return "massless flexures (the scene gives no material.density)"
+
+    def record(self) -> dict:
+        """JSON: ``{"value": t/mm^3 or null, "source": ...}``."""
+        return {"value": self.density, "source": self.source}
+
+
+def choose_density(
+    scene: Scene, option: float | None, default: float | None = None, what: str = "this analysis"
+) -> tuple[Scene, DensityChoice]:
+    """The scene with the flexure density ``what`` uses, and which one it is.
+
+    ``option`` (``--density``, t/mm^3) replaces the scene's ``material.density``;
+    without either, ``default`` is taken (the report passes :data:`PLA_DENSITY`; the
+    commands pass None). A scene that is then still massless, its flexures without
+    density and a moving body without mass data, is refused: the modes and time
+    histories of such a scene are undefined.
+
+    Raises
+    ------
+    SceneError
+        ``--density`` out of range, or a massless scene (naming ``--density`` with
+        PLA's value as an example).
+    """
+    given = scene.mechanism.inertia.density
+    if option is not None:
+        scene = with_density(scene, option)
+        return scene, DensityChoice(scene.mechanism.inertia.density, "--density")
+    if given is not None:
+        return scene, DensityChoice(given, "scene")
+    if default is not None:
+        return with_density(scene, default), DensityChoice(default, "default")
+    massless = scene.mechanism.inertia.massless_bodies(scene.mechanism.moving_bodies)
+    if massless:
+        raise SceneError(
+            COMMAND_LINE,
+            "--density",
+            None,
+            f"{what} needs masses, but the scene gives no material.density and the moving "
+            f"bodies {', '.join(massless)} no mass data: give the flexures' density in "
+            f"t/mm^3, e.g. --density {PLA_DENSITY:g} (PLA), or material.density in the scene",
+        )
+    return scene, DensityChoice(None, "none")
 
 
 def with_density(scene: Scene, density: float) -> Scene:
@@ -26,7 +103,7 @@ def with_density(scene: Scene, density: float) -> Scene:
     from flexval.geometry.inertia import parse_density
 
     def fail(field: str, value, reason: str) -> None:
-        raise SceneError("<command line>", "--density", value, reason)
+        raise SceneError(COMMAND_LINE, "--density", value, reason)
 
     inertia = dataclasses.replace(
         scene.mechanism.inertia, density=parse_density({"density": density}, fail)
@@ -77,9 +154,18 @@ def run_modes(
 
 
 def modes_record(
-    scene: Scene, spec: ModelSpec, case: LoadCase | None, fraction: float, system, modes: Modes
+    scene: Scene,
+    spec: ModelSpec,
+    case: LoadCase | None,
+    fraction: float,
+    system,
+    modes: Modes,
+    density: DensityChoice | None = None,
 ) -> dict:
     """The JSON record: frequencies (Hz), omega^2 (1/s^2) and each mode's body motions.
+
+    ``density`` (``{"value": t/mm^3, "source": ...}``, :meth:`DensityChoice.record`)
+    is the flexure density used, taken from the scene if not given.
 
     ``mode_shapes[k][body]`` is (dx, dy, dtheta) of the body's reference
     point (mm, mm, rad) in mode k, normalised to unit modal mass (x^T M x = 1
@@ -99,6 +185,10 @@ def modes_record(
         "frequencies_hz": modes.frequencies_hz.tolist(),
         "eigenvalues": modes.eigenvalues.tolist(),
         "equilibrium": {"dx": dx, "dy": dy, "rotation": rot},
+        "density": (
+            density
+            or DensityChoice(inertia.density, "none" if inertia.density is None else "scene")
+        ).record(),
         "massless_bodies": inertia.massless_bodies(system.mechanism.moving_bodies),
         "mode_shapes": shapes,
     }
