@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from .errors import did_you_mean
 from .fields import ABSENT, Field, Table
 from .magnitudes import SMALLEST_NORMAL
 
@@ -260,7 +261,8 @@ def parse_gravity(data: dict, fail: Fail) -> np.ndarray | None:
             fail(
                 f"gravity.{key}",
                 table[key],
-                f"unknown field; expected one of {sorted(GRAVITY_KEYS)}",
+                f"unknown field{did_you_mean(key, GRAVITY_KEYS)}; expected one of "
+                f"{sorted(GRAVITY_KEYS)}",
             )
     if "acceleration" not in table:
         fail("gravity.acceleration", None, "missing value [gx, gy] in mm/s^2")

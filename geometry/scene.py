@@ -50,16 +50,17 @@ from typing import Any
 
 import numpy as np
 
-from .errors import SceneError
+from .errors import SceneError, did_you_mean
 from .fields import REQUIRED, Field, Table
 from .flexurefields import check_thickness_fits, read_notch, read_spline, read_thickness, section_of
 from .inertia import MassData, parse_body_mass, parse_density, parse_gravity
-from .loads import Force, LoadCase, Moment
+from .loads import LOAD_KINDS, Force, LoadCase, Moment
 from .magnitudes import SMALLEST_NORMAL
 from .mechanism import FlexureSpec, Material, Mechanism, PinSpec, Section, assemble
 from .scenefields import (
     BODIES,
     COORDINATE_LIMIT,
+    FLEXURE_SHAPES,
     FLEXURES,
     GROUND,
     LOAD_CASES,
@@ -239,7 +240,9 @@ class _Reader:
         for k in data:
             if k not in allowed:
                 self.fail(
-                    f"{where}{k}", data[k], f"unknown field; expected one of {sorted(allowed)}"
+                    f"{where}{k}",
+                    data[k],
+                    f"unknown field{did_you_mean(k, allowed)}; expected one of {sorted(allowed)}",
                 )
 
     def value(self, data: dict, field: Field, where: str, default: Any = _UNSET) -> Any:
@@ -272,7 +275,9 @@ class _Reader:
             if v not in field.choices:
                 words = [repr(c) for c in field.choices]
                 text = " or ".join([", ".join(words[:-1]), words[-1]] if len(words) > 1 else words)
-                self.fail(f"{where}{field.name}", v, f"must be {text}")
+                self.fail(
+                    f"{where}{field.name}", v, f"must be {text}{did_you_mean(v, field.choices)}"
+                )
             return v
         raise TypeError(f"field {field.name!r} ({kind}) is read by its table's own code")
 
@@ -290,6 +295,46 @@ class _Reader:
             self.fail(f"{where}{field.name}", v, f"must be from {lo:g} to {hi:g}{unit}")
 
 
+def _shapes_text(shapes) -> str:
+    """``a segment or a notch``: the shapes (``shape`` values) in words."""
+    words = [f"{'an' if s[0] in 'aeiou' else 'a'} {s}" for s in shapes]
+    return " or ".join([", ".join(words[:-1]), words[-1]] if len(words) > 1 else words)
+
+
+def _refuse_fields_of_other_shapes(rd: _Reader, f: dict, where: str, kind: str) -> None:
+    """Refuse a field that belongs to another shape than ``kind`` (its declared variants).
+
+    Without ``shape`` the flexure is an arc: fields of another shape there mean the
+    ``shape`` is missing, and the error names it and the shapes they belong to.
+    """
+    foreign = [k for k in f if k in FLEXURES and k not in FLEXURES.keys(kind)]
+    if not foreign:
+        return
+    owners = [s for s in FLEXURE_SHAPES if all(k in FLEXURES.keys(s) for k in foreign)]
+    fields = " and ".join(f"{k!r}" for k in foreign)
+    verb = "belong" if len(foreign) > 1 else "belongs"
+    arc_fields = ("center", "radius", "axis_deg", "width_deg")
+    if "shape" not in f and not all(k in f for k in arc_fields):
+        shapes = owners or [s for s in FLEXURE_SHAPES if s != kind]
+        choices = " or ".join(f'shape = "{s}"' for s in shapes)
+        rd.fail(
+            f"{where}shape",
+            None,
+            f"missing: {fields} {verb} to {_shapes_text(shapes)}, but without shape the "
+            f"flexure is an arc (center, radius, axis_deg, width_deg): give {choices}",
+        )
+    key = foreign[0]
+    shapes = FLEXURES[key].variants
+    given = "" if "shape" in f else " (the flexure gives no shape)"
+    rd.fail(
+        f"{where}{key}",
+        f[key],
+        f"{key!r} belongs to {_shapes_text(shapes)} ("
+        + " or ".join(f'shape = "{s}"' for s in shapes)
+        + f"), not to {_shapes_text([kind])}{given}: remove it or change the shape",
+    )
+
+
 def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> FlexureSpec:
     if not isinstance(f, dict):
         rd.fail(f"flexures[{k}]", f, "must be a table")
@@ -299,6 +344,7 @@ def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> Fle
     bodies = rd.body_pair(f, where, "flexure")
     depth = rd.value(f, FLEXURES["depth"], where, default=default_section.depth)
     kind = rd.value(f, FLEXURES["shape"], where)
+    _refuse_fields_of_other_shapes(rd, f, where, kind)
     if kind == "notch":
         shape, section = read_notch(rd, f, where, depth, default_section.thickness)
     else:
@@ -352,6 +398,12 @@ def _load_component(
     """One load: the fields of ``table`` (of ``variant``) in ``c``."""
     rd.known_keys(c, table, where, variant)
     kind = c.get("kind")
+    if kind not in LOAD_KINDS:
+        hint = did_you_mean(kind, LOAD_KINDS)
+        if kind is None:
+            force = [k for k in ("point", "angle_deg") if k in c]
+            hint = f" ({' and '.join(force)} belong to a force)" if force else ""
+        rd.fail(f"{where}kind", kind, f"must be 'moment' or 'force'{hint}")
     value = rd.value(c, table["value"], where)
     body = rd.value(c, table["body"], where, default=target_body)
     if kind == "moment":
@@ -364,11 +416,23 @@ def _load_component(
                     "direction (it acts on the whole body): remove it or use kind = 'force'",
                 )
         return Moment(body, value)
-    if kind == "force":
-        point = rd.value(c, table["point"], where, default=target_point)
-        angle = rd.value(c, table["angle_deg"], where, default=REQUIRED)
-        return Force(body, point, math.radians(angle), value)
-    rd.fail(f"{where}kind", kind, "must be 'moment' or 'force'")
+    if "point" not in c and body != target_body:
+        rd.fail(
+            f"{where}point",
+            None,
+            f"missing: a force on body {body!r} needs its point of application [x, y] in mm "
+            f"(the default, the target point, is on the target body {target_body!r})",
+        )
+    point = rd.value(c, table["point"], where, default=target_point)
+    if "angle_deg" not in c:
+        rd.fail(
+            f"{where}angle_deg",
+            None,
+            "missing: a force needs its direction in degrees from the x axis, "
+            "counterclockwise (a pure couple is kind = 'moment')",
+        )
+    angle = rd.value(c, table["angle_deg"], where)
+    return Force(body, point, math.radians(angle), value)
 
 
 _UNSAFE_NAME_CHARACTERS = set('/\\<>:"|?*')

@@ -121,8 +121,9 @@ FLEXURES = Table(
     "middle and `height` = H at both ends; a spline by the points its centre line "
     "passes through (the C² cubic spline by chord length, not-a-knot ends). An arc, "
     "a segment or a spline may taper: `thickness = [h_start, h_end]` varies linearly "
-    "in arc length from the centre line's first end. Fields of another shape are "
-    "accepted and ignored.",
+    "in arc length from the centre line's first end. A field of another shape is "
+    "refused by name; without `shape` the flexure is an arc, so `start` and `end` or "
+    "`points` there name the missing `shape`.",
     (
         Field("name", "name", "the flexure's name (unique)"),
         Field(

@@ -5,7 +5,7 @@ message naming the field and the value (exit 2), over several values each."""
 import pytest
 from test_scene_errors import _base, _dump
 
-from flexval.geometry import SceneError, load_scene
+from flexval.geometry import BUILTIN_SCENES, SceneError, load_scene
 from flexval.geometry.loads import MAX_LOAD_SUBSTEPS
 from flexval.reducedmodels.core import SolverSettings
 from flexval.validation.cli import EXIT_INPUT, MAX_LOCAL_WORKERS, main
@@ -174,3 +174,69 @@ def test_modes_density_option_is_range_checked(density, capsys):
     assert main(["modes", "open_chain", "--model", "ee", "--density", density]) == EXIT_INPUT
     err = capsys.readouterr().err
     assert "'--density'" in err and "Traceback" not in err, err
+
+
+_MASSLESS_SCENES = [
+    name
+    for name in BUILTIN_SCENES
+    if load_scene(name).mechanism.inertia.density is None
+    and load_scene(name).mechanism.inertia.massless_bodies(load_scene(name).mechanism.moving_bodies)
+]
+
+
+@pytest.mark.parametrize("scene", _MASSLESS_SCENES)
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["modes", "{scene}", "--model", "dcmm:2"],
+        ["modes", "{scene}", "--model", "ee", "--at", "0.5"],
+        ["run", "{scene}", "--model", "ee", "--dynamic", "--duration", "0.01"],
+    ],
+)
+def test_a_massless_scene_is_refused_naming_the_density_option(scene, argv, capsys):
+    """Modes and time histories of a scene without density or body masses are undefined:
+    refused up front naming --density with PLA as the example (the report, which
+    assumes PLA, says so), never a refusal naming a body's mass the user cannot give
+    on the command line."""
+    assert main([a.format(scene=scene) for a in argv]) == EXIT_INPUT
+    captured = capsys.readouterr()
+    assert "field '--density' = None" in captured.err and "1.24e-09 (PLA)" in captured.err
+    assert "Traceback" not in captured.err and "bodies." not in captured.err, captured.err
+
+
+def test_there_are_massless_builtin_scenes():
+    assert "open_chain" in _MASSLESS_SCENES
+
+
+@pytest.mark.parametrize("density", ["1e-320", "5e-324", "0", "-1.24e-9", "nan", "inf", "1240"])
+def test_dynamic_density_option_is_range_checked(density, capsys):
+    argv = ["run", "open_chain", "--model", "ee", "--dynamic", "--duration", "0.01"]
+    assert main([*argv, f"--density={density}"]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert "'--density'" in err and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize(
+    "path, words",
+    [
+        ("section.thicknes", "did you mean 'thickness'?"),
+        ("materail.youngs_modulus", "did you mean 'material'?"),
+        ("material.youngs_modulos", "did you mean 'youngs_modulus'?"),
+        ("flexures.e122.radius", "did you mean 'e12'?"),
+        ("flexures.e12.raduis", "did you mean 'radius'?"),
+        ("load_cases.m+.vlaue", "did you mean 'value'?"),
+    ],
+)
+def test_a_sweep_path_that_names_no_scene_field_names_the_nearest(tmp_path, capsys, path, words):
+    """A misspelt axis path is refused on the sweep file's field, naming the closest scene
+    field, before any point is built or any output folder made."""
+    sweep = tmp_path / "sw.toml"
+    sweep.write_text(
+        f'base = "open_chain"\nmodels = ["ee"]\nreference = "dcmm:1"\n'
+        f'[[axes]]\npath = "{path}"\nvalues = [0.1, 0.2]\n',
+        encoding="utf-8",
+    )
+    assert main(["sweep", str(sweep), "--out", str(tmp_path / "o")]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert "'axes[0].path'" in err and repr(path) in err and words in err, err
+    assert not (tmp_path / "o").exists()

@@ -259,3 +259,126 @@ def test_crossings_finds_a_proper_crossing_only():
     np.testing.assert_allclose(crossings(p, q), [[1.0, 1.0]])
     assert len(crossings(p, q + [5.0, 0.0])) == 0  # disjoint
     assert len(crossings(p, p + [0.0, 1.0])) == 0  # parallel
+
+
+# --- errors that name the real mistake --------------------------------------------------
+
+
+def _as_segment(f: dict, shape: str | None = "segment") -> dict:
+    """Flexure ``f`` turned into a straight one from its arc's first to its second end
+    (``shape`` left out if None)."""
+    for key in ("center", "radius", "axis_deg", "width_deg"):
+        f.pop(key)
+    f.update(start=[0.0, 0.0], end=[4.0, 4.0])
+    if shape is not None:
+        f["shape"] = shape
+    return f
+
+
+@pytest.mark.parametrize(
+    "edit, field, words",
+    [
+        # start/end without shape: the default arc would miss its centre
+        (lambda f: _as_segment(f, None), "flexures.e12.shape", "'start' and 'end' belong to a"),
+        (
+            lambda f: _as_segment(f, None).update(contour="circular", height=0.3),
+            "flexures.e12.shape",
+            'give shape = "notch"',
+        ),
+        (
+            lambda f: (
+                [f.pop(k) for k in ("center", "radius", "axis_deg", "width_deg")]
+                and f.update(points=[[0.0, 0.0], [2.0, 1.0], [4.0, 0.0]])
+            ),
+            "flexures.e12.shape",
+            'give shape = "spline"',
+        ),
+        # a field of another shape on an explicit shape, or on a complete arc
+        (lambda f: _as_segment(f).update(radius=3.0), "flexures.e12.radius", "belongs to an arc"),
+        (lambda f: _as_segment(f).update(contour="circular"), "flexures.e12.contour", "a notch"),
+        (lambda f: _as_segment(f).update(height=0.3), "flexures.e12.height", "not to a segment"),
+        (lambda f: f.update(contour="elliptical"), "flexures.e12.contour", "not to an arc"),
+        (lambda f: f.update(start=[0.0, 0.0]), "flexures.e12.start", "gives no shape"),
+        (
+            lambda f: _as_segment(f).update(points=[[0.0, 0.0], [1.0, 1.0], [2.0, 0.0]]),
+            "flexures.e12.points",
+            'shape = "spline"',
+        ),
+        # misspellings name the nearest known name
+        (lambda f: f.update(raduis=3.0), "flexures.e12.raduis", "did you mean 'radius'?"),
+        (lambda f: f.update(shape="segmnet"), "flexures.e12.shape", "did you mean 'segment'?"),
+        (lambda f: f.update(widthdeg=240.0), "flexures.e12.widthdeg", "'width_deg'?"),
+    ],
+)
+def test_flexure_fields_in_the_wrong_place_name_the_mistake(tmp_path, edit, field, words):
+    d = _base()
+    edit(_flex(d, "e12"))
+    msg = _expect(tmp_path, d, field)
+    assert words in msg, msg
+    assert "'flexures.e12.center' = None" not in msg
+
+
+def test_start_end_without_shape_is_not_a_missing_centre(tmp_path):
+    """The error names the missing shape and its value, not the arc's centre it lacks."""
+    d = _base()
+    _as_segment(_flex(d, "e12"), None)
+    msg = _expect(tmp_path, d, "flexures.e12.shape", "= None")
+    assert 'shape = "segment"' in msg and 'shape = "notch"' in msg, msg
+    _flex(d, "e12")["shape"] = "segment"  # the fix the message names is accepted
+    path = tmp_path / "fixed.toml"
+    path.write_text(_dump(d))
+    assert load_scene(path).mechanism.flexures[0].shape.kind == "segment"
+
+
+@pytest.mark.parametrize(
+    "case, edit, field, words",
+    [
+        (0, lambda c: c.update(kind="momnet"), "load_cases.m+.kind", "did you mean 'moment'?"),
+        (2, lambda c: c.update(kind="froce"), "load_cases.f+.kind", "did you mean 'force'?"),
+        (2, lambda c: c.pop("kind"), "load_cases.f+.kind", "point and angle_deg belong to a force"),
+        (2, lambda c: c.pop("angle_deg"), "load_cases.f+.angle_deg", "a force needs its direction"),
+        (
+            2,
+            lambda c: c.pop("point") and c.update(body="3"),
+            "load_cases.f+.point",
+            "a force on body '3' needs its point of application",
+        ),
+        (0, lambda c: c.update(point=[1.0, 2.0]), "load_cases.m+.point", "a moment has no point"),
+        (0, lambda c: c.update(vlaue=1.0), "load_cases.m+.vlaue", "did you mean 'value'?"),
+    ],
+)
+def test_load_fields_in_the_wrong_place_name_the_mistake(tmp_path, case, edit, field, words):
+    d = _base()
+    edit(d["load_cases"][case])
+    msg = _expect(tmp_path, d, field)
+    assert words in msg, msg
+
+
+def test_a_force_without_point_on_the_target_body_acts_at_the_target_point(tmp_path):
+    """The documented default stays: a force on the target body without ``point``."""
+    d = _base()
+    d["load_cases"][2].pop("point")
+    path = tmp_path / "ok.toml"
+    path.write_text(_dump(d))
+    force = load_scene(path).load_case("f+").components[0]
+    assert list(force.point) == [20.0, 15.8]
+
+
+def test_a_misspelt_table_names_the_nearest(tmp_path):
+    d = _base()
+    d["gravity"] = {"acceleraton": [0.0, -9810.0]}
+    _expect(tmp_path, d, "gravity.acceleraton", "did you mean 'acceleration'?")
+    d = _base()
+    d["materail"] = d.pop("material")
+    _expect(tmp_path, d, "materail", "did you mean 'material'?")
+
+
+def test_cli_names_the_missing_shape_with_exit_2(tmp_path, capsys):
+    d = _base()
+    _as_segment(_flex(d, "e23"), None)
+    path = tmp_path / "bad.toml"
+    path.write_text(_dump(d))
+    assert main(["run", str(path), "--model", "dcmm:1"]) == 2
+    err = capsys.readouterr().err
+    assert "field 'flexures.e23.shape' = None" in err and "'start' and 'end'" in err, err
+    assert "Traceback" not in err

@@ -58,8 +58,10 @@ from typing import Any
 import numpy as np
 
 from flexval.geometry import BUILTIN_SCENES, Scene, SceneError
+from flexval.geometry.errors import did_you_mean
 from flexval.geometry.fields import ABSENT, Field, Table, markdown_table
 from flexval.geometry.scene import parse_scene, read_scene_data
+from flexval.geometry.scenefields import BODIES, FLEXURES, LOAD_CASES, MATERIAL, PINS, SECTION
 from flexval.reducedmodels import ModelSpec, parse_model, run_reduced
 
 from ..compare import METRICS
@@ -77,6 +79,16 @@ reference's (free: every model records it); ``limit_load``: the first limit poin
 that stops below full load, found by arc length (costly: only on request)."""
 DEFAULT_OUTPUTS = ("peak_stress",)
 NAMED_ARRAYS = ("flexures", "load_cases", "bodies", "pins")
+_SCENE_TABLES = {
+    "section": SECTION,
+    "material": MATERIAL,
+    "flexures": FLEXURES,
+    "load_cases": LOAD_CASES,
+    "bodies": BODIES,
+    "pins": PINS,
+}
+"""The scene tables whose declared fields an axis may set where the base scene leaves
+them out (a flexure's own thickness, the material's density)."""
 MAX_COUNT = 1_000_000
 """Most values of one axis, and most points of one task (``batch``)."""
 
@@ -335,7 +347,7 @@ def _axis(source: str, k: int, a: Any) -> Axis:
                 source,
                 f"{where}.{key}",
                 a[key],
-                f"unknown field; expected one of {sorted(known)}",
+                f"unknown field{did_you_mean(key, known)}; expected one of {sorted(known)}",
             )
     path = a.get("path")
     if not isinstance(path, str) or not path.strip():
@@ -409,24 +421,31 @@ def _slot(data: dict, path: str, source: str, field: str) -> tuple[Any, Any]:
                     isinstance(node[part], bool) or not isinstance(node[part], (int, float))
                 ):
                     _fail(source, field, path, f"'{part}' of {where} is not a number")
-                if part not in node and (
-                    not walked or walked[0] not in ("section", "material", *NAMED_ARRAYS)
-                ):
-                    _fail(source, field, path, f"{where} has no field '{part}'")
+                declared = _SCENE_TABLES.get(walked[0]) if walked else None
+                if part not in node and (declared is None or part not in declared):
+                    known = set(node) | (set() if declared is None else declared.keys())
+                    _fail(
+                        source,
+                        field,
+                        path,
+                        f"unknown field '{part}' of {where}{did_you_mean(part, known)}",
+                    )
                 return node, part
             if part not in node:
-                _fail(source, field, path, f"{where} has no field '{part}'")
+                hint = did_you_mean(part, node)
+                _fail(source, field, path, f"{where} has no field '{part}'{hint}")
             node = node[part]
         elif isinstance(node, list):
             if walked and walked[-1] in NAMED_ARRAYS and all(isinstance(x, dict) for x in node):
                 match = [x for x in node if str(x.get("name")) == part]
                 if not match:
+                    names = [str(x.get("name")) for x in node]
                     _fail(
                         source,
                         field,
                         path,
-                        f"{where} has no entry named '{part}'; names are "
-                        f"{[str(x.get('name')) for x in node]}",
+                        f"{where} has no entry named '{part}'{did_you_mean(part, names)}; "
+                        f"names are {names}",
                     )
                 if last:
                     _fail(source, field, path, f"{where}.{part} is a table, not a number")
@@ -528,7 +547,8 @@ def parse_sweep(
     known = SWEEP.keys()
     for key in data:
         if key not in known:
-            _fail(source, key, data[key], f"unknown field; expected one of {sorted(known)}")
+            hint = did_you_mean(key, known)
+            _fail(source, key, data[key], f"unknown field{hint}; expected one of {sorted(known)}")
     name = str(data.get("name", default_name))
     if "base" not in data:
         _fail(source, "base", None, "missing: the base scene (built-in name or path)")
