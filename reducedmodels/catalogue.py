@@ -153,6 +153,25 @@ class Option:
 
 
 @dataclass(frozen=True)
+class Cost:
+    """What one load path of a model is estimated to take, before it is built.
+
+    Attributes
+    ----------
+    bytes : float
+        Peak resident memory of the process running it, bytes.
+    seconds : float
+        Wall time, s.
+    size : str
+        What the estimate grows with, for messages (e.g. ``"182,682 unknowns"``).
+    """
+
+    bytes: float
+    seconds: float
+    size: str
+
+
+@dataclass(frozen=True)
 class Family:
     """A model family: id syntax, options, how to run it and what it can do.
 
@@ -177,6 +196,11 @@ class Family:
     system : callable, optional
         ``system(mechanism, spec, settings) -> reducedmodels.System`` (for
         :data:`ARCLENGTH`).
+    cost : callable, optional
+        ``cost(mechanism, spec, levels) -> Cost``: the peak memory and the time
+        of one load path of ``levels`` load levels, estimated from the
+        mechanism and the spec without building anything (None: a family
+        whose paths are small and quick whatever the resolution).
     """
 
     name: str
@@ -186,6 +210,7 @@ class Family:
     options: tuple[Option, ...] = ()
     capabilities: frozenset[str] = frozenset()
     system: Callable[..., Any] | None = None
+    cost: Callable[..., Cost] | None = None
 
     def __post_init__(self) -> None:
         unknown = set(self.capabilities) - CAPABILITIES

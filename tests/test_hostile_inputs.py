@@ -240,3 +240,151 @@ def test_a_sweep_path_that_names_no_scene_field_names_the_nearest(tmp_path, caps
     err = capsys.readouterr().err
     assert "'axes[0].path'" in err and repr(path) in err and words in err, err
     assert not (tmp_path / "o").exists()
+
+
+def _flexval_peak(argv, env_memory=None, timeout=60):
+    """Run ``flexval argv`` in a fresh process; (exit code, stderr, seconds, peak RSS bytes)."""
+    import os
+    import subprocess
+    import sys
+    import time
+
+    code = (
+        "import resource, sys\n"
+        "from flexval.validation.cli import main\n"
+        f"rc = main({list(argv)!r})\n"
+        "print('peak', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)\n"
+        "sys.exit(rc)\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "FLEXVAL_MEMORY"}
+    if env_memory is not None:
+        env["FLEXVAL_MEMORY"] = env_memory
+    t0 = time.perf_counter()
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=timeout
+    )
+    seconds = time.perf_counter() - t0
+    peak = int(done.stderr.rsplit("peak", 1)[1]) * 1024  # ru_maxrss: kB on Linux
+    return done.returncode, done.stderr, seconds, peak
+
+
+def _lower_fitting(scene_name, level, budget):
+    """The finest continuum level below ``level`` whose estimate fits ``budget`` bytes."""
+    import flexval.validation  # noqa: F401  (registers the continuum)
+    from flexval.reducedmodels import parse_model
+
+    mechanism = load_scene(scene_name).mechanism
+    for r in range(level - 1, -1, -1):
+        spec = parse_model(f"continuum:{r}")
+        if spec.model_family.cost(mechanism, spec, None).bytes <= budget:
+            return spec.id
+    return None
+
+
+@pytest.mark.parametrize("budget,level", [("1G", 8), ("1G", 3), ("300M", 2), ("4G", 5)])
+def test_a_continuum_level_beyond_the_memory_budget_is_refused_before_work(budget, level):
+    """A mesh level whose estimated peak memory exceeds the budget ($FLEXVAL_MEMORY here, so
+    the test does not depend on the machine) exits 2 at once, naming the estimate, the budget
+    and the finest level that fits; deciding stays small in time and memory."""
+    from flexval.validation.resources import _parse_size
+
+    argv = ["run", "open_chain", "--model", f"continuum:{level}", "--load-case", "m+"]
+    rc, err, seconds, peak = _flexval_peak(argv, budget)
+    assert rc == EXIT_INPUT, err
+    assert "'--model'" in err and f"continuum:{level}" in err and "of memory" in err, err
+    assert "$FLEXVAL_MEMORY" in err and "unknowns" in err, err
+    lower = _lower_fitting("open_chain", level, _parse_size(budget))
+    assert lower is not None and f"{lower} needs about" in err, err
+    assert seconds < 15 and peak < 1e9, (seconds, peak)
+
+
+def test_continuum_level_8_is_refused_on_this_machine():
+    """Without a budget the machine's available memory is the bound: level 8 of the open
+    chain (about 1.8 TB) is refused here, quickly and without growing."""
+    argv = ["run", "open_chain", "--model", "continuum:8", "--load-case", "m+"]
+    rc, err, seconds, peak = _flexval_peak(argv)
+    assert rc == EXIT_INPUT, err
+    assert "continuum:8" in err and ("the memory available" in err or "cgroup" in err), err
+    assert seconds < 15 and peak < 1e9, (seconds, peak)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["converge", "open_chain", "--model", "continuum", "--levels", "0:8"],
+        ["modes", "open_chain", "--model", "continuum:7"],
+        ["stress", "open_chain", "--model", "continuum:6", "--quick"],
+        ["report", "--model", "continuum:6", "--model", "ee", "--no-bench"],
+    ],
+)
+def test_every_command_checks_the_continuum_memory_before_work(argv, tmp_path, capsys):
+    """converge, modes, stress and report refuse a level beyond the budget before any work."""
+    if argv[0] in ("stress", "report"):
+        argv = [*argv, "--out", str(tmp_path / "out")]
+    import os
+
+    os.environ["FLEXVAL_MEMORY"] = "2G"
+    try:
+        assert main(argv) == EXIT_INPUT
+    finally:
+        del os.environ["FLEXVAL_MEMORY"]
+    err = capsys.readouterr().err
+    assert "of memory" in err and "$FLEXVAL_MEMORY" in err and "continuum:" in err, err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("text", ["lots", "-1G", "0", "1X", "nan"])
+def test_a_malformed_memory_budget_is_refused(text, monkeypatch, capsys):
+    monkeypatch.setenv("FLEXVAL_MEMORY", text)
+    assert main(["run", "open_chain", "--model", "continuum:1", "--load-case", "m+"]) == 2
+    err = capsys.readouterr().err
+    assert "FLEXVAL_MEMORY" in err and repr(text) in err, err
+
+
+def _huge_sweep(tmp_path, count=100_000, combine="grid"):
+    path = tmp_path / "huge.toml"
+    path.write_text(
+        'name = "huge"\nbase = "open_chain"\nmodels = ["ee"]\nreference = "beam:20"\n'
+        f'combine = "{combine}"\n'
+        f'[[axes]]\npath = "section.thickness"\nlinspace = [0.08, 0.12, {count}]\n'
+        f'[[axes]]\npath = "material.youngs_modulus"\nlinspace = [2000.0, 2200.0, {count}]\n'
+    )
+    return path
+
+
+def test_a_ten_billion_point_sweep_is_refused_from_its_axes(tmp_path):
+    """Two axes of 100,000 values: 10^10 points, counted from the axes (no point built),
+    refused at once naming the count and the option that accepts it."""
+    path = _huge_sweep(tmp_path)
+    rc, err, seconds, peak = _flexval_peak(["sweep", str(path), "--out", str(tmp_path / "o")])
+    assert rc == EXIT_INPUT, err
+    assert "10,000,000,000 points" in err and "--max-points 1,000,000" in err, err
+    assert seconds < 15 and peak < 1e9, (seconds, peak)
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_sweep_accepted_by_max_points_is_still_refused_by_memory(tmp_path):
+    """--max-points lifts the count bound, not the memory the points would hold."""
+    from flexval.validation.sweep.spec import BYTES_PER_POINT
+
+    path = _huge_sweep(tmp_path)
+    argv = ["sweep", str(path), "--out", str(tmp_path / "o"), "--max-points", str(10**10)]
+    rc, err, seconds, peak = _flexval_peak(argv, "8G")
+    assert rc == EXIT_INPUT, err
+    assert "10,000,000,000 points" in err and "of memory" in err and "$FLEXVAL_MEMORY" in err
+    assert f"{10**10 * BYTES_PER_POINT / 1e9:.2e} GB" in err, err
+    assert seconds < 15 and peak < 1e9, (seconds, peak)
+
+
+@pytest.mark.parametrize("max_points,count", [(99, 10), (10, 4)])
+def test_max_points_bounds_a_small_sweep_too(tmp_path, capsys, max_points, count):
+    """The bound is exact: count^2 grid points above --max-points are refused, at or below
+    it the sweep is built (zip: count points)."""
+    from flexval.validation.sweep import load_sweep
+
+    path = _huge_sweep(tmp_path, count)
+    if count * count > max_points:
+        with pytest.raises(SceneError) as info:
+            load_sweep(path, max_points)
+        assert f"{count * count:,} points" in str(info.value)
+    assert len(load_sweep(_huge_sweep(tmp_path, count, "zip"), max_points).points) == count

@@ -174,6 +174,14 @@ def _run_each(specs, cases, run_one, row, scene, json_path) -> int:
     return status
 
 
+def _check_memory(paths, source: str, field: str, parallel: int = 1, quiet: bool = False) -> None:
+    """Refuse (exit 2) a model whose load path would not fit in memory, before any work; print
+    the time estimate of long work (:func:`flexval.validation.resources.check_models`)."""
+    from .resources import check_models
+
+    check_models(paths, source, field, parallel, quiet)
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from flexval.reducedmodels.catalogue import FIELDS
 
@@ -196,6 +204,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
             args.density,
             "applies to --dynamic only (a static run takes its weights from the scene)",
         )
+    _check_memory(
+        [(scene.mechanism, spec, args.levels) for spec in specs for _ in cases],
+        *(("<command line>", "--model") if args.model else (scene.source, "request.models")),
+    )
     if args.dynamic:
         return _run_dynamic(args, scene, specs, cases, json_path)
     out_dir = check_folder(args.out_dir, "--out-dir") if fields else None
@@ -395,6 +407,7 @@ def _cmd_modes(args: argparse.Namespace) -> int:
 
     scene = load_scene(args.scene)
     spec = parse_model(args.model, "<command line>", "--model")
+    _check_memory([(scene.mechanism, spec, None)], COMMAND_LINE, "--model")
     json_path = check_file(args.json, "--json") if args.json is not None else None
     plot_path = check_figure_file(args.plot, "--plot") if args.plot is not None else None
     scene, density = choose_density(scene, args.density, what="a modal analysis")
@@ -489,6 +502,11 @@ def _cmd_converge(args: argparse.Namespace) -> int:
     json_path = check_file(args.json, "--json") if args.json is not None else None
     scene = load_scene(args.scene)
     cases = [scene.load_case(n) for n in args.load_case] if args.load_case else scene.load_cases
+    _check_memory(
+        [(scene.mechanism, spec.with_resolution(r), None) for r in resolutions for _ in cases],
+        COMMAND_LINE,
+        "--levels" if args.levels else "--model",
+    )
     out, status = [], EXIT_OK
     for case in cases:
         st = study(scene, spec, resolutions, case)
@@ -511,6 +529,24 @@ def _cmd_converge(args: argparse.Namespace) -> int:
     return status
 
 
+def _check_report_memory(scenes: list[str], specs: list, args: argparse.Namespace) -> None:
+    """:func:`_check_memory` of every path the report traces: each model on each scene and
+    load case, and the convergence study of its reference family (the resolutions up to one
+    above the reference's; :data:`flexval.validation.reportdata.DEFAULT_MODELS`)."""
+    from flexval.reducedmodels.catalogue import REFERENCE
+
+    from .reportdata import _convergence_specs
+
+    paths = []
+    for name in scenes:
+        scene = load_scene(name)
+        reference = next((s for s in specs if s.model_family.has(REFERENCE)), None)
+        if not args.no_converge and reference is not None and reference.resolution is not None:
+            paths += [(scene.mechanism, s, None) for s in _convergence_specs(reference)]
+        paths += [(scene.mechanism, s, None) for s in specs for _ in scene.load_cases]
+    _check_memory(paths, COMMAND_LINE, "--model", parallel=args.jobs or 1, quiet=args.quiet)
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     from .report import DEFAULT_MODELS, build_report
 
@@ -518,7 +554,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
     for name in scenes:
         load_scene(name)  # bad input fails before any work
     models = args.model or list(DEFAULT_MODELS)
-    _parse_models(models, "<command line>", "--model")
+    specs = _parse_models(models, "<command line>", "--model")
+    _check_report_memory(scenes, specs, args)
     out = check_folder(args.out, "--out")  # created only once the rest is known good
     path = build_report(
         scenes,
@@ -565,6 +602,19 @@ def _cmd_stress(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene)
     models = args.model or ["ee", "dcmm:1", "dcmm:2", "prbm", "beam:20"]
     specs = _parse_models(models, "<command line>", "--model")
+    from .stress import AMPLIFICATIONS, STEP_COUNTS
+
+    counts = [n for n in STEP_COUNTS if not args.quick or n < 1001]
+    _check_memory(  # every case: each amplification at 11 levels, then each step count
+        [
+            (scene.mechanism, spec, n)
+            for spec in specs
+            for _ in scene.load_cases
+            for n in [11] * len(AMPLIFICATIONS) + counts
+        ],
+        COMMAND_LINE,
+        "--model",
+    )
     out = check_folder(args.out, "--out")
 
     def progress(line: str) -> None:
@@ -596,7 +646,34 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             args.workers,
             "sizes the local cluster; an existing one (--scheduler) has its own",
         )
-    sweep = load_sweep(args.sweep)  # every point is checked before anything runs
+    from .sweep.spec import MAX_POINTS
+
+    def building(line: str) -> None:
+        if not args.quiet:
+            print(f"sweep: {line}", file=sys.stderr, flush=True)
+
+    # the point count is checked from the axes before any point is built, then every point
+    sweep = load_sweep(args.sweep, args.max_points or MAX_POINTS, building)
+    workers = args.workers or (1 if args.scheduler else MAX_LOCAL_WORKERS)
+    _check_memory(
+        [
+            (point.scene.mechanism, spec, None)
+            for spec in (sweep.reference, *sweep.models)
+            if spec.model_family.cost is not None
+            for point in sweep.valid_points
+            for _ in sweep.load_cases
+        ],
+        sweep.source,
+        "reference" if sweep.reference.model_family.cost is not None else "models",
+        parallel=workers,
+        quiet=args.quiet,
+    )
+    if args.batch is not None:
+        sweep = dataclasses.replace(sweep, batch=args.batch)
+    out = check_folder(
+        args.out if args.out is not None else os.path.join("sweeps", safe_name(sweep.name)), "--out"
+    )
+    results_store(sweep, out).check()  # a dataset of another format: refused up front
     if args.batch is not None:
         sweep = dataclasses.replace(sweep, batch=args.batch)
     out = check_folder(
@@ -976,6 +1053,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help=f"local cluster size, 1 to {MAX_LOCAL_WORKERS} (the logical CPUs; "
         "default: one single-threaded process per core)",
+    )
+    q.add_argument(
+        "--max-points",
+        type=_int_in(1, 10**15),
+        metavar="N",
+        help="most points the sweep may have (default 1,000,000): the count is computed "
+        "from the axes before any point is built, and a larger sweep is refused",
     )
     q.add_argument(
         "--batch",

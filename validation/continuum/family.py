@@ -21,6 +21,7 @@ from flexval.reducedmodels.catalogue import (
     register,
 )
 
+from .cost import path_cost
 from .material import LAWS, PLANES
 
 # Default mesh level: the coarsest whose end values (target displacement
@@ -124,5 +125,6 @@ CONTINUUM = register(
         ),
         frozenset({FIELDS, REFERENCE, ARCLENGTH}),
         system,
+        path_cost,
     )
 )
