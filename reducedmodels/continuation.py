@@ -44,6 +44,7 @@ import numpy as np
 
 from flexval.geometry import LoadCase
 
+from .bifurcation import BIFURCATION_RTOL, classify
 from .core import System
 from .loadpath import LoadPath
 from .loads import Loads
@@ -118,18 +119,37 @@ class ArcLength(Stepping):
         Most converged steps.
     max_growth : float
         Largest arc length as a multiple of the initial one.
+    branch_switch : bool
+        At the first bifurcation point, leave the traced branch for the one
+        that crosses it (see :meth:`review`).
 
-    Every converged step is reported.
+    Every converged step is reported. A step across which the tangent's
+    number of negative eigenvalues (:meth:`System.instability`, every
+    negative one counted however small) changes is
+    bisected on the arc length until the load factors on either side of the
+    change agree to :data:`~flexval.reducedmodels.bifurcation.BIFURCATION_RTOL`;
+    when the load does not turn there (it moves the same way from the step's
+    start through the bracket to its end) and the critical mode is not the
+    path's slope (:func:`~flexval.reducedmodels.bifurcation.classify`), the
+    crossing is a bifurcation point, reported with the step
+    (``Verdict.bifurcations``: the bracket's middle).
     """
 
     cut_name = "arc-length"
     first_factor = 0.0
 
     def __init__(
-        self, max_load_factor: float, n_steps: int, psi: float, max_steps: int, max_growth: float
+        self,
+        max_load_factor: float,
+        n_steps: int,
+        psi: float,
+        max_steps: int,
+        max_growth: float,
+        branch_switch: bool = False,
     ):
         self.max_load_factor, self.n_steps, self.psi = max_load_factor, n_steps, psi
         self.max_steps, self.max_growth = max_steps, max_growth
+        self.branch_switch = branch_switch
 
     def begin(self, system: System, loads: Loads, point: PathPoint) -> None:
         """Size the first step from the tangent at rest."""
@@ -148,7 +168,8 @@ class ArcLength(Stepping):
         self.arc, self.arc_max = arc0, self.max_growth * arc0
         self.arc_min = arc0 * 0.5**self.settings.max_cuts
         self.direction = (tangent, 1.0)  # unscaled (dq, dlambda) of the last converged step
-        self.was_cut = self.landed = False
+        self.was_cut = self.landed = self.switched = False
+        self.count = self.next_count = system.instability(point.tangent, 0.0)
 
     def finished(self) -> bool:
         """True once the path has landed on ``max_load_factor``."""
@@ -190,8 +211,90 @@ class ArcLength(Stepping):
             if landing.state is None:
                 return Verdict(None, lam, landing.reason, None, False)
             self.landed = True
-            return Verdict(landing.state, self.max_load_factor, "", landing.tangent, fast)
-        return Verdict(q_new, lam_new, "", result.tangent, fast)
+            verdict = Verdict(landing.state, self.max_load_factor, "", landing.tangent, fast)
+        else:
+            verdict = Verdict(q_new, lam_new, "", result.tangent, fast)
+        return self._watch(verdict, solve)
+
+    def _watch(self, verdict: Verdict, solve: Solve) -> Verdict:
+        """Locate a bifurcation inside the step, if the inertia changes across it without a turn.
+
+        With ``branch_switch``, the first one found replaces the step's end
+        by the state just before it and points the next step along the
+        critical mode (the direction of the crossing branch), sized to half
+        the step bounds; the arc-length limits are re-based on that size.
+        """
+        count = self.system.instability(verdict.tangent, 0.0)
+        self.next_count = count
+        if count is None or self.count is None or count == self.count:
+            return verdict
+        located = self._locate(verdict, self.count, solve)
+        if located is None:
+            return verdict
+        factor, (q_lo, lam_lo, tangent_lo), mode = located
+        if not self.branch_switch or self.switched:
+            return verdict._replace(bifurcations=(factor,))
+        self.switched, self.landed = True, False
+        self.next_count = self.count
+        step = self.system.scaled(mode)
+        unit = mode / math.sqrt(float(np.mean(step * step)))  # arc-length norm 1
+        probe = 1e-6
+        ratio = self.system.motion_ratio(q_lo, self.system.update(q_lo, probe * unit)) / probe
+        if ratio > 0.0:
+            self.arc = 0.5 / ratio
+            self.arc_max = max(self.arc_max, self.max_growth * self.arc)
+            self.arc_min = min(self.arc_min, self.arc * 0.5**self.settings.max_cuts)
+        self.step_taken = (unit, 0.0)
+        return Verdict(q_lo, lam_lo, "", tangent_lo, False, (factor,))
+
+    def _locate(
+        self, verdict: Verdict, before: int, solve: Solve
+    ) -> tuple[float, tuple[np.ndarray, float, Tangent | None], np.ndarray] | None:
+        """Bisect the step on the arc length to the change of inertia; None unless a bifurcation.
+
+        Returns the bifurcation's load factor (the bracket's middle), the
+        converged state, factor and tangent just before it, and the critical
+        mode (unit, unscaled coordinates) just after it.
+        """
+        system, loads, psi = self.system, self.loads, self.psi
+        q0, lam0 = self.q, self.factor
+        dq, dlam = verdict.state - q0, verdict.factor - lam0
+        length = math.sqrt(arc_dot(system, dq, dq) + psi**2 * dlam**2)
+        lo, hi = (q0, lam0, None), (verdict.state, verdict.factor, verdict.tangent)
+        t_lo, t_hi = 0.0, 1.0
+        while abs(hi[1] - lo[1]) > BIFURCATION_RTOL * max(abs(hi[1]), abs(lo[1])):
+            t = 0.5 * (t_lo + t_hi)
+            if t_hi - t_lo < 1e-12:
+                break
+            problem = ArcLengthStep(system, loads, lam0 + t * dlam, q0, lam0, t * length, psi)
+            result = solve(problem, q0 + t * dq, q0)
+            if result.state is None:
+                break
+            tangent = FixedLoad(system, loads, result.factor).assemble(result.state)[1]
+            count = system.instability(tangent, 0.0)
+            if count is None:
+                break
+            if count == before:
+                lo, t_lo = (result.state, result.factor, tangent), t
+            else:
+                hi, t_hi = (result.state, result.factor, tangent), t
+        sense = np.sign(dlam)
+        ordered = sense != 0.0 and (
+            sense * (lo[1] - lam0) >= 0.0
+            and sense * (hi[1] - lo[1]) > 0.0
+            and sense * (verdict.factor - hi[1]) >= 0.0
+        )
+        if not ordered:
+            return None  # the load turns inside the bracket: a limit point
+        if hi[2] is None:
+            hi = (hi[0], hi[1], FixedLoad(system, loads, hi[1]).assemble(hi[0])[1])
+        # the whole step's direction: the bracket's is swamped by round-off along the mode
+        split, mode = classify(system, hi[2], verdict.state - q0)
+        if not split:
+            return None
+        if lo[2] is None:
+            lo = (lo[0], lo[1], FixedLoad(system, loads, lo[1]).assemble(lo[0])[1])
+        return 0.5 * (lo[1] + hi[1]), lo, mode
 
     def cut(self) -> bool:
         """Halve the arc length."""
@@ -202,6 +305,7 @@ class ArcLength(Stepping):
     def advance(self, verdict: Verdict) -> float | None:
         """Take the step; grow the arc length after an easy, uncut one. Every step is reported."""
         self.direction = self.step_taken
+        self.count = self.next_count
         self.q, self.factor = verdict.state, verdict.factor
         self.peak = max(self.peak, self.factor)
         self.taken_arc = self.arc
@@ -237,6 +341,7 @@ def solve_arclength(
     max_growth: float = 10.0,
     stop: Callable[[LoadPath], bool] | None = None,
     record_poses: bool = False,
+    branch_switch: bool = False,
 ) -> LoadPath:
     """Trace the equilibrium path of ``case`` by arc-length continuation.
 
@@ -266,6 +371,9 @@ def solve_arclength(
         the path there as a success (e.g. once past a limit point).
     record_poses : bool
         Also record every body's pose at each point.
+    branch_switch : bool
+        Follow the branch that crosses the path at its first bifurcation
+        point (:class:`ArcLength`).
 
     Returns
     -------
@@ -275,7 +383,8 @@ def solve_arclength(
         ``substeps`` (converged steps), per-point ``iterations`` (Newton
         iterations since the previous point, failed attempts included),
         ``limit_points`` (indices of local extrema of the load) and the final
-        ``arc_length``.
+        ``arc_length``; ``bifurcations`` the bifurcation points passed
+        (``{"load", "fraction"}``, N or N mm and load factor).
 
     Raises
     ------
@@ -295,11 +404,12 @@ def solve_arclength(
         case,
         f"{model or 'model'}:arclength",
         scene,
-        {"max_load_factor": max_load_factor, "n_steps": n_steps, "psi": psi},
+        {"max_load_factor": max_load_factor, "n_steps": n_steps, "psi": psi}
+        | ({"branch_switch": True} if branch_switch else {}),
         record_poses=record_poses,
         limit_points=True,
     )
-    stepping = ArcLength(max_load_factor, n_steps, psi, max_steps, max_growth)
+    stepping = ArcLength(max_load_factor, n_steps, psi, max_steps, max_growth, branch_switch)
     path, last = recorder.run(trace(system, system.loads(case), stepping), stop)
     path.stats["arc_length"] = last.step
     return path

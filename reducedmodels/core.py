@@ -590,8 +590,25 @@ class System:
         eigenvalue indefinite; an inertia that cannot be judged (or no
         tangent) counts as stable.
         """
-        negative = tangent.negative_eigenvalues() if tangent is not None else None
-        return negative is not None and negative > self.n_multipliers
+        negative = self.instability(tangent)
+        return negative is not None and negative > 0
+
+    def instability(self, tangent: Tangent | None, round_off: float | None = None) -> int | None:
+        """The tangent's negative eigenvalues beyond those its multipliers make (None: not judged).
+
+        Zero on a stable equilibrium; it changes where the path passes a
+        limit point or a bifurcation (an eigenvalue of the tangent crosses
+        zero). ``round_off`` (default the tangent's own margin) sets which
+        eigenvalues are too small to count: 0 counts them all.
+        """
+        if tangent is None:
+            return None
+        negative = (
+            tangent.negative_eigenvalues()
+            if round_off is None
+            else tangent.negative_eigenvalues(round_off)
+        )
+        return None if negative is None else negative - self.n_multipliers
 
     def residual(self, grad: np.ndarray, loads: Loads) -> float:
         """Largest out-of-balance force (moments per unit size) relative to the load scale."""

@@ -77,6 +77,11 @@ class LoadPath:
         Of an arc-length trace: where the load turns, each ``{"index",
         "load", "traced_load", "dx", "dy", "rotation"}`` (see
         :func:`flexval.validation.limits.limit_points`; N or N mm, mm, rad).
+    bifurcations : list of dict, optional
+        Of a traced path: the bifurcation points it passed or stopped at,
+        each ``{"load", "fraction"}`` (N or N mm, and the load factor), where
+        the tangent's inertia changes while the load does not turn (see
+        :mod:`flexval.reducedmodels.bifurcation`).
     """
 
     model: str
@@ -102,6 +107,7 @@ class LoadPath:
     stress_profile: dict | None = None
     limit_points: list | None = None
     fibre_stress: dict | None = None
+    bifurcations: list | None = None
 
     @property
     def displacement(self) -> np.ndarray:

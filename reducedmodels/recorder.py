@@ -86,6 +86,7 @@ class PathRecorder:
             reactions=[] if record_reactions else None,
             valid=[],
             validity=[],
+            bifurcations=[],
         )
         self.stats = {
             "unknowns": system.n_dofs,
@@ -118,10 +119,15 @@ class PathRecorder:
                 lp.shapes[c.name].append(c.shape(*local).tolist())
         self.stats["iterations"].append(point.iterations)
         self._count(point.counters)
+        self._bifurcations(point.bifurcations)
         self.factors.append(point.factor)
         f = self.factors
         if "limit_points" in self.stats and len(f) >= 3 and (f[-2] - f[-3]) * (f[-1] - f[-2]) < 0:
             self.stats["limit_points"].append(len(f) - 2)
+
+    def _bifurcations(self, factors) -> None:
+        """Append bifurcation points (load factors) as ``{"load", "fraction"}`` (N or N mm)."""
+        self.path.bifurcations.extend({"load": f * self.magnitude, "fraction": f} for f in factors)
 
     def _count(self, counters) -> None:
         self.stats.update(
@@ -153,12 +159,21 @@ class PathRecorder:
         """The SolverError for a failed trace, carrying the path so far."""
         self._judge()
         self._count(exc.counters)
-        self.stats["failure"] = exc.reason
+        lam, case = exc.factor, self.case
+        self._bifurcations(exc.bifurcations)
+        reason = exc.reason
+        if exc.bifurcation is not None:
+            self._bifurcations([exc.bifurcation])
+            reason = (
+                f"bifurcation at {exc.bifurcation * case.magnitude:.6g} {case.unit} "
+                f"(fraction {exc.bifurcation:.6g}): beyond it load control finds only "
+                "unstable equilibria (trace it with --arclength)"
+            )
+        self.stats["failure"] = reason
         self.path.converged = False
         self.path.seconds = time.perf_counter() - self.t0
-        lam, case = exc.factor, self.case
         return SolverError(
-            f"{self.model or 'model'} on load case '{case.name}': {exc.reason}; "
+            f"{self.model or 'model'} on load case '{case.name}': {reason}; "
             f"last converged load {lam * case.magnitude:.6g} {case.unit} "
             f"({100 * lam:.2f} % of full load)",
             lam,

@@ -97,8 +97,13 @@ class Tangent(Protocol):
         """
         ...
 
-    def negative_eigenvalues(self) -> int | None:
-        """Number of eigenvalues below -ROUND_OFF |K| (None: could not be judged)."""
+    def negative_eigenvalues(self, round_off: float = ROUND_OFF) -> int | None:
+        """Number of eigenvalues below -round_off |K| (None: could not be judged).
+
+        ``round_off`` 0 counts every negative eigenvalue, however small: the
+        exact inertia a bifurcation search bisects on (the stability test
+        keeps a margin for round-off).
+        """
         ...
 
     def toarray(self) -> np.ndarray:
@@ -141,12 +146,12 @@ class DenseTangent:
             raise np.linalg.LinAlgError(f"singular tangent (zero pivot {info})")
         return lapack.dsytrs(ldu, ipiv, rhs)[0]
 
-    def negative_eigenvalues(self) -> int | None:
+    def negative_eigenvalues(self, round_off: float = ROUND_OFF) -> int | None:
         """Zero when the Cholesky succeeded, else the negative eigenvalues of LDL^T's D.
 
         D's 1 x 1 blocks and 2 x 2 blocks (rows k, k + 1 of the upper
         factorisation, marked by ipiv[k] = ipiv[k + 1] < 0) give its
-        eigenvalues directly; those below -ROUND_OFF times the largest in
+        eigenvalues directly; those below -``round_off`` times the largest in
         size count. (Plain floats: at most ``DENSE_LIMIT`` of them.)
         """
         if not np.isfinite(self.matrix).all():
@@ -163,7 +168,7 @@ class DenseTangent:
                 a, b, c = eigenvalues[k], off[k], eigenvalues[k + 1]
                 mid, radius = 0.5 * (a + c), math.hypot(0.5 * (a - c), b)
                 eigenvalues[k], eigenvalues[k + 1] = mid - radius, mid + radius
-        limit = -ROUND_OFF * max(map(abs, eigenvalues), default=0.0)
+        limit = -round_off * max(map(abs, eigenvalues), default=0.0)
         return len([value for value in eigenvalues if value < limit])
 
     def toarray(self) -> np.ndarray:
@@ -268,7 +273,7 @@ class BandedTangent:
             solve(rhs[:, k], self.perm, token, x[:, k])
         return x
 
-    def negative_eigenvalues(self) -> int | None:
+    def negative_eigenvalues(self, round_off: float = ROUND_OFF) -> int | None:
         """Zero when the banded Cholesky of the solves succeeded (O(n b^2), no extra work).
 
         Otherwise the count comes from banded bisection (``eigvals_banded``),
@@ -282,7 +287,7 @@ class BandedTangent:
             return 0
         scale = np.abs(upper).max(initial=0.0) * (2 * self.b + 1)  # >= spectral radius
         negative = sla.eigvals_banded(
-            upper, select="v", select_range=(-np.inf, -ROUND_OFF * scale), check_finite=False
+            upper, select="v", select_range=(-np.inf, -round_off * scale), check_finite=False
         )
         return int(negative.size)
 
@@ -315,7 +320,7 @@ class SparseTangent:
             self._lu = spla.splu(self.matrix)
         return self._lu.solve(rhs)
 
-    def negative_eigenvalues(self) -> int | None:
+    def negative_eigenvalues(self, round_off: float = ROUND_OFF) -> int | None:
         """Signs of the pivots of a symmetric-mode LU with diagonal pivoting (an LDL^T).
 
         Not judged (None) for saddle-point systems, whose zero diagonal breaks
@@ -335,7 +340,7 @@ class SparseTangent:
         except RuntimeError:
             return None
         d = lu.U.diagonal()
-        return int(np.sum(d < -ROUND_OFF * np.abs(d).max(initial=0.0)))
+        return int(np.sum(d < -round_off * np.abs(d).max(initial=0.0)))
 
     def toarray(self) -> np.ndarray:
         return self.matrix.toarray()

@@ -28,12 +28,19 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
+from .bifurcation import BIFURCATION_RTOL, classify
 from .loads import Loads
 from .newton import FixedLoad, NewtonResult, StepProblem, StepRefused, solve_step
 from .tangent import Tangent
 
 if TYPE_CHECKING:
     from .core import System
+
+BIFURCATION_PROBE = 0.02
+"""How far beyond a suspected bifurcation (relative load factor) load control probes for
+the equilibrium that a bifurcation leaves and a limit point does not: far enough that the
+state's round-off along the critical mode (residual over a vanishing eigenvalue) is small
+beside the step along the path."""
 
 PREDICTOR_STATES = 5
 """Converged states the load-control predictor extrapolates through (a quartic).
@@ -87,6 +94,9 @@ class PathPoint:
         arc length; 0 for the first point).
     counters : Counters
         Totals along the path up to this point.
+    bifurcations : tuple of float
+        Load factors of the bifurcation points located since the previous
+        point (see :mod:`flexval.reducedmodels.bifurcation`).
     """
 
     state: np.ndarray
@@ -95,21 +105,38 @@ class PathPoint:
     tangent: Tangent | None
     step: float
     counters: Counters
+    bifurcations: tuple[float, ...] = ()
 
 
 class TraceFailure(Exception):
-    """The tracer cannot continue; carries the reason, the last converged factor and the counts."""
+    """The tracer cannot continue; carries the reason, the last converged factor and the counts.
 
-    def __init__(self, reason: str, factor: float, counters: Counters):
+    ``bifurcations`` are the load factors of the bifurcation points located
+    since the last reported point; ``bifurcation`` is the load factor of the
+    one that stopped the path (load control beyond it finds only unstable
+    equilibria), or None.
+    """
+
+    def __init__(
+        self,
+        reason: str,
+        factor: float,
+        counters: Counters,
+        bifurcations: Sequence[float] = (),
+        bifurcation: float | None = None,
+    ):
         super().__init__(reason)
         self.reason, self.factor, self.counters = reason, factor, counters
+        self.bifurcations, self.bifurcation = tuple(bifurcations), bifurcation
 
 
 class Verdict(NamedTuple):
     """A stepping strategy's review of one Newton solve.
 
     ``state`` None means the step is refused (``reason`` says why) and will
-    be cut; ``fast`` says the step was easy enough to grow the next one.
+    be cut; ``fast`` says the step was easy enough to grow the next one;
+    ``bifurcations`` are the load factors of bifurcation points located in
+    the step.
     """
 
     state: np.ndarray | None
@@ -117,6 +144,7 @@ class Verdict(NamedTuple):
     reason: str
     tangent: Tangent | None
     fast: bool
+    bifurcations: tuple[float, ...] = ()
 
 
 class Stepping(ABC):
@@ -168,6 +196,13 @@ class Stepping(ABC):
         """Why the path must stop now although unfinished (a step budget), or None."""
         return None
 
+    def stopped_by_bifurcation(self, solve: Solve) -> float | None:
+        """The load factor of a bifurcation that the last refused steps could not pass, or None.
+
+        ``solve`` is the tracer's counted Newton solve, for any probe.
+        """
+        return None
+
 
 def trace(system: System, loads: Loads, stepping: Stepping) -> Iterator[PathPoint]:
     """Yield the converged points of the path ``stepping`` follows under ``loads``.
@@ -200,7 +235,7 @@ def trace(system: System, loads: Loads, stepping: Stepping) -> Iterator[PathPoin
     except StepRefused as exc:
         raise TraceFailure(str(exc), point.factor, counters) from None
     yield point
-    spent = 0
+    spent, found = 0, ()
     while not stepping.finished():
         problem, guess, origin = stepping.attempt()
         before = counters.newton_iterations
@@ -213,9 +248,12 @@ def trace(system: System, loads: Loads, stepping: Stepping) -> Iterator[PathPoin
                     f"{stepping.cut_name} cutting failed ({verdict.reason})",
                     stepping.factor,
                     counters,
+                    found,
+                    stepping.stopped_by_bifurcation(solve),
                 )
             continue
         counters.substeps += 1
+        found += verdict.bifurcations
         reported = stepping.advance(verdict)
         if reported is not None:
             yield PathPoint(
@@ -225,11 +263,12 @@ def trace(system: System, loads: Loads, stepping: Stepping) -> Iterator[PathPoin
                 verdict.tangent,
                 stepping.step_size(),
                 counters.copy(),
+                found,
             )
-            spent = 0
+            spent, found = 0, ()
         why = stepping.exhausted(counters)
         if why is not None:
-            raise TraceFailure(why, stepping.factor, counters)
+            raise TraceFailure(why, stepping.factor, counters, found)
 
 
 class LoadControl(Stepping):
@@ -270,6 +309,10 @@ class LoadControl(Stepping):
         """Start at the first requested factor."""
         self.system, self.loads, self.settings = system, loads, system.settings
         self.q, self.factor = point.state, point.factor
+        self.tangent = point.tangent  # at the last accepted state, to classify a bifurcation
+        self.level = (self.q, self.factor)  # the state at the last requested factor reached
+        self.unstable_above: float | None = None  # least factor refused as unstable
+        self.refused_unstable = False  # the last refusal was an unstable equilibrium
         self.history = [(self.q, self.factor)]  # converged (state, factor) for the predictor
         # what the connectors' own predictors keep of each state, computed once per state
         self.past = [system.remembered(self.q)] if system.predicts_internal else None
@@ -320,12 +363,16 @@ class LoadControl(Stepping):
         """Refuse non-convergence, a step beyond the bounds and (optionally) instability."""
         q_new, why = result.state, result.reason
         ratio = self.system.motion_ratio(self.q, q_new) if q_new is not None else math.inf
+        self.refused_unstable = False
         if ratio <= 1.0 and self.settings.check_stability and self.system.unstable(result.tangent):
             q_new, ratio, why = (
                 None,
                 math.inf,
                 ("converged to an unstable equilibrium (past a limit point?)"),
             )
+            self.refused_unstable = True
+            if self.unstable_above is None or result.factor < self.unstable_above:
+                self.unstable_above = result.factor
         if ratio > 1.0:
             return Verdict(
                 None, result.factor, why if q_new is None else "step too large", None, False
@@ -349,12 +396,15 @@ class LoadControl(Stepping):
         What the predictor keeps of the state (history, slope) is computed
         only if the path goes on after it.
         """
-        self.q, self.factor = verdict.state, verdict.factor
+        self.q, self.factor, self.tangent = verdict.state, verdict.factor, verdict.tangent
+        if self.unstable_above is not None and self.factor >= self.unstable_above:
+            self.unstable_above = None  # that unstable state lay on another branch
         if verdict.fast:
             self.step = min(2.0 * self.step, self.spacing)
         reached = None
         if not self.factor < self.target - 1e-14 * self.spacing:
             reached, self.target = self.target, next(self.targets, None)
+            self.level = (self.q, self.factor)
         if self.target is not None:
             self.slope = self._slope(verdict.tangent) if self.system.predicts_with_slope else None
             self.history = [*self.history[1 - PREDICTOR_STATES :], (self.q, self.factor)]
@@ -365,6 +415,74 @@ class LoadControl(Stepping):
     def step_size(self) -> float:
         """Load-factor increment of the last accepted sub-step."""
         return self.last_step
+
+    def stopped_by_bifurcation(self, solve: Solve) -> float | None:
+        """The bifurcation between the last stable state and the nearest unstable one, if it is one.
+
+        When step cutting fails on an unstable equilibrium converged within
+        the step bounds, the crossing lies between the last accepted factor
+        and the least factor refused as unstable (cutting has closed that
+        bracket to ``min_step``). Near a limit point load control can also
+        converge to the unstable twin of the stable state, so the path is
+        probed :data:`BIFURCATION_PROBE` (relative) beyond: a bifurcation
+        leaves an equilibrium there, within the step bounds, unstable, reached
+        from the stable state along a direction that is not the critical
+        mode of the last stable tangent
+        (:func:`~flexval.reducedmodels.bifurcation.classify`); a limit point
+        leaves none. Returns the bracket's middle, or None.
+        """
+        above, system = self.unstable_above, self.system
+        if not self.refused_unstable or above is None or self.tangent is None:
+            return None
+        if above - self.factor > BIFURCATION_RTOL * max(abs(above), abs(self.factor)):
+            return None
+        trial = self.factor + BIFURCATION_PROBE * max(abs(self.factor), self.spacing)
+        q_level, factor_level = self.level  # a linear guess: the sub-steps near the crossing
+        span = self.factor - factor_level  # are too close together to extrapolate through
+        guess = (
+            self.q if span <= 0.0 else self.q + (self.q - q_level) * ((trial - self.factor) / span)
+        )
+        probe = solve(FixedLoad(system, self.loads, trial), guess, self.q)
+        if probe.state is None or system.motion_ratio(self.q, probe.state) > 1.0:
+            return None
+        if not system.unstable(probe.tangent):
+            return None
+        try:
+            split, _ = classify(system, self.tangent, probe.state - self.q)
+        except (ValueError, RuntimeError, np.linalg.LinAlgError):
+            return None
+        return self._exact_crossing(solve, 0.5 * (self.factor + above)) if split else None
+
+    def _exact_crossing(self, solve: Solve, found: float) -> float:
+        """The crossing where every negative eigenvalue counts, below ``found`` if it lies there.
+
+        The stability test leaves eigenvalues above -ROUND_OFF |K| uncounted
+        (on a stiff tangent the crossing is found late by up to 0.2 %:
+        beam:100's column). When the last stable state has a negative
+        eigenvalue that small, the crossing is bisected on the load factor
+        between the last requested level and it, from linear guesses along
+        that stretch, to ``BIFURCATION_RTOL``.
+        """
+        system, loads = self.system, self.loads
+        if system.instability(self.tangent, 0.0) == 0:
+            return found
+        (q_lo, lo), (q_hi, hi) = self.level, (self.q, self.factor)
+        if system.instability(self.system.assemble(q_lo, loads, lo)[2], 0.0) != 0:
+            return found
+        while hi - lo > BIFURCATION_RTOL * abs(hi):
+            mid = 0.5 * (lo + hi)
+            guess = q_lo + (q_hi - q_lo) * ((mid - lo) / (hi - lo))
+            result = solve(FixedLoad(system, loads, mid), guess, q_lo)
+            if result.state is None:
+                return found
+            count = system.instability(system.assemble(result.state, loads, mid)[2], 0.0)
+            if count is None:
+                return found
+            if count == 0:
+                q_lo, lo = result.state, mid
+            else:
+                q_hi, hi = result.state, mid
+        return 0.5 * (lo + hi)
 
     def exhausted(self, counters: Counters) -> str | None:
         """More sub-steps than ``max_substeps``."""

@@ -131,6 +131,10 @@ def _run_request(args: argparse.Namespace, scene) -> tuple[list, list, frozenset
             args.max_load_factor,
             "applies to --arclength traces only",
         )
+    if args.branch_switch and not args.arclength:
+        raise SceneError(
+            "<command line>", "--branch-switch", True, "applies to --arclength traces only"
+        )
     if args.arclength:
         from .limits import check_arclength
 
@@ -182,6 +186,31 @@ def _check_memory(paths, source: str, field: str, parallel: int = 1, quiet: bool
     check_models(paths, source, field, parallel, quiet)
 
 
+def _keep_on_interrupt(description) -> None:
+    """What SIGINT or SIGTERM keeps from now on (:func:`flexval.validation.interrupt.keep`)."""
+    from .interrupt import keep
+
+    keep(description)
+
+
+def _keep_cached(enabled: bool, more: str = "") -> None:
+    """An interruption keeps the load paths finished so far in the result cache, if it is
+    used (the same command then reads them), and nothing otherwise."""
+
+    def description() -> str:
+        from .cache import ResultCache
+
+        cache = ResultCache(enabled=enabled)
+        if not cache.enabled:
+            return "no load path (the result cache is not used)" + more
+        return (
+            f"the load paths finished so far, in the result cache {cache.root}; "
+            "the same command reuses them" + more
+        )
+
+    _keep_on_interrupt(description)
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from flexval.reducedmodels.catalogue import FIELDS
 
@@ -212,6 +241,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         return _run_dynamic(args, scene, specs, cases, json_path)
     out_dir = check_folder(args.out_dir, "--out-dir") if fields else None
     cache = ResultCache(enabled=args.cache)
+    _keep_cached(cache.enabled and not args.arclength)
     inertia = scene.mechanism.inertia
     massless = inertia.massless_bodies(scene.mechanism.moving_bodies)
     if inertia.gravity is not None and massless:
@@ -235,6 +265,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
                 max_factor,
                 args.levels - 1 if args.levels else DEFAULT_STEPS,
                 record_poses=record["record_poses"],
+                branch_switch=args.branch_switch,
             )
         # field outputs need the solve
         key = (
@@ -296,6 +327,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
                 f"{'':<{columns[0].size}}{GAP}limit point: load {point['load']:.6g} "
                 f"{lp.load_unit}, dx {point['dx']:.6g} mm, dy {point['dy']:.6g} mm, "
                 f"rot {math.degrees(point['rotation']):.6g} deg"
+            )
+        for point in lp.bifurcations or []:
+            print(
+                f"{'':<{columns[0].size}}{GAP}bifurcation: load {point['load']:.6g} "
+                f"{lp.load_unit} (fraction {point['fraction']:.6g})"
             )
 
     print(header(columns))
@@ -557,6 +593,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
     specs = _parse_models(models, "<command line>", "--model")
     _check_report_memory(scenes, specs, args)
     out = check_folder(args.out, "--out")  # created only once the rest is known good
+    _keep_cached(not args.no_cache, f"; the files written in {out} are whole")
     path = build_report(
         scenes,
         out,
@@ -581,6 +618,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene)
     (ref,) = _parse_models([args.reference], "<command line>", "--reference")
     out = check_folder(args.out, "--out")
+    _keep_cached(not args.no_cache)
     rows, failures = runtime_vs_error(
         scene,
         ref,
@@ -627,6 +665,33 @@ def _cmd_stress(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _close_cluster(cluster) -> None:
+    """Close the local Dask cluster (None: none was made, or its start was interrupted).
+
+    After SIGINT or SIGTERM (:mod:`flexval.validation.interrupt`) its worker processes are
+    ended first, and the close waits for nothing: Dask's own closing at exit, which waits
+    for the workers it lost, is dropped."""
+    from .interrupt import received, stop_children
+
+    if received() is None:
+        if cluster is not None:
+            cluster.close()
+        return
+    import atexit
+    import logging
+
+    from distributed.deploy.spec import close_clusters
+
+    logging.disable(logging.CRITICAL)  # Dask's complaints about the workers it lost
+    atexit.unregister(close_clusters)
+    stop_children()
+    if cluster is not None:
+        try:
+            cluster.close(timeout=0.5)
+        except Exception:  # the workers are gone; the scheduler ends with this process
+            pass
+
+
 def _cmd_sweep(args: argparse.Namespace) -> int:
     import dataclasses
 
@@ -638,6 +703,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         sweep_rows,
         write_outputs,
     )
+    from .sweep.engine import stop_workers_on_signals
 
     if args.scheduler and args.workers is not None:
         raise SceneError(
@@ -674,12 +740,10 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         args.out if args.out is not None else os.path.join("sweeps", safe_name(sweep.name)), "--out"
     )
     results_store(sweep, out).check()  # a dataset of another format: refused up front
-    if args.batch is not None:
-        sweep = dataclasses.replace(sweep, batch=args.batch)
-    out = check_folder(
-        args.out if args.out is not None else os.path.join("sweeps", safe_name(sweep.name)), "--out"
+    _keep_on_interrupt(
+        lambda: f"{len(results_store(sweep, out).parts())} finished Parquet parts in "
+        f"{out / 'results'}; the same command resumes from them"
     )
-    results_store(sweep, out).check()  # a dataset of another format: refused up front
     invalid = len(sweep.points) - len(sweep.valid_points)
     print(
         f"sweep {sweep.name}: {len(sweep.points)} points ({invalid} invalid), "
@@ -709,11 +773,11 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         else:
             cluster = local_cluster(args.workers)
             client = Client(cluster)
+            stop_workers_on_signals(client)
         with client:
             stats = run_sweep(sweep, out, client, use_cache=not args.no_cache, progress=progress)
     finally:
-        if cluster is not None:
-            cluster.close()
+        _close_cluster(cluster)
     rows = sweep_rows(sweep, out)
     write_outputs(sweep, rows, out, stats.seconds)
     stale = len(results_store(sweep, out).keys()) - len(rows)
@@ -831,6 +895,12 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         metavar="X",
         help="with --arclength: trace up to X times the load case's value (default 1)",
+    )
+    q.add_argument(
+        "--branch-switch",
+        action="store_true",
+        help="with --arclength: at the first bifurcation point, follow the crossing branch "
+        "(a step along the critical mode) instead of the traced one",
     )
     q.add_argument(
         "--out-dir",
@@ -1090,18 +1160,31 @@ def main(argv: list[str] | None = None) -> int:
     interpreter's teardown (a fifth of a small model's whole run), and a
     reader that closes the output pipe early only discards the rest of the
     output. Called from Python with a list of arguments, ``main`` returns.
+    The console script also stops in order on SIGINT and SIGTERM
+    (:mod:`flexval.validation.interrupt`): exit status 130 or 143.
     """
-    args = build_parser().parse_args(argv)
     if argv is None:
+        from .interrupt import install
         from .process import discard_output_when_reader_leaves
 
+        install()  # SIGINT/SIGTERM: orderly stop, exit 130/143 (flexval.validation.interrupt)
         discard_output_when_reader_leaves()
-    with warnings.catch_warnings():
-        warnings.showwarning = _show_warning
-        status = _dispatch(args)
+    try:
+        args = build_parser().parse_args(argv)
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            status = _dispatch(args)
+    except BaseException:
+        from .interrupt import finish, received
+
+        if received() is None:
+            raise
+        finish(received())  # ends the process: 128 + the signal number
     if argv is None:
+        from .interrupt import uninstall
         from .process import end_process
 
+        uninstall()
         end_process(status)
     return status
 

@@ -32,6 +32,7 @@ def trace_arclength(
     max_load_factor: float = 1.0,
     n_steps: int = DEFAULT_STEPS,
     record_poses: bool = False,
+    branch_switch: bool = False,
 ) -> LoadPath:
     """Trace ``case`` with ``spec`` by arc-length continuation up to ``max_load_factor``.
 
@@ -48,12 +49,16 @@ def trace_arclength(
         Sets the initial arc length (see ``solve_arclength``).
     record_poses : bool
         Also record every body's pose at each point.
+    branch_switch : bool
+        At the first bifurcation point, follow the crossing branch (see
+        :class:`flexval.reducedmodels.continuation.ArcLength`).
 
     Returns
     -------
     LoadPath
         Model ``<id>:arclength``; every converged point in the order traced
-        (the load may rise and fall) and ``limit_points`` (see :func:`limit_points`).
+        (the load may rise and fall), ``limit_points`` (see :func:`limit_points`)
+        and ``bifurcations``.
 
     Raises
     ------
@@ -74,6 +79,7 @@ def trace_arclength(
             scene=scene.name,
             max_steps=100 * n_steps,
             record_poses=record_poses,
+            branch_switch=branch_switch,
         )
     except SolverError as exc:
         if exc.path is not None:
