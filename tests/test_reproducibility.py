@@ -78,3 +78,179 @@ def test_dynamic_run_is_bit_identical_in_one_process_and_across_processes():
     assert first["frequencies"] == second["frequencies"]
     assert first["histories"][0] == first["histories"][1]  # same process
     assert first["histories"] == second["histories"]  # another process
+
+
+CLI = [sys.executable, "-m", "flexval.validation.cli"]
+THREAD_VARIABLES = ("FLEXVAL_BLAS_THREADS", "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")
+
+
+def _env(cache: Path, **extra: str) -> dict[str, str]:
+    """This process's environment with its own result/mesh cache, no thread settings
+    inherited (flexval's default BLAS cap applies), and ``extra`` on top."""
+    env = {k: v for k, v in os.environ.items() if k not in THREAD_VARIABLES}
+    return {**env, "PYTHONPATH": str(ROOT), "FLEXVAL_CACHE": str(cache), **extra}
+
+
+def _flexval(jobs: list[tuple[list[str], dict[str, str]]], cwd: Path) -> None:
+    """Run ``flexval ARGS`` once per (args, environment), all at the same time."""
+    procs = [
+        subprocess.Popen(
+            [*CLI, *args],
+            env=env,
+            cwd=cwd,
+            text=True,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+        )
+        for args, env in jobs
+    ]
+    for args, p in zip([a for a, _ in jobs], procs, strict=True):
+        _, err = p.communicate()
+        assert p.returncode == 0, (args, err)
+
+
+def numbers(value: object) -> object:
+    """``value`` (parsed JSON or a row) with every float as its exact hex form and the
+    wall times (``seconds``) left out: what must agree bit for bit between runs."""
+    if isinstance(value, dict):
+        return {k: numbers(v) for k, v in value.items() if k != "seconds"}
+    if isinstance(value, list):
+        return [numbers(v) for v in value]
+    if isinstance(value, float):
+        return value.hex()
+    return value
+
+
+def _dense_open_chain(folder: Path) -> Path:
+    """The open chain with PLA flexures (the dynamic protocol's masses) as a scene file."""
+    from flexval.geometry.inertia import PLA_DENSITY
+
+    text = (ROOT / "geometry" / "scenes" / "open_chain.toml").read_text(encoding="utf-8")
+    dense = text.replace("[material]\n", f"[material]\ndensity = {PLA_DENSITY!r}\n", 1)
+    assert dense != text
+    path = folder / "open_chain_pla.toml"
+    path.write_text(dense, encoding="utf-8")
+    return path
+
+
+def test_damped_dynamic_beam20_path_is_bit_identical_in_three_processes(tmp_path):
+    """The dynamic protocol's beam:20 on the open chain's f- case (PLA flexures, damping
+    ratio 0.2 at its two lowest frequencies, the protocol's error bound 1e-8: about 1100
+    adaptive steps, a fifth of them rejected), three processes at once, each with its own
+    cache and another OPENBLAS_NUM_THREADS (the default cap applies): every number of the
+    three histories agrees bit for bit."""
+    scene = _dense_open_chain(tmp_path)
+    args = [
+        "run",
+        str(scene),
+        "--dynamic",
+        "--model",
+        "beam:20",
+        "--load-case",
+        "f-",
+        "--damping-ratio",
+        "0.2",
+        "--duration",
+        "0.2",
+        "--error-tol",
+        "1e-8",
+    ]
+    blas = ({}, {"OPENBLAS_NUM_THREADS": "1"}, {"OPENBLAS_NUM_THREADS": "2"})
+    jobs = [
+        ([*args, "--json", str(tmp_path / f"run{k}.json")], _env(tmp_path / f"cache{k}", **extra))
+        for k, extra in enumerate(blas)
+    ]
+    _flexval(jobs, tmp_path)
+    runs = [json.loads((tmp_path / f"run{k}.json").read_text()) for k in range(len(jobs))]
+    (result,) = runs[0]["results"]
+    assert result["settings"]["rayleigh_alpha"] > 0 and result["settings"]["rayleigh_beta"] > 0
+    assert len(result["time"]) > 500 and result["stats"]["rejected_steps"] > 50
+    assert numbers(runs[1]) == numbers(runs[0])
+    assert numbers(runs[2]) == numbers(runs[0])
+
+
+def test_static_paths_are_bit_identical_across_processes_and_mesh_caches(tmp_path):
+    """beam:100, dcmm:2, prbm and the continuum (level 1) on f-: a first run meshes the
+    flexures into its cache; then one run reads those meshes from it (other
+    OPENBLAS_NUM_THREADS) while another meshes them anew in its own cache. The three
+    JSON documents agree bit for bit."""
+    args = ["run", "open_chain", "--load-case", "f-"]
+    for m in ("beam:100", "dcmm:2", "prbm", "continuum:1"):
+        args += ["--model", m]
+    warm, fresh = tmp_path / "cache", tmp_path / "fresh"
+    _flexval([([*args, "--json", str(tmp_path / "first.json")], _env(warm))], tmp_path)
+    assert list((warm / "meshes").iterdir())  # the second run reads meshes from here
+    _flexval(
+        [
+            ([*args, "--json", str(tmp_path / "warm.json")], _env(warm, OPENBLAS_NUM_THREADS="2")),
+            ([*args, "--json", str(tmp_path / "fresh.json")], _env(fresh)),
+        ],
+        tmp_path,
+    )
+    first, *others = (
+        numbers(json.loads((tmp_path / f"{name}.json").read_text()))
+        for name in ("first", "warm", "fresh")
+    )
+    assert len(first["results"]) == 4
+    assert all(other == first for other in others)
+
+
+SWEEP = """
+name = "repro"
+base = "open_chain"
+models = ["beam:20", "dcmm:1"]
+reference = "prbm"
+load_cases = ["f+", "m-"]
+batch = 1
+
+[[axes]]
+path = "section.thickness"
+values = [0.09, 0.11]
+
+[[axes]]
+path = "material.youngs_modulus"
+values = [2000.0, 2200.0]
+"""
+"""Four points, two models and a reference, two load cases, one point per task: 24 rows
+from 12 tasks, spread over the workers differently with one worker and with two."""
+
+
+def test_a_sweep_gives_identical_rows_with_one_and_two_workers(tmp_path):
+    import pyarrow.parquet as pq
+
+    sweep = tmp_path / "repro.toml"
+    sweep.write_text(SWEEP, encoding="utf-8")
+    jobs = [
+        (
+            ["sweep", str(sweep), "--out", str(tmp_path / f"w{n}"), "--workers", str(n)]
+            + ["--no-cache", "--quiet"],
+            _env(tmp_path / f"cache{n}"),
+        )
+        for n in (1, 2)
+    ]
+    _flexval(jobs, tmp_path)
+    tables = []
+    for n in (1, 2):
+        rows = pq.read_table(tmp_path / f"w{n}" / "results").to_pylist()
+        tables.append(sorted((numbers(r) for r in rows), key=lambda r: r["key"]))
+    assert len(tables[0]) == 24 and all(r["status"] == "ok" for r in tables[0])
+    assert tables[1] == tables[0]
+
+
+def test_a_report_gives_identical_results_and_gates_with_and_without_the_cache(tmp_path):
+    """Two reports of the open chain (beam:100 as reference, beam:20 and dcmm:1): the
+    first on two processes filling the cache, the second on one recomputing everything.
+    results.json and gates.json are the same bytes."""
+    args = ["report", "open_chain", "--no-bench", "--no-converge", "--quiet"]
+    for m in ("beam:100", "beam:20", "dcmm:1"):
+        args += ["--model", m]
+    cache = tmp_path / "cache"
+    _flexval([([*args, "--out", str(tmp_path / "a"), "--jobs", "2"], _env(cache))], tmp_path)
+    _flexval(
+        [([*args, "--out", str(tmp_path / "b"), "--jobs", "1", "--no-cache"], _env(cache))],
+        tmp_path,
+    )
+    gates = json.loads((tmp_path / "a" / "gates.json").read_text())
+    assert gates["open_chain"]["beam:100"]["dcmm:1"]  # the comparisons are there
+    for name in ("results.json", "gates.json"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
