@@ -6,7 +6,9 @@ a unique name in the target's own folder, flushed to disk (fsync) and then
 renamed over the target (``os.replace``, atomic on POSIX). A reader never
 sees a half-written file, two processes writing the same target never
 collide on a temporary name, and a failed write leaves the target as it was
-and no temporary file behind; it raises :class:`OutputError`.
+and no temporary file behind; it raises :class:`OutputError`. The
+temporary files being written are also listed (:func:`remove_temporaries`),
+so that a process stopped by a signal can remove them before it ends.
 
 This module sits in ``geometry`` because it is the lowest layer: the mesh
 cache here and every writer in ``validation`` share it.
@@ -43,6 +45,30 @@ class OutputError(OSError):
 
 class CacheWarning(UserWarning):
     """A cache entry or the cache folder is unusable; the result is recomputed."""
+
+
+_LIVE: dict[Path, int] = {}
+"""The temporary files :func:`atomic_path` is writing, with the id of the process writing each
+(a forked child inherits its parent's entries; it removes only its own)."""
+
+
+def remove_temporaries() -> list[Path]:
+    """Remove the temporary files this process's :func:`atomic_path` calls are writing.
+
+    For a process that ends on a signal (:mod:`flexval.validation.interrupt`): the
+    targets stay as they were. Returns the removed paths.
+    """
+    pid = os.getpid()
+    removed = []
+    for tmp, owner in list(_LIVE.items()):
+        if owner == pid:
+            _LIVE.pop(tmp, None)
+            try:
+                tmp.unlink()
+            except OSError:
+                continue
+            removed.append(tmp)
+    return removed
 
 
 def _umask() -> int:
@@ -88,6 +114,7 @@ def atomic_path(target: str | Path) -> Iterator[Path]:
     except OSError as exc:
         raise OutputError(target, exc.strerror or str(exc)) from exc
     tmp = Path(name)
+    _LIVE[tmp] = os.getpid()
     try:
         yield tmp
         with open(tmp, "rb+") as fh:
@@ -102,6 +129,8 @@ def atomic_path(target: str | Path) -> Iterator[Path]:
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+    finally:
+        _LIVE.pop(tmp, None)
     _fsync_folder(target.parent)
 
 

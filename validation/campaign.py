@@ -27,6 +27,7 @@ from flexval.reducedmodels import LoadPath, ModelSpec, SolverError
 
 from .cache import ResultCache, result_key
 from .failures import Failure, failure_of
+from .interrupt import stop_pool, worker_signals
 from .run import run_model
 
 
@@ -127,7 +128,9 @@ def prefetch(jobs: list[Job], memo: RunMemo, workers: int, progress: bool = True
     cache is read, not recomputed.
 
     Nothing happens with fewer than two workers: the campaigns then run every
-    job themselves, one after the other.
+    job themselves, one after the other. An exception here (SIGINT or SIGTERM
+    among them) stops the workers at once; the paths they finished are in the
+    disk cache.
     """
     todo: dict[str, Job] = {}
     for job in jobs:
@@ -135,7 +138,8 @@ def prefetch(jobs: list[Job], memo: RunMemo, workers: int, progress: bool = True
     if workers < 2 or len(todo) < 2:
         return
     bar = Progress(len(todo), enabled=progress)
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    pool = ProcessPoolExecutor(max_workers=workers, initializer=worker_signals)
+    try:
         futures = {pool.submit(_run_job, job, memo.disk): key for key, job in todo.items()}
         for fut in as_completed(futures):
             lp, job = fut.result(), todo[futures[fut]]
@@ -143,6 +147,10 @@ def prefetch(jobs: list[Job], memo: RunMemo, workers: int, progress: bool = True
                 memo.remember(futures[fut], lp)
             state = "FAILED" if lp is None else f"{lp.seconds:.3g} s"
             bar.step(f"{job.scene.name} {job.spec.id} {job.case.name} {state}")
+    except BaseException:  # an interruption (flexval.validation.interrupt) or a failure
+        stop_pool(pool)  # the queued jobs are dropped, not waited for
+        raise
+    pool.shutdown()
 
 
 def timed_run(

@@ -741,8 +741,10 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     )
     results_store(sweep, out).check()  # a dataset of another format: refused up front
     _keep_on_interrupt(
-        lambda: f"{len(results_store(sweep, out).parts())} finished Parquet parts in "
-        f"{out / 'results'}; the same command resumes from them"
+        lambda: (
+            f"{len(results_store(sweep, out).parts())} finished Parquet parts in "
+            f"{out / 'results'}; the same command resumes from them"
+        )
     )
     invalid = len(sweep.points) - len(sweep.valid_points)
     print(

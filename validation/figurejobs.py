@@ -6,13 +6,17 @@ file it is given and nothing the text depends on: the text links to the path
 it chose. :class:`Figures` runs them on ``workers`` processes, or at once in
 this process with one worker; :meth:`Figures.wait` (also on leaving the
 ``with`` block) waits for every figure and raises the first failure, e.g. an
-:class:`~flexval.validation.outputs.OutputError`, as the serial run would.
+:class:`~flexval.validation.outputs.OutputError`, as the serial run would. An
+exception in the block (SIGINT or SIGTERM among them) stops the workers at
+once: a figure being drawn is not written, and its temporary file is removed.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
+
+from .interrupt import stop_pool, worker_signals
 
 
 def draw_now(fn: Callable, *args, **kwargs) -> None:
@@ -30,7 +34,11 @@ class Figures:
     """
 
     def __init__(self, workers: int = 1):
-        self.pool = ProcessPoolExecutor(max_workers=workers) if workers > 1 else None
+        self.pool = (
+            ProcessPoolExecutor(max_workers=workers, initializer=worker_signals)
+            if workers > 1
+            else None
+        )
         self.pending: list[Future] = []
 
     def draw(self, fn: Callable, *args, **kwargs) -> None:
@@ -53,6 +61,13 @@ class Figures:
         try:
             if exc_type is None:
                 self.wait()
-        finally:
+        except BaseException:
             if self.pool is not None:
-                self.pool.shutdown(wait=True, cancel_futures=True)
+                stop_pool(self.pool)
+            raise
+        if self.pool is None:
+            return
+        if exc_type is None:
+            self.pool.shutdown(wait=True)
+        else:  # e.g. SIGINT or SIGTERM (flexval.validation.interrupt): no figure is waited for
+            stop_pool(self.pool)

@@ -124,6 +124,26 @@ def local_cluster(workers: int | None = None):
     )
 
 
+def stop_workers_on_signals(client) -> None:
+    """Make the workers of a local cluster end at once on SIGINT or SIGTERM, after removing
+    their own temporary files (:func:`flexval.validation.interrupt.worker_signals`): a
+    terminal's Ctrl-C reaches them too, and an interrupted sweep sends them SIGTERM."""
+    from distributed.diagnostics.plugin import WorkerPlugin
+
+    class WorkerSignals(WorkerPlugin):
+        name = "flexval-worker-signals"
+
+        def setup(self, worker) -> None:
+            import threading
+
+            from ..interrupt import worker_signals
+
+            if threading.current_thread() is threading.main_thread():
+                worker_signals()
+
+    client.register_plugin(WorkerSignals())
+
+
 class _Progress:
     """One line per finished task: tasks done, failed rows, ETA from the mean task rate."""
 
