@@ -257,3 +257,56 @@ def test_sigint_on_a_slow_run_exits_130_without_its_json(tmp_path):
     _interrupted_line(prog.stderr, "SIGINT")
     assert not json_path.exists()
     assert _temporaries(tmp_path) == []
+
+
+_STUCK = """
+import sys, time
+from pathlib import Path
+from flexval.geometry.files import atomic_path
+from flexval.validation import interrupt
+
+interrupt.install()
+interrupt.keep("nothing (a test)")
+target = Path(sys.argv[1])
+with atomic_path(target) as tmp:
+    tmp.write_text("half")
+    said = False
+    while True:  # an orderly stop that never comes: each interruption is swallowed
+        try:
+            if not said:
+                said = True
+                print("writing", flush=True)
+            time.sleep(60)
+        except KeyboardInterrupt:
+            pass
+"""
+
+
+def test_a_stop_that_hangs_is_ended_by_the_watcher_with_its_files_removed(tmp_path):
+    """The bound holds when the program does not stop by itself: the watcher thread ends it
+    GRACE_S after the signal, removes the file being written and prints the line."""
+    from flexval.validation.interrupt import GRACE_S
+
+    target = tmp_path / "result.json"
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _STUCK, str(target)],
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    assert proc.stdout.readline().strip() == "writing"
+    assert len(_temporaries(tmp_path)) == 1
+    start = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    status = proc.wait(timeout=30)
+    seconds = time.monotonic() - start
+    assert status == 143, proc.stderr.read()
+    assert GRACE_S <= seconds < STOP_S
+    _interrupted_line(proc.stderr.read(), "SIGTERM")
+    assert list(tmp_path.iterdir()) == []  # neither the target nor its temporary file
+    proc.stdout.close()
+    proc.stderr.close()

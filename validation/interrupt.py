@@ -31,8 +31,8 @@ from __future__ import annotations
 
 import atexit
 import os
+import select
 import signal
-import socket
 import sys
 import threading
 import time
@@ -70,7 +70,7 @@ class _State:
         self.signum: int | None = None
         self.kept: Callable[[], str] | str = "nothing (the same command starts again)"
         self.watcher: threading.Thread | None = None
-        self.wake: tuple[socket.socket, socket.socket] | None = None
+        self.wake: tuple[int, int] | None = None
         self.done = threading.Event()
         self.exiting = threading.Lock()
 
@@ -119,13 +119,13 @@ def install() -> None:
         handled = True
     if not handled or _state.watcher is not None:
         return
-    read, write = socket.socketpair()
-    write.setblocking(False)
+    read, write = os.pipe()
+    os.set_blocking(write, False)
     try:
-        signal.set_wakeup_fd(write.fileno(), warn_on_full_buffer=False)
+        signal.set_wakeup_fd(write, warn_on_full_buffer=False)
     except ValueError:  # not the main thread
-        read.close()
-        write.close()
+        os.close(read)
+        os.close(write)
         return
     _state.wake = (read, write)
     _state.watcher = threading.Thread(target=_watch, args=(read,), name="flexval-interrupt")
@@ -142,12 +142,12 @@ def uninstall() -> None:
     signal.set_wakeup_fd(-1)
     read, write = _state.wake
     try:
-        write.send(_STOP_WATCHER)
+        os.write(write, _STOP_WATCHER)
     except OSError:
         pass
     _state.watcher.join(timeout=1.0)
-    read.close()
-    write.close()
+    os.close(read)
+    os.close(write)
     _state.watcher = _state.wake = None
     for sig in SIGNALS:
         if signal.getsignal(sig) is _on_signal:
@@ -156,18 +156,17 @@ def uninstall() -> None:
             )
 
 
-def _watch(read: socket.socket) -> None:
+def _watch(read: int) -> None:
     """The watcher thread: after the first SIGINT/SIGTERM, end the process if the orderly
     stop takes longer than :data:`GRACE_S`, or at once on a second one."""
     first: int | None = None
     deadline = None
     while True:
-        read.settimeout(None if deadline is None else max(deadline - time.monotonic(), 0.0))
+        wait = None if deadline is None else max(deadline - time.monotonic(), 0.0)
         try:
-            data = read.recv(64)
-        except TimeoutError:
-            data = b""
-        except OSError:
+            ready, _, _ = select.select([read], [], [], wait)
+            data = os.read(read, 64) if ready else b""
+        except (OSError, ValueError):
             return
         if _STOP_WATCHER in data or _state.done.is_set():
             return
