@@ -310,3 +310,15 @@ def test_a_stop_that_hangs_is_ended_by_the_watcher_with_its_files_removed(tmp_pa
     assert list(tmp_path.iterdir()) == []  # neither the target nor its temporary file
     proc.stdout.close()
     proc.stderr.close()
+
+
+def test_sigterm_on_stress_tests_exits_143_and_writes_no_report(tmp_path):
+    out = tmp_path / "stress"
+    argv = ["stress", "open_chain", "--quick", "--model", "beam:20", "--out", str(out)]
+    prog = Program(argv, tmp_path / "cache", tmp_path / "stdout.txt")
+    prog.wait_for("stress open_chain: beam:20")  # the first of its runs is done
+    status, seconds = prog.interrupt(signal.SIGTERM)
+    assert status == 143, prog.stderr
+    assert seconds < STOP_S
+    assert "the same command starts again" in _interrupted_line(prog.stderr, "SIGTERM")
+    assert list(out.iterdir()) == []  # its files are written at the end
