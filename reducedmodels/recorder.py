@@ -164,6 +164,7 @@ class PathRecorder:
         reason = exc.reason
         if exc.bifurcation is not None:
             self._bifurcations([exc.bifurcation])
+            self.stats["stopped_at_bifurcation"] = exc.bifurcation  # load factor
             reason = (
                 f"bifurcation at {exc.bifurcation * case.magnitude:.6g} {case.unit} "
                 f"(fraction {exc.bifurcation:.6g}): beyond it load control finds only "

@@ -19,21 +19,32 @@ beam:100's tip is within 6e-5 of the elastica's. The critical mode's cosine
 with the path's direction (:func:`flexval.reducedmodels.bifurcation.mode_cosine`)
 is about 1e-9 at the column's bifurcation; Lee's frame and the deep arch,
 whose limit points are traced in tests/test_limit_loads.py, report none.
+
+A report on the column tabulates each model's bifurcation beside the limit
+loads, and a sweep's rows carry it (``bifurcation_load``; null where a path
+has none).
 """
 
 from __future__ import annotations
 
 import json
 import math
+import re
 import tomllib
 from pathlib import Path
 
+import pyarrow.parquet as pq
 import pytest
+from distributed import Client, LocalCluster
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
 from flexval.reducedmodels import LoadPath
 from flexval.validation.cli import main
+from flexval.validation.failures import BIFURCATION
+from flexval.validation.report import write_report
+from flexval.validation.reportdata import compute_report
+from flexval.validation.sweep import load_sweep, results_store, run_sweep, sweep_rows, write_outputs
 
 SCENES = Path(__file__).parent / "scenes"
 COLUMN = SCENES / "euler_column.toml"
@@ -120,3 +131,66 @@ def test_bifurcations_round_trip_through_json():
 def test_branch_switch_needs_arclength(tmp_path, capsys):
     assert main(["run", str(COLUMN), "--model", "beam:4", "--branch-switch"]) == 2
     assert "--branch-switch" in capsys.readouterr().err
+
+
+def test_report_tabulates_the_bifurcation_beside_limit_points(tmp_path):
+    """A report on the column: load control stops at Euler's load, a failure at a
+    bifurcation point, tabulated with its load and fraction, named in the findings and
+    the discussion."""
+    data = compute_report(
+        [str(COLUMN)],
+        ["beam:100", "beam:20"],
+        repeats=1,
+        use_cache=False,
+        progress=False,
+        bench=False,
+        converge=False,
+    )
+    text = write_report(data, tmp_path).read_text()
+    (res,) = data.scenes
+    full = _column()[2]
+    for fail in res.failures:
+        assert fail.reason == BIFURCATION
+        assert fail.load == pytest.approx(euler_load(), rel=5e-3)
+    assert [(m, c) for m, c, _, _ in res.bifurcations()] == [("beam:100", "P"), ("beam:20", "P")]
+    table = text.split("### Limit loads and bifurcations against `beam:100`")[1]
+    row = next(line for line in table.splitlines() if line.startswith("| `beam:100` bifurcation |"))
+    load, fraction = re.search(r"\| ([\d.]+) N at ([\d.]+) % \(\+0\.00 %\) \|$", row).groups()
+    assert float(load) == pytest.approx(euler_load(), rel=5e-3)
+    assert float(fraction) == pytest.approx(100 * euler_load() / full, rel=5e-3)
+    assert "| `beam:20` bifurcation |" in table
+    findings = text.split("### Findings")[1].split("## Discussion")[0]
+    assert "`beam:100` on `P` fails at 82 % (bifurcation point, 2.47 N)." in findings
+    assert f"`beam:100` on `P` has a bifurcation point at {load} N" in findings
+    assert "**Bifurcations.** `beam:100` on `P` of euler_column" in text.split("## Discussion")[1]
+
+
+def test_a_sweep_row_carries_the_first_bifurcation(tmp_path):
+    """E doubled puts Euler's load (proportional to E) above the 3 N applied: that row
+    reaches full load and carries a null, never a NaN."""
+    spec = tmp_path / "sw.toml"
+    spec.write_text(
+        f'base = "{COLUMN}"\nmodels = ["beam:20"]\nreference = "beam:100"\n'
+        'outputs = ["limit_load"]\n[[axes]]\npath = "material.youngs_modulus"\n'
+        "values = [10000.0, 20000.0]\n"
+    )
+    sweep = load_sweep(spec)
+    with (
+        LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        run_sweep(sweep, tmp_path / "o", client, use_cache=False)
+    table = pq.read_table(results_store(sweep, tmp_path / "o").parts())
+    assert table.column("bifurcation_load").null_count == 2
+    rows = {(r["point"], r["model"]): r for r in sweep_rows(sweep, tmp_path / "o")}
+    for model in ("beam:100", "beam:20"):
+        low, high = rows[(0, model)], rows[(1, model)]
+        assert low["status"] == "solver_failure" and low["limit_load"] is None
+        assert low["bifurcation_load"] == pytest.approx(euler_load(), rel=5e-3)
+        assert high["status"] == "ok" and high["bifurcation_load"] is None
+    write_outputs(sweep, list(rows.values()), tmp_path / "o")
+    summary = (tmp_path / "o" / "summary.md").read_text()
+    assert "| beam:100 | P | 1 | 2.4675 N | 2.4675 N |" in summary
+    assert "(bifurcation at 2.4675 N)" in summary

@@ -135,6 +135,16 @@ def test_every_table_names_the_failure(arch):
     assert "`dcmm:2` (" not in findings and "**dcmm:2**" not in timings
 
 
+def test_limit_table_has_no_bifurcation_rows_without_bifurcations(arch):
+    _, data, md = arch
+    assert data.scenes[0].bifurcations() == []
+    text = md.read_text()
+    table = text.split("### Limit loads against `beam:100`")[1].split("###")[0]
+    rows = [line for line in table.splitlines() if line.startswith("| `")]
+    assert rows == [f"| `dcmm:2` | {data.scenes[0].failures[0].load:.5g} N |"]
+    assert "bifurcation" not in text.lower()
+
+
 def test_results_json_carries_the_failure(arch):
     _, data, md = arch
     dump = json.loads((md.parent / "results.json").read_text())["scenes"]["arch"]

@@ -253,6 +253,23 @@ def _failures_bullet(data: ReportData) -> list[str]:
     ]
 
 
+def _bifurcations_bullet(data: ReportData) -> list[str]:
+    found = [(r, *b) for r in data.scenes for b in r.bifurcations()]
+    if not found:
+        return []
+    return [
+        "- **Bifurcations.** "
+        + "; ".join(
+            f"`{m}` on `{c}` of {r.scene.name} at {b['load']:.5g} {unit} "
+            f"({100 * b['fraction']:.2f} % of the full load)"
+            for r, m, c, b, unit in found
+        )
+        + ". Load control cannot pass one (beyond it the path it follows is unstable); "
+        "`flexval run --arclength` traces on along it, `--branch-switch` onto the crossing "
+        "branch."
+    ]
+
+
 def discussion(data: ReportData) -> list[str]:
     """The report's discussion section (Markdown lines)."""
     bullets = []
@@ -265,6 +282,7 @@ def discussion(data: ReportData) -> list[str]:
         _at_or_below_bullet,
         _times_bullet,
         _failures_bullet,
+        _bifurcations_bullet,
     ):
         bullets += make(data)
     return ["## Discussion", ""] + bullets + [""]

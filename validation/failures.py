@@ -7,7 +7,9 @@ Every command that runs several models (``report``, ``bench``, ``converge``,
 load: if there is one, the failure is that limit point (load control cannot
 pass it whatever the solver) and its load is given; the arc-length path is kept
 with the failure (:attr:`Failure.trace`) so the report can draw the traced
-branch. Units: N or N mm.
+branch. A path that load control cannot continue past a bifurcation point (the
+tracer located it: :attr:`reducedmodels.LoadPath.bifurcations`) fails there, at the
+bifurcation's load, unless a limit point comes first. Units: N or N mm.
 """
 
 from __future__ import annotations
@@ -26,6 +28,9 @@ against the last load that load control converges on the closed chain)."""
 
 #: ``Failure.reason`` of a path that stops at a limit point found by arc length
 LIMIT_POINT = "limit point"
+#: ``Failure.reason`` of a path that stops at a bifurcation point (load control finds only
+#: unstable equilibria beyond it)
+BIFURCATION = "bifurcation point"
 
 
 @dataclass(frozen=True)
@@ -40,11 +45,12 @@ class Failure:
         Last converged load factor (0..1).
     load : float
         The load of the failure (N or N mm): the limit load when
-        ``reason`` is :data:`LIMIT_POINT`, else the last converged load.
+        ``reason`` is :data:`LIMIT_POINT`, the bifurcation's load when it is
+        :data:`BIFURCATION`, else the last converged load.
     unit : str
         ``N`` or ``N mm``.
     reason : str
-        :data:`LIMIT_POINT` or the solver's own reason.
+        :data:`LIMIT_POINT`, :data:`BIFURCATION` or the solver's own reason.
     message : str
         The solver's full message.
     trace : LoadPath or None
@@ -113,6 +119,24 @@ def failure_of(
     load = exc.load_factor * case.magnitude
     limit = first_limit(scene, spec, case)
     trace = None
-    if limit is not None and limit[0] <= case.magnitude:
+    stop = stopping_bifurcation(exc)
+    if limit is not None and limit[0] <= case.magnitude and (stop is None or limit[0] < stop):
         (load, trace), reason = limit, LIMIT_POINT
+    elif stop is not None:
+        load, reason = stop, BIFURCATION
     return Failure(spec.id, case.name, exc.load_factor, load, case.unit, reason, str(exc), trace)
+
+
+def stopping_bifurcation(exc: SolverError) -> float | None:
+    """The load (N or N mm) of the bifurcation point a load-control path stopped at, or None.
+
+    The recorder names it in the partial path's ``stats["stopped_at_bifurcation"]``
+    (its load factor; see :class:`flexval.reducedmodels.recorder.PathRecorder`).
+    """
+    path = exc.path
+    factor = path.stats.get("stopped_at_bifurcation") if path is not None else None
+    if factor is None:
+        return None
+    return next(
+        (float(b["load"]) for b in path.bifurcations or () if b["fraction"] == factor), None
+    )

@@ -204,6 +204,16 @@ def _failure_lines(failures: list[Failure]) -> list[str]:
     return [f"- `{f.model}` on `{f.load_case}` {f.summary()}." for f in failures]
 
 
+def _bifurcation_lines(res: SceneResults) -> list[str]:
+    """One line per model and load case whose path has a bifurcation point: the first."""
+    return [
+        f"- `{m}` on `{c}` has a bifurcation point at {b['load']:.5g} {unit} "
+        f"({100 * b['fraction']:.2f} % of the full load): the tangent turns indefinite "
+        "while the load still rises, another branch crosses the path there."
+        for m, c, b, unit in res.bifurcations()
+    ]
+
+
 def _validity_lines(res: SceneResults) -> list[str]:
     """One line per model and load case whose path leaves the model's range of meaning.
 
@@ -228,7 +238,7 @@ def _findings(res: SceneResults, reference: str) -> list[str]:
     """Plain-words findings computed from the error and timing tables, the failures and
     the validity monitor."""
     failed = {f.model for f in res.failures}
-    out = _failure_lines(res.failures) + _validity_lines(res)
+    out = _failure_lines(res.failures) + _bifurcation_lines(res) + _validity_lines(res)
     rows = res.worst_errors(reference)
     if not rows:
         return out + [f"- No model could be compared with `{reference}` on every load case."]

@@ -154,6 +154,16 @@ class SceneResults:
         """The failure of ``model`` on ``case``, or None."""
         return next((f for f in self.failures if f.model == model and f.load_case == case), None)
 
+    def bifurcations(self) -> list[tuple[str, str, dict, str]]:
+        """(model, case, first bifurcation ``{"load", "fraction"}``, load unit) of every
+        load-control path that has one (passed, or where it stopped), in model and case order."""
+        return [
+            (m, c, lp.bifurcations[0], lp.load_unit)
+            for m in self.models
+            for c in self.cases
+            if (lp := self.paths.get((m, c))) is not None and lp.bifurcations
+        ]
+
     def traces(self, case: str) -> dict[str, LoadPath]:
         """{model: arc-length path through its limit point} of the models failing on ``case``."""
         return {

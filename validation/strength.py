@@ -10,7 +10,9 @@
 * Limit loads: a model that stops at a limit point under load control is
   traced by arc length when its failure is recorded
   (:func:`flexval.validation.failures.failure_of`); the limit loads are tabulated
-  with their error against the reference's own limit load where it has one.
+  with their error against the reference's own limit load where it has one, and
+  beside them every model's first bifurcation point (load and fraction of the full
+  load) where its path has one.
 
 Units: MPa, N or N mm, mm.
 """
@@ -122,6 +124,36 @@ def limit_load_data(failures: list[Failure], reference: str) -> dict[str, dict[s
     return out
 
 
+def bifurcation_data(
+    paths: dict[tuple[str, str], LoadPath], models: list[str], cases: list[str], reference: str
+) -> dict[str, dict[str, dict]]:
+    """{model: {case: {"load", "fraction", "unit", "error_percent"}}} of the first bifurcation.
+
+    Taken from each model's load-control path on the case
+    (:attr:`reducedmodels.LoadPath.bifurcations`: passed, or where the path
+    stopped); load in N or N mm, fraction of the full load; the error is
+    against the reference's first bifurcation on the same case (None when it
+    has none).
+    """
+    first = {
+        (m, c): (paths[(m, c)].bifurcations[0], paths[(m, c)].load_unit)
+        for m in models
+        for c in cases
+        if (m, c) in paths and paths[(m, c)].bifurcations
+    }
+    out: dict[str, dict[str, dict]] = {}
+    for (m, c), (b, unit) in first.items():
+        ref = first.get((reference, c))
+        err = 100.0 * (b["load"] - ref[0]["load"]) / ref[0]["load"] if ref else None
+        out.setdefault(m, {})[c] = {
+            "load": b["load"],
+            "fraction": b["fraction"],
+            "unit": unit,
+            "error_percent": err,
+        }
+    return out
+
+
 # --- render --------------------------------------------------------------------------------
 def _cell(v: dict | None, value: str) -> str:
     if v is None:
@@ -146,8 +178,14 @@ def peak_stress_table(data: dict[str, dict[str, dict]], cases: list[str]) -> lis
     return lines
 
 
-def limit_load_table(data: dict[str, dict[str, dict]], cases: list[str]) -> list[str]:
-    """Markdown: model x load case, first limit load and its error against the reference."""
+def limit_load_table(
+    data: dict[str, dict[str, dict]],
+    cases: list[str],
+    bifurcations: dict[str, dict[str, dict]] | None = None,
+) -> list[str]:
+    """Markdown: model x load case, first limit load and its error against the reference;
+    then, per model with one, a row of its first bifurcation points (load, percent of the
+    full load, error against the reference's)."""
     lines = ["| model | " + " | ".join(cases) + " |", "|---|" + "---:|" * len(cases)]
     for m, row in data.items():
         cells = [
@@ -155,6 +193,16 @@ def limit_load_table(data: dict[str, dict[str, dict]], cases: list[str]) -> list
             for c in cases
         ]
         lines.append(f"| `{m}` | " + " | ".join(cells) + " |")
+    for m, row in (bifurcations or {}).items():
+        cells = [
+            _cell(
+                row[c], f"{row[c]['load']:.5g} {row[c]['unit']} at {100 * row[c]['fraction']:.2f} %"
+            )
+            if c in row
+            else "—"
+            for c in cases
+        ]
+        lines.append(f"| `{m}` bifurcation | " + " | ".join(cells) + " |")
     return lines
 
 
@@ -332,14 +380,22 @@ def section(
         draw(stress_profiles, scene, c, full, png)
         lines += [f"![{name} {c} stress]({png.name})", ""]
     data = limit_load_data(failures, reference)
-    if data:
+    bifurcations = bifurcation_data(paths, models, cases, reference)
+    if data or bifurcations:
+        title = "Limit loads" + (" and bifurcations" if bifurcations else "")
         lines += [
-            f"### Limit loads against `{reference}`",
+            f"### {title} against `{reference}`",
             "",
             "Models that stopped at a limit point under load control, traced by arc "
             "length: first limit load on the path and its error against the reference's "
             "(— where the reference has none in range).",
-            "",
         ]
-        lines += limit_load_table(data, cases) + [""]
+        if bifurcations:
+            lines[-1] += (
+                " Rows marked bifurcation: the first bifurcation point on the model's path "
+                "(the tangent turns indefinite while the load still rises; another branch "
+                "crosses there), its load and percent of the full load, and its error "
+                "against the reference's."
+            )
+        lines += [""] + limit_load_table(data, cases, bifurcations) + [""]
     return lines

@@ -63,6 +63,7 @@ _FIXED = [
     ("peak_stress_error", pa.float64()),
     ("limit_load", pa.float64()),
     ("limit_load_error", pa.float64()),
+    ("bifurcation_load", pa.float64()),
 ]
 """The columns of every row besides the parameters. ``peak_stress``: the largest outer-fibre
 stress over the flexures (MPa) at the load ``peak_stress_load`` (fraction of full load: 1
@@ -71,7 +72,9 @@ below ``load_reached``), on ``peak_stress_flexure`` at the fraction ``peak_stres
 its length from its first end; ``peak_stress_error``: (model - reference) / reference at
 full load (converged rows only), percent. ``limit_load``: the first limit point below full load of a
 run that stopped there (N or N mm, ``load_unit``; asked for with ``outputs``);
-``limit_load_error``: against the reference's, percent."""
+``limit_load_error``: against the reference's, percent. ``bifurcation_load``: the first
+bifurcation point on the run's load-control path, where it stopped or one it passed (N or
+N mm; asked for with ``limit_load``), null where there is none."""
 
 
 def schema(paths: list[str]) -> pa.Schema:

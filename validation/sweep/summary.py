@@ -189,7 +189,11 @@ def _limit_section(sweep: Sweep, rows: list[dict]) -> list[str]:
     ]
     found = [r for r in rows if r["limit_load"] is not None]
     if not found:
-        return lines + ["No run stopped at a limit point below full load."]
+        return (
+            lines
+            + ["No run stopped at a limit point below full load."]
+            + _bifurcations(sweep, rows)
+        )
     lines += [
         "| model | limit points | with the reference's | median |error| % | max |error| % |",
         "|---|---:|---:|---:|---:|",
@@ -204,6 +208,34 @@ def _limit_section(sweep: Sweep, rows: list[dict]) -> list[str]:
                 f"{_fmt(float(np.median(errs)) if errs else None)} | "
                 f"{_fmt(max(errs) if errs else None)} |"
             )
+    return lines + _bifurcations(sweep, rows)
+
+
+def _bifurcations(sweep: Sweep, rows: list[dict]) -> list[str]:
+    """Markdown: per model and load case, the points whose path has a bifurcation point,
+    and its loads."""
+    found = [r for r in rows if r["bifurcation_load"] is not None]
+    lines = [""]
+    if not found:
+        return lines + ["No run's path has a bifurcation point."]
+    lines += [
+        "Bifurcation points (the tangent turns indefinite while the load still rises; "
+        "load control stops there): the points whose path has one, and the first one's "
+        "load (smallest and largest over those points).",
+        "",
+        "| model | load case | points with a bifurcation | smallest load | largest load |",
+        "|---|---|---:|---:|---:|",
+    ]
+    for model in (sweep.reference.id, *(s.id for s in sweep.models)):
+        for case in sweep.load_cases:
+            mine = [r for r in found if r["model"] == model and r["load_case"] == case]
+            if mine:
+                loads = [r["bifurcation_load"] for r in mine]
+                unit = mine[0]["load_unit"] or ""
+                lines.append(
+                    f"| {model} | {case} | {len({r['point'] for r in mine})} | "
+                    f"{min(loads):.5g} {unit} | {max(loads):.5g} {unit} |"
+                )
     return lines
 
 
@@ -268,6 +300,8 @@ def format_summary(sweep: Sweep, rows: list[dict]) -> str:
         )
         if r["limit_load"] is not None:
             reached += f" (limit point at {r['limit_load']:.5g} {r['load_unit']})"
+        if r.get("bifurcation_load") is not None:
+            reached += f" (bifurcation at {r['bifurcation_load']:.5g} {r['load_unit']})"
         lines.append(
             f"- point {r['point']} ({_params(sweep, r['point'])}), {r['model']}, "
             f"{r['load_case']}: {r['status']}{reached}: {r['reason']}"

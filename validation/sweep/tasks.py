@@ -14,7 +14,9 @@ converged row, at or below ``load_reached`` for a solver failure), and a
 converged row its error against the reference's at full load; with the ``limit_load``
 output, a run that stops below full load is searched for its first limit
 point by arc length (:func:`flexval.validation.failures.first_limit`, as the
-report does), and the row carries that load.
+report does), and the row carries that load and the load of the first bifurcation
+point on its load-control path (``bifurcation_load``; the tracer locates it, nothing
+more is run).
 
 Units: errors in percent, times in s, stresses in MPa, loads in N or N mm.
 """
@@ -80,6 +82,7 @@ def base_row(point: Point, model: str, case: str, info: TaskInfo) -> dict:
         "peak_stress_error": None,
         "limit_load": None,
         "limit_load_error": None,
+        "bifurcation_load": None,
         **{m: None for m in METRICS},
     }
     row.update({PARAM_PREFIX + k: v for k, v in point.params.items()})
@@ -115,6 +118,7 @@ def attempt(
             _peak(exc.path, lc, row, info)
         if "limit_load" in info.outputs:
             row["limit_load"] = _limit_load(point, spec, lc, row)
+            row["bifurcation_load"] = _bifurcation_load(exc.path)
         return None
     except SceneError as exc:
         row.update(status="model_invalid", reason=f"{exc.field}: {exc.reason}")
@@ -134,7 +138,16 @@ def attempt(
         row["valid"] = all(lp.valid)
         row["validity"] = next((v for v in lp.validity or () if v), None)
     _peak(lp, lc, row, info)
+    if "limit_load" in info.outputs:
+        row["bifurcation_load"] = _bifurcation_load(lp)
     return lp
+
+
+def _bifurcation_load(lp: LoadPath | None) -> float | None:
+    """The load of the first bifurcation point on ``lp`` (N or N mm), or None."""
+    if lp is None or not lp.bifurcations:
+        return None
+    return float(lp.bifurcations[0]["load"])
 
 
 def _peak(lp: LoadPath, case: LoadCase, row: dict, info: TaskInfo) -> None:
