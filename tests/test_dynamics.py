@@ -388,3 +388,28 @@ def test_bad_error_tol_names_the_option(tmp_path, capsys, value):
     assert main(["run", str(scene), "--dynamic", "--model", "dcmm:1", f"--error-tol={value}"]) == 2
     err = capsys.readouterr().err
     assert "--error-tol" in err and repr(float(value)) in err
+
+
+def test_without_a_time_law_the_default_duration_is_that_of_t1_1s(tmp_path, capsys):
+    """The help's default: a load case without a time law ramps by Eq. 15 from 0 to
+    t1 = 1 s and runs 1.25 t1, exactly as the time law ``t1 = 1`` and as ``--duration 1.25``."""
+    from flexval.validation.cli import main
+
+    bare, ramped = tmp_path / "bare.toml", tmp_path / "ramped.toml"
+    bare.write_text(SCENE, encoding="utf-8")
+    ramped.write_text(SCENE + "t1 = 1.0\n", encoding="utf-8")
+    args = ["--dynamic", "--model", "dcmm:1", "--damping-ratio", "1"]
+    runs = []
+    for scene, extra in ((bare, []), (bare, ["--duration", "1.25"]), (ramped, [])):
+        out = tmp_path / f"r{len(runs)}.json"
+        assert main(["run", str(scene), *args, *extra, "--json", str(out)]) == 0
+        (result,) = json.loads(out.read_text())["results"]
+        runs.append({k: result[k] for k in ("time", "load", "dx", "dy", "rotation")})
+    assert runs[0]["time"][-1] == pytest.approx(1.25, rel=1e-12)
+    full = tomllib.loads(SCENE)["load_cases"][0]["value"]
+    assert runs[0]["load"][-1] == pytest.approx(full, rel=1e-12)
+    assert runs[0] == runs[1] == runs[2]
+    capsys.readouterr()
+    with pytest.raises(SystemExit):
+        main(["run", "--help"])
+    assert "t1 = 1 s, a run of 1.25 s" in " ".join(capsys.readouterr().out.split())

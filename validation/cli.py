@@ -922,7 +922,8 @@ def build_parser() -> argparse.ArgumentParser:
         type=float,
         metavar="T",
         help="--dynamic: end time in s (default: the load case's end_time, or 1.25 "
-        "t1; without a time law the Eq. 15 ramp spans 0.8 T)",
+        "t1; a load case without a time law ramps by Eq. 15 from 0 to t1 = 1 s, a run "
+        "of 1.25 s, or, given T, over 0.8 T)",
     )
     q.add_argument(
         "--damping-ratio",

@@ -3,10 +3,11 @@
 The System is the static one (gravity included) with the masses of
 :mod:`flexval.reducedmodels.inertia`; the load follows the case's time law
 (:mod:`flexval.geometry.timelaw`) or, without one, the paper's Eq. 15 ramp over the
-first 80 % of ``--duration``. Damping is Rayleigh's, given directly or as a
-damping ratio that holds exactly at the two lowest natural frequencies at
-rest. The paper's "damping adjusted to minimise dynamic effects" is, in
-these terms, a ratio near 1 (critical damping of the two lowest modes).
+first 80 % of ``--duration`` (:data:`DEFAULT_LAW` when no duration is given: from 0 to
+t1 = 1 s, a run of 1.25 t1, as a time law without ``end_time`` gives). Damping is
+Rayleigh's, given directly or as a damping ratio that holds exactly at the two lowest
+natural frequencies at rest. The paper's "damping adjusted to minimise dynamic effects"
+is, in these terms, a ratio near 1 (critical damping of the two lowest modes).
 Units: s, mm, rad, Hz.
 """
 
@@ -25,12 +26,19 @@ from .modes import modal_system
 
 DEFAULT_RAMP_FRACTION = 0.8
 """Without a time law in the scene, the Eq. 15 ramp ends at this fraction of the duration."""
+DEFAULT_LAW = TimeLaw()
+"""A load case without a time law, run without ``--duration``: the Eq. 15 ramp from 0 to
+t1 = 1 s (the time-law fields' defaults), for 1.25 t1 (its default duration), so that the
+ramp spans :data:`DEFAULT_RAMP_FRACTION` of the run as with a given duration."""
 MIN_DURATION = DynamicSettings().min_step / DynamicSettings().first_step
 """Shortest run (s): its first step (``first_step`` of the duration) is the smallest allowed."""
 
 
 def time_law(case: LoadCase, duration: float | None, source: str) -> tuple[TimeLaw, float]:
     """The case's time law and the run's duration (s); ``--duration`` overrides the end time.
+
+    Without a time law: :data:`DEFAULT_LAW` and its duration (1.25 s), or, given a
+    duration T, the Eq. 15 ramp from 0 to 0.8 T.
 
     ``source`` names the scene file in the error raised for a time law too short to run."""
     if duration is not None and not (math.isfinite(duration) and MIN_DURATION <= duration <= 1e6):
@@ -44,13 +52,7 @@ def time_law(case: LoadCase, duration: float | None, source: str) -> tuple[TimeL
     law = case.time_law
     if law is None:
         if duration is None:
-            raise SceneError(
-                "<command line>",
-                "--duration",
-                None,
-                f"load case {case.name!r} has no time law (ramp, t0, t1): "
-                "give the run's duration in s",
-            )
+            return DEFAULT_LAW, DEFAULT_LAW.duration
         return TimeLaw("eq15", 0.0, DEFAULT_RAMP_FRACTION * duration), duration
     if duration is None:
         duration = law.duration
