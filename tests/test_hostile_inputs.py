@@ -249,11 +249,13 @@ def _flexval_peak(argv, env_memory=None, timeout=60):
     import sys
     import time
 
+    from peakmemory import PEAK_KB as _PEAK_KB
+
     code = (
-        "import resource, sys\n"
+        "import sys\n"
         "from flexval.validation.cli import main\n"
         f"rc = main({list(argv)!r})\n"
-        "print('peak', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)\n"
+        f"print('peak', {_PEAK_KB}, file=sys.stderr)\n"
         "sys.exit(rc)\n"
     )
     env = {k: v for k, v in os.environ.items() if k != "FLEXVAL_MEMORY"}
@@ -264,7 +266,7 @@ def _flexval_peak(argv, env_memory=None, timeout=60):
         [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=timeout
     )
     seconds = time.perf_counter() - t0
-    peak = int(done.stderr.rsplit("peak", 1)[1]) * 1024  # ru_maxrss: kB on Linux
+    peak = int(done.stderr.rsplit("peak", 1)[1]) * 1024  # VmHWM: kB
     return done.returncode, done.stderr, seconds, peak
 
 
