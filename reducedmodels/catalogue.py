@@ -19,7 +19,10 @@ traces a load case (imports its code lazily, so ``flexval info`` never loads
 a solver) and its capabilities (:data:`FIELDS`, :data:`ARCLENGTH`,
 :data:`LINEAR`, :data:`REFERENCE`). Adding a family is one module that calls
 :func:`register`; the reduced models register in :mod:`flexval.reducedmodels.families`,
-the continuum in :mod:`flexval.validation.continuum.family`.
+the continuum in :mod:`flexval.validation.continuum.family`, and an installed
+package's families through the entry-point group ``flexval.families``
+(:mod:`flexval.reducedmodels.plugins`), loaded the first time an id names a
+family that is not registered.
 
 Bad ids raise :class:`geometry.SceneError` naming the source, the field and
 the text (the CLI turns it into exit code 2).
@@ -294,17 +297,51 @@ class ModelSpec:
 
 
 _FAMILIES: dict[str, Family] = {}
+_PLUGIN_OF: dict[str, str] = {}
+"""Family name -> the distribution package whose entry point registered it."""
+_LOADING: list[str] = []
+"""The package whose entry point is being loaded (:mod:`flexval.reducedmodels.plugins`)."""
 
 
 def register(fam: Family) -> Family:
-    """Add ``fam`` to the catalogue (re-registering the same name replaces it)."""
+    """Add ``fam`` to the catalogue (re-registering the same name replaces it).
+
+    While a plug-in package's entry point is loaded
+    (:func:`flexval.reducedmodels.plugins.load_plugins`), a name that is
+    already registered is refused instead: a plug-in never replaces a
+    built-in family or another package's.
+
+    Raises
+    ------
+    SceneError
+        A plug-in registering a name already taken (naming the package).
+    """
+    if _LOADING:
+        package = _LOADING[-1]
+        if fam.name in _FAMILIES and _FAMILIES[fam.name] is not fam:
+            owner = _PLUGIN_OF.get(fam.name)
+            taken = f"the family of plug-in package {owner!r}" if owner else "a built-in family"
+            raise SceneError(
+                f"<plug-in package {package}>",
+                "flexval.families",
+                fam.name,
+                f"the family name clashes with {taken}; rename the plug-in's family",
+            )
+        _PLUGIN_OF[fam.name] = package
     _FAMILIES[fam.name] = fam
     return fam
+
+
+def plugin_of(name: str) -> str | None:
+    """The distribution package that registered the family ``name`` as a plug-in (None:
+    registered by flexval or by a direct :func:`register` call)."""
+    return _PLUGIN_OF.get(name)
 
 
 def unregister(name: str) -> None:
     """Remove the family ``name`` (e.g. a test's toy family)."""
     _FAMILIES.pop(name, None)
+    _PLUGIN_OF.pop(name, None)
 
 
 def families() -> tuple[Family, ...]:
@@ -366,6 +403,10 @@ def parse_model(text: str, source: str = "<command line>", field: str = "model")
     if not isinstance(text, str):
         fail(f"expected a model id string: {expected_ids()}")
     m = _ID_RE.match(text.strip())
+    if m and m.group("family") not in _FAMILIES:
+        from .plugins import load_plugins  # entry points are looked up only for unknown names
+
+        load_plugins()
     if not m or m.group("family") not in _FAMILIES:
         fail(f"expected {expected_ids()}")
     fam = _FAMILIES[m.group("family")]

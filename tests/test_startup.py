@@ -88,6 +88,15 @@ def test_small_models_load_only_the_core_and_their_kernels(model, tmp_path):
     assert _loaded(modules, heavy | {"scipy.sparse.linalg", "scipy.sparse.csgraph"}) == set()
 
 
+def test_plugins_are_looked_up_only_for_unknown_model_ids(tmp_path):
+    """Reading the installed packages' entry points (``importlib.metadata``) costs
+    milliseconds: a command naming built-in models only never loads the plug-in loader."""
+    assert "importlib.metadata" not in _imports(["info", "closed_chain"], tmp_path)
+    argv = ["run", "closed_chain", "--model", "dcmm:1", "--load-case", "f+"]
+    assert "flexval.reducedmodels.plugins" not in _imports(argv, tmp_path)
+    assert "flexval.reducedmodels.plugins" in _imports(["models"], tmp_path)
+
+
 def test_beam_loads_its_compiled_kernels_only(tmp_path):
     modules = _imports(["run", "closed_chain", "--model", "beam:5", "--load-case", "f+"], tmp_path)
     assert "numba" in modules

@@ -1,6 +1,7 @@
 """The ``flexval`` command line.
 
-Exit codes: 0 success, 2 bad input (message on stderr, no traceback),
+Exit codes: 0 success, 1 a gate of ``flexval gate`` does not hold, 2 bad input
+(message on stderr, no traceback),
 3 solver failure (message with the last converged load level), 4 an output
 file could not be written although it was checked before the work (device
 full, I/O error, folder removed meanwhile; the message names the file).
@@ -90,9 +91,12 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 def _cmd_models(args: argparse.Namespace) -> int:
+    from flexval.reducedmodels.plugins import load_plugins
+
     from .modelinfo import catalogue_record, format_models
 
     json_path = check_file(args.json, "--json") if args.json is not None else None
+    load_plugins()
     print(format_models())
     if json_path:
         write_json(json_path, catalogue_record())
@@ -797,6 +801,84 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+EXIT_GATE_FAILED = 1
+"""``flexval gate``: a gate does not hold."""
+
+
+def _cmd_gate(args: argparse.Namespace) -> int:
+    from .cache import ResultCache
+    from .campaign import available_cores
+    from .gate import ReferenceFailure, evaluate, prepare, summary_record
+    from .gatefile import load_gates
+
+    json_path = check_file(args.json, "--json") if args.json is not None else None
+    junit_path = check_file(args.junit, "--junit") if args.junit is not None else None
+    if args.prepare and (json_path or junit_path):
+        option = "--json" if json_path else "--junit"
+        raise SceneError(
+            COMMAND_LINE, option, args.json or args.junit, "--prepare writes no verdict"
+        )
+    root = check_folder(args.cache, "--cache") if args.cache is not None else None
+    gates = load_gates(args.gates)
+    specs = [gates.reference] + [g.model for g in gates.gates]
+    workers = args.workers or available_cores()
+    _check_memory(
+        [(s.mechanism, spec, None) for spec in specs for s in gates.scenes],
+        gates.source,
+        "gates",
+        parallel=workers,
+        quiet=args.quiet,
+    )
+    cache = ResultCache(root=root)
+    _keep_cached(cache.enabled)
+    if args.prepare:
+        done, failed = prepare(gates, cache, workers, not args.quiet)
+        print(f"{done} paths in the result cache {cache.root}")
+        for line in failed:
+            print(f"flexval: solver failure: {line}", file=sys.stderr)
+        return EXIT_SOLVER if failed else EXIT_OK
+    try:
+        checks = evaluate(gates, cache, workers, not args.quiet)
+    except ReferenceFailure as exc:
+        print(f"flexval: solver failure: {exc}", file=sys.stderr)
+        return EXIT_SOLVER
+    rows = [
+        [
+            c.model,
+            c.scene,
+            c.case,
+            c.metric,
+            sig(c.value),
+            sig(c.threshold),
+            "pass" if c.passed else "FAIL",
+        ]
+        for c in checks
+    ]
+    columns = [
+        Column("model", "<"),
+        Column("scene", "<"),
+        Column("case", "<"),
+        Column("metric", "<"),
+        Column("error %"),
+        Column("threshold %"),
+        Column("verdict", "<"),
+    ]
+    print(f"errors against {gates.reference.id} (percent)")
+    print("\n".join(text_table(columns, rows)))
+    failed = [c for c in checks if not c.passed]
+    for c in failed:
+        if c.reason:
+            print(f"{c.model} {c.scene} {c.case}: {c.reason}")
+    print(f"{len(checks)} checks: {len(checks) - len(failed)} passed, {len(failed)} failed")
+    if json_path:
+        write_json(json_path, summary_record(gates, checks))
+    if junit_path:
+        from .junit import write_junit
+
+        write_junit(junit_path, checks, gates.reference.id)
+    return EXIT_GATE_FAILED if failed else EXIT_OK
+
+
 def _campaign_options(q: argparse.ArgumentParser) -> None:
     """Options shared by the commands that run many models: timing, cache, progress."""
     q.add_argument(
@@ -1146,6 +1228,34 @@ def build_parser() -> argparse.ArgumentParser:
     )
     q.add_argument("--quiet", action="store_true", help="no progress lines")
     q.set_defaults(func=_cmd_sweep)
+
+    q = sub.add_parser(
+        "gate",
+        help="accuracy gates for CI: exit 1 when a model's error exceeds its threshold",
+    )
+    q.add_argument("gates", metavar="GATES.toml", help="gates file (see the gates file reference)")
+    q.add_argument("--junit", metavar="PATH", help="also write the checks as JUnit XML")
+    q.add_argument("--json", metavar="PATH", help="also write the checks as JSON")
+    q.add_argument(
+        "--cache",
+        metavar="DIR",
+        help="result cache folder kept between CI runs (default: $FLEXVAL_CACHE, else "
+        "~/.cache/flexval)",
+    )
+    q.add_argument(
+        "--prepare",
+        action="store_true",
+        help="only compute the paths into the cache (the reference's and the built-in "
+        "models'); no verdict",
+    )
+    q.add_argument(
+        "--workers",
+        type=_int_in(1, MAX_LOCAL_WORKERS),
+        metavar="N",
+        help=f"processes computing paths, 1 to {MAX_LOCAL_WORKERS} (default: one per core)",
+    )
+    q.add_argument("--quiet", action="store_true", help="no progress bar")
+    q.set_defaults(func=_cmd_gate)
     return p
 
 

@@ -2,8 +2,9 @@
 
 Nothing here names a family: the listing is built from
 :func:`flexval.reducedmodels.catalogue.families`, so a family registered by a
-plug-in module appears like the built-in ones. Only the catalogue is
-imported, no solver.
+plug-in module appears like the built-in ones; the CLI loads the installed
+plug-in packages' families first (:func:`flexval.reducedmodels.plugins.load_plugins`),
+and each one's package is named. Only the catalogue is imported, no solver.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from flexval.reducedmodels.catalogue import (
     Family,
     Option,
     families,
+    plugin_of,
 )
 
 from .tables import Column, text_table
@@ -67,6 +69,7 @@ def family_record(fam: Family) -> dict:
         },
         "options": [option_record(o) for o in fam.options],
         "capabilities": sorted(fam.capabilities),
+        "plugin": plugin_of(fam.name),
     }
 
 
@@ -152,6 +155,8 @@ def format_models() -> str:
             )
         for o in f.options:
             text += f". Option {o.name}: {o.doc}"
+        if plugin_of(f.name):
+            text += f". From the plug-in package {plugin_of(f.name)}"
         lines += _wrapped(f.name, text + ".", indent)
     lines += ["", "Capabilities:", ""]
     width = max(len(c) for c in CAPABILITIES) + 2
