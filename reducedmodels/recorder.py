@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -24,6 +25,21 @@ from .core import SolverError, System
 from .loadpath import LoadPath
 from .sections import SectionForces
 from .tracer import LoadControl, PathPoint, TraceFailure, trace
+
+_OBSERVERS: list[Callable[[LoadPath], None]] = []
+"""Called with the path after each point a :class:`PathRecorder` records (see :func:`observing`)."""
+
+
+@contextmanager
+def observing(callback: Callable[[LoadPath], None]) -> Iterator[None]:
+    """Within the block, call ``callback(path)`` after every point any :class:`PathRecorder`
+    records (the path so far: its last load is the point's); for progress reports. The
+    callback only reads: the traced path is the same with or without it."""
+    _OBSERVERS.append(callback)
+    try:
+        yield
+    finally:
+        _OBSERVERS.remove(callback)
 
 
 class PathRecorder:
@@ -124,6 +140,8 @@ class PathRecorder:
         f = self.factors
         if "limit_points" in self.stats and len(f) >= 3 and (f[-2] - f[-3]) * (f[-1] - f[-2]) < 0:
             self.stats["limit_points"].append(len(f) - 2)
+        for callback in _OBSERVERS:
+            callback(lp)
 
     def _bifurcations(self, factors) -> None:
         """Append bifurcation points (load factors) as ``{"load", "fraction"}`` (N or N mm)."""

@@ -18,8 +18,9 @@ import os
 import statistics
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 from flexval.geometry import LoadCase, Scene, SceneError
@@ -40,10 +41,15 @@ def available_cores() -> int:
 
 
 class Progress:
-    """A one-line text progress bar on stderr (silent when disabled)."""
+    """Progress on stderr (silent when disabled): a one-line bar redrawn in place, or with
+    ``lines`` one line per unit of work, which also says about how long the rest will take
+    at the rate so far (for logs and for output interleaved with other lines)."""
 
-    def __init__(self, total: int, enabled: bool = True, width: int = 24):
+    def __init__(
+        self, total: int, enabled: bool = True, width: int = 24, lines: bool = False
+    ) -> None:
         self.total, self.done, self.enabled, self.width = total, 0, enabled, width
+        self.lines = lines
         self.t0 = time.perf_counter()
 
     def step(self, label: str) -> None:
@@ -51,9 +57,18 @@ class Progress:
         self.done += 1
         if not self.enabled:
             return
-        filled = int(self.width * self.done / max(self.total, 1))
+        filled = int(self.width * min(self.done, self.total) / max(self.total, 1))
         bar = "#" * filled + "." * (self.width - filled)
         elapsed = time.perf_counter() - self.t0
+        if self.lines:
+            left = elapsed * max(self.total - self.done, 0) / self.done
+            print(
+                f"[{bar}] {self.done:>3}/{self.total} {elapsed:7.1f} s, about {left:.0f} s "
+                f"left  {label}",
+                file=sys.stderr,
+                flush=True,
+            )
+            return
         end = "\n" if self.done >= self.total else ""
         print(
             f"\r[{bar}] {self.done:>3}/{self.total} {elapsed:7.1f} s  {label:<40.40}",
@@ -61,6 +76,37 @@ class Progress:
             file=sys.stderr,
             flush=True,
         )
+
+
+@contextmanager
+def level_progress(
+    specs: list[ModelSpec], cases: list[LoadCase], levels: int | None, enabled: bool
+) -> Iterator[None]:
+    """Within the block, one :class:`Progress` line on stderr per converged load level of the
+    load-control paths of every model in ``specs`` on every case in ``cases`` (``levels``
+    each, default the case's): the model, the case, level k/N of the path and its load,
+    the time so far and about how long the rest takes at that rate. Nothing when not
+    ``enabled``; the paths are the same either way (:func:`flexval.reducedmodels.recorder.observing`
+    only reads them)."""
+    if not enabled:
+        yield
+        return
+    from flexval.reducedmodels.catalogue import LINEAR
+    from flexval.reducedmodels.recorder import observing
+
+    per_path = {c.name: len(c.factors(levels)) for c in cases}
+    traced = [s for s in specs if not s.model_family.has(LINEAR)]  # a linear model traces none
+    bar = Progress(len(traced) * sum(per_path.values()), lines=True)
+
+    def show(lp: LoadPath) -> None:
+        n = per_path.get(lp.load_case, 0)
+        bar.step(
+            f"{lp.model} on {lp.load_case}: level {len(lp.load)}/{n}, load "
+            f"{lp.load[-1]:.4g} {lp.load_unit}"
+        )
+
+    with observing(show):
+        yield
 
 
 def run_key(scene: Scene, spec: ModelSpec, case: LoadCase, repeats: int, record: bool) -> str:

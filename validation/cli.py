@@ -182,12 +182,13 @@ def _run_each(specs, cases, run_one, row, scene, json_path) -> int:
     return status
 
 
-def _check_memory(paths, source: str, field: str, parallel: int = 1, quiet: bool = False) -> None:
+def _check_memory(paths, source: str, field: str, parallel: int = 1, quiet: bool = False) -> float:
     """Refuse (exit 2) a model whose load path would not fit in memory, before any work; print
-    the time estimate of long work (:func:`flexval.validation.resources.check_models`)."""
+    the time estimate of long work (:func:`flexval.validation.resources.check_models`); the
+    estimated time, s."""
     from .resources import check_models
 
-    check_models(paths, source, field, parallel, quiet)
+    return check_models(paths, source, field, parallel, quiet)
 
 
 def _keep_on_interrupt(description) -> None:
@@ -237,7 +238,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             args.density,
             "applies to --dynamic only (a static run takes its weights from the scene)",
         )
-    _check_memory(
+    estimate = _check_memory(
         [(scene.mechanism, spec, args.levels) for spec in specs for _ in cases],
         *(("<command line>", "--model") if args.model else (scene.source, "request.models")),
     )
@@ -339,7 +340,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
             )
 
     print(header(columns))
-    return _run_each(specs, cases, run_one, row, scene, json_path)
+    from .campaign import level_progress
+    from .resources import long_seconds
+
+    long = not args.arclength and estimate > long_seconds()  # progress: see --help
+    with level_progress(specs, cases, args.levels, enabled=long):
+        return _run_each(specs, cases, run_one, row, scene, json_path)
 
 
 def _run_dynamic(args: argparse.Namespace, scene, specs, cases, json_path) -> int:
@@ -937,7 +943,17 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("-o", "--output", required=True, metavar="FILE.png", help="output PNG")
     q.set_defaults(func=_cmd_plot)
 
-    q = sub.add_parser("run", help="trace load paths with one or more models")
+    from .resources import LONG_ENV, LONG_SECONDS
+
+    q = sub.add_parser(
+        "run",
+        help="trace load paths with one or more models",
+        description="Trace load paths with one or more models. Work estimated to take "
+        f"longer than {LONG_SECONDS:g} s (${LONG_ENV} sets another threshold) prints the "
+        "estimate first and, on static load-control paths, one progress line per converged "
+        "load level on stderr (level k/N, load, time so far, about how long the rest takes), "
+        "whether or not stderr is a terminal; the results are the same.",
+    )
     q.add_argument("scene", help=scene_help)
     q.add_argument(
         "--model",

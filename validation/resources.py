@@ -7,7 +7,9 @@ and factor fill from the mesh level, :mod:`flexval.validation.continuum.cost`),
 and a path whose estimated peak memory exceeds what the machine has is
 refused as bad input (exit 2) naming the estimate, the machine's figure and
 the highest resolution that fits. Work estimated to take longer than
-:data:`LONG_SECONDS` prints its estimate first.
+:data:`LONG_SECONDS` (or the environment variable :data:`LONG_ENV`) prints its
+estimate first, and shows its progress (the report's bar, the sweep's lines, and
+``flexval run``'s line per converged load level).
 
 The machine's figure is the memory available now (``MemAvailable``, via
 psutil), lowered to the room left under a cgroup limit (a container's cap),
@@ -34,8 +36,26 @@ HEADROOM = 1.25
 1.12 of the measured peak on the sizes it was fitted to and at least 20 % low beyond them
 (open_chain at continuum:4)."""
 LONG_SECONDS = 60.0
-"""Work estimated to take longer than this prints its estimate before it starts."""
+"""Work estimated to take longer than this (s) prints its estimate before it starts and
+shows its progress."""
+LONG_ENV = "FLEXVAL_LONG_SECONDS"
+"""Overrides :data:`LONG_SECONDS` (s, a number >= 0; 0 shows every estimate and progress)."""
 _UNITS = {"": 1, "K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}
+
+
+def long_seconds() -> float:
+    """The threshold (s) above which work prints its estimate and shows progress:
+    :data:`LONG_ENV` if set (SceneError if it is not a number >= 0), else :data:`LONG_SECONDS`."""
+    text = os.environ.get(LONG_ENV)
+    if text is None:
+        return LONG_SECONDS
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not (value >= 0.0 and value != float("inf")):
+        raise SceneError("<environment>", LONG_ENV, text, "expected a number of seconds >= 0")
+    return value
 
 
 def _parse_size(text: str) -> int:
@@ -175,7 +195,7 @@ def check_models(
             )
         if worst is None or cost.seconds > worst[1].seconds:
             worst = (spec, cost)
-    if total > LONG_SECONDS and not quiet:
+    if total > long_seconds() and not quiet:
         spec, cost = worst
         print(
             f"estimate: about {duration(total)} of model runs (the longest: {spec.id}, "
