@@ -7,7 +7,9 @@
   (:func:`flexval.validation.sweep.spec.field_reference`), the command line
   (:func:`flexval.validation.clireference.cli_reference`), the model catalogue,
   the built-in scene and sweep files, a scene file of the repository
-  (``<!-- flexval:toml PATH -->``) and a ``flexval`` command's output, run while
+  (``<!-- flexval:toml PATH -->``, or any text file: ``<!-- flexval:file PATH -->``), the
+  gates file fields (:func:`flexval.validation.gatefile.field_reference`) and a
+  ``flexval`` command's output, run while
   the site is built (``<!-- flexval:command ARGS -->``). An unknown marker
   fails the build.
 - The package as it installs is linked under ``build/docs-src`` for
@@ -103,11 +105,13 @@ def _builtin_sweep(name: str) -> str:
 
 
 def _command(args: str) -> str:
-    """``flexval ARGS`` run now in a scratch folder, shown with what it printed."""
+    """``flexval ARGS`` run now in a scratch folder, shown with what it printed (an argument
+    ``@/PATH`` is the repository's file PATH, shown as ``PATH``)."""
     flexval = Path(sys.executable).with_name("flexval")
+    argv = [str(ROOT / a[2:]) if a.startswith("@/") else a for a in shlex.split(args)]
     with tempfile.TemporaryDirectory(prefix="flexval-docs-command-") as folder:
         proc = subprocess.run(
-            [str(flexval), *shlex.split(args)],
+            [str(flexval), *argv],
             cwd=folder,
             env={**os.environ, "MPLBACKEND": "Agg", "COLUMNS": "100"},
             capture_output=True,
@@ -116,7 +120,8 @@ def _command(args: str) -> str:
         )
     if proc.returncode != 0:
         raise RuntimeError(f"flexval {args} failed (exit {proc.returncode}):\n{proc.stderr}")
-    return f"```text\n$ flexval {args}\n{proc.stdout.rstrip()}\n```\n"
+    shown = args.replace("@/", "")
+    return f"```text\n$ flexval {shown}\n{proc.stdout.rstrip()}\n```\n"
 
 
 def _toml_file(path: str) -> str:
@@ -125,9 +130,17 @@ def _toml_file(path: str) -> str:
     return f"`{path}`:\n\n```toml\n{text.rstrip()}\n```\n"
 
 
+def _source_file(path: str) -> str:
+    """A text file of the repository (a relative path), as a code block in its language."""
+    language = {".py": "python", ".toml": "toml", ".yml": "yaml", ".yaml": "yaml"}
+    text = (ROOT / path).read_text(encoding="utf-8")
+    return f"`{path}`:\n\n```{language.get(Path(path).suffix, 'text')}\n{text.rstrip()}\n```\n"
+
+
 def _generators() -> dict:
     from flexval.geometry.scene import field_reference as scene_reference
     from flexval.validation.clireference import cli_reference
+    from flexval.validation.gatefile import field_reference as gates_reference
     from flexval.validation.sweep.spec import field_reference as sweep_reference
 
     return {
@@ -141,6 +154,8 @@ def _generators() -> dict:
         "examples": _gallery,
         "command": _command,
         "toml": _toml_file,
+        "file": _source_file,
+        "gates-reference": gates_reference,
     }
 
 

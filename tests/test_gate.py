@@ -199,3 +199,12 @@ def test_scene_files_are_found_relative_to_the_gates_file(tmp_path, capsys):
     )
     assert _run([str(folder / "gates.toml")]) == 0
     assert "1 checks: 1 passed, 0 failed" in capsys.readouterr().out
+
+
+def test_the_gates_reference_names_every_declared_field():
+    from flexval.validation.gatefile import GATE, GATES, field_reference
+
+    text = field_reference()
+    for table in (GATES, GATE):
+        for f in table.fields:
+            assert f"`{f.name}`" in text
