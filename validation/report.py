@@ -543,8 +543,8 @@ def render_markdown(
         "the results (report.md, results.json and gates.json are the same from one run of "
         "the same code to the next).",
         "- A model that fails on a load case is reported where it appears: how far it got "
-        "(percent of the load), why (a limit point found by arc length, or the solver's "
-        "reason) and the load.",
+        "(percent of the load), why (a limit point found by arc length, a bifurcation, or "
+        "the solver's reason) and the load.",
         f"- Tools: {data.versions}.",
         "",
     ]
