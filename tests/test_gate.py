@@ -2,7 +2,12 @@
 
 The expected verdicts are computed here from the library's own error
 function (:func:`flexval.validation.compare.errors`) on paths run directly
-(:func:`flexval.validation.run.run_model`), never typed in. The reference is
+(:func:`flexval.validation.run.run_model`), never typed in; those of
+``limit_load`` from the report's limit-load and bifurcation tables
+(:func:`flexval.validation.campaign.run_campaign`,
+:func:`flexval.validation.strength.limit_load_data` and ``bifurcation_data``), and
+those of ``frequency`` from the report's natural-frequency table
+(:func:`flexval.validation.frequencies.frequency_data`). The reference is
 ``beam:100`` (fast) where the brief's acceptance run uses ``continuum:1``:
 on the open chain's f+ case ``dcmm:1`` is about 15 % off either.
 """
@@ -11,6 +16,7 @@ from __future__ import annotations
 
 import json
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import pytest
 
@@ -147,13 +153,18 @@ def test_a_model_that_cannot_reach_full_load_fails_its_gates(tmp_path, capsys):
         ),
         (
             'reference = "beam:100"\nscenes = ["open_chain"]\n[[gates]]\nmodel = "beam:20"\n'
-            "limit_load = 1.0\n",
-            "not supported yet",
+            "limit_load = 1.0\nmodes = 3\n",
+            "gates[0].modes",
         ),
         (
             'reference = "beam:100"\nscenes = ["open_chain"]\n[[gates]]\nmodel = "beam:20"\n'
-            "frequency = 1.0\n",
-            "not supported yet",
+            "frequency = 1.0\nmodes = 0\n",
+            "gates[0].modes",
+        ),
+        (
+            'reference = "beam:100"\nscenes = ["open_chain"]\n[[gates]]\nmodel = "beam:20"\n'
+            "frequency = -1.0\n",
+            "gates[0].frequency",
         ),
         (
             'reference = "beam:100"\nscenes = ["open_chain"]\n[[gates]]\nmodel = "beam:20"\n'
@@ -208,3 +219,230 @@ def test_the_gates_reference_names_every_declared_field():
     for table in (GATES, GATE):
         for f in table.fields:
             assert f"`{f.name}`" in text
+
+
+# --- limit_load ----------------------------------------------------------------------------
+SCENES = Path(__file__).parent / "scenes"
+LIMIT_SCENES = ("euler_column", "deep_arch")  # a bifurcation point; a limit point
+
+
+def _first_critical(limits: dict, bifurcations: dict, model: str, case: str) -> float | None:
+    """The smaller of a model's limit load and first bifurcation load in the report's tables."""
+    loads = [t[model][case]["load"] for t in (limits, bifurcations) if case in t.get(model, {})]
+    return min(loads) if loads else None
+
+
+@pytest.fixture(scope="module")
+def limit_expected() -> dict[str, tuple[float, float | None, float | None]]:
+    """{scene: (beam:10's limit_load error %, beam:10's, ee's first critical load)} from
+    the report's limit-load and bifurcation tables."""
+    from flexval.validation.campaign import run_campaign
+    from flexval.validation.strength import bifurcation_data, limit_load_data
+
+    models = [REFERENCE, "beam:10", "ee"]
+    out = {}
+    for name in LIMIT_SCENES:
+        scene = load_scene(SCENES / f"{name}.toml")
+        paths, failures = run_campaign(
+            scene, [parse_model(m) for m in models], scene.load_cases, 1, None
+        )
+        limits = limit_load_data(failures, REFERENCE)
+        bifurcations = bifurcation_data(paths, models, ["P"], REFERENCE)
+        ref = _first_critical(limits, bifurcations, REFERENCE, "P")
+        own = _first_critical(limits, bifurcations, "beam:10", "P")
+        table = limits if "P" in limits.get("beam:10", {}) else bifurcations
+        assert abs(table["beam:10"]["P"]["error_percent"]) == pytest.approx(
+            100 * abs(own - ref) / ref, rel=1e-12
+        )  # one kind of critical point each: the report's own error
+        out[name] = (
+            100 * abs(own - ref) / ref,
+            own,
+            _first_critical(limits, bifurcations, "ee", "P"),
+        )
+    return out
+
+
+def _limit_gates(tmp_path, threshold: float) -> str:
+    path = tmp_path / "limits.toml"
+    scenes = [str(SCENES / f"{n}.toml") for n in LIMIT_SCENES]
+    path.write_text(
+        f'reference = "{REFERENCE}"\nscenes = {json.dumps(scenes)}\n'
+        f'[[gates]]\nmodel = "beam:10"\nlimit_load = {threshold}\n'
+        '[[gates]]\nmodel = "ee"\nlimit_load = 50.0\n'
+    )
+    return str(path)
+
+
+def test_limit_load_gates_compare_the_reports_first_critical_loads(tmp_path, limit_expected):
+    worst = max(e for e, _, _ in limit_expected.values())
+    best = min(e for e, _, _ in limit_expected.values())
+    threshold = (worst + best) / 2  # fails on one scene, holds on the other
+    record, junit = tmp_path / "limits.json", tmp_path / "limits.xml"
+    argv = [_limit_gates(tmp_path, threshold), "--json", str(record), "--junit", str(junit)]
+    assert _run(argv) == 1
+    rows = json.loads(record.read_text())["results"]
+    assert [(r["model"], r["scene"], r["metric"]) for r in rows] == [
+        (m, s, "limit_load") for m in ("beam:10", "ee") for s in LIMIT_SCENES
+    ]
+    for row in rows[:2]:
+        error, own, _ = limit_expected[row["scene"]]
+        assert row["value_percent"] == pytest.approx(error, rel=1e-12)
+        assert row["passed"] == (error <= threshold)
+        assert f"{own:.5g} N" in row["detail"]
+    for row in rows[2:]:  # the linear ee has none, the reference has one: fails, saying so
+        assert limit_expected[row["scene"]][2] is None
+        assert row["passed"] is False and row["value_percent"] is None
+        assert "ee: no critical load within 1 times the load" in row["reason"]
+    assert {r["scene"] for r in rows[:2] if not r["passed"]} == {
+        n for n, (e, _, _) in limit_expected.items() if e > threshold
+    }
+    cases = {c.get("classname") + " " + c.get("name"): c for c in ET.parse(junit).iter("testcase")}
+    arch = cases["flexval.gate.beam:10 deep_arch P limit_load"]
+    assert "limit point" in arch.find("system-out").text
+    column = cases["flexval.gate.beam:10 euler_column P limit_load"]
+    assert "bifurcation point" in column.find("system-out").text
+
+    assert _run([_limit_gates(tmp_path, 1.01 * worst), "--json", str(record)]) == 1
+    rows = json.loads(record.read_text())["results"]
+    assert all(r["passed"] for r in rows if r["model"] == "beam:10")
+
+
+def test_a_limit_load_gate_without_critical_loads_passes_saying_so(tmp_path, capsys):
+    from flexval.validation.campaign import run_campaign
+    from flexval.validation.strength import bifurcation_data, limit_load_data
+
+    scene = load_scene("open_chain")
+    models = [REFERENCE, "beam:20"]
+    paths, failures = run_campaign(
+        scene, [parse_model(m) for m in models], [scene.load_case("f+")], 1, None
+    )
+    assert not limit_load_data(failures, REFERENCE)
+    assert not bifurcation_data(paths, models, ["f+"], REFERENCE)
+    path, junit = tmp_path / "g.toml", tmp_path / "g.xml"
+    path.write_text(
+        f'reference = "{REFERENCE}"\nscenes = ["open_chain"]\nload_cases = ["f+"]\n'
+        '[[gates]]\nmodel = "beam:20"\nlimit_load = 0.0\n'
+    )
+    assert _run([str(path), "--junit", str(junit)]) == 0
+    text = f"no critical load within 1 times the load ({scene.load_case('f+').magnitude:.5g} N)"
+    assert text in capsys.readouterr().out
+    (case,) = ET.parse(junit).iter("testcase")
+    assert case.find("failure") is None and text in case.find("system-out").text
+
+
+# --- frequency -----------------------------------------------------------------------------
+STEEL = 7.85e-9  # t/mm^3
+
+
+def _dense_open_chain(folder) -> str:
+    """The open chain renamed, with a flexure density of its own (material.density)."""
+    from importlib import resources
+
+    text = resources.files("flexval.geometry").joinpath("scenes", "open_chain.toml").read_text()
+    text = text.replace('name = "open_chain"', 'name = "steel_chain"', 1)
+    text = text.replace("[material]\n", f"[material]\ndensity = {STEEL!r}\n", 1)
+    (folder / "steel_chain.toml").write_text(text)
+    return "steel_chain.toml"
+
+
+@pytest.fixture(scope="module")
+def frequency_expected(tmp_path_factory) -> dict[tuple[str, int], tuple[float, int]]:
+    """{(scene, modes): (dcmm:1's worst mode error in percent, its mode number)} from the
+    report's natural-frequency table (modes = 4, its count) and from the same analysis
+    with 2 modes."""
+    from flexval.validation.frequencies import (
+        DEFAULT_DENSITY,
+        MODE_COUNT,
+        frequency_data,
+        lowest_frequencies,
+        mode_errors,
+    )
+    from flexval.validation.modes import choose_density
+
+    folder = tmp_path_factory.mktemp("scenes")
+    out = {}
+    for scene in (load_scene("open_chain"), load_scene(folder / _dense_open_chain(folder))):
+        errs = frequency_data(scene, ["dcmm:1"], REFERENCE).errors["dcmm:1"]
+        k = max(range(MODE_COUNT), key=lambda j: abs(errs[j]))
+        out[scene.name, MODE_COUNT] = (abs(errs[k]), k + 1)
+        massive, _ = choose_density(scene, None, DEFAULT_DENSITY)
+        two = [lowest_frequencies(massive, parse_model(m), 2) for m in ("dcmm:1", REFERENCE)]
+        errs = mode_errors(*two)
+        k = max(range(2), key=lambda j: abs(errs[j]))
+        out[scene.name, 2] = (abs(errs[k]), k + 1)
+    return out
+
+
+def _frequency_gates(tmp_path, threshold: float, modes: int = 4) -> str:
+    scene = _dense_open_chain(tmp_path)
+    path = tmp_path / "modes.toml"
+    path.write_text(
+        f'reference = "{REFERENCE}"\nscenes = ["open_chain", "{scene}"]\n'
+        f'[[gates]]\nmodel = "dcmm:1"\nfrequency = {threshold}\nmodes = {modes}\n'
+    )
+    return str(path)
+
+
+def test_frequency_gates_compare_the_reports_natural_frequencies(tmp_path, frequency_expected):
+    four = {s: v for (s, n), v in frequency_expected.items() if n == 4}
+    threshold = sum(e for e, _ in four.values()) / 2
+    assert min(e for e, _ in four.values()) < threshold < max(e for e, _ in four.values())
+    record, junit = tmp_path / "modes.json", tmp_path / "modes.xml"
+    argv = [_frequency_gates(tmp_path, threshold), "--json", str(record), "--junit", str(junit)]
+    assert _run(argv) == 1
+    rows = json.loads(record.read_text())["results"]
+    assert [(r["scene"], r["case"], r["metric"]) for r in rows] == [
+        ("open_chain", "rest", "frequency"),
+        ("steel_chain", "rest", "frequency"),
+    ]
+    for row in rows:
+        error, mode = four[row["scene"]]
+        assert row["value_percent"] == pytest.approx(error, rel=1e-12)
+        assert row["passed"] == (error <= threshold)
+        assert f"mode {mode} of 4" in row["detail"]
+    cases = {c.get("name"): c for c in ET.parse(junit).iter("testcase")}
+    assert "PLA" in cases["open_chain rest frequency"].find("system-out").text
+    steel = cases["steel_chain rest frequency"].find("system-out").text
+    assert f"the scene's flexure density {STEEL:g}" in steel
+
+    assert _run([_frequency_gates(tmp_path, 1.01 * max(e for e, _ in four.values()))]) == 0
+
+
+def test_a_frequency_gate_compares_the_lowest_modes_it_names(tmp_path, frequency_expected):
+    two = {s: v for (s, n), v in frequency_expected.items() if n == 2}
+    record = tmp_path / "two.json"
+    worst = max(e for e, _ in two.values())
+    assert _run([_frequency_gates(tmp_path, 1.01 * worst, 2), "--json", str(record)]) == 0
+    for row in json.loads(record.read_text())["results"]:
+        error, mode = two[row["scene"]]
+        assert row["value_percent"] == pytest.approx(error, rel=1e-9)
+        assert f"mode {mode} of 2" in row["detail"]
+    assert _run([_frequency_gates(tmp_path, 0.99 * worst, 2)]) == 1
+
+
+def test_prepare_caches_critical_loads_and_frequencies(tmp_path, monkeypatch):
+    """A warm gate reads the limit searches and the modal analyses from the cache."""
+    from flexval.validation import gatemetrics
+
+    cache = tmp_path / "ci-cache"
+    limits, modes = _limit_gates(tmp_path, 50.0), _frequency_gates(tmp_path, 50.0)
+    cold = {}
+    for gates in (limits, modes):
+        record = tmp_path / "cold.json"
+        _run([gates, "--cache", str(cache), "--json", str(record)])
+        cold[gates] = json.loads(record.read_text())["results"]
+    fresh = tmp_path / "fresh-cache"
+    for gates in (limits, modes):
+        assert _run([gates, "--prepare", "--cache", str(fresh)]) == 0
+
+    def never(*args, **kwargs):
+        raise AssertionError("computed, not read from the cache")
+
+    monkeypatch.setattr(gatemetrics, "_search", never)
+    monkeypatch.setattr(gatemetrics, "lowest_frequencies", never)
+    for gates in (limits, modes):
+        record = tmp_path / "warm.json"
+        _run([gates, "--cache", str(fresh), "--json", str(record)])
+        warm = json.loads(record.read_text())["results"]
+        strip = [{k: v for k, v in r.items() if k != "seconds"} for r in warm]
+        assert strip == [{k: v for k, v in r.items() if k != "seconds"} for r in cold[gates]]

@@ -9,6 +9,11 @@ exactly: floats as ``float.hex``, arrays by their dtype, shape and bytes
 changes the key. Fields that do not define the mechanism (its ``source``,
 i.e. how the scene path was typed) are left out.
 
+The same folder keeps JSON records of results that are not load paths (a
+model's first critical load, its natural frequencies: see
+:mod:`flexval.validation.gatemetrics`), keyed the same way by
+:func:`record_key`, which also holds the scene's mass data and gravity.
+
 Location: ``$FLEXVAL_CACHE/results`` or ``~/.cache/flexval/results``
 (:func:`flexval.geometry.files.cache_dir`; an unusable folder means no caching,
 with a warning). Each entry is one JSON document holding the LoadPath, its
@@ -36,6 +41,8 @@ from flexval.reducedmodels import LoadPath
 
 ENTRY_FORMAT = "flexval-loadpath/2"
 """Format tag of a cache entry (a different tag is a foreign entry)."""
+RECORD_FORMAT = "flexval-record/1"
+"""Format tag of a cache entry holding a JSON record (:meth:`ResultCache.get_record`)."""
 
 
 @lru_cache(maxsize=1)
@@ -120,12 +127,34 @@ def result_key(scene, model: str, case_name: str, levels: int | None, extra: dic
     return hashlib.sha256(payload.encode()).hexdigest()[:32]
 
 
+def record_key(scene, model: str, what: str, extra: dict) -> str:
+    """Hash of what determines one JSON record of ``what`` (e.g. a model's natural
+    frequencies) computed for ``model`` on ``scene``: as :func:`result_key`, with the
+    scene's mass data and gravity (``mechanism.inertia``, which the mechanism's own
+    comparison leaves out) and without a load case (give it in ``extra`` if one applies)."""
+    payload = json.dumps(
+        {
+            "scene": scene.name,
+            "mechanism": exact(scene.mechanism),
+            "inertia": exact(scene.mechanism.inertia),
+            "model": model,
+            "what": what,
+            "extra": exact(extra),
+            "code": code_version(),
+            "format": RECORD_FORMAT,
+        },
+        sort_keys=True,
+    )
+    return hashlib.sha256(payload.encode()).hexdigest()[:32]
+
+
 def _checksum(body: dict) -> str:
     return hashlib.sha256(json.dumps(body, sort_keys=True, allow_nan=False).encode()).hexdigest()
 
 
 class ResultCache:
-    """LoadPath store under ``cache_dir()/results`` (disabled or unusable: always misses).
+    """LoadPath store under ``cache_dir()/results`` (disabled or unusable: always misses),
+    which also keeps JSON records of other results (:meth:`get_record`, :meth:`put_record`).
 
     Parameters
     ----------
@@ -184,6 +213,65 @@ class ResultCache:
             write_bytes(self._entry(key), json.dumps(doc, allow_nan=False).encode("utf-8"))
         except OSError as exc:
             warnings.warn(f"result not cached: {exc}", CacheWarning, stacklevel=2)
+
+    def get_record(self, key: str) -> dict | None:
+        """The JSON record stored under ``key`` (:func:`record_key`), or None (a bad entry
+        is discarded with a warning)."""
+        if not self.enabled:
+            return None
+        path = self._entry(key)
+        try:
+            data = path.read_bytes()
+        except FileNotFoundError:
+            return None
+        except OSError as exc:
+            warnings.warn(
+                f"cache entry {path} cannot be read ({exc.strerror or exc}); recomputing",
+                CacheWarning,
+                stacklevel=2,
+            )
+            return None
+        record = _decode_record(key, data)
+        if record is None:
+            warnings.warn(
+                f"cache entry {path} is damaged or foreign; discarded and recomputed",
+                CacheWarning,
+                stacklevel=2,
+            )
+            path.unlink(missing_ok=True)
+        return record
+
+    def put_record(self, key: str, record: dict) -> None:
+        """Store a JSON record (one with a non-finite number is not stored)."""
+        if not self.enabled:
+            return
+        try:
+            checksum = _checksum(record)
+        except ValueError:  # NaN or inf: strict JSON could not hold it losslessly
+            return
+        doc = {"format": RECORD_FORMAT, "key": key, "sha256": checksum, "record": record}
+        try:
+            self.root.mkdir(parents=True, exist_ok=True)
+            write_bytes(self._entry(key), json.dumps(doc, allow_nan=False).encode("utf-8"))
+        except OSError as exc:
+            warnings.warn(f"result not cached: {exc}", CacheWarning, stacklevel=2)
+
+
+def _decode_record(key: str, data: bytes) -> dict | None:
+    """The record of a cache entry, or None if it is not a sound record entry for ``key``."""
+    try:
+        doc = json.loads(data.decode("utf-8"))
+        if (
+            not isinstance(doc, dict)
+            or doc.get("format") != RECORD_FORMAT
+            or doc.get("key") != key
+            or not isinstance(doc.get("record"), dict)
+            or _checksum(doc["record"]) != doc.get("sha256")
+        ):
+            return None
+        return doc["record"]
+    except (UnicodeDecodeError, ValueError, KeyError, TypeError, RecursionError):
+        return None
 
 
 def _decode(key: str, data: bytes) -> LoadPath | None:

@@ -839,7 +839,7 @@ def _cmd_gate(args: argparse.Namespace) -> int:
     _keep_cached(cache.enabled)
     if args.prepare:
         done, failed = prepare(gates, cache, workers, not args.quiet)
-        print(f"{done} paths in the result cache {cache.root}")
+        print(f"{done} results in the result cache {cache.root}")
         for line in failed:
             print(f"flexval: solver failure: {line}", file=sys.stderr)
         return EXIT_SOLVER if failed else EXIT_OK
@@ -872,8 +872,10 @@ def _cmd_gate(args: argparse.Namespace) -> int:
     print(f"errors against {gates.reference.id} (percent)")
     print("\n".join(text_table(columns, rows)))
     failed = [c for c in checks if not c.passed]
-    for c in failed:
-        if c.reason:
+    for c in checks:
+        if c.detail:
+            print(f"{c.model} {c.scene} {c.case} {c.metric}: {c.detail}")
+        if c.reason and not c.passed and c.reason != c.detail:
             print(f"{c.model} {c.scene} {c.case}: {c.reason}")
     print(f"{len(checks)} checks: {len(checks) - len(failed)} passed, {len(failed)} failed")
     if json_path:
@@ -1261,8 +1263,8 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument(
         "--prepare",
         action="store_true",
-        help="only compute the paths into the cache (the reference's and the built-in "
-        "models'); no verdict",
+        help="only compute the results into the cache (paths, critical loads, natural "
+        "frequencies; the reference's and the built-in models'); no verdict",
     )
     q.add_argument(
         "--workers",

@@ -28,7 +28,7 @@ from scipy.sparse.linalg import ArpackError
 from flexval.geometry import LoadCase, Moment, Scene, SceneError
 from flexval.geometry.inertia import PLA_DENSITY
 from flexval.reducedmodels import SolverError
-from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.catalogue import ModelSpec, parse_model
 
 from .failures import Failure
 from .modes import DensityChoice, choose_density, run_modes
@@ -84,13 +84,42 @@ def _rest_case(scene: Scene) -> LoadCase:
     return LoadCase("rest", (Moment(scene.mechanism.target_body, 0.0),), 2)
 
 
-def _percent(values: list[float], reference: list[float] | None) -> list[float | None]:
+def mode_errors(values: list[float], reference: list[float] | None) -> list[float | None]:
+    """(f - f_ref) / f_ref in percent, mode by mode against the reference's mode of the same
+    rank (None where the reference has no such mode, or none at all)."""
     if reference is None:
         return [None] * len(values)
     return [
         100.0 * (f - reference[k]) / reference[k] if k < len(reference) else None
         for k, f in enumerate(values)
     ]
+
+
+MODAL_ERRORS = (SolverError, SceneError, np.linalg.LinAlgError, ArpackError)
+"""The failures of a modal analysis that the report records as a model's result."""
+
+
+def lowest_frequencies(massive: Scene, spec: ModelSpec, count: int = MODE_COUNT) -> list[float]:
+    """The ``count`` lowest natural frequencies (Hz, ascending) of ``spec`` at rest on
+    ``massive`` (the scene with the density of :func:`~flexval.validation.modes.choose_density`),
+    as the report's table gives them (fewer if the model has fewer massive coordinates).
+
+    Raises
+    ------
+    One of :data:`MODAL_ERRORS`
+        If the modal analysis fails.
+    """
+    _, modes = run_modes(massive, spec, None, 0.0, count)
+    return modes.frequencies_hz.tolist()
+
+
+def modal_reason(exc: Exception) -> str:
+    """The reason of a failed modal analysis, in words (one of :data:`MODAL_ERRORS`)."""
+    if isinstance(exc, SceneError):
+        return exc.reason
+    if isinstance(exc, SolverError):
+        return str(exc)
+    return f"{type(exc).__name__}: {exc}"
 
 
 def frequency_data(scene: Scene, models: list[str], reference: str) -> FrequencyTable:
@@ -108,19 +137,12 @@ def frequency_data(scene: Scene, models: list[str], reference: str) -> Frequency
     failures: list[Failure] = []
     for model in order:
         try:
-            _, modes = run_modes(massive, parse_model(model), None, 0.0, MODE_COUNT)
-        except (SolverError, SceneError, np.linalg.LinAlgError, ArpackError) as exc:
-            reason = (
-                exc.reason
-                if isinstance(exc, SceneError)
-                else str(exc)
-                if isinstance(exc, SolverError)
-                else f"{type(exc).__name__}: {exc}"
-            )
+            frequencies[model] = lowest_frequencies(massive, parse_model(model))
+        except MODAL_ERRORS as exc:
             factor = exc.load_factor if isinstance(exc, SolverError) else 0.0
-            failures.append(Failure(model, rest.name, factor, 0.0, rest.unit, reason, str(exc)))
-            continue
-        frequencies[model] = modes.frequencies_hz.tolist()
+            failures.append(
+                Failure(model, rest.name, factor, 0.0, rest.unit, modal_reason(exc), str(exc))
+            )
     ref = frequencies.get(reference)
     return FrequencyTable(
         order,
@@ -129,7 +151,7 @@ def frequency_data(scene: Scene, models: list[str], reference: str) -> Frequency
         inertia.massless_bodies(scene.mechanism.moving_bodies),
         inertia.gravity is not None,
         frequencies,
-        {m: _percent(f, ref) for m, f in frequencies.items()},
+        {m: mode_errors(f, ref) for m, f in frequencies.items()},
         failures,
     )
 

@@ -9,6 +9,13 @@ model that cannot reach full load fails its checks on that case, with the
 solver's reason; a reference that cannot is a :class:`ReferenceFailure` (no
 verdict is possible).
 
+``limit_load`` compares first critical loads and ``frequency`` natural
+frequencies, both found as the report finds them
+(:mod:`flexval.validation.gatemetrics`): a limit or bifurcation point below full
+load is their subject, not a failure. ``frequency`` is one check per scene and
+model (load case ``rest``). Each of these checks says in ``detail`` what was
+compared (the loads and their kinds; the worst mode and the flexure density).
+
 Paths come from the result cache (:mod:`flexval.validation.cache`: exact
 scene, model id and code), so a CI job that keeps the cache between runs
 recomputes nothing that did not change; plug-in families
@@ -27,7 +34,16 @@ from flexval.reducedmodels.catalogue import plugin_of
 from .cache import ResultCache
 from .campaign import Job, RunMemo, prefetch, timed_run
 from .compare import errors
-from .gatefile import PATH_METRICS, GateFile
+from .frequencies import mode_errors
+from .gatefile import (
+    FREQUENCY_METRICS,
+    LIMIT_METRICS,
+    PATH_METRICS,
+    STRESS_METRICS,
+    Gate,
+    GateFile,
+)
+from .gatemetrics import SEARCH_RANGE, Critical, Frequencies, critical_load, natural_frequencies
 
 
 @dataclass(frozen=True)
@@ -44,10 +60,14 @@ class Check:
     passed : bool
     reason : str
         Why there is no value (the model did not reach full load, has no peak
-        stress); empty otherwise.
+        stress, has a critical load where the reference has none); empty otherwise.
     seconds : float
         The model's run time on the case (s; of the run that filled the cache
         when cached).
+    detail : str
+        What was compared, where the value alone does not say (``limit_load``:
+        the two critical loads; ``frequency``: the worst mode, its frequencies
+        and the flexure density); empty otherwise.
     """
 
     model: str
@@ -59,6 +79,7 @@ class Check:
     passed: bool
     reason: str = ""
     seconds: float = 0.0
+    detail: str = ""
 
     def to_dict(self) -> dict:
         """JSON form."""
@@ -72,6 +93,7 @@ class Check:
             "passed": self.passed,
             "reason": self.reason,
             "seconds": self.seconds,
+            "detail": self.detail,
         }
 
 
@@ -92,12 +114,36 @@ def _path(scene: Scene, spec: ModelSpec, case: LoadCase, memo: RunMemo) -> LoadP
     return timed_run(scene, spec, case, 1, memo if _cacheable(spec) else None)
 
 
+CASE_METRICS = PATH_METRICS + STRESS_METRICS
+"""The metrics read from the load-control path at full load (its reference must reach it)."""
+REST = "rest"
+"""The load case name of a ``frequency`` check (the report's name for the rest state)."""
+
+
+def _needs(metrics, wanted: tuple[str, ...]) -> bool:
+    return any(m in metrics for m in wanted)
+
+
+def _wanted(gates: GateFile) -> list[tuple[ModelSpec, set[str], set[int]]]:
+    """Every model to compute, the reference first: its metrics and the mode counts of its
+    ``frequency`` gates (the reference's: the union of every gate's)."""
+    own = [
+        (g.model, set(g.thresholds), {g.modes} if "frequency" in g.thresholds else set())
+        for g in gates.gates
+    ]
+    metrics = set().union(*(m for _, m, _ in own))
+    counts = set().union(*(c for _, _, c in own))
+    return [(gates.reference, metrics, counts)] + own
+
+
 def _jobs(gates: GateFile, cacheable_only: bool) -> list[Job]:
-    specs = [gates.reference] + [g.model for g in gates.gates]
+    """The load-control paths to compute ahead (those of the path, stress and limit-load
+    gates)."""
     return [
         Job(scene, spec, scene.load_case(c), 1, False)
-        for spec in specs
-        if not cacheable_only or _cacheable(spec)
+        for spec, metrics, _ in _wanted(gates)
+        if _needs(metrics, CASE_METRICS + LIMIT_METRICS)
+        and (not cacheable_only or _cacheable(spec))
         for scene in gates.scenes
         for c in gates.cases[scene.name]
     ]
@@ -120,21 +166,43 @@ def _prefetch(jobs: list[Job], memo: RunMemo, workers: int, progress: bool) -> N
 def prepare(
     gates: GateFile, cache: ResultCache, workers: int = 1, progress: bool = True
 ) -> tuple[int, list[str]]:
-    """Compute every cacheable path of ``gates`` into ``cache`` (no verdict).
+    """Compute every cacheable result of ``gates`` into ``cache`` (no verdict): the load
+    paths, and the critical loads and natural frequencies that ``limit_load`` and
+    ``frequency`` gates compare.
 
-    Returns the number of paths now cached and the lines of the paths that
-    failed (model, scene, case, reason).
+    Returns the number of results now cached and the lines of those that failed
+    (model, scene, case, reason).
     """
-    jobs = _jobs(gates, cacheable_only=True)
     memo = RunMemo(cache)
-    _prefetch(jobs, memo, workers, progress)
-    failed = []
-    for job in jobs:
-        try:
-            _path(job.scene, job.spec, job.case, memo)
-        except (SolverError, SceneError) as exc:
-            failed.append(f"{job.spec.id} {job.scene.name} {job.case.name}: {exc}")
-    return len(jobs) - len(failed), failed
+    _prefetch(_jobs(gates, cacheable_only=True), memo, workers, progress)
+    done, failed = 0, []
+    for spec, metrics, counts in _wanted(gates):
+        if not _cacheable(spec):
+            continue
+        for scene in gates.scenes:
+            for c in (
+                gates.cases[scene.name] if _needs(metrics, CASE_METRICS + LIMIT_METRICS) else ()
+            ):
+                case = scene.load_case(c)
+                if _needs(metrics, CASE_METRICS):
+                    try:
+                        _path(scene, spec, case, memo)
+                        done += 1
+                    except (SolverError, SceneError) as exc:
+                        failed.append(f"{spec.id} {scene.name} {c}: {exc}")
+                if _needs(metrics, LIMIT_METRICS):
+                    found = critical_load(scene, spec, case, memo)
+                    if found.failure:
+                        failed.append(f"{spec.id} {scene.name} {c}: {found.failure}")
+                    else:
+                        done += 1
+            for count in sorted(counts):
+                modes = natural_frequencies(scene, spec, count, cache)
+                if modes.failure:
+                    failed.append(f"{spec.id} {scene.name} {REST}: {modes.failure}")
+                else:
+                    done += 1
+    return done, failed
 
 
 def _peak(lp: LoadPath) -> float | None:
@@ -158,59 +226,180 @@ def _values(lp: LoadPath, ref: LoadPath, scene: Scene, metrics) -> dict[str, flo
     return out
 
 
-def evaluate(
-    gates: GateFile, cache: ResultCache, workers: int = 1, progress: bool = True
-) -> list[Check]:
-    """Every check of ``gates``, in the order model, scene, case, metric.
+@dataclass
+class _References:
+    """The reference's results that the gates compare with, by scene and case."""
+
+    paths: dict[tuple[str, str], LoadPath]
+    critical: dict[tuple[str, str], Critical]
+    frequencies: dict[tuple[str, int], Frequencies]
+
+
+def _references(gates: GateFile, memo: RunMemo) -> _References:
+    """The reference's paths, critical loads and natural frequencies that the gates need.
 
     Raises
     ------
     ReferenceFailure
-        If the reference cannot reach full load on a case (or cannot
-        represent a scene).
+        If the reference cannot reach full load where a path or stress gate needs it,
+        finds neither full load nor a critical load where a limit-load gate needs one, or
+        its modal analysis fails.
+    """
+    spec, metrics, counts = _wanted(gates)[0]
+    refs = _References({}, {}, {})
+    cacheable = _cacheable(spec)
+    for scene in gates.scenes:
+        for c in gates.cases[scene.name]:
+            case = scene.load_case(c)
+            where = f"reference {spec.id} on {scene.name} {c}"
+            if _needs(metrics, CASE_METRICS):
+                try:
+                    refs.paths[scene.name, c] = _path(scene, spec, case, memo)
+                except (SolverError, SceneError) as exc:
+                    raise ReferenceFailure(f"{where}: {exc}") from None
+            if _needs(metrics, LIMIT_METRICS):
+                found = critical_load(scene, spec, case, memo, cacheable)
+                if found.failure:
+                    raise ReferenceFailure(f"{where}: {found.failure}")
+                refs.critical[scene.name, c] = found
+        for count in sorted(counts):
+            modes = natural_frequencies(scene, spec, count, memo.disk, cacheable)
+            if modes.failure or not modes.values:
+                why = modes.failure or "no mode"
+                raise ReferenceFailure(
+                    f"reference {spec.id} on {scene.name}: modal analysis failed: {why}"
+                )
+            refs.frequencies[scene.name, count] = modes
+    return refs
+
+
+def _path_checks(gate: Gate, scene: Scene, case: LoadCase, ref: LoadPath, memo: RunMemo):
+    """The path and stress checks of ``gate`` on ``case``."""
+    reason, values, seconds = "", {}, 0.0
+    try:
+        lp = _path(scene, gate.model, case, memo)
+        values, seconds = _values(lp, ref, scene, gate.thresholds), lp.seconds
+    except SolverError as exc:
+        reason = f"did not reach full load ({100 * exc.load_factor:.0f} %): {exc}"
+    except SceneError as exc:
+        reason = f"cannot model the scene: {exc.reason}"
+    for metric, threshold in gate.thresholds.items():
+        if metric not in CASE_METRICS:
+            continue
+        value = values.get(metric)
+        why = reason or ("" if value is not None else NO_PEAK.format(gate.model.id))
+        passed = bool(value is not None and value <= threshold)
+        yield Check(
+            gate.model.id, scene.name, case.name, metric, value, threshold, passed, why, seconds
+        )
+
+
+def _none_within(case: LoadCase) -> str:
+    return (
+        f"no critical load within {SEARCH_RANGE:g} times the load "
+        f"({SEARCH_RANGE * case.magnitude:.5g} {case.unit})"
+    )
+
+
+def _limit_check(gate: Gate, scene: Scene, case: LoadCase, ref: Critical, memo: RunMemo) -> Check:
+    """The ``limit_load`` check of ``gate`` on ``case``: the first critical loads compared."""
+    own = critical_load(scene, gate.model, case, memo, _cacheable(gate.model))
+    threshold = gate.thresholds["limit_load"]
+
+    def check(value: float | None, passed: bool, reason: str = "", detail: str = "") -> Check:
+        return Check(
+            gate.model.id,
+            scene.name,
+            case.name,
+            "limit_load",
+            value,
+            threshold,
+            passed,
+            reason,
+            own.seconds,
+            detail,
+        )
+
+    if own.failure:
+        return check(None, False, own.failure)
+    if own.kind is None and ref.kind is None:
+        return check(None, True, detail=_none_within(case))
+    if own.kind is None or ref.kind is None:
+        text = (
+            f"{gate.model.id}: {own.describe() if own.kind else _none_within(case)}; "
+            f"the reference: {ref.describe() if ref.kind else _none_within(case)}"
+        )
+        return check(None, False, text, text)
+    signed = 100.0 * (own.load - ref.load) / ref.load
+    detail = f"{own.describe()} against the reference's {ref.describe()} ({signed:+.4g} %)"
+    return check(abs(signed), abs(signed) <= threshold, detail=detail)
+
+
+def _frequency_check(gate: Gate, scene: Scene, ref: Frequencies, cache: ResultCache) -> Check:
+    """The ``frequency`` check of ``gate`` on ``scene``: the worst of its lowest modes."""
+    own = natural_frequencies(scene, gate.model, gate.modes, cache, _cacheable(gate.model))
+    threshold = gate.thresholds["frequency"]
+    density = own.density.describe()
+
+    def check(value: float | None, reason: str = "", detail: str = "") -> Check:
+        passed = bool(value is not None and value <= threshold)
+        return Check(
+            gate.model.id,
+            scene.name,
+            REST,
+            "frequency",
+            value,
+            threshold,
+            passed,
+            reason,
+            own.seconds,
+            detail,
+        )
+
+    if own.failure:
+        return check(None, f"modal analysis failed: {own.failure}", density)
+    n = min(gate.modes, len(ref.values))
+    if len(own.values) < n:
+        text = f"{gate.model.id} has {len(own.values)} modes, the reference {n}"
+        return check(None, text, f"{text}; {density}")
+    errs = mode_errors(own.values[:n], ref.values[:n])
+    k = max(range(n), key=lambda j: abs(errs[j]))
+    detail = (
+        f"mode {k + 1} of {n}: {own.values[k]:.6g} Hz against the reference's "
+        f"{ref.values[k]:.6g} Hz ({errs[k]:+.4g} %); {density}"
+    )
+    return check(abs(errs[k]), detail=detail)
+
+
+def evaluate(
+    gates: GateFile, cache: ResultCache, workers: int = 1, progress: bool = True
+) -> list[Check]:
+    """Every check of ``gates``, in the order model, scene, case, metric (a scene's
+    ``frequency`` check after its load cases').
+
+    Raises
+    ------
+    ReferenceFailure
+        If the reference cannot give what a gate compares with (see
+        :func:`_references`), or cannot represent a scene.
     """
     memo = RunMemo(cache)
     _prefetch(_jobs(gates, cacheable_only=True), memo, workers, progress)
-    refs: dict[tuple[str, str], LoadPath] = {}
-    for scene in gates.scenes:
-        for c in gates.cases[scene.name]:
-            try:
-                refs[scene.name, c] = _path(scene, gates.reference, scene.load_case(c), memo)
-            except (SolverError, SceneError) as exc:
-                raise ReferenceFailure(
-                    f"reference {gates.reference.id} on {scene.name} {c}: {exc}"
-                ) from None
-    checks = []
+    refs = _references(gates, memo)
+    checks: list[Check] = []
     for gate in gates.gates:
         for scene in gates.scenes:
             for c in gates.cases[scene.name]:
-                reason, values, seconds = "", {}, 0.0
-                try:
-                    lp = _path(scene, gate.model, scene.load_case(c), memo)
-                    values, seconds = (
-                        _values(lp, refs[scene.name, c], scene, gate.thresholds),
-                        lp.seconds,
-                    )
-                except SolverError as exc:
-                    reason = f"did not reach full load ({100 * exc.load_factor:.0f} %): {exc}"
-                except SceneError as exc:
-                    reason = f"cannot model the scene: {exc.reason}"
-                for metric, threshold in gate.thresholds.items():
-                    value = values.get(metric)
-                    why = reason or ("" if value is not None else NO_PEAK.format(gate.model.id))
+                case = scene.load_case(c)
+                if _needs(gate.thresholds, CASE_METRICS):
+                    checks += _path_checks(gate, scene, case, refs.paths[scene.name, c], memo)
+                if _needs(gate.thresholds, LIMIT_METRICS):
                     checks.append(
-                        Check(
-                            gate.model.id,
-                            scene.name,
-                            c,
-                            metric,
-                            value,
-                            threshold,
-                            bool(value is not None and value <= threshold),
-                            why,
-                            seconds,
-                        )
+                        _limit_check(gate, scene, case, refs.critical[scene.name, c], memo)
                     )
+            if _needs(gate.thresholds, FREQUENCY_METRICS):
+                ref = refs.frequencies[scene.name, gate.modes]
+                checks.append(_frequency_check(gate, scene, ref, cache))
     return checks
 
 

@@ -8,6 +8,8 @@ A gates file (TOML) is read by ``flexval gate``::
     model = "dcmm:3"
     path_disp = 3.0          # percent, every load case of every scene
     end_rot = 2.0
+    limit_load = 5.0         # first critical load (limit or bifurcation point)
+    frequency = 2.0          # worst of the lowest ``modes`` natural frequencies
 
 Its fields are declared once (:data:`GATES`, :data:`GATE`), for the parser
 here and for the generated reference (:func:`field_reference`). Every bad
@@ -29,15 +31,23 @@ from flexval.geometry.errors import did_you_mean
 from flexval.geometry.fields import ABSENT, Field, Table, markdown_table
 from flexval.reducedmodels.catalogue import ModelSpec, parse_model
 
+from .frequencies import MODE_COUNT
+
+MAX_MODES = 1000
+"""The most natural frequencies a modal analysis gives (``flexval modes --count``)."""
+
 PATH_METRICS = ("end_disp", "end_disp_vec", "end_rot", "path_disp", "path_rot")
 """The error metrics of a load path against the reference's
 (:data:`flexval.validation.compare.METRICS`, percent)."""
 STRESS_METRICS = ("peak_stress",)
 """|peak fibre stress at full load - the reference's| / the reference's, percent."""
-UNSUPPORTED_METRICS = ("limit_load", "frequency")
-"""Metrics of the report that a gate does not check yet (each needs runs the result cache
-does not keep: arc-length searches, modal analyses); a gates file naming one is refused."""
-METRICS = PATH_METRICS + STRESS_METRICS
+LIMIT_METRICS = ("limit_load",)
+"""|first critical load - the reference's| / the reference's, percent (the report's limit
+loads and bifurcations: :func:`flexval.validation.gatemetrics.critical_load`)."""
+FREQUENCY_METRICS = ("frequency",)
+"""The largest |f_k - f_k,ref| / f_k,ref over the lowest ``modes`` natural frequencies at
+rest, percent (the report's natural-frequency table: one check per scene, not per case)."""
+METRICS = PATH_METRICS + STRESS_METRICS + LIMIT_METRICS + FREQUENCY_METRICS
 """The metrics a gate checks, in the order of its tables."""
 
 _METRIC_TEXT = {
@@ -47,6 +57,10 @@ _METRIC_TEXT = {
     "path_disp": "largest displacement error along the path, of the largest reference one",
     "path_rot": "largest rotation error along the path, of the largest reference one",
     "peak_stress": "error of the peak outer-fibre stress at full load",
+    "limit_load": "error of the first critical load (limit or bifurcation point) within the "
+    "full load; passes where neither model has one, fails where only one has",
+    "frequency": "largest error of the lowest `modes` natural frequencies at rest, each "
+    "against the reference's of the same rank (one check per scene)",
 }
 
 GATES = Table(
@@ -75,14 +89,20 @@ GATE = Table(
     "gates",
     "One model and the largest error it may have on every load case of every scene, per "
     "metric (at least one metric). A model that does not reach full load fails all of its "
-    "gates on that load case.",
+    "gates on that load case but `limit_load`.",
     (Field("model", "text", "model id of the model gated (not the reference)"),)
     + tuple(
         Field(m, "number", _METRIC_TEXT[m], unit="%", default=ABSENT, minimum=0.0) for m in METRICS
     )
-    + tuple(
-        Field(m, "number", "not supported yet: refused", unit="%", default=ABSENT)
-        for m in UNSUPPORTED_METRICS
+    + (
+        Field(
+            "modes",
+            "integer",
+            "how many of the lowest natural frequencies `frequency` compares (only with it)",
+            default=MODE_COUNT,
+            minimum=1,
+            maximum=MAX_MODES,
+        ),
     ),
     array=True,
 )
@@ -91,10 +111,12 @@ GATE = Table(
 
 @dataclass(frozen=True)
 class Gate:
-    """One model and its thresholds (percent), by metric in :data:`METRICS` order."""
+    """One model and its thresholds (percent), by metric in :data:`METRICS` order, and how
+    many natural frequencies its ``frequency`` threshold covers."""
 
     model: ModelSpec
     thresholds: dict[str, float]
+    modes: int = MODE_COUNT
 
 
 @dataclass(frozen=True)
@@ -162,14 +184,6 @@ def _gate(k: int, entry: Any, reference: ModelSpec, source: str) -> Gate:
     spec = parse_model(entry["model"], source, where + ".model")
     if spec == reference:
         _fail(source, where + ".model", spec.id, "is the reference; it is not compared with itself")
-    for name in UNSUPPORTED_METRICS:
-        if name in entry:
-            _fail(
-                source,
-                f"{where}.{name}",
-                entry[name],
-                f"not supported yet by flexval gate; supported metrics: {', '.join(METRICS)}",
-            )
     thresholds = {}
     for name in METRICS:
         if name not in entry:
@@ -182,7 +196,18 @@ def _gate(k: int, entry: Any, reference: ModelSpec, source: str) -> Gate:
         thresholds[name] = float(value)
     if not thresholds:
         _fail(source, where, spec.id, f"gives no threshold; give one or more of {list(METRICS)}")
-    return Gate(spec, thresholds)
+    return Gate(spec, thresholds, _modes(entry, where, source))
+
+
+def _modes(entry: dict, where: str, source: str) -> int:
+    if "modes" not in entry:
+        return MODE_COUNT
+    value = entry["modes"]
+    if "frequency" not in entry:
+        _fail(source, f"{where}.modes", value, "is given without a frequency threshold")
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_MODES:
+        _fail(source, f"{where}.modes", value, f"must be an integer from 1 to {MAX_MODES}")
+    return value
 
 
 def parse_gates(data: dict, source: str, folder: Path = Path(".")) -> GateFile:
@@ -243,8 +268,17 @@ _RULES = """\
 Thresholds are in percent, the unit of the error metrics (see the report's
 error tables): a gate holds on a load case when the model's error is at most
 its threshold. Every gate is checked on every listed load case of every
-scene. A field no table declares, an unknown model id and a metric that is
-not supported yet are refused, naming them (exit code 2).
+scene (`frequency` once per scene: the natural frequencies at rest do not
+depend on the load case). A field no table declares and an unknown model id
+are refused, naming them (exit code 2).
+
+`limit_load` compares the first critical load on each load case, a limit
+point or a bifurcation point, whichever comes first, found as the report's
+limit-load table finds it: a path that stops short of full load is searched
+by arc length. Where neither the model nor the reference reaches one within
+the full load the check passes and says so; where only one does it fails.
+`frequency` compares the lowest `modes` natural frequencies at rest with the
+flexure density the report uses: the scene's `material.density`, else PLA's.
 """
 
 

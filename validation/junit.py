@@ -5,7 +5,11 @@ GitLab (``artifacts:reports:junit``) and Jenkins (``junit`` step) read:
 ``testsuites`` > ``testsuite`` (one per gated model) > ``testcase`` (one per
 scene, load case and metric; ``name``, ``classname``, ``time`` in seconds) >
 ``failure`` (``message``, ``type`` and the figures as text) for a check that
-does not hold. Written atomically (:func:`flexval.validation.outputs.write_text`).
+does not hold, and ``system-out`` with what a check compared where its value
+alone does not say (:attr:`flexval.validation.gate.Check.detail`: the critical
+loads of ``limit_load``, the worst mode and the flexure density of
+``frequency``; that neither model has a critical load where that check passes
+without a value). Written atomically (:func:`flexval.validation.outputs.write_text`).
 """
 
 from __future__ import annotations
@@ -21,12 +25,14 @@ from .tables import sig
 def _failure_text(check: Check, reference: str) -> tuple[str, str, str]:
     """(type, message, body) of a failed check."""
     where = f"{check.model} on {check.scene} {check.case} against {reference}"
+    detail = f"\n{check.detail}" if check.detail and check.detail != check.reason else ""
     if check.value is None:
-        return "NoResult", f"{check.metric}: no value: {check.reason}", f"{where}: {check.reason}"
+        message = f"{check.metric}: no value: {check.reason}"
+        return "NoResult", message, f"{where}: {check.reason}{detail}"
     message = f"{check.metric} = {sig(check.value)} % > {sig(check.threshold)} %"
     body = (
         f"{where}: {check.metric} error {check.value!r} % exceeds the threshold "
-        f"{check.threshold!r} %"
+        f"{check.threshold!r} %{detail}"
     )
     return "AccuracyGate", message, body
 
@@ -61,6 +67,8 @@ def junit_xml(checks: list[Check], reference: str, name: str = "flexval gate") -
             if not c.passed:
                 kind, message, body = _failure_text(c, reference)
                 ET.SubElement(case, "failure", message=message, type=kind).text = body
+            if c.detail:
+                ET.SubElement(case, "system-out").text = c.detail
     root.set("tests", str(len(checks)))
     root.set("failures", str(sum(not c.passed for c in checks)))
     root.set("errors", "0")
