@@ -75,6 +75,22 @@ def test_key_changes_with_every_input(field, value):
     assert result_key(sc, args["model"], "f+", args["levels"], args["extra"]) != k0
 
 
+def test_key_changes_with_gravity_and_mass_data():
+    """Static paths carry the weights, which the mechanism's own comparison leaves out."""
+    from flexval.validation.modes import with_density
+
+    sc = with_density(load_scene("open_chain"), 1.24e-9)
+    inertia = sc.mechanism.inertia
+    heavy = dataclasses.replace(
+        sc,
+        mechanism=dataclasses.replace(
+            sc.mechanism, inertia=dataclasses.replace(inertia, gravity=np.array([0.0, -9810.0]))
+        ),
+    )
+    keys = {result_key(s, "ee", "f+", None, {}) for s in (load_scene("open_chain"), sc, heavy)}
+    assert len(keys) == 3
+
+
 def test_key_does_not_depend_on_how_the_scene_path_was_typed(tmp_path, monkeypatch):
     text = (ROOT / "geometry" / "scenes" / "open_chain.toml").read_text()
     (tmp_path / "sub").mkdir()

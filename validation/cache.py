@@ -1,6 +1,7 @@
 """On-disk cache of LoadPaths, keyed by the exact values that determine them.
 
-The key hashes the scene's name, its mechanism and load case, the model id
+The key hashes the scene's name, its mechanism, mass data and gravity (a static
+path carries the weights) and load case, the model id
 and options, the number of levels, what is recorded, and the code version (a
 hash of the source of the ``geometry``, ``reducedmodels`` and ``validation``
 packages, so any code change invalidates the cache). Numbers enter the key
@@ -115,6 +116,7 @@ def result_key(scene, model: str, case_name: str, levels: int | None, extra: dic
         {
             "scene": scene.name,
             "mechanism": exact(scene.mechanism),
+            "inertia": exact(scene.mechanism.inertia),
             "case": exact(scene.load_case(case_name)),
             "model": model,
             "levels": levels,
