@@ -31,6 +31,7 @@ import dataclasses
 import hashlib
 import json
 import warnings
+from collections.abc import Callable
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
@@ -176,49 +177,25 @@ class ResultCache:
 
     def get(self, key: str) -> LoadPath | None:
         """The cached LoadPath for ``key``, or None (a bad entry is discarded with a warning)."""
-        if not self.enabled:
-            return None
-        path = self._entry(key)
-        try:
-            data = path.read_bytes()
-        except FileNotFoundError:
-            return None
-        except OSError as exc:
-            warnings.warn(
-                f"cache entry {path} cannot be read ({exc.strerror or exc}); recomputing",
-                CacheWarning,
-                stacklevel=2,
-            )
-            return None
-        lp = _decode(key, data)
-        if lp is None:
-            warnings.warn(
-                f"cache entry {path} is damaged or foreign; discarded and recomputed",
-                CacheWarning,
-                stacklevel=2,
-            )
-            path.unlink(missing_ok=True)
-        return lp
+        return self._read(key, ENTRY_FORMAT, "loadpath", LoadPath.from_dict)
 
     def put(self, key: str, lp: LoadPath) -> None:
         """Store a converged LoadPath (failures, and paths with non-finite values, are not)."""
-        if not self.enabled or not lp.converged:
-            return
-        body = lp.to_dict()
-        try:
-            checksum = _checksum(body)
-        except ValueError:  # NaN or inf: strict JSON could not hold it losslessly
-            return
-        doc = {"format": ENTRY_FORMAT, "key": key, "sha256": checksum, "loadpath": body}
-        try:
-            self.root.mkdir(parents=True, exist_ok=True)
-            write_bytes(self._entry(key), json.dumps(doc, allow_nan=False).encode("utf-8"))
-        except OSError as exc:
-            warnings.warn(f"result not cached: {exc}", CacheWarning, stacklevel=2)
+        if lp.converged:
+            self._write(key, ENTRY_FORMAT, "loadpath", lp.to_dict())
 
     def get_record(self, key: str) -> dict | None:
         """The JSON record stored under ``key`` (:func:`record_key`), or None (a bad entry
         is discarded with a warning)."""
+        return self._read(key, RECORD_FORMAT, "record", dict)
+
+    def put_record(self, key: str, record: dict) -> None:
+        """Store a JSON record (one with a non-finite number is not stored)."""
+        self._write(key, RECORD_FORMAT, "record", record)
+
+    def _read(self, key: str, fmt: str, field: str, convert: Callable):
+        """``convert`` of the checked body of the entry ``key`` of format ``fmt``, or None (a
+        damaged or foreign entry is removed with a warning; one that cannot be read is left)."""
         if not self.enabled:
             return None
         path = self._entry(key)
@@ -230,63 +207,49 @@ class ResultCache:
             warnings.warn(
                 f"cache entry {path} cannot be read ({exc.strerror or exc}); recomputing",
                 CacheWarning,
-                stacklevel=2,
+                stacklevel=3,
             )
             return None
-        record = _decode_record(key, data)
-        if record is None:
+        body = _decode_body(key, data, fmt, field, convert)
+        if body is None:
             warnings.warn(
                 f"cache entry {path} is damaged or foreign; discarded and recomputed",
                 CacheWarning,
-                stacklevel=2,
+                stacklevel=3,
             )
             path.unlink(missing_ok=True)
-        return record
+        return body
 
-    def put_record(self, key: str, record: dict) -> None:
-        """Store a JSON record (one with a non-finite number is not stored)."""
+    def _write(self, key: str, fmt: str, field: str, body: dict) -> None:
+        """Store ``body`` under ``key`` with its checksum (atomically; a body with a
+        non-finite number is not stored: strict JSON could not hold it losslessly)."""
         if not self.enabled:
             return
         try:
-            checksum = _checksum(record)
-        except ValueError:  # NaN or inf: strict JSON could not hold it losslessly
+            checksum = _checksum(body)
+        except ValueError:
             return
-        doc = {"format": RECORD_FORMAT, "key": key, "sha256": checksum, "record": record}
+        doc = {"format": fmt, "key": key, "sha256": checksum, field: body}
         try:
             self.root.mkdir(parents=True, exist_ok=True)
             write_bytes(self._entry(key), json.dumps(doc, allow_nan=False).encode("utf-8"))
         except OSError as exc:
-            warnings.warn(f"result not cached: {exc}", CacheWarning, stacklevel=2)
+            warnings.warn(f"result not cached: {exc}", CacheWarning, stacklevel=3)
 
 
-def _decode_record(key: str, data: bytes) -> dict | None:
-    """The record of a cache entry, or None if it is not a sound record entry for ``key``."""
+def _decode_body(key: str, data: bytes, fmt: str, field: str, convert: Callable):
+    """``convert`` of the body (``doc[field]``) of a cache entry, or None if it is not a
+    sound entry of format ``fmt`` for ``key`` (its checksum included) or does not convert."""
     try:
         doc = json.loads(data.decode("utf-8"))
         if (
             not isinstance(doc, dict)
-            or doc.get("format") != RECORD_FORMAT
+            or doc.get("format") != fmt
             or doc.get("key") != key
-            or not isinstance(doc.get("record"), dict)
-            or _checksum(doc["record"]) != doc.get("sha256")
+            or not isinstance(doc.get(field), dict)
+            or _checksum(doc[field]) != doc.get("sha256")
         ):
             return None
-        return doc["record"]
-    except (UnicodeDecodeError, ValueError, KeyError, TypeError, RecursionError):
-        return None
-
-
-def _decode(key: str, data: bytes) -> LoadPath | None:
-    """The LoadPath of a cache entry, or None if it is not a sound entry for ``key``."""
-    try:
-        doc = json.loads(data.decode("utf-8"))
-        if (
-            not isinstance(doc, dict)
-            or doc.get("format") != ENTRY_FORMAT
-            or doc.get("key") != key
-            or _checksum(doc["loadpath"]) != doc.get("sha256")
-        ):
-            return None
-        return LoadPath.from_dict(doc["loadpath"])
+        return convert(doc[field])
     except (UnicodeDecodeError, ValueError, KeyError, TypeError, RecursionError):
         return None
