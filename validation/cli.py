@@ -731,14 +731,14 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     # the point count is checked from the axes before any point is built, then every point
     sweep = load_sweep(args.sweep, args.max_points or MAX_POINTS, building)
     workers = args.workers or (1 if args.scheduler else MAX_LOCAL_WORKERS)
-    _check_memory(
-        [
+    _check_memory(  # one point built at a time, for the costly families only
+        (
             (point.scene.mechanism, spec, None)
             for spec in (sweep.reference, *sweep.models)
             if spec.model_family.cost is not None
             for point in sweep.valid_points
             for _ in sweep.load_cases
-        ],
+        ),
         sweep.source,
         "reference" if sweep.reference.model_family.cost is not None else "models",
         parallel=workers,

@@ -25,16 +25,22 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from flexval.reducedmodels import ModelSpec
 from flexval.reducedmodels.catalogue import REFERENCE
 
 from ..cache import code_version
 from .spec import Point, Sweep
 from .store import ResultStore
-from .tasks import TaskInfo, base_row, run_model_batch, run_reference
+from .tasks import TaskInfo, base_row, row_key, run_model_batch, run_reference
 
 RETRIES = 2
 """Times Dask reruns a task whose worker died before it finished."""
+MESSAGE_LOG_LENGTH = 10
+"""Recent messages Dask keeps per connection (``distributed.admin.low-level-log-length``,
+1000 by default) in a local cluster: each message to a worker holds its task's points, so
+a thousand held 470 MB of scenes in the driver of a 20,000-point sweep."""
 BLAS_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 """Worker environment of the local cluster: one BLAS thread per single-threaded worker."""
 
@@ -79,7 +85,7 @@ def _batch_size(sweep: Sweep, spec: ModelSpec, workers: int) -> int:
     :func:`auto_batch` for ``workers``, otherwise."""
     if spec.model_family.has(REFERENCE):
         return 1
-    return sweep.batch or auto_batch(len(sweep.valid_points), workers)
+    return sweep.batch or auto_batch(sweep.points.valid_count, workers)
 
 
 def task_info(sweep: Sweep) -> TaskInfo:
@@ -88,22 +94,23 @@ def task_info(sweep: Sweep) -> TaskInfo:
 
 
 def current_keys(sweep: Sweep) -> set[str]:
-    """The keys of every row ``sweep`` produces with the current code."""
+    """The keys of every row ``sweep`` produces with the current code (from the points'
+    records: no scene is built)."""
     info = task_info(sweep)
     models = [sweep.reference.id, *(s.id for s in sweep.models)]
-    keys = {base_row(p, "-", "-", info)["key"] for p in sweep.points if p.scene is None}
-    keys.update(
-        base_row(p, m, c, info)["key"]
-        for p in sweep.valid_points
-        for m in models
-        for c in sweep.load_cases
-    )
+    keys = set()
+    for r in sweep.points.records():
+        if r.reason is not None:
+            keys.add(row_key(r.digest, "-", "-", info))
+        else:
+            keys.update(row_key(r.digest, m, c, info) for m in models for c in sweep.load_cases)
     return keys
 
 
 def local_cluster(workers: int | None = None):
     """A LocalCluster of single-threaded worker processes (default: one per core).
 
+    Dask keeps :data:`MESSAGE_LOG_LENGTH` recent messages per connection, not a thousand.
     Dask's own log lines below ERROR are silenced: on a loaded machine every
     close printed "Worker process still alive after 4.0 seconds, killing" for
     workers that had finished; a worker lost mid-task is a recorded failure row.
@@ -111,8 +118,12 @@ def local_cluster(workers: int | None = None):
     import logging
     import os
 
+    import dask
     from distributed import LocalCluster
 
+    # the scheduler runs in this process: its logs of recent messages would hold the
+    # arguments (points and scenes) of the last thousand tasks sent to each worker
+    dask.config.set({"distributed.admin.low-level-log-length": MESSAGE_LOG_LENGTH})
     n = workers or os.cpu_count() or 1
     return LocalCluster(
         n_workers=n,
@@ -164,6 +175,21 @@ class _Progress:
         )
 
 
+BLOCK_TASKS = TASKS_PER_WORKER
+"""Points of one block of :func:`run_sweep`: this many of the largest task per worker."""
+BLOCKS_IN_FLIGHT = 2
+"""Blocks whose tasks are submitted and not all finished: the next block is built and
+submitted when fewer remain, so the workers always have the next tasks queued while the
+driver holds the scenes of at most this many blocks."""
+
+
+def _blocks(need: np.ndarray, size: int) -> Iterator[np.ndarray]:
+    """The positions where ``need`` holds, in consecutive runs of ``size``."""
+    positions = np.flatnonzero(need)
+    for k in range(0, len(positions), size):
+        yield positions[k : k + size]
+
+
 def run_sweep(
     sweep: Sweep,
     out_dir: str | Path,
@@ -172,6 +198,11 @@ def run_sweep(
     progress: Callable[[str], None] | None = None,
 ) -> SweepStats:
     """Run what is missing of ``sweep`` on the Dask ``client``; rows go to ``out_dir/results``.
+
+    The points are built and submitted block by block (:data:`BLOCK_TASKS` tasks per
+    worker of the largest task), at most :data:`BLOCKS_IN_FLIGHT` blocks at a time: the
+    driver holds every point's record (:class:`~flexval.validation.sweep.spec.PointRecord`)
+    and which of its (point, model) pairs are missing, and the scenes of those blocks only.
 
     Parameters
     ----------
@@ -191,65 +222,91 @@ def run_sweep(
     done = store.keys()
     info = task_info(sweep)
     stats = SweepStats()
+    cases = sweep.load_cases
+    specs = (sweep.reference, *sweep.models)
 
-    invalid = [
-        base_row(p, "-", "-", info) | {"status": "invalid_point", "reason": p.reason}
-        for p in sweep.points
-        if p.scene is None
-    ]
-    fresh_invalid = [r for r in invalid if r["key"] not in done]
+    fresh_invalid = []
+    missing = np.zeros((len(sweep.points), len(specs)), dtype=bool)
+    for k, r in enumerate(sweep.points.records()):
+        if r.reason is not None:
+            if row_key(r.digest, "-", "-", info) not in done:
+                point = Point(r.index, sweep.points.params(r.index), None, r.digest, r.reason)
+                fresh_invalid.append(
+                    base_row(point, "-", "-", info)
+                    | {"status": "invalid_point", "reason": r.reason}
+                )
+            continue
+        for j, spec in enumerate(specs):
+            missing[k, j] = any(row_key(r.digest, spec.id, c, info) not in done for c in cases)
     if fresh_invalid:
         stats.parts.append(store.append(fresh_invalid))
     stats.rows_written += len(fresh_invalid)
+    del fresh_invalid
+    stats.rows_skipped = (sweep.points.valid_count * len(specs) - int(missing.sum())) * len(cases)
 
-    def missing(model: str) -> list[Point]:
-        return [
-            p
-            for p in sweep.valid_points
-            if any(base_row(p, model, c, info)["key"] not in done for c in sweep.load_cases)
-        ]
-
-    todo = {spec: missing(spec.id) for spec in (sweep.reference, *sweep.models)}
-    stats.rows_skipped = (
-        len(sweep.valid_points) * (len(sweep.models) + 1) - sum(len(v) for v in todo.values())
-    ) * len(sweep.load_cases)
-    need_ref = {p.index for pts in todo.values() for p in pts}
-    ref_points = [p for p in sweep.valid_points if p.index in need_ref]
-    tasks = {}
-    ref_future = {}
     workers = sum(client.nthreads().values())
-    for chunk in chunks(ref_points, _batch_size(sweep, sweep.reference, workers)):
-        fut = client.submit(
-            run_reference,
-            chunk,
-            sweep.reference,
-            sweep.load_cases,
-            info,
-            use_cache,
-            retries=RETRIES,
-            pure=False,
-        )
-        tasks[fut] = (chunk, sweep.reference.id)
-        for p in chunk:
-            ref_future[p.index] = fut
-    for spec in sweep.models:
-        for chunk in chunks(todo[spec], _batch_size(sweep, spec, workers)):
-            refs = list({id(ref_future[p.index]): ref_future[p.index] for p in chunk}.values())
+    batch = [_batch_size(sweep, spec, workers) for spec in specs]
+    size = max(batch) * max(workers, 1) * BLOCK_TASKS
+    need = missing.any(axis=1)  # the reference runs wherever a model runs (it gives the errors)
+    stats.tasks = sum(
+        -(-len(block) // batch[0])
+        + sum(-(-int(missing[block, j].sum()) // batch[j]) for j in range(1, len(specs)))
+        for block in _blocks(need, size)
+    )
+
+    def submit(block: np.ndarray) -> Iterator[tuple[object, list[Point], str]]:
+        """Build the points of ``block`` and submit their tasks: (future, points, model)."""
+        points = {int(k): sweep.points[int(k)] for k in block}
+        ref_future = {}
+        for chunk in chunks(list(points.values()), batch[0]):
             fut = client.submit(
-                run_model_batch,
+                run_reference,
                 chunk,
-                spec,
-                sweep.load_cases,
+                sweep.reference,
+                cases,
                 info,
-                refs,
+                use_cache,
                 retries=RETRIES,
                 pure=False,
             )
-            tasks[fut] = (chunk, spec.id)
-    stats.tasks = len(tasks)
-    bar = _Progress(len(tasks), progress)
-    for fut in as_completed(list(tasks)):
-        chunk, model = tasks.pop(fut)
+            ref_future.update((p.index, fut) for p in chunk)
+            yield fut, chunk, sweep.reference.id
+        for j, spec in enumerate(specs[1:], start=1):
+            todo = [points[int(k)] for k in block if missing[k, j]]
+            for chunk in chunks(todo, batch[j]):
+                refs = list({id(ref_future[p.index]): ref_future[p.index] for p in chunk}.values())
+                fut = client.submit(
+                    run_model_batch,
+                    chunk,
+                    spec,
+                    cases,
+                    info,
+                    refs,
+                    retries=RETRIES,
+                    pure=False,
+                )
+                yield fut, chunk, spec.id
+
+    tasks: dict = {}  # future: (points, model, block)
+    open_blocks: dict[int, int] = {}  # block: its tasks not finished
+    pending = enumerate(_blocks(need, size))
+    finished = as_completed()
+
+    def refill() -> None:
+        while len(open_blocks) < BLOCKS_IN_FLIGHT:
+            nxt = next(pending, None)
+            if nxt is None:
+                return
+            b, block = nxt
+            for fut, chunk, model in submit(block):
+                tasks[fut] = (chunk, model, b)
+                open_blocks[b] = open_blocks.get(b, 0) + 1
+                finished.add(fut)
+
+    refill()
+    bar = _Progress(stats.tasks, progress)
+    for fut in finished:
+        chunk, model, b = tasks.pop(fut)
         try:
             result = fut.result()
             rows = result["rows"] if isinstance(result, dict) else result
@@ -258,8 +315,9 @@ def run_sweep(
             rows = [
                 base_row(p, model, c, info) | {"status": "error", "reason": reason}
                 for p in chunk
-                for c in sweep.load_cases
+                for c in cases
             ]
+        result = None
         rows = [r for r in rows if r["key"] not in done]
         failed = sum(r["status"] != "ok" for r in rows)
         part = store.append(rows)
@@ -269,7 +327,12 @@ def run_sweep(
         stats.rows_written += len(rows)
         stats.rows_failed += failed
         fut.release()
+        del fut, chunk, rows  # the block's scenes go with its last task
         bar.update(failed)
+        open_blocks[b] -= 1
+        if not open_blocks[b]:
+            del open_blocks[b]
+            refill()
     stats.seconds = time.perf_counter() - t0
     return stats
 

@@ -51,7 +51,7 @@ import itertools
 import json
 import math
 import tomllib
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -96,9 +96,10 @@ MAX_POINTS = 1_000_000
 """Default bound on a sweep's points (``flexval sweep --max-points``): the point count is
 computed from the axes before any point is built, and a sweep with more is refused."""
 BYTES_PER_POINT = 10e3
-"""Memory one built point holds (its scene data and parsed scene), bytes: 6.0 kB measured on
-open_chain, 8.2 kB on notch_fourbar (resident memory over 3000 points); a sweep whose points
-would not fit is refused."""
+"""Memory a sweep's driver holds per point, bytes: the points themselves are not held (a
+:class:`PointRecord` each, and the scenes of the blocks in flight), but the keys of their
+stored rows and the rows the summary reads are, 3.8 kB a row measured (open_chain, 20,000
+points, two rows each: 160 MB); a sweep whose points would not fit is refused."""
 SECONDS_PER_POINT = 6e-3
 """Time to build one point (parse and check its scene), s: 1.7 ms measured on open_chain,
 5.6 ms on notch_fourbar (2000 points, a loaded 2-core machine)."""
@@ -303,8 +304,152 @@ class Point:
 
 
 @dataclass(frozen=True)
+class PointRecord:
+    """What the driver keeps of a point between building it and the summary: its index, the
+    digest of its scene data and, for an invalid point, why the loader refused it."""
+
+    index: int
+    digest: str
+    reason: str | None = None
+
+
+@dataclass(frozen=True)
+class PointBuilder:
+    """Builds the point of a given index from the base scene's data and the axes."""
+
+    base: dict
+    axes: tuple[Axis, ...]
+    combine: str
+    source: str
+    name: str
+    cases: tuple[str, ...]
+    rotation: float | None
+
+    def params(self, index: int) -> dict[str, float]:
+        """The axis values of point ``index`` (the order of :func:`_combine`)."""
+        if self.combine == "zip" or not self.axes:
+            return {a.path: a.values[index] for a in self.axes}
+        values = {}
+        for a in reversed(self.axes):  # itertools.product: the last axis varies fastest
+            index, k = divmod(index, len(a.values))
+            values[a.path] = a.values[k]
+        return {a.path: values[a.path] for a in self.axes}
+
+    def build(self, index: int, params: dict[str, float] | None = None) -> Point:
+        """Point ``index`` with its loaded scene (scene None and a reason for a refused random
+        draw; a refused listed point raises SceneError naming the point and the field)."""
+        params = self.params(index) if params is None else params
+        pdata = copy.deepcopy(self.base)
+        for k, (path, v) in enumerate(params.items()):
+            node, key = _slot(pdata, path, self.source, f"axes[{k}].path")
+            node[key] = v
+        where = f"{self.source}: point {index} {params}"
+        try:
+            scene = parse_scene(copy.deepcopy(pdata), where, default_name=self.name)
+        except SceneError as exc:
+            if not any(a.random for a in self.axes):
+                raise
+            return Point(index, params, None, digest(pdata), f"{exc.field}: {exc.reason}")
+        if self.rotation is not None:
+            scene = _normalise(scene, pdata, self.cases, self.rotation)
+        return Point(index, params, scene, digest(pdata))
+
+
+class PointSet(Sequence):
+    """A sweep's points: built on demand, one at a time, from a :class:`PointBuilder` and the
+    small per-point records (:class:`PointRecord`) of a checking pass, or a given tuple of
+    built points.
+
+    Indexing and iteration build the points (scenes included); :meth:`records`,
+    :meth:`params` and :attr:`valid_count` do not. Memory: 24 bytes of digest per point and
+    the reasons of the invalid points, however many points there are.
+    """
+
+    def __init__(
+        self,
+        builder: PointBuilder | None = None,
+        digests: np.ndarray | None = None,
+        reasons: dict[int, str] | None = None,
+        points: tuple[Point, ...] | None = None,
+    ):
+        self._builder, self._points = builder, points
+        self._digests = digests
+        self._reasons = reasons or {}
+        if points is not None:
+            self._by_index = {p.index: k for k, p in enumerate(points)}
+
+    @classmethod
+    def of(cls, points: tuple[Point, ...]) -> PointSet:
+        """The set of the built ``points`` (positions and indices may differ)."""
+        return cls(points=tuple(points))
+
+    def __len__(self) -> int:
+        return len(self._points) if self._points is not None else len(self._digests)
+
+    def __getitem__(self, k: int) -> Point:  # type: ignore[override]
+        """The point at position ``k``, built."""
+        if self._points is not None:
+            return self._points[k]
+        k = range(len(self))[k]
+        point = self._builder.build(k)
+        if point.digest != self._digests[k].decode():
+            raise RuntimeError(f"point {k} of the sweep built differently from its check")
+        return point
+
+    def __iter__(self) -> Iterator[Point]:
+        if self._points is not None:
+            yield from self._points
+            return
+        for k, values in enumerate(_combine(self._builder.axes, self._builder.combine)):
+            yield self._builder.build(k, {a.path: v for a, v in zip(self._builder.axes, values)})
+
+    def records(self) -> Iterator[PointRecord]:
+        """Every point's :class:`PointRecord`, in order, without building a scene."""
+        if self._points is not None:
+            for p in self._points:
+                yield PointRecord(p.index, p.digest, p.reason)
+            return
+        for k, d in enumerate(self._digests):
+            yield PointRecord(k, d.decode(), self._reasons.get(k))
+
+    def params(self, index: int) -> dict[str, float]:
+        """The parameters of the point of ``index``, without building it."""
+        if self._points is not None:
+            return self._points[self._by_index[index]].params
+        return self._builder.params(index)
+
+    @property
+    def valid_count(self) -> int:
+        """The number of points whose scene loaded."""
+        if self._points is not None:
+            return sum(p.scene is not None for p in self._points)
+        return len(self) - len(self._reasons)
+
+
+class ValidPoints(Sequence):
+    """The points of a :class:`PointSet` whose scene loaded, built as they are iterated."""
+
+    def __init__(self, points: PointSet):
+        self._all = points
+
+    def __len__(self) -> int:
+        return self._all.valid_count
+
+    def __getitem__(self, k: int) -> Point:  # type: ignore[override]
+        return next(itertools.islice(iter(self), range(len(self))[k], None))
+
+    def __iter__(self) -> Iterator[Point]:
+        if self._all.valid_count == len(self._all):
+            yield from self._all
+            return
+        for r in self._all.records():
+            if r.reason is None:
+                yield self._all[r.index]
+
+
+@dataclass(frozen=True)
 class Sweep:
-    """A checked sweep: axes, models, reference and every point."""
+    """A checked sweep: axes, models, reference and its points (built on demand)."""
 
     name: str
     description: str
@@ -318,14 +463,19 @@ class Sweep:
     metric: str
     linear_rotation: float | None
     batch: int | None
-    points: tuple[Point, ...]
+    points: PointSet
+    """Every point; a tuple of built points is taken as :meth:`PointSet.of` it."""
     outputs: tuple[str, ...] = DEFAULT_OUTPUTS
     """The optional outputs asked for (a subset of :data:`OPTIONAL_OUTPUTS`, in that order)."""
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.points, PointSet):
+            object.__setattr__(self, "points", PointSet.of(self.points))
+
     @property
-    def valid_points(self) -> tuple[Point, ...]:
-        """The points whose scene loaded."""
-        return tuple(p for p in self.points if p.scene is not None)
+    def valid_points(self) -> ValidPoints:
+        """The points whose scene loaded (built as they are iterated)."""
+        return ValidPoints(self.points)
 
 
 def _fail(source: str, field: str, value: Any, reason: str) -> None:
@@ -580,13 +730,14 @@ def parse_sweep(
     max_points: int = MAX_POINTS,
     progress: Callable[[str], None] | None = None,
 ) -> Sweep:
-    """Check a parsed sweep file and build every point (nothing is run but ee scaling).
+    """Check a parsed sweep file and every point (nothing is run but ee scaling).
 
-    The point count is checked (``max_points``, and the memory the points
-    would hold) from the axes before any point is built; the points are then
-    generated one at a time from the axes; when building them is estimated
-    to take longer than a minute, ``progress`` is told the estimate and then
-    every tenth of the points built.
+    The point count is checked (``max_points``, and the memory the points'
+    records would hold) from the axes before any point is built; the points
+    are then generated one at a time from the axes, checked, and kept only as
+    a :class:`PointRecord` (the sweep's :class:`PointSet` builds them again on
+    demand); when checking them is estimated to take longer than a minute,
+    ``progress`` is told the estimate and then every tenth of the points checked.
 
     Raises
     ------
@@ -649,27 +800,17 @@ def parse_sweep(
 
     tell = progress if count * SECONDS_PER_POINT > LONG_SECONDS else None
     if tell is not None:
-        tell(f"building {count:,} points: about {duration(count * SECONDS_PER_POINT)}")
-    points = []
+        tell(f"checking {count:,} points: about {duration(count * SECONDS_PER_POINT)}")
+    builder = PointBuilder(base, axes, combine, source, name, tuple(cases), rotation)
+    digests = np.empty(count, dtype="S24")
+    reasons = {}
     for i, values in enumerate(_combine(axes, combine)):
         if tell is not None and i and i % max(1, count // 10) == 0:
-            tell(f"built {i:,} of {count:,} points")
-        params = {a.path: v for a, v in zip(axes, values)}
-        pdata = copy.deepcopy(base)
-        for k, (path, v) in enumerate(params.items()):
-            node, key = _slot(pdata, path, source, f"axes[{k}].path")
-            node[key] = v
-        where = f"{source}: point {i} {params}"
-        try:
-            scene = parse_scene(copy.deepcopy(pdata), where, default_name=name)
-        except SceneError as exc:
-            if not any(a.random for a in axes):
-                raise
-            points.append(Point(i, params, None, digest(pdata), f"{exc.field}: {exc.reason}"))
-            continue
-        if rotation is not None:
-            scene = _normalise(scene, pdata, tuple(cases), rotation)
-        points.append(Point(i, params, scene, digest(pdata)))
+            tell(f"checked {i:,} of {count:,} points")
+        point = builder.build(i, {a.path: v for a, v in zip(axes, values)})
+        digests[i] = point.digest.encode()
+        if point.scene is None:
+            reasons[i] = point.reason
     return Sweep(
         name,
         str(data.get("description", "")),
@@ -683,7 +824,7 @@ def parse_sweep(
         metric,
         rotation,
         batch,
-        tuple(points),
+        PointSet(builder, digests, reasons),
         outputs,
     )
 

@@ -77,12 +77,8 @@ def _fmt(x: float | None) -> str:
     return "–" if x is None else f"{x:.3g}"
 
 
-def _point(sweep: Sweep, index: int):
-    return next(p for p in sweep.points if p.index == index)
-
-
 def _params(sweep: Sweep, index: int) -> str:
-    p = _point(sweep, index).params
+    p = sweep.points.params(index)
     return ", ".join(f"{k} = {v:.4g}" for k, v in p.items()) or "base scene"
 
 
@@ -92,7 +88,7 @@ def _ranges(sweep: Sweep, pts: list[int]) -> str:
         return ""
     spans = []
     for a in sweep.axes[:1] if sweep.combine == "zip" else sweep.axes:
-        v = [_point(sweep, i).params[a.path] for i in pts]
+        v = [sweep.points.params(i)[a.path] for i in pts]
         spans.append(f"{a.path} {min(v):.4g}..{max(v):.4g}")
     return "; ".join(spans)
 
@@ -123,7 +119,7 @@ def _per_point(sweep: Sweep, metrics: dict, first: tuple[str, dict] | None = Non
         "| point | parameters | " + " | ".join(extra + list(metrics)) + " |",
         "|---:|---|" + "---:|" * (len(extra) + len(metrics)),
     ]
-    for p in sweep.points:
+    for p in sweep.points.records():
         cells = ([_fmt(first[1].get(p.index))] if first else []) + [
             _fmt(metrics[m].get(p.index)) for m in metrics
         ]
@@ -385,7 +381,7 @@ def _lines(sweep: Sweep, rows: list[dict], path: Path, value: RowValue, label: s
     for ax, case in zip(axs[0], cases):
         for spec in sweep.models:
             pts = sorted(
-                (_point(sweep, r["point"]).params.get(axis.path, 0.0) if axis else 0.0, value(r))
+                (sweep.points.params(r["point"]).get(axis.path, 0.0) if axis else 0.0, value(r))
                 for r in rows
                 if r["model"] == spec.id and r["load_case"] == case and value(r) is not None
             )
@@ -417,11 +413,12 @@ def _heatmaps(sweep: Sweep, metrics: dict, path: Path, label: str) -> None:
     grids = {}
     for model, per in metrics.items():
         z = np.full((len(y), len(x)), np.nan)
-        for p in sweep.points:
+        for p in sweep.points.records():
             v = per.get(p.index)
             if v is not None:
-                i = int(np.argmin(np.abs(y - p.params[ax1.path])))
-                j = int(np.argmin(np.abs(x - p.params[ax0.path])))
+                params = sweep.points.params(p.index)
+                i = int(np.argmin(np.abs(y - params[ax1.path])))
+                j = int(np.argmin(np.abs(x - params[ax0.path])))
                 z[i, j] = max(v, 1e-6)
         grids[model] = z
     finite = np.concatenate([z[np.isfinite(z)] for z in grids.values()] + [np.array([1.0])])
@@ -459,7 +456,7 @@ def _scatter(sweep: Sweep, metrics: dict, path: Path, label: str) -> None:
     fig, axs = plt.subplots(1, len(sweep.axes), figsize=(4.2 * len(sweep.axes), 3.4), squeeze=False)
     for ax, a in zip(axs[0], sweep.axes):
         for model, per in metrics.items():
-            pts = [(_point(sweep, i).params[a.path], v) for i, v in per.items() if v is not None]
+            pts = [(sweep.points.params(i)[a.path], v) for i, v in per.items() if v is not None]
             if pts:
                 px, py = zip(*pts)
                 ax.plot(px, np.maximum(py, 1e-6), ".", ms=3, label=model)
@@ -497,7 +494,7 @@ def _limits(sweep: Sweep, rows: list[dict], path: Path) -> Path:
                 unit = found[0]["load_unit"]
                 pts = sorted(
                     (
-                        _point(sweep, r["point"]).params.get(axis.path, 0.0) if axis else 0.0,
+                        sweep.points.params(r["point"]).get(axis.path, 0.0) if axis else 0.0,
                         r["limit_load"],
                     )
                     for r in found
