@@ -61,6 +61,7 @@ from .loadpath import LoadPath
 from .loads import Loads
 from .modes import refuse_massless_bodies
 from .newton import FixedLoad, StepProblem, solve_step
+from .recorder import notify
 from .tangent import Tangent
 
 
@@ -288,6 +289,7 @@ def solve_dynamic(
         if path.poses is not None:
             for b in system.mechanism.bodies:
                 path.poses[b].append(system.pose(q, b).tolist())
+        notify(path)
 
     def fail(message: str, t: float) -> SolverError:
         stats["failure"] = message
@@ -350,3 +352,36 @@ def solve_dynamic(
     path.stats = stats
     path.seconds = time.perf_counter() - t_start
     return path
+
+
+def iteration_seconds(
+    system: System,
+    case: LoadCase,
+    duration: float,
+    settings: DynamicSettings | None = None,
+    damping: Rayleigh = Rayleigh(),
+    repeats: int = 3,
+) -> float:
+    """Wall time of one Newton iteration of a time step (s): the effective residual and
+    tangent of a first step at rest, assembled and solved ``repeats`` times, the fastest
+    (for estimates of a run's time; nothing is integrated)."""
+    s = settings or DynamicSettings()
+    q = system.initial_state()
+    zero = np.zeros(system.n_dofs)
+    step = DynamicStep(
+        system,
+        system.loads(case),
+        0.0,
+        MassModel(system),
+        (q, zero, zero, zero),
+        s.first_step * duration,
+        GeneralizedAlpha(s.rho_inf),
+        damping,
+    )
+    best = math.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        r, K = step.assemble(q)
+        step.correction(q, r, K)
+        best = min(best, time.perf_counter() - t0)
+    return best

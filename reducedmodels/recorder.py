@@ -33,13 +33,22 @@ _OBSERVERS: list[Callable[[LoadPath], None]] = []
 @contextmanager
 def observing(callback: Callable[[LoadPath], None]) -> Iterator[None]:
     """Within the block, call ``callback(path)`` after every point any :class:`PathRecorder`
-    records (the path so far: its last load is the point's); for progress reports. The
+    records, and every time step a dynamic run accepts (the path so far: its last load, or
+    time, is the point's); for progress reports. The
     callback only reads: the traced path is the same with or without it."""
     _OBSERVERS.append(callback)
     try:
         yield
     finally:
         _OBSERVERS.remove(callback)
+
+
+def notify(path: LoadPath) -> None:
+    """Tell every observer (:func:`observing`) that ``path`` has a new point: a load level
+    recorded by a :class:`PathRecorder`, or a time step accepted by
+    :func:`flexval.reducedmodels.dynamics.solve_dynamic`."""
+    for callback in _OBSERVERS:
+        callback(path)
 
 
 class PathRecorder:
@@ -140,8 +149,7 @@ class PathRecorder:
         f = self.factors
         if "limit_points" in self.stats and len(f) >= 3 and (f[-2] - f[-3]) * (f[-1] - f[-2]) < 0:
             self.stats["limit_points"].append(len(f) - 2)
-        for callback in _OBSERVERS:
-            callback(lp)
+        notify(lp)
 
     def _bifurcations(self, factors) -> None:
         """Append bifurcation points (load factors) as ``{"load", "fraction"}`` (N or N mm)."""

@@ -238,9 +238,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
             args.density,
             "applies to --dynamic only (a static run takes its weights from the scene)",
         )
-    estimate = _check_memory(
+    estimate = _check_memory(  # a dynamic run's memory too; its time is estimated apart
         [(scene.mechanism, spec, args.levels) for spec in specs for _ in cases],
         *(("<command line>", "--model") if args.model else (scene.source, "request.models")),
+        quiet=args.dynamic,
     )
     if args.dynamic:
         return _run_dynamic(args, scene, specs, cases, json_path)
@@ -406,8 +407,21 @@ def _run_dynamic(args: argparse.Namespace, scene, specs, cases, json_path) -> in
             )
         )
 
+    from .dynamic import describe, estimate_dynamic, time_progress
+    from .resources import long_seconds
+
+    estimates = [
+        (spec.id, case.name, e)
+        for spec in specs
+        for case in cases
+        if (e := estimate_dynamic(scene, spec, case, args.duration, args.error_tol, args.rho_inf))
+    ]
+    long = bool(estimates) and sum(e.seconds for *_, e in estimates) > long_seconds()
+    if long:  # the estimate, then a progress line per 1/20 of each run's duration
+        print(describe(estimates), file=sys.stderr, flush=True)
     print(header(columns))
-    return _run_each(specs, cases, run_one, row, scene, json_path)
+    with time_progress(len(specs) * len(cases), enabled=long):
+        return _run_each(specs, cases, run_one, row, scene, json_path)
 
 
 def _model_column(specs, suffix: str = "") -> Column:
@@ -954,6 +968,8 @@ def build_parser() -> argparse.ArgumentParser:
         f"longer than {LONG_SECONDS:g} s (${LONG_ENV} sets another threshold) prints the "
         "estimate first and, on static load-control paths, one progress line per converged "
         "load level on stderr (level k/N, load, time so far, about how long the rest takes), "
+        "and on --dynamic runs (time steps estimated from the duration, the lowest natural "
+        "frequency at rest and --error-tol) one line per twentieth of the duration reached, "
         "whether or not stderr is a terminal; the results are the same.",
     )
     q.add_argument("scene", help=scene_help)
