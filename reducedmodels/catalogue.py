@@ -204,6 +204,11 @@ class Family:
         of one load path of ``levels`` load levels, estimated from the
         mechanism and the spec without building anything (None: a family
         whose paths are small and quick whatever the resolution).
+    connectors : callable, optional
+        ``connectors(mechanism, spec, **options) -> list of Connector``: the
+        connectors ``system`` joins, without the System (a batch of copies,
+        :mod:`flexval.reducedmodels.batch`, numbers them once for all
+        copies). None: a batch builds each copy's System.
     """
 
     name: str
@@ -214,6 +219,7 @@ class Family:
     capabilities: frozenset[str] = frozenset()
     system: Callable[..., Any] | None = None
     cost: Callable[..., Cost] | None = None
+    connectors: Callable[..., Any] | None = None
 
     def __post_init__(self) -> None:
         unknown = set(self.capabilities) - CAPABILITIES

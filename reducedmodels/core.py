@@ -234,12 +234,17 @@ class System:
         self._gather = gathers
         diagonal = np.arange(n)
         compiled = any(group.compiled for group, _ in self._groups)
+        #: the global row and column of every value slot of the tangent's pattern (the layout's
+        #: slots' order)
+        self.pattern_rows = np.concatenate([*rows, diagonal])
+        self.pattern_cols = np.concatenate([*cols, diagonal])
         self.layout = TangentLayout(
             n,
-            np.concatenate([*rows, diagonal]),
-            np.concatenate([*cols, diagonal]),
+            self.pattern_rows,
+            self.pattern_cols,
             self.n_multipliers,
             compiled,
+            self._tangent_ordering(),
         )
         # each group's Hessian values -> storage slots (-1: a ground entry, dropped)
         group_slots, start = [], 0
@@ -281,6 +286,11 @@ class System:
         generic_slots = np.concatenate(generic_slots or [np.zeros(0, np.int64)])
         self._hess_keep = generic_slots >= 0
         self._hess_slots = generic_slots[self._hess_keep]
+
+    def _tangent_ordering(self) -> np.ndarray | None:
+        """The unknowns' order for a banded tangent, or None for the layout's own (see
+        :class:`~flexval.reducedmodels.tangent.TangentLayout`)."""
+        return None
 
     @staticmethod
     def _split(values: np.ndarray, bounds: list[int]) -> list[np.ndarray]:
@@ -350,11 +360,7 @@ class System:
         ``dead_load_scale`` (N); it joins the force scale of the residual test,
         so that a case without load (or a small one) still has a meaningful one.
         """
-        loads = Loads.of_case(case, self.pose_dofs, self.reference, self.size)
-        loads.scale = max(
-            [loads.scale, *(getattr(c, "dead_load_scale", 0.0) for c in self.connectors)]
-        )
-        return loads
+        return case_loads(case, self.pose_dofs, self.reference, self.size, self.connectors)
 
     # --- assembly --------------------------------------------------------
     def assemble(
@@ -407,6 +413,11 @@ class System:
                 energy += assembler(coordinates, grad, storage)
         diagonal = self._load_diagonal  # zero between assemblies
         energy += loads.add_to(q, factor, grad, diagonal)
+        if loads.many:
+            dofs = loads.diagonal_array
+            storage[self._diagonal_slots[dofs]] += diagonal[dofs]
+            diagonal[dofs] = 0.0
+            return energy, grad, storage
         for dof in loads.diagonal_dofs:  # the few loaded bodies' rotations
             value = diagonal[dof]
             if value:
@@ -519,10 +530,10 @@ class System:
         states = np.array([q for q, _ in history])
         if slope is None:
             weights, slope_weight = lagrange_weights(factors, factor), 0.0
-            guess = np.dot(weights, states)
+            guess = self._combine(weights, states)
         else:
             weights, slope_weight = hermite_weights(factors, factor)
-            guess = np.dot(weights, states)
+            guess = self._combine(weights, states)
             guess += slope_weight * slope
         if self._predictors:
             if past is None:
@@ -551,6 +562,11 @@ class System:
                     [state[k] for state in past], states_weights, [state[:2] for state in now[run]]
                 )
         return guess
+
+    @staticmethod
+    def _combine(weights: Sequence[float], states: np.ndarray) -> np.ndarray:
+        """sum(w_i q_i) over the states (k, n): one BLAS product."""
+        return np.dot(weights, states)
 
     def validity(self, q: np.ndarray) -> list[str]:
         """Every connector's reasons why state q is outside its model's range of meaning.
@@ -617,6 +633,21 @@ class System:
     def scaled(self, v: np.ndarray) -> np.ndarray:
         """Dimensionless version of a coordinate vector (lengths / size, angles as is)."""
         return v / self._coordinate_scale
+
+
+def case_loads(
+    case: LoadCase,
+    pose_dofs,
+    reference: dict,
+    size: float,
+    connectors: Sequence[Connector],
+) -> Loads:
+    """Dead loads of ``case`` at full value, numbered by ``pose_dofs(body)`` (see
+    :meth:`System.loads`): the bodies' reference points (mm), the mechanism's size (mm) and
+    the connectors, whose own dead loads (``dead_load_scale``, N) join the force scale."""
+    loads = Loads.of_case(case, pose_dofs, reference, size)
+    loads.scale = max([loads.scale, *(getattr(c, "dead_load_scale", 0.0) for c in connectors)])
+    return loads
 
 
 def connector_groups(connectors: Sequence[Connector]) -> list[tuple[ConnectorGroup, slice]]:

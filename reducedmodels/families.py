@@ -141,6 +141,17 @@ def _trace_ee(
     return lp
 
 
+def _connectors_of(make):
+    """``Family.connectors`` of a family whose flexures are ``make`` connectors."""
+
+    def connectors(mechanism: Mechanism, spec: ModelSpec, **options) -> list:
+        from .models import flexure_connectors
+
+        return flexure_connectors(mechanism, spec, make, options)
+
+    return connectors
+
+
 def _system_of(make):
     """``Family.system`` of a family whose flexures are ``make`` connectors."""
 
@@ -164,6 +175,7 @@ BEAM = register(
         (Option.flag("shear", "Timoshenko beams (shear deformation of the rectangular section)"),),
         frozenset({ARCLENGTH}),
         _system_of(_beam),
+        connectors=_connectors_of(_beam),
     )
 )
 
@@ -176,6 +188,7 @@ PRBM = register(
         (),
         frozenset({ARCLENGTH}),
         _system_of(_prbm),
+        connectors=_connectors_of(_prbm),
     )
 )
 
@@ -189,6 +202,7 @@ DCMM = register(
         (FRAME,),
         frozenset({ARCLENGTH}),
         _system_of(_dcmm),
+        connectors=_connectors_of(_dcmm),
     )
 )
 
@@ -201,5 +215,6 @@ EE = register(
         (),
         frozenset({LINEAR}),
         _system_of(_ee),
+        connectors=_connectors_of(_ee),
     )
 )

@@ -26,6 +26,10 @@ import numpy as np
 
 from flexval.geometry import Force, LoadCase, Moment
 
+MANY_LOADS = 16
+"""Loads from which :meth:`Loads.add_to` takes one numpy pass instead of a loop on floats
+(a mechanism has a few; a batch of copies has a few per copy)."""
+
 
 @dataclass
 class Loads:
@@ -110,6 +114,20 @@ class Loads:
         ]
         #: the rotation dofs whose tangent diagonal :meth:`add_to` may change (each once)
         self.diagonal_dofs = list(dict.fromkeys(it for _, _, it, *_ in self._points))
+        self.many = False
+        if len(self._points) + len(self._moments) > MANY_LOADS:
+            self.vectorise()
+
+    def vectorise(self) -> None:
+        """Take one numpy pass over all loads in :meth:`add_to` from now on (many loads: a
+        batch of copies, whose copies then see the same arithmetic however many they are)."""
+        self.many = True
+        table = np.array(self._points, float).reshape(-1, 7).T
+        self._point_dofs = table[:3].astype(np.int64)
+        self._point_values = table[3:]
+        self._moment_dofs = np.array([d for d, _ in self._moments], np.int64)
+        self._moment_values = np.array([m for _, m in self._moments], float)
+        self.diagonal_array = np.array(self.diagonal_dofs, np.int64)
 
     def add_to(self, q: np.ndarray, factor: float, grad: np.ndarray, diagonal: np.ndarray) -> float:
         """Add the loads at ``factor`` to ``grad`` and the tangent ``diagonal`` (in place).
@@ -118,6 +136,8 @@ class Loads:
         ``item``): called at every assembly, where numpy scalars cost more
         than the arithmetic of a few loads.
         """
+        if self.many:
+            return self._add_many(q, float(factor), grad, diagonal)
         energy, factor, item = 0.0, float(factor), q.item
         for ix, iy, it, fx, fy, rx, ry in self._points:
             theta = item(it)
@@ -131,6 +151,24 @@ class Loads:
         for dof, m in self._moments:
             energy -= factor * m * item(dof)
             grad[dof] -= factor * m
+        return energy
+
+    def _add_many(
+        self, q: np.ndarray, factor: float, grad: np.ndarray, diagonal: np.ndarray
+    ) -> float:
+        """:meth:`add_to` in one numpy pass over all loads (the same terms)."""
+        (ix, iy, it), (fx, fy, rx, ry) = self._point_dofs, self._point_values
+        theta = q[it]
+        c, s = np.cos(theta), np.sin(theta)
+        rrx, rry = c * rx - s * ry, s * rx + c * ry
+        energy = -factor * float(np.sum(fx * (q[ix] + rrx) + fy * (q[iy] + rry)))
+        np.add.at(grad, ix, -factor * fx)
+        np.add.at(grad, iy, -factor * fy)
+        np.add.at(grad, it, -factor * (fy * rrx - fx * rry))
+        np.add.at(diagonal, it, factor * (fx * rrx + fy * rry))
+        dofs, moments = self._moment_dofs, self._moment_values
+        energy -= factor * float(np.sum(moments * q[dofs]))
+        np.add.at(grad, dofs, -factor * moments)
         return energy
 
     def vector(self, q: np.ndarray) -> np.ndarray:

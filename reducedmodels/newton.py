@@ -210,3 +210,188 @@ def solve_step(
         f"no convergence in {settings.max_iterations} iterations (residual {res:.3g})",
         None,
     )
+
+
+class BatchNewtonResult(NamedTuple):
+    """Outcome of :func:`solve_batch`: :class:`NewtonResult` for every copy of a batch at once.
+
+    ``state`` holds every copy's coordinates: a converged copy's converged
+    state, a failed or inactive copy's from where the solve started
+    (``origin``, or the guess); None only when no copy converged.
+    ``iterations`` and ``reasons`` are per copy, as :func:`solve_step` gives
+    them for that copy alone; ``failed`` marks the copies that did not
+    converge. ``storage`` holds every copy's tangent values as the copy's
+    own solve would return its tangent (a copy that stopped early keeps the
+    values of its last assembly), those of the copies that took no part as
+    the batch kept them; ``tangent`` wraps it.
+    """
+
+    state: np.ndarray | None
+    factor: float
+    iterations: np.ndarray
+    reason: str
+    tangent: Tangent | None
+    failed: np.ndarray
+    reasons: list[str]
+    storage: np.ndarray
+
+
+def solve_batch(
+    problem: StepProblem,
+    q: np.ndarray,
+    settings: SolverSettings,
+    origin: np.ndarray | None,
+    active: np.ndarray,
+) -> BatchNewtonResult:
+    """:func:`solve_step` on every active copy of a batch at once, each copy as if alone.
+
+    ``problem.system`` is a :class:`flexval.reducedmodels.batch.BatchSystem`:
+    independent copies, so its tangent is block-diagonal and one assembly and
+    one factorisation serve all copies. Every test of :func:`solve_step` is
+    made per copy, on the copy's own residual, correction and body motions,
+    with the same constants; a copy that meets one stops there (converged or
+    failed) and takes no further part: its coordinates stay, its block of
+    the tangent keeps the values of its last assembly (so its correction is
+    zero and the factorisation unchanged), and its iteration count is the
+    one its own solve gives. The iteration ends when no copy is left; its
+    length is the largest count. A failed copy's coordinates go back to
+    ``origin`` (or the guess), a state its connectors accept.
+
+    ``active`` (bool per copy) says which copies take part; the others are
+    frozen throughout (their tangent block as :attr:`BatchSystem.kept` holds it).
+    """
+    system = problem.system
+    loads, factor = problem.loads, problem.factor
+    force_tol, step_tol, error_tol = settings.force_tol, settings.step_tol, settings.error_tol
+    max_iterations, max_stall = settings.max_iterations, settings.max_stall
+    copies, dof_copy, slot_copy = system.n_copies, system.dof_copy, system.slot_copy
+    fallback = (q if origin is None else origin).copy()
+    running = np.asarray(active, bool).copy()
+    failed = np.zeros(copies, bool)
+    iterations = np.zeros(copies, np.int64)
+    reasons = [""] * copies
+    res0 = np.full(copies, np.nan)
+    best = np.full(copies, np.inf)
+    stalled = np.zeros(copies, np.int64)
+    last_step = np.full(copies, np.nan)
+    kept = system.kept.copy()  # every copy's tangent values as its solve leaves them
+    q = q.copy()
+
+    def stop(mask: np.ndarray, count: int, why: str | None) -> None:
+        """Copies ``mask`` stop at iteration ``count``: failed (``why``) or converged (None)."""
+        idx = np.flatnonzero(mask)
+        if idx.size == 0:
+            return
+        running[idx] = False
+        iterations[idx] = count
+        if why is not None:
+            failed[idx] = True
+            for k in idx.tolist():
+                reasons[k] = why
+            back = mask[dof_copy]
+            q[back] = fallback[back]
+
+    def keep(mask: np.ndarray, storage: np.ndarray) -> None:
+        """Copies ``mask`` stop: their tangent values are those of this iteration's assembly."""
+        if mask.all():
+            np.copyto(kept, storage)
+        elif mask.any():
+            at = np.append(mask, False)[slot_copy]
+            kept[at] = storage[at]
+
+    res = np.full(copies, np.inf)
+    for it in range(max_iterations + 1):
+        if not running.any():
+            break
+        assembled = None
+        while assembled is None and running.any():
+            try:
+                assembled = system.assemble_storage(q, loads, factor)
+            except (ValueError, FloatingPointError):  # some copy's connector refused its state
+                refused = system.refusals(q, loads, factor, running)
+                for k, why in refused.items():
+                    stop(np.arange(copies) == k, it, f"invalid state ({why})")
+                if not refused:  # not one copy alone: judge none of them
+                    stop(running, it, "invalid state (refused in the batch)")
+        if assembled is None:
+            break
+        _, g, storage = assembled
+        everyone = running.all()  # the common case: every copy still iterating
+        if not everyone:
+            frozen = ~np.append(running, False)[slot_copy]
+            storage[frozen] = kept[frozen]
+        res = np.where(running, system.copy_residuals(g, loads), res)
+        stop(running & ~np.isfinite(res), it, "non-finite residual")
+        done = running & (res <= force_tol)
+        keep(done, storage)
+        stop(done, it, None)
+        fresh = running & np.isnan(res0)
+        res0[fresh] = res[fresh]
+        diverging = running & (res > DIVERGENCE * np.maximum(res0, 1.0))
+        for k in np.flatnonzero(diverging).tolist():
+            stop(np.arange(copies) == k, it, f"diverging residual {res[k]:.3g}")
+        improved = running & (res < best)
+        best[improved] = res[improved]
+        stalled = np.where(improved, 0, stalled + running)
+        for k in np.flatnonzero(running & (stalled >= max_stall)).tolist():
+            stop(
+                np.arange(copies) == k,
+                it,
+                f"stalled (no lower residual in {stalled[k]} iterations, best {best[k]:.3g})",
+            )
+        if it == max_iterations or not running.any():
+            break
+        everyone = running.all()
+        moving = None if everyone else running[dof_copy]
+        try:
+            du = system.layout.tangent(storage).solve(-g if everyone else np.where(moving, -g, 0.0))
+        except (RuntimeError, np.linalg.LinAlgError) as exc:  # singular factor
+            stop(running, it, f"singular tangent ({exc})")
+            break
+        step = system.copy_steps(du)
+        stop(running & ~np.isfinite(step), it, "singular tangent")
+        everyone = running.all()
+        if not everyone:
+            moving = running[dof_copy]
+            du[~moving] = 0.0
+        nonlinear = running & (step > system.update_threshold)
+        q_new = q + du
+        if nonlinear.all():
+            q_new = system.update(q, du)
+        elif nonlinear.any():
+            chosen = nonlinear[dof_copy]
+            q_new[chosen] = system.update(q, du)[chosen]
+        if everyone:
+            q = q_new
+        else:
+            q[moving] = q_new[moving]
+        contracting = ~np.isnan(last_step) & (res <= CONTRACTION_EVIDENCE * res0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            estimate = step * np.minimum(1.0, step / last_step)
+        small = running & ((step <= step_tol) | (contracting & (estimate <= error_tol)))
+        keep(small, storage)
+        stop(small, it + 1, None)
+        last_step = np.where(running, step, last_step)
+        if origin is not None:
+            wide = running & (step > EXCURSION_CHECK)
+            if wide.any():
+                far = wide & (system.motion_ratios(origin, q) > settings.max_excursion)
+                stop(far, it + 1, "iterates left the sub-step's bounds")
+    for k in np.flatnonzero(running).tolist():
+        stop(
+            np.arange(copies) == k,
+            max_iterations,
+            f"no convergence in {max_iterations} iterations (residual {res[k]:.3g})",
+        )
+    converged = np.asarray(active, bool) & ~failed
+    reason = next((r for r in reasons if r), "")
+    return BatchNewtonResult(
+        q if converged.any() else None,
+        factor,
+        iterations,
+        reason,
+        system.layout.tangent(kept),
+        failed,
+        reasons,
+        kept,
+    )

@@ -151,6 +151,27 @@ class PathRecorder:
             self.stats["limit_points"].append(len(f) - 2)
         notify(lp)
 
+    def record_levels(
+        self,
+        factors: Sequence[float],
+        dx: Sequence[float],
+        dy: Sequence[float],
+        rotation: Sequence[float],
+        iterations: Sequence[int],
+        counters,
+    ) -> None:
+        """Append several converged points at once from their outputs, as :meth:`record` does
+        one by one: load factors, target motion (mm, rad), Newton iterations per point and the
+        totals after the last (a batch's copy, whose states the batch judges:
+        :meth:`judged`). Poses, shapes and reactions are not recorded this way."""
+        lp, magnitude = self.path, self.magnitude
+        lp.load.extend(f * magnitude for f in factors)
+        lp.dx.extend(dx), lp.dy.extend(dy), lp.rotation.extend(rotation)
+        self.stats["iterations"].extend(iterations)
+        self._count(counters)
+        self.factors.extend(factors)
+        notify(lp)
+
     def _bifurcations(self, factors) -> None:
         """Append bifurcation points (load factors) as ``{"load", "fraction"}`` (N or N mm)."""
         self.path.bifurcations.extend({"load": f * self.magnitude, "fraction": f} for f in factors)
@@ -164,10 +185,17 @@ class PathRecorder:
 
     def _judge(self) -> None:
         """Validity verdicts and section stresses of the states recorded since the last call."""
-        if not self.states:
-            return
-        system, lp = self.system, self.path
-        verdicts, forces = path_end_pass(system, self.states)
+        if self.states:
+            self.judged(*path_end_pass(self.system, self.states))
+
+    def judged(
+        self,
+        verdicts: Sequence[list[str]],
+        forces: Sequence[tuple[Connector, SectionForces | None]],
+    ) -> None:
+        """Record the verdicts and section forces of the states recorded since the last
+        judgement, as :func:`path_end_pass` gives them (or a batch's end pass for this copy)."""
+        lp = self.path
         for reasons in verdicts:
             lp.valid.append(not reasons)
             lp.validity.append("; ".join(reasons) if reasons else None)

@@ -273,6 +273,11 @@ class BandedTangent:
             solve(rhs[:, k], self.perm, token, x[:, k])
         return x
 
+    def positive_definite(self) -> bool:
+        """True when the banded Cholesky succeeds (the factorisation the solves use)."""
+        self._factorise()
+        return self._cholesky is not None
+
     def negative_eigenvalues(self, round_off: float = ROUND_OFF) -> int | None:
         """Zero when the banded Cholesky of the solves succeeded (O(n b^2), no extra work).
 
@@ -357,6 +362,11 @@ class TangentLayout:
         Global row and column of every value slot (duplicates are summed).
     n_multipliers : int
         Lagrange multipliers among the unknowns (they make K a saddle point).
+    ordering : int array (n,), optional
+        The unknowns' order for band storage (default: reverse Cuthill-McKee),
+        which it then takes whatever the size (unless the band is wider than
+        ``BAND_LIMIT``): a batch gives each copy's own order, so that each
+        block is factorised by the same arithmetic in a batch of any size.
     compiled : bool
         The system already runs compiled kernels (numba is loaded), so a
         narrow band may take the compiled Cholesky below ``DENSE_LIMIT``,
@@ -385,15 +395,26 @@ class TangentLayout:
         cols: np.ndarray,
         n_multipliers: int = 0,
         compiled: bool = False,
+        ordering: np.ndarray | None = None,
     ):
         limit_threads()  # once per process: small banded systems want 1 BLAS thread
         self.n, self.n_multipliers = n, n_multipliers
         rows, cols = np.asarray(rows, np.int64), np.asarray(cols, np.int64)
-        small = n <= DENSE_LIMIT
+        # a caller's ordering asks for band storage (a batch: each copy's block factorised
+        # by the same arithmetic whatever the batch's size)
+        small = n <= DENSE_LIMIT and ordering is None
         if small and not (compiled and n >= NARROW_MIN):
             self.kind, self.slots, self.size = "dense", rows * n + cols, n * n
             return
-        if compiled:  # scipy's ordering, without building a sparse matrix
+        if ordering is not None:  # the caller's: a batch's copies, each in its own order
+            perm = np.asarray(ordering, np.int64)
+            position = np.empty(n, np.int64)
+            position[perm] = np.arange(n)
+            j = position[cols]
+            offset = j - position[rows]
+            b = int(max(offset.max(initial=0), -offset.min(initial=0)))
+            band_slots = None
+        elif compiled:  # scipy's ordering, without building a sparse matrix
             kernels = order_kernels()
             perm = kernels.ordering(n, rows, cols)
             position, b, band_slots = kernels.band_slots(perm, rows, cols)

@@ -60,12 +60,15 @@ predictor: 1150, 1118, 1116 over the 36 paths with 4, 5, 6 states (6: prbm
 Solve = Callable[[StepProblem, np.ndarray, "np.ndarray | None"], NewtonResult]
 """solve(problem, guess, origin): the tracer's counted call of the one Newton iteration."""
 
+Newton = Callable[..., NewtonResult]
+"""newton(problem, guess, settings, origin): one Newton solve of a step problem."""
+
 
 @dataclasses.dataclass
 class Counters:
-    """Work done so far along a path (all counts)."""
+    """Work done so far along a path (all counts; in a batch, Newton iterations per copy)."""
 
-    newton_iterations: int = 0
+    newton_iterations: int | np.ndarray = 0
     step_cuts: int = 0
     substeps: int = 0
 
@@ -204,8 +207,16 @@ class Stepping(ABC):
         return None
 
 
-def trace(system: System, loads: Loads, stepping: Stepping) -> Iterator[PathPoint]:
+def trace(
+    system: System, loads: Loads, stepping: Stepping, newton: Newton = solve_step
+) -> Iterator[PathPoint]:
     """Yield the converged points of the path ``stepping`` follows under ``loads``.
+
+    ``newton`` is the Newton solve of a step problem: :func:`solve_step`, or
+    for a batch of copies traced together
+    (:mod:`flexval.reducedmodels.batch`) the same iteration on every copy at
+    once, whose iteration counts are then one per copy (the counters carry
+    them as arrays).
 
     Raises
     ------
@@ -220,8 +231,9 @@ def trace(system: System, loads: Loads, stepping: Stepping) -> Iterator[PathPoin
     def solve(
         problem: StepProblem, guess: np.ndarray, origin: np.ndarray | None = None
     ) -> NewtonResult:
-        result = solve_step(problem, guess, settings, origin)
-        counters.newton_iterations += result.iterations
+        result = newton(problem, guess, settings, origin)
+        # a new object, not in place: a batch's counts are an array the points keep
+        counters.newton_iterations = counters.newton_iterations + result.iterations
         return result
 
     first = solve(FixedLoad(system, loads, stepping.first_factor), system.initial_state())

@@ -119,11 +119,11 @@ def test_built_in_systems_keep_the_layout_scipys_ordering_gives(scene, model):
     captured = {}
     original = TangentLayout.__init__
 
-    def capture(self, n, rows, cols, n_multipliers=0, compiled=False):
+    def capture(self, n, rows, cols, n_multipliers=0, compiled=False, ordering=None):
         captured.update(
             n=n, rows=np.asarray(rows), cols=np.asarray(cols), n_multipliers=n_multipliers
         )
-        original(self, n, rows, cols, n_multipliers, compiled)
+        original(self, n, rows, cols, n_multipliers, compiled, ordering)
 
     TangentLayout.__init__ = capture
     try:

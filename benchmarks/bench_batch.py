@@ -1,0 +1,101 @@
+"""Batched throughput per core: paths per second of each reduced model, one by one and in a batch.
+
+The same path (a scene's load case, default the open chain under f+) is traced N times: one
+by one through the model's runner (:func:`flexval.reducedmodels.models.run_reduced`: build,
+trace, record), and as one batch of N copies
+(:func:`flexval.reducedmodels.batch.run_batch`: the copies share one System, one assembly
+and one factorisation per Newton iteration; their connectors are built once, since the copies
+are of one mechanism). Both in this process, on one core (BLAS limited to one thread), median
+of ``--repeats`` runs. The batch's end values are checked against the solo run's (they must
+agree to 1e-12 of the path's motion) before anything is timed.
+
+Run: ``python benchmarks/bench_batch.py [--scene open_chain] [--case f+] [--n 1000]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+
+import numpy as np
+
+from flexval.geometry import load_scene
+from flexval.reducedmodels.batch import run_batch
+from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.models import run_reduced
+from flexval.reducedmodels.threads import limit_threads
+
+MODELS = ("ee", "dcmm:1", "dcmm:3", "prbm", "beam:20", "beam:100")
+"""The reduced models timed (the paper's four, at their usual resolutions)."""
+
+SOLO_PATHS = 200
+"""Paths timed one by one per repeat (beam:100: a tenth): enough for a stable median."""
+
+
+def check(mech, spec, case) -> None:
+    """The batch gives the solo path (end displacement and rotation to 1e-12 of the motion)."""
+    solo = run_reduced(mech, spec, case)
+    batched = run_batch([mech] * 3, spec, [case] * 3)[1]
+    scale = max(np.hypot(solo.dx, solo.dy).max(), 1e-300)
+    worst = max(abs(solo.dx[-1] - batched.dx[-1]), abs(solo.dy[-1] - batched.dy[-1])) / scale
+    if worst > 1e-12 or abs(solo.rotation[-1] - batched.rotation[-1]) > 1e-12 * max(
+        abs(solo.rotation[-1]), 1e-300
+    ):
+        raise SystemExit(f"{spec.id}: the batch's path differs from the solo run's ({worst:.2e})")
+
+
+def per_path(run, count: int, repeats: int) -> float:
+    """Median over ``repeats`` of the wall seconds per path of ``run()`` (``count`` paths)."""
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        run()
+        times.append((time.perf_counter() - t0) / count)
+    return statistics.median(times)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scene", default="open_chain")
+    ap.add_argument("--case", default="f+")
+    ap.add_argument("--n", type=int, default=1000, help="copies per batch (default 1000)")
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--models", default=",".join(MODELS))
+    args = ap.parse_args()
+    limit_threads()
+    sc = load_scene(args.scene)
+    mech = sc.mechanism
+    case = next(c for c in sc.load_cases if c.name == args.case)
+    print(
+        f"{args.scene} {args.case}; batches of {args.n} copies; median of {args.repeats}; "
+        f"load average {os.getloadavg()[0]:.1f}"
+    )
+    print(f"{'model':10s} {'one by one':>22s} {'batched':>22s} {'speed-up':>9s}  batch sizes")
+    for model in args.models.split(","):
+        spec = parse_model(model)
+        check(mech, spec, case)
+        heavy = spec.family == "beam" and (spec.resolution or 0) >= 100
+        n_solo = SOLO_PATHS // 10 if heavy else SOLO_PATHS
+        solo = per_path(
+            lambda spec=spec, n_solo=n_solo: [run_reduced(mech, spec, case) for _ in range(n_solo)],
+            n_solo,
+            args.repeats,
+        )
+        sizes: set = set()
+
+        def batch(spec=spec, sizes=sizes) -> None:
+            paths = run_batch([mech] * args.n, spec, [case] * args.n)
+            sizes.update(p.stats["batch"] for p in paths)
+
+        batched = per_path(batch, args.n, args.repeats)
+        print(
+            f"{model:10s} {1e3 * solo:8.3f} ms {1 / solo:8.0f}/s {1e3 * batched:8.3f} ms "
+            f"{1 / batched:8.0f}/s {solo / batched:8.1f}x  {sorted(sizes)}",
+            flush=True,
+        )
+
+
+if __name__ == "__main__":
+    main()

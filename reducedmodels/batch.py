@@ -1,0 +1,888 @@
+"""Many copies of one mechanism and model traced together: a batch.
+
+A design study runs the same mechanism topology with the same model
+thousands of times, with other dimensions and loads. Traced one by one,
+each path pays the per-call costs of the core (Python, LAPACK's checks,
+numpy's small-array overheads) at every Newton iteration; a 9-unknown
+``dcmm:1`` path costs far more than its arithmetic. :class:`BatchSystem`
+puts N copies side by side in one :class:`~flexval.reducedmodels.core.System`:
+their connectors join the same groups (one compiled assembly for all), their
+tangent is block-diagonal (one banded factorisation, whose band is one
+copy's), and :func:`trace_batch` steps them together through the one tracer
+(:func:`flexval.reducedmodels.tracer.trace`) with the one Newton iteration
+applied to every copy at once (:func:`flexval.reducedmodels.newton.solve_batch`).
+
+How copies stay exactly what they are alone:
+
+* every test of a Newton iteration is made per copy (its own residual
+  relative to its own load scale, its own correction scaled by its own
+  size, its own body motions); a copy that converges stops there and its
+  tangent block keeps the values its own solve would return;
+* every decision of load control (halve a predicted sub-step, accept or
+  cut a step, grow the next) is made per copy as
+  :class:`~flexval.reducedmodels.tracer.LoadControl` makes it; where the
+  copies disagree, the minority leaves the batch (:class:`BatchLoadControl`)
+  and is traced again alone from the start, so its result is exactly what a
+  solo run gives and the others are not held back. A batch that cannot go
+  on (step cutting fails, the sub-step budget) hands every copy left to a
+  solo run too, which then fails or succeeds as it would alone.
+
+A copy's path is its solo run's up to round-off: the batch factorises every
+block in the band (a small copy alone takes dense LAPACK) and combines the
+predictor's states elementwise, so the last digits of its iterates differ,
+and where a Newton test lands within round-off of its bound the copy stops
+an iteration or two earlier or later than alone. Over the 236
+reduced-model paths of the built-in scenes (three copies each) the batch
+and solo end values differ by at most 1.6e-11 of the mechanism's size
+(lengths) and in rad, most by less than 1e-13. Within a batch, the
+arithmetic of a copy does not depend on the other copies: its path is the
+same bit for bit in a batch of any size.
+
+Units: mm, N, N mm, rad; times in s.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import time
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numpy as np
+import scipy.sparse as sp
+
+from flexval.geometry import LoadCase, Mechanism, SceneError
+
+from .connector import Connector
+from .core import SolverError, SolverSettings, System, case_loads
+from .loadpath import LoadPath
+from .loads import Loads
+from .newton import BatchNewtonResult, FixedLoad, StepProblem, solve_batch
+from .recorder import PathRecorder
+from .tangent import ROUND_OFF
+from .tracer import Counters, LoadControl, PathPoint, Solve, TraceFailure, Verdict, trace
+
+Member = tuple[Mechanism, Sequence[Connector]]
+"""One copy of a batch: its mechanism and the connectors a System of it joins."""
+
+
+class BatchSystem(System):
+    """Independent copies of one mechanism topology and model as one System.
+
+    Parameters
+    ----------
+    members : sequence of System or (Mechanism, connectors)
+        The copies: each a System built as for a solo run, or the mechanism
+        and the connectors such a System would join (same family and
+        resolution; any dimensions, sections and materials). They must have
+        the same bodies and the same kinds of connectors in the same order,
+        and share the ground's reference point (mm).
+    settings : SolverSettings, optional
+        The solver settings (default: the first System's, or the defaults).
+
+    Attributes
+    ----------
+    members : list of (Mechanism, list of Connector)
+    n_copies : int
+    copy_dofs : list of int arrays
+        Where each copy's coordinates (numbered as its own System numbers
+        them) lie in the batch's.
+    dof_copy : int array (n_dofs,)
+        The copy each coordinate of the batch belongs to.
+    slot_copy : int array (layout.size,)
+        The copy each value slot of the tangent storage belongs to
+        (``n_copies`` for a slot no entry uses).
+    kept : array (layout.size,)
+        Every copy's tangent values at its last accepted state (at rest
+        before the first): what a copy's block holds while it takes no part
+        in a solve, so that the block-diagonal factorisation stays that of
+        stable blocks.
+    """
+
+    def __init__(self, members: Sequence[System | Member], settings: SolverSettings | None = None):
+        if not members:
+            raise ValueError("a batch needs at least one copy")
+        self._systems: dict[int, System] = {}
+        pairs = []
+        for k, member in enumerate(members):
+            if isinstance(member, System):
+                self._systems[k] = member
+                settings = settings or member.settings
+                member = (member.mechanism, member.connectors)
+            pairs.append((member[0], list(member[1])))
+        settings = settings or SolverSettings()
+        #: copy 0 as a System alone: the numbering and band order every copy shares
+        self.template = self._systems.get(0) or System(*pairs[0], settings)
+        #: every copy numbered as copy 0 (the same connectors' sizes): no System per copy
+        self.uniform = self._check(pairs)
+        self.members, self.n_copies = pairs, len(pairs)
+        ground = pairs[0][0].ground
+        merged, origin = self._merged_connectors(pairs, ground)
+        #: (copy, index among the copy's connectors) of every connector of the batch
+        self.origin = origin
+        self.copy_dofs: list[np.ndarray] | None = None
+        super().__init__(self._merged_mechanism(pairs, ground), merged, settings)
+        self._number_copies()
+
+    @staticmethod
+    def _check(pairs: list[Member]) -> bool:
+        """Refuse copies that are not of copy 0's topology; True if every copy's connectors
+        also have copy 0's numbers of internal coordinates (meshes may differ in size)."""
+        mech0, connectors0 = pairs[0]
+        ground, bodies = mech0.ground, list(mech0.bodies)
+        kinds = [(type(c), c.bodies) for c in connectors0]
+        sizes = [c.n_internal for c in connectors0]
+        uniform = True
+        for k, (mech, connectors) in enumerate(pairs):
+            if list(mech.bodies) != bodies or mech.ground != ground:
+                raise ValueError(f"copy {k}: its bodies differ from copy 0's")
+            if not np.array_equal(mech.bodies[ground].reference, mech0.bodies[ground].reference):
+                raise ValueError(f"copy {k}: its ground's reference point differs from copy 0's")
+            if [(type(c), c.bodies) for c in connectors] != kinds:
+                raise ValueError(f"copy {k}: its connectors differ in kind from copy 0's")
+            uniform = uniform and [c.n_internal for c in connectors] == sizes
+        return uniform
+
+    def _own(self, k: int) -> System:
+        """The System whose numbering copy k has: copy 0's alone if all are alike."""
+        return self.template if self.uniform else self.copy_system(k)
+
+    def copy_system(self, k: int) -> System:
+        """Copy k as a System alone (built on first use: a check of that copy, a solo run)."""
+        if k not in self._systems:
+            self._systems[k] = System(*self.members[k], self.settings)
+        return self._systems[k]
+
+    @staticmethod
+    def _name(k: int, body: str, ground: str) -> str:
+        """Copy k's name of ``body`` in the batch (the ground is shared)."""
+        return body if body == ground else f"{k}/{body}"
+
+    @classmethod
+    def _merged_connectors(
+        cls, pairs: list[Member], ground: str
+    ) -> tuple[list[Connector], list[tuple[int, int]]]:
+        """Every copy's connectors with the batch's body names, one class after the other.
+
+        Connectors of one class sit together so that each class is one group
+        (one compiled assembly for all copies). Also returns, per connector,
+        (copy, index among the copy's connectors).
+        """
+        kinds = list(dict.fromkeys(type(c) for c in pairs[0][1]))
+        merged, origin = [], []
+        for kind in kinds:
+            for k, (_, connectors) in enumerate(pairs):
+                for j, c in enumerate(connectors):
+                    if type(c) is kind:
+                        renamed = copy.copy(c)
+                        renamed.bodies = tuple(cls._name(k, b, ground) for b in c.bodies)
+                        merged.append(renamed)
+                        origin.append((k, j))
+        return merged, origin
+
+    @classmethod
+    def _merged_mechanism(cls, pairs: list[Member], ground: str) -> Mechanism:
+        """The bodies of every copy, renamed, under the shared ground (copy 0 for the rest)."""
+        first = pairs[0][0]
+        bodies = {ground: first.bodies[ground]}
+        for k, (mechanism, _) in enumerate(pairs):
+            for name in mechanism.moving_bodies:
+                new = cls._name(k, name, ground)
+                bodies[new] = dataclasses.replace(mechanism.bodies[name], name=new)
+        return Mechanism(
+            bodies,
+            first.flexures,
+            ground,
+            first.material,
+            cls._name(0, first.target_body, ground),
+            first.target_point,
+            first.source,
+        )
+
+    @staticmethod
+    def _combine(weights, states: np.ndarray) -> np.ndarray:
+        """sum(w_i q_i) state after state, elementwise: BLAS's product of the weights and the
+        states sums each coordinate's terms in an order that depends on how many
+        coordinates there are (its vector kernels), which would make a copy's prediction
+        depend on the batch's size."""
+        out = weights[0] * states[0]
+        for w, state in zip(weights[1:], states[1:]):
+            out += w * state
+        return out
+
+    def _copy_numbering(self) -> list[np.ndarray]:
+        """Where each copy's coordinates (its own System's numbering) lie in the batch's."""
+        ground = self.mechanism.ground
+        poses = [(i, body) for body, i in self.template.body_index.items()]
+        copy_dofs = [np.empty(self._own(k).n_dofs, np.int64) for k in range(self.n_copies)]
+        for k in range(self.n_copies):
+            for i, body in poses:
+                j = self.body_index[self._name(k, body, ground)]
+                copy_dofs[k][3 * i : 3 * i + 3] = range(3 * j, 3 * j + 3)
+        for m, (k, j) in enumerate(self.origin):
+            copy_dofs[k][self._own(k)._local_to_global[j][6:]] = self._local_to_global[m][6:]
+        return copy_dofs
+
+    def _tangent_ordering(self) -> np.ndarray | None:
+        """The copies one after the other, each in its own band order.
+
+        A copy whose own tangent is banded keeps its order (its block is
+        then factorised with the arithmetic of the copy alone); copies all
+        alike whose own tangent is dense take the reverse Cuthill-McKee order
+        of copy 0's pattern. Either way each copy's block is a contiguous
+        diagonal block of the band (:meth:`copy_unstable` reads it). Copies
+        of different sizes with dense tangents of their own: None (the
+        layout's order).
+        """
+        self.copy_dofs = self._copy_numbering()
+        if self.uniform:
+            template = self.template
+            if template.layout.kind == "banded":
+                perm = template.layout.perm
+            else:
+                from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+                n = template.n_dofs
+                pattern = (template.pattern_rows, template.pattern_cols)
+                graph = sp.csr_matrix((np.ones(pattern[0].size), pattern), shape=(n, n))
+                perm = reverse_cuthill_mckee(graph, symmetric_mode=True).astype(np.int64)
+            return np.concatenate([dofs[perm] for dofs in self.copy_dofs])
+        if any(self._own(k).layout.kind != "banded" for k in range(self.n_copies)):
+            return None
+        return np.concatenate(
+            [dofs[self._own(k).layout.perm] for k, dofs in enumerate(self.copy_dofs)]
+        )
+
+    def _number_copies(self) -> None:
+        """The maps between copies and batch, and every per-copy scale."""
+        ground = self.mechanism.ground
+        if self.copy_dofs is None:
+            self.copy_dofs = self._copy_numbering()
+        copy_dofs = self.copy_dofs
+        dof_copy = np.empty(self.n_dofs, np.int64)
+        for k, dofs in enumerate(copy_dofs):
+            dof_copy[dofs] = k
+        self.dof_copy = dof_copy
+        sizes = np.array([mechanism.size() for mechanism, _ in self.members])
+        self.copy_sizes = sizes
+        self.force_scale = np.where(self.is_rotation, 1.0 / sizes[dof_copy], 1.0)
+        self._coordinate_scale = np.where(self.is_rotation, 1.0, sizes[dof_copy])
+        self._by_copy = np.argsort(dof_copy, kind="stable")
+        self._copy_starts = np.searchsorted(dof_copy[self._by_copy], np.arange(self.n_copies))
+        bodies = self.mechanism.moving_bodies
+        body_copy = dof_copy[3 * np.arange(len(bodies))]
+        self._bodies_by_copy = np.argsort(body_copy, kind="stable")
+        self._body_starts = np.searchsorted(
+            body_copy[self._bodies_by_copy], np.arange(self.n_copies)
+        )
+        target = []
+        for k, (mechanism, _) in enumerate(self.members):
+            body = mechanism.target_body
+            rx, ry = (mechanism.target_point - mechanism.bodies[body].reference).tolist()
+            tx, ty = mechanism.target_point.tolist()
+            target.append([3 * self.body_index[self._name(k, body, ground)], rx, ry, tx, ty])
+        target = np.array(target)
+        self._target_dof = target[:, 0].astype(np.int64)
+        self._target_geometry = target[:, 1:].T  # rel x, rel y, rest x, rest y (mm)
+        self._blocks: tuple | None = None  # see _block_maps
+        slot_copy = np.full(self.layout.size, self.n_copies, np.int64)
+        used = self.layout.slots >= 0
+        slot_copy[self.layout.slots[used]] = dof_copy[self.pattern_rows[used]]
+        self.slot_copy = slot_copy
+        self.kept = np.zeros(self.layout.size)
+
+    # --- between copies and batch ---------------------------------------
+    def merge(self, states: Sequence[np.ndarray]) -> np.ndarray:
+        """The batch's coordinates from each copy's (its own numbering)."""
+        q = np.empty(self.n_dofs)
+        for dofs, state in zip(self.copy_dofs, states):
+            q[dofs] = state
+        return q
+
+    def split(self, q: np.ndarray, k: int) -> np.ndarray:
+        """Copy k's coordinates, in its own numbering, from the batch's."""
+        return q[self.copy_dofs[k]]
+
+    def copy_targets(self, states: np.ndarray) -> tuple[np.ndarray, ...]:
+        """:meth:`System.target` of every copy at every state: dx, dy (mm) and rotation (rad),
+        each (states, copies)."""
+        dof = self._target_dof
+        x, y, theta = states[:, dof], states[:, dof + 1], states[:, dof + 2]
+        rx, ry, tx, ty = self._target_geometry
+        c, s = np.cos(theta), np.sin(theta)
+        return (x + (c * rx - s * ry)) - tx, (y + (s * rx + c * ry)) - ty, theta
+
+    def batch_loads(self, cases: Sequence[LoadCase]) -> Loads:
+        """Every copy's dead loads of its case (one per copy), in the batch's numbering.
+
+        The result's ``scale`` is an array: each copy's own load scale (N),
+        which its residual is relative to.
+        """
+        ground, parts = self.mechanism.ground, []
+        for k, ((mechanism, connectors), case) in enumerate(zip(self.members, cases)):
+            reference = {b: body.reference for b, body in mechanism.bodies.items()}
+            parts.append(
+                case_loads(
+                    case,
+                    lambda body, k=k: self.pose_dofs(self._name(k, body, ground)),
+                    reference,
+                    mechanism.size(),
+                    connectors,
+                )
+            )
+        loads = Loads(
+            np.concatenate([p.dofs for p in parts]).reshape(-1, 3),
+            np.concatenate([p.forces for p in parts]).reshape(-1, 2),
+            np.concatenate([p.rels for p in parts]).reshape(-1, 2),
+            np.concatenate([p.moment_dofs for p in parts]).astype(np.int64),
+            np.concatenate([p.moments for p in parts]),
+            np.array([p.scale for p in parts]),
+        )
+        loads.vectorise()  # the same arithmetic in a batch of any size
+        return loads
+
+    # --- per-copy versions of the core's measures -----------------------
+    def copy_residuals(self, grad: np.ndarray, loads: Loads) -> np.ndarray:
+        """:meth:`System.residual` of every copy (dimensionless), from the batch's gradient."""
+        scaled = np.abs(grad * self.force_scale)[self._by_copy]
+        return np.maximum.reduceat(scaled, self._copy_starts) / loads.scale
+
+    def copy_steps(self, du: np.ndarray) -> np.ndarray:
+        """The largest scaled correction of every copy (lengths / size, angles)."""
+        return np.maximum.reduceat(np.abs(self.scaled(du))[self._by_copy], self._copy_starts)
+
+    def motion_ratios(self, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
+        """:meth:`System.motion_ratio` of every copy (> 1: a body moved too far)."""
+        s, poses = self.settings, 3 * len(self.body_index)
+        d = (q1[:poses] - q0[:poses]).reshape(-1, 3)[self._bodies_by_copy]
+        rotation = np.maximum.reduceat(np.abs(d[:, 2]), self._body_starts)
+        translation = np.maximum.reduceat(np.hypot(d[:, 0], d[:, 1]), self._body_starts)
+        return np.maximum(
+            rotation / s.max_rotation_step,
+            translation / (s.max_translation_step * self.copy_sizes),
+        )
+
+    def motion_ratio(self, q0: np.ndarray, q1: np.ndarray) -> float:
+        """The largest of :meth:`motion_ratios` (the batch moves as far as its farthest copy)."""
+        return float(self.motion_ratios(q0, q1).max())
+
+    def refusals(
+        self, q: np.ndarray, loads: Loads, factor: float, among: np.ndarray
+    ) -> dict[int, str]:
+        """The copies (of ``among``) whose connectors refuse state q, with the reason.
+
+        Each is assembled alone (a failed batch assembly does not say which copy refused).
+        """
+        found = {}
+        for k in np.flatnonzero(among).tolist():
+            system = self.copy_system(k)
+            try:
+                system.assemble(self.split(q, k), self.copy_loads(k), factor)
+            except (ValueError, FloatingPointError) as exc:
+                found[k] = str(exc)
+        return found
+
+    def copy_unstable(self, q: np.ndarray, tangent, factor: float, among: np.ndarray) -> np.ndarray:
+        """Which copies of ``among`` are at an unstable equilibrium (bool per copy).
+
+        The inertia of a block-diagonal tangent is the sum of its blocks',
+        and a stable block has as many negative eigenvalues as multipliers:
+        when the whole tangent has no more, every copy is stable (one count,
+        the common case). Otherwise each copy is judged alone on its tangent
+        at its state.
+        """
+        unstable = np.zeros(self.n_copies, bool)
+        if self._block_maps() is not None:
+            if self.n_multipliers == 0 and tangent.positive_definite():
+                return unstable
+            return among & (self._block_inertia(tangent) > 0)
+        negative = self.instability(tangent)
+        if negative is None or negative <= 0:
+            return unstable
+        for k in np.flatnonzero(among).tolist():
+            system = self.copy_system(k)
+            _, _, own = system.assemble(self.split(q, k), self.copy_loads(k), factor)
+            unstable[k] = system.unstable(own)
+        return unstable
+
+    def _block_maps(self) -> tuple | None:
+        """Where each copy's diagonal block lies in the band (built on first use), or None
+        when the copies are not all alike in band storage: copy k's block is the band's
+        columns k m .. k m + m - 1 (m unknowns a copy), its entries (i, j), j - i <= b."""
+        if self._blocks is None and self.uniform and self.layout.kind == "banded":
+            m, b = self.template.n_dofs, self.layout.b
+            i = np.concatenate([np.arange(m - d) for d in range(min(b, m - 1) + 1)])
+            j = np.concatenate([np.arange(d, m) for d in range(min(b, m - 1) + 1)])
+            columns = (np.arange(self.n_copies) * m)[:, None] + j[None, :]
+            multipliers = sum(c.n_multipliers for c in self.template.connectors)
+            self._blocks = (m, i, j, b + i - j, columns, multipliers)
+        return self._blocks
+
+    def _block_inertia(self, tangent) -> np.ndarray:
+        """Every copy's negative eigenvalues beyond its multipliers, from its diagonal block.
+
+        The blocks (copies, m, m) are read from the band and their
+        eigenvalues computed in one stacked call; those below
+        -``ROUND_OFF`` times the block's largest in size count, as a copy's
+        own dense tangent counts the pivots of its LDL^T.
+        """
+        m, i, j, rows, columns, multipliers = self._blocks
+        values = tangent.storage[rows[None, :], columns]
+        blocks = np.zeros((self.n_copies, m, m))
+        blocks[:, i, j] = values
+        blocks[:, j, i] = values
+        if not np.isfinite(blocks).all():
+            return np.zeros(self.n_copies, np.int64)
+        eigenvalues = np.linalg.eigvalsh(blocks)
+        limit = -ROUND_OFF * np.abs(eigenvalues).max(axis=1, initial=0.0)
+        return np.count_nonzero(eigenvalues < limit[:, None], axis=1) - multipliers
+
+    def use_loads(self, cases: Sequence[LoadCase]) -> Loads:
+        """:meth:`batch_loads` of ``cases`` (kept for per-copy checks); keeps the rest tangent."""
+        self._cases = list(cases)
+        loads = self.batch_loads(cases)
+        self.kept = self.assemble_storage(self.initial_state(), loads, 0.0)[2]
+        return loads
+
+    def copy_loads(self, k: int) -> Loads:
+        """Copy k's loads of its case in its own numbering (for a check of the copy alone)."""
+        return self.copy_system(k).loads(self._cases[k])
+
+
+class BatchLoadControl(LoadControl):
+    """:class:`~flexval.reducedmodels.tracer.LoadControl` of a batch: each copy's decisions,
+    taken together while they agree.
+
+    Every decision LoadControl takes on one path is taken here for every
+    copy still in the batch, on its own measures; where copies disagree the
+    larger group goes on and the smaller leaves the batch (:attr:`active`
+    false, :attr:`left` true): its coordinates stay at its last accepted
+    state and its tangent block as it was there, and :func:`trace_batch`
+    traces it again alone.
+    """
+
+    def __init__(self, factors: Sequence[float], batch: BatchSystem):
+        super().__init__(factors)
+        self.batch = batch
+        self.active = np.ones(batch.n_copies, bool)
+        self.last: BatchNewtonResult | None = None
+        self._kept_next: np.ndarray | None = None
+
+    def newton(self, problem: StepProblem, guess: np.ndarray, settings, origin=None):
+        """The batch's Newton solve (:func:`solve_batch`) on the copies still in the batch."""
+        self.last = solve_batch(problem, guess, settings, origin, self.active)
+        return self.last
+
+    def leave(self, mask: np.ndarray) -> None:
+        """Copies ``mask`` leave the batch (to be traced alone)."""
+        self.active &= ~mask
+
+    def _split_vote(self, yes: np.ndarray) -> bool:
+        """The decision of the larger group of the active copies (ties: yes); the rest leave."""
+        among = self.active
+        ayes = int(np.count_nonzero(yes & among))
+        noes = int(np.count_nonzero(among)) - ayes
+        decision = ayes >= noes
+        self.leave(among & (yes != decision))
+        return decision
+
+    def begin(self, system, loads, point: PathPoint) -> None:
+        """Start from the first point; copies whose first solve failed leave."""
+        if self.last is not None:
+            self.leave(self.last.failed)
+            self._keep(self.last.storage)
+        super().begin(system, loads, point)
+
+    def _keep(self, storage: np.ndarray) -> None:
+        """Take the active copies' tangent values from ``storage`` as their accepted ones."""
+        batch = self.batch
+        if self.active.all():
+            np.copyto(batch.kept, storage)
+            return
+        at = np.append(self.active, False)[batch.slot_copy]
+        batch.kept[at] = storage[at]
+
+    def attempt(self):
+        """LoadControl's sub-step, halved while the copies' predictions move too far."""
+        batch = self.batch
+        while True:
+            trial = min(self.factor + self.step, self.target)
+            guess = self._predict(trial)
+            still = ~self.active[batch.dof_copy]
+            guess[still] = self.q[still]
+            if 0.5 * self.step < self.min_step:
+                break
+            if not self._split_vote(batch.motion_ratios(self.q, guess) > 1.0):
+                break
+            self.step *= 0.5
+        guess[~self.active[batch.dof_copy]] = self.q[~self.active[batch.dof_copy]]
+        self.last_step = trial - self.factor
+        return FixedLoad(batch, self.loads, trial), guess, self.q
+
+    def review(self, result: BatchNewtonResult, solve: Solve) -> Verdict:
+        """LoadControl's review of every copy; the majority's verdict, the others leave."""
+        batch, active = self.batch, self.active  # active: changed in place by the votes
+        ratios = np.full(batch.n_copies, np.inf)
+        ok = active & ~result.failed
+        if result.state is not None and ok.any():
+            ratios = np.where(ok, batch.motion_ratios(self.q, result.state), np.inf)
+        within = ok & (ratios <= 1.0)
+        unstable = np.zeros(batch.n_copies, bool)
+        if within.any() and self.settings.check_stability:
+            unstable = batch.copy_unstable(result.state, result.tangent, result.factor, within)
+            within &= ~unstable
+        refused = active & ~within
+        accepted = self._split_vote(within)
+        if not accepted:  # the copies left all refused this step: LoadControl's reason
+            k = int(np.flatnonzero(refused)[0])
+            self.refused_unstable = bool(unstable[k])
+            if self.refused_unstable and (
+                self.unstable_above is None or result.factor < self.unstable_above
+            ):
+                self.unstable_above = result.factor
+            why = (
+                result.reasons[k]
+                if result.failed[k]
+                else "converged to an unstable equilibrium (past a limit point?)"
+                if unstable[k]
+                else "step too large"
+            )
+            return Verdict(None, result.factor, why, None, False)
+        self.refused_unstable = False
+        easy = result.iterations <= self.settings.fast_iterations
+        fast = self._split_vote(easy & (ratios < 0.5))
+        state = result.state.copy()
+        still = ~self.active[batch.dof_copy]
+        state[still] = self.q[still]
+        storage = result.storage
+        if not self.active.all():
+            storage = storage.copy()
+            gone = np.append(~self.active, False)[batch.slot_copy]
+            storage[gone] = batch.kept[gone]
+        self._kept_next = storage
+        return Verdict(state, result.factor, "", batch.layout.tangent(storage), fast)
+
+    def stopped_by_bifurcation(self, solve: Solve) -> float | None:
+        """LoadControl's probe for a batch of one copy (its solo path's reason to stop); a
+        batch of several that cannot go on hands its copies to batches of one."""
+        if self.batch.n_copies != 1:
+            return None
+        return super().stopped_by_bifurcation(solve)
+
+    def advance(self, verdict: Verdict) -> float | None:
+        """LoadControl's advance; the accepted tangent values become the copies' kept ones."""
+        self._keep(self._kept_next)
+        return super().advance(verdict)
+
+
+class CopyView(NamedTuple):
+    """What a :class:`~flexval.reducedmodels.recorder.PathRecorder` reads of a copy's System
+    to record the path the batch traced for it (no System of its own is built)."""
+
+    mechanism: Mechanism
+    connectors: Sequence[Connector]
+    n_dofs: int
+
+
+BATCH_UNKNOWNS = 40_000
+"""Most unknowns of one batch (larger sets of copies are traced as several): the band of a
+batch this size, some 10 MB with the factor, stays in the processor's caches. Cost per path
+on the open chain f+ (2-core machine): beam:100 3.9, 3.7, 4.1 ms in batches of 25, 50, 100
+copies (23,000 to 91,000 unknowns), beam:20 0.84, 0.83, 1.02 ms in batches of 100, 250, 500
+(19,000 to 93,000), dcmm:1 0.19, 0.21, 0.22 ms in batches of 250, 1000, 4000 (2,000 to
+36,000)."""
+
+
+def _unknowns(member: System | Member) -> int:
+    """The unknowns of one copy: its bodies' poses and its connectors' internal coordinates."""
+    if isinstance(member, System):
+        return member.n_dofs
+    mechanism, connectors = member
+    return 3 * len(mechanism.moving_bodies) + sum(c.n_internal for c in connectors)
+
+
+REBATCH_SHARE = 0.25
+"""Least share of a batch's copies that must stay to the end for the copies that left it by
+a vote to be traced as a new batch together (else each in a batch of one): the copies of a
+batch that split up now and then go on in ever smaller batches, those of one that breaks up
+step by step (a soft stretch that every copy takes in its own sub-steps) one by one."""
+
+
+def trace_batch(
+    members: Sequence[System | Member],
+    cases: Sequence[LoadCase],
+    levels: int | None = None,
+    model: str = "",
+    scene: str = "",
+    settings: dict | None = None,
+) -> list[LoadPath | SolverError]:
+    """The load-control paths of many copies, traced together where they agree.
+
+    Parameters
+    ----------
+    members : sequence of System or (Mechanism, connectors)
+        The copies (see :class:`BatchSystem`).
+    cases : sequence of LoadCase
+        Each copy's load case; all must request the same load factors
+        (``levels`` equal steps, default each case's own).
+    levels, model, scene, settings :
+        As for :func:`flexval.reducedmodels.recorder.solve_path`.
+
+    Returns
+    -------
+    list of LoadPath or SolverError
+        Per copy, in order: its path, or the error its solo run raises. The
+        copies that leave a batch by a vote are traced again as a batch of
+        their own (while a batch keeps at least :data:`REBATCH_SHARE` of its
+        copies), else each in a batch of one, as are those of a batch that
+        cannot go on. Every copy is traced by the batch's arithmetic, so its
+        path does not depend on which copies it was traced with (a sweep
+        gives the same rows whatever its task sizes). Each path's
+        ``seconds`` is its share of its batch's wall time,
+        ``stats["batch"]`` the number of copies it was traced with.
+    """
+    factors = [case.factors(levels) for case in cases]
+    if any(not np.array_equal(f, factors[0]) for f in factors):
+        raise ValueError("the copies' load cases request different load factors")
+    size = max(1, BATCH_UNKNOWNS // max(_unknowns(members[0]), 1)) if members else 1
+    if len(members) > size:
+        return [
+            path
+            for start in range(0, len(members), size)
+            for path in trace_batch(
+                members[start : start + size],
+                cases[start : start + size],
+                levels,
+                model,
+                scene,
+                settings,
+            )
+        ]
+    results: list[LoadPath | SolverError | None] = [None] * len(members)
+    groups = [list(range(len(members)))]  # copies to trace as one batch, in turn
+    while groups:
+        group = groups.pop(0)
+        t0 = time.perf_counter()
+        batch = BatchSystem([members[k] for k in group])
+        loads = batch.use_loads([cases[k] for k in group])
+        stepping = BatchLoadControl(factors[0], batch)
+        points: list[PathPoint] = []
+        failure = None
+        try:
+            for point in trace(batch, loads, stepping, stepping.newton):
+                points.append(point)
+        except TraceFailure as exc:
+            failure = exc
+        group_cases = [cases[k] for k in group]
+        if failure is not None and len(group) > 1:  # each copy alone: its own way to fail
+            groups += [[k] for k in group]
+            continue
+        kept = [0] if failure is not None else np.flatnonzero(stepping.active).tolist()
+        paths = record_batch(batch, points, kept, group_cases, model, scene, settings, failure)
+        seconds = (time.perf_counter() - t0) / max(len(kept), 1)
+        for j, path in zip(kept, paths):
+            recorded = path.path if isinstance(path, SolverError) else path
+            recorded.seconds = seconds
+            recorded.stats["batch"] = len(kept)
+            results[group[j]] = path
+        left = [k for k in group if results[k] is None]
+        if len(kept) >= REBATCH_SHARE * len(group):
+            groups += [left] if left else []
+        else:
+            groups += [[k] for k in left]
+    return results
+
+
+def record_batch(
+    batch: BatchSystem,
+    points: Sequence[PathPoint],
+    kept: Sequence[int],
+    cases: Sequence[LoadCase],
+    model: str = "",
+    scene: str = "",
+    settings: dict | None = None,
+    failure: TraceFailure | None = None,
+) -> list[LoadPath | SolverError]:
+    """The LoadPaths of copies ``kept`` from the batch's points, as each copy's recorder makes it.
+
+    With a ``failure`` (the trace of a batch of one copy stopped), the copy's
+    :class:`~flexval.reducedmodels.core.SolverError` carrying the path so far, as its
+    recorder makes it of the same failure.
+
+    The validity monitor and the section forces take one pass per group of
+    the batch's connectors for every copy and level at once
+    (:meth:`~flexval.reducedmodels.connector.ConnectorGroup.path_end_pass`),
+    as :func:`~flexval.reducedmodels.recorder.path_end_pass` takes one per
+    group of a copy; reasons and stresses then go to each copy in its own
+    connectors' order.
+    """
+    if not kept:
+        return []
+    states = np.array([p.state for p in points])
+    position = {k: j for j, k in enumerate(kept)}
+    reasons = [[[] for _ in points] for _ in kept]
+    forces: list[list] = [[] for _ in kept]
+    for (group, run), coordinates in zip(batch.groups, batch.group_coordinates(states)):
+        verdicts, stacked = group.path_end_pass(coordinates)
+        for m, c, per_level, found in zip(
+            range(run.start, run.stop), group.connectors, verdicts, stacked
+        ):
+            k, index = batch.origin[m]
+            j = position.get(k)
+            if j is None:
+                continue
+            for into, why in zip(reasons[j], per_level):
+                if why:
+                    into.extend(f"{c.name}: {w}" for w in why)
+            forces[j].append((index, c, found))
+    copies = batch.n_copies
+    iterations = np.array([np.broadcast_to(p.iterations, (copies,)) for p in points]).T.tolist()
+    last = points[-1].counters
+    newton = np.broadcast_to(last.newton_iterations, (copies,)).tolist()
+    dx, dy, rotation = (v.T.tolist() for v in batch.copy_targets(states))
+    factors = [p.factor for p in points]
+    paths = []
+    for j, k in enumerate(kept):
+        mechanism, connectors = batch.members[k]
+        recorder = PathRecorder(
+            CopyView(mechanism, connectors, batch.copy_dofs[k].size),
+            cases[k],
+            model,
+            scene,
+            settings,
+        )
+        recorder.record_levels(
+            factors,
+            dx[k],
+            dy[k],
+            rotation[k],
+            iterations[k],
+            Counters(newton[k], last.step_cuts, last.substeps),
+        )
+        recorder.judged(reasons[j], [(c, found) for _, c, found in sorted(forces[j], key=_first)])
+        if failure is None:
+            paths.append(recorder.finish())
+            continue
+        counts = failure.counters
+        alone = Counters(
+            int(np.broadcast_to(counts.newton_iterations, (copies,))[k]),
+            counts.step_cuts,
+            counts.substeps,
+        )
+        paths.append(
+            recorder.failure(
+                TraceFailure(
+                    failure.reason, failure.factor, alone, failure.bifurcations, failure.bifurcation
+                )
+            )
+        )
+    return paths
+
+
+def _first(entry: tuple) -> int:
+    return entry[0]
+
+
+RUN_FAILURES = (
+    SolverError,
+    SceneError,
+    ArithmeticError,
+    ValueError,
+    RuntimeError,
+    np.linalg.LinAlgError,
+)
+"""What a model's run may raise for one copy and :func:`run_batch` returns as its result: the
+solver's failure, a flexure the model cannot represent, a state or a tangent it cannot handle."""
+
+
+def run_batch(
+    mechanisms: Sequence[Mechanism],
+    spec,
+    cases: Sequence[LoadCase],
+    levels: int | None = None,
+    scene: str = "",
+) -> list[LoadPath | Exception]:
+    """Every copy's load path with the model ``spec``: its own mechanism and load case.
+
+    A family that builds a System and traces it by load control (beams,
+    DCMM, PRBM, the continuum) runs as :func:`trace_batch`; a linear family
+    (``ee``), which solves one linear system per path and has no Newton to
+    share, runs copy by copy through its own runner. Copies given the same
+    mechanism object share its connectors (built once). Each path's
+    ``seconds`` includes its share of building the connectors.
+
+    Parameters
+    ----------
+    mechanisms : sequence of Mechanism
+        One per copy, all of one topology (bodies, flexures and pins alike).
+    spec : ModelSpec
+        The model (see :func:`flexval.reducedmodels.catalogue.parse_model`).
+    cases : sequence of LoadCase
+        One per copy, requesting the same load factors.
+    levels, scene :
+        As for the family's runner.
+
+    Returns
+    -------
+    list of LoadPath or Exception
+        Per copy, in order: its path, or what its solo run raises (one of
+        :data:`RUN_FAILURES`: a copy the model cannot build, a solver
+        failure). Copies that cannot share a batch (other bodies or
+        connectors) run alone.
+    """
+    from .catalogue import LINEAR
+
+    family = spec.model_family
+    results: list[LoadPath | Exception | None] = [None] * len(mechanisms)
+
+    def alone(k: int) -> None:
+        try:
+            path = family.run(mechanisms[k], spec, cases[k], levels=levels, scene=scene)
+        except RUN_FAILURES as exc:
+            results[k] = exc
+            return
+        path.stats["batch"] = 1
+        results[k] = path
+
+    if family.system is None or family.has(LINEAR):
+        for k in range(len(mechanisms)):
+            alone(k)
+        return results
+    t0 = time.perf_counter()
+    options = dict(spec.kwargs)
+    built: dict[int, System | Member | Exception] = {}  # copies of one mechanism share it
+    for m in mechanisms:
+        if id(m) in built:
+            continue
+        try:
+            built[id(m)] = (
+                family.system(m, spec, None, **options)
+                if family.connectors is None
+                else (m, family.connectors(m, spec, **options))
+            )
+        except RUN_FAILURES as exc:
+            built[id(m)] = exc
+    for k, m in enumerate(mechanisms):
+        if isinstance(built[id(m)], Exception):
+            results[k] = built[id(m)]
+    todo = [k for k in range(len(mechanisms)) if results[k] is None]
+    build = (time.perf_counter() - t0) / max(len(mechanisms), 1)
+    try:
+        traced = trace_batch(
+            [built[id(mechanisms[k])] for k in todo],
+            [cases[k] for k in todo],
+            levels,
+            spec.id,
+            scene,
+            options,
+        )
+    except RUN_FAILURES:  # copies that cannot share a batch, or a batch it cannot trace
+        for k in todo:
+            alone(k)
+        return results
+    for k, result in zip(todo, traced):
+        if isinstance(result, LoadPath):
+            result.seconds += build
+        results[k] = result
+    return results
