@@ -49,7 +49,7 @@ from distributed import Client, get_task_stream
 
 from flexval.validation.sweep import local_cluster, parse_sweep, results_store, run_sweep
 from flexval.validation.sweep.engine import auto_batch, chunks, task_info
-from flexval.validation.sweep.tasks import run_model_batch, run_reference
+from flexval.validation.sweep.tasks import PointBlock, SweepJob, model_task, reference_task
 
 MODELS = ["ee", "dcmm:1", "dcmm:2", "prbm", "beam:20"]
 
@@ -93,23 +93,37 @@ def variants(n: int, reference: str, batch: int | None, cases: list[str]) -> dic
     }
 
 
+def _block(sweep, positions: list[int]) -> PointBlock:
+    """The parameter block of the points at ``positions`` (as the engine sends it)."""
+    values = sweep.points.builder.values(positions)
+    digests = tuple(sweep.points.digest(k) for k in positions)
+    return PointBlock(tuple(positions), values, digests, (True,) * len(positions))
+
+
 def plain_loop(sweep) -> tuple[float, int, float]:
-    """Wall seconds, rows and seconds inside the task functions, called one after the other."""
-    info = task_info(sweep)
+    """Wall seconds, rows and seconds inside the task functions, called one after the other
+    (their parts are written to a temporary folder)."""
+    out = tempfile.mkdtemp(prefix="bench_sweep_loop_")
+    b = sweep.points.builder
+    job = SweepJob(
+        task_info(sweep), b.light(), tuple(a.path for a in sweep.axes), sweep.load_cases, out
+    )
+    positions = list(range(len(sweep.points)))
     inside = 0.0
     t0 = time.perf_counter()
-    t = time.perf_counter()
-    ref = run_reference(
-        list(sweep.valid_points), sweep.reference, sweep.load_cases, info, use_cache=False
-    )
-    inside += time.perf_counter() - t
-    rows = list(ref["rows"])
-    for spec in sweep.models:
-        for chunk in chunks(list(sweep.valid_points), _batch(sweep, 1)):
-            t = time.perf_counter()
-            rows += run_model_batch(chunk, spec, sweep.load_cases, info, [ref])
-            inside += time.perf_counter() - t
-    return time.perf_counter() - t0, len(rows), inside
+    try:
+        t = time.perf_counter()
+        ref = reference_task(_block(sweep, positions), sweep.reference, job, use_cache=False)
+        inside += time.perf_counter() - t
+        rows = ref["summary"]["rows"]
+        for spec in sweep.models:
+            for chunk in chunks(positions, _batch(sweep, 1)):
+                t = time.perf_counter()
+                rows += model_task(_block(sweep, chunk), spec, job, [ref])["rows"]
+                inside += time.perf_counter() - t
+    finally:
+        shutil.rmtree(out)
+    return time.perf_counter() - t0, rows, inside
 
 
 def _batch(sweep, workers: int) -> int:
@@ -196,6 +210,89 @@ def report(label: str, sweep, loop: bool) -> None:
     )
 
 
+TOLERANCE = os.path.join(os.path.dirname(__file__), "sweeps", "tolerance_open_chain.toml")
+
+
+def _peak_kb(pid: int | str = "self") -> int:
+    """Peak resident memory (VmHWM) of process ``pid``, kB (Linux)."""
+    with open(f"/proc/{pid}/status") as f:
+        return int(next(line.split()[1] for line in f if line.startswith("VmHWM:")))
+
+
+def tolerance_once(path: str, workers: int) -> dict:
+    """One run of the tolerance sweep ``path`` as ``flexval sweep --workers N --no-cache``
+    runs it (load, cluster start, run, read the rows back): wall seconds, points, the CPU
+    seconds of this driver process (scheduler included) and of the workers, the largest
+    peak RSS of them, and the largest task per model."""
+    import psutil
+
+    from flexval.validation.sweep import load_sweep, sweep_rows
+
+    out = tempfile.mkdtemp(prefix="bench_sweep_tol_")
+    try:
+        wall, cpu = time.perf_counter(), time.process_time()
+        sweep = load_sweep(path)
+        with local_cluster(workers) as cluster, Client(cluster) as client:
+            client.wait_for_workers(workers)
+            in_run = time.process_time()
+            stats = run_sweep(sweep, out, client, use_cache=False)
+            in_run = time.process_time() - in_run
+            pids = [w.pid for w in cluster.workers.values()]
+            work = sum(sum(psutil.Process(p).cpu_times()[:2]) for p in pids)
+            peak = max(_peak_kb(p) for p in pids)
+        rows = sweep_rows(sweep, out)
+        wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+        assert len(rows) == stats.rows_written and stats.rows_failed == 0
+        return {
+            "wall": wall,
+            "points": len(sweep.points),
+            "driver_cpu": cpu,
+            "run_cpu": in_run,
+            "worker_cpu": work,
+            "peak_mb": max(peak, _peak_kb()) / 1024,
+            "tasks": stats.tasks,
+            "task_points": stats.task_points,
+        }
+    finally:
+        shutil.rmtree(out)
+
+
+def tolerance(path: str, workers: int, repeats: int) -> None:
+    """Medians over ``repeats`` runs of :func:`tolerance_once`, one line each and the
+    medians: points/s, and the driver's CPU time per point against a worker's."""
+    import statistics
+
+    runs = []
+    for k in range(repeats):
+        load = os.getloadavg()[0]
+        r = tolerance_once(path, workers)
+        runs.append(r)
+        print(
+            f"  run {k + 1}: {r['wall']:.1f} s wall (cluster start included), "
+            f"{r['points'] / r['wall']:.0f} points/s, driver CPU "
+            f"{1e3 * r['driver_cpu'] / r['points']:.3f} ms/point "
+            f"({1e3 * r['run_cpu'] / r['points']:.3f} in run_sweep), worker CPU "
+            f"{1e3 * r['worker_cpu'] / r['points']:.3f} ms/point, largest peak RSS "
+            f"{r['peak_mb']:.0f} MB, {r['tasks']} tasks (largest {r['task_points']}) "
+            f"(load average before {load:.1f})",
+            flush=True,
+        )
+
+    def med(key):
+        return statistics.median(r[key] for r in runs)
+
+    n = runs[0]["points"]
+    print(
+        f"median of {repeats}: {med('wall'):.1f} s, {n / med('wall'):.0f} points/s with "
+        f"{workers} workers; driver CPU {1e3 * med('driver_cpu') / n:.3f} ms/point = 1/"
+        f"{med('worker_cpu') / med('driver_cpu'):.0f} of the workers' "
+        f"{1e3 * med('worker_cpu') / n:.3f} ms/point (run_sweep alone: "
+        f"{1e3 * med('run_cpu') / n:.3f} ms/point = 1/{med('worker_cpu') / med('run_cpu'):.0f}); "
+        f"largest peak RSS {med('peak_mb'):.0f} MB",
+        flush=True,
+    )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=1000, help="variants (default 1000)")
@@ -210,7 +307,21 @@ def main() -> None:
     )
     ap.add_argument("--cases", default="f+", help="load cases, comma-separated (default f+)")
     ap.add_argument("--no-loop", action="store_true", help="skip the plain loop")
+    ap.add_argument(
+        "--tolerance",
+        nargs="?",
+        const=TOLERANCE,
+        default=None,
+        help="run the tolerance sweep file (default benchmarks/sweeps/tolerance_open_chain.toml: "
+        "20,000 points) instead, --workers workers, --repeats times",
+    )
+    ap.add_argument("--workers", type=int, default=2, help="workers of --tolerance (default 2)")
+    ap.add_argument("--repeats", type=int, default=3, help="runs of --tolerance (default 3)")
     args = ap.parse_args()
+    if args.tolerance:
+        print(f"{args.tolerance}; {os.cpu_count()} cores", flush=True)
+        tolerance(args.tolerance, args.workers, args.repeats)
+        return
     cases = args.cases.split(",")
     t0 = time.perf_counter()
     sweep = parse_sweep(variants(args.n, "beam:100", args.batch, cases), "<bench>")

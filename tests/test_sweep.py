@@ -141,14 +141,14 @@ def test_an_interrupted_sweep_resumes_with_the_missing_rows_only(tmp_path, clien
 
 
 def test_a_failing_task_and_a_failing_model_are_recorded(tmp_path, client, monkeypatch):
-    real = sweep_tasks.run_model
+    real = sweep_tasks.run_batch
 
-    def crash_on_dcmm(scene, spec, case, *a, **k):
-        if spec.family == "dcmm" and case.name == "f+":
+    def crash_on_dcmm(mechanisms, spec, cases, *a, **k):
+        if spec.family == "dcmm" and cases[0].name == "f+":
             raise KeyError("injected worker crash")
-        return real(scene, spec, case, *a, **k)
+        return real(mechanisms, spec, cases, *a, **k)
 
-    monkeypatch.setattr(sweep_tasks, "run_model", crash_on_dcmm)
+    monkeypatch.setattr(sweep_tasks, "run_batch", crash_on_dcmm)
     text = TINY.replace('reference = "prbm"', 'reference = "beam:20"').replace(
         '"dcmm:1"]', '"dcmm:1", "prbm"]'
     )
@@ -229,8 +229,10 @@ def test_a_reference_rotation_near_zero_is_measured_against_its_scale(tmp_path, 
         assert abs(lp.rotation[-1] - ref.rotation[-1]) > 0.01 * abs(ref.rotation[-1])
         want = errors(lp, ref, p.scene.mechanism.size())
         assert r["end_rot"] < 1e-9 and r["path_rot"] < 1e-9
+        # the sweep traces its points as batches, each path its solo run's to 1e-12 of the
+        # motion: a metric (percent) that is round-off itself agrees to 1e-10 only
         for metric, value in want.items():
-            assert r[metric] == pytest.approx(value, rel=1e-9, abs=1e-20)
+            assert r[metric] == pytest.approx(value, rel=1e-9, abs=1e-10)
 
 
 def test_generated_invalid_points_are_reported_not_fatal(tmp_path, client):

@@ -1,6 +1,9 @@
-"""Built-in sweeps: the open-chain example, the cantilever geometry sweeps and the notch chart.
+"""Built-in sweeps: the open-chain example and tolerance study, the cantilever geometry sweeps
+and the notch chart.
 
-``open_chain_arcs`` is a sweep file shipped in ``validation/data/sweeps``.
+``open_chain_arcs`` and ``open_chain_tolerance`` (a tolerance study: the thickness
+drawn from a normal distribution, the reference on a subsample) are sweep files shipped
+in ``validation/data/sweeps``.
 ``slenderness`` and ``arc_angle`` sweep a single clamped arc (radius
 :data:`RADIUS`, depth 1 mm, E = 2000 MPa, nu = 0.3) carrying a dead tip
 force perpendicular to its chord, scaled at every point so that the linear
@@ -47,7 +50,7 @@ NOTCH_RATIOS = (0.05, 0.1, 0.2, 0.5, 1.0)
 """t / R of the notch sweep: from a slender neck to one as thick as the cut-outs' radius."""
 NOTCH_ROTATION = 0.02  # rad
 NOTCH_MODELS = ("beam:20", "dcmm:1", "dcmm:2", "prbm", "ee")
-FILE_SWEEPS = ("open_chain_arcs",)
+FILE_SWEEPS = ("open_chain_arcs", "open_chain_tolerance")
 BUILTIN_SWEEPS = FILE_SWEEPS + ("slenderness", "arc_angle", "notch_ratio")
 
 

@@ -1,11 +1,26 @@
-"""Run a sweep on a Dask cluster, appending rows to the Parquet store as tasks finish.
+"""Run a sweep on a Dask cluster; the workers write the Parquet parts, the driver publishes them.
 
-Tasks are whole runs of one model on a batch of points (every load case of
-the sweep): :attr:`Sweep.batch` points per task for the reduced models (by
-default :func:`auto_batch`), so the per-task cost of Dask stays small
-against the work, and one point per task for the costly reference-class
-models (the continuum). The reference runs once per point in its own
-tasks; a model task receives the reference paths of its points from Dask.
+Tasks are whole runs of one model on a block of points (every load case of
+the sweep). The driver sends *parameter blocks*, not scenes
+(:class:`~flexval.validation.sweep.tasks.PointBlock`: indices, axis values and
+scene digests); each worker builds the scenes from the sweep's base scene data
+and writes its rows as a staged part, which the driver renames into the
+dataset once it has counted the task. The points are taken block by block, at
+most :data:`BLOCKS_IN_FLIGHT` blocks at a time, so the driver holds a few
+blocks of parameters, whatever the point count, and no scene at all.
+
+Task sizes follow the measured cost: the first tasks of each model hold
+:func:`auto_batch` points; the seconds the tasks report for their points then
+size the later ones to :data:`TASK_SECONDS` of work (:func:`task_points`). A
+sweep's ``batch`` fixes the size; a reference-class (costly) model runs one
+point a task. The reference runs once per point in its own tasks (on the
+``reference_sample`` points only, when the sweep gives one:
+:func:`reference_positions`); a model task receives the reference paths of its
+points from Dask. Behind a cheap reference, every model's tasks hold the points
+of one reference task (the reference's size), and with work stealing off
+(:data:`WORK_STEALING`) they run on its worker, which has built their scenes
+already; each task runs its model on its points as one batch
+(:func:`~flexval.validation.sweep.tasks.run_model_block`).
 
 Resuming: every row's key hashes the point's scene, the model, the load
 case, the reference, the code version and the optional outputs; a (point,
@@ -27,20 +42,32 @@ from pathlib import Path
 
 import numpy as np
 
-from flexval.reducedmodels import ModelSpec
 from flexval.reducedmodels.catalogue import REFERENCE
 
 from ..cache import code_version
 from .spec import Point, Sweep
 from .store import ResultStore
-from .tasks import TaskInfo, base_row, row_key, run_model_batch, run_reference
+from .tasks import (
+    PointBlock,
+    SweepJob,
+    TaskInfo,
+    base_row,
+    model_task,
+    reference_task,
+    row_key,
+    summary_of,
+)
 
 RETRIES = 2
 """Times Dask reruns a task whose worker died before it finished."""
 MESSAGE_LOG_LENGTH = 10
 """Recent messages Dask keeps per connection (``distributed.admin.low-level-log-length``,
-1000 by default) in a local cluster: each message to a worker holds its task's points, so
-a thousand held 470 MB of scenes in the driver of a 20,000-point sweep."""
+1000 by default) in a local cluster: each message to a worker holds its task's arguments, so
+a thousand held 470 MB of scenes in a driver that sent scenes (20,000 points)."""
+WORK_STEALING = False
+"""Dask's work stealing, off: a model task then runs on the worker that holds its block's
+reference paths (and its points' scenes, built there by the reference's task), instead of
+being moved to an idle worker that fetches the paths and builds every scene again."""
 BLAS_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 """Worker environment of the local cluster: one BLAS thread per single-threaded worker."""
 
@@ -55,37 +82,54 @@ class SweepStats:
     rows_skipped: int = 0
     seconds: float = 0.0
     parts: list = field(default_factory=list)
+    task_points: dict = field(default_factory=dict)
+    """Model id: the points of its largest task."""
 
 
-def chunks(points: list[Point], size: int) -> Iterator[list[Point]]:
+def chunks(points: list, size: int) -> Iterator[list]:
     """``points`` in consecutive runs of ``size`` (the last may be shorter)."""
     for k in range(0, len(points), size):
         yield points[k : k + size]
 
 
 MAX_AUTO_BATCH = 25
-"""Most points per task of a reduced model chosen by :func:`auto_batch`. Dask costs about 5 ms
-per task (``benchmarks/bench_sweep.py``: wall time outside the tasks over the tasks, 4 to 15 ms
-on the loaded 2-core machine) against about 0.1 s of reduced-model work per open-chain point
-and load case: 25 points per task keep that cost near 1 % of the work (batch 5: 2.4 %,
-10: 1.8 %, 25: 0.7 % of one worker's time measured on 200 variants)."""
+"""Most points per task of a reduced model before its cost is measured (:func:`auto_batch`):
+about 0.1 s of work for an open-chain point and load case of beam:20, less for the others, so
+the first tasks are short and report the cost soon."""
 TASKS_PER_WORKER = 4
-"""Fewest tasks per worker and model that :func:`auto_batch` aims at: the last tasks of a
+"""Fewest tasks per worker and model that the task sizes aim at: the last tasks of a
 sweep leave workers idle, the less the smaller the tasks."""
+TASK_SECONDS = 1.0
+"""Work per task, s, that :func:`task_points` aims at once a model's cost is measured. Dask
+costs about 5 ms a task and the driver about 1 ms (publishing the part, the progress line):
+under 1 % of a second's work, so one driver keeps pace with a hundred workers; an
+interruption or the sweep's last task leaves a worker idle for about this long at most."""
+MAX_TASK_POINTS = 5000
+"""Most points per task, whatever their cost: bounds a task's rows (about 4 kB each in the
+worker's memory) and the reference paths one task hands to the model tasks."""
 
 
 def auto_batch(points: int, workers: int) -> int:
-    """Points per reduced-model task when the sweep gives none: enough tasks for
+    """Points per reduced-model task before its cost is measured: enough tasks for
     :data:`TASKS_PER_WORKER` per worker and model, at most :data:`MAX_AUTO_BATCH` points each."""
     return max(1, min(MAX_AUTO_BATCH, points // (TASKS_PER_WORKER * max(workers, 1))))
 
 
-def _batch_size(sweep: Sweep, spec: ModelSpec, workers: int) -> int:
-    """Points per task: one for a reference-class (costly) model; the sweep's batch, or
-    :func:`auto_batch` for ``workers``, otherwise."""
-    if spec.model_family.has(REFERENCE):
-        return 1
-    return sweep.batch or auto_batch(sweep.points.valid_count, workers)
+def task_points(
+    seconds_per_point: float | None, remaining: int, workers: int, fixed: int | None = None
+) -> int:
+    """Points per task of a model: ``fixed`` if the sweep gives it; before any task of the
+    model finished (``seconds_per_point`` None) :func:`auto_batch` of the ``remaining``
+    points; then enough for :data:`TASK_SECONDS` of work, at most :data:`MAX_TASK_POINTS`,
+    and few enough that the remaining points still make :data:`TASKS_PER_WORKER` tasks per
+    worker (short tasks at the end: the workers finish together)."""
+    if fixed:
+        return fixed
+    if seconds_per_point is None:
+        return auto_batch(remaining, workers)
+    sized = int(TASK_SECONDS / max(seconds_per_point, 1e-9))
+    tail = remaining // (TASKS_PER_WORKER * max(workers, 1))
+    return max(1, min(MAX_TASK_POINTS, sized, tail))
 
 
 def task_info(sweep: Sweep) -> TaskInfo:
@@ -93,17 +137,44 @@ def task_info(sweep: Sweep) -> TaskInfo:
     return TaskInfo(sweep.name, sweep.reference.id, code_version(), sweep.outputs)
 
 
+def reference_positions(sweep: Sweep) -> np.ndarray | None:
+    """The positions of the points the reference runs on, sorted: None for every point, or
+    the sweep's ``reference_sample`` of them drawn without replacement, seeded by the seeds
+    of its random axes (0 without any), so a rerun draws the same. The draw is among the
+    valid points of a checked sweep; among all points of a lazy one (whose invalid points
+    only the workers find), where a refused draw leaves the reference a point fewer."""
+    k = sweep.reference_sample
+    if k is None:
+        return None
+    points = sweep.points
+    if points.checked:
+        pool = np.array([n for n in range(len(points)) if points.reason(n) is None], dtype=np.int64)
+    else:
+        pool = np.arange(len(points), dtype=np.int64)
+    if k >= len(pool):
+        return None
+    seeds = [a.seed for a in sweep.axes if a.random and a.seed is not None] or [0]
+    return np.sort(np.random.default_rng(seeds).choice(pool, size=k, replace=False))
+
+
 def current_keys(sweep: Sweep) -> set[str]:
     """The keys of every row ``sweep`` produces with the current code (from the points'
-    records: no scene is built)."""
+    records: no scene is built). A point of a lazy sweep not known to be invalid may be
+    either: its invalid-point key and its models' keys are all current."""
     info = task_info(sweep)
-    models = [sweep.reference.id, *(s.id for s in sweep.models)]
+    sample = reference_positions(sweep)
+    sampled = None if sample is None else set(sample.tolist())
+    checked = sweep.points.checked
     keys = set()
-    for r in sweep.points.records():
-        if r.reason is not None:
+    for position, r in enumerate(sweep.points.records()):
+        if r.reason is not None or not checked:
             keys.add(row_key(r.digest, "-", "-", info))
-        else:
-            keys.update(row_key(r.digest, m, c, info) for m in models for c in sweep.load_cases)
+            if r.reason is not None:
+                continue
+        models = [s.id for s in sweep.models]
+        if sampled is None or position in sampled:
+            models.append(sweep.reference.id)
+        keys.update(row_key(r.digest, m, c, info) for m in models for c in sweep.load_cases)
     return keys
 
 
@@ -123,7 +194,12 @@ def local_cluster(workers: int | None = None):
 
     # the scheduler runs in this process: its logs of recent messages would hold the
     # arguments (points and scenes) of the last thousand tasks sent to each worker
-    dask.config.set({"distributed.admin.low-level-log-length": MESSAGE_LOG_LENGTH})
+    dask.config.set(
+        {
+            "distributed.admin.low-level-log-length": MESSAGE_LOG_LENGTH,
+            "distributed.scheduler.work-stealing": WORK_STEALING,
+        }
+    )
     n = workers or os.cpu_count() or 1
     return LocalCluster(
         n_workers=n,
@@ -156,38 +232,139 @@ def stop_workers_on_signals(client) -> None:
 
 
 class _Progress:
-    """One line per finished task: tasks done, failed rows, ETA from the mean task rate."""
+    """One line per finished task: tasks finished and submitted, runs (point and model) done
+    or found stored, failed rows, and the ETA from the runs' mean rate."""
 
     def __init__(self, total: int, emit: Callable[[str], None] | None):
-        self.total, self.emit, self.done, self.failed = total, emit, 0, 0
+        self.total, self.emit = total, emit
+        self.done = self.failed = self.runs = self.skipped = 0
         self.t0 = time.perf_counter()
 
-    def update(self, failed_rows: int) -> None:
+    def update(self, failed_rows: int, runs: int, submitted: int) -> None:
         self.done += 1
         self.failed += failed_rows
+        self.runs += runs
         if self.emit is None:
             return
         elapsed = time.perf_counter() - self.t0
-        eta = elapsed / self.done * (self.total - self.done)
+        left = max(self.total - self.skipped - self.runs, 0)
+        eta = elapsed / max(self.runs, 1) * left
         self.emit(
-            f"sweep: {self.done}/{self.total} tasks, {self.failed} failed rows, "
-            f"{elapsed:.0f} s elapsed, ETA {eta:.0f} s"
+            f"sweep: {self.done}/{submitted} tasks, {self.runs + self.skipped:,}/{self.total:,} "
+            f"runs, {self.failed} failed rows, {elapsed:.0f} s elapsed, ETA {eta:.0f} s"
         )
 
 
 BLOCK_TASKS = TASKS_PER_WORKER
 """Points of one block of :func:`run_sweep`: this many of the largest task per worker."""
 BLOCKS_IN_FLIGHT = 2
-"""Blocks whose tasks are submitted and not all finished: the next block is built and
+"""Blocks whose tasks are submitted and not all finished: the next block is made and
 submitted when fewer remain, so the workers always have the next tasks queued while the
-driver holds the scenes of at most this many blocks."""
+driver holds the parameters of at most this many blocks."""
 
 
-def _blocks(need: np.ndarray, size: int) -> Iterator[np.ndarray]:
-    """The positions where ``need`` holds, in consecutive runs of ``size``."""
-    positions = np.flatnonzero(need)
-    for k in range(0, len(positions), size):
-        yield positions[k : k + size]
+@dataclass
+class _Block:
+    """A block of points in the driver: positions, parameters, digests and indices, which
+    (point, spec) pairs run, the stored keys per point, and the reference futures its model
+    tasks wait on (released with the block)."""
+
+    positions: np.ndarray
+    values: np.ndarray
+    digests: list[str]
+    indices: list[int]
+    run: np.ndarray
+    skip: list[frozenset]
+    stored: int
+    refs: dict = field(default_factory=dict)
+    open: int = 0
+
+
+def _make_block(sweep: Sweep, positions: np.ndarray, done: np.ndarray, sampled, info) -> _Block:
+    """The block of ``positions``: parameters, digests, and the (point, spec) pairs to run
+    given the stored keys ``done`` (a lazy sweep's point stored as invalid is left out)."""
+    points, cases = sweep.points, sweep.load_cases
+    specs = (sweep.reference, *sweep.models)
+    builder = points.builder
+    if builder is not None:
+        values = builder.values(positions)
+        indices = positions.tolist()
+    else:
+        built = [points[int(k)] for k in positions]
+        values = np.array([[p.params[a.path] for a in sweep.axes] for p in built])
+        values = values.reshape(len(positions), len(sweep.axes))
+        indices = [p.index for p in built]
+    if points.checked:
+        digests = [points.digest(int(k)) for k in positions]
+    else:
+        digests = [builder.digest_of(v) for v in values]
+    run = np.ones((len(positions), len(specs)), dtype=bool)
+    skip = [frozenset()] * len(positions)
+    if done.size:
+        keep = []
+        for i, d in enumerate(digests):
+            if not points.checked and np.isin(row_key(d, "-", "-", info).encode(), done):
+                continue  # a lazy sweep's point stored as invalid
+            keys = np.array([[row_key(d, s.id, c, info) for c in cases] for s in specs], "S24")
+            stored = np.isin(keys, done)
+            run[i] = ~stored.all(axis=1)
+            skip[i] = frozenset(k.decode() for k in keys[stored])
+            keep.append(i)
+        positions, values, run = positions[keep], values[keep], run[keep]
+        digests, indices, skip = ([x[i] for i in keep] for x in (digests, indices, skip))
+    # the reference runs wherever a model runs (it gives the errors), on its sample only
+    on_sample = np.ones(len(positions), bool) if sampled is None else np.isin(positions, sampled)
+    stored = int((~run[:, 1:]).sum() + (~run[:, 0] & on_sample).sum())
+    run[:, 0] = on_sample & run.any(axis=1)
+    return _Block(positions, values, digests, indices, run, skip, stored)
+
+
+def _point_blocks(sweep: Sweep, size: Callable[[], int]) -> Iterator[np.ndarray]:
+    """The positions of the points to run, in consecutive runs of ``size()`` (asked anew for
+    every block), without the points a checked sweep knows to be invalid."""
+    points = sweep.points
+    start = 0
+    while start < len(points):
+        stop = min(len(points), start + size())
+        block = np.arange(start, stop, dtype=np.int64)
+        if points.checked:
+            block = block[[points.reason(int(k)) is None for k in block]]
+        start = stop
+        if len(block):
+            yield block
+
+
+def _task_block(blk: _Block, chunk: np.ndarray, j: int, sweep: Sweep) -> PointBlock:
+    """The :class:`PointBlock` of the points ``chunk`` (positions in ``blk``) for spec ``j``:
+    it owns the invalid-point row of a point whose first running spec it is."""
+    first = blk.run.argmax(axis=1)
+    built = None
+    if sweep.points.builder is None:
+        built = tuple(sweep.points[int(blk.positions[i])] for i in chunk)
+    return PointBlock(
+        tuple(blk.indices[i] for i in chunk),
+        blk.values[chunk],
+        tuple(blk.digests[i] for i in chunk),
+        tuple(bool(first[i] == j) for i in chunk),
+        frozenset().union(*(blk.skip[i] for i in chunk)),
+        built,
+    )
+
+
+def _failed_task(
+    blk: _Block, chunk: np.ndarray, model: str, exc: Exception, sweep: Sweep, info: TaskInfo
+) -> list[dict]:
+    """The ``error`` rows of a task that raised (not yet stored)."""
+    reason = f"task failed: {type(exc).__name__}: {exc}"
+    rows = []
+    for i in chunk:
+        params = dict(zip((a.path for a in sweep.axes), blk.values[i].tolist()))
+        point = Point(blk.indices[i], params, None, blk.digests[i])
+        rows += [
+            base_row(point, model, c, info) | {"status": "error", "reason": reason}
+            for c in sweep.load_cases
+        ]
+    return [r for r in rows if not any(r["key"] in blk.skip[i] for i in chunk)]
 
 
 def run_sweep(
@@ -199,10 +376,10 @@ def run_sweep(
 ) -> SweepStats:
     """Run what is missing of ``sweep`` on the Dask ``client``; rows go to ``out_dir/results``.
 
-    The points are built and submitted block by block (:data:`BLOCK_TASKS` tasks per
-    worker of the largest task), at most :data:`BLOCKS_IN_FLIGHT` blocks at a time: the
-    driver holds every point's record (:class:`~flexval.validation.sweep.spec.PointRecord`)
-    and which of its (point, model) pairs are missing, and the scenes of those blocks only.
+    The points are made and submitted block by block (:data:`BLOCK_TASKS` tasks per worker
+    of the largest task), at most :data:`BLOCKS_IN_FLIGHT` blocks at a time: the driver holds
+    the stored keys (24 bytes a row), the reasons of the invalid points and the parameters
+    of those blocks; never a scene, nor the rows of a finished task.
 
     Parameters
     ----------
@@ -211,7 +388,7 @@ def run_sweep(
         Output folder; the Parquet dataset is its ``results`` sub-folder.
     client : distributed.Client
     use_cache : bool
-        Let workers reuse cached converged reference paths.
+        Let workers reuse cached converged paths of a costly reference.
     progress : callable, optional
         Called with a progress line after each finished task.
     """
@@ -219,119 +396,134 @@ def run_sweep(
 
     t0 = time.perf_counter()
     store = results_store(sweep, out_dir)
-    done = store.keys()
+    store.clear_staged()
+    done = store.key_array()
     info = task_info(sweep)
     stats = SweepStats()
     cases = sweep.load_cases
     specs = (sweep.reference, *sweep.models)
+    points = sweep.points
+    builder = points.builder
+    job = SweepJob(
+        info,
+        None if builder is None else builder.light(),
+        tuple(a.path for a in sweep.axes),
+        cases,
+        str(store.folder),
+    )
+    sampled = reference_positions(sweep)
 
-    fresh_invalid = []
-    missing = np.zeros((len(sweep.points), len(specs)), dtype=bool)
-    for k, r in enumerate(sweep.points.records()):
-        if r.reason is not None:
-            if row_key(r.digest, "-", "-", info) not in done:
-                point = Point(r.index, sweep.points.params(r.index), None, r.digest, r.reason)
-                fresh_invalid.append(
-                    base_row(point, "-", "-", info)
-                    | {"status": "invalid_point", "reason": r.reason}
-                )
-            continue
-        for j, spec in enumerate(specs):
-            missing[k, j] = any(row_key(r.digest, spec.id, c, info) not in done for c in cases)
-    if fresh_invalid:
-        stats.parts.append(store.append(fresh_invalid))
+    fresh_invalid = []  # the invalid points a checking pass found: their rows, here
+    for r in points.records():
+        if r.reason is not None and not np.isin(row_key(r.digest, "-", "-", info).encode(), done):
+            point = Point(r.index, points.params(r.index), None, r.digest, r.reason)
+            fresh_invalid.append(
+                base_row(point, "-", "-", info) | {"status": "invalid_point", "reason": r.reason}
+            )
+    part = store.append(fresh_invalid)
+    if part is not None:
+        stats.parts.append(part)
     stats.rows_written += len(fresh_invalid)
     del fresh_invalid
-    stats.rows_skipped = (sweep.points.valid_count * len(specs) - int(missing.sum())) * len(cases)
 
-    workers = sum(client.nthreads().values())
-    batch = [_batch_size(sweep, spec, workers) for spec in specs]
-    size = max(batch) * max(workers, 1) * BLOCK_TASKS
-    need = missing.any(axis=1)  # the reference runs wherever a model runs (it gives the errors)
-    stats.tasks = sum(
-        -(-len(block) // batch[0])
-        + sum(-(-int(missing[block, j].sum()) // batch[j]) for j in range(1, len(specs)))
-        for block in _blocks(need, size)
-    )
+    workers = max(sum(client.nthreads().values()), 1)
+    costly = [spec.model_family.has(REFERENCE) for spec in specs]
+    cost = [[0.0, 0] for _ in specs]  # seconds and points of the finished tasks, per spec
+    taken = [0]  # points put in blocks so far
 
-    def submit(block: np.ndarray) -> Iterator[tuple[object, list[Point], str]]:
-        """Build the points of ``block`` and submit their tasks: (future, points, model)."""
-        points = {int(k): sweep.points[int(k)] for k in block}
-        ref_future = {}
-        for chunk in chunks(list(points.values()), batch[0]):
-            fut = client.submit(
-                run_reference,
-                chunk,
-                sweep.reference,
-                cases,
-                info,
-                use_cache,
-                retries=RETRIES,
-                pure=False,
-            )
-            ref_future.update((p.index, fut) for p in chunk)
-            yield fut, chunk, sweep.reference.id
-        for j, spec in enumerate(specs[1:], start=1):
-            todo = [points[int(k)] for k in block if missing[k, j]]
-            for chunk in chunks(todo, batch[j]):
-                refs = list({id(ref_future[p.index]): ref_future[p.index] for p in chunk}.values())
-                fut = client.submit(
-                    run_model_batch,
-                    chunk,
-                    spec,
-                    cases,
-                    info,
-                    refs,
-                    retries=RETRIES,
-                    pure=False,
-                )
-                yield fut, chunk, spec.id
+    def batch(j: int) -> int:
+        if costly[j]:
+            return 1
+        seconds, n = cost[j]
+        return task_points(seconds / n if n else None, len(points) - taken[0], workers, sweep.batch)
 
-    tasks: dict = {}  # future: (points, model, block)
-    open_blocks: dict[int, int] = {}  # block: its tasks not finished
-    pending = enumerate(_blocks(need, size))
+    sizes = [1] * len(specs)  # points per task of each spec in the block being made
+
+    def block_size() -> int:
+        sizes[:] = [batch(j) for j in range(len(specs))]
+        if not costly[0]:  # a model's task then needs one reference task, on one worker
+            sizes[1:] = [sizes[0]] * (len(specs) - 1)
+        size = max(sizes) * workers * BLOCK_TASKS
+        taken[0] += size
+        return size
+
+    n_ref = points.valid_count if sampled is None else len(sampled)
+    bar = _Progress(points.valid_count * len(sweep.models) + n_ref, progress)
+
+    def submit(blk: _Block) -> Iterator[tuple[object, int, np.ndarray]]:
+        """Submit the tasks of ``blk``: (future, spec, positions in the block)."""
+        bar.skipped += blk.stored
+        stats.rows_skipped += blk.stored * len(cases)
+        for j, spec in enumerate(specs):
+            todo = np.flatnonzero(blk.run[:, j])
+            for chunk in chunks(todo, sizes[j]):
+                block = _task_block(blk, chunk, j, sweep)
+                if j == 0:
+                    ref = client.submit(
+                        reference_task, block, spec, job, use_cache, retries=RETRIES, pure=False
+                    )
+                    blk.refs.update((int(i), ref) for i in chunk)
+                    fut = client.submit(summary_of, ref, pure=False)
+                else:
+                    mine = [blk.refs[i] for i in chunk.tolist() if i in blk.refs]
+                    refs = list({id(f): f for f in mine}.values())
+                    fut = client.submit(
+                        model_task, block, spec, job, refs, retries=RETRIES, pure=False
+                    )
+                stats.tasks += 1
+                stats.task_points[spec.id] = max(stats.task_points.get(spec.id, 0), len(chunk))
+                yield fut, j, chunk
+
+    tasks: dict = {}  # future: (block, spec, positions in the block)
+    blocks: dict[int, _Block] = {}
+    pending = enumerate(_point_blocks(sweep, block_size))
     finished = as_completed()
 
     def refill() -> None:
-        while len(open_blocks) < BLOCKS_IN_FLIGHT:
+        while len(blocks) < BLOCKS_IN_FLIGHT:
             nxt = next(pending, None)
             if nxt is None:
                 return
-            b, block = nxt
-            for fut, chunk, model in submit(block):
-                tasks[fut] = (chunk, model, b)
-                open_blocks[b] = open_blocks.get(b, 0) + 1
+            b, positions = nxt
+            blk = _make_block(sweep, positions, done, sampled, info)
+            for fut, j, chunk in submit(blk):
+                tasks[fut] = (b, j, chunk)
+                blk.open += 1
                 finished.add(fut)
+            if blk.open:
+                blocks[b] = blk
 
     refill()
-    bar = _Progress(stats.tasks, progress)
     for fut in finished:
-        chunk, model, b = tasks.pop(fut)
+        b, j, chunk = tasks.pop(fut)
+        blk = blocks[b]
         try:
             result = fut.result()
-            rows = result["rows"] if isinstance(result, dict) else result
         except Exception as exc:  # a lost task is a recorded failure, not a lost sweep
-            reason = f"task failed: {type(exc).__name__}: {exc}"
-            rows = [
-                base_row(p, model, c, info) | {"status": "error", "reason": reason}
-                for p in chunk
-                for c in cases
-            ]
-        result = None
-        rows = [r for r in rows if r["key"] not in done]
-        failed = sum(r["status"] != "ok" for r in rows)
-        part = store.append(rows)
-        if part is not None:
-            stats.parts.append(part)
-        done.update(r["key"] for r in rows)
-        stats.rows_written += len(rows)
-        stats.rows_failed += failed
+            rows = _failed_task(blk, chunk, specs[j].id, exc, sweep, info)
+            staged = store.stage(rows)
+            result = {
+                "staged": staged,
+                "rows": len(rows),
+                "failed": len(rows),
+                "points": 0,
+                "seconds": 0.0,
+                "invalid": {},
+            }
+        if result["staged"] is not None:
+            stats.parts.append(store.publish(result["staged"]))
+        stats.rows_written += result["rows"]
+        stats.rows_failed += result["failed"]
+        cost[j][0] += result["seconds"]
+        cost[j][1] += result["points"]
+        if result["invalid"]:
+            points.note_invalid(result["invalid"])
         fut.release()
-        del fut, chunk, rows  # the block's scenes go with its last task
-        bar.update(failed)
-        open_blocks[b] -= 1
-        if not open_blocks[b]:
-            del open_blocks[b]
+        bar.update(result["failed"], len(chunk), stats.tasks)
+        del fut, result
+        blk.open -= 1
+        if not blk.open:
+            del blocks[b]  # its reference futures go with it
             refill()
     stats.seconds = time.perf_counter() - t0
     return stats
@@ -343,5 +535,11 @@ def results_store(sweep: Sweep, out_dir: str | Path) -> ResultStore:
 
 
 def sweep_rows(sweep: Sweep, out_dir: str | Path) -> list[dict]:
-    """The stored rows of ``sweep`` under the current code (see :func:`current_keys`)."""
-    return results_store(sweep, out_dir).rows(current_keys(sweep))
+    """The stored rows of ``sweep`` under the current code (see :func:`current_keys`); the
+    invalid points among them are noted in ``sweep.points`` (a lazy sweep learns its invalid
+    points from its workers, and a resumed one from its stored rows)."""
+    rows = results_store(sweep, out_dir).rows(current_keys(sweep))
+    invalid = {r["point"]: r["reason"] for r in rows if r["status"] == "invalid_point"}
+    if invalid and not sweep.points.checked:
+        sweep.points.note_invalid(invalid)
+    return rows

@@ -6,16 +6,19 @@ A sweep file (TOML) names a base scene and the parameters to vary::
     base = "open_chain"              # built-in scene, or a path relative to this file
     models = ["ee", "dcmm:1", "prbm", "beam:20"]
     reference = "beam:100"           # errors are measured against it
+    reference_sample = 5             # optional: the reference runs on 5 of the points only
     load_cases = ["f+", "m+"]        # optional; default: all of the base scene's
     combine = "grid"                 # "grid" (every combination) or "zip" (i-th with i-th)
     metric = "worst"                 # summary metric: worst = max(end_disp_vec, end_rot)
     linear_rotation = 0.3            # optional (rad): scale each load case so that the
                                      # linear (ee) end rotation is this at every point
     batch = 10                       # optional: points per task of a reduced model
-                                     # (default: automatic, see engine.auto_batch)
+                                     # (default: from the measured cost, see
+                                     # engine.task_points)
     outputs = ["peak_stress"]        # optional: besides errors and times (always there),
-                                     # "peak_stress" (default) and "limit_load" (an
+                                     # "peak_stress" (default), "limit_load" (an
                                      # arc-length search on each run that stops early)
+                                     # and "first_yield" (against material.yield_strength)
 
     [[axes]]
     path = "section.thickness"       # any numeric field of the scene, by path
@@ -46,6 +49,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 import hashlib
 import itertools
 import json
@@ -74,10 +78,12 @@ SUMMARY_METRICS = ("worst",) + METRICS
 """``worst`` is max(end_disp_vec, end_rot): a model is as good as its worse end error."""
 ALWAYS_OUTPUTS = ("errors", "times")
 """Outputs of every row: the error metrics against the reference and the run time."""
-OPTIONAL_OUTPUTS = ("peak_stress", "limit_load")
+OPTIONAL_OUTPUTS = ("peak_stress", "limit_load", "first_yield")
 """``peak_stress``: the largest outer-fibre stress at full load and its error against the
 reference's (free: every model records it); ``limit_load``: the first limit point of a run
-that stops below full load, found by arc length (costly: only on request)."""
+that stops below full load, found by arc length (costly: only on request); ``first_yield``:
+the load at first yield and the safety factors at full load against the scene's
+``material.yield_strength`` (free; null without one)."""
 DEFAULT_OUTPUTS = ("peak_stress",)
 NAMED_ARRAYS = ("flexures", "load_cases", "bodies", "pins")
 _SCENE_TABLES = {
@@ -100,6 +106,8 @@ BYTES_PER_POINT = 10e3
 :class:`PointRecord` each, and the scenes of the blocks in flight), but the keys of their
 stored rows and the rows the summary reads are, 3.8 kB a row measured (open_chain, 20,000
 points, two rows each: 160 MB); a sweep whose points would not fit is refused."""
+RECORD_BLOCK = 4096
+"""Points whose parameters a lazy :class:`PointSet` computes at a time for its records."""
 SECONDS_PER_POINT = 6e-3
 """Time to build one point (parse and check its scene), s: 1.7 ms measured on open_chain,
 5.6 ms on notch_fourbar (2000 points, a loaded 2-core machine)."""
@@ -122,6 +130,17 @@ SWEEP = Table(
             "text",
             "model id every error is measured against (not one of models)",
             default="beam:100",
+        ),
+        Field(
+            "reference_sample",
+            "integer",
+            "run the reference on this many of the valid points only (a tolerance study "
+            "needs the models' outputs at every point but their errors on a subsample): "
+            "error columns exist only on the rows of those points",
+            default=ABSENT,
+            default_text="every point",
+            minimum=1,
+            maximum=MAX_COUNT,
         ),
         Field(
             "load_cases",
@@ -158,7 +177,8 @@ SWEEP = Table(
             "integer",
             "points per task of a reduced model",
             default=ABSENT,
-            default_text="automatic: points / (4 workers), 1 to 25",
+            default_text="automatic: the first tasks points / (4 workers), 1 to 25; then about "
+            "1 s of measured work each",
             minimum=1,
             maximum=MAX_COUNT,
         ),
@@ -166,7 +186,8 @@ SWEEP = Table(
             "outputs",
             "choices",
             "what each row holds besides errors and times (always there): peak_stress "
-            "(free) and limit_load (an arc-length search on each run that stops early)",
+            "(free), limit_load (an arc-length search on each run that stops early) and "
+            "first_yield (free; against the scene's material.yield_strength)",
             default=ABSENT,
             default_text="`" + str(list(DEFAULT_OUTPUTS)).replace("'", '"') + "`",
             choices=ALWAYS_OUTPUTS + OPTIONAL_OUTPUTS,
@@ -285,6 +306,8 @@ class Axis:
     path: str
     values: tuple[float, ...]
     random: bool
+    seed: int | None = None
+    """The seed of a random axis's draws (None for listed values)."""
 
 
 @dataclass(frozen=True)
@@ -335,6 +358,61 @@ class PointBuilder:
             values[a.path] = a.values[k]
         return {a.path: values[a.path] for a in self.axes}
 
+    def values(self, indices: np.ndarray) -> np.ndarray:
+        """The axis values of the points ``indices``, one row each (the order of
+        :meth:`params`), without building a scene."""
+        indices = np.asarray(indices, dtype=np.int64)
+        out = np.empty((len(indices), len(self.axes)))
+        if self.combine == "zip" or not self.axes:
+            for j, a in enumerate(self.axes):
+                out[:, j] = np.asarray(a.values)[indices]
+            return out
+        shape = tuple(len(a.values) for a in self.axes)
+        for j, (a, k) in enumerate(zip(self.axes, np.unravel_index(indices, shape))):
+            out[:, j] = np.asarray(a.values)[k]
+        return out
+
+    def light(self) -> PointBuilder:
+        """This builder without the axes' values (what a worker needs to build a point whose
+        parameters it is given: a few kB, whatever the point count)."""
+        return dataclasses.replace(
+            self, axes=tuple(dataclasses.replace(a, values=()) for a in self.axes)
+        )
+
+    @functools.cached_property
+    def _digest_template(self) -> tuple[str, ...]:
+        """The JSON text of :func:`digest` of a point's data, split where the axis values go
+        (every other piece is the index of the axis whose value goes there)."""
+        data = copy.deepcopy(self.base)
+        marks = {}
+        for k, a in enumerate(self.axes):
+            mark = f"\x00axis{k}\x00"
+            node, key = _slot(data, a.path, self.source, f"axes[{k}].path")
+            node[key] = mark
+            marks[json.dumps(mark)] = k
+        text = json.dumps(data, sort_keys=True, default=str)
+        pieces: list = [text]
+        for mark, k in marks.items():
+            split = []
+            for piece in pieces:
+                if isinstance(piece, int):
+                    split.append(piece)
+                    continue
+                parts = piece.split(mark)
+                for n, part in enumerate(parts):
+                    split += [k, part] if n else [part]
+            pieces = split
+        return tuple(pieces)
+
+    def digest_of(self, values: Sequence[float]) -> str:
+        """:func:`digest` of the data of the point with the axis ``values``, without copying
+        the base scene or writing JSON (for a sweep without ``linear_rotation``, whose
+        points' data differ from the base's in the axis values only)."""
+        text = "".join(
+            json.dumps(float(values[p])) if isinstance(p, int) else p for p in self._digest_template
+        )
+        return hashlib.sha256(text.encode()).hexdigest()[:24]
+
     def build(self, index: int, params: dict[str, float] | None = None) -> Point:
         """Point ``index`` with its loaded scene (scene None and a reason for a refused random
         draw; a refused listed point raises SceneError naming the point and the field)."""
@@ -345,7 +423,7 @@ class PointBuilder:
             node[key] = v
         where = f"{self.source}: point {index} {params}"
         try:
-            scene = parse_scene(copy.deepcopy(pdata), where, default_name=self.name)
+            scene = parse_scene(pdata, where, default_name=self.name)  # it reads, never writes
         except SceneError as exc:
             if not any(a.random for a in self.axes):
                 raise
@@ -360,9 +438,14 @@ class PointSet(Sequence):
     small per-point records (:class:`PointRecord`) of a checking pass, or a given tuple of
     built points.
 
+    A *lazy* set (``digests`` None, ``count`` points) has had no checking pass: the digests
+    follow from the axis values (:meth:`PointBuilder.digest_of`) and a point is known to be
+    invalid only once a worker built it (:meth:`note_invalid`); until then
+    :attr:`valid_count` counts it valid, and :attr:`checked` is False.
+
     Indexing and iteration build the points (scenes included); :meth:`records`,
-    :meth:`params` and :attr:`valid_count` do not. Memory: 24 bytes of digest per point and
-    the reasons of the invalid points, however many points there are.
+    :meth:`params` and :attr:`valid_count` do not. Memory: 24 bytes of digest per point of a
+    checked set, none for a lazy one, and the reasons of the invalid points.
     """
 
     def __init__(
@@ -371,12 +454,42 @@ class PointSet(Sequence):
         digests: np.ndarray | None = None,
         reasons: dict[int, str] | None = None,
         points: tuple[Point, ...] | None = None,
+        count: int | None = None,
     ):
         self._builder, self._points = builder, points
         self._digests = digests
+        self._count = count
         self._reasons = reasons or {}
         if points is not None:
             self._by_index = {p.index: k for k, p in enumerate(points)}
+
+    @property
+    def builder(self) -> PointBuilder | None:
+        """The builder of the points (None for a set of built points)."""
+        return self._builder
+
+    @property
+    def checked(self) -> bool:
+        """Whether every point's validity is known (a checking pass, or built points)."""
+        return self._points is not None or self._digests is not None
+
+    def digest(self, k: int) -> str:
+        """The scene digest of the point at position ``k``, without building it."""
+        if self._points is not None:
+            return self._points[k].digest
+        if self._digests is not None:
+            return self._digests[k].decode()
+        return self._builder.digest_of(self._builder.values(np.array([k]))[0])
+
+    def reason(self, k: int) -> str | None:
+        """Why the point at position ``k`` is invalid (None: valid, or not known yet)."""
+        if self._points is not None:
+            return self._points[k].reason
+        return self._reasons.get(k)
+
+    def note_invalid(self, reasons: dict[int, str]) -> None:
+        """Record the points (by index) that a worker found invalid, with why."""
+        self._reasons.update(reasons)
 
     @classmethod
     def of(cls, points: tuple[Point, ...]) -> PointSet:
@@ -384,7 +497,9 @@ class PointSet(Sequence):
         return cls(points=tuple(points))
 
     def __len__(self) -> int:
-        return len(self._points) if self._points is not None else len(self._digests)
+        if self._points is not None:
+            return len(self._points)
+        return len(self._digests) if self._digests is not None else self._count
 
     def __getitem__(self, k: int) -> Point:  # type: ignore[override]
         """The point at position ``k``, built."""
@@ -392,7 +507,7 @@ class PointSet(Sequence):
             return self._points[k]
         k = range(len(self))[k]
         point = self._builder.build(k)
-        if point.digest != self._digests[k].decode():
+        if point.digest != self.digest(k):
             raise RuntimeError(f"point {k} of the sweep built differently from its check")
         return point
 
@@ -409,8 +524,16 @@ class PointSet(Sequence):
             for p in self._points:
                 yield PointRecord(p.index, p.digest, p.reason)
             return
-        for k, d in enumerate(self._digests):
-            yield PointRecord(k, d.decode(), self._reasons.get(k))
+        if self._digests is not None:
+            for k, d in enumerate(self._digests):
+                yield PointRecord(k, d.decode(), self._reasons.get(k))
+            return
+        for start in range(0, len(self), RECORD_BLOCK):
+            block = np.arange(start, min(start + RECORD_BLOCK, len(self)))
+            for k, values in zip(block, self._builder.values(block)):
+                yield PointRecord(
+                    int(k), self._builder.digest_of(values), self._reasons.get(int(k))
+                )
 
     def params(self, index: int) -> dict[str, float]:
         """The parameters of the point of ``index``, without building it."""
@@ -440,7 +563,7 @@ class ValidPoints(Sequence):
 
     def __iter__(self) -> Iterator[Point]:
         if self._all.valid_count == len(self._all):
-            yield from self._all
+            yield from (p for p in self._all if p.scene is not None)  # a lazy set's unknowns
             return
         for r in self._all.records():
             if r.reason is None:
@@ -467,6 +590,9 @@ class Sweep:
     """Every point; a tuple of built points is taken as :meth:`PointSet.of` it."""
     outputs: tuple[str, ...] = DEFAULT_OUTPUTS
     """The optional outputs asked for (a subset of :data:`OPTIONAL_OUTPUTS`, in that order)."""
+    reference_sample: int | None = None
+    """How many of the valid points the reference runs on (None: every point); the rows of
+    the other points carry no errors."""
 
     def __post_init__(self) -> None:
         if not isinstance(self.points, PointSet):
@@ -550,7 +676,7 @@ def _axis(source: str, k: int, a: Any) -> Axis:
         "normal": lambda: rng.normal(x1, x2, n),
         "lognormal": lambda: rng.lognormal(math.log(x1), x2, n),
     }[dist]()
-    return Axis(path, tuple(float(v) for v in vals), True)
+    return Axis(path, tuple(float(v) for v in vals), True, seed)
 
 
 def _outputs(source: str, value: Any) -> tuple[str, ...]:
@@ -733,10 +859,13 @@ def parse_sweep(
     """Check a parsed sweep file and every point (nothing is run but ee scaling).
 
     The point count is checked (``max_points``, and the memory the points'
-    records would hold) from the axes before any point is built; the points
-    are then generated one at a time from the axes, checked, and kept only as
-    a :class:`PointRecord` (the sweep's :class:`PointSet` builds them again on
-    demand); when checking them is estimated to take longer than a minute,
+    records would hold) from the axes before any point is built. A sweep with a
+    random axis and no ``linear_rotation`` is not built here at all: a refused draw
+    is an invalid point, not bad input, so the workers that build the points find
+    them (a lazy :class:`PointSet`; the digests follow from the axis values).
+    Otherwise the points are generated one at a time from the axes, checked, and
+    kept only as a :class:`PointRecord` (the sweep's :class:`PointSet` builds them
+    again on demand); when checking them is estimated to take longer than a minute,
     ``progress`` is told the estimate and then every tenth of the points checked.
 
     Raises
@@ -785,6 +914,9 @@ def parse_sweep(
     if batch is not None:
         batch = _count(source, "batch", batch)
     outputs = _outputs(source, data.get("outputs", list(DEFAULT_OUTPUTS)))
+    sample = data.get("reference_sample")
+    if sample is not None:
+        sample = _count(source, "reference_sample", sample)
     raw_axes = data.get("axes", [])
     if not isinstance(raw_axes, list):
         _fail(source, "axes", raw_axes, "must be an array of tables [[axes]]")
@@ -796,21 +928,12 @@ def parse_sweep(
 
     count = point_count(axes, combine, source)
     check_point_count(count, source, max_points)
-    from ..resources import LONG_SECONDS, duration
-
-    tell = progress if count * SECONDS_PER_POINT > LONG_SECONDS else None
-    if tell is not None:
-        tell(f"checking {count:,} points: about {duration(count * SECONDS_PER_POINT)}")
     builder = PointBuilder(base, axes, combine, source, name, tuple(cases), rotation)
-    digests = np.empty(count, dtype="S24")
-    reasons = {}
-    for i, values in enumerate(_combine(axes, combine)):
-        if tell is not None and i and i % max(1, count // 10) == 0:
-            tell(f"checked {i:,} of {count:,} points")
-        point = builder.build(i, {a.path: v for a, v in zip(axes, values)})
-        digests[i] = point.digest.encode()
-        if point.scene is None:
-            reasons[i] = point.reason
+    if rotation is None and any(a.random for a in axes):
+        # a refused random draw is an invalid point, not bad input: the workers find them
+        points = PointSet(builder, count=count)
+    else:
+        points = _checked_points(builder, count, progress)
     return Sweep(
         name,
         str(data.get("description", "")),
@@ -824,9 +947,34 @@ def parse_sweep(
         metric,
         rotation,
         batch,
-        PointSet(builder, digests, reasons),
+        points,
         outputs,
+        reference_sample=sample,
     )
+
+
+def _checked_points(
+    builder: PointBuilder, count: int, progress: Callable[[str], None] | None
+) -> PointSet:
+    """The points of ``builder``, each built and checked once, kept as records (a listed
+    point that the loader refuses raises SceneError; ``progress`` as for
+    :func:`parse_sweep`)."""
+    from ..resources import LONG_SECONDS, duration
+
+    axes = builder.axes
+    tell = progress if count * SECONDS_PER_POINT > LONG_SECONDS else None
+    if tell is not None:
+        tell(f"checking {count:,} points: about {duration(count * SECONDS_PER_POINT)}")
+    digests = np.empty(count, dtype="S24")
+    reasons = {}
+    for i, values in enumerate(_combine(axes, builder.combine)):
+        if tell is not None and i and i % max(1, count // 10) == 0:
+            tell(f"checked {i:,} of {count:,} points")
+        point = builder.build(i, {a.path: v for a, v in zip(axes, values)})
+        digests[i] = point.digest.encode()
+        if point.scene is None:
+            reasons[i] = point.reason
+    return PointSet(builder, digests, reasons)
 
 
 def load_sweep(

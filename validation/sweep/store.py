@@ -3,7 +3,12 @@
 One row per (point, model, load case). A part file is written to a
 temporary name and renamed into place, so a sweep interrupted at any moment
 leaves only whole parts; rerunning it reads the ``key`` column of every part
-and skips what is there. Failed runs are rows too (``status`` and
+and skips what is there. The workers write their tasks' parts themselves, as
+*staged* parts (:meth:`ResultStore.stage`, a name the dataset does not read);
+the driver renames each into the dataset once it has counted the task
+(:meth:`ResultStore.publish`), so the dataset holds exactly the tasks the
+driver reported, and the staged parts an interruption leaves are removed by
+the next run (:meth:`ResultStore.clear_staged`). Failed runs are rows too (``status`` and
 ``reason``), with empty (null) errors: a Parquet file never holds a NaN.
 
 Every part of a dataset has the same schema (:func:`schema`). A folder
@@ -22,8 +27,10 @@ from __future__ import annotations
 
 import hashlib
 import math
+import os
 from pathlib import Path
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
@@ -33,6 +40,8 @@ from flexval.geometry.files import atomic_path
 from ..compare import METRICS
 
 PARAM_PREFIX = "param:"
+STAGED = ".staged-"
+"""Name prefix of a part written by a worker and not yet published into the dataset."""
 STATUSES = ("ok", "solver_failure", "model_invalid", "error", "invalid_point")
 """``ok``: converged (errors null only if the reference failed); ``solver_failure``: the
 model stopped below full load (``load_reached``); ``model_invalid``: the model refuses
@@ -64,6 +73,15 @@ _FIXED = [
     ("limit_load", pa.float64()),
     ("limit_load_error", pa.float64()),
     ("bifurcation_load", pa.float64()),
+    ("target_dx", pa.float64()),
+    ("target_dy", pa.float64()),
+    ("target_rotation", pa.float64()),
+    ("first_yield_load", pa.float64()),
+    ("first_yield_fraction", pa.float64()),
+    ("first_yield_flexure", pa.string()),
+    ("first_yield_at", pa.float64()),
+    ("safety_factor", pa.float64()),
+    ("fatigue_safety_factor", pa.float64()),
 ]
 """The columns of every row besides the parameters. ``peak_stress``: the largest outer-fibre
 stress over the flexures (MPa) at the load ``peak_stress_load`` (fraction of full load: 1
@@ -74,7 +92,13 @@ full load (converged rows only), percent. ``limit_load``: the first limit point 
 run that stopped there (N or N mm, ``load_unit``; asked for with ``outputs``);
 ``limit_load_error``: against the reference's, percent. ``bifurcation_load``: the first
 bifurcation point on the run's load-control path, where it stopped or one it passed (N or
-N mm; asked for with ``limit_load``), null where there is none."""
+N mm; asked for with ``limit_load``), null where there is none. ``target_dx``,
+``target_dy``, ``target_rotation``: the target's displacement (mm) and rotation (rad) at
+full load (converged rows; :func:`~flexval.validation.sweep.tolerance.target_columns`).
+``first_yield_*`` and the safety factors: the first yield point and the safety factors at
+full load against the scene's ``material.yield_strength`` and ``fatigue_strength``
+(:func:`flexval.validation.yieldpoint.yield_columns`; asked for with ``first_yield``), null
+without them or where the path does not tell."""
 
 
 def schema(paths: list[str]) -> pa.Schema:
@@ -126,17 +150,45 @@ class ResultStore:
             out.update(pq.read_table(part, columns=["key"]).column("key").to_pylist())
         return out
 
+    def key_array(self) -> np.ndarray:
+        """Keys of every row already stored, sorted, as 24-byte strings (after :meth:`check`):
+        24 bytes a row, for :func:`numpy.isin`, where a set of str holds about 100."""
+        self.check()
+        keys = [pq.read_table(p, columns=["key"]).column("key").to_numpy() for p in self.parts()]
+        if not keys:
+            return np.empty(0, dtype="S24")
+        return np.unique(np.concatenate(keys).astype("S24"))
+
     def append(self, rows: list[dict]) -> Path | None:
         """Write ``rows`` as one new part file, atomically; None if ``rows`` is empty."""
+        staged = self.stage(rows)
+        return None if staged is None else self.publish(staged)
+
+    def stage(self, rows: list[dict]) -> Path | None:
+        """Write ``rows`` as one staged part, atomically (not yet read as part of the
+        dataset); None if ``rows`` is empty."""
         if not rows:
             return None
         table = pa.Table.from_pylist([_clean(r) for r in rows], schema=self.schema)
         name = hashlib.sha256("".join(sorted(r["key"] for r in rows)).encode()).hexdigest()[:20]
         self.folder.mkdir(parents=True, exist_ok=True)
-        final = self.folder / f"part-{name}.parquet"
-        with atomic_path(final) as tmp:
+        staged = self.folder / f"{STAGED}part-{name}.parquet"
+        with atomic_path(staged) as tmp:
             pq.write_table(table, tmp)
+        return staged
+
+    def publish(self, staged: str | Path) -> Path:
+        """Rename the staged part ``staged`` into the dataset; its final path."""
+        staged = Path(staged)
+        final = staged.with_name(staged.name.removeprefix(STAGED))
+        os.replace(staged, final)
         return final
+
+    def clear_staged(self) -> None:
+        """Remove the staged parts that an interrupted run left unpublished."""
+        if self.folder.is_dir():
+            for path in self.folder.glob(f"{STAGED}part-*.parquet"):
+                path.unlink(missing_ok=True)
 
     def rows(self, keys: set[str] | None = None) -> list[dict]:
         """The stored rows (those whose key is in ``keys``, if given), sorted by point, model

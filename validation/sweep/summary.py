@@ -28,6 +28,9 @@ import numpy as np
 
 from ..outputs import save_figure, write_text
 from .spec import Sweep
+from .tolerancefiles import FILES as TOLERANCE_FILES
+from .tolerancefiles import is_tolerance, write_tolerance
+from .tolerancefiles import summary_lines as tolerance_lines
 
 THRESHOLDS = (1.0, 5.0)
 """Error levels (percent) of the "within" regions."""
@@ -278,6 +281,7 @@ def format_summary(sweep: Sweep, rows: list[dict]) -> str:
         lines += _stress_section(sweep, rows)
     if "limit_load" in sweep.outputs:
         lines += _limit_section(sweep, rows)
+    lines += tolerance_lines(sweep, rows)
     failed = [r for r in rows if r["status"] != "ok"]
     lines += ["", "## Failures", ""]
     if not failed:
@@ -528,14 +532,15 @@ def _runtimes(sweep: Sweep, rows: list[dict], path: Path) -> None:
 
 
 #: figures a sweep writes only sometimes (see :func:`write_outputs`)
-OPTIONAL_FIGURES = ("stress.png", "limits.png")
+OPTIONAL_FIGURES = ("stress.png", "limits.png") + TOLERANCE_FILES
 
 
 def write_outputs(
     sweep: Sweep, rows: list[dict], out_dir: str | Path, wall: float | None = None
 ) -> list[Path]:
     """Write summary.md, timings.md, errors.png, runtime.png, stress.png (with the
-    ``peak_stress`` output) and limits.png (when a limit load was found) into ``out_dir``.
+    ``peak_stress`` output), limits.png (when a limit load was found) and, for a tolerance
+    study, tolerance.json and its histograms (:mod:`.tolerancefiles`) into ``out_dir``.
 
     An optional figure (:data:`OPTIONAL_FIGURES`) that this call does not write is
     removed if an earlier run left it there, so every figure in the folder is this
@@ -568,6 +573,8 @@ def write_outputs(
         )
     if any(r["limit_load"] is not None for r in rows):
         written.append(_limits(sweep, rows, out / "limits.png"))
+    if is_tolerance(sweep):
+        written += write_tolerance(sweep, rows, out)
     for name in OPTIONAL_FIGURES:
         stale = out / name
         if stale not in written and stale.is_file():

@@ -1,11 +1,21 @@
-"""What a Dask worker runs: one model on a batch of sweep points, all load cases.
+"""What a Dask worker runs: one model on a block of sweep points, all load cases.
 
-A task returns finished result rows (see :mod:`flexval.validation.sweep.store`),
-never raises for a model that fails: a SolverError, a model that refuses
+A task receives a :class:`PointBlock` (the points' indices, axis values and
+scene digests, not their scenes), builds each point's scene from the sweep's
+base scene data (:meth:`~flexval.validation.sweep.spec.PointBuilder.build`:
+the same function as the driver's check, so the same scene), runs the model
+on the block through :func:`run_model_block` (the one place a model is solved:
+a tracer that runs many copies of one mechanism together replaces its loop),
+and writes its rows as one staged Parquet part
+(:meth:`~flexval.validation.sweep.store.ResultStore.stage`); it returns a
+small summary (the part, counts, its own seconds, the invalid points found).
+It never raises for a model that fails: a SolverError, a model that refuses
 the geometry, an unexpected numerical exception or a non-finite result is a
 row with its status and reason. The reference task also returns its load
 paths and limit loads, which the model tasks of the same points receive
-from Dask (the reference is computed once per point and shared).
+from Dask (the reference is computed once per point and shared); a model's
+rows on a point the reference did not run on (``reference_sample``) carry
+its own outputs and no errors.
 
 With the ``peak_stress`` output (the default), a row carries its peak stress
 at the last level its path recorded (:func:`flexval.validation.strength.peak_at_full_load`
@@ -24,20 +34,28 @@ Units: errors in percent, times in s, stresses in MPa, loads in N or N mm.
 from __future__ import annotations
 
 import hashlib
+import time
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
 
 from flexval.geometry import LoadCase, SceneError
 from flexval.reducedmodels import LoadPath, ModelSpec, SolverError
+from flexval.reducedmodels.batch import RUN_FAILURES, run_batch
 
 from ..cache import ResultCache, result_key
 from ..compare import METRICS, errors
 from ..failures import first_limit
 from ..run import run_model
 from ..strength import peak_at_full_load
-from .spec import Point
-from .store import PARAM_PREFIX
+from ..yieldpoint import yield_columns
+from .spec import Point, PointBuilder
+from .store import PARAM_PREFIX, ResultStore
+from .tolerance import target_columns
+
+FAILURES = RUN_FAILURES
+"""What a model run may raise and a row records (anything else fails the task)."""
 
 
 @dataclass(frozen=True)
@@ -100,14 +118,19 @@ def attempt(
     row: dict,
     info: TaskInfo,
     cache: ResultCache | None = None,
+    solved: LoadPath | BaseException | None = None,
 ) -> LoadPath | None:
-    """Run ``spec`` on ``case`` of the point; fill ``row`` (status, reason, time, peak
-    stress, limit load if asked for); the path or None."""
+    """Run ``spec`` on ``case`` of the point (or take its outcome ``solved`` from
+    :func:`run_model_block`); fill ``row`` (status, reason, time, peak stress, limit load if
+    asked for); the path or None."""
     scene = point.scene
     lc = scene.load_case(case)
     key = result_key(scene, spec.id, case, None, {"sweep": True}) if cache else None
     lp = cache.get(key) if cache else None
     try:
+        if isinstance(solved, BaseException):
+            raise solved
+        lp = solved if solved is not None else lp
         if lp is None:
             lp = run_model(scene, spec, lc)
             if cache:
@@ -116,6 +139,7 @@ def attempt(
         row.update(status="solver_failure", reason=str(exc), load_reached=exc.load_factor)
         if exc.path is not None and exc.path.load:
             _peak(exc.path, lc, row, info)
+            row.update(yield_columns(scene, exc.path, info.outputs))
         if "limit_load" in info.outputs:
             row["limit_load"] = _limit_load(point, spec, lc, row)
             row["bifurcation_load"] = _bifurcation_load(exc.path)
@@ -138,6 +162,8 @@ def attempt(
         row["valid"] = all(lp.valid)
         row["validity"] = next((v for v in lp.validity or () if v), None)
     _peak(lp, lc, row, info)
+    row.update(yield_columns(scene, lp, info.outputs))
+    row.update(target_columns(lp))
     if "limit_load" in info.outputs:
         row["bifurcation_load"] = _bifurcation_load(lp)
     return lp
@@ -184,62 +210,226 @@ def _relative(value: float | None, reference: float | None) -> float | None:
     return 100.0 * (value - reference) / reference
 
 
-def run_reference(
-    points: list[Point],
+@dataclass(frozen=True)
+class SweepJob:
+    """What every task of a sweep shares: its rows' identity, how to build a point, the load
+    cases, and the store's folder and columns (a few kB, whatever the point count)."""
+
+    info: TaskInfo
+    builder: PointBuilder | None
+    """:meth:`PointBuilder.light` of the sweep's builder (None: the blocks carry built points)."""
+    paths: tuple[str, ...]
+    cases: tuple[str, ...]
+    folder: str
+
+    def store(self) -> ResultStore:
+        """The sweep's Parquet store."""
+        return ResultStore(self.folder, list(self.paths))
+
+
+@dataclass(frozen=True)
+class PointBlock:
+    """The points of one task: indices, axis values (one row each, in axis order) and scene
+    digests; the worker builds their scenes.
+
+    ``owner`` marks the points whose ``invalid_point`` row this task writes should the scene
+    loader refuse them (one task per point does); ``skip`` holds the keys of rows already
+    stored, which the task does not write again. ``built`` carries built points instead
+    (a sweep given as a tuple of points).
+    """
+
+    indices: tuple[int, ...]
+    values: np.ndarray
+    digests: tuple[str, ...]
+    owner: tuple[bool, ...]
+    skip: frozenset[str] = frozenset()
+    built: tuple[Point, ...] | None = None
+
+    def __len__(self) -> int:
+        return len(self.indices)
+
+    def points(self, job: SweepJob) -> list[Point]:
+        """The block's points, built (scene None and a reason for a refused random draw).
+
+        Raises
+        ------
+        RuntimeError
+            If a point's scene hashes to another digest than the driver's (the driver's
+            digests key the rows, so a point built differently must not be stored).
+        """
+        if self.built is not None:
+            return list(self.built)
+        points = []
+        for index, values, want in zip(self.indices, self.values.tolist(), self.digests):
+            point = _BUILT.get((job.folder, index, want))
+            if point is None:
+                point = job.builder.build(index, dict(zip(job.paths, values)))
+                if point.digest != want:
+                    raise RuntimeError(f"point {index} of the sweep built differently from its key")
+                _remember((job.folder, index, want), point)
+            points.append(point)
+        return points
+
+
+BUILT_POINTS = 4096
+"""Points a worker keeps built (a few tasks' worth, some megabytes): the reference's task and
+the model tasks of one block mostly run on the worker that holds the reference's paths, and
+building a point's scene (parsing and checking it) costs more than its reduced models."""
+
+_BUILT: OrderedDict[tuple, Point] = OrderedDict()
+
+
+def _remember(key: tuple, point: Point) -> None:
+    """Keep ``point`` among the last :data:`BUILT_POINTS` built in this process."""
+    _BUILT[key] = point
+    while len(_BUILT) > BUILT_POINTS:
+        _BUILT.popitem(last=False)
+
+
+def run_model_block(
     spec: ModelSpec,
+    scenes: list,
     cases: tuple[str, ...],
-    info: TaskInfo,
-    use_cache: bool = True,
+    cache: ResultCache | None = None,
+) -> list[list[LoadPath | BaseException]]:
+    """``spec`` on every scene and load case: per scene, per case, its load path or the
+    exception it raised (one of :data:`FAILURES`; anything else propagates).
+
+    The only place a sweep solves a model. The scenes of one block are copies of one
+    mechanism with other parameter values: without a ``cache`` each load case is one batch
+    (:func:`flexval.reducedmodels.batch.run_batch`: the copies traced together, each path
+    what its own run gives, its time its share of the batch's). ``cache`` (costly models
+    only) keeps converged paths, one run at a time.
+    """
+    if cache is None:
+        per_case = []
+        for case in cases:
+            paths = run_batch(
+                [scene.mechanism for scene in scenes],
+                spec,
+                [scene.load_case(case) for scene in scenes],
+            )
+            for scene, lp in zip(scenes, paths):
+                if isinstance(lp, LoadPath):
+                    lp.scene = scene.name
+            per_case.append(paths)
+        return [list(row) for row in zip(*per_case)] if per_case else [[] for _ in scenes]
+    out = []
+    for scene in scenes:
+        per = []
+        for case in cases:
+            key = result_key(scene, spec.id, case, None, {"sweep": True}) if cache else None
+            lp = cache.get(key) if cache else None
+            try:
+                if lp is None:
+                    lp = run_model(scene, spec, scene.load_case(case))
+                    if cache:
+                        cache.put(key, lp)
+            except FAILURES as exc:
+                lp = exc
+            per.append(lp)
+        out.append(per)
+    return out
+
+
+def _invalid_rows(points: list[Point], block: PointBlock, info: TaskInfo) -> list[dict]:
+    """The ``invalid_point`` rows of the refused points this task owns."""
+    return [
+        base_row(p, "-", "-", info) | {"status": "invalid_point", "reason": p.reason}
+        for p, own in zip(points, block.owner)
+        if p.scene is None and own
+    ]
+
+
+def _finish(
+    rows: list[dict], points: list[Point], block: PointBlock, job: SweepJob, t0: float
 ) -> dict:
-    """The reference on every point and case: {"rows": [...], "paths": {(point, case): path},
+    """Stage the rows not stored yet as one part; the task's summary for the driver."""
+    rows = [r for r in rows + _invalid_rows(points, block, job.info) if r["key"] not in block.skip]
+    staged = job.store().stage(rows)
+    return {
+        "staged": None if staged is None else str(staged),
+        "rows": len(rows),
+        "failed": sum(r["status"] != "ok" for r in rows),
+        "points": len(block),
+        "seconds": time.perf_counter() - t0,
+        "invalid": {p.index: p.reason for p in points if p.scene is None},
+    }
+
+
+def reference_task(block: PointBlock, spec: ModelSpec, job: SweepJob, use_cache: bool) -> dict:
+    """The reference on every point and case of ``block``: {"summary": what
+    :func:`_finish` gives, "ran": indices of its points, "paths": {(point, case): path},
     "limits": {(point, case): limit load}}.
 
-    Converged reference paths are cached on the worker (:class:`ResultCache`),
-    so a resumed sweep does not recompute a reference it already had.
+    Converged paths of a costly reference (one whose family declares a cost: the continuum)
+    are cached on the worker (:class:`ResultCache`), so a resumed sweep does not recompute
+    them; a cheap one is not (hashing and writing a path costs more than tracing it).
     """
-    cache = ResultCache(enabled=use_cache)
+    t0 = time.perf_counter()
+    points = block.points(job)
+    valid = [p for p in points if p.scene is not None]
+    cache = ResultCache() if use_cache and spec.model_family.cost is not None else None
+    solved = run_model_block(spec, [p.scene for p in valid], job.cases, cache)
     rows, paths, limits = [], {}, {}
-    for p in points:
-        for case in cases:
-            row = base_row(p, spec.id, case, info)
-            lp = attempt(p, spec, case, row, info, cache)
+    for p, outcomes in zip(valid, solved):
+        for case, outcome in zip(job.cases, outcomes):
+            row = base_row(p, spec.id, case, job.info)
+            lp = attempt(p, spec, case, row, job.info, solved=outcome)
             if lp is not None:
                 paths[(p.index, case)] = lp
             if row["limit_load"] is not None:
                 limits[(p.index, case)] = row["limit_load"]
             rows.append(row)
-    return {"rows": rows, "paths": paths, "limits": limits}
+    return {
+        "summary": _finish(rows, points, block, job, t0),
+        "ran": frozenset(block.indices),
+        "paths": paths,
+        "limits": limits,
+    }
 
 
-def run_model_batch(
-    points: list[Point],
-    spec: ModelSpec,
-    cases: tuple[str, ...],
-    info: TaskInfo,
-    references: list[dict],
-) -> list[dict]:
-    """Rows of ``spec`` on every point and case, with errors (of the paths, the peak stress
-    and the limit load) against the reference's, found in ``references`` (results of
-    :func:`run_reference`)."""
+def summary_of(result: dict) -> dict:
+    """The summary of a :func:`reference_task` result (what the driver fetches of it)."""
+    return result["summary"]
+
+
+def model_task(block: PointBlock, spec: ModelSpec, job: SweepJob, references: list[dict]) -> dict:
+    """Rows of ``spec`` on every point and case of ``block``, with errors (of the paths, the
+    peak stress and the limit load) against the reference's where it ran, found in
+    ``references`` (results of :func:`reference_task`); the summary of :func:`_finish`."""
+    t0 = time.perf_counter()
+    ran: set = set()
     ref_paths: dict = {}
     ref_limits: dict = {}
     for r in references:
+        ran.update(r["ran"])
         ref_paths.update(r["paths"])
         ref_limits.update(r["limits"])
+    points = block.points(job)
+    valid = [p for p in points if p.scene is not None]
+    solved = run_model_block(spec, [p.scene for p in valid], job.cases)
     rows = []
-    for p in points:
-        for case in cases:
-            row = base_row(p, spec.id, case, info)
-            lp = attempt(p, spec, case, row, info)
-            ref = ref_paths.get((p.index, case))
-            if lp is not None and ref is not None:
-                row.update(errors(lp, ref, p.scene.mechanism.size()))
-                ref_peak = peak_at_full_load(ref) if row["peak_stress"] is not None else None
-                row["peak_stress_error"] = _relative(
-                    row["peak_stress"], ref_peak["stress"] if ref_peak else None
+    for p, outcomes in zip(valid, solved):
+        for case, outcome in zip(job.cases, outcomes):
+            row = base_row(p, spec.id, case, job.info)
+            lp = attempt(p, spec, case, row, job.info, solved=outcome)
+            if p.index in ran:
+                _errors(p, lp, ref_paths.get((p.index, case)), row, job.info)
+                row["limit_load_error"] = _relative(
+                    row["limit_load"], ref_limits.get((p.index, case))
                 )
-            elif lp is not None:
-                row["reason"] = f"no errors: the reference {info.reference} failed here"
-            row["limit_load_error"] = _relative(row["limit_load"], ref_limits.get((p.index, case)))
             rows.append(row)
-    return rows
+    return _finish(rows, points, block, job, t0)
+
+
+def _errors(p: Point, lp: LoadPath | None, ref: LoadPath | None, row: dict, info: TaskInfo):
+    """Fill ``row``'s errors of ``lp`` against the reference's path ``ref`` (percent)."""
+    if lp is not None and ref is not None:
+        row.update(errors(lp, ref, p.scene.mechanism.size()))
+        ref_peak = peak_at_full_load(ref) if row["peak_stress"] is not None else None
+        row["peak_stress_error"] = _relative(
+            row["peak_stress"], ref_peak["stress"] if ref_peak else None
+        )
+    elif lp is not None:
+        row["reason"] = f"no errors: the reference {info.reference} failed here"
