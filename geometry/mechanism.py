@@ -33,10 +33,31 @@ from .shapes import Shape
 
 @dataclass(frozen=True)
 class Material:
-    """Linear elastic constants: Young's modulus E (MPa) and Poisson's ratio nu."""
+    """Linear elastic constants: Young's modulus E (MPa) and Poisson's ratio nu; optional
+    strengths (MPa) against which a model's peak stress is judged.
+
+    The strengths decide no load path: they are left out of the comparison (and so
+    of the result cache's key, :func:`flexval.validation.cache.exact`), and every
+    model runs the same with or without them.
+
+    Attributes
+    ----------
+    youngs_modulus : float
+        E, MPa.
+    poisson_ratio : float
+        nu.
+    yield_strength : float or None
+        sigma_y, MPa: the outer-fibre stress at which the flexure first yields
+        (:mod:`flexval.validation.yieldpoint`); None: not given.
+    fatigue_strength : float or None
+        sigma_f, MPa, below ``yield_strength``: the stress amplitude the
+        flexure endures without fatigue failure; None: not given.
+    """
 
     youngs_modulus: float
     poisson_ratio: float
+    yield_strength: float | None = field(default=None, compare=False)
+    fatigue_strength: float | None = field(default=None, compare=False)
 
     @property
     def shear_modulus(self) -> float:

@@ -14,7 +14,7 @@ defaults and range checks from there, and the scene file reference is
 generated from the same declarations (:func:`field_reference`). In short::
 
     name = "..."                      # optional, defaults to the file stem
-    [material]  youngs_modulus, poisson_ratio
+    [material]  youngs_modulus, poisson_ratio (optional: yield_strength, fatigue_strength)
     [section]   depth (b), thickness (h)
     [ground]    name, points = [[x, y], ...]
     [target]    body, point = [x, y]
@@ -34,6 +34,7 @@ generated from the same declarations (:func:`field_reference`). In short::
     [[load_cases]] name, kind = "moment" | "force", value, body, point,
                    angle_deg, levels; or loads = [{...}, ...] to combine
     [request]   models = [...], outputs = [...]
+    [[measurements]] load_case, file   (optional: a rig's CSV, flexval.geometry.measured)
 """
 
 from __future__ import annotations
@@ -56,6 +57,7 @@ from .flexurefields import check_thickness_fits, read_notch, read_spline, read_t
 from .inertia import MassData, parse_body_mass, parse_density, parse_gravity
 from .loads import LOAD_KINDS, Force, LoadCase, Moment
 from .magnitudes import SMALLEST_NORMAL
+from .measured import Measurement, read_measurement
 from .mechanism import FlexureSpec, Material, Mechanism, PinSpec, Section, assemble
 from .scenefields import (
     BODIES,
@@ -67,6 +69,7 @@ from .scenefields import (
     LOAD_COMPONENTS,
     MATERIAL,
     MAX_NAME_LENGTH,
+    MEASUREMENTS,
     NUMBER_LIMIT,
     OUTPUTS,
     PINS,
@@ -112,6 +115,8 @@ class Scene:
     ``models`` are the model ids of ``request.models`` as written: geometry
     knows no model; :func:`flexval.reducedmodels.catalogue.parse_model` reads them
     (with source ``source`` and field ``request.models``) when they are used.
+    ``measurements`` are the ``[[measurements]]`` files, read and checked against their
+    load cases (:mod:`flexval.geometry.measured`).
     """
 
     name: str
@@ -121,6 +126,7 @@ class Scene:
     models: tuple[str, ...]
     outputs: frozenset[str]
     source: str
+    measurements: tuple[Measurement, ...] = ()
 
     def load_case(self, name: str) -> LoadCase:
         """The load case called ``name``."""
@@ -465,12 +471,24 @@ def _scene_name(rd: _Reader, value: Any) -> str:
 
 
 def _material(rd: _Reader, data: dict) -> tuple[Material, dict]:
-    """``[material]``: E (MPa) and nu, and the raw table (its density is read later)."""
+    """``[material]``: E (MPa), nu, the optional yield and fatigue strengths (MPa, the
+    fatigue strength below the yield strength), and the raw table (its density is read
+    later)."""
     mat = rd.table(data, "material", "")
     rd.known_keys(mat, MATERIAL, "material.")
     E = rd.value(mat, MATERIAL["youngs_modulus"], "material.")
     nu = rd.value(mat, MATERIAL["poisson_ratio"], "material.")
-    return Material(E, nu), mat
+    yield_strength = rd.value(mat, MATERIAL["yield_strength"], "material.")
+    fatigue = rd.value(mat, MATERIAL["fatigue_strength"], "material.")
+    if fatigue is not None and yield_strength is None:
+        rd.fail("material.fatigue_strength", fatigue, "needs material.yield_strength")
+    if fatigue is not None and fatigue >= yield_strength:
+        rd.fail(
+            "material.fatigue_strength",
+            fatigue,
+            f"must be below material.yield_strength ({yield_strength:g} MPa)",
+        )
+    return Material(E, nu, yield_strength, fatigue), mat
 
 
 def _section(rd: _Reader, data: dict) -> Section:
@@ -667,12 +685,40 @@ def _request(rd: _Reader, data: dict) -> tuple[tuple, list]:
     return models, outputs
 
 
+def _measurements(rd: _Reader, data: dict, cases: list[LoadCase]) -> tuple[Measurement, ...]:
+    """``[[measurements]]``: each file read (relative to the scene file's folder) and checked
+    against its load case; a missing or bad file is refused naming the entry."""
+    out = []
+    for k, m in enumerate(rd.array(data, "measurements", "", "tables [[measurements]]")):
+        where = f"measurements[{k}]."
+        m = rd.item_table(m, f"measurements[{k}]")
+        rd.known_keys(m, MEASUREMENTS, where)
+        name = rd.value(m, MEASUREMENTS["load_case"], where)
+        case = next((c for c in cases if c.name == name), None)
+        if case is None:
+            rd.fail(
+                f"{where}load_case",
+                name,
+                f"unknown load case; the scene has {[c.name for c in cases]}",
+            )
+        file = m.get("file")
+        if not isinstance(file, str) or not file.strip():
+            rd.fail(f"{where}file", file, "must be the path of a CSV file")
+        path = Path(rd.source).parent / file  # an absolute path stays as it is
+        try:
+            out.append(read_measurement(path, case))
+        except SceneError as exc:
+            where_in = "" if exc.field == "file" else f"{exc.field} = {exc.value!r}: "
+            rd.fail(f"{where}file", file, f"{path}: {where_in}{exc.reason}")
+    return tuple(out)
+
+
 def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
     """Build and check a Scene from parsed TOML ``data`` read from ``source``.
 
     In passes, each a function named after what it reads: the mechanism
     (material, section, ground, target, flexures, bodies, pins, masses), the
-    load cases on it, the bodies they leave dangling, the request. Every
+    load cases on it, the bodies they leave dangling, the request, the measurements. Every
     value is checked where it is read (:class:`SceneError` names the field).
     """
     rd = _Reader(source)
@@ -690,6 +736,7 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
         models,
         frozenset(outputs),
         source,
+        _measurements(rd, data, cases),
     )
 
 

@@ -55,6 +55,12 @@ SCENE = Table(
         Field("gravity", "table", "a uniform gravity field", default=ABSENT),
         Field("load_cases", "tables", "the load cases (at least one)"),
         Field("request", "table", "the models and outputs to run", default=ABSENT),
+        Field(
+            "measurements",
+            "tables",
+            "measured load–displacement files to compare the models with",
+            default=ABSENT,
+        ),
     ),
 )
 """The top level of a scene file."""
@@ -71,6 +77,24 @@ MATERIAL = Table(
             "Poisson's ratio ν (used by the continuum and the shear corrections)",
             default=0.3,
             interval=(-1.0, 0.5),
+        ),
+        Field(
+            "yield_strength",
+            "number",
+            "yield strength σ_y: the run reports the load at first yield and the safety "
+            "factor at full load of every model (decides no load path)",
+            unit="MPa",
+            default=ABSENT,
+            positive=True,
+        ),
+        Field(
+            "fatigue_strength",
+            "number",
+            "fatigue (endurance) strength σ_f, below `yield_strength` (which it needs): "
+            "the run reports the safety factor against it too",
+            unit="MPa",
+            default=ABSENT,
+            positive=True,
         ),
         DENSITY_FIELD,
     ),
@@ -333,6 +357,21 @@ REQUEST = Table(
     ),
 )
 
+MEASUREMENTS = Table(
+    "measurements",
+    "Optional: measured load–displacement files of the mechanism (from a test rig), one "
+    "entry per file. `flexval report` adds a section *Against measurements* that scores "
+    "every model against each, as `flexval compare` does on the command line; the file "
+    "format and the scores are described on the page "
+    "[Comparing with measurements](../measurements.md). A missing or bad file is refused "
+    "naming the entry, the line and the column.",
+    (
+        Field("load_case", "name", "the load case the file measures"),
+        Field("file", "text", "the CSV file, relative to the scene file's folder"),
+    ),
+    array=True,
+)
+
 SCENE_TABLES = (
     SCENE,
     MATERIAL,
@@ -346,6 +385,7 @@ SCENE_TABLES = (
     LOAD_CASES,
     LOAD_COMPONENTS,
     REQUEST,
+    MEASUREMENTS,
 )
 """Every table of a scene file, in reference order."""
 

@@ -72,7 +72,9 @@ class LoadPath:
     fibre_stress : dict of flexure -> {"stress", "at", "layer"}, optional
         The continuum's own peak fibre normal stress at full load (MPa), where
         (fraction from the first end) and the boundary layer excluded at each
-        end face (mm): see :mod:`flexval.validation.continuum.fibre`.
+        end face (mm): see :mod:`flexval.validation.continuum.fibre`. A notch
+        hinge's entry adds that peak at every level, ``path_stress`` (MPa) and
+        ``path_at`` (fraction), the stress its first yield is judged by.
     limit_points : list of dict, optional
         Of an arc-length trace: where the load turns, each ``{"index",
         "load", "traced_load", "dx", "dy", "rotation"}`` (see

@@ -55,6 +55,9 @@ def _table(data: dict, path: str, variant: str | None) -> dict:
         return data["load_cases"][0]
     if path == "load_cases":
         return data["load_cases"][0]
+    if path == "measurements":
+        data["measurements"] = [{"load_case": "m+", "file": "probe.csv"}]
+        return data["measurements"][0]
     if path == "load_cases.loads":
         data["load_cases"][0] = {"name": "m+", "loads": [{"kind": "moment", "value": 1e-3}]}
         return data["load_cases"][0]["loads"][0]

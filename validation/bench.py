@@ -3,7 +3,10 @@
 For each model the error is the largest, over the scene's load cases, of the
 path displacement error (``path_disp`` of :mod:`flexval.validation.compare`: largest
 vector error along the path / largest reference displacement, percent), and
-the time is the mean over load cases of the median wall time per load path.
+the time is the mean over load cases of the median wall time per load path,
+alone and batched (:mod:`flexval.validation.batchtiming`: the same path run as
+a batch of identical copies, its cost per path), each also as a speed-up
+against :data:`SPEED_REFERENCE`.
 """
 
 from __future__ import annotations
@@ -14,14 +17,17 @@ from pathlib import Path
 from flexval.geometry import Scene
 from flexval.reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
 
+from .batchtiming import SPEED_REFERENCE, BatchMemo
 from .cache import ResultCache
-from .campaign import Progress, run_campaign
+from .campaign import Progress, RunMemo, run_campaign
 from .compare import errors
 from .failures import Failure
 from .figurejobs import draw_now
 from .outputs import output_path, write_json, write_text
 from .tables import Column, markdown_table, sig
 
+#: the keys of a row that are run times or depend on them (kept out of a report's results)
+TIMING_KEYS = ("seconds", "batched_seconds", "copies", "batches")
 #: the reduced models of the study, every resolution of the paper's range and beyond
 SWEEP_MODELS = (
     *(f"beam:{n}" for n in (5, 10, 20, 40, 100, 200, 400)),
@@ -55,14 +61,21 @@ def runtime_vs_error(
     cache: ResultCache | None = None,
     progress: bool = True,
     record_models: tuple[str, ...] = (),
+    batches: BatchMemo | None = None,
 ) -> tuple[list[dict], list[Failure]]:
-    """Rows {model, seconds, error, per_case} of the study, and the failures.
+    """Rows {model, seconds, batched_seconds, copies, batches, error, per_case} of the
+    study, and the failures.
 
     A model that fails on some load case has no row (its error is not
     defined); its failures are returned. ``record_models`` are run recording
     poses and shapes (as the report runs them, so that their cached paths serve
-    both).
+    both). ``batched_seconds`` is the mean over load cases of the batched cost per
+    path, ``copies`` the copies of its batches and ``batches`` how many were timed, on
+    each load case (None for a model not batched), read from ``batches`` (default: a
+    memo of ``repeats`` batches through ``cache``, timed here).
     """
+    if batches is None:
+        batches = BatchMemo(repeats, cache.disk if isinstance(cache, RunMemo) else cache)
     cases = list(scene.load_cases)
     all_specs = [reference] + [s for s in specs if s.id != reference.id]
     bar = Progress(len(all_specs) * len(cases), enabled=progress)
@@ -89,15 +102,50 @@ def runtime_vs_error(
             per_case[case.name] = errors(lp, ref, scene.mechanism.size())
             secs.append(lp.seconds)
         if ok:
+            timed = [batches.get(scene, spec, case) for case in cases]
+            whole = all(t is not None for t in timed)
             rows.append(
                 {
                     "model": spec.id,
                     "seconds": sum(secs) / len(secs),
+                    "batched_seconds": (
+                        sum(t.seconds for t in timed) / len(timed) if whole else None
+                    ),
+                    "copies": [t.copies for t in timed] if whole else None,
+                    "batches": [len(t.samples) for t in timed] if whole else None,
                     "error": max(e["path_disp"] for e in per_case.values()),
                     "per_case": per_case,
                 }
             )
     return rows, failures
+
+
+def speed_ups(rows: list[dict], key: str, reference: str = SPEED_REFERENCE) -> list[float | None]:
+    """Each row's ``reference`` row's ``key`` (seconds) over its own: how many times
+    faster than ``reference`` (None where either has no time)."""
+    ref = next((r.get(key) for r in rows if r["model"] == reference), None)
+    return [ref / r[key] if ref and r.get(key) else None for r in rows]
+
+
+def _times(ratio: float) -> str:
+    return f"{ratio:.3g}x"
+
+
+def _copies(per_case: list[int]) -> str:
+    """The batch sizes of a row's load cases, each once (``10/100``)."""
+    return "/".join(str(n) for n in sorted(set(per_case)))
+
+
+def _batches(row: dict) -> str:
+    """``copies × batches`` of a row (``100 × 3``), or – for a model not batched."""
+    if row.get("copies") is None:
+        return "–"
+    return f"{_copies(row['copies'])} × {_copies(row['batches'])}"
+
+
+def _cell(value, fmt: Callable) -> str:
+    """``fmt(value)``, or – for None (not timed)."""
+    return "–" if value is None else fmt(value)
 
 
 def write_bench(
@@ -121,19 +169,50 @@ def write_bench(
     out.mkdir(parents=True, exist_ok=True)
     stem = f"bench_{scene.name}"
     front = set(pareto_front([(r["seconds"], r["error"]) for r in rows]))
+    timed = [k for k, r in enumerate(rows) if r.get("batched_seconds") is not None]
+    batched_front = {
+        timed[j]
+        for j in pareto_front([(rows[k]["batched_seconds"], rows[k]["error"]) for k in timed])
+    }
+    single_up, batched_up = speed_ups(rows, "seconds"), speed_ups(rows, "batched_seconds")
     lines = [
         f"# Runtime versus error: {scene.name}",
         "",
         f"Reference: `{reference}`. Error: largest over load cases of the path "
         "displacement error (percent); time: mean over load cases of the median wall "
-        "time per load path (s).",
+        "time per load path (s), alone and batched: one batch of identical copies of the "
+        "path (`copies`) run together, its wall time per path, median of the `batches` "
+        "timed on each load case (`flexval.validation.batchtiming`; – for a model not "
+        "batched). Speed-ups: "
+        f"`{SPEED_REFERENCE}`'s time over the model's. Pareto: not both slower and less "
+        "accurate than another model, alone and batched.",
         "",
     ]
     lines += markdown_table(
-        [Column("model", "<"), Column("seconds"), Column("error (%)"), Column("Pareto", "<")],
         [
-            [r["model"], sig(r["seconds"], 3), sig(r["error"], 3), "yes" if k in front else ""]
-            for k, r in enumerate(rows)
+            Column("model", "<"),
+            Column("seconds"),
+            Column("batched (s/path)"),
+            Column("copies × batches"),
+            Column(f"speed-up vs {SPEED_REFERENCE}"),
+            Column("batched speed-up"),
+            Column("error (%)"),
+            Column("Pareto", "<"),
+            Column("Pareto, batched", "<"),
+        ],
+        [
+            [
+                r["model"],
+                sig(r["seconds"], 3),
+                _cell(r.get("batched_seconds"), lambda v: sig(v, 3)),
+                _batches(r),
+                _cell(up, _times),
+                _cell(bup, _times),
+                sig(r["error"], 3),
+                "yes" if k in front else "",
+                "yes" if k in batched_front else "",
+            ]
+            for k, (r, up, bup) in enumerate(zip(rows, single_up, batched_up))
         ],
     )
     png = output_path(out, stem, ".png")

@@ -178,8 +178,40 @@ def _run_each(specs, cases, run_one, row, scene, json_path) -> int:
             results.append(lp)
             row(lp)
     if json_path:
-        write_json(json_path, {"scene": scene.name, "results": [p.to_dict() for p in results]})
+        write_json(
+            json_path, {"scene": scene.name, "results": [_result(scene, p) for p in results]}
+        )
     return status
+
+
+def _result(scene, lp) -> dict:
+    """A path as the run JSON holds it: its fields and, where the scene's material has a
+    yield strength, ``first_yield``, ``safety_factor`` and ``yield_note``
+    (:func:`flexval.validation.yieldpoint.path_yield`)."""
+    from .yieldpoint import scene_yield
+
+    return {**lp.to_dict(), **(scene_yield(scene, lp) or {})}
+
+
+def _yield_line(scene, lp) -> str | None:
+    """The run table's line on first yield and safety factor (None without a yield strength)."""
+    from .yieldpoint import scene_yield
+
+    found = scene_yield(scene, lp)
+    if found is None:
+        return None
+    fy, factors, note = found["first_yield"], found["safety_factor"], found["yield_note"]
+    parts = [
+        f"first yield: load {fy['load']:.6g} {lp.load_unit} ({100 * fy['fraction']:.4g} % of "
+        f"full load) on {fy['flexure']} at s = {fy['at']:.4g} mm"
+        if fy
+        else "first yield: none"
+    ]
+    if factors["yield"] is not None:
+        parts.append(f"safety factor {factors['yield']:.4g}")
+    if factors["fatigue"] is not None:
+        parts.append(f"against fatigue {factors['fatigue']:.4g}")
+    return "; ".join(parts) + (f" ({note})" if note else "")
 
 
 def _check_memory(paths, source: str, field: str, parallel: int = 1, quiet: bool = False) -> float:
@@ -328,6 +360,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
         note = _validity_note(lp)
         if note:
             print(note)
+        strength = _yield_line(scene, lp)
+        if strength:
+            print(f"{'':<{columns[0].size}}{GAP}{strength}")
         for point in lp.limit_points or []:
             print(
                 f"{'':<{columns[0].size}}{GAP}limit point: load {point['load']:.6g} "
@@ -458,6 +493,47 @@ def _validity_note(lp) -> str:
         f"  ! {lp.model} {lp.load_case}: outside the model's range from level {k + 1} "
         f"({lp.load[k]:.4g} {lp.load_unit}): {lp.validity[k]}"
     )
+
+
+def _cmd_compare(args: argparse.Namespace) -> int:
+    """``flexval compare``: models against a measured load-displacement file
+    (:mod:`flexval.validation.measuredcompare`); exit 3 when a model's path stops before
+    the largest measured load (the JSON and the plot are written all the same)."""
+    from flexval.geometry.measured import read_measurement
+
+    from .cache import ResultCache
+    from .measuredcompare import compare_measurement, traced_case
+    from .measuredreport import plot, text_lines
+
+    json_path = check_file(args.json, "--json") if args.json is not None else None
+    plot_path = check_figure_file(args.plot, "--plot") if args.plot is not None else None
+    scene = load_scene(args.scene)
+    case = scene.load_case(args.load_case)
+    measurement = read_measurement(args.measured, case)
+    specs = _parse_models(args.model or [], COMMAND_LINE, "--model")
+    if not specs:
+        specs = _parse_models(scene.models, scene.source, "request.models")
+    if not specs:
+        raise SceneError(
+            scene.source, "--model", None, "no model requested (give --model or request.models)"
+        )
+    levels = len(traced_case(case, measurement)[0].at)
+    _check_memory(
+        [(scene.mechanism, spec, levels) for spec in specs],
+        *((COMMAND_LINE, "--model") if args.model else (scene.source, "request.models")),
+    )
+    cache = ResultCache(enabled=not args.no_cache)
+    _keep_cached(cache.enabled)
+    comparison = compare_measurement(scene, measurement, specs, cache if cache.enabled else None)
+    print("\n".join(text_lines(comparison)))
+    if json_path:
+        write_json(json_path, comparison.record())
+    if plot_path:
+        plot(comparison, plot_path)
+        print(f"wrote {plot_path}")
+    for s in comparison.stopped():
+        print(f"flexval: solver failure: {s.model}: {comparison.beyond_text(s)}", file=sys.stderr)
+    return EXIT_SOLVER if comparison.stopped() else EXIT_OK
 
 
 def _cmd_modes(args: argparse.Namespace) -> int:
@@ -630,12 +706,14 @@ def _cmd_report(args: argparse.Namespace) -> int:
         workers=args.jobs,
         protocol=Path(args.protocol) if args.protocol else None,
         peers=args.peers,
+        batched=not args.no_batch,
     )
     print(f"wrote {path}")
     return EXIT_OK
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
+    from .batchtiming import BatchMemo
     from .bench import runtime_vs_error, sweep_specs, write_bench
     from .cache import ResultCache
 
@@ -643,13 +721,15 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     (ref,) = _parse_models([args.reference], "<command line>", "--reference")
     out = check_folder(args.out, "--out")
     _keep_cached(not args.no_cache)
+    cache = ResultCache(enabled=not args.no_cache)
     rows, failures = runtime_vs_error(
         scene,
         ref,
         sweep_specs(ref),
         args.repeats,
-        ResultCache(enabled=not args.no_cache),
+        cache,
         not args.quiet,
+        batches=BatchMemo(args.repeats, cache, enabled=not args.no_batch),
     )
     for f in failures:
         print(f"flexval: {f.model} on {f.load_case} {f.summary()}: {f.message}", file=sys.stderr)
@@ -901,6 +981,12 @@ def _cmd_gate(args: argparse.Namespace) -> int:
     return EXIT_GATE_FAILED if failed else EXIT_OK
 
 
+NO_BATCH_HELP = (
+    "skip the batched cost per path (each path also timed as a batch of identical copies, "
+    "with the speed-ups against beam:100)"
+)
+
+
 def _campaign_options(q: argparse.ArgumentParser) -> None:
     """Options shared by the commands that run many models: timing, cache, progress."""
     q.add_argument(
@@ -1081,6 +1167,38 @@ def build_parser() -> argparse.ArgumentParser:
     )
     q.set_defaults(func=_cmd_run)
 
+    q = sub.add_parser(
+        "compare",
+        help="compare models with a measured load-displacement file (a test rig's CSV)",
+        description="Trace each model through the measured loads of a CSV file (columns "
+        "load, in the load case's unit N or N mm; dx, dy in mm and rotation in deg, any of "
+        "them; optional <column>_std standard uncertainties) and score it: RMS and largest "
+        "difference in percent of the measured range, and the share of points within twice "
+        "the standard uncertainty. Measured loads beyond a model's path (a limit point) are "
+        "reported, not scored; exit 3 then.",
+    )
+    q.add_argument("scene", help=scene_help)
+    q.add_argument("--measured", required=True, metavar="FILE", help="the measured CSV file")
+    q.add_argument(
+        "--load-case", required=True, metavar="NAME", help="the load case the file measures"
+    )
+    q.add_argument(
+        "--model",
+        action="append",
+        metavar="MODEL",
+        help=f"model id: {ids} (repeatable; default: the scene's request.models)",
+    )
+    q.add_argument(
+        "--json", metavar="PATH", help="write the scores, the values and the paths as JSON"
+    )
+    q.add_argument("--plot", metavar="FILE.png", help="draw the measurement against every model")
+    q.add_argument(
+        "--no-cache",
+        action="store_true",
+        help="recompute every path (default: reuse and store them in the result cache)",
+    )
+    q.set_defaults(func=_cmd_compare)
+
     q = sub.add_parser("modes", help="natural frequencies and mode shapes about an equilibrium")
     q.add_argument("scene", help=scene_help)
     q.add_argument(
@@ -1163,6 +1281,7 @@ def build_parser() -> argparse.ArgumentParser:
     _campaign_options(q)
     q.add_argument("--no-bench", action="store_true", help="skip the runtime-vs-error study")
     q.add_argument("--no-converge", action="store_true", help="skip the mesh convergence study")
+    q.add_argument("--no-batch", action="store_true", help=NO_BATCH_HELP)
     q.add_argument(
         "--peers",
         action="store_true",
@@ -1197,6 +1316,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     q.add_argument("--out", default="reports/bench", metavar="DIR", help="output folder")
     _campaign_options(q)
+    q.add_argument("--no-batch", action="store_true", help=NO_BATCH_HELP)
     q.set_defaults(func=_cmd_bench)
 
     q = sub.add_parser("stress", help="stress tests: load amplification, step count, invariance")
@@ -1222,7 +1342,7 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument(
         "sweep",
         help="sweep file (TOML) or built-in sweep: open_chain_arcs, slenderness, arc_angle, "
-        "notch_ratio",
+        "notch_ratio, open_chain_tolerance",
     )
     q.add_argument(
         "--out",

@@ -18,7 +18,7 @@ from flexval.geometry.kinematics import place_points  # noqa: E402
 from flexval.reducedmodels import LoadPath  # noqa: E402
 
 from .drawing import draw_mechanism  # noqa: E402
-from .outputs import save_figure  # noqa: E402
+from .outputs import write_figure  # noqa: E402
 
 #: fixed style per model family so models stay distinguishable across figures
 _STYLE = {
@@ -43,12 +43,7 @@ def style(model: str) -> dict:
 
 
 def _save(fig, path: Path) -> str:
-    fig.tight_layout()
-    try:
-        save_figure(fig, path, dpi=110)
-    finally:
-        plt.close(fig)
-    return path.name
+    return write_figure(fig, path).name
 
 
 def _finish_loglog(fig, ax, xlabel: str, ylabel: str, title: str, path: Path) -> str:

@@ -222,3 +222,15 @@ def save_figure(fig, path: str | Path, **savefig_options) -> Path:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format=fmt, **savefig_options)
     return path
+
+
+def write_figure(fig, path: str | Path, dpi: int = 110) -> Path:
+    """Lay out a finished Matplotlib figure, save it atomically (:func:`save_figure`) and
+    close it, whatever happens (an open figure holds its memory until the process ends)."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    try:
+        return save_figure(fig, path, dpi=dpi)
+    finally:
+        plt.close(fig)

@@ -26,7 +26,7 @@ from pathlib import Path
 
 from flexval.reducedmodels.catalogue import FIELDS, parse_model
 
-from . import figures, frequencies, strength
+from . import figures, frequencies, measuredreport, strength
 from .convergence import order_text
 from .failures import Failure
 from .figurejobs import Figures, draw_now
@@ -480,6 +480,7 @@ def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
                     draw(figures.relative_rotations, sc, c, lp, png)
                     L += [f"![{c}]({png.name})", ""]
     L += _field_picture_lines(res, out, draw)
+    L += measuredreport.section(res.measured, out, draw)
     if res.bench_rows or res.bench_failures:
         L += [
             "### Runtime versus error",
@@ -585,11 +586,13 @@ def build_report(
     workers: int = 1,
     protocol: Path | None = None,
     peers: bool = False,
+    batched: bool = True,
 ) -> Path:
     """Compute everything (on ``workers`` processes), then write ``out/report.md``, its
     figures, JSON files and run times; ``protocol``: as in :func:`render_markdown`;
-    ``peers``: time beam:100 against OpenSeesPy too (:func:`compute_report`)."""
+    ``peers``: time beam:100 against OpenSeesPy too; ``batched``: time the models in
+    batches of identical copies too (both :func:`compute_report`)."""
     data = compute_report(
-        scene_names, models, repeats, use_cache, progress, bench, converge, workers, peers
+        scene_names, models, repeats, use_cache, progress, bench, converge, workers, peers, batched
     )
     return write_report(data, out, protocol)

@@ -27,18 +27,20 @@ from functools import cached_property
 from importlib import metadata
 from pathlib import Path
 
-from flexval.geometry import Scene, load_scene
+from flexval.geometry import LoadCase, Scene, load_scene
 from flexval.geometry.graph import independent_loops
 from flexval.reducedmodels import LoadPath
 from flexval.reducedmodels.catalogue import REFERENCE, ModelSpec, parse_model
 
-from .bench import runtime_vs_error, sweep_specs
+from .batchtiming import BatchMemo, BatchTiming
+from .bench import TIMING_KEYS, runtime_vs_error, sweep_specs
 from .cache import ResultCache, code_version
 from .campaign import Job, Progress, RunMemo, prefetch, run_campaign, timed_run
 from .compare import errors, paper_percent, paper_scene, paper_seconds
 from .convergence import ConvergenceStudy, study
 from .failures import Failure
 from .frequencies import FrequencyTable, frequency_data
+from .measuredcompare import MeasuredComparison, compare_measurement
 from .peers import PeerRow, PeerUnavailable, compare_with_opensees
 
 DEFAULT_MODELS = ("continuum", "beam:100", "beam:20", "prbm", "dcmm:1", "dcmm:2", "dcmm:3", "ee")
@@ -134,6 +136,9 @@ class SceneResults:
     frequencies: FrequencyTable | None = None
     bracket: PlaneBracket | None = None
     peers: list[PeerRow] | str | None = None  # the OpenSees comparison, why not, or not asked
+    measured: list[MeasuredComparison] = field(default_factory=list)  # [[measurements]]
+    #: {(model, case): batched cost per path} of the batched models (not the reference)
+    batched: dict[tuple[str, str], BatchTiming] = field(default_factory=dict)
 
     @property
     def cases(self) -> list[str]:
@@ -272,7 +277,8 @@ class ReportData:
                     "results": [_stable(lp) for lp in r.paths.values()],
                     "failures": [f.to_dict() for f in r.failures],
                     "bench": [
-                        {k: v for k, v in row.items() if k != "seconds"} for row in r.bench_rows
+                        {k: v for k, v in row.items() if k not in TIMING_KEYS}
+                        for row in r.bench_rows
                     ],
                 }
                 for r in self.scenes
@@ -281,7 +287,8 @@ class ReportData:
 
     def timings(self) -> dict:
         """Every run time of the report, JSON-ready (s): per path the median and its
-        samples and whether it came from the cache; the bench rows, the plane
+        samples and whether it came from the cache; the batched cost per path
+        (:mod:`flexval.validation.batchtiming`); the bench rows, the plane
         bracket's and the convergence studies' runs; the report's wall times."""
         scenes = {}
         for r in self.scenes:
@@ -296,8 +303,10 @@ class ReportData:
                     }
                     for lp in r.paths.values()
                 ],
+                "batched": [t.to_dict() for t in r.batched.values()],
                 "bench": [
-                    {"model": row["model"], "seconds": row["seconds"]} for row in r.bench_rows
+                    {"model": row["model"], **{k: row.get(k) for k in TIMING_KEYS}}
+                    for row in r.bench_rows
                 ],
                 "bracket": (
                     {"model": r.bracket.model, "seconds": r.bracket.seconds()}
@@ -474,6 +483,14 @@ class _Plan:
             runs += [(s, cases[0]) for s in _convergence_specs(self.reference)]
         return [Job(scene, s, c, self.repeats_for(s), s.id in self.record) for s, c in runs]
 
+    def batch_tasks(self, scene: Scene) -> list[tuple[Scene, ModelSpec, LoadCase]]:
+        """Every (scene, model, case) whose batched cost per path the run times show: the
+        models of the tables and of the runtime-versus-error study on every case."""
+        specs = list(self.specs)
+        if self.bench_reference is not None:
+            specs += sweep_specs(self.bench_reference)
+        return [(scene, s, c) for s in specs for c in scene.load_cases]
+
 
 def _longest_first(jobs: list[Job]) -> list[Job]:
     """``jobs`` ordered for a process pool: the reference family's finest resolutions
@@ -497,8 +514,16 @@ def compute_report(
     converge: bool = True,
     workers: int = 1,
     peers: bool = False,
+    batched: bool = True,
 ) -> ReportData:
     """Run and compare everything the report shows (see the module docstring).
+
+    With ``batched``, every model but the reference is also timed as a batch of
+    identical copies of each path (:mod:`flexval.validation.batchtiming`, on ``workers``
+    processes after the paths), for the run times: ``repeats`` batches (median) for
+    the models of the tables, one per load case for the bench's other resolutions
+    (the bench averages it over the load cases), which keeps the report's added time
+    to about half.
 
     With ``peers``, :data:`PAPER_REFERENCE` is also timed against OpenSeesPy
     on every load case (:func:`flexval.validation.peers.compare_with_opensees`, in
@@ -529,6 +554,9 @@ def compute_report(
         repeats,
     )
     prefetch(_longest_first([j for sc in scenes for j in plan.jobs(sc)]), memo, workers, progress)
+    tables = {s.id for s in specs}  # the other resolutions of the bench: one batch per case
+    batches = BatchMemo(repeats, memo.disk, batched, lambda s: repeats if s.id in tables else 1)
+    batches.prefetch([t for sc in scenes for t in plan.batch_tasks(sc)], workers, progress)
     bar = Progress(sum(len(specs) * len(s.load_cases) for s in scenes), enabled=progress)
     out: list[SceneResults] = []
     for sc in scenes:
@@ -543,14 +571,24 @@ def compute_report(
             repeats_for=plan.repeats_for,
         )
         res = SceneResults(sc, paths, failures, [s.id for s in specs], ref_id)
+        res.batched = {
+            (s.id, c.name): t
+            for s in specs
+            for c in sc.load_cases
+            if (t := batches.get(sc, s, c)) is not None
+        }
         res.frames = _frame_rows(res, specs, memo)
         res.frequencies = frequency_data(sc, res.models, ref_id or PAPER_REFERENCE)
+        res.measured = [
+            compare_measurement(sc, m, specs, memo, unmodelled_is_failure=True)
+            for m in sc.measurements
+        ]
         if reference:
             res.bracket = _plane_bracket(res, reference, memo)
         if plan.bench_reference is not None:
             bref = plan.bench_reference
             res.bench_rows, res.bench_failures = runtime_vs_error(
-                sc, bref, sweep_specs(bref), repeats, memo, progress, plan.record
+                sc, bref, sweep_specs(bref), repeats, memo, progress, plan.record, batches
             )
             res.bench_reference = bref.id
         if converge and reference:
@@ -568,6 +606,8 @@ def compute_report(
             )
         out.append(res)
     wall = {"models": time.perf_counter() - t0}
+    if batched:
+        wall["batched"] = batches.wall  # part of "models"
     if peers:
         t1 = time.perf_counter()
         n = parse_model(PAPER_REFERENCE).resolution

@@ -37,6 +37,7 @@ from .failures import LIMIT_POINT, Failure  # noqa: E402
 from .figurejobs import draw_now  # noqa: E402
 from .figures import _save, style  # noqa: E402
 from .outputs import output_path  # noqa: E402
+from .yieldtable import yield_section  # noqa: E402
 
 
 def curved_beam_factor(radius: float, thickness: float) -> float:
@@ -374,6 +375,7 @@ def section(
             "",
         ]
     lines += fibre_table(scene, paths, reference, cases, convergence)
+    lines += yield_section(scene, paths, models, cases, reference)
     for c in cases:
         full = {m: paths[(m, c)] for m in models if (m, c) in paths}
         png = output_path(out, f"{name}_{c}_stress", ".png")

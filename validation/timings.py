@@ -20,12 +20,16 @@ import statistics
 from collections.abc import Callable
 from pathlib import Path
 
+from flexval.reducedmodels.catalogue import parse_model
+
+from . import batchtiming
 from .bench import write_bench
 from .campaign import available_cores
 from .figurejobs import draw_now
 from .outputs import write_json, write_text
 from .peers import AGREEMENT_BAR, geometric_mean
 from .reportdata import PAPER_REFERENCE, ReportData, SceneResults
+from .tables import sig
 
 #: file names of the run times, beside report.md
 TIMINGS_MD, TIMINGS_JSON = "timings.md", "timings.json"
@@ -39,13 +43,15 @@ def _fmt(v: float | None, digits: int = 2) -> str:
 
 
 def timing_table(res: SceneResults) -> list[str]:
-    """Markdown: our median seconds per load path beside the paper's, and the speed-ups."""
+    """Markdown: our median seconds per load path, alone and batched, beside the paper's, and
+    the speed-ups against :data:`~flexval.validation.reportdata.PAPER_REFERENCE`."""
     paper = res.paper.seconds if res.paper else {}
     lines = [
         "| model | "
-        + " | ".join(f"{c} ours (s) | {c} paper (s)" for c in res.cases)
-        + f" | speed-up vs {PAPER_REFERENCE}, ours | paper |",
-        "|---|" + "---:|" * (2 * len(res.cases) + 2),
+        + " | ".join(f"{c} ours (s) | {c} batched (s) | {c} paper (s)" for c in res.cases)
+        + f" | copies | speed-up vs {PAPER_REFERENCE}, ours | "
+        f"speed-up vs {PAPER_REFERENCE}, batched | paper |",
+        "|---|" + "---:|" * (3 * len(res.cases) + 4),
     ]
 
     def mean_time(m: str, table: dict | None = None) -> float | None:
@@ -56,29 +62,57 @@ def timing_table(res: SceneResults) -> list[str]:
         vals = [v for v in vals if v is not None]
         return sum(vals) / len(vals) if vals else None
 
+    batched = {
+        m: {c: t.seconds for (mm, c), t in res.batched.items() if mm == m} for m in res.models
+    }
     ref_ours, ref_paper = mean_time(PAPER_REFERENCE), mean_time(PAPER_REFERENCE, paper)
+    ref_batched = mean_time(PAPER_REFERENCE, batched)
     for m in res.models:
+        spec = parse_model(m)
         cells = []
         for c in res.cases:
-            lp, fail = res.paths.get((m, c)), res.failure(m, c)
+            lp, fail, t = res.paths.get((m, c)), res.failure(m, c), res.batched.get((m, c))
             cells.append(fail.summary() if fail else f"{lp.seconds:.4f}" if lp else "–")
+            cells.append(
+                "not batched"
+                if not batchtiming.batched(spec)
+                else "–"
+                if t is None
+                else sig(t.seconds, 3) + ("" if t.agrees else " †")
+            )
             cells.append(_fmt(paper.get(m, {}).get(c)))
-        ours, pap = mean_time(m), mean_time(m, paper)
+        ours, pap, bat = mean_time(m), mean_time(m, paper), mean_time(m, batched)
+        copies = sorted({t.copies for (mm, _), t in res.batched.items() if mm == m})
         su = f"{ref_ours / ours:.3g}x" if ours and ref_ours else "–"
+        sb = f"{ref_batched / bat:.3g}x" if bat and ref_batched else "–"
         sp = f"{ref_paper / pap:.3g}x" if pap and ref_paper else "–"
-        lines.append(f"| {m} | " + " | ".join(cells) + f" | {su} | {sp} |")
+        n = "/".join(str(k) for k in copies) or "–"
+        lines.append(f"| {m} | " + " | ".join(cells) + f" | {n} | {su} | {sb} | {sp} |")
+    lines += [
+        f"- † `{t.model}` on `{t.load_case}`: "
+        + (
+            "a batched copy did not reach full load"
+            if t.agreement is None
+            else f"the batched copies' end values differ from the path alone by "
+            f"{t.agreement:.2g} (more than {batchtiming.AGREEMENT_BAR:g})"
+        )
+        + ": its batched time is not that of the same path."
+        for t in res.batched.values()
+        if not t.agrees
+    ]
     return lines
 
 
 def _cheapest_lines(res: SceneResults, reference: str) -> list[str]:
-    """The cheapest model (mean seconds per load path) within each of :data:`BUDGETS`."""
+    """The cheapest model (mean seconds per load path) within each of :data:`BUDGETS`, alone
+    and, where every such model was timed in batches, batched."""
     rows = res.worst_errors(reference)
     out = []
     for budget in BUDGETS:
+        within = [(m, e) for m, e, _ in rows if e <= budget]
         ok = [
             (sum(res.paths[(m, c)].seconds for c in res.cases) / len(res.cases), m, e)
-            for m, e, _ in rows
-            if e <= budget
+            for m, e in within
         ]
         if ok:
             s, m, e = min(ok)
@@ -86,6 +120,15 @@ def _cheapest_lines(res: SceneResults, reference: str) -> list[str]:
                 f"- Cheapest model within {budget:g} % of `{reference}` on every load "
                 f"case (largest path displacement error): **{m}** ({e:.2f} %, "
                 f"{s * 1e3:.1f} ms per load path)."
+            )
+        timed = [[res.batched.get((m, c)) for c in res.cases] for m, _ in within]
+        if within and all(t is not None for ts in timed for t in ts):
+            s, m, e = min(
+                (sum(t.seconds for t in ts) / len(ts), m, e) for ts, (m, e) in zip(timed, within)
+            )
+            out.append(
+                f"- Batched, the cheapest within {budget:g} %: **{m}** ({e:.2f} %, "
+                f"{s * 1e3:.2f} ms per load path)."
             )
     return out
 
@@ -165,6 +208,17 @@ def _scene_lines(res: SceneResults, bench_md: Path | None) -> list[str]:
             else "."
         ),
         "",
+        "Batched: the same path run as one batch of `copies` identical copies traced "
+        "together, the batch's wall time divided by the copies, median of the same "
+        "repeats: what a path of the model costs when many are run, the per-path costs "
+        f"that every model shares spread over the batch. `copies`: "
+        f"{batchtiming.BATCH_COPIES}, where the cost per path of the small models stops "
+        f"falling, fewer for a larger model (at most {batchtiming.BATCH_UNKNOWNS} unknowns "
+        "in a batch), whose own arithmetic already outweighs the shared costs, and "
+        f"{batchtiming.REFERENCE_COPIES} for `{batchtiming.SPEED_REFERENCE}`, where its "
+        "cost per path is flat. The continuum reference is not batched. Speed-ups: "
+        f"`{PAPER_REFERENCE}`'s mean time over the model's, alone and batched.",
+        "",
     ]
     L += timing_table(res) + [""]
     ref = res.reference if res.has_reference() else PAPER_REFERENCE
@@ -208,7 +262,9 @@ def render_timings(data: ReportData, benches: dict[str, Path], render_seconds: f
     ``render_seconds``: wall time of writing report.md, its figures and JSON files.
     """
     wall, peers = data.wall_seconds.get("models"), data.wall_seconds.get("peers")
+    batched = data.wall_seconds.get("batched")
     total = f"{wall:.1f} s computing, " if wall is not None else ""
+    total += f"{batched:.1f} s of it timing batches, " if batched is not None else ""
     total += f"{peers:.1f} s timing OpenSeesPy, " if peers is not None else ""
     lines = [
         "# flexval validation report: run times",

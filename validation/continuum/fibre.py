@@ -188,6 +188,25 @@ def notch_concentration(
     return {"nominal": nominal, "thinnest": float(forces.at[k]), "concentration": stress / nominal}
 
 
+def notch_peaks(system, state: np.ndarray) -> dict[str, tuple[float, float]]:
+    """Each continuum notch hinge's peak fibre stress (MPa) and where (fraction from its first
+    end) at a converged ``state`` of ``system``: :func:`fibre_stress_peak` outside
+    :func:`boundary_layers`, as :func:`fibre_stresses` finds it at full load."""
+    flexures = {f.name: f for f in system.mechanism.flexures}
+    out = {}
+    for conn, local in zip(system.connectors, system.local_states(state)):
+        flexure = flexures.get(conn.name)
+        if flexure is None or not hasattr(conn, "solid") or not _is_notch(flexure):
+            continue
+        out[conn.name] = fibre_stress_peak(conn, *local, boundary_layers(flexure))
+    return out
+
+
+def _is_notch(flexure) -> bool:
+    profile = flexure.section.profile
+    return profile is not None and profile.kind == "notch"
+
+
 def fibre_stresses(system, state: np.ndarray) -> dict[str, dict]:
     """Each continuum flexure's peak fibre stress at a converged ``state`` of ``system``.
 
@@ -205,7 +224,6 @@ def fibre_stresses(system, state: np.ndarray) -> dict[str, dict]:
         first, last = boundary_layers(flexure)
         stress, at = fibre_stress_peak(conn, *local, (first, last))
         out[conn.name] = {"stress": stress, "at": at, "layer": first, "layer_end": last}
-        profile = flexure.section.profile
-        if profile is not None and profile.kind == "notch":
+        if _is_notch(flexure):
             out[conn.name].update(notch_concentration(conn, local, flexure, stress))
     return out
