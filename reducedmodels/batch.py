@@ -828,8 +828,8 @@ def run_batch(
     list of LoadPath or Exception
         Per copy, in order: its path, or what its solo run raises (one of
         :data:`RUN_FAILURES`: a copy the model cannot build, a solver
-        failure). Copies that cannot share a batch (other bodies or
-        connectors) run alone.
+        failure). Copies are grouped by topology (bodies, connectors and
+        their sizes, load factors), each group traced as its own batches.
     """
     from .catalogue import LINEAR
 
@@ -866,23 +866,45 @@ def run_batch(
     for k, m in enumerate(mechanisms):
         if isinstance(built[id(m)], Exception):
             results[k] = built[id(m)]
-    todo = [k for k in range(len(mechanisms)) if results[k] is None]
     build = (time.perf_counter() - t0) / max(len(mechanisms), 1)
-    try:
-        traced = trace_batch(
-            [built[id(mechanisms[k])] for k in todo],
-            [cases[k] for k in todo],
-            levels,
-            spec.id,
-            scene,
-            options,
-        )
-    except RUN_FAILURES:  # copies that cannot share a batch, or a batch it cannot trace
-        for k in todo:
-            alone(k)
-        return results
-    for k, result in zip(todo, traced):
-        if isinstance(result, LoadPath):
-            result.seconds += build
-        results[k] = result
+    groups: dict[tuple, list[int]] = {}  # copies that can share a batch, in order
+    for k in range(len(mechanisms)):
+        if results[k] is None:
+            member = built[id(mechanisms[k])]
+            groups.setdefault(_topology(member, cases[k].factors(levels)), []).append(k)
+    for todo in groups.values():
+        try:
+            traced = trace_batch(
+                [built[id(mechanisms[k])] for k in todo],
+                [cases[k] for k in todo],
+                levels,
+                spec.id,
+                scene,
+                options,
+            )
+        except RUN_FAILURES:  # a batch it cannot trace: each copy alone
+            for k in todo:
+                alone(k)
+            continue
+        for k, result in zip(todo, traced):
+            if isinstance(result, LoadPath):
+                result.seconds += build
+            results[k] = result
     return results
+
+
+def _topology(member: System | Member, factors: np.ndarray) -> tuple:
+    """What copies must share to be one batch (:meth:`BatchSystem._check`) and to be traced
+    through the same load factors: a key that groups the copies of a sweep's block whose
+    flexures change kind, or whose meshes change size, into batches of their own."""
+    mechanism, connectors = (
+        (member.mechanism, member.connectors) if isinstance(member, System) else member
+    )
+    ground = mechanism.ground
+    return (
+        tuple(mechanism.bodies),
+        ground,
+        tuple(mechanism.bodies[ground].reference.tolist()),
+        tuple((type(c), c.bodies, c.n_internal) for c in connectors),
+        tuple(np.asarray(factors, float).tolist()),
+    )

@@ -264,3 +264,20 @@ def test_a_copys_path_does_not_depend_on_its_batch(model):
         assert other.rotation == paths[0].rotation
         assert other.peak_stress == paths[0].peak_stress
         assert other.stats["iterations"] == paths[0].stats["iterations"]
+
+
+def test_copies_of_other_topologies_or_levels_go_in_batches_of_their_own():
+    """run_batch groups the copies it can trace together: two mechanisms and two level
+    counts in one call give four batches, each path its solo run's."""
+    open_m, open_c = variants("open_chain", "f+", [1.0, 1.002], [1.0, 1.0])
+    closed_m, closed_c = variants("closed_chain", "f+", [1.0, 0.998], [1.0, 1.0])
+    finer = [dataclasses.replace(c, levels=c.levels + 4) for c in open_c]
+    mechanisms = [open_m[0], closed_m[0], open_m[1], closed_m[1], *open_m]
+    cases = [open_c[0], closed_c[0], open_c[1], closed_c[1], *finer]
+    spec = parse_model("dcmm:1")
+    paths = run_batch(mechanisms, spec, cases)
+    assert [p.stats["batch"] for p in paths] == [2] * 6
+    for mech, case, path in zip(mechanisms, cases, paths):
+        solo = solve_path(build_system(mech, spec), case, None, "dcmm:1")
+        assert len(path.load) == case.levels
+        assert_same_path(solo, path, mech.size())
