@@ -23,7 +23,13 @@ def load_example(name: str):
 
 
 def test_every_example_is_tested():
-    tested = {"pure_moment_circle", "compare_models", "custom_family", "rig_measurements"}
+    tested = {
+        "pure_moment_circle",
+        "compare_models",
+        "custom_family",
+        "rig_measurements",
+        "batch_tolerance",
+    }
     assert {p.stem for p in EXAMPLES.glob("*.py")} == tested
 
 
@@ -75,3 +81,19 @@ def test_rig_measurements_scores_the_models_as_the_report(tmp_path):
         known = gates["open_chain"]["beam:100"][model]["f+"]["path_disp"]
         assert (known - 100 * s) / (1 + 2 * s) <= score <= (known + 100 * s) / (1 - 2 * s), model
     assert (tmp_path / "rig_open_chain_f+.png").is_file()
+
+
+def test_batch_tolerance_traces_the_solo_paths_and_the_first_order_spread():
+    """The batched copies are the solo paths (to 1e-12 of the displacement) and stay mostly
+    in one batch; the spread of |d| over the draws is |d'| std(h) up to the response's
+    curvature: with d = d0 + a x + b x^2 (x = h - h0 ~ N(0, s), a = d', b = d''/2) the
+    spread's square is a^2 s^2 + 2 b^2 s^4 in expectation, and the sample's cross term of
+    x and x^2 moves it by about 2 |b| s / sqrt(n) of a s relative; three of those bound the
+    gap."""
+    example = load_example("batch_tolerance")
+    out = example.main()
+    assert out["largest batch-solo difference (of |d|)"] <= 1e-12
+    assert out["copies in the largest batch"] >= example.DRAWS / 2
+    ratio = abs(out["d''(h) (mm/mm^2)"] / 2 * example.STD / out["d'(h) (mm/mm)"])
+    bound = ratio**2 + 3 * 2 * ratio / math.sqrt(example.DRAWS)
+    assert abs(out["std |d| (mm)"] / out["first-order std (mm)"] - 1) <= bound
