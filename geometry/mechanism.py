@@ -64,6 +64,19 @@ class Material:
         """G = E / (2 (1 + nu)), MPa."""
         return self.youngs_modulus / (2.0 * (1.0 + self.poisson_ratio))
 
+    def plane_strain(self) -> Material:
+        """The constants of a wide flexure (plate) in bending, MPa: E / (1 - nu^2) and
+        nu / (1 - nu), the plane-strain pair, with the same shear modulus G.
+
+        A beam of width b much larger than sqrt(R h) cannot curl sideways
+        (anticlastic curvature suppressed), so its bending and axial stiffness
+        per unit strain are E / (1 - nu^2), not E; the continuum's
+        ``plane=strain`` is the same idealisation in 2D.
+        """
+        nu = self.poisson_ratio
+        wide = self.youngs_modulus / (1.0 - nu * nu)
+        return dataclasses.replace(self, youngs_modulus=wide, poisson_ratio=nu / (1.0 - nu))
+
 
 @dataclass(frozen=True)
 class Section:

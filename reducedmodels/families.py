@@ -21,6 +21,12 @@ if TYPE_CHECKING:
 #: largest N of ``beam:N`` and ``dcmm:N`` (a guard against typos, far beyond any use)
 MAX_ELEMENTS = 100_000
 
+PLATE = Option.flag(
+    "plate",
+    "wide flexures: the material's plane-strain constants E/(1-nu^2) and nu/(1-nu) "
+    "(anticlastic curvature suppressed; the counterpart of continuum[plane=strain])",
+)
+
 FRAME = Option.choice(
     "frame",
     "DCMM measuring frame: each element's relative displacement is measured in the "
@@ -172,7 +178,10 @@ BEAM = register(
         "with the option shear); beam:100 and beam:20 are the paper's FEM100 and FEM20",
         _trace_beams,
         Resolution("N", "beam elements per flexure", 20, 1, MAX_ELEMENTS, True, (5, 320)),
-        (Option.flag("shear", "Timoshenko beams (shear deformation of the rectangular section)"),),
+        (
+            Option.flag("shear", "Timoshenko beams (shear deformation of the rectangular section)"),
+            PLATE,
+        ),
         frozenset({ARCLENGTH}),
         _system_of(_beam),
         connectors=_connectors_of(_beam),
@@ -185,7 +194,7 @@ PRBM = register(
         "symmetric 3R pseudo-rigid-body chain per flexure, exact in the linear limit",
         _trace_nonlinear,
         None,
-        (),
+        (PLATE,),
         frozenset({ARCLENGTH}),
         _system_of(_prbm),
         connectors=_connectors_of(_prbm),
@@ -199,7 +208,7 @@ DCMM = register(
         "compliance at its centre of elasticity",
         _trace_nonlinear,
         Resolution("N", "sub-arcs per flexure", 1, 1, MAX_ELEMENTS, True, (1, 8)),
-        (FRAME,),
+        (FRAME, PLATE),
         frozenset({ARCLENGTH}),
         _system_of(_dcmm),
         connectors=_connectors_of(_dcmm),
@@ -212,7 +221,7 @@ EE = register(
         "linear ellipse-of-elasticity prediction (the small-load limit of dcmm:1)",
         _trace_ee,
         None,
-        (),
+        (PLATE,),
         frozenset({LINEAR}),
         _system_of(_ee),
         connectors=_connectors_of(_ee),

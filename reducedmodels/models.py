@@ -8,6 +8,7 @@ these runners, is registered in :mod:`flexval.reducedmodels.families`.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -36,6 +37,8 @@ def flexure_connectors(
 ) -> list:
     """The connectors a System of ``mechanism`` joins: one ``make(...)`` per flexure, pins, weights.
 
+    With the option ``plate`` (a true ``options["plate"]``) the flexures take the
+    material's plane-strain constants (:meth:`~flexval.geometry.Material.plane_strain`).
     Pins (``mechanism.pins``) are added as exact Lagrange-multiplier joints
     (:class:`flexval.reducedmodels.joints.PinConnector`) whatever the model. With
     ``[gravity]`` in the scene, the weights of the flexures and bodies are
@@ -48,10 +51,14 @@ def flexure_connectors(
         e.g. a PRBM arc angle outside its fitted table); the field names the
         flexure.
     """
+    options = dict(options)
+    flexible = mechanism  # the plate option: the flexures' constants of a wide section
+    if options.pop("plate", False):
+        flexible = dataclasses.replace(mechanism, material=mechanism.material.plane_strain())
     conns = []
     for f in mechanism.flexures:
         try:
-            conns.append(make(f, mechanism, spec, **options))
+            conns.append(make(f, flexible, spec, **options))
         except ValueError as exc:  # the model cannot represent this flexure
             raise SceneError(mechanism.source, f"flexures.{f.name}", spec.id, str(exc)) from None
     if mechanism.pins:

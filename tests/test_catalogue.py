@@ -163,7 +163,7 @@ def test_canonical_ids(text, canonical):
         ("dcmm:2[frame]", ["'frame'", "needs a value"]),
         ("continuum:1[law=rubber]", ["'law'", "svk, neo-hookean"]),
         ("continuum:1[plane=3d]", ["'plane'", "stress, strain"]),
-        ("prbm[shear]", ["unknown option 'shear'", "allowed: none"]),
+        ("prbm[shear]", ["unknown option 'shear'", "allowed: plate"]),
         ("dcmm:2[frame=follower,frame=leader]", ["given twice"]),
         ("beam:0", ["between 1 and"]),
         ("continuum:9", ["between 0 and 8"]),
