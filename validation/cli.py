@@ -844,12 +844,18 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         args.out if args.out is not None else os.path.join("sweeps", safe_name(sweep.name)), "--out"
     )
     results_store(sweep, out).check()  # a dataset of another format: refused up front
-    _keep_on_interrupt(
-        lambda: (
-            f"{len(results_store(sweep, out).parts())} finished Parquet parts in "
+
+    def kept() -> str:
+        """What an interruption keeps, once the workers are ended: the published parts;
+        the staged ones (a worker's part, or its temporary file, cut short) are removed."""
+        store = results_store(sweep, out)
+        store.clear_staged()
+        return (
+            f"{len(store.parts())} finished Parquet parts in "
             f"{out / 'results'}; the same command resumes from them"
         )
-    )
+
+    _keep_on_interrupt(kept)
     invalid = len(sweep.points) - len(sweep.valid_points)
     print(
         f"sweep {sweep.name}: {len(sweep.points)} points ({invalid} invalid), "

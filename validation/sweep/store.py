@@ -185,7 +185,8 @@ class ResultStore:
         return final
 
     def clear_staged(self) -> None:
-        """Remove the staged parts that an interrupted run left unpublished."""
+        """Remove the staged parts that an interrupted run left unpublished (and the
+        temporary files of those a worker was writing when it was stopped)."""
         if self.folder.is_dir():
             for path in self.folder.glob(f"{STAGED}part-*.parquet"):
                 path.unlink(missing_ok=True)
