@@ -109,8 +109,8 @@ class BatchSystem(System):
             if isinstance(member, System):
                 self._systems[k] = member
                 settings = settings or member.settings
-                member = (member.mechanism, member.connectors)
-            pairs.append((member[0], list(member[1])))
+            mechanism, connectors = _parts(member)
+            pairs.append((mechanism, list(connectors)))
         settings = settings or SolverSettings()
         #: copy 0 as a System alone: the numbering and band order every copy shares
         self.template = self._systems.get(0) or System(*pairs[0], settings)
@@ -406,6 +406,15 @@ class BatchSystem(System):
             unstable[k] = system.unstable(own)
         return unstable
 
+    def copy_blocks(self, into: np.ndarray, source: np.ndarray, copies: np.ndarray) -> None:
+        """Copy the tangent values of the copies ``copies`` (bool per copy) from storage
+        ``source`` into storage ``into``."""
+        if copies.all():
+            np.copyto(into, source)
+        elif copies.any():
+            at = np.append(copies, False)[self.slot_copy]
+            into[at] = source[at]
+
     def _block_maps(self) -> tuple | None:
         """Where each copy's diagonal block lies in the band (built on first use), or None
         when the copies are not all alike in band storage: copy k's block is the band's
@@ -496,27 +505,21 @@ class BatchLoadControl(LoadControl):
 
     def _keep(self, storage: np.ndarray) -> None:
         """Take the active copies' tangent values from ``storage`` as their accepted ones."""
-        batch = self.batch
-        if self.active.all():
-            np.copyto(batch.kept, storage)
-            return
-        at = np.append(self.active, False)[batch.slot_copy]
-        batch.kept[at] = storage[at]
+        self.batch.copy_blocks(self.batch.kept, storage, self.active)
 
     def attempt(self):
         """LoadControl's sub-step, halved while the copies' predictions move too far."""
         batch = self.batch
         while True:
             trial = min(self.factor + self.step, self.target)
-            guess = self._predict(trial)
-            still = ~self.active[batch.dof_copy]
-            guess[still] = self.q[still]
+            guess = self._predict(trial)  # the copies that left: their guess set below
             if 0.5 * self.step < self.min_step:
                 break
             if not self._split_vote(batch.motion_ratios(self.q, guess) > 1.0):
                 break
             self.step *= 0.5
-        guess[~self.active[batch.dof_copy]] = self.q[~self.active[batch.dof_copy]]
+        still = ~self.active[batch.dof_copy]
+        guess[still] = self.q[still]
         self.last_step = trial - self.factor
         return FixedLoad(batch, self.loads, trial), guess, self.q
 
@@ -555,13 +558,13 @@ class BatchLoadControl(LoadControl):
         state = result.state.copy()
         still = ~self.active[batch.dof_copy]
         state[still] = self.q[still]
-        storage = result.storage
+        storage, tangent = result.storage, result.tangent  # factorised by the stability check
         if not self.active.all():
             storage = storage.copy()
-            gone = np.append(~self.active, False)[batch.slot_copy]
-            storage[gone] = batch.kept[gone]
+            batch.copy_blocks(storage, batch.kept, ~self.active)
+            tangent = batch.layout.tangent(storage)
         self._kept_next = storage
-        return Verdict(state, result.factor, "", batch.layout.tangent(storage), fast)
+        return Verdict(state, result.factor, "", tangent, fast)
 
     def stopped_by_bifurcation(self, solve: Solve) -> float | None:
         """LoadControl's probe for a batch of one copy (its solo path's reason to stop); a
@@ -594,11 +597,14 @@ copies (23,000 to 91,000 unknowns), beam:20 0.84, 0.83, 1.02 ms in batches of 10
 36,000)."""
 
 
+def _parts(member: System | Member) -> Member:
+    """A copy's mechanism and connectors, given as a System or as the pair."""
+    return (member.mechanism, member.connectors) if isinstance(member, System) else member
+
+
 def _unknowns(member: System | Member) -> int:
     """The unknowns of one copy: its bodies' poses and its connectors' internal coordinates."""
-    if isinstance(member, System):
-        return member.n_dofs
-    mechanism, connectors = member
+    mechanism, connectors = _parts(member)
     return 3 * len(mechanism.moving_bodies) + sum(c.n_internal for c in connectors)
 
 
@@ -760,7 +766,9 @@ def record_batch(
             iterations[k],
             Counters(newton[k], last.step_cuts, last.substeps),
         )
-        recorder.judged(reasons[j], [(c, found) for _, c, found in sorted(forces[j], key=_first)])
+        recorder.judged(
+            reasons[j], [(c, found) for _, c, found in sorted(forces[j], key=lambda e: e[0])]
+        )
         if failure is None:
             paths.append(recorder.finish())
             continue
@@ -778,10 +786,6 @@ def record_batch(
             )
         )
     return paths
-
-
-def _first(entry: tuple) -> int:
-    return entry[0]
 
 
 RUN_FAILURES = (
@@ -897,9 +901,7 @@ def _topology(member: System | Member, factors: np.ndarray) -> tuple:
     """What copies must share to be one batch (:meth:`BatchSystem._check`) and to be traced
     through the same load factors: a key that groups the copies of a sweep's block whose
     flexures change kind, or whose meshes change size, into batches of their own."""
-    mechanism, connectors = (
-        (member.mechanism, member.connectors) if isinstance(member, System) else member
-    )
+    mechanism, connectors = _parts(member)
     ground = mechanism.ground
     return (
         tuple(mechanism.bodies),

@@ -264,7 +264,7 @@ def solve_batch(
     loads, factor = problem.loads, problem.factor
     force_tol, step_tol, error_tol = settings.force_tol, settings.step_tol, settings.error_tol
     max_iterations, max_stall = settings.max_iterations, settings.max_stall
-    copies, dof_copy, slot_copy = system.n_copies, system.dof_copy, system.slot_copy
+    copies, dof_copy = system.n_copies, system.dof_copy
     fallback = (q if origin is None else origin).copy()
     running = np.asarray(active, bool).copy()
     failed = np.zeros(copies, bool)
@@ -291,14 +291,6 @@ def solve_batch(
             back = mask[dof_copy]
             q[back] = fallback[back]
 
-    def keep(mask: np.ndarray, storage: np.ndarray) -> None:
-        """Copies ``mask`` stop: their tangent values are those of this iteration's assembly."""
-        if mask.all():
-            np.copyto(kept, storage)
-        elif mask.any():
-            at = np.append(mask, False)[slot_copy]
-            kept[at] = storage[at]
-
     res = np.full(copies, np.inf)
     for it in range(max_iterations + 1):
         if not running.any():
@@ -316,14 +308,12 @@ def solve_batch(
         if assembled is None:
             break
         _, g, storage = assembled
-        everyone = running.all()  # the common case: every copy still iterating
-        if not everyone:
-            frozen = ~np.append(running, False)[slot_copy]
-            storage[frozen] = kept[frozen]
+        if not running.all():  # the copies that stopped: their kept values
+            system.copy_blocks(storage, kept, ~running)
         res = np.where(running, system.copy_residuals(g, loads), res)
         stop(running & ~np.isfinite(res), it, "non-finite residual")
         done = running & (res <= force_tol)
-        keep(done, storage)
+        system.copy_blocks(kept, storage, done)  # their tangent: this assembly's
         stop(done, it, None)
         fresh = running & np.isnan(res0)
         res0[fresh] = res[fresh]
@@ -369,7 +359,7 @@ def solve_batch(
         with np.errstate(divide="ignore", invalid="ignore"):
             estimate = step * np.minimum(1.0, step / last_step)
         small = running & ((step <= step_tol) | (contracting & (estimate <= error_tol)))
-        keep(small, storage)
+        system.copy_blocks(kept, storage, small)
         stop(small, it + 1, None)
         last_step = np.where(running, step, last_step)
         if origin is not None:
