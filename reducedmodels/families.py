@@ -27,6 +27,14 @@ PLATE = Option.flag(
     "(anticlastic curvature suppressed; the counterpart of continuum[plane=strain])",
 )
 
+WIDTH = Option.flag(
+    "width",
+    "flexures of finite depth b: each flexure's bending modulus E r(beta) from the "
+    "anticlastic curvature of its section, beta = b^2/(R h) (Searle's parameter; r = 1 "
+    "on a straight flexure, tending to plate's 1/(1-nu^2) as beta grows), shear modulus "
+    "kept; excludes plate",
+)
+
 FRAME = Option.choice(
     "frame",
     "DCMM measuring frame: each element's relative displacement is measured in the "
@@ -181,6 +189,7 @@ BEAM = register(
         (
             Option.flag("shear", "Timoshenko beams (shear deformation of the rectangular section)"),
             PLATE,
+            WIDTH,
         ),
         frozenset({ARCLENGTH}),
         _system_of(_beam),
@@ -194,7 +203,7 @@ PRBM = register(
         "symmetric 3R pseudo-rigid-body chain per flexure, exact in the linear limit",
         _trace_nonlinear,
         None,
-        (PLATE,),
+        (PLATE, WIDTH),
         frozenset({ARCLENGTH}),
         _system_of(_prbm),
         connectors=_connectors_of(_prbm),
@@ -208,7 +217,7 @@ DCMM = register(
         "compliance at its centre of elasticity",
         _trace_nonlinear,
         Resolution("N", "sub-arcs per flexure", 1, 1, MAX_ELEMENTS, True, (1, 8)),
-        (FRAME, PLATE),
+        (FRAME, PLATE, WIDTH),
         frozenset({ARCLENGTH}),
         _system_of(_dcmm),
         connectors=_connectors_of(_dcmm),
@@ -221,7 +230,7 @@ EE = register(
         "linear ellipse-of-elasticity prediction (the small-load limit of dcmm:1)",
         _trace_ee,
         None,
-        (PLATE,),
+        (PLATE, WIDTH),
         frozenset({LINEAR}),
         _system_of(_ee),
         connectors=_connectors_of(_ee),

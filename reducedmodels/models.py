@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from flexval.geometry import LoadCase, Mechanism, SceneError
+from flexval.geometry import Flexure, LoadCase, Mechanism, SceneError
 
 from .catalogue import ModelSpec
 from .connector import Connector
@@ -39,6 +39,11 @@ def flexure_connectors(
 
     With the option ``plate`` (a true ``options["plate"]``) the flexures take the
     material's plane-strain constants (:meth:`~flexval.geometry.Material.plane_strain`).
+    With ``width`` each flexure takes its own bending modulus E r, r the
+    ratio of its depth's anticlastic curvature
+    (:func:`flexval.geometry.anticlastic.flexure_ratio`), with the same shear
+    modulus (:func:`~flexval.geometry.anticlastic.effective_material`): 1 on a
+    straight uniform flexure, tending to ``plate``'s constants as the depth grows.
     Pins (``mechanism.pins``) are added as exact Lagrange-multiplier joints
     (:class:`flexval.reducedmodels.joints.PinConnector`) whatever the model. With
     ``[gravity]`` in the scene, the weights of the flexures and bodies are
@@ -49,16 +54,26 @@ def flexure_connectors(
     SceneError
         If the model cannot represent a flexure (``make`` raises ValueError,
         e.g. a PRBM arc angle outside its fitted table); the field names the
-        flexure.
+        flexure. If both ``plate`` and ``width`` are given (field ``model``).
     """
     options = dict(options)
+    plate, width = options.pop("plate", False), options.pop("width", False)
+    if plate and width:
+        raise SceneError(
+            mechanism.source,
+            "model",
+            spec.id,
+            "options 'plate' and 'width' exclude each other: 'plate' is the limit of "
+            "'width' for a flexure much deeper than sqrt(R h); give one of them",
+        )
     flexible = mechanism  # the plate option: the flexures' constants of a wide section
-    if options.pop("plate", False):
+    if plate:
         flexible = dataclasses.replace(mechanism, material=mechanism.material.plane_strain())
     conns = []
     for f in mechanism.flexures:
         try:
-            conns.append(make(f, flexible, spec, **options))
+            own = _of_its_depth(mechanism, f) if width else flexible
+            conns.append(make(f, own, spec, **options))
         except ValueError as exc:  # the model cannot represent this flexure
             raise SceneError(mechanism.source, f"flexures.{f.name}", spec.id, str(exc)) from None
     if mechanism.pins:
@@ -66,6 +81,20 @@ def flexure_connectors(
 
         conns += pin_connectors(mechanism)
     return with_weights(mechanism, conns)
+
+
+def _of_its_depth(mechanism: Mechanism, flexure: Flexure) -> Mechanism:
+    """``mechanism`` with the material of ``flexure``'s own depth (the option ``width``).
+
+    The connectors read the material from the mechanism they are given, so
+    each flexure gets a copy carrying its own; a flexure whose ratio is 1 (a
+    straight uniform one) gets the mechanism itself.
+    """
+    from flexval.geometry.anticlastic import effective_material, flexure_ratio
+
+    material = mechanism.material
+    own = effective_material(material, flexure_ratio(flexure, material.poisson_ratio))
+    return mechanism if own is material else dataclasses.replace(mechanism, material=own)
 
 
 def connector_system(
