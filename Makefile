@@ -33,7 +33,7 @@ venv: $(STAMP)
 report: $(PEERS)
 	$(BIN)/flexval info open_chain
 	$(BIN)/flexval info closed_chain
-	$(BIN)/flexval report --out reports/paper --protocol reports/dynamics/protocol.json --peers
+	$(BIN)/flexval report --out reports/paper --protocol reports/dynamics/protocol.json --threed reports/threed/threed.json --peers
 	$(BIN)/flexval report notch_fourbar filleted_stage tapered_leaf spline_flexure --out reports/flexures
 
 # lint and format check first (ruff, configured in pyproject.toml), then the suite

@@ -706,6 +706,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
         workers=args.jobs,
         protocol=Path(args.protocol) if args.protocol else None,
         peers=args.peers,
+        threed=Path(args.threed) if args.threed else None,
         batched=not args.no_batch,
     )
     print(f"wrote {path}")
@@ -1300,6 +1301,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="protocol.json of benchmarks/paper_protocol.py, summarised in the "
         "report's dynamics section (default: none; a missing or stale file is "
         "said so in the report, never an error)",
+    )
+    q.add_argument(
+        "--threed",
+        metavar="PATH",
+        help="threed.json of benchmarks/threed_study.py, each paper scene's section "
+        '"2D idealisation against 3D" (default: none; a missing or stale file is said '
+        "so in the report, never an error)",
     )
     q.add_argument(
         "--jobs",

@@ -33,10 +33,11 @@ integration error the cell carries.
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
+
+from .studyfile import read_study, stale_lines
 
 PROTOCOL_FORMAT = "flexval-protocol/1"
 """Format tag of ``protocol.json``."""
@@ -67,17 +68,9 @@ class Cell:
 
 def read_protocol(path: Path) -> tuple[dict | None, str | None]:
     """The protocol document at ``path``, or None and the reason it cannot be used."""
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        return None, f"`{path.as_posix()}` does not exist"
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        return None, f"`{path.as_posix()}` is unreadable ({type(exc).__name__})"
-    if not isinstance(doc, dict) or doc.get("format") != PROTOCOL_FORMAT:
-        return None, f"`{path.as_posix()}` is not a {PROTOCOL_FORMAT} file"
-    missing = [k for k in REQUIRED if k not in doc]
-    if missing:
-        return None, f"`{path.as_posix()}` lacks {', '.join(missing)}"
+    doc, why = read_study(path, PROTOCOL_FORMAT, REQUIRED)
+    if doc is None:
+        return None, why
     try:
         _cells(doc)
         _by_model(doc, "paper")
@@ -194,13 +187,7 @@ def protocol_section(path: Path | None, out: Path, code: str) -> list[str]:
         return lines + [f"Not available: {why}. Produce it with {PRODUCE}.", ""]
     cells = _cells(doc)
     table = Path(os.path.relpath(path.parent / doc.get("table", "protocol.md"), out)).as_posix()
-    if doc["code_version"] != code:
-        lines += [
-            f"**Stale:** these results were computed by flexval code "
-            f"{doc['code_version']}, this report by {code}; rerun "
-            "`python benchmarks/paper_protocol.py` to refresh them.",
-            "",
-        ]
+    lines += stale_lines(doc, code, "python benchmarks/paper_protocol.py")
     lines += [
         f"Errors (percent) at the end of the ramp against `{doc['reference']}` run "
         f"under the same protocol, on {doc['case']}; ramp times in T1, the first natural "

@@ -41,6 +41,7 @@ from .reportdata import (
     compute_report,
 )
 from .tables import sig
+from .threedsection import threed_section
 from .timings import BUDGETS, TIMINGS_MD, write_benches, write_timings
 
 __all__ = [
@@ -360,7 +361,9 @@ def _thickness_words(section) -> str:
     return f"h = {start:g} to {end:g} mm (taper)"
 
 
-def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
+def _scene_section(
+    res: SceneResults, out: Path, draw: Callable, threed: Path | None, code: str
+) -> list[str]:
     """Markdown of one scene; draws its figures into ``out`` with ``draw(fn, *args)``."""
     from .drawing import plot_mechanism
 
@@ -426,6 +429,8 @@ def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
         L += [f"### Errors against the continuum reference `{res.reference}`", ""]
         L += _metrics_table(res, res.reference) + [""]
         L += _bracket_lines(res)
+    if threed is not None or res.paper:
+        L += threed_section(threed, res.scene.name, code)
     L += strength.section(
         sc,
         res.paths,
@@ -498,12 +503,18 @@ def _scene_section(res: SceneResults, out: Path, draw: Callable) -> list[str]:
 
 
 def render_markdown(
-    data: ReportData, out: Path, draw: Callable = draw_now, protocol: Path | None = None
+    data: ReportData,
+    out: Path,
+    draw: Callable = draw_now,
+    protocol: Path | None = None,
+    threed: Path | None = None,
 ) -> str:
     """The report's Markdown, drawing its figures into ``out`` with ``draw(fn, *args)``
     (default: at once; :meth:`flexval.validation.figurejobs.Figures.draw` on worker processes);
     ``protocol`` is the ``protocol.json`` of ``benchmarks/paper_protocol.py`` (None: not given),
-    summarised in its own section when the scenes include the open chain."""
+    summarised in its own section when the scenes include the open chain; ``threed`` the
+    ``threed.json`` of ``benchmarks/threed_study.py`` (None: not given), each scene's section
+    "2D idealisation against 3D"."""
     from .discussion import discussion
 
     if any(r.paper for r in data.scenes):
@@ -550,22 +561,24 @@ def render_markdown(
         "",
     ]
     for res in data.scenes:
-        lines += _scene_section(res, out, draw)
+        lines += _scene_section(res, out, draw, threed, data.code)
     if any(res.scene.name == PROTOCOL_SCENE for res in data.scenes):
         lines += protocol_section(protocol, out, data.code)
     lines += discussion(data)
     return "\n".join(lines) + "\n"
 
 
-def write_report(data: ReportData, out: Path, protocol: Path | None = None) -> Path:
+def write_report(
+    data: ReportData, out: Path, protocol: Path | None = None, threed: Path | None = None
+) -> Path:
     """Write ``report.md`` (with figures), ``results.json`` and ``gates.json`` into ``out``,
     and the run times (:mod:`flexval.validation.timings`); the figures are drawn on
-    ``data.workers`` processes while the text is written. ``protocol``: as in
+    ``data.workers`` processes while the text is written. ``protocol``, ``threed``: as in
     :func:`render_markdown`."""
     t0 = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
     with Figures(data.workers) as figs:
-        md = write_text(out / "report.md", render_markdown(data, out, figs.draw, protocol))
+        md = write_text(out / "report.md", render_markdown(data, out, figs.draw, protocol, threed))
         write_json(out / "results.json", data.results())
         write_json(out / "gates.json", data.gates())
         benches = write_benches(data, out, figs.draw)
@@ -587,12 +600,13 @@ def build_report(
     protocol: Path | None = None,
     peers: bool = False,
     batched: bool = True,
+    threed: Path | None = None,
 ) -> Path:
     """Compute everything (on ``workers`` processes), then write ``out/report.md``, its
-    figures, JSON files and run times; ``protocol``: as in :func:`render_markdown`;
+    figures, JSON files and run times; ``protocol``, ``threed``: as in :func:`render_markdown`;
     ``peers``: time beam:100 against OpenSeesPy too; ``batched``: time the models in
     batches of identical copies too (both :func:`compute_report`)."""
     data = compute_report(
         scene_names, models, repeats, use_cache, progress, bench, converge, workers, peers, batched
     )
-    return write_report(data, out, protocol)
+    return write_report(data, out, protocol, threed)
