@@ -4,17 +4,24 @@ The same path (a scene's load case, default the open chain under f+) is traced N
 by one through the model's runner (:func:`flexval.reducedmodels.models.run_reduced`: build,
 trace, record), and as one batch of N copies
 (:func:`flexval.reducedmodels.batch.run_batch`: the copies share one System, one assembly
-and one factorisation per Newton iteration; their connectors are built once, since the copies
-are of one mechanism). Both in this process, on one core (BLAS limited to one thread), median
-of ``--repeats`` runs. The batch's end values are checked against the solo run's (they must
+and one factorisation per Newton iteration; ``ee``'s linear responses are solved and recorded
+together; their connectors are built once, since the copies are of one mechanism). With
+``--distinct`` every copy is a mechanism of its own (each flexure's section scaled by a factor
+within 1e-3 of 1), as in a sweep: the batch then builds every copy's connectors. Both in this
+process, on one core (BLAS limited to one thread), median of ``--repeats`` runs: wall time,
+and the process's CPU time (what a path costs a core, whatever else shares the machine; on a
+busy machine the wall time is that over the share of a core the process gets). The speed-up
+is of the CPU times. The batch's end values are checked against the solo run's (they must
 agree to 1e-12 of the path's motion) before anything is timed.
 
-Run: ``python benchmarks/bench_batch.py [--scene open_chain] [--case f+] [--n 1000]``.
+Run: ``python benchmarks/bench_batch.py [--scene open_chain] [--case f+] [--n 1000]
+[--distinct]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import statistics
 import time
@@ -46,14 +53,30 @@ def check(mech, spec, case) -> None:
         raise SystemExit(f"{spec.id}: the batch's path differs from the solo run's ({worst:.2e})")
 
 
-def per_path(run, count: int, repeats: int) -> float:
-    """Median over ``repeats`` of the wall seconds per path of ``run()`` (``count`` paths)."""
-    times = []
+def distinct(mech, n: int) -> list:
+    """n mechanisms of their own: every flexure's section scaled by 1 + 1e-3 (k / n - 1/2)."""
+    return [
+        dataclasses.replace(
+            mech,
+            flexures=tuple(
+                dataclasses.replace(f, section=f.section.scaled(1.0 + 1e-3 * (k / n - 0.5)))
+                for f in mech.flexures
+            ),
+        )
+        for k in range(n)
+    ]
+
+
+def per_path(run, count: int, repeats: int) -> tuple[float, float]:
+    """Medians over ``repeats`` of the wall and the CPU seconds per path of ``run()`` (``count``
+    paths)."""
+    wall, cpu = [], []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         run()
-        times.append((time.perf_counter() - t0) / count)
-    return statistics.median(times)
+        wall.append((time.perf_counter() - t0) / count)
+        cpu.append((time.process_time() - c0) / count)
+    return statistics.median(wall), statistics.median(cpu)
 
 
 def main() -> None:
@@ -63,22 +86,30 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=1000, help="copies per batch (default 1000)")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--models", default=",".join(MODELS))
+    ap.add_argument(
+        "--distinct", action="store_true", help="every copy a mechanism of its own (a sweep's)"
+    )
     args = ap.parse_args()
     limit_threads()
     sc = load_scene(args.scene)
     mech = sc.mechanism
     case = next(c for c in sc.load_cases if c.name == args.case)
+    copies = distinct(mech, args.n) if args.distinct else [mech] * args.n
     print(
-        f"{args.scene} {args.case}; batches of {args.n} copies; median of {args.repeats}; "
+        f"{args.scene} {args.case}; batches of {args.n} "
+        f"{'distinct ' if args.distinct else ''}copies; median of {args.repeats}; "
         f"load average {os.getloadavg()[0]:.1f}"
     )
-    print(f"{'model':10s} {'one by one':>22s} {'batched':>22s} {'speed-up':>9s}  batch sizes")
+    print(
+        f"{'model':10s} {'one by one':>22s} {'batched':>22s} {'batched, CPU':>22s} "
+        f"{'speed-up':>9s}  batch sizes"
+    )
     for model in args.models.split(","):
         spec = parse_model(model)
         check(mech, spec, case)
         heavy = spec.family == "beam" and (spec.resolution or 0) >= 100
         n_solo = SOLO_PATHS // 10 if heavy else SOLO_PATHS
-        solo = per_path(
+        solo, solo_cpu = per_path(
             lambda spec=spec, n_solo=n_solo: [run_reduced(mech, spec, case) for _ in range(n_solo)],
             n_solo,
             args.repeats,
@@ -86,13 +117,14 @@ def main() -> None:
         sizes: set = set()
 
         def batch(spec=spec, sizes=sizes) -> None:
-            paths = run_batch([mech] * args.n, spec, [case] * args.n)
+            paths = run_batch(copies, spec, [case] * args.n)
             sizes.update(p.stats["batch"] for p in paths)
 
-        batched = per_path(batch, args.n, args.repeats)
+        batched, batched_cpu = per_path(batch, args.n, args.repeats)
         print(
             f"{model:10s} {1e3 * solo:8.3f} ms {1 / solo:8.0f}/s {1e3 * batched:8.3f} ms "
-            f"{1 / batched:8.0f}/s {solo / batched:8.1f}x  {sorted(sizes)}",
+            f"{1 / batched:8.0f}/s {1e3 * batched_cpu:8.3f} ms {1 / batched_cpu:8.0f}/s "
+            f"{solo_cpu / batched_cpu:8.1f}x  {sorted(sizes)}",
             flush=True,
         )
 

@@ -43,10 +43,10 @@ Units: mm, N, N mm, rad; times in s.
 
 from __future__ import annotations
 
-import copy
-import dataclasses
+import gc
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from typing import NamedTuple
 
 import numpy as np
@@ -56,11 +56,12 @@ from flexval.geometry import LoadCase, Mechanism, SceneError
 
 from .connector import Connector
 from .core import SolverError, SolverSettings, System, case_loads
+from .linearbatch import linear_responses
 from .loadpath import LoadPath
 from .loads import Loads
 from .newton import BatchNewtonResult, FixedLoad, StepProblem, solve_batch
-from .recorder import PathRecorder
-from .tangent import ROUND_OFF
+from .recorder import PathRecorder, path_peaks
+from .tangent import ROUND_OFF, DenseTangent
 from .tracer import Counters, LoadControl, PathPoint, Solve, TraceFailure, Verdict, trace
 
 Member = tuple[Mechanism, Sequence[Connector]]
@@ -104,13 +105,15 @@ class BatchSystem(System):
         if not members:
             raise ValueError("a batch needs at least one copy")
         self._systems: dict[int, System] = {}
-        pairs = []
+        pairs, lists = [], {}  # copies given one sequence of connectors share one list
         for k, member in enumerate(members):
             if isinstance(member, System):
                 self._systems[k] = member
                 settings = settings or member.settings
             mechanism, connectors = _parts(member)
-            pairs.append((mechanism, list(connectors)))
+            if id(connectors) not in lists:
+                lists[id(connectors)] = (connectors, list(connectors))
+            pairs.append((mechanism, lists[id(connectors)][1]))
         settings = settings or SolverSettings()
         #: copy 0 as a System alone: the numbering and band order every copy shares
         self.template = self._systems.get(0) or System(*pairs[0], settings)
@@ -133,8 +136,11 @@ class BatchSystem(System):
         ground, bodies = mech0.ground, list(mech0.bodies)
         kinds = [(type(c), c.bodies) for c in connectors0]
         sizes = [c.n_internal for c in connectors0]
-        uniform = True
+        uniform, seen = True, set()
         for k, (mech, connectors) in enumerate(pairs):
+            if (id(mech), id(connectors)) in seen:  # a copy of a copy checked already
+                continue
+            seen.add((id(mech), id(connectors)))
             if list(mech.bodies) != bodies or mech.ground != ground:
                 raise ValueError(f"copy {k}: its bodies differ from copy 0's")
             if not np.array_equal(mech.bodies[ground].reference, mech0.bodies[ground].reference):
@@ -170,15 +176,16 @@ class BatchSystem(System):
         (copy, index among the copy's connectors).
         """
         kinds = list(dict.fromkeys(type(c) for c in pairs[0][1]))
+        bodies = [
+            [(j, c.bodies) for j, c in enumerate(pairs[0][1]) if type(c) is kind] for kind in kinds
+        ]
         merged, origin = [], []
-        for kind in kinds:
+        for ends in bodies:  # a class after the other
             for k, (_, connectors) in enumerate(pairs):
-                for j, c in enumerate(connectors):
-                    if type(c) is kind:
-                        renamed = copy.copy(c)
-                        renamed.bodies = tuple(cls._name(k, b, ground) for b in c.bodies)
-                        merged.append(renamed)
-                        origin.append((k, j))
+                for j, (a, b) in ends:
+                    ends_k = (cls._name(k, a, ground), cls._name(k, b, ground))
+                    merged.append(_shallow_copy(connectors[j], "bodies", ends_k))
+                    origin.append((k, j))
         return merged, origin
 
     @classmethod
@@ -189,7 +196,7 @@ class BatchSystem(System):
         for k, (mechanism, _) in enumerate(pairs):
             for name in mechanism.moving_bodies:
                 new = cls._name(k, name, ground)
-                bodies[new] = dataclasses.replace(mechanism.bodies[name], name=new)
+                bodies[new] = _shallow_copy(mechanism.bodies[name], "name", new)
         return Mechanism(
             bodies,
             first.flexures,
@@ -214,6 +221,8 @@ class BatchSystem(System):
     def _copy_numbering(self) -> list[np.ndarray]:
         """Where each copy's coordinates (its own System's numbering) lie in the batch's."""
         ground = self.mechanism.ground
+        if self.uniform:
+            return self._uniform_numbering()
         poses = [(i, body) for body, i in self.template.body_index.items()]
         copy_dofs = [np.empty(self._own(k).n_dofs, np.int64) for k in range(self.n_copies)]
         for k in range(self.n_copies):
@@ -223,6 +232,27 @@ class BatchSystem(System):
         for m, (k, j) in enumerate(self.origin):
             copy_dofs[k][self._own(k)._local_to_global[j][6:]] = self._local_to_global[m][6:]
         return copy_dofs
+
+    def _uniform_numbering(self) -> list[np.ndarray]:
+        """:meth:`_copy_numbering` of copies all numbered as copy 0, as one table (copies, n):
+        each copy's bodies' poses, then the internal coordinates of each of its connectors."""
+        ground, template, count = self.mechanism.ground, self.template, self.n_copies
+        own_bodies = list(template.body_index)  # in copy 0's order
+        bodies = np.array(
+            [[self.body_index[self._name(k, b, ground)] for b in own_bodies] for k in range(count)]
+        ).reshape(count, len(own_bodies))
+        table = np.empty((count, template.n_dofs), np.int64)
+        table[:, : 3 * len(own_bodies)] = (3 * bodies[:, :, None] + np.arange(3)).reshape(count, -1)
+        sizes = np.diff(self._bounds) - 6  # each connector's internal coordinates
+        if sizes.any():
+            origin = np.array(self.origin, np.int64)
+            per = np.repeat(np.arange(sizes.size), sizes)  # the connector of each
+            offset = np.arange(per.size) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+            batch = self._all_dofs[np.asarray(self._bounds[:-1])[per] + 6 + offset]
+            own_start = np.asarray(template._bounds[:-1]) + 6
+            own = template._all_dofs[own_start[origin[per, 1]] + offset]
+            table[origin[per, 0], own] = batch
+        return list(table)
 
     def _tangent_ordering(self) -> np.ndarray | None:
         """The copies one after the other, each in its own band order.
@@ -247,6 +277,8 @@ class BatchSystem(System):
                 pattern = (template.pattern_rows, template.pattern_cols)
                 graph = sp.csr_matrix((np.ones(pattern[0].size), pattern), shape=(n, n))
                 perm = reverse_cuthill_mckee(graph, symmetric_mode=True).astype(np.int64)
+            #: the band order of each copy's block (of the copy's own unknowns)
+            self._tangent_order = perm
             return np.concatenate([dofs[perm] for dofs in self.copy_dofs])
         if any(self._own(k).layout.kind != "banded" for k in range(self.n_copies)):
             return None
@@ -264,7 +296,15 @@ class BatchSystem(System):
         for k, dofs in enumerate(copy_dofs):
             dof_copy[dofs] = k
         self.dof_copy = dof_copy
-        sizes = np.array([mechanism.size() for mechanism, _ in self.members])
+        of_mechanism: dict[int, tuple] = {}  # size, target body and offsets (mm): once each
+        for mechanism, _ in self.members:
+            if id(mechanism) not in of_mechanism:
+                body = mechanism.target_body
+                rx, ry = (mechanism.target_point - mechanism.bodies[body].reference).tolist()
+                tx, ty = mechanism.target_point.tolist()
+                of_mechanism[id(mechanism)] = (mechanism.size(), body, rx, ry, tx, ty)
+        found = [of_mechanism[id(mechanism)] for mechanism, _ in self.members]
+        sizes = np.array([size for size, *_ in found])
         self.copy_sizes = sizes
         self.force_scale = np.where(self.is_rotation, 1.0 / sizes[dof_copy], 1.0)
         self._coordinate_scale = np.where(self.is_rotation, 1.0, sizes[dof_copy])
@@ -276,13 +316,12 @@ class BatchSystem(System):
         self._body_starts = np.searchsorted(
             body_copy[self._bodies_by_copy], np.arange(self.n_copies)
         )
-        target = []
-        for k, (mechanism, _) in enumerate(self.members):
-            body = mechanism.target_body
-            rx, ry = (mechanism.target_point - mechanism.bodies[body].reference).tolist()
-            tx, ty = mechanism.target_point.tolist()
-            target.append([3 * self.body_index[self._name(k, body, ground)], rx, ry, tx, ty])
-        target = np.array(target)
+        target = np.array(
+            [
+                [3 * self.body_index[self._name(k, body, ground)], *offsets]
+                for k, (_, body, *offsets) in enumerate(found)
+            ]
+        )
         self._target_dof = target[:, 0].astype(np.int64)
         self._target_geometry = target[:, 1:].T  # rel x, rel y, rest x, rest y (mm)
         self._blocks: tuple | None = None  # see _block_maps
@@ -291,6 +330,41 @@ class BatchSystem(System):
         slot_copy[self.layout.slots[used]] = dof_copy[self.pattern_rows[used]]
         self.slot_copy = slot_copy
         self.kept = np.zeros(self.layout.size)
+        self._rest: np.ndarray | None = None  # see initial_state
+
+    def initial_state(self) -> np.ndarray:
+        """Every copy's undeformed configuration (:meth:`System.initial_state` in its own
+        numbering: bodies at their reference points, connectors' internal coordinates at
+        rest), found once for the copies of one mechanism and merged (a new array)."""
+        if self._rest is None:
+            own: dict[tuple[int, int], np.ndarray] = {}
+            states = []
+            for k, (mechanism, connectors) in enumerate(self.members):
+                key = (id(mechanism), id(connectors))
+                if key not in own:
+                    numbering = self._own(k)
+                    q = np.zeros(numbering.n_dofs)
+                    for b, i in numbering.body_index.items():
+                        q[3 * i : 3 * i + 2] = mechanism.bodies[b].reference
+                    for c, idx in zip(connectors, numbering._local_to_global):
+                        q[idx[6:]] = c.initial_internal()
+                    own[key] = q
+                states.append(own[key])
+            self._rest = self.merge(states)
+        return self._rest.copy()
+
+    def copy_sections(self) -> list[dict]:
+        """Each copy's flexure sections by name (copies of one mechanism share its dict)."""
+        by_mechanism: dict[int, dict] = {}
+        out = []
+        for mechanism, _ in self.members:
+            found = by_mechanism.get(id(mechanism))
+            if found is None:
+                found = by_mechanism[id(mechanism)] = {
+                    f.name: f.section for f in mechanism.flexures
+                }
+            out.append(found)
+        return out
 
     # --- between copies and batch ---------------------------------------
     def merge(self, states: Sequence[np.ndarray]) -> np.ndarray:
@@ -319,23 +393,32 @@ class BatchSystem(System):
         The result's ``scale`` is an array: each copy's own load scale (N),
         which its residual is relative to.
         """
-        ground, parts = self.mechanism.ground, []
+        template, own = self.template, {}  # the loads of a case on a copy, in its numbering
+        keys, copies_of = [], {}
         for k, ((mechanism, connectors), case) in enumerate(zip(self.members, cases)):
-            reference = {b: body.reference for b, body in mechanism.bodies.items()}
-            parts.append(
-                case_loads(
-                    case,
-                    lambda body, k=k: self.pose_dofs(self._name(k, body, ground)),
-                    reference,
-                    mechanism.size(),
-                    connectors,
+            key = (id(case), id(mechanism), id(connectors))  # copies of one mechanism and case
+            if key not in own:
+                reference = {b: body.reference for b, body in mechanism.bodies.items()}
+                own[key] = case_loads(
+                    case, template.pose_dofs, reference, mechanism.size(), connectors
                 )
-            )
+            keys.append(key)
+            copies_of.setdefault(key, []).append(k)
+        # the copies' bodies' poses in the batch (each copy's own numbering is copy 0's)
+        poses = np.array([dofs[: 3 * len(template.body_index)] for dofs in self.copy_dofs])
+        dofs, moment_dofs = [None] * self.n_copies, [None] * self.n_copies
+        for key, ks in copies_of.items():  # renumbered for all copies of a key at once
+            p, at = own[key], poses[ks]
+            for into, local in ((dofs, p.dofs), (moment_dofs, p.moment_dofs)):
+                renumbered = np.where(local >= 0, at[:, local], -1)
+                for k, row in zip(ks, renumbered):
+                    into[k] = row
+        parts = [own[key] for key in keys]
         loads = Loads(
-            np.concatenate([p.dofs for p in parts]).reshape(-1, 3),
+            np.concatenate(dofs).reshape(-1, 3),
             np.concatenate([p.forces for p in parts]).reshape(-1, 2),
             np.concatenate([p.rels for p in parts]).reshape(-1, 2),
-            np.concatenate([p.moment_dofs for p in parts]).astype(np.int64),
+            np.concatenate(moment_dofs).astype(np.int64),
             np.concatenate([p.moments for p in parts]),
             np.array([p.scale for p in parts]),
         )
@@ -396,7 +479,7 @@ class BatchSystem(System):
         if self._block_maps() is not None:
             if self.n_multipliers == 0 and tangent.positive_definite():
                 return unstable
-            return among & (self._block_inertia(tangent) > 0)
+            return self._block_inertia(tangent, among) > 0
         negative = self.instability(tangent)
         if negative is None or negative <= 0:
             return unstable
@@ -428,24 +511,42 @@ class BatchSystem(System):
             self._blocks = (m, i, j, b + i - j, columns, multipliers)
         return self._blocks
 
-    def _block_inertia(self, tangent) -> np.ndarray:
-        """Every copy's negative eigenvalues beyond its multipliers, from its diagonal block.
+    def _block_inertia(self, tangent, among: np.ndarray) -> np.ndarray:
+        """The negative eigenvalues beyond its multipliers of every copy of ``among`` (bool per
+        copy; 0 for the others), from its diagonal block.
 
-        The blocks (copies, m, m) are read from the band and their
-        eigenvalues computed in one stacked call; those below
-        -``ROUND_OFF`` times the block's largest in size count, as a copy's
-        own dense tangent counts the pivots of its LDL^T.
+        The blocks (copies, m, m) are read from the band. A copy whose own
+        tangent is dense is judged as its own System judges it: the block in
+        the copy's own numbering, its LDL^T's pivots counted
+        (:meth:`~flexval.reducedmodels.tangent.DenseTangent.negative_eigenvalues`,
+        LAPACK's ``dsytrf``: two thirds of the time of its eigenvalues on
+        ``prbm``'s 21 x 21 saddle points). Larger
+        copies, banded alone, have their eigenvalues computed in one stacked
+        call; those below -``ROUND_OFF`` times the block's largest in size
+        count, as the copy's own band counts its eigenvalues.
         """
-        m, i, j, rows, columns, multipliers = self._blocks
-        values = tangent.storage[rows[None, :], columns]
-        blocks = np.zeros((self.n_copies, m, m))
+        m, i, j, rows, columns, multipliers = self._block_maps()
+        chosen = np.flatnonzero(among)
+        values = tangent.storage[rows[None, :], columns[chosen]]
+        blocks = np.zeros((chosen.size, m, m))
         blocks[:, i, j] = values
         blocks[:, j, i] = values
+        negative = np.zeros(self.n_copies, np.int64)
         if not np.isfinite(blocks).all():
-            return np.zeros(self.n_copies, np.int64)
+            return negative
+        if self.template.layout.kind == "dense":
+            own = np.argsort(self._tangent_order)  # each block in its copy's own numbering
+            blocks = blocks[:, own][:, :, own]
+            indefinite = multipliers > 0
+            negative[chosen] = [
+                DenseTangent(block, indefinite).negative_eigenvalues() - multipliers
+                for block in blocks
+            ]
+            return negative
         eigenvalues = np.linalg.eigvalsh(blocks)
         limit = -ROUND_OFF * np.abs(eigenvalues).max(axis=1, initial=0.0)
-        return np.count_nonzero(eigenvalues < limit[:, None], axis=1) - multipliers
+        negative[chosen] = np.count_nonzero(eigenvalues < limit[:, None], axis=1) - multipliers
+        return negative
 
     def use_loads(self, cases: Sequence[LoadCase]) -> Loads:
         """:meth:`batch_loads` of ``cases`` (kept for per-copy checks); keeps the rest tangent."""
@@ -597,6 +698,19 @@ copies (23,000 to 91,000 unknowns), beam:20 0.84, 0.83, 1.02 ms in batches of 10
 36,000)."""
 
 
+def _shallow_copy(item, attribute: str, value):
+    """A shallow copy of ``item`` (a connector, a frozen dataclass) with ``attribute`` set.
+
+    What ``copy.copy`` and then setting the attribute make of an object whose
+    state is its ``__dict__``, without copy's generic protocol (a fifth of
+    the time; a batch renames every copy's bodies and connectors).
+    """
+    new = object.__new__(type(item))
+    new.__dict__.update(item.__dict__)
+    object.__setattr__(new, attribute, value)
+    return new
+
+
 def _parts(member: System | Member) -> Member:
     """A copy's mechanism and connectors, given as a System or as the pair."""
     return (member.mechanism, member.connectors) if isinstance(member, System) else member
@@ -608,6 +722,26 @@ def _unknowns(member: System | Member) -> int:
     return 3 * len(mechanism.moving_bodies) + sum(c.n_internal for c in connectors)
 
 
+@contextmanager
+def collection_paused() -> Iterator[None]:
+    """Python's cyclic garbage collector paused within the block (as it was, after it).
+
+    A batch creates some ten small objects per copy and level (renamed
+    connectors, numbering maps, each path's lists and dicts); every 700 of
+    them start a collection, which scans all the batch's live objects as they
+    age: a third of a ``dcmm:1`` batch's time (1000 copies, open chain f+,
+    measured). Reference counting still frees what a batch drops; cycles
+    wait for the next collection after the block.
+    """
+    paused = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if paused:
+            gc.enable()
+
+
 REBATCH_SHARE = 0.25
 """Least share of a batch's copies that must stay to the end for the copies that left it by
 a vote to be traced as a new batch together (else each in a batch of one): the copies of a
@@ -615,6 +749,7 @@ batch that split up now and then go on in ever smaller batches, those of one tha
 step by step (a soft stretch that every copy takes in its own sub-steps) one by one."""
 
 
+@collection_paused()
 def trace_batch(
     members: Sequence[System | Member],
     cases: Sequence[LoadCase],
@@ -648,7 +783,8 @@ def trace_batch(
         ``seconds`` is its share of its batch's wall time,
         ``stats["batch"]`` the number of copies it was traced with.
     """
-    factors = [case.factors(levels) for case in cases]
+    distinct = {id(case): case for case in cases}.values()  # each case once
+    factors = [case.factors(levels) for case in distinct]
     if any(not np.array_equal(f, factors[0]) for f in factors):
         raise ValueError("the copies' load cases request different load factors")
     size = max(1, BATCH_UNKNOWNS // max(_unknowns(members[0]), 1)) if members else 1
@@ -727,8 +863,9 @@ def record_batch(
         return []
     states = np.array([p.state for p in points])
     position = {k: j for j, k in enumerate(kept)}
-    reasons = [[[] for _ in points] for _ in kept]
-    forces: list[list] = [[] for _ in kept]
+    reasons: dict[int, list[list[str]]] = {}  # of the copies with any, per level
+    stressed = []  # (copy's place in kept, connector's index in its copy, name, forces, section)
+    sections = batch.copy_sections()
     for (group, run), coordinates in zip(batch.groups, batch.group_coordinates(states)):
         verdicts, stacked = group.path_end_pass(coordinates)
         for m, c, per_level, found in zip(
@@ -738,10 +875,20 @@ def record_batch(
             j = position.get(k)
             if j is None:
                 continue
-            for into, why in zip(reasons[j], per_level):
-                if why:
-                    into.extend(f"{c.name}: {w}" for w in why)
-            forces[j].append((index, c, found))
+            if any(per_level):
+                into_levels = reasons.setdefault(j, [[] for _ in points])
+                for into, why in zip(into_levels, per_level):
+                    if why:
+                        into.extend(f"{c.name}: {w}" for w in why)
+            section = sections[k].get(c.name)
+            if found is not None and section is not None:
+                stressed.append((j, index, c.name, found, section))
+    peaks: list[list] = [[] for _ in kept]
+    for (j, index, name, _, _), found in zip(
+        stressed, path_peaks([(forces, section) for *_, forces, section in stressed])
+    ):
+        peaks[j].append((index, name, found))
+    no_reasons = [[] for _ in points]
     copies = batch.n_copies
     iterations = np.array([np.broadcast_to(p.iterations, (copies,)) for p in points]).T.tolist()
     last = points[-1].counters
@@ -766,8 +913,9 @@ def record_batch(
             iterations[k],
             Counters(newton[k], last.step_cuts, last.substeps),
         )
-        recorder.judged(
-            reasons[j], [(c, found) for _, c, found in sorted(forces[j], key=lambda e: e[0])]
+        recorder.judged_peaks(
+            reasons.get(j, no_reasons),
+            [(name, found) for _, name, found in sorted(peaks[j], key=lambda e: e[0])],
         )
         if failure is None:
             paths.append(recorder.finish())
@@ -800,6 +948,7 @@ RUN_FAILURES = (
 solver's failure, a flexure the model cannot represent, a state or a tangent it cannot handle."""
 
 
+@collection_paused()
 def run_batch(
     mechanisms: Sequence[Mechanism],
     spec,
@@ -811,10 +960,13 @@ def run_batch(
 
     A family that builds a System and traces it by load control (beams,
     DCMM, PRBM, the continuum) runs as :func:`trace_batch`; a linear family
-    (``ee``), which solves one linear system per path and has no Newton to
-    share, runs copy by copy through its own runner. Copies given the same
-    mechanism object share its connectors (built once). Each path's
-    ``seconds`` includes its share of building the connectors.
+    that builds connectors (``ee``: its path is the linear response of its
+    connectors at rest) as
+    :func:`~flexval.reducedmodels.linearbatch.linear_responses`, every copy's
+    small solve and outputs at once; another linear family copy by copy
+    through its own runner. Copies given the same mechanism object share its
+    connectors (built once). Each path's ``seconds`` includes its share of
+    building the connectors.
 
     Parameters
     ----------
@@ -849,7 +1001,8 @@ def run_batch(
         path.stats["batch"] = 1
         results[k] = path
 
-    if family.system is None or family.has(LINEAR):
+    linear = family.has(LINEAR)
+    if family.system is None or (linear and family.connectors is None):
         for k in range(len(mechanisms)):
             alone(k)
         return results
@@ -872,20 +1025,26 @@ def run_batch(
             results[k] = built[id(m)]
     build = (time.perf_counter() - t0) / max(len(mechanisms), 1)
     groups: dict[tuple, list[int]] = {}  # copies that can share a batch, in order
+    keys: dict[tuple[int, int], tuple] = {}
     for k in range(len(mechanisms)):
         if results[k] is None:
             member = built[id(mechanisms[k])]
-            groups.setdefault(_topology(member, cases[k].factors(levels)), []).append(k)
+            at = (id(member), id(cases[k]))  # copies of one mechanism and case share a key
+            if at not in keys:
+                keys[at] = _topology(member, cases[k].factors(levels))
+            groups.setdefault(keys[at], []).append(k)
     for todo in groups.values():
+        members = [built[id(mechanisms[k])] for k in todo]
         try:
-            traced = trace_batch(
-                [built[id(mechanisms[k])] for k in todo],
-                [cases[k] for k in todo],
-                levels,
-                spec.id,
-                scene,
-                options,
-            )
+            if linear:
+                traced = linear_responses(members, [cases[k] for k in todo], levels, spec.id, scene)
+                for path in traced:
+                    if isinstance(path, LoadPath):
+                        path.stats["batch"] = len(todo)
+            else:
+                traced = trace_batch(
+                    members, [cases[k] for k in todo], levels, spec.id, scene, options
+                )
         except RUN_FAILURES:  # a batch it cannot trace: each copy alone
             for k in todo:
                 alone(k)

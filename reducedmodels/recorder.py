@@ -15,10 +15,11 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from typing import NamedTuple
 
 import numpy as np
 
-from flexval.geometry import LoadCase
+from flexval.geometry import LoadCase, Section
 
 from .connector import Connector
 from .core import SolverError, System
@@ -124,8 +125,15 @@ class PathRecorder:
             self.stats["limit_points"] = []
         self.path.stats = self.stats
         self.factors: list[float] = []
-        self.sections = {f.name: f.section for f in system.mechanism.flexures}
+        self._sections: dict | None = None  # see sections
         self.states: list[np.ndarray] = []  # recorded states not yet judged and stressed
+
+    @property
+    def sections(self) -> dict:
+        """The system's flexure sections by name (read when the path is stressed)."""
+        if self._sections is None:
+            self._sections = {f.name: f.section for f in self.system.mechanism.flexures}
+        return self._sections
 
     def record(self, point: PathPoint) -> None:
         """Append one converged point."""
@@ -194,13 +202,31 @@ class PathRecorder:
         forces: Sequence[tuple[Connector, SectionForces | None]],
     ) -> None:
         """Record the verdicts and section forces of the states recorded since the last
-        judgement, as :func:`path_end_pass` gives them (or a batch's end pass for this copy)."""
+        judgement, as :func:`path_end_pass` gives them."""
+        self._verdicts(verdicts)
+        record_path_stress(self.path, forces, self.sections)
+        self.states = []
+
+    def judged_peaks(
+        self, verdicts: Sequence[list[str]], peaks: Sequence[tuple[str, tuple]]
+    ) -> None:
+        """:meth:`judged` with each flexure's stresses found already (a batch's end pass for
+        this copy): (flexure name, :func:`path_peaks` entry), in the connectors' order."""
+        self._verdicts(verdicts)
+        for name, found in peaks:
+            append_stress(self.path, name, *found)
+        self.states = []
+
+    def _verdicts(self, verdicts: Sequence[list[str]]) -> None:
+        """Append the validity monitor's reasons at each level (empty: valid)."""
         lp = self.path
+        if not any(verdicts):  # every level valid
+            lp.valid.extend([True] * len(verdicts))
+            lp.validity.extend([None] * len(verdicts))
+            return
         for reasons in verdicts:
             lp.valid.append(not reasons)
             lp.validity.append("; ".join(reasons) if reasons else None)
-        record_path_stress(lp, forces, self.sections)
-        self.states = []
 
     def finish(self) -> LoadPath:
         """The path of a successful trace (wall time from the recorder's creation)."""
@@ -301,22 +327,19 @@ def record_stress(
     scales : sequence of float
         The factors of the levels to append.
     """
-    factors = [abs(f) for f in np.asarray(scales, float).tolist()]
+    named = []
     for c, found in zip(connectors, forces):
         section = sections.get(c.name)
-        if section is None or found is None:
-            continue
-        unit = found.fibre_stress(section)
-        peak = int(np.argmax(unit))
-        top = float(unit[peak])  # plain floats: one product per level
-        _append_stress(
-            path,
-            c.name,
-            [f * top for f in factors],
-            [float(found.at[peak])] * len(factors),
-            found.at,
-            factors[-1] * unit,
-        )
+        if section is not None and found is not None:
+            named.append((c.name, found, section))
+    if len(named) < STACK_FROM:  # a path's few flexures: each alone
+        factors = [abs(f) for f in np.asarray(scales, float).tolist()]
+        for name, found, section in named:
+            append_stress(path, name, *_state_peak(found, section, factors))
+        return
+    peaks = state_peaks([(found, section) for _, found, section in named], scales)
+    for (name, _, _), found in zip(named, peaks):
+        append_stress(path, name, *found)
 
 
 def record_path_stress(
@@ -336,35 +359,180 @@ def record_path_stress(
         Section forces (N, N mm), (k, m) each, in the order of the levels.
     sections : dict of flexure name -> Section
     """
+    named = []
     for c, stacked in forces:
         section = sections.get(c.name)
-        if section is None or stacked is None:
+        if section is not None and stacked is not None:
+            named.append((c.name, stacked, section))
+    if len(named) < STACK_FROM:  # a path's few flexures: each alone
+        for name, stacked, section in named:
+            append_stress(path, name, *_path_peak(stacked, section))
+        return
+    found = path_peaks([(stacked, section) for _, stacked, section in named])
+    for (name, _, _), peaks in zip(named, found):
+        append_stress(path, name, *peaks)
+
+
+class _Sections(NamedTuple):
+    """Uniform sections of several flexures as arrays (c, 1, ...) (mm, mm^2, mm^4): what
+    :meth:`SectionForces.fibre_stress` reads of one, so one call serves them all."""
+
+    thickness: np.ndarray
+    area: np.ndarray
+    inertia: np.ndarray
+    profile: None = None
+
+
+Peaks = tuple[list[float], list[float], list[float], list[float]]
+"""A flexure's peak stress at each level (MPa), its place (arc-length fraction from the first
+end), the stations' fractions and the stress at each station at the last level (MPa)."""
+
+
+STACK_FROM = 8
+"""Least number of flexures with uniform sections and forces of one shape whose stresses
+:func:`path_peaks` and :func:`state_peaks` compute stacked: below it (a path's own few
+flexures) stacking them costs more than it saves."""
+
+
+def _fibre_stresses(
+    entries: Sequence[tuple[SectionForces, Section]],
+) -> tuple[list[int], list[tuple[list[int], np.ndarray, np.ndarray]]]:
+    """The entries whose outer-fibre stress (MPa) is computed alone, and the stacks of the others.
+
+    Entries with uniform sections and forces of one shape, at least
+    :data:`STACK_FROM` of them, are stacked (their forces (c, ..., m),
+    their sections as arrays) and take one call of
+    :meth:`SectionForces.fibre_stress`, elementwise the arithmetic of each
+    alone, so that a flexure's stress is the same whether it is computed with
+    others (a batch's copies) or alone. Returns the indices of the entries
+    left alone (a varying section, a few flexures) and, per stack, (the
+    entries' indices, their stresses (c, ..., m), their stations (c, m)).
+    """
+    alone: list[int] = []
+    alike: dict[tuple, list[int]] = {}  # uniform sections, by the forces' shape
+    for j, (forces, section) in enumerate(entries):
+        if section.profile is None:
+            alike.setdefault(forces.axial.shape, []).append(j)
+        else:
+            alone.append(j)
+    stacks = []
+    constants: dict[int, tuple[float, float, float]] = {}  # a section's, read once
+    for shape, members in alike.items():
+        if len(members) < STACK_FROM:
+            alone += members
             continue
-        unit = stacked.fibre_stress(section)
-        _append_stress(
-            path,
-            c.name,
-            unit.max(axis=1).tolist(),
-            stacked.at[unit.argmax(axis=1)].tolist(),
-            stacked.at,
-            unit[-1],
+        chosen = [entries[j] for j in members]
+        for _, s in chosen:
+            if id(s) not in constants:
+                constants[id(s)] = (s.thickness, s.area, s.inertia)
+        values = np.array([constants[id(s)] for _, s in chosen], float)
+        sections = _Sections(*(values[:, k].reshape(-1, *[1] * len(shape)) for k in range(3)))
+        at = np.array([f.at for f, _ in chosen])
+        stacked = SectionForces(
+            at, np.stack([f.axial for f, _ in chosen]), np.stack([f.moment for f, _ in chosen])
         )
+        stacks.append((members, stacked.fibre_stress(sections), at))
+    return alone, stacks
 
 
-def _append_stress(
+def path_peaks(entries: Sequence[tuple[SectionForces, Section]]) -> list[Peaks]:
+    """Each flexure's peak outer-fibre stress at every level, its place and its last profile.
+
+    Many flexures at once (:func:`_fibre_stresses`: a batch's copies), each as alone.
+
+    Parameters
+    ----------
+    entries : sequence of (SectionForces, Section)
+        Section forces (N, N mm) stacked over k levels, (k, m) each, and the
+        flexure's section.
+
+    Returns
+    -------
+    list of :data:`Peaks`
+        Per entry, plain lists.
+    """
+    out: list = [None] * len(entries)
+    alone, stacks = _fibre_stresses(entries)
+    for j in alone:
+        out[j] = _path_peak(*entries[j])
+    for members, unit, at in stacks:  # unit (c, k, m)
+        places = np.take_along_axis(at, unit.argmax(axis=2), axis=1)
+        found = zip(unit.max(axis=2).tolist(), places.tolist(), at.tolist(), unit[:, -1].tolist())
+        for j, peaks in zip(members, found):
+            out[j] = peaks
+    return out
+
+
+def _path_peak(forces: SectionForces, section: Section) -> Peaks:
+    """:func:`path_peaks` of one flexure alone (forces (k, m))."""
+    unit = forces.fibre_stress(section)
+    return (
+        unit.max(axis=1).tolist(),
+        forces.at[unit.argmax(axis=1)].tolist(),
+        forces.at.tolist(),
+        unit[-1].tolist(),
+    )
+
+
+def _state_peak(forces: SectionForces, section: Section, factors: list[float]) -> Peaks:
+    """:func:`state_peaks` of one flexure alone (forces (m,); ``factors`` the scales' sizes)."""
+    unit = forces.fibre_stress(section)
+    peak = int(np.argmax(unit))
+    top = float(unit[peak])  # plain floats: one product per level
+    return (
+        [f * top for f in factors],
+        [float(forces.at[peak])] * len(factors),
+        forces.at.tolist(),
+        (factors[-1] * unit).tolist(),
+    )
+
+
+def state_peaks(
+    entries: Sequence[tuple[SectionForces, Section]], scales: Sequence[float] = (1.0,)
+) -> list[Peaks]:
+    """Each flexure's peak outer-fibre stress at one state, scaled to several levels.
+
+    The linear response's form (:func:`record_stress`): the stress at the
+    state times each entry of ``scales`` in size (MPa), its place at every
+    level, the stations and the profile at the last level. Many flexures at
+    once (:func:`_fibre_stresses`), each as alone.
+
+    Parameters
+    ----------
+    entries : sequence of (SectionForces, Section)
+        Section forces (N, N mm) at the state, (m,) each, and the flexure's section.
+    scales : sequence of float
+        The factors of the levels.
+    """
+    factors = [abs(f) for f in np.asarray(scales, float).tolist()]
+    out: list = [None] * len(entries)
+    alone, stacks = _fibre_stresses(entries)
+    for j in alone:
+        out[j] = _state_peak(*entries[j], factors)
+    for members, unit, at in stacks:  # unit (c, m)
+        rows = np.arange(len(members))
+        peak = unit.argmax(axis=1)
+        tops, places = unit[rows, peak].tolist(), at[rows, peak].tolist()
+        profiles = (factors[-1] * unit).tolist()
+        for j, top, place, station, profile in zip(members, tops, places, at.tolist(), profiles):
+            out[j] = ([f * top for f in factors], [place] * len(factors), station, profile)
+    return out
+
+
+def append_stress(
     path: LoadPath,
     name: str,
     peaks: list[float],
     places: list[float],
-    at: np.ndarray,
-    profile: np.ndarray,
+    at: list[float],
+    profile: list[float],
 ) -> None:
     """Append one flexure's peak stresses (MPa) and places; its profile replaces the last one."""
     if path.peak_stress is None:
         path.peak_stress, path.peak_stress_at, path.stress_profile = {}, {}, {}
     path.peak_stress.setdefault(name, []).extend(peaks)
     path.peak_stress_at.setdefault(name, []).extend(places)
-    path.stress_profile[name] = {"at": at.tolist(), "stress": profile.tolist()}
+    path.stress_profile[name] = {"at": at, "stress": profile}
 
 
 def solve_path(

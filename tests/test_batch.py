@@ -20,7 +20,7 @@ from flexval.geometry import load_scene
 from flexval.reducedmodels.batch import BatchSystem, run_batch, trace_batch
 from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels.core import SolverError
-from flexval.reducedmodels.models import build_system
+from flexval.reducedmodels.models import build_system, run_reduced
 from flexval.reducedmodels.recorder import solve_path
 
 AGREEMENT = 1e-12
@@ -281,3 +281,194 @@ def test_copies_of_other_topologies_or_levels_go_in_batches_of_their_own():
         solo = solve_path(build_system(mech, spec), case, None, "dcmm:1")
         assert len(path.load) == case.levels
         assert_same_path(solo, path, mech.size())
+
+
+def comparable(path) -> dict:
+    """Everything a path records but its wall time and the size of the batch it came from."""
+    found = path.to_dict()
+    found.pop("seconds")
+    found["stats"].pop("batch", None)
+    return found
+
+
+def with_gravity(mechanisms):
+    """The mechanisms with their flexures' weights (steel's density, gravity along -y)."""
+    from flexval.geometry.inertia import MassData
+
+    weights = MassData(density=7.85e-9, gravity=np.array([0.0, -9810.0]))
+    return [dataclasses.replace(m, inertia=weights) for m in mechanisms]
+
+
+@pytest.mark.parametrize(
+    "scene, case, gravity",
+    [
+        ("open_chain", "f+", False),
+        ("open_chain", "m-", True),
+        ("closed_chain", "f-", False),
+        ("closed_chain", "f+", True),
+        ("notch_fourbar", None, False),
+        ("tapered_leaf", None, True),
+        ("spline_flexure", None, False),
+    ],
+)
+def test_ee_batch_is_each_copys_solo_path_bit_for_bit(scene, case, gravity):
+    """ee's linear responses of copies with other sections and loads, computed together, are
+    their solo runs' paths exactly: levels, motion, validity verdicts, stresses and profiles
+    (pins, varying sections, splines and weights included)."""
+    case = case or load_scene(scene).load_cases[0].name
+    mechanisms, cases = variants(scene, case, SCALES, [1.0, 0.5, 2.0, 1.0, 3.0])
+    if gravity:
+        mechanisms = with_gravity(mechanisms)
+    spec = parse_model("ee")
+    solo = [run_reduced(m, spec, c) for m, c in zip(mechanisms, cases)]
+    batched = run_batch(mechanisms, spec, cases)
+    assert [p.stats["batch"] for p in batched] == [len(mechanisms)] * len(mechanisms)
+    for a, b in zip(solo, batched):
+        assert comparable(b) == comparable(a)
+    assert batched[0].peak_stress
+
+
+def test_ee_batch_records_the_linear_rotation_limit_as_alone():
+    """Copies loaded past the linearised kinematics' rotation limit get the solo verdicts."""
+    mechanisms, cases = variants("open_chain", "m+", [1.0, 1.0, 1.0], [0.2, 1.0, 4.0])
+    spec = parse_model("ee")
+    batched = run_batch(mechanisms, spec, cases)
+    assert all(batched[0].valid) and not all(batched[2].valid)
+    for m, c, b in zip(mechanisms, cases, batched):
+        assert comparable(b) == comparable(run_reduced(m, spec, c))
+
+
+def test_an_ee_copys_path_does_not_depend_on_its_batch():
+    """Bit for bit the same ee path alone, with one other copy or with four."""
+    mechanisms, cases = variants("closed_chain", "f+", SCALES, LOADS)
+    spec = parse_model("ee")
+    paths = [run_batch(mechanisms[:n], spec, cases[:n])[0] for n in (1, 2, 5)]
+    assert [p.stats["batch"] for p in paths] == [1, 2, 5]
+    for other in paths[1:]:
+        assert comparable(other) == comparable(paths[0])
+
+
+@pytest.mark.parametrize("model", ["dcmm:3", "prbm", "beam:5"])
+def test_batch_construction_is_the_per_copy_construction(model, monkeypatch):
+    """The numbering, loads and rest state a batch builds for all copies at once are, bit for
+    bit, those built copy by copy: each copy's own numbering placed by its bodies' names, its
+    loads numbered by them, the core's rest state of the merged System."""
+    from flexval.reducedmodels.core import System, case_loads
+
+    mechanisms, cases = variants("closed_chain", "f+", [1.0, 0.7, 1.4], [1.0, 2.0, 0.5])
+    spec = parse_model(model)
+    members = [(m, spec.model_family.connectors(m, spec)) for m in mechanisms]
+    batch = BatchSystem(members + [members[0]])
+    cases = [*cases, cases[0]]
+    assert batch.uniform
+    table = batch.copy_dofs
+    monkeypatch.setattr(batch, "uniform", False)  # each copy numbered by its own System
+    for fast, own in zip(table, batch._copy_numbering()):
+        assert np.array_equal(fast, own)
+    assert np.array_equal(batch.initial_state(), System.initial_state(batch))
+    loads, ground = batch.batch_loads(cases), batch.mechanism.ground
+    parts = [
+        case_loads(
+            case,
+            lambda body, k=k: batch.pose_dofs(batch._name(k, body, ground)),
+            {b: body.reference for b, body in mechanism.bodies.items()},
+            mechanism.size(),
+            connectors,
+        )
+        for k, ((mechanism, connectors), case) in enumerate(zip(batch.members, cases))
+    ]
+    for key in ("dofs", "forces", "rels", "moment_dofs", "moments"):
+        alone = np.concatenate([getattr(p, key).reshape(-1) for p in parts])
+        assert np.array_equal(getattr(loads, key).reshape(-1), alone), key
+    assert np.array_equal(loads.scale, [p.scale for p in parts])
+
+
+def test_stresses_of_many_flexures_at_once_are_each_flexures_alone():
+    """path_peaks and state_peaks stack flexures of one kind of section (a batch's); each
+    entry must be what its own SectionForces.fibre_stress gives (max, argmax and profile, bit
+    for bit), stacked or not."""
+    from flexval.reducedmodels.recorder import STACK_FROM, path_peaks, state_peaks
+    from flexval.reducedmodels.sections import SectionForces
+
+    uniform = load_scene("open_chain").mechanism.flexures[0].section
+    varying = load_scene("notch_fourbar").mechanism.flexures[0].section
+    sections = [uniform.scaled(1.0 + 0.1 * k) for k in range(STACK_FROM + 2)]
+    sections.insert(3, varying)
+    rng = np.random.default_rng(7)
+    at = np.linspace(0.0, 1.0, 9)
+    paths = [SectionForces(at, rng.normal(size=(5, 9)), rng.normal(size=(5, 9))) for _ in sections]
+    for forces, section, found in zip(paths, sections, path_peaks(list(zip(paths, sections)))):
+        unit = forces.fibre_stress(section)
+        assert found == (
+            unit.max(axis=1).tolist(),
+            at[unit.argmax(axis=1)].tolist(),
+            at.tolist(),
+            unit[-1].tolist(),
+        )
+    scales = [0.0, -0.5, 1.0]
+    states = [SectionForces(at, f.axial[0], f.moment[0]) for f in paths]
+    for forces, section, found in zip(
+        states, sections, state_peaks(list(zip(states, sections)), scales)
+    ):
+        unit = forces.fibre_stress(section)
+        top, place = float(unit.max()), float(at[unit.argmax()])
+        assert found == ([abs(s) * top for s in scales], [place] * 3, at.tolist(), unit.tolist())
+    # a few alone give the same
+    assert path_peaks(list(zip(paths, sections))[:3]) == path_peaks(list(zip(paths, sections)))[:3]
+
+
+@pytest.mark.parametrize("seed", [0, 4])
+def test_a_batch_judges_each_copys_stability_as_its_own_system(seed):
+    """The negative eigenvalues beyond the multipliers of each copy's tangent block (prbm: a
+    saddle point) are those the copy's own System counts on its own tangent, at states far
+    from equilibrium where copies differ."""
+    mechanisms, cases = variants("open_chain", "f+", [1.0, 0.8, 1.3, 1.1], [1.0, 2.0, 0.5, 1.0])
+    spec = parse_model("prbm")
+    batch = BatchSystem([(m, spec.model_family.connectors(m, spec)) for m in mechanisms])
+    loads = batch.use_loads(cases)
+    rng = np.random.default_rng(seed)
+    q = batch.initial_state() + rng.normal(0.0, 2.5, batch.n_dofs) * batch.is_rotation
+    found = []
+    for factor in (1.0, 5.0, -5.0):
+        _, _, tangent = batch.assemble(q, loads, factor)
+        negative = batch._block_inertia(tangent, np.ones(batch.n_copies, bool))
+        for k in range(batch.n_copies):
+            system = batch.copy_system(k)
+            _, _, own = system.assemble(batch.split(q, k), batch.copy_loads(k), factor)
+            assert negative[k] == system.instability(own)
+            found.append(negative[k])
+    assert 0 in found and max(found) > 0
+
+
+def test_a_batch_pauses_the_garbage_collector_only_while_it_runs():
+    import gc
+
+    mechanisms, cases = variants("open_chain", "f+", [1.0, 1.01], [1.0, 1.0])
+    spec = parse_model("dcmm:1")
+    assert gc.isenabled()
+    run_batch(mechanisms, spec, cases)
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        run_batch(mechanisms, spec, cases)
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+
+
+def test_ee_copies_of_other_topologies_are_refused_together_and_run_apart():
+    """linear_responses refuses copies that do not share copy 0's numbering; run_batch
+    groups them by topology first, so each still gets its solo path."""
+    from flexval.reducedmodels.linearbatch import linear_responses
+
+    open_m, open_c = variants("open_chain", "f+", [1.0, 1.1], [1.0, 1.0])
+    closed_m, closed_c = variants("closed_chain", "f+", [1.0], [1.0])
+    spec = parse_model("ee")
+    members = [(m, spec.model_family.connectors(m, spec)) for m in (*open_m, *closed_m)]
+    with pytest.raises(ValueError, match="one topology"):
+        linear_responses(members, [*open_c, *closed_c])
+    mechanisms, cases = [open_m[0], closed_m[0], open_m[1]], [open_c[0], closed_c[0], open_c[1]]
+    paths = run_batch(mechanisms, spec, cases)
+    assert [p.stats["batch"] for p in paths] == [2, 1, 2]
+    for m, c, p in zip(mechanisms, cases, paths):
+        assert comparable(p) == comparable(run_reduced(m, spec, c))
