@@ -13,7 +13,10 @@ adds them as it computes them):
   whatever the number of elements, so a banded LU (LAPACK ``dgbtrf``) costs
   O(n b^2), and so does the inertia (a banded Cholesky, or banded bisection
   when that fails, saddle points included);
-* ``sparse`` -- wide bands (2D continuum meshes): SuperLU.
+* ``sparse`` -- wide bands (2D continuum meshes from level 3, 3D meshes): a
+  sparse LDL^T under a fill-reducing ordering, analysed once per pattern
+  (QDLDL's, or SuperLU's in symmetric mode where the factor fills in too
+  much for QDLDL's column-by-column arithmetic), whose D gives the inertia.
 
 Every :class:`Tangent` solves K x = b and counts its negative eigenvalues
 (Sylvester's inertia, the stability check of the load stepping).
@@ -36,16 +39,27 @@ from scipy.linalg import lapack
 from .threads import limit_threads
 
 DENSE_LIMIT = 96  # above ~100 unknowns, multithreaded LAPACK stalls on a loaded 2-core machine
-BAND_LIMIT = 64  # band storage beats SuperLU up to at least this half-bandwidth, measured on
-# the continuum meshes: banded LU was 2x faster at b = 29, even at b = 61, 2x
-# slower at b = 117; the banded Cholesky makes whole level-2 paths
-# (b = 61 on both scenes) 1.6x faster than SuperLU; b = 117 is not measured
+BAND_LIMIT = 64  # band storage beats the sparse LDL^T up to at least this half-bandwidth:
+# per Newton iteration (assembly, factorisation, solve, inertia) of a plane-strain strip,
+# L/h = 78 (benchmarks/bench_sparse.py), banded 1.6x faster at b = 61 (level 2, 11,200
+# unknowns: 0.023 s against 0.037 s; 0.016 against 0.027 on a quieter machine), 1.2x slower
+# at b = 125 (level 3, 42,400: 0.29 s against 0.25 s; 0.22 against 0.18); the continuum's
+# level 2 is b = 61 on both scenes
 NARROW_BAND = 8  # compiled banded Cholesky up to this half-bandwidth, LAPACK's above: at b = 5
 # (beam chains) the loop takes half of dpbtrf's time, at b = 29 three times it
 NARROW_MIN = 48  # a system that already runs compiled kernels takes a narrow band instead of
 # dense storage from this many unknowns (factor + solve at b = 5, n = 57:
 # 5 us instead of 15 us, n = 90: 8 instead of 36 us; n = 33: 6 against 9)
 ROUND_OFF = 1e-12  # eigenvalues above -ROUND_OFF * |K| count as zero, not as negative
+LDL_FILL_LIMIT = 200  # QDLDL's column-by-column LDL^T up to this many factor entries per
+# column, SuperLU's supernodes (dense blocks, BLAS 3) above. QDLDL's time over symmetric-mode
+# SuperLU's, scikit-fem elasticity matrices: 2D quad9, 28-44 per column at 6,000-23,000
+# unknowns, 0.36-0.61 (0.58 and 0.72 at 45,000 and 177,000); 3D hex27 at 98 per column 0.71,
+# 173: 0.94, 277: 0.95, 550 (13,900 unknowns): 4
+BACKWARD_ERROR = 1e-14  # a sparse LDL^T's solve is refined while |K x - b| > BACKWARD_ERROR
+# (|K| |x| + |b|) (infinity norms; 45 eps): measured 4e-17 to 5e-16 on the strips and the
+# hex27 matrix of benchmarks/bench_sparse.py, up to 23 eps on random indefinite matrices
+REFINEMENTS = 2  # refinement steps before a pivoting LU redoes the solve
 
 
 @functools.cache
@@ -305,50 +319,206 @@ class BandedTangent:
         return dense
 
 
-class SparseTangent:
-    """A tangent held as a CSC matrix (SuperLU).
+class SparseAnalysis:
+    """What one sparsity pattern's tangents share: the factorisation chosen and its analysis.
 
-    The LU is made on the first solve and kept: one tangent may be solved
-    with more than once (the Newton correction, then the load stepping's
-    linearised prediction K^-1 f from the same tangent), as the dense and
-    banded tangents do with their factors.
+    A System's pattern is fixed, so its layout keeps one of these for every
+    tangent it wraps. ``method`` is chosen by the first tangent's
+    factorisation (a symmetric-mode SuperLU, see :class:`SparseTangent`):
+    ``"ldl"`` (QDLDL's LDL^T: its AMD ordering and elimination tree are
+    computed once, by the first ``qdldl.Solver``, and each later tangent
+    refactorises numerically into the same solver) when that factor's fill
+    is at most ``LDL_FILL_LIMIT`` entries per column, ``"superlu"`` (one
+    symmetric-mode SuperLU per tangent) above it, ``"lu"`` (a pivoting
+    SuperLU per tangent, no inertia for saddle points) once a zero pivot
+    stopped an LDL^T of this pattern (a multiplier ordered before the
+    unknowns it constrains: the same at every iteration).
     """
 
-    def __init__(self, matrix: sp.csc_matrix, n_multipliers: int):
+    def __init__(self) -> None:
+        self.method: str | None = None
+        self.solver = None  # the qdldl.Solver, holding the factor of tangent ``owner``
+        self.owner = 0  # the token of the SparseTangent whose factor the solver holds
+        self.issued = 0  # tokens issued so far
+
+    def token(self) -> int:
+        """A new tangent's token (which factor the shared solver holds)."""
+        self.issued += 1
+        return self.issued
+
+    def __getstate__(self) -> dict:
+        """A copy (pickle, deepcopy) makes its own solver: the compiled one cannot be copied."""
+        return {**self.__dict__, "solver": None, "owner": 0}
+
+
+class SparseTangent:
+    """A tangent held as a CSC matrix: one symmetric factorisation gives solves and inertia.
+
+    The factorisation is an LDL^T without numerical pivoting under a
+    fill-reducing symmetric ordering (QDLDL with AMD, or SuperLU in
+    symmetric mode with diagonal pivots): by Sylvester's law the signs of
+    D are K's inertia, so the stability check costs nothing beyond the
+    solve. The factor is made on the first solve (or inertia) and kept: one
+    tangent may be solved with more than once (the Newton correction, then
+    the load stepping's linearised prediction K^-1 f), as the dense and
+    banded tangents do with their factors. Tangents of one System share a
+    :class:`SparseAnalysis` (the symbolic analysis of their common pattern).
+
+    Without pivoting an LDL^T can meet a zero pivot (a saddle point whose
+    multiplier is ordered before the unknowns it constrains) or lose
+    accuracy on an indefinite K (growth of the factors); every solve's
+    backward error is checked and, above ``BACKWARD_ERROR``, refined with
+    the same factor (at most ``REFINEMENTS`` times). A zero pivot, or a
+    solve still inaccurate, sends the tangent to a pivoting SuperLU LU for
+    its solves, its inertia then counted by a separate symmetric-mode
+    SuperLU (not judged, None, for saddle points); after a zero pivot the
+    pattern's later tangents go straight to that path.
+    """
+
+    def __init__(
+        self, matrix: sp.csc_matrix, n_multipliers: int, analysis: SparseAnalysis | None = None
+    ):
         self.matrix, self.n, self.n_multipliers = matrix, matrix.shape[0], n_multipliers
-        self._lu = None
+        self._analysis = analysis if analysis is not None else SparseAnalysis()
+        self._token = self._analysis.token()
+        self._method = None  # "ldl", "superlu" or "lu": how this tangent is factorised
+        self._symmetric = None  # a symmetric-mode SuperLU with diagonal pivots
+        self._lu = None  # a pivoting SuperLU (the fallback)
+        self._pivots = None  # D of the LDL^T (None: no LDL^T of this tangent)
+        self._norm = None  # |K|_inf, for the solves' backward error
 
-    def solve(self, rhs: np.ndarray) -> np.ndarray:
-        if self._lu is None:
-            import scipy.sparse.linalg as spla  # SuperLU: only wide bands (a start-up cost)
+    def _factorise(self) -> None:
+        if self._method is not None:
+            return
+        if not np.isfinite(self.matrix.data).all():  # a refused iterate, not the pattern's fault
+            self._fall_back(pattern=False)
+            return
+        analysis = self._analysis
+        if analysis.method == "ldl" and self._ldl():
+            self._method = "ldl"
+            return
+        if analysis.method in (None, "superlu"):
+            symmetric = _symmetric_superlu(self.matrix)
+            if symmetric is not None:
+                self._symmetric, self._pivots = symmetric, symmetric.U.diagonal()
+                self._method = "superlu"
+                if analysis.method is None:  # the pattern's first tangent chooses
+                    fill = symmetric.L.nnz / max(self.n, 1)
+                    analysis.method = "ldl" if fill <= LDL_FILL_LIMIT else "superlu"
+                return
+        self._fall_back()
 
-            self._lu = spla.splu(self.matrix)
-        return self._lu.solve(rhs)
-
-    def negative_eigenvalues(self, round_off: float = ROUND_OFF) -> int | None:
-        """Signs of the pivots of a symmetric-mode LU with diagonal pivoting (an LDL^T).
-
-        Not judged (None) for saddle-point systems, whose zero diagonal breaks
-        a diagonal-pivot LDL^T, or when the factorisation meets a zero pivot.
-        """
-        if self.n_multipliers:
-            return None
+    def _fall_back(self, pattern: bool = True) -> None:
+        """A pivoting LU for this tangent's solves (``pattern``: and the pattern's later ones)."""
         import scipy.sparse.linalg as spla
 
-        try:
-            lu = spla.splu(
-                self.matrix,
-                permc_spec="MMD_AT_PLUS_A",
-                diag_pivot_thresh=0.0,
-                options={"SymmetricMode": True},
-            )
-        except RuntimeError:
+        if pattern:
+            self._analysis.method = "lu"
+        self._method = "lu"
+        self._pivots, self._symmetric = None, None
+        self._lu = spla.splu(self.matrix)
+
+    def _ldl(self) -> bool:
+        """Factorise into the pattern's QDLDL solver; False at a zero or non-finite pivot."""
+        import qdldl  # only wide bands
+
+        analysis = self._analysis
+        if analysis.solver is None:
+            analysis.solver = qdldl.Solver(self.matrix)  # AMD ordering and elimination tree
+        else:
+            analysis.solver.update(self.matrix)  # numeric only, the analysis reused
+        analysis.owner = self._token
+        pivots = analysis.solver.factors()[1]
+        if not (np.isfinite(pivots).all() and pivots.all()):  # QDLDL divides by a zero pivot
+            analysis.owner = 0
+            return False
+        self._pivots = pivots
+        return True
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """K x = rhs by the LDL^T, refined until its backward error is ``BACKWARD_ERROR``."""
+        self._factorise()
+        if self._method == "lu":
+            return self._lu.solve(rhs)
+        x = self._factor_solve(rhs)
+        for refinement in range(REFINEMENTS + 1):
+            residual = rhs - self.matrix @ x
+            if self._backward_error(x, rhs, residual) <= BACKWARD_ERROR:
+                return x
+            if refinement < REFINEMENTS:  # a step of iterative refinement with the same factor
+                x = x + self._factor_solve(residual)
+        self._fall_back(pattern=False)  # near-singular values, not the pattern: this tangent
+        return self._lu.solve(rhs)
+
+    def _factor_solve(self, rhs: np.ndarray) -> np.ndarray:
+        """K x = rhs with this tangent's LDL^T (QDLDL's or the symmetric SuperLU's)."""
+        if self._method == "superlu":
+            return self._symmetric.solve(rhs)
+        if self._analysis.owner != self._token:  # a later tangent refactorised the solver
+            self._ldl()
+        solver = self._analysis.solver
+        if rhs.ndim == 1:
+            return solver.solve(rhs)
+        return np.column_stack([solver.solve(np.ascontiguousarray(column)) for column in rhs.T])
+
+    def _backward_error(self, x: np.ndarray, rhs: np.ndarray, residual: np.ndarray) -> float:
+        """|rhs - K x| / (|K| |x| + |rhs|) in infinity norms (over all columns)."""
+        if self._norm is None:
+            self._norm = _norm_inf(self.matrix)
+        size = self._norm * np.abs(x).max(initial=0.0) + np.abs(rhs).max(initial=0.0)
+        return float(np.abs(residual).max(initial=0.0) / size) if size > 0.0 else 0.0
+
+    def negative_eigenvalues(self, round_off: float = ROUND_OFF) -> int | None:
+        """Pivots of the LDL^T below -round_off times the largest in size (Sylvester's inertia).
+
+        Not judged (None) when K has non-finite entries, or when it fell back
+        to the pivoting LU and is a saddle point or meets a zero pivot in a
+        symmetric-mode SuperLU too.
+        """
+        if not np.isfinite(self.matrix.data).all():
             return None
-        d = lu.U.diagonal()
-        return int(np.sum(d < -round_off * np.abs(d).max(initial=0.0)))
+        self._factorise()
+        pivots = self._pivots
+        if pivots is None:  # the fallback: a separate symmetric-mode factorisation
+            if self.n_multipliers:
+                return None
+            symmetric = _symmetric_superlu(self.matrix)
+            if symmetric is None:
+                return None
+            pivots = symmetric.U.diagonal()
+        return int(np.sum(pivots < -round_off * np.abs(pivots).max(initial=0.0)))
 
     def toarray(self) -> np.ndarray:
         return self.matrix.toarray()
+
+
+def _symmetric_superlu(matrix: sp.csc_matrix):
+    """SuperLU in symmetric mode with diagonal pivots (an LDL^T whose D is U's diagonal).
+
+    None when it meets a zero pivot, takes an off-diagonal one (then U's
+    diagonal is no longer D) or gives a non-finite pivot.
+    """
+    import scipy.sparse.linalg as spla  # SuperLU: only wide bands (a start-up cost)
+
+    try:
+        lu = spla.splu(
+            matrix,
+            permc_spec="MMD_AT_PLUS_A",
+            diag_pivot_thresh=0.0,
+            options={"SymmetricMode": True},
+        )
+    except RuntimeError:
+        return None
+    pivots = lu.U.diagonal()
+    if not np.array_equal(lu.perm_r, lu.perm_c) or not np.isfinite(pivots).all():
+        return None
+    return lu
+
+
+def _norm_inf(matrix: sp.csc_matrix) -> float:
+    """The largest absolute row sum of a sparse matrix (its infinity norm)."""
+    row_sums = np.bincount(matrix.indices, np.abs(matrix.data), minlength=matrix.shape[0])
+    return float(row_sums.max(initial=0.0))
 
 
 class TangentLayout:
@@ -447,6 +617,7 @@ class TangentLayout:
         uniq, inverse = np.unique(cols * n + rows, return_inverse=True)
         self.slots, self.size = inverse.ravel().astype(np.int64), uniq.size
         self._keys = uniq
+        self._analysis = SparseAnalysis()  # shared by the pattern's tangents
         self._indices = (uniq % n).astype(np.int32)
         self._indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
 
@@ -496,4 +667,4 @@ class TangentLayout:
         if self.kind == "banded":  # column j contiguous: Fortran order, as LAPACK wants it
             return BandedTangent(storage.reshape(self.n, self.b + 1).T, self.perm, self.b)
         matrix = sp.csc_matrix((storage, self._indices, self._indptr), shape=(self.n, self.n))
-        return SparseTangent(matrix, self.n_multipliers)
+        return SparseTangent(matrix, self.n_multipliers, self._analysis)
