@@ -209,6 +209,9 @@ class Family:
         connectors ``system`` joins, without the System (a batch of copies,
         :mod:`flexval.reducedmodels.batch`, numbers them once for all
         copies). None: a batch builds each copy's System.
+    exclusive : tuple of (str, str)
+        Pairs of options (a, b) where b means nothing once a is set: an id
+        giving a a value other than its default and naming b is refused.
     """
 
     name: str
@@ -220,6 +223,7 @@ class Family:
     system: Callable[..., Any] | None = None
     cost: Callable[..., Cost] | None = None
     connectors: Callable[..., Any] | None = None
+    exclusive: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self) -> None:
         unknown = set(self.capabilities) - CAPABILITIES
@@ -390,6 +394,9 @@ def _parse_options(
         if name in given:
             fail(f"option {name!r} given twice")
         given[name] = value
+    for a, b in fam.exclusive:
+        if given.get(a, fam.option(a).default) != fam.option(a).default and b in given:
+            fail(f"option {b!r} of '{fam.name}' means nothing with {a!r}; leave it out")
     return tuple(sorted((k, v) for k, v in given.items() if v != fam.option(k).default))
 
 

@@ -35,6 +35,9 @@ WIDTH = Option.flag(
     "kept; excludes plate",
 )
 
+WIDTH_EXCLUDES = (("width", "plate"),)
+"""``plate`` is ``width``'s limit of a flexure much deeper than sqrt(R h): an id gives one."""
+
 FRAME = Option.choice(
     "frame",
     "DCMM measuring frame: each element's relative displacement is measured in the "
@@ -194,6 +197,7 @@ BEAM = register(
         frozenset({ARCLENGTH}),
         _system_of(_beam),
         connectors=_connectors_of(_beam),
+        exclusive=WIDTH_EXCLUDES,
     )
 )
 
@@ -207,6 +211,7 @@ PRBM = register(
         frozenset({ARCLENGTH}),
         _system_of(_prbm),
         connectors=_connectors_of(_prbm),
+        exclusive=WIDTH_EXCLUDES,
     )
 )
 
@@ -221,6 +226,7 @@ DCMM = register(
         frozenset({ARCLENGTH}),
         _system_of(_dcmm),
         connectors=_connectors_of(_dcmm),
+        exclusive=WIDTH_EXCLUDES,
     )
 )
 
@@ -234,5 +240,6 @@ EE = register(
         frozenset({LINEAR}),
         _system_of(_ee),
         connectors=_connectors_of(_ee),
+        exclusive=WIDTH_EXCLUDES,
     )
 )

@@ -43,7 +43,8 @@ def flexure_connectors(
     ratio of its depth's anticlastic curvature
     (:func:`flexval.geometry.anticlastic.flexure_ratio`), with the same shear
     modulus (:func:`~flexval.geometry.anticlastic.effective_material`): 1 on a
-    straight uniform flexure, tending to ``plate``'s constants as the depth grows.
+    straight uniform flexure, tending to ``plate``'s constants as the depth grows
+    (the catalogue refuses an id giving both).
     Pins (``mechanism.pins``) are added as exact Lagrange-multiplier joints
     (:class:`flexval.reducedmodels.joints.PinConnector`) whatever the model. With
     ``[gravity]`` in the scene, the weights of the flexures and bodies are
@@ -54,18 +55,10 @@ def flexure_connectors(
     SceneError
         If the model cannot represent a flexure (``make`` raises ValueError,
         e.g. a PRBM arc angle outside its fitted table); the field names the
-        flexure. If both ``plate`` and ``width`` are given (field ``model``).
+        flexure.
     """
     options = dict(options)
     plate, width = options.pop("plate", False), options.pop("width", False)
-    if plate and width:
-        raise SceneError(
-            mechanism.source,
-            "model",
-            spec.id,
-            "options 'plate' and 'width' exclude each other: 'plate' is the limit of "
-            "'width' for a flexure much deeper than sqrt(R h); give one of them",
-        )
     flexible = mechanism  # the plate option: the flexures' constants of a wide section
     if plate:
         flexible = dataclasses.replace(mechanism, material=mechanism.material.plane_strain())

@@ -7,7 +7,7 @@ continuum model runs.
 
 from __future__ import annotations
 
-from flexval.geometry import LoadCase, Mechanism
+from flexval.geometry import LoadCase, Mechanism, SceneError
 from flexval.geometry.mesh import MAX_LEVEL
 from flexval.reducedmodels import LoadPath
 from flexval.reducedmodels.catalogue import (
@@ -73,6 +73,8 @@ def run(
     """
     from .run import run_continuum
 
+    if spec.kwargs.get("three_d") and extra.get("png"):
+        raise SceneError("<command line>", "model", spec.id, "the 3D continuum draws no PNG")
     return run_continuum(
         mechanism,
         case,
@@ -122,9 +124,16 @@ CONTINUUM = register(
                 PLANES,
                 "stress",
             ),
+            Option.flag(
+                "3d",
+                "the flexures as 3D solids (27-node Lagrange hexahedra through half the "
+                "depth b, mid-plane symmetry, free faces z = +-b/2): no plane assumption",
+                keyword="three_d",
+            ),
         ),
         frozenset({FIELDS, REFERENCE, ARCLENGTH}),
         system,
         path_cost,
+        exclusive=(("3d", "plane"),),
     )
 )

@@ -36,13 +36,24 @@ def build_system(
     law: str = "svk",
     plane: str = "stress",
     settings: SolverSettings | None = None,
+    three_d: bool = False,
 ) -> System:
-    """The multibody System with every flexure meshed at ``level`` (pins as exact joints)."""
+    """The multibody System with every flexure meshed at ``level`` (pins as exact joints).
+
+    ``three_d``: the flexures as 3D solids of half their depth
+    (:class:`.connector3d.Continuum3DConnector`; ``plane`` is not used).
+    """
     from flexval.reducedmodels.joints import pin_connectors
 
-    conns = [
-        ContinuumConnector(f, mechanism, level, law=law, plane=plane) for f in mechanism.flexures
-    ]
+    if three_d:
+        from .connector3d import Continuum3DConnector
+
+        conns = [Continuum3DConnector(f, mechanism, level, law=law) for f in mechanism.flexures]
+    else:
+        conns = [
+            ContinuumConnector(f, mechanism, level, law=law, plane=plane)
+            for f in mechanism.flexures
+        ]
     conns += pin_connectors(mechanism)
     return System(mechanism, with_weights(mechanism, conns), settings or SolverSettings())
 
@@ -59,6 +70,7 @@ def run_continuum(
     vtu_dir: str | Path | None = None,
     png: str | Path | None = None,
     model: str | None = None,
+    three_d: bool = False,
 ) -> LoadPath:
     """Trace ``case`` with the continuum model (wall time includes meshing and set-up).
 
@@ -89,16 +101,25 @@ def run_continuum(
         Model id of the result and of the VTU file's name (default
         ``continuum:LEVEL``; the catalogue passes the canonical id with its
         options, so variants of one level do not overwrite each other's file).
+    three_d : bool
+        The flexures as 3D solids (:mod:`.connector3d`) instead of plane ones;
+        the VTU holds their hexahedra and displacements (:mod:`.output3d`);
+        no PNG, no fibre stress of the continuum's own (the section
+        resultants and their peak stress are recorded).
 
     Raises
     ------
     reducedmodels.SolverError
         If the path cannot be followed to full load.
+    ValueError
+        If ``three_d`` is asked together with ``png``.
     """
+    if three_d and png is not None:
+        raise ValueError("the 3D continuum draws no PNG picture")
     limit_threads()  # a per-process cost (threadpoolctl's library scan), not the model's
     t0 = time.perf_counter()
     level = DEFAULT_LEVEL if level is None else int(level)
-    system = build_system(mechanism, level, law, plane)
+    system = build_system(mechanism, level, law, plane, three_d=three_d)
     model = model or f"continuum:{level}"
     settings = {
         "level": level,
@@ -108,6 +129,10 @@ def run_continuum(
         "aspect_ratio": ASPECT_RATIO,
         "mesh_version": MESH_VERSION,
     }
+    if three_d:
+        from flexval.geometry.extrude import layers
+
+        settings.update(plane="3d", layers=layers(level), element_order_3d=27)
     from .fibre import fibre_stresses, notch_peaks
 
     recorder = PathRecorder(system, case, model, scene, settings, record_shapes=record_shapes)
@@ -135,9 +160,10 @@ def run_continuum(
     if vtu_dir is not None:
         from ..outputs import output_path
         from .output import write_vtu
+        from .output3d import write_vtu_3d
 
         stem = f"{scene + '_' if scene else ''}{case.name}_{model.replace(':', '')}"
-        write_vtu(
+        (write_vtu_3d if three_d else write_vtu)(
             output_path(Path(vtu_dir), stem, ".vtu"),
             system.connectors,
             system.local_states(full_load.state),
