@@ -18,6 +18,10 @@ The 3D solves take minutes each; run it after a change to the models::
 
     python benchmarks/threed_study.py                       # both scenes, levels 0 1
     python benchmarks/threed_study.py --scenes open_chain --levels 0
+    python benchmarks/threed_study.py --levels 0 1 --fine-cases open_chain:m+
+
+A 3D level-1 path of the open chain takes 10-40 minutes and 6-8 GB on a 2-core
+machine; level 0 takes 0.5-4 minutes and 0.8 GB.
 """
 
 from __future__ import annotations
@@ -67,7 +71,8 @@ def trace(scene: Scene, model: str, case) -> tuple[LoadPath | None, str | None, 
 
 
 def study_case(scene: Scene, case, levels: list[int], reduced: list[str], seconds: dict) -> dict:
-    """One load case: the 3D levels, both planes and the reduced models' errors against 3D."""
+    """One load case: the 3D ``levels``, both planes and the reduced models' errors against the
+    finest 3D level that reached full load."""
     threed, finest = [], None
     for level in levels:
         model = f"continuum:{level}[3d]"
@@ -99,7 +104,21 @@ def study_case(scene: Scene, case, levels: list[int], reduced: list[str], second
     return {"threed": threed, "planes": planes, "errors": errs}
 
 
-def study(scenes: list[str], levels: list[int], reduced: list[str], cases: list[str] | None):
+def levels_of(scene: str, case: str, levels: list[int], fine: list[str] | None) -> list[int]:
+    """The 3D levels of one case: all of ``levels`` when ``fine`` is None or names the case
+    (``CASE`` or ``SCENE:CASE``), else only the coarsest."""
+    if fine is None or case in fine or f"{scene}:{case}" in fine:
+        return levels
+    return levels[:1]
+
+
+def study(
+    scenes: list[str],
+    levels: list[int],
+    reduced: list[str],
+    cases: list[str] | None,
+    fine: list[str] | None = None,
+):
     """The document and the wall times of every run (keyed by scene, case, model)."""
     code = code_version()  # the code the results come from, not the code at the end
     seconds: dict = {}
@@ -112,7 +131,12 @@ def study(scenes: list[str], levels: list[int], reduced: list[str], cases: list[
             "depth": mech.flexures[0].section.depth,
             "thickness": mech.flexures[0].section.thickness,
             "searle": searle_parameters(mech),
-            "cases": {c.name: study_case(scene, c, levels, reduced, seconds) for c in chosen},
+            "cases": {
+                c.name: study_case(
+                    scene, c, levels_of(name, c.name, levels, fine), reduced, seconds
+                )
+                for c in chosen
+            },
         }
         print(f"{name}: done", flush=True)
     doc = {"format": THREED_FORMAT, "code_version": code, "planes": PLANES, "scenes": out}
@@ -165,12 +189,19 @@ def main() -> None:
     ap.add_argument("--scenes", nargs="+", default=["open_chain", "closed_chain"])
     ap.add_argument("--levels", nargs="+", type=int, default=[0, 1])
     ap.add_argument("--cases", nargs="+", default=None, help="default: every load case")
+    ap.add_argument(
+        "--fine-cases",
+        nargs="+",
+        default=None,
+        help="cases (CASE or SCENE:CASE) that run every level; the others run only the "
+        "coarsest (default: every case runs every level)",
+    )
     ap.add_argument("--models", nargs="+", default=list(REDUCED))
     ap.add_argument("--out", type=Path, default=Path("reports/threed"))
     args = ap.parse_args()
     for m in args.models:
         parse_model(m)  # a bad id fails before any work
-    doc, seconds = study(args.scenes, sorted(args.levels), args.models, args.cases)
+    doc, seconds = study(args.scenes, sorted(args.levels), args.models, args.cases, args.fine_cases)
     args.out.mkdir(parents=True, exist_ok=True)
     write_json(args.out / "threed.json", doc)
     write_text(args.out / "threed.md", markdown(doc))

@@ -63,8 +63,9 @@ def test_section_places_3d_and_names_the_closest_option(tmp_path):
     path.write_text(json.dumps(_doc()))
     text = "\n".join(threed_section(path, "open_chain", "abc"))
     # |d| 1.03 between 1.10 (stress) and 0.98 (strain): (1.03 - 1.10) / (0.98 - 1.10) = 0.58
-    assert "| m+ | 1.03 | 0.971 | 1.1 | 0.98 | 0.58 | 0.58 | plane strain |" in text
+    assert "| m+ | 1 | 1.03 | 0.971 | 1.1 | 0.98 | 0.58 | 0.58 | plane strain |" in text
     assert "failed: stopped at 40 %" in text
+    assert "lies 0.58–0.58 of the way" in text and "closer to plane strain on every case" in text
     assert "- `beam:100`: m+: `beam:100[width]`." in text
     assert "Stale" not in text
 

@@ -119,7 +119,7 @@ def _bracket_rows(cases: dict) -> tuple[list[str], dict[str, str]]:
         fine, coarse = _finest(case)
         if fine is None:
             why = "; ".join(str(r.get("failure")) for r in case["threed"]) or "not run"
-            rows.append(f"| {name} | failed: {why} | | | | | | |")
+            rows.append(f"| {name} | failed: {why} | | | | | | | |")
             continue
         d3, r3 = _end(fine)
         ds, rs = _end(case["planes"]["stress"])
@@ -127,10 +127,30 @@ def _bracket_rows(cases: dict) -> tuple[list[str], dict[str, str]]:
         t_d, t_r = position(d3, ds, dp), position(r3, rs, rp)
         closer[name] = _closer(t_d)
         rows.append(
-            f"| {name} | {d3:.6g} | {_change(fine, coarse)} | {ds:.6g} | {dp:.6g} | "
+            f"| {name} | {int(fine['level'])} | {d3:.6g} | {_change(fine, coarse)} | {ds:.6g} | "
+            f"{dp:.6g} | "
             f"{_fmt(t_d)} | {_fmt(t_r)} | {closer[name]} |"
         )
     return rows, closer
+
+
+def _verdict(cases: dict, closer: dict[str, str]) -> str:
+    """One sentence: the range of the 3D answer's position and the closer idealisation."""
+    where = []
+    for case in cases.values():
+        fine, _ = _finest(case)
+        stress, strain = _end(case["planes"]["stress"]), _end(case["planes"]["strain"])
+        t = position(_end(fine)[0], stress[0], strain[0])
+        if t is not None:
+            where.append(t)
+    sides = sorted(set(closer.values()))
+    span = f"{min(where):.2f}–{max(where):.2f}" if where else "–"
+    side = (
+        f"closer to {sides[0]} on every case"
+        if len(sides) == 1
+        else "closer to " + ", ".join(f"{v} on {k}" for k, v in closer.items())
+    )
+    return f"The 3D target |d| lies {span} of the way from plane stress to plane strain: {side}."
 
 
 def _model_rows(cases: dict) -> tuple[list[str], list[str]]:
@@ -186,19 +206,21 @@ def threed_section(path: Path | None, scene: str, code: str) -> list[str]:
     lines += [
         f"Depth b = {float(data['depth']):g} mm, thickness h = {float(data['thickness']):g} mm; "
         f"Searle's parameter b²/(R h) by flexure: {searle or '–'}. "
-        f"Target |d| at full load (mm): the finest 3D level, its change from the level "
-        f"below (percent), `{planes['stress']}` and `{planes['strain']}`; the 3D answer's "
+        f"Target |d| at full load (mm): the finest 3D level run, its change from the level "
+        f"below where both ran (percent), `{planes['stress']}` and `{planes['strain']}`; the "
+        "3D answer's "
         "position between them (0: plane stress, 1: plane strain) for |d| and the rotation.",
         "",
-        "| case | 3D |d| (mm) | level change (%) | plane stress | plane strain | "
-        "position |d| | position rot. | closer |",
-        "|---|---:|---:|---:|---:|---:|---:|---|",
+        "| case | 3D level | 3D |d| (mm) | change from level below (%) | plane stress | "
+        "plane strain | position |d| | position rot. | closer |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
     rows, closer = _bracket_rows(data["cases"])
     lines += rows
     cases = {k: v for k, v in data["cases"].items() if k in closer}
     if not cases:
         return lines + ["", "No 3D run reached full load.", ""]
+    lines += ["", _verdict(cases, closer)]
     model_rows, best = _model_rows(cases)
     lines += [
         "",
