@@ -121,12 +121,66 @@ class BatchSystem(System):
         self.uniform = self._check(pairs)
         self.members, self.n_copies = pairs, len(pairs)
         ground = pairs[0][0].ground
-        merged, origin = self._merged_connectors(pairs, ground)
+        #: each copy's body names in the batch
+        self.copy_names = names = self._names(pairs, ground)
+        merged, origin = self._merged_connectors(pairs, names)
         #: (copy, index among the copy's connectors) of every connector of the batch
         self.origin = origin
         self.copy_dofs: list[np.ndarray] | None = None
-        super().__init__(self._merged_mechanism(pairs, ground), merged, settings)
+        #: copy_dofs as one table (copies, unknowns) where every copy is numbered as copy 0
+        self._copy_table: np.ndarray | None = None
+        super().__init__(self._merged_mechanism(pairs, ground, names), merged, settings)
         self._number_copies()
+
+    def _number_connectors(self) -> tuple[np.ndarray, np.ndarray, list[int], np.ndarray]:
+        """:meth:`System._number_connectors` of copies all numbered as copy 0, as one table.
+
+        Copy k's bodies are the batch's bodies k b .. (k + 1) b - 1 (b bodies a
+        copy, in copy 0's order), so a connector's pose dofs are its copy 0
+        counterpart's shifted by 3 b k; the internal coordinates follow in
+        the batch's connector order; each copy's internal angles are read
+        once per sequence of connectors the copies share. The numbers the
+        loop over every connector gives (``tests/test_batch.py``), without it.
+        """
+        if not self.uniform:
+            return super()._number_connectors()
+        template, count = self.template, self.n_copies
+        bodies = len(template.body_index)
+        origin = np.array(self.origin, np.int64).reshape(-1, 2)
+        copy, index = origin[:, 0], origin[:, 1]
+        starts = np.asarray(template._bounds[:-1], np.int64)
+        ends = template._all_dofs[starts[:, None] + np.arange(6)][index]  # copy 0's, -1: ground
+        pose = np.where(ends >= 0, ends + 3 * bodies * copy[:, None], -1)
+        poses = 3 * bodies * count
+        sizes = (np.diff(template._bounds) - 6)[index]  # each connector's internal coordinates
+        total = poses + int(sizes.sum())
+        place = np.where(pose >= 0, pose, total + np.arange(6) % 3)
+        bounds = np.concatenate([[0], np.cumsum(6 + sizes)])
+        angles = np.tile([False, False, True], bodies * count)
+        if not sizes.any():
+            return pose.ravel(), place.ravel(), bounds.tolist(), angles
+        dofs, places = np.empty(bounds[-1], np.int64), np.empty(bounds[-1], np.int64)
+        at = bounds[:-1, None] + np.arange(6)
+        dofs[at], places[at] = pose, place
+        per = np.repeat(np.arange(sizes.size), sizes)  # the connector of each internal one
+        offset = np.arange(per.size) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+        at = bounds[:-1][per] + 6 + offset
+        dofs[at] = places[at] = poses + np.arange(per.size)
+        # each distinct sequence of connectors' internal angles, in copy 0's internal order
+        rows, table = {}, []
+        for _, connectors in self.members:
+            if id(connectors) not in rows:
+                rows[id(connectors)] = len(table)
+                table.append(
+                    np.concatenate(
+                        [np.zeros(0, bool)]
+                        + [np.asarray(c.internal_is_rotation(), bool) for c in connectors]
+                    )
+                )
+        row = np.array([rows[id(connectors)] for _, connectors in self.members])
+        first = np.cumsum(np.diff(template._bounds) - 6) - (np.diff(template._bounds) - 6)
+        internal = np.array(table)[row[copy[per]], first[index[per]] + offset]
+        return dofs, places, bounds.tolist(), np.concatenate([angles, internal])
 
     @staticmethod
     def _check(pairs: list[Member]) -> bool:
@@ -166,10 +220,18 @@ class BatchSystem(System):
         return body if body == ground else f"{k}/{body}"
 
     @classmethod
+    def _names(cls, pairs: list[Member], ground: str) -> list[dict[str, str]]:
+        """Each copy's body names in the batch (:meth:`_name`), every copy's bodies being
+        copy 0's (:meth:`_check`)."""
+        bodies = list(pairs[0][0].bodies)
+        return [{b: cls._name(k, b, ground) for b in bodies} for k in range(len(pairs))]
+
+    @staticmethod
     def _merged_connectors(
-        cls, pairs: list[Member], ground: str
+        pairs: list[Member], names: list[dict[str, str]]
     ) -> tuple[list[Connector], list[tuple[int, int]]]:
-        """Every copy's connectors with the batch's body names, one class after the other.
+        """Every copy's connectors with the batch's body names (``names``: :meth:`_names`),
+        one class after the other.
 
         Connectors of one class sit together so that each class is one group
         (one compiled assembly for all copies). Also returns, per connector,
@@ -181,28 +243,30 @@ class BatchSystem(System):
         ]
         merged, origin = [], []
         for ends in bodies:  # a class after the other
-            for k, (_, connectors) in enumerate(pairs):
+            for k, ((_, connectors), named) in enumerate(zip(pairs, names)):
                 for j, (a, b) in ends:
-                    ends_k = (cls._name(k, a, ground), cls._name(k, b, ground))
-                    merged.append(_shallow_copy(connectors[j], "bodies", ends_k))
+                    merged.append(_shallow_copy(connectors[j], "bodies", (named[a], named[b])))
                     origin.append((k, j))
         return merged, origin
 
-    @classmethod
-    def _merged_mechanism(cls, pairs: list[Member], ground: str) -> Mechanism:
-        """The bodies of every copy, renamed, under the shared ground (copy 0 for the rest)."""
+    @staticmethod
+    def _merged_mechanism(
+        pairs: list[Member], ground: str, names: list[dict[str, str]]
+    ) -> Mechanism:
+        """The bodies of every copy, renamed (``names``: :meth:`_names`), under the shared
+        ground (copy 0 for the rest)."""
         first = pairs[0][0]
         bodies = {ground: first.bodies[ground]}
-        for k, (mechanism, _) in enumerate(pairs):
+        for (mechanism, _), named in zip(pairs, names):
             for name in mechanism.moving_bodies:
-                new = cls._name(k, name, ground)
+                new = named[name]
                 bodies[new] = _shallow_copy(mechanism.bodies[name], "name", new)
         return Mechanism(
             bodies,
             first.flexures,
             ground,
             first.material,
-            cls._name(0, first.target_body, ground),
+            names[0][first.target_body],
             first.target_point,
             first.source,
         )
@@ -236,10 +300,10 @@ class BatchSystem(System):
     def _uniform_numbering(self) -> list[np.ndarray]:
         """:meth:`_copy_numbering` of copies all numbered as copy 0, as one table (copies, n):
         each copy's bodies' poses, then the internal coordinates of each of its connectors."""
-        ground, template, count = self.mechanism.ground, self.template, self.n_copies
+        template, count = self.template, self.n_copies
         own_bodies = list(template.body_index)  # in copy 0's order
         bodies = np.array(
-            [[self.body_index[self._name(k, b, ground)] for b in own_bodies] for k in range(count)]
+            [[self.body_index[named[b]] for b in own_bodies] for named in self.copy_names]
         ).reshape(count, len(own_bodies))
         table = np.empty((count, template.n_dofs), np.int64)
         table[:, : 3 * len(own_bodies)] = (3 * bodies[:, :, None] + np.arange(3)).reshape(count, -1)
@@ -252,6 +316,7 @@ class BatchSystem(System):
             own_start = np.asarray(template._bounds[:-1]) + 6
             own = template._all_dofs[own_start[origin[per, 1]] + offset]
             table[origin[per, 0], own] = batch
+        self._copy_table = table
         return list(table)
 
     def _tangent_ordering(self) -> np.ndarray | None:
@@ -279,7 +344,7 @@ class BatchSystem(System):
                 perm = reverse_cuthill_mckee(graph, symmetric_mode=True).astype(np.int64)
             #: the band order of each copy's block (of the copy's own unknowns)
             self._tangent_order = perm
-            return np.concatenate([dofs[perm] for dofs in self.copy_dofs])
+            return self._copy_table[:, perm].ravel()
         if any(self._own(k).layout.kind != "banded" for k in range(self.n_copies)):
             return None
         return np.concatenate(
@@ -288,13 +353,15 @@ class BatchSystem(System):
 
     def _number_copies(self) -> None:
         """The maps between copies and batch, and every per-copy scale."""
-        ground = self.mechanism.ground
         if self.copy_dofs is None:
             self.copy_dofs = self._copy_numbering()
         copy_dofs = self.copy_dofs
         dof_copy = np.empty(self.n_dofs, np.int64)
-        for k, dofs in enumerate(copy_dofs):
-            dof_copy[dofs] = k
+        if self._copy_table is not None:
+            dof_copy[self._copy_table] = np.arange(self.n_copies)[:, None]
+        else:
+            for k, dofs in enumerate(copy_dofs):
+                dof_copy[dofs] = k
         self.dof_copy = dof_copy
         of_mechanism: dict[int, tuple] = {}  # size, target body and offsets (mm): once each
         for mechanism, _ in self.members:
@@ -318,7 +385,7 @@ class BatchSystem(System):
         )
         target = np.array(
             [
-                [3 * self.body_index[self._name(k, body, ground)], *offsets]
+                [3 * self.body_index[self.copy_names[k][body]], *offsets]
                 for k, (_, body, *offsets) in enumerate(found)
             ]
         )
@@ -405,7 +472,11 @@ class BatchSystem(System):
             keys.append(key)
             copies_of.setdefault(key, []).append(k)
         # the copies' bodies' poses in the batch (each copy's own numbering is copy 0's)
-        poses = np.array([dofs[: 3 * len(template.body_index)] for dofs in self.copy_dofs])
+        poses = (
+            self._copy_table[:, : 3 * len(template.body_index)]
+            if self._copy_table is not None
+            else np.array([dofs[: 3 * len(template.body_index)] for dofs in self.copy_dofs])
+        )
         dofs, moment_dofs = [None] * self.n_copies, [None] * self.n_copies
         for key, ks in copies_of.items():  # renumbered for all copies of a key at once
             p, at = own[key], poses[ks]
@@ -864,14 +935,14 @@ def record_batch(
     states = np.array([p.state for p in points])
     position = {k: j for j, k in enumerate(kept)}
     reasons: dict[int, list[list[str]]] = {}  # of the copies with any, per level
-    stressed = []  # (copy's place in kept, connector's index in its copy, name, forces, section)
+    stressed = []  # (copy's place in kept, connector's index in its copy, name)
+    entries = []  # their (forces, section)
     sections = batch.copy_sections()
     for (group, run), coordinates in zip(batch.groups, batch.group_coordinates(states)):
         verdicts, stacked = group.path_end_pass(coordinates)
-        for m, c, per_level, found in zip(
-            range(run.start, run.stop), group.connectors, verdicts, stacked
+        for (k, index), c, per_level, found in zip(
+            batch.origin[run], group.connectors, verdicts, stacked
         ):
-            k, index = batch.origin[m]
             j = position.get(k)
             if j is None:
                 continue
@@ -880,13 +951,13 @@ def record_batch(
                 for into, why in zip(into_levels, per_level):
                     if why:
                         into.extend(f"{c.name}: {w}" for w in why)
-            section = sections[k].get(c.name)
-            if found is not None and section is not None:
-                stressed.append((j, index, c.name, found, section))
+            if found is not None:
+                section = sections[k].get(c.name)
+                if section is not None:
+                    stressed.append((j, index, c.name))
+                    entries.append((found, section))
     peaks: list[list] = [[] for _ in kept]
-    for (j, index, name, _, _), found in zip(
-        stressed, path_peaks([(forces, section) for *_, forces, section in stressed])
-    ):
+    for (j, index, name), found in zip(stressed, path_peaks(entries)):
         peaks[j].append((index, name, found))
     no_reasons = [[] for _ in points]
     copies = batch.n_copies
@@ -915,7 +986,7 @@ def record_batch(
         )
         recorder.judged_peaks(
             reasons.get(j, no_reasons),
-            [(name, found) for _, name, found in sorted(peaks[j], key=lambda e: e[0])],
+            [(name, found) for _, name, found in sorted(peaks[j])],  # by index: unique
         )
         if failure is None:
             paths.append(recorder.finish())

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -134,29 +135,12 @@ class System:
             (mech.target_point - self.reference[mech.target_body]).tolist(),
             mech.target_point.tolist(),
         )
-        n = 3 * len(self.body_index)
-        total = n + sum(c.n_internal for c in self.connectors)
         # every connector's global dofs [pose_a, pose_b, internal] in one array (ground: -1),
-        # and their places in [q, ground pose] (the ground's pose read after q), built from
-        # plain lists; connector k's are _all_dofs[_bounds[k]:_bounds[k + 1]]
-        pose = {b: [3 * k, 3 * k + 1, 3 * k + 2] for b, k in self.body_index.items()}
-        place = {**pose, mech.ground: [total, total + 1, total + 2]}
-        pose[mech.ground] = [-1, -1, -1]
-        dofs, places, self._bounds = [], [], [0]
-        rot_mask = [np.array([False, False, True] * len(self.body_index))]
-        for c in self.connectors:
-            internal = list(range(n, n + c.n_internal))
-            a, b = c.bodies
-            dofs += pose[a] + pose[b] + internal
-            places += place[a] + place[b] + internal
-            self._bounds.append(len(dofs))
-            rot_mask.append(np.asarray(c.internal_is_rotation(), bool))
-            n += c.n_internal
-        self._all_dofs = np.array(dofs, np.int64)
-        self._all_gather = np.array(places, np.int64)
-        self._local_to_global = self._split(self._all_dofs, self._bounds)
-        self.n_dofs = n
-        self.is_rotation = np.concatenate(rot_mask)
+        # and their places in [q, ground pose] (the ground's pose read after q); connector
+        # k's are _all_dofs[_bounds[k]:_bounds[k + 1]]
+        self._all_dofs, self._all_gather, self._bounds, self.is_rotation = self._number_connectors()
+        # the poses, then every connector's internal coordinates (its local ones but the six)
+        self.n_dofs = 3 * len(self.body_index) + self._bounds[-1] - 6 * len(self.connectors)
         self.n_multipliers = sum(c.n_multipliers for c in self.connectors)
         #: residual weights: forces as is, moments per unit of mechanism size (N)
         self.force_scale = np.where(self.is_rotation, 1.0 / self.size, 1.0)
@@ -187,6 +171,49 @@ class System:
         )
         self._build_scatter()
 
+    @cached_property
+    def _local_to_global(self) -> list[np.ndarray]:
+        """Each connector's global dofs [pose_a, pose_b, internal] (views of ``_all_dofs``),
+        made on first use: a batch of thousands of connectors reads few of them."""
+        return self._split(self._all_dofs, self._bounds)
+
+    @cached_property
+    def _gather(self) -> list[np.ndarray]:
+        """Each connector's local coordinates' places in [q, ground pose] (views of
+        ``_all_gather``), made on first use."""
+        return self._split(self._all_gather, self._bounds)
+
+    def _number_connectors(self) -> tuple[np.ndarray, np.ndarray, list[int], np.ndarray]:
+        """The unknowns: the moving bodies' poses, then each connector's internal coordinates.
+
+        Returns every connector's global dofs [pose_a, pose_b, internal] laid
+        end to end (ground: -1), their places in [q, ground pose] (the
+        ground's pose read after q), where each connector's start (and the
+        end), and which unknowns are angles; built from plain lists.
+        """
+        mech = self.mechanism
+        n = 3 * len(self.body_index)
+        total = n + sum(c.n_internal for c in self.connectors)
+        pose = {b: [3 * k, 3 * k + 1, 3 * k + 2] for b, k in self.body_index.items()}
+        place = {**pose, mech.ground: [total, total + 1, total + 2]}
+        pose[mech.ground] = [-1, -1, -1]
+        dofs, places, bounds = [], [], [0]
+        rot_mask = [np.array([False, False, True] * len(self.body_index))]
+        for c in self.connectors:
+            internal = list(range(n, n + c.n_internal))
+            a, b = c.bodies
+            dofs += pose[a] + pose[b] + internal
+            places += place[a] + place[b] + internal
+            bounds.append(len(dofs))
+            rot_mask.append(np.asarray(c.internal_is_rotation(), bool))
+            n += c.n_internal
+        return (
+            np.array(dofs, np.int64),
+            np.array(places, np.int64),
+            bounds,
+            np.concatenate(rot_mask),
+        )
+
     def _build_scatter(self) -> None:
         """Index maps of the assembly, computed once (the sparsity pattern never changes).
 
@@ -210,7 +237,6 @@ class System:
           entry, None where the group has none.
         """
         n, bounds, all_gather = self.n_dofs, self._bounds, self._all_gather
-        gathers = self._split(all_gather, bounds)
 
         def of_run(values: np.ndarray, offsets: list[int], run: slice) -> np.ndarray:
             """The entries of a run of consecutive connectors (a view)."""
@@ -231,7 +257,6 @@ class System:
         # System assembles in one thread at a time (sweeps run systems in processes)
         self._coordinates = self.extended(np.zeros(n))
         self._load_diagonal = np.zeros(n)
-        self._gather = gathers
         diagonal = np.arange(n)
         compiled = any(group.compiled for group, _ in self._groups)
         #: the global row and column of every value slot of the tangent's pattern (the layout's

@@ -420,7 +420,7 @@ class _StackTables(NamedTuple):
         The samples in station order, connector by connector.
     sample_start : list of int (c + 1,)
         Each connector's first sample (and the end).
-    pose_order : list of int
+    pose_order : int64 array
         The connectors' local coordinates [pose_a, pose_b, internal], laid
         end to end, in the stack's order of chain bodies (a, cuts, b).
     element_dofs : int64 array (e, 6)
@@ -442,7 +442,7 @@ class _StackTables(NamedTuple):
     w: np.ndarray
     order: np.ndarray
     sample_start: list
-    pose_order: list
+    pose_order: np.ndarray
     element_dofs: np.ndarray
     hessian_rows: np.ndarray
     hessian_cols: np.ndarray
@@ -496,7 +496,7 @@ def _stack_tables(chains: tuple[tuple[int, bool], ...]) -> _StackTables:
         np.concatenate(w),
         np.concatenate(order).astype(np.int64),
         sample_start,
-        pose_order,
+        np.array(pose_order, np.int64),
         np.concatenate(element_dofs),
         np.concatenate(rows).astype(np.int64),
         np.concatenate(cols).astype(np.int64),
@@ -652,11 +652,15 @@ class DcmmGroup(ConnectorGroup):
             tables.sub_arc_start,
         )
         limits = np.array([c._turn_limit for c in self.connectors])
-        near = ((strain > MAX_STRAIN - SCREEN_MARGIN) | (turn > limits - SCREEN_MARGIN)).T.tolist()
-        levels = levels_of() if any(map(any, near)) else [None] * len(poses)
+        near = ((strain > MAX_STRAIN - SCREEN_MARGIN) | (turn > limits - SCREEN_MARGIN)).T
+        screened = near.any(axis=1).tolist()  # the connectors near a limit at some level
+        levels = levels_of() if any(screened) else []
+        steps = range(len(poses))
         return [
-            [c.validity(*states[j]) if flag else [] for states, flag in zip(levels, flags)]
-            for j, (c, flags) in enumerate(zip(self.connectors, near))
+            [c.validity(*states[j]) if flag else [] for states, flag in zip(levels, near[j])]
+            if screen
+            else [[] for _ in steps]
+            for j, (c, screen) in enumerate(zip(self.connectors, screened))
         ]
 
     def path_section_forces(self, levels) -> list[SectionForces]:

@@ -384,15 +384,15 @@ def test_batch_construction_is_the_per_copy_construction(model, monkeypatch):
 
 
 def test_stresses_of_many_flexures_at_once_are_each_flexures_alone():
-    """path_peaks and state_peaks stack flexures of one kind of section (a batch's); each
-    entry must be what its own SectionForces.fibre_stress gives (max, argmax and profile, bit
-    for bit), stacked or not."""
-    from flexval.reducedmodels.recorder import STACK_FROM, path_peaks, state_peaks
+    """path_peaks and state_peaks stack flexures of one kind of section (a batch's), in stacks
+    of at most STACK_SIZE; each entry must be what its own SectionForces.fibre_stress gives
+    (max, argmax and profile, bit for bit), stacked or not, in the first stack or a later one."""
+    from flexval.reducedmodels.recorder import STACK_FROM, STACK_SIZE, path_peaks, state_peaks
     from flexval.reducedmodels.sections import SectionForces
 
     uniform = load_scene("open_chain").mechanism.flexures[0].section
     varying = load_scene("notch_fourbar").mechanism.flexures[0].section
-    sections = [uniform.scaled(1.0 + 0.1 * k) for k in range(STACK_FROM + 2)]
+    sections = [uniform.scaled(1.0 + 0.01 * k) for k in range(2 * STACK_SIZE + STACK_FROM + 2)]
     sections.insert(3, varying)
     rng = np.random.default_rng(7)
     at = np.linspace(0.0, 1.0, 9)
@@ -415,6 +415,29 @@ def test_stresses_of_many_flexures_at_once_are_each_flexures_alone():
         assert found == ([abs(s) * top for s in scales], [place] * 3, at.tolist(), unit.tolist())
     # a few alone give the same
     assert path_peaks(list(zip(paths, sections))[:3]) == path_peaks(list(zip(paths, sections)))[:3]
+
+
+@pytest.mark.parametrize("scene", ["open_chain", "closed_chain"])
+@pytest.mark.parametrize("model", ["dcmm:1", "dcmm:3", "beam:4", "prbm"])
+def test_a_batch_numbers_copies_as_one_table_as_the_loop_over_its_connectors(scene, model):
+    """Copies all numbered as copy 0 get the batch's unknowns from copy 0's numbering shifted
+    per copy, without the core's loop over every connector; it must give that loop's numbers
+    exactly: every connector's dofs and places in [q, ground pose], where each starts, and
+    which unknowns are angles (internal coordinates: dcmm:3's cut bodies, beam:4's nodes,
+    prbm's link angles and multipliers; pins on the closed chain). Copies share connectors
+    or have their own."""
+    from flexval.reducedmodels.core import System
+
+    spec = parse_model(model)
+    mechanisms, _ = variants(scene, "f+", [1.0, 1.2, 0.9], [1.0, 1.0, 1.0])
+    own = [(m, spec.model_family.connectors(m, spec)) for m in mechanisms]
+    batch = BatchSystem([own[0], own[1], own[0], own[2], own[0]])
+    assert batch.uniform
+    table, loop = batch._number_connectors(), System._number_connectors(batch)
+    for fast, slow in zip(table, loop):
+        assert type(fast) is type(slow)
+        assert np.array_equal(fast, slow) and np.asarray(fast).dtype == np.asarray(slow).dtype
+    assert batch.n_dofs == loop[3].size and batch.is_rotation.any()
 
 
 @pytest.mark.parametrize("seed", [0, 4])

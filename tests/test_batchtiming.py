@@ -79,14 +79,13 @@ def test_a_small_batch_times_the_solo_path(model, case_name):
         assert lp.load == solo.load
         assert math.hypot(lp.dx[-1] - solo.dx[-1], lp.dy[-1] - solo.dy[-1]) <= 1e-12 * size
         assert abs(lp.rotation[-1] - solo.rotation[-1]) <= 1e-12 * turn
-        # a linear model has no Newton to share: it runs copy by copy
-        assert lp.stats["batch"] == (1 if model == "ee" else SMALL)
+        assert lp.stats["batch"] == SMALL  # a linear model's copies too: one assembly
     timing = time_batch(scene, spec, case, repeats=2, copies=SMALL)
     assert timing.copies == SMALL and len(timing.samples) == 2
     assert all(math.isfinite(s) and s > 0 for s in timing.samples)
     assert timing.seconds == statistics.median(timing.samples)
     assert timing.agrees and timing.agreement <= AGREEMENT_BAR
-    assert timing.batches == [1 if model == "ee" else SMALL]
+    assert timing.batches == [SMALL]
 
 
 def test_agreement_sees_another_path():
@@ -197,7 +196,7 @@ def test_the_timing_table_shows_the_batched_cost_and_speed_ups(computed):
         assert 1 <= t["copies"] <= batch_copies(unknowns[model], model)
         if model == SPEED_REFERENCE:
             assert t["copies"] == REFERENCE_COPIES
-        assert t["batches"] == [1 if model == "ee" else t["copies"]]
+        assert t["batches"] == [t["copies"]]
 
 
 def _no_figure(*args) -> None:

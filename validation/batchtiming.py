@@ -23,8 +23,10 @@ Every timing checks that it timed the real path: each copy's end
 displacement and rotation must equal those of the same path run alone
 (:func:`end_agreement`, to :data:`AGREEMENT_BAR`). The continuum reference
 is not batched (its path costs seconds: the per-call costs are already
-negligible). A linear family (``ee``) has no Newton to share and runs copy
-by copy inside the batch call.
+negligible). A linear family (``ee``) has no Newton to share; its copies'
+linear responses are computed together
+(:func:`flexval.reducedmodels.linearbatch.linear_responses`: one assembly of
+every copy's K0, one pass for the outputs and one for the stresses).
 
 Timings are median seconds of repeats, cached on disk as JSON records
 (:meth:`flexval.validation.cache.ResultCache.get_record`) beside the load
@@ -62,9 +64,9 @@ median of 3, ms per path; alone, then N = 10, 30, 100, 300, 1000; the 2-core VM 
 average of 2.8): ``dcmm:1`` 1.01; 0.54, 0.27, 0.18, 0.17, 0.20; ``prbm`` 1.22; 0.81, 0.45,
 0.36, 0.33, 0.36; ``beam:20`` 2.03; 1.22, 0.95, 0.97, 0.92, 0.89. From 100 copies on the
 per-batch costs are spread thin; larger batches cost no less per path (their arrays leave
-the processor's caches) and take more of the report's time. A linear model runs copy by
-copy (``ee`` on ``notch_fourbar``: 1.78 ms alone; 1.79, 1.76, 1.82 at N = 10, 30, 100): its
-batched cost is its cost alone."""
+the processor's caches) and take more of the report's time. A linear model's copies share
+their assembly and recording the same way (``ee`` on ``notch_fourbar`` f+: 1.71 ms alone;
+0.31, 0.17, 0.16 at N = 10, 30, 100; load average 1.4)."""
 
 BATCH_UNKNOWNS = 5_000
 """Most unknowns in a timed batch: a model of n unknowns is timed with
@@ -135,8 +137,7 @@ class BatchTiming:
         Largest relative difference of a copy's end displacement or rotation from the
         path run alone (:func:`end_agreement`); None when a copy did not reach full load.
     batches : list of int
-        The batch sizes the copies were traced in (``[copies]``: all together; ``[1]``: a
-        linear model, copy by copy).
+        The batch sizes the copies were traced in (``[copies]``: all together).
     cached : bool
         Read from the result cache (its seconds are those of the run that filled it).
     """
