@@ -169,7 +169,7 @@ def markdown(doc: dict) -> str:
                     f"{_value(p, 'rot')} |"
                 )
         lines += ["", "End errors against the finest 3D level (percent):", ""]
-        lines += ["| case | model | |d| vector | rotation |", "|---|---|---:|---:|"]
+        lines += ["| case | model | disp. vector | rotation |", "|---|---|---:|---:|"]
         for case, c in data["cases"].items():
             for model, e in c["errors"].items():
                 lines.append(f"| {case} | {model} | {e['end_disp_vec']:.3f} | {e['end_rot']:.3f} |")

@@ -25,6 +25,7 @@ def _doc(code: str = "abc") -> dict:
         ],
         "planes": {"stress": end(1.10, 0.55), "strain": end(0.98, 0.49)},
         "errors": {
+            "continuum:1": {"end_disp_vec": 6.7, "end_rot": 6.6},
             "beam:100": {"end_disp_vec": 6.8, "end_rot": 6.7},
             "beam:100[plate]": {"end_disp_vec": 4.9, "end_rot": 4.8},
             "beam:100[width]": {"end_disp_vec": 0.4, "end_rot": 0.3},
@@ -65,6 +66,7 @@ def test_section_places_3d_and_names_the_closest_option(tmp_path):
     # |d| 1.03 between 1.10 (stress) and 0.98 (strain): (1.03 - 1.10) / (0.98 - 1.10) = 0.58
     assert "| m+ | 1 | 1.03 | 0.971 | 1.1 | 0.98 | 0.58 | 0.58 | plane strain |" in text
     assert "failed: stopped at 40 %" in text
+    assert "is itself 6.70–6.70 % from 3D" in text
     assert "lies 0.58–0.58 of the way" in text and "closer to plane strain on every case" in text
     assert "- `beam:100`: m+: `beam:100[width]`." in text
     assert "Stale" not in text

@@ -153,9 +153,24 @@ def _verdict(cases: dict, closer: dict[str, str]) -> str:
     return f"The 3D target |d| lies {span} of the way from plane stress to plane strain: {side}."
 
 
-def _model_rows(cases: dict) -> tuple[list[str], list[str]]:
+def _reference_note(cases: dict, reference: str) -> str:
+    """One sentence: how far the plane-stress continuum itself is from 3D (empty without)."""
+    errs = [
+        c["errors"][reference]["end_disp_vec"] for c in cases.values() if reference in c["errors"]
+    ]
+    if not errs:
+        return ""
+    return (
+        f" The plane-stress continuum `{reference}`, the report's reference, is itself "
+        f"{min(errs):.2f}–{max(errs):.2f} % from 3D in the target displacement: reduced-model "
+        "errors against it below that size measure agreement within the idealisation."
+    )
+
+
+def _model_rows(cases: dict, planes: set[str]) -> tuple[list[str], list[str]]:
     """Each 2D or reduced model's end errors against 3D by case, and the lines naming the
-    closest option of each base model (the id before ``[``) per case."""
+    closest option of each base model (the id before ``[``) per case, the 2D ``planes``
+    left out of the latter (the bracket table compares them)."""
     models = list(dict.fromkeys(m for c in cases.values() for m in c["errors"]))
     rows = []
     for m in models:
@@ -167,7 +182,7 @@ def _model_rows(cases: dict) -> tuple[list[str], list[str]]:
     best = []
     bases = dict.fromkeys(m.split("[")[0] for m in models)
     for base in bases:
-        variants = [m for m in models if m.split("[")[0] == base]
+        variants = [m for m in models if m.split("[")[0] == base and m not in planes]
         if len(variants) < 2:
             continue
         picks = []
@@ -211,8 +226,8 @@ def threed_section(path: Path | None, scene: str, code: str) -> list[str]:
         "3D answer's "
         "position between them (0: plane stress, 1: plane strain) for |d| and the rotation.",
         "",
-        "| case | 3D level | 3D |d| (mm) | change from level below (%) | plane stress | "
-        "plane strain | position |d| | position rot. | closer |",
+        "| case | 3D level | 3D disp. (mm) | change from level below (%) | plane stress | "
+        "plane strain | position disp. | position rot. | closer |",
         "|---|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
     rows, closer = _bracket_rows(data["cases"])
@@ -220,11 +235,11 @@ def threed_section(path: Path | None, scene: str, code: str) -> list[str]:
     cases = {k: v for k, v in data["cases"].items() if k in closer}
     if not cases:
         return lines + ["", "No 3D run reached full load.", ""]
-    lines += ["", _verdict(cases, closer)]
-    model_rows, best = _model_rows(cases)
+    lines += ["", _verdict(cases, closer) + _reference_note(cases, doc["planes"]["stress"])]
+    model_rows, best = _model_rows(cases, set(planes.values()))
     lines += [
         "",
-        "End errors against the finest 3D level (|d| vector / rotation, percent):",
+        "End errors against the finest 3D level (displacement vector / rotation, percent):",
         "",
         "| model | " + " | ".join(cases) + " |",
         "|---|" + "---:|" * len(cases),
