@@ -35,6 +35,15 @@ part: contention slows the tasks and the wall alike, so a busy fraction
 below 100 % is time the workers spent idle (scheduling, transfers, the
 driver writing parts, the tail of the last tasks), which is what Dask
 itself costs.
+
+``--tolerance [FILE]`` runs a tolerance sweep (default
+``benchmarks/sweeps/tolerance_open_chain.toml``, 20,000 points) as ``flexval sweep
+--workers N --no-cache`` runs it and prints its wall time split into loading the sweep,
+starting the local cluster, ``run_sweep``, closing the cluster and reading the rows back,
+with the CPU time per point of the driver (all of it, and in ``run_sweep``) and of the
+workers. ``--cluster-start`` times the local cluster's start, first task and close with its
+start method (a forkserver) and with Dask's ``spawn``, each in fresh processes,
+alternating.
 """
 
 from __future__ import annotations
@@ -231,20 +240,31 @@ def tolerance_once(path: str, workers: int) -> dict:
     out = tempfile.mkdtemp(prefix="bench_sweep_tol_")
     try:
         wall, cpu = time.perf_counter(), time.process_time()
+        split = {}
         sweep = load_sweep(path)
-        with local_cluster(workers) as cluster, Client(cluster) as client:
-            client.wait_for_workers(workers)
-            in_run = time.process_time()
-            stats = run_sweep(sweep, out, client, use_cache=False)
-            in_run = time.process_time() - in_run
-            pids = [w.pid for w in cluster.workers.values()]
-            work = sum(sum(psutil.Process(p).cpu_times()[:2]) for p in pids)
-            peak = max(_peak_kb(p) for p in pids)
+        split["load"] = time.perf_counter() - wall
+        cluster = local_cluster(workers)
+        try:
+            with Client(cluster) as client:
+                client.wait_for_workers(workers)
+                split["cluster start"] = time.perf_counter() - wall - sum(split.values())
+                in_run = time.process_time()
+                stats = run_sweep(sweep, out, client, use_cache=False)
+                in_run = time.process_time() - in_run
+                split["run_sweep"] = time.perf_counter() - wall - sum(split.values())
+                pids = [w.pid for w in cluster.workers.values()]
+                work = sum(sum(psutil.Process(p).cpu_times()[:2]) for p in pids)
+                peak = max(_peak_kb(p) for p in pids)
+        finally:
+            cluster.close()
+        split["close"] = time.perf_counter() - wall - sum(split.values())
         rows = sweep_rows(sweep, out)
+        split["read rows"] = time.perf_counter() - wall - sum(split.values())
         wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
         assert len(rows) == stats.rows_written and stats.rows_failed == 0
         return {
             "wall": wall,
+            "split": split,
             "points": len(sweep.points),
             "driver_cpu": cpu,
             "run_cpu": in_run,
@@ -274,7 +294,8 @@ def tolerance(path: str, workers: int, repeats: int) -> None:
             f"({1e3 * r['run_cpu'] / r['points']:.3f} in run_sweep), worker CPU "
             f"{1e3 * r['worker_cpu'] / r['points']:.3f} ms/point, largest peak RSS "
             f"{r['peak_mb']:.0f} MB, {r['tasks']} tasks (largest {r['task_points']}) "
-            f"(load average before {load:.1f})",
+            f"(load average before {load:.1f})\n    wall: "
+            + ", ".join(f"{k} {v:.2f} s" for k, v in r["split"].items()),
             flush=True,
         )
 
@@ -291,6 +312,73 @@ def tolerance(path: str, workers: int, repeats: int) -> None:
         f"largest peak RSS {med('peak_mb'):.0f} MB",
         flush=True,
     )
+
+
+CLUSTER_CHILD = r"""
+import json, sys, time
+from distributed import Client
+from flexval.validation.sweep import engine
+import flexval.validation.sweep.tasks  # as flexval sweep: the driver has imported them
+
+
+def first(_):
+    import flexval.validation.sweep.tasks  # noqa: F401  (a worker's first task's imports)
+
+    return 1
+
+
+if __name__ == "__main__":
+    engine.START_METHOD, workers = sys.argv[1], int(sys.argv[2])
+    t0 = time.perf_counter()
+    cluster = engine.local_cluster(workers)
+    client = Client(cluster)
+    client.wait_for_workers(workers)
+    t1 = time.perf_counter()
+    client.gather(client.map(first, range(workers), pure=False))
+    t2 = time.perf_counter()
+    client.close()
+    cluster.close()
+    t3 = time.perf_counter()
+    print(json.dumps({"start": t1 - t0, "first task": t2 - t1, "close": t3 - t2}))
+"""
+
+
+def cluster_start(workers: int, repeats: int) -> None:
+    """Start, first task and close of :func:`local_cluster` with its start method and with
+    ``spawn``, each in a fresh process (a forkserver lives as long as its process), the two
+    alternating, ``repeats`` times: medians."""
+    import json
+    import statistics
+    import subprocess
+    import sys
+
+    from flexval.validation.sweep.engine import START_METHOD
+
+    methods = [START_METHOD, "spawn"]
+    times: dict[str, list[dict]] = {m: [] for m in methods}
+    with tempfile.TemporaryDirectory(prefix="bench_sweep_start_") as tmp:
+        child = os.path.join(tmp, "child.py")
+        with open(child, "w", encoding="utf-8") as f:
+            f.write(CLUSTER_CHILD)
+        for k in range(repeats):
+            for m in methods if k % 2 == 0 else methods[::-1]:
+                done = subprocess.run(
+                    [sys.executable, child, m, str(workers)],
+                    capture_output=True,
+                    text=True,
+                    check=True,
+                    timeout=300,
+                )
+                times[m].append(json.loads(done.stdout.strip().splitlines()[-1]))
+    for m in methods:
+        med = {key: statistics.median(t[key] for t in times[m]) for key in times[m][0]}
+        print(
+            f"  {m:<10}: "
+            + ", ".join(f"{key} {v:.2f} s" for key, v in med.items())
+            + f"; total {sum(med.values()):.2f} s (median of {repeats}, {workers} workers, "
+            f"load average {os.getloadavg()[0]:.1f})",
+            flush=True,
+        )
 
 
 def main() -> None:
@@ -315,9 +403,22 @@ def main() -> None:
         help="run the tolerance sweep file (default benchmarks/sweeps/tolerance_open_chain.toml: "
         "20,000 points) instead, --workers workers, --repeats times",
     )
-    ap.add_argument("--workers", type=int, default=2, help="workers of --tolerance (default 2)")
-    ap.add_argument("--repeats", type=int, default=3, help="runs of --tolerance (default 3)")
+    ap.add_argument(
+        "--cluster-start",
+        action="store_true",
+        help="time the local cluster's start, first task and close, against spawn's instead",
+    )
+    ap.add_argument(
+        "--workers", type=int, default=2, help="workers of --tolerance, --cluster-start (2)"
+    )
+    ap.add_argument(
+        "--repeats", type=int, default=3, help="runs of --tolerance, --cluster-start (3)"
+    )
     args = ap.parse_args()
+    if args.cluster_start:
+        print(f"local cluster start; {os.cpu_count()} cores", flush=True)
+        cluster_start(args.workers, args.repeats)
+        return
     if args.tolerance:
         print(f"{args.tolerance}; {os.cpu_count()} cores", flush=True)
         tolerance(args.tolerance, args.workers, args.repeats)

@@ -13,6 +13,7 @@ from flexval.validation.sweep.builtin import BUILTIN_SWEEPS
 from flexval.validation.sweep.engine import (
     MAX_TASK_POINTS,
     TASK_SECONDS,
+    TaskCost,
     reference_positions,
     task_info,
     task_points,
@@ -160,3 +161,20 @@ def test_invalid_random_draws_are_found_by_the_workers_once(tmp_path, client):
     assert {r["point"] for r in rows if r["status"] == "invalid_point"} == bad
     assert len(rows) == len(bad) + 2 * (8 - len(bad)) and fresh.points.valid_count == 8 - len(bad)
     assert run_sweep(fresh, tmp_path / "o", client, use_cache=False).tasks == 0
+
+
+def test_a_task_cost_fits_its_fixed_part_apart_once_sizes_differ():
+    """Tasks costing 30 ms plus 0.3 ms a point: the first (25 points each) give their mean
+    cost per point, fixed part included; with tasks twice as large, the fitted slope."""
+    cost = TaskCost()
+    assert cost.per_point() is None
+    for _ in range(4):
+        cost.add(25, 0.030 + 25 * 3e-4)
+    assert cost.per_point() == pytest.approx((0.030 + 25 * 3e-4) / 25)
+    for n in (600, 700, 2400):
+        cost.add(n, 0.030 + n * 3e-4)
+    assert cost.per_point() == pytest.approx(3e-4, rel=1e-9)
+    noisy = TaskCost()  # a slope past the mean (a negative fixed part) is not taken
+    noisy.add(25, 0.001)
+    noisy.add(100, 0.100)
+    assert noisy.per_point() == pytest.approx(0.101 / 125)

@@ -10,7 +10,7 @@ most :data:`BLOCKS_IN_FLIGHT` blocks at a time, so the driver holds a few
 blocks of parameters, whatever the point count, and no scene at all.
 
 Task sizes follow the measured cost: the first tasks of each model hold
-:func:`auto_batch` points; the seconds the tasks report for their points then
+:func:`auto_batch` points; the CPU seconds the tasks report for their points then
 size the later ones to :data:`TASK_SECONDS` of work (:func:`task_points`). A
 sweep's ``batch`` fixes the size; a reference-class (costly) model runs one
 point a task. The reference runs once per point in its own tasks (on the
@@ -35,6 +35,7 @@ Units: times in s.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -100,10 +101,13 @@ TASKS_PER_WORKER = 4
 """Fewest tasks per worker and model that the task sizes aim at: the last tasks of a
 sweep leave workers idle, the less the smaller the tasks."""
 TASK_SECONDS = 1.0
-"""Work per task, s, that :func:`task_points` aims at once a model's cost is measured. Dask
-costs about 5 ms a task and the driver about 1 ms (publishing the part, the progress line):
-under 1 % of a second's work, so one driver keeps pace with a hundred workers; an
-interruption or the sweep's last task leaves a worker idle for about this long at most."""
+"""Work per task, CPU s, that :func:`task_points` aims at once a model's cost is measured
+(the CPU time of the tasks' own thread: on cores shared with other jobs the wall time of the
+same work is longer, and tasks sized by it came out two to four times smaller, each paying
+again the batch's set-up, about 30 ms for dcmm:1, and its Parquet part). Dask costs about
+5 ms a task and the driver about 1 ms (publishing the part, the progress line): under 1 % of
+a second's work, so one driver keeps pace with a hundred workers; an interruption or the
+sweep's last task leaves a worker idle for about this long at most."""
 MAX_TASK_POINTS = 5000
 """Most points per task, whatever their cost: bounds a task's rows (about 4 kB each in the
 worker's memory) and the reference paths one task hands to the model tasks."""
@@ -130,6 +134,52 @@ def task_points(
     sized = int(TASK_SECONDS / max(seconds_per_point, 1e-9))
     tail = remaining // (TASKS_PER_WORKER * max(workers, 1))
     return max(1, min(MAX_TASK_POINTS, sized, tail))
+
+
+@dataclass
+class TaskCost:
+    """The CPU seconds and points of a model's finished tasks, and the cost of one more
+    point (:meth:`per_point`): a task costs a fixed part (the batch's set-up, its Parquet
+    part: about 30 ms for dcmm:1 on the open chain) and a part per point."""
+
+    tasks: int = 0
+    points: float = 0.0
+    seconds: float = 0.0
+    points2: float = 0.0
+    products: float = 0.0
+    smallest: float = math.inf
+    largest: float = 0.0
+
+    def add(self, points: int, seconds: float) -> None:
+        """Count a finished task of ``points`` points that took ``seconds`` CPU s."""
+        self.tasks += 1
+        self.points += points
+        self.seconds += seconds
+        self.points2 += points * points
+        self.products += points * seconds
+        self.smallest = min(self.smallest, points)
+        self.largest = max(self.largest, points)
+
+    def per_point(self) -> float | None:
+        """CPU s per point: the slope of the tasks' seconds against their points (least
+        squares) once their sizes differ by a factor :data:`FIT_SPREAD`, else (or where the
+        slope is not positive) their mean seconds per point, which counts the fixed part
+        too; at most the mean. None before any task finished."""
+        if not self.points:
+            return None
+        mean = self.seconds / self.points
+        if self.largest < FIT_SPREAD * self.smallest:
+            return mean
+        n = self.tasks
+        slope = (n * self.products - self.points * self.seconds) / (
+            n * self.points2 - self.points**2
+        )
+        return min(slope, mean) if slope > 0.0 else mean
+
+
+FIT_SPREAD = 2.0
+"""Ratio of the largest to the smallest task of a model from which :meth:`TaskCost.per_point`
+fits the fixed part apart: the first tasks of :func:`auto_batch` points cost mostly it."""
 
 
 def task_info(sweep: Sweep) -> TaskInfo:
@@ -178,8 +228,46 @@ def current_keys(sweep: Sweep) -> set[str]:
     return keys
 
 
+START_METHOD = "forkserver"
+"""How the local cluster starts its worker processes: forked from one server process that
+imported :data:`WORKER_MODULES` once (and holds no other thread, so the fork is safe). A
+worker then starts in milliseconds, with flexval's numerical stack loaded, and ends without
+tearing an interpreter down; started by ``spawn`` (Dask's default), each worker is a fresh
+interpreter that imports Dask and the modules its tasks need: 4.9 s to start two workers
+and 1.2 s to end them on the 2-core machine at load average 5.6, against 2.5 s and 0.06 s
+(``benchmarks/bench_sweep.py --cluster-start``). Where the platform has no forkserver
+(Windows), ``spawn``."""
+WORKER_MODULES = (
+    "distributed",
+    "flexval.validation.sweep.tasks",
+    "flexval.reducedmodels.models",
+    "flexval.reducedmodels.tangent",
+    "flexval.reducedmodels.beam",
+    "flexval.reducedmodels.dcmm",
+    "flexval.reducedmodels.prbm",
+)
+"""What the forkserver imports before it forks the workers: Dask's worker, the sweep's
+tasks and the reduced models with their kernels (a module missing here is imported by
+the worker that needs it)."""
+
+
+QUIET_DASK = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.deploy.cluster-repr-interval": "5s",
+}
+"""Dask's periodic work in a local cluster, made rarer: the workers' statistical profiler
+(every 10 ms, for a dashboard flexval does not serve), the event-loop ticks (20 ms), the
+system and memory monitors (0.5 s and 0.1 s: the nannies run in the driver). An idle
+cluster of two workers cost the driver 35 ms of CPU a second and each worker 25 ms; with
+these, 6 and 2."""
+
+
 def local_cluster(workers: int | None = None):
-    """A LocalCluster of single-threaded worker processes (default: one per core).
+    """A LocalCluster of single-threaded worker processes (default: one per core), started
+    by :data:`START_METHOD`.
 
     Dask keeps :data:`MESSAGE_LOG_LENGTH` recent messages per connection, not a thousand.
     Dask's own log lines below ERROR are silenced: on a loaded machine every
@@ -187,25 +275,37 @@ def local_cluster(workers: int | None = None):
     workers that had finished; a worker lost mid-task is a recorded failure row.
     """
     import logging
+    import multiprocessing
     import os
 
     import dask
     from distributed import LocalCluster
 
+    method = START_METHOD if START_METHOD in multiprocessing.get_all_start_methods() else "spawn"
     # the scheduler runs in this process: its logs of recent messages would hold the
     # arguments (points and scenes) of the last thousand tasks sent to each worker
     dask.config.set(
         {
             "distributed.admin.low-level-log-length": MESSAGE_LOG_LENGTH,
             "distributed.scheduler.work-stealing": WORK_STEALING,
+            "distributed.worker.multiprocessing-method": method,
+            **QUIET_DASK,
         }
     )
+    if method == "forkserver":
+        from multiprocessing import forkserver
+
+        from distributed.utils import get_mp_context
+
+        # after Dask's own choice, which it makes once; used when the server first starts
+        get_mp_context().set_forkserver_preload(list(WORKER_MODULES))
+        forkserver.ensure_running()  # it imports them while this process starts the scheduler
     n = workers or os.cpu_count() or 1
     return LocalCluster(
         n_workers=n,
         threads_per_worker=1,
         processes=True,
-        dashboard_address=":0",
+        dashboard_address=":0",  # its HTTP server on a free port: 8787 may be taken
         env=BLAS_ENV,
         silence_logs=logging.ERROR,
     )
@@ -271,7 +371,8 @@ class _Block:
 
     positions: np.ndarray
     values: np.ndarray
-    digests: list[str]
+    digests: list[str] | None
+    """None for a lazy sweep with no stored row: its workers compute them."""
     indices: list[int]
     run: np.ndarray
     skip: list[frozenset]
@@ -296,8 +397,10 @@ def _make_block(sweep: Sweep, positions: np.ndarray, done: np.ndarray, sampled, 
         indices = [p.index for p in built]
     if points.checked:
         digests = [points.digest(int(k)) for k in positions]
-    else:
+    elif done.size:
         digests = [builder.digest_of(v) for v in values]
+    else:  # a lazy sweep's digests follow from the values: the workers compute them
+        digests = None
     run = np.ones((len(positions), len(specs)), dtype=bool)
     skip = [frozenset()] * len(positions)
     if done.size:
@@ -312,6 +415,7 @@ def _make_block(sweep: Sweep, positions: np.ndarray, done: np.ndarray, sampled, 
             keep.append(i)
         positions, values, run = positions[keep], values[keep], run[keep]
         digests, indices, skip = ([x[i] for i in keep] for x in (digests, indices, skip))
+    # (digests are None only where nothing is stored: the loop above did not run)
     # the reference runs wherever a model runs (it gives the errors), on its sample only
     on_sample = np.ones(len(positions), bool) if sampled is None else np.isin(positions, sampled)
     stored = int((~run[:, 1:]).sum() + (~run[:, 0] & on_sample).sum())
@@ -344,7 +448,7 @@ def _task_block(blk: _Block, chunk: np.ndarray, j: int, sweep: Sweep) -> PointBl
     return PointBlock(
         tuple(blk.indices[i] for i in chunk),
         blk.values[chunk],
-        tuple(blk.digests[i] for i in chunk),
+        None if blk.digests is None else tuple(blk.digests[i] for i in chunk),
         tuple(bool(first[i] == j) for i in chunk),
         frozenset().union(*(blk.skip[i] for i in chunk)),
         built,
@@ -359,7 +463,8 @@ def _failed_task(
     rows = []
     for i in chunk:
         params = dict(zip((a.path for a in sweep.axes), blk.values[i].tolist()))
-        point = Point(blk.indices[i], params, None, blk.digests[i])
+        d = sweep.points.builder.digest_of(blk.values[i]) if blk.digests is None else blk.digests[i]
+        point = Point(blk.indices[i], params, None, d)
         rows += [
             base_row(point, model, c, info) | {"status": "error", "reason": reason}
             for c in sweep.load_cases
@@ -414,8 +519,8 @@ def run_sweep(
     sampled = reference_positions(sweep)
 
     fresh_invalid = []  # the invalid points a checking pass found: their rows, here
-    for r in points.records():
-        if r.reason is not None and not np.isin(row_key(r.digest, "-", "-", info).encode(), done):
+    for r in points.invalid_records():
+        if not np.isin(row_key(r.digest, "-", "-", info).encode(), done):
             point = Point(r.index, points.params(r.index), None, r.digest, r.reason)
             fresh_invalid.append(
                 base_row(point, "-", "-", info) | {"status": "invalid_point", "reason": r.reason}
@@ -428,14 +533,17 @@ def run_sweep(
 
     workers = max(sum(client.nthreads().values()), 1)
     costly = [spec.model_family.has(REFERENCE) for spec in specs]
-    cost = [[0.0, 0] for _ in specs]  # seconds and points of the finished tasks, per spec
+    cost = [TaskCost() for _ in specs]  # the finished tasks, per spec
     taken = [0]  # points put in blocks so far
 
     def batch(j: int) -> int:
         if costly[j]:
             return 1
-        seconds, n = cost[j]
-        return task_points(seconds / n if n else None, len(points) - taken[0], workers, sweep.batch)
+        return task_points(cost[j].per_point(), len(points) - taken[0], workers, sweep.batch)
+
+    def measured() -> bool:
+        """Whether every task size that follows a measured cost has one."""
+        return all(costly[j] or sweep.batch or cost[j].tasks for j in range(len(specs)))
 
     sizes = [1] * len(specs)  # points per task of each spec in the block being made
 
@@ -480,7 +588,9 @@ def run_sweep(
     finished = as_completed()
 
     def refill() -> None:
-        while len(blocks) < BLOCKS_IN_FLIGHT:
+        # the next block waits for the first measured costs: sized by auto_batch again,
+        # its tasks would be as small as the first block's
+        while len(blocks) < BLOCKS_IN_FLIGHT and (not blocks or measured()):
             nxt = next(pending, None)
             if nxt is None:
                 return
@@ -507,15 +617,16 @@ def run_sweep(
                 "rows": len(rows),
                 "failed": len(rows),
                 "points": 0,
-                "seconds": 0.0,
+                "cpu": 0.0,
+                "first": False,
                 "invalid": {},
             }
         if result["staged"] is not None:
             stats.parts.append(store.publish(result["staged"]))
         stats.rows_written += result["rows"]
         stats.rows_failed += result["failed"]
-        cost[j][0] += result["seconds"]
-        cost[j][1] += result["points"]
+        if result["points"] and not result["first"]:  # a first task pays one-time costs
+            cost[j].add(result["points"], result["cpu"])
         if result["invalid"]:
             points.note_invalid(result["invalid"])
         fut.release()
@@ -524,7 +635,7 @@ def run_sweep(
         blk.open -= 1
         if not blk.open:
             del blocks[b]  # its reference futures go with it
-            refill()
+        refill()
     stats.seconds = time.perf_counter() - t0
     return stats
 

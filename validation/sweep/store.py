@@ -26,12 +26,12 @@ parameters in their scene field's unit.
 from __future__ import annotations
 
 import hashlib
-import math
 import os
 from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from flexval.geometry import SceneError
@@ -106,11 +106,16 @@ def schema(paths: list[str]) -> pa.Schema:
     return pa.schema(_FIXED + [(PARAM_PREFIX + p, pa.float64()) for p in paths])
 
 
-def _clean(row: dict) -> dict:
-    """Non-finite floats become null."""
-    return {
-        k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()
-    }
+def _finite_or_null(table: pa.Table) -> pa.Table:
+    """``table`` with every non-finite float (NaN, inf) replaced by null, column by column."""
+    for i, f in enumerate(table.schema):
+        if not pa.types.is_floating(f.type):
+            continue
+        column = table.column(i)
+        bad = pc.invert(pc.is_finite(column))  # null where the value is null
+        if pc.any(bad).as_py():
+            table = table.set_column(i, f, pc.if_else(bad, pa.scalar(None, f.type), column))
+    return table
 
 
 class ResultStore:
@@ -169,7 +174,7 @@ class ResultStore:
         dataset); None if ``rows`` is empty."""
         if not rows:
             return None
-        table = pa.Table.from_pylist([_clean(r) for r in rows], schema=self.schema)
+        table = _finite_or_null(pa.Table.from_pylist(rows, schema=self.schema))
         name = hashlib.sha256("".join(sorted(r["key"] for r in rows)).encode()).hexdigest()[:20]
         self.folder.mkdir(parents=True, exist_ok=True)
         staged = self.folder / f"{STAGED}part-{name}.parquet"
@@ -198,7 +203,10 @@ class ResultStore:
         tables = [pq.read_table(p, schema=self.schema) for p in self.parts()]
         if not tables:
             return []
-        rows = pa.concat_tables(tables).to_pylist()
+        table = pa.concat_tables(tables)
         if keys is not None:
-            rows = [r for r in rows if r["key"] in keys]
-        return sorted(rows, key=lambda r: (r["point"], r["model"], r["load_case"]))
+            wanted = pa.array(list(keys), type=pa.string())
+            table = table.filter(pc.is_in(table["key"], value_set=wanted))
+        # a stable sort (Arrow's is), strings by their UTF-8 bytes: Python's code point order
+        order = [("point", "ascending"), ("model", "ascending"), ("load_case", "ascending")]
+        return table.sort_by(order).to_pylist()

@@ -8,7 +8,7 @@ on the block through :func:`run_model_block` (the one place a model is solved:
 a tracer that runs many copies of one mechanism together replaces its loop),
 and writes its rows as one staged Parquet part
 (:meth:`~flexval.validation.sweep.store.ResultStore.stage`); it returns a
-small summary (the part, counts, its own seconds, the invalid points found).
+small summary (the part, counts, its own CPU seconds, the invalid points found).
 It never raises for a model that fails: a SolverError, a model that refuses
 the geometry, an unexpected numerical exception or a non-finite result is a
 row with its status and reason. The reference task also returns its load
@@ -33,6 +33,7 @@ Units: errors in percent, times in s, stresses in MPa, loads in N or N mm.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import time
 from collections import OrderedDict
@@ -48,7 +49,6 @@ from ..cache import ResultCache, result_key
 from ..compare import METRICS, errors
 from ..failures import first_limit
 from ..run import run_model
-from ..strength import peak_at_full_load
 from ..yieldpoint import yield_columns
 from .spec import Point, PointBuilder
 from .store import PARAM_PREFIX, ResultStore
@@ -78,10 +78,22 @@ def row_key(digest: str, model: str, case: str, info: TaskInfo) -> str:
 
 def base_row(point: Point, model: str, case: str, info: TaskInfo) -> dict:
     """A row with the point's identity and parameters and every result field empty."""
-    row = {
-        "key": row_key(point.digest, model, case, info),
+    row = dict(_row_template(model, case, info))
+    row["key"] = row_key(point.digest, model, case, info)
+    row["point"] = point.index
+    row["load_unit"] = point.scene.load_case(case).unit if point.scene is not None else None
+    row.update({PARAM_PREFIX + k: v for k, v in point.params.items()})
+    return row
+
+
+@functools.lru_cache(maxsize=64)
+def _row_template(model: str, case: str, info: TaskInfo) -> dict:
+    """The fields :func:`base_row` shares between the rows of one model and case (copied:
+    a row is filled in place)."""
+    return {
+        "key": None,
         "sweep": info.sweep,
-        "point": point.index,
+        "point": None,
         "model": model,
         "reference": info.reference,
         "load_case": case,
@@ -92,7 +104,7 @@ def base_row(point: Point, model: str, case: str, info: TaskInfo) -> dict:
         "newton_iterations": None,
         "valid": None,
         "validity": None,
-        "load_unit": point.scene.load_case(case).unit if point.scene is not None else None,
+        "load_unit": None,
         "peak_stress": None,
         "peak_stress_flexure": None,
         "peak_stress_at": None,
@@ -103,8 +115,6 @@ def base_row(point: Point, model: str, case: str, info: TaskInfo) -> dict:
         "bifurcation_load": None,
         **{m: None for m in METRICS},
     }
-    row.update({PARAM_PREFIX + k: v for k, v in point.params.items()})
-    return row
 
 
 def _finite(lp: LoadPath) -> bool:
@@ -180,7 +190,13 @@ def _peak(lp: LoadPath, case: LoadCase, row: dict, info: TaskInfo) -> None:
     """Fill ``row``'s peak stress (MPa), its flexure and place at the last level of ``lp``,
     and that level's load as a fraction of ``case``'s full load, when the sweep asks for
     it and the model gives one."""
-    peak = peak_at_full_load(lp) if "peak_stress" in info.outputs else None
+    if "peak_stress" not in info.outputs:
+        return
+    # imported here: the module draws figures too, and matplotlib costs a worker 0.3 s to
+    # import; a sweep without peak stresses never needs it
+    from ..strength import peak_at_full_load
+
+    peak = peak_at_full_load(lp)
     if peak is not None:
         reached = 1.0 if lp.converged else abs(lp.load[-1]) / case.magnitude
         row.update(
@@ -240,7 +256,9 @@ class PointBlock:
 
     indices: tuple[int, ...]
     values: np.ndarray
-    digests: tuple[str, ...]
+    digests: tuple[str, ...] | None
+    """None: the worker computes them from the values (a lazy sweep's,
+    :meth:`~flexval.validation.sweep.spec.PointBuilder.digest_of`)."""
     owner: tuple[bool, ...]
     skip: frozenset[str] = frozenset()
     built: tuple[Point, ...] | None = None
@@ -259,15 +277,23 @@ class PointBlock:
         """
         if self.built is not None:
             return list(self.built)
-        points = []
-        for index, values, want in zip(self.indices, self.values.tolist(), self.digests):
-            point = _BUILT.get((job.folder, index, want))
-            if point is None:
-                point = job.builder.build(index, dict(zip(job.paths, values)))
-                if point.digest != want:
-                    raise RuntimeError(f"point {index} of the sweep built differently from its key")
-                _remember((job.folder, index, want), point)
-            points.append(point)
+        digests = self.digests
+        if digests is None:
+            digests = tuple(job.builder.digest_of(v) for v in self.values)
+        keys = [(job.folder, index, want) for index, want in zip(self.indices, digests)]
+        points = [_BUILT.get(key) for key in keys]
+        missing = [n for n, p in enumerate(points) if p is None]
+        if missing:
+            built = job.builder.build_block(
+                [self.indices[n] for n in missing], self.values[missing]
+            )
+            for n, point in zip(missing, built):
+                if point.digest != digests[n]:
+                    raise RuntimeError(
+                        f"point {self.indices[n]} of the sweep built differently from its key"
+                    )
+                _remember(keys[n], point)
+                points[n] = point
         return points
 
 
@@ -341,10 +367,30 @@ def _invalid_rows(points: list[Point], block: PointBlock, info: TaskInfo) -> lis
     ]
 
 
+_RAN: set[str] = set()
+"""The models this process has run a task of."""
+
+
+def _first_task(spec: ModelSpec) -> bool:
+    """Whether this is the first task of ``spec`` in this process: it pays the one-time
+    costs (imports, loading the compiled kernels; 0.3 s for ee on the open chain against
+    15 ms for its next 25 points), which the driver leaves out of the model's cost."""
+    first = spec.id not in _RAN
+    _RAN.add(spec.id)
+    return first
+
+
 def _finish(
-    rows: list[dict], points: list[Point], block: PointBlock, job: SweepJob, t0: float
+    rows: list[dict],
+    points: list[Point],
+    block: PointBlock,
+    job: SweepJob,
+    t0: float,
+    first: bool,
 ) -> dict:
-    """Stage the rows not stored yet as one part; the task's summary for the driver."""
+    """Stage the rows not stored yet as one part; the task's summary for the driver: its
+    part, counts, CPU seconds since ``t0`` (:func:`time.thread_time`), whether it was its
+    model's first task in this process, the invalid points found."""
     rows = [r for r in rows + _invalid_rows(points, block, job.info) if r["key"] not in block.skip]
     staged = job.store().stage(rows)
     return {
@@ -352,7 +398,8 @@ def _finish(
         "rows": len(rows),
         "failed": sum(r["status"] != "ok" for r in rows),
         "points": len(block),
-        "seconds": time.perf_counter() - t0,
+        "cpu": time.thread_time() - t0,
+        "first": first,
         "invalid": {p.index: p.reason for p in points if p.scene is None},
     }
 
@@ -366,7 +413,8 @@ def reference_task(block: PointBlock, spec: ModelSpec, job: SweepJob, use_cache:
     are cached on the worker (:class:`ResultCache`), so a resumed sweep does not recompute
     them; a cheap one is not (hashing and writing a path costs more than tracing it).
     """
-    t0 = time.perf_counter()
+    t0 = time.thread_time()
+    first = _first_task(spec)
     points = block.points(job)
     valid = [p for p in points if p.scene is not None]
     cache = ResultCache() if use_cache and spec.model_family.cost is not None else None
@@ -382,7 +430,7 @@ def reference_task(block: PointBlock, spec: ModelSpec, job: SweepJob, use_cache:
                 limits[(p.index, case)] = row["limit_load"]
             rows.append(row)
     return {
-        "summary": _finish(rows, points, block, job, t0),
+        "summary": _finish(rows, points, block, job, t0, first),
         "ran": frozenset(block.indices),
         "paths": paths,
         "limits": limits,
@@ -398,7 +446,8 @@ def model_task(block: PointBlock, spec: ModelSpec, job: SweepJob, references: li
     """Rows of ``spec`` on every point and case of ``block``, with errors (of the paths, the
     peak stress and the limit load) against the reference's where it ran, found in
     ``references`` (results of :func:`reference_task`); the summary of :func:`_finish`."""
-    t0 = time.perf_counter()
+    t0 = time.thread_time()
+    first = _first_task(spec)
     ran: set = set()
     ref_paths: dict = {}
     ref_limits: dict = {}
@@ -420,14 +469,18 @@ def model_task(block: PointBlock, spec: ModelSpec, job: SweepJob, references: li
                     row["limit_load"], ref_limits.get((p.index, case))
                 )
             rows.append(row)
-    return _finish(rows, points, block, job, t0)
+    return _finish(rows, points, block, job, t0, first)
 
 
 def _errors(p: Point, lp: LoadPath | None, ref: LoadPath | None, row: dict, info: TaskInfo):
     """Fill ``row``'s errors of ``lp`` against the reference's path ``ref`` (percent)."""
     if lp is not None and ref is not None:
         row.update(errors(lp, ref, p.scene.mechanism.size()))
-        ref_peak = peak_at_full_load(ref) if row["peak_stress"] is not None else None
+        ref_peak = None
+        if row["peak_stress"] is not None:
+            from ..strength import peak_at_full_load  # see _peak
+
+            ref_peak = peak_at_full_load(ref)
         row["peak_stress_error"] = _relative(
             row["peak_stress"], ref_peak["stress"] if ref_peak else None
         )
