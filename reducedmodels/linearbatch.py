@@ -39,116 +39,11 @@ from .connector import Connector
 from .loadpath import LoadPath
 from .loads import Loads
 from .recorder import append_stress, state_peaks
-from .tangent import TangentLayout
+from .restnumbering import RestNumbering
 from .validity import MAX_LINEAR_ROTATION
 
 Member = tuple[Mechanism, Sequence[Connector]]
 """One copy: its mechanism and its connectors (``Family.connectors``)."""
-
-
-@dataclass(frozen=True)
-class _Numbering:
-    """The unknowns and assembly maps shared by copies of one topology (copy 0's).
-
-    Numbered as :func:`flexval.reducedmodels.models.linear_response` numbers
-    one mechanism: the moving bodies' poses, then each connector's internal
-    coordinates in turn; every connector's local coordinates laid end to end.
-
-    Attributes
-    ----------
-    n : int
-        Unknowns.
-    bodies : list of str
-        The moving bodies, in order (body k's pose is unknowns 3k .. 3k + 2).
-    dofs : int array (d,)
-        The unknown of every local coordinate (-1: the ground's).
-    gather : int array (d,)
-        Its place in [q, ground pose].
-    places, bounds : list of int
-        Where each connector's local coordinates start and end.
-    local_rows, local_cols : int arrays (h,)
-        Every Hessian value's local row and column, connectors end to end.
-    keep : bool array (h,)
-        The values that enter K0 (no ground row or column).
-    layout : TangentLayout
-        K0's storage.
-    patterns : list of (rows, cols)
-        Each connector's Hessian pattern (what every copy's connectors must have).
-    """
-
-    n: int
-    bodies: list
-    dofs: np.ndarray
-    gather: np.ndarray
-    places: list
-    bounds: list
-    local_rows: np.ndarray
-    local_cols: np.ndarray
-    keep: np.ndarray
-    layout: TangentLayout
-    patterns: list
-
-    @classmethod
-    def of(cls, mechanism: Mechanism, connectors: Sequence[Connector]) -> _Numbering:
-        """The numbering of ``mechanism`` joined by ``connectors``."""
-        ground, bodies = mechanism.ground, mechanism.moving_bodies
-        first = {b: 3 * k for k, b in enumerate(bodies)}
-        first[ground] = None
-        n = 3 * len(bodies)
-        dofs, places, patterns, start = [], [], [], 0
-        for c in connectors:
-            ends = [
-                (-1, -1, -1) if first[b] is None else range(first[b], first[b] + 3)
-                for b in c.bodies
-            ]
-            dofs += [*ends[0], *ends[1], *range(n, n + c.n_internal)]
-            pattern = c.hessian_pattern()
-            m = 6 + c.n_internal
-            patterns.append(
-                (np.repeat(np.arange(m), m), np.tile(np.arange(m), m))
-                if pattern is None
-                else pattern
-            )
-            places.append(start)
-            start += m
-            n += c.n_internal
-        dofs = np.array(dofs)
-        local_rows = np.concatenate([rows + k for (rows, _), k in zip(patterns, places)])
-        local_cols = np.concatenate([cols + k for (_, cols), k in zip(patterns, places)])
-        rows, cols = dofs[local_rows], dofs[local_cols]
-        keep = (rows >= 0) & (cols >= 0)
-        diagonal = np.arange(n)
-        layout = TangentLayout(
-            n,
-            np.concatenate([rows[keep], diagonal]),
-            np.concatenate([cols[keep], diagonal]),
-            sum(c.n_multipliers for c in connectors),
-        )
-        return cls(
-            n,
-            list(bodies),
-            dofs,
-            np.where(dofs >= 0, dofs, n + np.arange(dofs.size) % 3),
-            places,
-            [*places[1:], start],
-            local_rows,
-            local_cols,
-            keep,
-            layout,
-            patterns,
-        )
-
-    def fits(self, connectors: Sequence[Connector]) -> bool:
-        """True if ``connectors`` assemble with these maps (the same Hessian patterns)."""
-        for c, (rows, cols) in zip(connectors, self.patterns):
-            pattern = c.hessian_pattern()
-            if pattern is None:
-                m = 6 + c.n_internal
-                if rows.size != m * m:
-                    return False
-            elif not (np.array_equal(pattern[0], rows) and np.array_equal(pattern[1], cols)):
-                return False
-        return True
 
 
 @dataclass(frozen=True)
@@ -179,7 +74,7 @@ class _Rest:
     reference: dict
 
     @classmethod
-    def of(cls, mechanism: Mechanism, connectors: Sequence[Connector], numbering: _Numbering):
+    def of(cls, mechanism: Mechanism, connectors: Sequence[Connector], numbering: RestNumbering):
         """Evaluate ``connectors`` at the rest state of ``mechanism`` (its own poses)."""
         reference = {b: mechanism.bodies[b].reference for b in mechanism.bodies}
         poses = {b: [*reference[b].tolist(), 0.0] for b in mechanism.bodies}  # at rest
@@ -244,7 +139,7 @@ def linear_responses(
     count = len(members)
     if count == 0:
         return []
-    numbering = _Numbering.of(*members[0])
+    numbering = RestNumbering.of(*members[0])
     kinds = [(type(c), c.bodies, c.n_internal) for c in members[0][1]]
     lam = cases[0].factors(levels)
     rests: dict[tuple[int, int], _Rest | Exception] = {}
@@ -285,7 +180,7 @@ def linear_responses(
 
 
 def _solve(
-    numbering: _Numbering,
+    numbering: RestNumbering,
     members: Sequence[Member],
     cases: Sequence[LoadCase],
     copies: list[int],
@@ -405,7 +300,7 @@ def _rotation_verdicts(turns: np.ndarray, bodies: list[str]) -> tuple[list, list
 
 
 def _section_forces(
-    numbering: _Numbering,
+    numbering: RestNumbering,
     members: Sequence[Member],
     copies: list[int],
     rests: list[_Rest],

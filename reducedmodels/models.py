@@ -25,7 +25,7 @@ from .inertia import with_weights
 from .loadpath import LoadPath
 from .loads import Loads
 from .recorder import record_stress, solve_path
-from .tangent import TangentLayout
+from .restnumbering import RestNumbering
 from .validity import MAX_LINEAR_ROTATION
 
 #: ``make(flexure, mechanism, spec, **options) -> Connector`` of one flexure
@@ -233,46 +233,28 @@ def linear_response(
     def pose_dofs(body: str) -> np.ndarray:
         return np.full(3, -1) if body == ground else np.arange(first[body], first[body] + 3)
 
-    n = 3 * len(bodies)
     reference = {b: mechanism.bodies[b].reference for b in mechanism.bodies}
     poses = {b: [*reference[b].tolist(), 0.0] for b in mechanism.bodies}  # at rest
-    first[ground] = None
     # each connector's local coordinates at rest, their global dofs (-1: the ground's) and
     # their places in q extended by the ground's pose, all connectors' end to end
-    rest, dofs, places, patterns, start = [], [], [], [], 0
-    for c in connectors:
-        ends = [
-            (-1, -1, -1) if first[b] is None else range(first[b], first[b] + 3) for b in c.bodies
-        ]
-        rest.append(
-            (np.array(poses[c.bodies[0]]), np.array(poses[c.bodies[1]]), c.initial_internal())
-        )
-        dofs += [*ends[0], *ends[1], *range(n, n + c.n_internal)]
-        pattern = c.hessian_pattern()
-        m = 6 + c.n_internal
-        patterns.append(
-            (np.repeat(np.arange(m), m), np.tile(np.arange(m), m)) if pattern is None else pattern
-        )
-        places.append(start)
-        start += m
-        n += c.n_internal
-    dofs = np.array(dofs)
-    gather = np.where(dofs >= 0, dofs, n + np.arange(dofs.size) % 3)
-    bounds = [*places[1:], start]
+    rest = [
+        (np.array(poses[c.bodies[0]]), np.array(poses[c.bodies[1]]), c.initial_internal())
+        for c in connectors
+    ]
+    numbering = RestNumbering.of(mechanism, connectors)
+    n, dofs, gather, places, bounds = (
+        numbering.n,
+        numbering.dofs,
+        numbering.gather,
+        numbering.places,
+        numbering.bounds,
+    )
+    start = bounds[-1] if bounds else 0
     # energy gradient and Hessian at rest, scattered as System.assemble does
     terms = [c.evaluate(*r) for c, r in zip(connectors, rest)]
-    local_rows = np.concatenate([rows + k for (rows, _), k in zip(patterns, places)])
-    local_cols = np.concatenate([cols + k for (_, cols), k in zip(patterns, places)])
+    local_rows, local_cols = numbering.local_rows, numbering.local_cols
+    keep, layout = numbering.keep, numbering.layout
     hessians = np.concatenate([np.ravel(h) for _, _, h in terms])
-    rows, cols = dofs[local_rows], dofs[local_cols]
-    keep = (rows >= 0) & (cols >= 0)
-    diagonal = np.arange(n)
-    layout = TangentLayout(
-        n,
-        np.concatenate([rows[keep], diagonal]),
-        np.concatenate([cols[keep], diagonal]),
-        sum(c.n_multipliers for c in connectors),
-    )
     K0 = layout.tangent(
         np.bincount(
             layout.slots[: layout.slots.size - n], weights=hessians[keep], minlength=layout.size

@@ -3,17 +3,11 @@
 Its internal coordinates are the displacements (mm) of the mesh nodes that
 are not on an end face, two per node. The nodes of each end face follow
 their rigid body exactly: x = x_body + R(theta) (X - X_ref_body). The strain
-energy of the solid is then a function of [pose_a, pose_b, internal], and the
-chain rule gives its gradient and Hessian:
-
-    g = T^T f,    H = T^T K T + sum_face nodes f_node . d2x/dtheta2  (theta-theta entry),
-
-with T = dx/d(coordinates) (identity on free dofs, the rigid Jacobian on face
-dofs) and f, K the solid's nodal forces and tangent. T^T K T is computed on
-the COO level: every nodal dof expands into one (free) or two (face: body
-translation and rotation) coordinates, and each element-matrix entry into the
-products of its row and column expansions; the index arrays are fixed and
-built once, only the rotation coefficients change. Units: mm, N, N mm, rad.
+energy of the solid is then a function of [pose_a, pose_b, internal]; its
+gradient and Hessian follow by the chain rule of :mod:`.endfaces`, over the
+index arrays this connector builds once (:meth:`ContinuumConnector._build_expansion`):
+every nodal dof expands into one (free) or two (face: body translation and
+rotation) coordinates. Units: mm, N, N mm, rad.
 """
 
 from __future__ import annotations
@@ -30,13 +24,10 @@ from flexval.geometry.mesh import FlexureMesh, flexure_mesh
 from flexval.reducedmodels.connector import Connector, ConnectorGroup, LocalState
 from flexval.reducedmodels.inertia import MassPoints
 from flexval.reducedmodels.sections import (
-    SectionForces,
-    polyline_axes,
     polyline_fractions,
-    statics_section_forces,
 )
-from flexval.reducedmodels.validity import MIN_DET_F, stretch_reasons
 
+from .endfaces import HeldEndFaces
 from .group import ContinuumGroup
 from .mass import face_accelerations, node_jacobian, scalar_mass
 from .material import make_law
@@ -45,7 +36,7 @@ from .recovery import PatchRecovery
 from .solid import Solid
 
 
-class ContinuumConnector(Connector):
+class ContinuumConnector(HeldEndFaces, Connector):
     """A flexure meshed as a 2D hyperelastic solid (a :class:`reducedmodels.Connector`).
 
     Parameters
@@ -101,6 +92,7 @@ class ContinuumConnector(Connector):
         self._end_slot = self.bodies.index(flexure.end_body)
         self._centre_fractions = polyline_fractions(self.mesh.nodes[self.mesh.centre_line])
         end_face = self._face[self._end_slot]
+        self.elastic = self.solid  # what HeldEndFaces evaluates
         self._end_kernel = self.solid.kernel.subset(
             np.flatnonzero(np.isin(self.mesh.elements, end_face).any(axis=1))
         )
@@ -181,32 +173,6 @@ class ContinuumConnector(Connector):
             x[self._face[s]] = rigid_points(np.asarray(pose, float), self._rel[s])[0]
         return x
 
-    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        """Local (rows, cols) of the Hessian values :meth:`evaluate` returns (duplicates sum)."""
-        return self._rows, self._cols
-
-    def evaluate(
-        self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-    ) -> tuple[float, np.ndarray, np.ndarray]:
-        """Energy (N mm), gradient (6 + n) and Hessian values over [pose_a, pose_b, internal].
-
-        The Hessian values belong to the entries of :meth:`hessian_pattern`.
-        """
-        x = self.positions(pose_a, pose_b, internal)
-        energy, forces, Ke = self.solid.evaluate(x)
-        coef = np.ones(self._exp_z.size)
-        second = np.zeros(2)
-        for s, pose in enumerate((pose_a, pose_b)):
-            _, jac, d2 = rigid_points(np.asarray(pose, float), self._rel[s])
-            coef[self._theta_pos[s]] = jac[:, :, 2].ravel()
-            f = forces.reshape(-1, 2)[self._face[s]]
-            second[s] = np.sum(f * d2)
-        grad = np.bincount(self._exp_z, weights=forces[self._exp_dof] * coef, minlength=self._n)
-        ke = Ke.ravel()
-        t, p, q = self._mixed
-        hess = np.concatenate([ke[self._plain_src], ke[t] * coef[p] * coef[q], second])
-        return energy, grad, hess
-
     def predict_internal(
         self,
         states: Sequence[LocalState],
@@ -234,25 +200,10 @@ class ContinuumConnector(Connector):
         """
         return self._alone.update_internal([old], [new])
 
-    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> list[str]:
-        """Centre-line fibre stretch beyond MAX_STRAIN; elements near inversion (det F < MIN_DET_F).
-
-        See :mod:`flexval.reducedmodels.validity`.
-        """
-        x = self.positions(pose_a, pose_b, internal)
-        line = self.mesh.centre_line
-        d, d0 = np.diff(x[line], axis=0), np.diff(self.mesh.nodes[line], axis=0)
-        reasons = stretch_reasons(
-            "centre-line segment", np.hypot(d[:, 0], d[:, 1]), np.hypot(d0[:, 0], d0[:, 1])
-        )
+    def _min_det(self, x: np.ndarray) -> np.ndarray:
+        """Each element's smallest det F over its quadrature points at positions ``x``."""
         F = self.solid.deformation_gradient(x)
-        det = (F[..., 0, 0] * F[..., 1, 1] - F[..., 0, 1] * F[..., 1, 0]).min(axis=1)
-        k = int(np.argmin(det))
-        if det[k] < MIN_DET_F:
-            reasons.append(
-                f"element {k + 1} near inversion: det F {det[k]:.3g} (limit {MIN_DET_F:.3g})"
-            )
-        return reasons
+        return (F[..., 0, 0] * F[..., 1, 1] - F[..., 0, 1] * F[..., 1, 0]).min(axis=1)
 
     # --- optional mass hook (flexval.reducedmodels.inertia) ---------------------------
     def mass_points(self, density: float) -> MassPoints:
@@ -308,36 +259,3 @@ class ContinuumConnector(Connector):
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed centre line (nodes at mid-thickness, start to end), mm."""
         return self.positions(pose_a, pose_b, internal)[self.mesh.centre_line]
-
-    def section_forces(
-        self,
-        pose_a: np.ndarray,
-        pose_b: np.ndarray,
-        internal: np.ndarray,
-        gradient: np.ndarray | None = None,
-    ) -> SectionForces:
-        """Section resultants N (N) and M (N mm) along the deformed mid-thickness line.
-
-        By equilibrium of the part of the solid beyond a cut, the resultant
-        of the stresses on any cross-section through a centre-line node is
-        the end face's reaction (the gradient on the end body's pose: the
-        sum of the face's nodal forces) carried there by statics. Unlike the
-        raw peak stress, which is singular at the corners of the rigidly held
-        end faces, it converges with the mesh at the rate of the reactions.
-        """
-        s = self._end_slot
-        pose = np.asarray((pose_a, pose_b)[s], float)
-        if gradient is not None:
-            wrench = gradient[3 * s : 3 * s + 3]
-        else:  # the end face's nodal forces: only its elements contribute
-            x = self.positions(pose_a, pose_b, internal)
-            face = self._face[s]
-            f = self._end_kernel.forces(x).reshape(-1, 2)[face]
-            arm = x[face] - pose[:2]
-            wrench = np.array(
-                [f[:, 0].sum(), f[:, 1].sum(), np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0])]
-            )
-        line = self.shape(pose_a, pose_b, internal)
-        return statics_section_forces(
-            line, self._centre_fractions, wrench, pose, axes=polyline_axes(line)
-        )

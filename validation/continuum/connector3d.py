@@ -38,19 +38,16 @@ from flexval.geometry.extrude import ExtrudedMesh, extruded_mesh
 from flexval.geometry.kinematics import rigid_points
 from flexval.reducedmodels.connector import Connector, LocalState
 from flexval.reducedmodels.sections import (
-    SectionForces,
-    polyline_axes,
     polyline_fractions,
-    statics_section_forces,
 )
-from flexval.reducedmodels.validity import MIN_DET_F, stretch_reasons
 
 from .connector import ContinuumConnector
+from .endfaces import HeldEndFaces
 from .group import ContinuumGroup
 from .solid3d import Law3D, Solid3D
 
 
-class Continuum3DConnector(Connector):
+class Continuum3DConnector(HeldEndFaces, Connector):
     """A flexure meshed as a 3D hyperelastic solid (a :class:`reducedmodels.Connector`).
 
     Parameters
@@ -69,6 +66,7 @@ class Continuum3DConnector(Connector):
         A ready mesh (default: :func:`flexval.geometry.extrude.extruded_mesh`).
     """
 
+    node_dim = 3
     update_above = 0.0
     """Newton corrections always go through :meth:`update_internal` (as in the 2D connector:
     mesh nodes are a fraction of the thickness apart)."""
@@ -109,7 +107,8 @@ class Continuum3DConnector(Connector):
         self._end_slot = self.plane._end_slot
         self._centre_fractions = polyline_fractions(mesh.plane.nodes[mesh.plane.centre_line])
         end_face = self._face[self._end_slot]
-        self._end_solid = self.solid3d.subset(
+        self.elastic = self.solid3d  # what HeldEndFaces evaluates
+        self._end_kernel = self.solid3d.subset(
             np.flatnonzero(np.isin(mesh.elements, end_face).any(axis=1))
         )
         self.n_internal = 2 * self._free.size + self._free_z.size
@@ -202,40 +201,6 @@ class Continuum3DConnector(Connector):
             x[self._face[s], :2] = rigid_points(np.asarray(pose, float), self._rel[s])[0]
         return x
 
-    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        """Local (rows, cols) of the Hessian values :meth:`evaluate` returns (duplicates sum)."""
-        return self._rows, self._cols
-
-    def evaluate(
-        self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
-    ) -> tuple[float, np.ndarray, np.ndarray]:
-        """Energy (N mm), gradient (6 + n) and Hessian values over [pose_a, pose_b, internal].
-
-        The Hessian values belong to the entries of :meth:`hessian_pattern`.
-
-        Raises
-        ------
-        ValueError
-            If an element is inverted (the core then cuts the step).
-        """
-        x = self.positions(pose_a, pose_b, internal)
-        energy, forces, Ke = self.solid3d.evaluate(x)
-        coef = np.ones(self._exp_z.size)
-        second = np.zeros(2)
-        for s, pose in enumerate((pose_a, pose_b)):
-            _, jac, d2 = rigid_points(np.asarray(pose, float), self._rel[s])
-            coef[self._theta_pos[s]] = jac[:, :, 2].ravel()
-            second[s] = np.sum(forces.reshape(-1, 3)[self._face[s], :2] * d2)
-        grad = np.bincount(self._exp_z, weights=forces[self._exp_dof] * coef, minlength=self._n)
-        ke = Ke.ravel()
-        t, p, q = self._mixed
-        n_plain = self._plain_src.size
-        hess = np.empty(self._rows.size)  # filled in place: no third copy of the entries
-        np.take(ke, self._plain_src, out=hess[:n_plain])
-        hess[n_plain:-2] = ke[t] * coef[p] * coef[q]
-        hess[-2:] = second
-        return energy, grad, hess
-
     def predict_internal(
         self,
         states: Sequence[LocalState],
@@ -259,55 +224,10 @@ class Continuum3DConnector(Connector):
         xy = self._layers.update_internal(layers_old, layers_new)
         return np.concatenate([xy, new[2][2 * self._free.size :]])
 
-    def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> list[str]:
-        """Centre-line fibre stretch beyond MAX_STRAIN; elements near inversion (det F < MIN_DET_F).
-
-        See :mod:`flexval.reducedmodels.validity`.
-        """
-        x = self.positions(pose_a, pose_b, internal)
-        line = self.mesh.centre_line
-        d, d0 = np.diff(x[line], axis=0), np.diff(self.mesh.nodes[line], axis=0)
-        reasons = stretch_reasons(
-            "centre-line segment", np.linalg.norm(d, axis=1), np.linalg.norm(d0, axis=1)
-        )
-        det = self.solid3d.min_det(x)
-        k = int(np.argmin(det))
-        if det[k] < MIN_DET_F:
-            reasons.append(
-                f"element {k + 1} near inversion: det F {det[k]:.3g} (limit {MIN_DET_F:.3g})"
-            )
-        return reasons
+    def _min_det(self, x: np.ndarray) -> np.ndarray:
+        """Each element's smallest det F over its quadrature points at positions ``x``."""
+        return self.solid3d.min_det(x)
 
     def shape(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> np.ndarray:
         """Deformed centre line on the mid-plane (start to end), (x, y) in mm."""
         return self.positions(pose_a, pose_b, internal)[self.mesh.centre_line, :2]
-
-    def section_forces(
-        self,
-        pose_a: np.ndarray,
-        pose_b: np.ndarray,
-        internal: np.ndarray,
-        gradient: np.ndarray | None = None,
-    ) -> SectionForces:
-        """Section resultants N (N) and M (N mm) along the deformed mid-plane centre line.
-
-        The end face's reaction (the gradient on the end body's pose, the
-        whole depth's) carried to every section by statics, as in
-        :meth:`.connector.ContinuumConnector.section_forces`.
-        """
-        s = self._end_slot
-        pose = np.asarray((pose_a, pose_b)[s], float)
-        if gradient is not None:
-            wrench = gradient[3 * s : 3 * s + 3]
-        else:  # the end face's nodal forces: only its elements contribute
-            x = self.positions(pose_a, pose_b, internal)
-            face = self._face[s]
-            f = self._end_solid.forces(x).reshape(-1, 3)[face]
-            arm = x[face, :2] - pose[:2]
-            wrench = np.array(
-                [f[:, 0].sum(), f[:, 1].sum(), np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0])]
-            )
-        line = self.shape(pose_a, pose_b, internal)
-        return statics_section_forces(
-            line, self._centre_fractions, wrench, pose, axes=polyline_axes(line)
-        )
