@@ -15,7 +15,7 @@
 - The package as it installs is linked under ``build/docs-src`` for
   mkdocstrings (see :func:`_link_package`).
 - The published reports (``reports/paper``, ``reports/flexures``,
-  ``reports/dynamics``, ``reports/sweep_example``: Markdown and figures) are added to the site under
+  ``reports/dynamics``, ``reports/threed``, ``reports/sweep_example``: Markdown and figures) are added to the site under
   ``validation/`` as they are, so their relative links resolve.
 - Every script in ``examples/`` is run with this Python in a scratch folder;
   the gallery page shows its description, its source, what it printed and any
@@ -43,6 +43,7 @@ REPORTS = {
     "paper": "reports/paper",
     "flexures": "reports/flexures",
     "dynamics": "reports/dynamics",
+    "threed": "reports/threed",
     "sweep_example": "reports/sweep_example",
 }
 """Folders of published reports, by their folder under ``validation/`` in the site."""
