@@ -15,7 +15,8 @@
 - The package as it installs is linked under ``build/docs-src`` for
   mkdocstrings (see :func:`_link_package`).
 - The published reports (``reports/paper``, ``reports/flexures``,
-  ``reports/dynamics``, ``reports/threed``, ``reports/sweep_example``: Markdown and figures) are added to the site under
+  ``reports/dynamics``, ``reports/threed``, ``reports/sweep_example``: Markdown
+  and figures) are added to the site under
   ``validation/`` as they are, so their relative links resolve.
 - Every script in ``examples/`` is run with this Python in a scratch folder;
   the gallery page shows its description, its source, what it printed and any
