@@ -52,14 +52,8 @@ from flexval.validation.continuum.run import build_system
 def superlu_twice(matrix: sp.csc_matrix, rhs: np.ndarray) -> tuple[np.ndarray, int | None]:
     """The solve by a pivoting SuperLU and the inertia by a symmetric-mode SuperLU."""
     x = spla.splu(matrix).solve(rhs)
-    try:
-        lu = spla.splu(
-            matrix,
-            permc_spec="MMD_AT_PLUS_A",
-            diag_pivot_thresh=0.0,
-            options={"SymmetricMode": True},
-        )
-    except RuntimeError:
+    lu = storage._symmetric_superlu(matrix)  # the inertia by the sparse path's own factorisation
+    if lu is None:
         return x, None
     d = lu.U.diagonal()
     return x, int(np.sum(d < -1e-12 * np.abs(d).max(initial=0.0)))

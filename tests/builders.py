@@ -1,6 +1,10 @@
-"""Small mechanisms for tests: one flexure between the ground and a tip body."""
+"""Small mechanisms for tests: one flexure between the ground and a tip body; an in-process
+Dask client for the sweeps."""
 
 from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -116,3 +120,60 @@ def assert_assembles_like_its_connectors(
         tangent.toarray(), ref_tangent, rtol=0, atol=1e-13 * np.abs(ref_tangent).max()
     )
     return ref_grad, ref_tangent
+
+
+@contextlib.contextmanager
+def in_process_client() -> Iterator:
+    """A Dask client of one in-process worker with one thread (no dashboard): a sweep's
+    tasks run in the test's own process."""
+    from distributed import Client, LocalCluster
+
+    with (
+        LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        yield client
+
+
+def tiny_scene(name: str = "tiny", material: str = "", force: float = 0.01) -> str:
+    """Scene TOML of one half-circle arc (radius 2 mm, h = 0.2 mm) between the ground and a
+    tip link, with a force case ``up`` (``force`` N, upwards) and a moment case ``twist``
+    (0.02 N mm); ``material`` adds lines to its ``[material]`` table."""
+    extra = f"{material.strip()}\n" if material.strip() else ""
+    return f"""
+name = "{name}"
+description = "one arc cantilever with a link"
+[material]
+youngs_modulus = 2000.0
+poisson_ratio = 0.3
+{extra}[section]
+depth = 1.0
+thickness = 0.2
+[ground]
+name = "g"
+points = [[0.0, 0.0]]
+[target]
+body = "t"
+point = [6.0, 0.0]
+[[flexures]]
+name = "a"
+bodies = ["g", "t"]
+center = [2.0, 0.0]
+radius = 2.0
+axis_deg = 90.0
+width_deg = 180.0
+[[load_cases]]
+name = "up"
+kind = "force"
+angle_deg = 90.0
+value = {force}
+levels = 6
+[[load_cases]]
+name = "twist"
+kind = "moment"
+body = "t"
+value = 0.02
+levels = 6
+"""

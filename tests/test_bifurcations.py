@@ -35,7 +35,7 @@ from pathlib import Path
 
 import pyarrow.parquet as pq
 import pytest
-from distributed import Client, LocalCluster
+from builders import in_process_client
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
@@ -175,12 +175,7 @@ def test_a_sweep_row_carries_the_first_bifurcation(tmp_path):
         "values = [10000.0, 20000.0]\n"
     )
     sweep = load_sweep(spec)
-    with (
-        LocalCluster(
-            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
-        ) as cluster,
-        Client(cluster) as client,
-    ):
+    with in_process_client() as client:
         run_sweep(sweep, tmp_path / "o", client, use_cache=False)
     table = pq.read_table(results_store(sweep, tmp_path / "o").parts())
     assert table.column("bifurcation_load").null_count == 2

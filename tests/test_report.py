@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from builders import tiny_scene
 
 from flexval.geometry import load_scene
 from flexval.reducedmodels import parse_model
@@ -15,41 +16,7 @@ from flexval.validation.report import build_report
 from flexval.validation.reportdata import read_results
 from flexval.validation.run import run_model
 
-TINY = """
-name = "tiny"
-description = "one arc cantilever with a link"
-[material]
-youngs_modulus = 2000.0
-poisson_ratio = 0.3
-[section]
-depth = 1.0
-thickness = 0.2
-[ground]
-name = "g"
-points = [[0.0, 0.0]]
-[target]
-body = "t"
-point = [6.0, 0.0]
-[[flexures]]
-name = "a"
-bodies = ["g", "t"]
-center = [2.0, 0.0]
-radius = 2.0
-axis_deg = 90.0
-width_deg = 180.0
-[[load_cases]]
-name = "up"
-kind = "force"
-angle_deg = 90.0
-value = 0.01
-levels = 6
-[[load_cases]]
-name = "twist"
-kind = "moment"
-body = "t"
-value = 0.02
-levels = 6
-"""
+TINY = tiny_scene()
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pyarrow.parquet as pq
 import pytest
-from distributed import Client, LocalCluster
+from builders import in_process_client
 
 from flexval.reducedmodels import parse_model
 from flexval.validation.cli import main
@@ -47,12 +47,7 @@ def _write(tmp_path, text, name="sw.toml"):
 
 @pytest.fixture(scope="module")
 def client():
-    with (
-        LocalCluster(
-            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
-        ) as cluster,
-        Client(cluster) as c,
-    ):
+    with in_process_client() as c:
         yield c
 
 

@@ -5,7 +5,7 @@ import textwrap
 
 import numpy as np
 import pytest
-from distributed import Client, LocalCluster
+from builders import in_process_client
 
 from flexval.validation.cache import exact
 from flexval.validation.sweep import load_sweep, run_sweep, sweep_rows
@@ -112,12 +112,7 @@ def test_task_sizes_follow_the_measured_cost(per_point, remaining, workers, want
 
 @pytest.fixture(scope="module")
 def client():
-    with (
-        LocalCluster(
-            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
-        ) as cluster,
-        Client(cluster) as c,
-    ):
+    with in_process_client() as c:
         yield c
 
 

@@ -17,7 +17,7 @@ import textwrap
 import weakref
 
 import pyarrow.parquet as pq
-from distributed import Client, LocalCluster
+from builders import in_process_client
 from peakmemory import PEAK_KB
 
 from flexval.validation.sweep import load_sweep, run_sweep
@@ -106,12 +106,7 @@ def test_the_engine_builds_and_drops_the_points_block_by_block(tmp_path):
     sweep = load_sweep(_sweep(tmp_path, 60, "blocks"))
     tracked = _Tracked(sweep.points)
     sweep = dataclasses.replace(sweep, points=tracked, batch=1)
-    with (
-        LocalCluster(
-            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
-        ) as cluster,
-        Client(cluster) as client,
-    ):
+    with in_process_client() as client:
         gc.disable()  # only reference counts free the points: the bound is not gc's timing
         try:
             stats = run_sweep(sweep, tmp_path / "out", client, use_cache=False)

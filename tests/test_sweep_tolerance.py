@@ -7,7 +7,7 @@ import textwrap
 
 import numpy as np
 import pytest
-from distributed import Client, LocalCluster
+from builders import in_process_client
 from scipy.stats import norm
 
 from flexval.geometry import SceneError
@@ -222,12 +222,7 @@ def tolerance_run(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("tolerance")
     sweep = load_sweep(_write(tmp, TOLERANCE))
     out = tmp / "out"
-    with (
-        LocalCluster(
-            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
-        ) as cluster,
-        Client(cluster) as client,
-    ):
+    with in_process_client() as client:
         run_sweep(sweep, out, client, use_cache=False)
     rows = sweep_rows(sweep, out)
     written = write_outputs(sweep, rows, out)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from builders import cantilever, tip_moment
+from builders import cantilever, in_process_client, tiny_scene, tip_moment
 
 from flexval.geometry import Material, Segment, load_scene
 from flexval.reducedmodels import run_reduced
@@ -169,42 +169,7 @@ def test_run_json_carries_first_yield(tmp_path, capsys):
     assert all("first_yield" not in r for r in json.loads(plain.read_text())["results"])
 
 
-TINY = """
-name = "tiny_strong"
-[material]
-youngs_modulus = 2000.0
-poisson_ratio = 0.3
-yield_strength = 40.0
-fatigue_strength = 20.0
-[section]
-depth = 1.0
-thickness = 0.2
-[ground]
-name = "g"
-points = [[0.0, 0.0]]
-[target]
-body = "t"
-point = [6.0, 0.0]
-[[flexures]]
-name = "a"
-bodies = ["g", "t"]
-center = [2.0, 0.0]
-radius = 2.0
-axis_deg = 90.0
-width_deg = 180.0
-[[load_cases]]
-name = "up"
-kind = "force"
-angle_deg = 90.0
-value = 0.05
-levels = 6
-[[load_cases]]
-name = "twist"
-kind = "moment"
-body = "t"
-value = 0.02
-levels = 6
-"""
+TINY = tiny_scene("tiny_strong", "yield_strength = 40.0\nfatigue_strength = 20.0", force=0.05)
 
 
 def test_report_tabulates_first_yield_against_the_continuum(tmp_path):
@@ -274,7 +239,6 @@ def test_continuum_notch_hinge_yields_by_its_true_peak(tmp_path):
 
 
 def test_sweep_rows_carry_first_yield(tmp_path):
-    from distributed import Client, LocalCluster
 
     from flexval.validation.sweep import load_sweep, run_sweep, sweep_rows
 
@@ -286,12 +250,7 @@ def test_sweep_rows_carry_first_yield(tmp_path):
         '[[axes]]\npath = "material.yield_strength"\nvalues = [4.0, 6.0]\n'
     )
     sweep = load_sweep(sweep_file)
-    with (
-        LocalCluster(
-            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
-        ) as cluster,
-        Client(cluster) as client,
-    ):
+    with in_process_client() as client:
         run_sweep(sweep, tmp_path / "o", client, use_cache=False)
     rows = sweep_rows(sweep, tmp_path / "o")
     assert len(rows) == 2 * 3 * 2
