@@ -203,16 +203,18 @@ def _no_figure(*args) -> None:
     """A figure drawer that draws nothing (the texts are compared, not the pictures)."""
 
 
+def _bench(scene, models: tuple[str, ...]):
+    """The runtime-versus-error rows (and failures) of ``models`` against ``beam:40``, one
+    repeat."""
+    return runtime_vs_error(
+        scene, parse_model("beam:40"), [parse_model(m) for m in models], repeats=1, progress=False
+    )
+
+
 def test_batched_times_change_only_the_timings_files(computed, tmp_path):
     data, _ = computed
     scene = data.scenes[0].scene
-    rows, _ = runtime_vs_error(
-        scene,
-        parse_model("beam:40"),
-        [parse_model(m) for m in ("beam:100", "dcmm:1")],
-        repeats=1,
-        progress=False,
-    )
+    rows, _ = _bench(scene, ("beam:100", "dcmm:1"))
     data = copy.deepcopy(data)
     data.scenes[0].bench_rows = rows
     slower = copy.deepcopy(data)
@@ -235,13 +237,7 @@ def test_batched_times_change_only_the_timings_files(computed, tmp_path):
 def test_the_bench_table_has_the_batched_columns(computed, tmp_path):
     data, _ = computed
     scene = data.scenes[0].scene
-    rows, failures = runtime_vs_error(
-        scene,
-        parse_model("beam:40"),
-        [parse_model(m) for m in ("beam:100", "dcmm:1", "ee")],
-        repeats=1,
-        progress=False,
-    )
+    rows, failures = _bench(scene, ("beam:100", "dcmm:1", "ee"))
     assert not failures
     for r in rows:
         assert math.isfinite(r["batched_seconds"]) and r["batched_seconds"] > 0
