@@ -1,10 +1,12 @@
 """The sweep's Parquet parts: non-finite floats stored as null, rows read back filtered by
-key and sorted by point, model and load case as Python sorts them."""
+key and sorted by point, model and load case as Python sorts them, and what an interrupted
+run leaves unpublished removed."""
 
 import math
 
 import pyarrow.parquet as pq
 
+from flexval.geometry.files import atomic_path
 from flexval.validation.sweep.store import ResultStore
 
 
@@ -44,3 +46,18 @@ def test_rows_read_back_filtered_by_key_and_sorted_as_python_sorts_them(tmp_path
     assert [r["key"] for r in got] == [r["key"] for r in want]
     keep = {"k1", "k3", "k4"}
     assert [r["key"] for r in store.rows(keep)] == [r["key"] for r in want if r["key"] in keep]
+
+
+def test_clear_staged_removes_unpublished_parts_and_a_write_cut_short(tmp_path):
+    store = ResultStore(tmp_path / "results", [])
+    published = store.append([_row("p", 0, "ee", "f+", seconds=0.0)])
+    staged = store.stage([_row("s", 1, "ee", "f+", seconds=0.0)])
+    # a worker stopped inside atomic_path leaves its temporary file, named as atomic_path names it
+    cut = atomic_path(staged.with_name(staged.name.replace("part-", "part-cut")))
+    temporary = cut.__enter__()
+    temporary.write_bytes(b"PAR1")
+    before = {p.name for p in store.folder.iterdir()}
+    assert {published.name, staged.name, temporary.name} == before
+    store.clear_staged()
+    assert [p.name for p in store.folder.iterdir()] == [published.name]
+    assert [r["key"] for r in store.rows()] == ["p"]

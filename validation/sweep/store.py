@@ -193,7 +193,9 @@ class ResultStore:
         """Remove the staged parts that an interrupted run left unpublished (and the
         temporary files of those a worker was writing when it was stopped)."""
         if self.folder.is_dir():
-            for path in self.folder.glob(f"{STAGED}part-*.parquet"):
+            # a staged part is ``.staged-part-NAME.parquet``; the temporary file it is
+            # written through is ``..staged-part-NAME.parquet.XXXX.tmp.parquet``
+            for path in self.folder.glob(f"*{STAGED}part-*.parquet"):
                 path.unlink(missing_ok=True)
 
     def rows(self, keys: set[str] | None = None) -> list[dict]:
