@@ -61,7 +61,8 @@ from .loadpath import LoadPath
 from .loads import Loads
 from .newton import BatchNewtonResult, FixedLoad, StepProblem, solve_batch
 from .recorder import PathRecorder, path_peaks
-from .tangent import ROUND_OFF, DenseTangent
+from .ldlkernel import negative_counts
+from .tangent import ROUND_OFF
 from .tracer import Counters, LoadControl, PathPoint, Solve, TraceFailure, Verdict, trace
 
 Member = tuple[Mechanism, Sequence[Connector]]
@@ -586,33 +587,29 @@ class BatchSystem(System):
         """The negative eigenvalues beyond its multipliers of every copy of ``among`` (bool per
         copy; 0 for the others), from its diagonal block.
 
-        The blocks (copies, m, m) are read from the band. A copy whose own
-        tangent is dense is judged as its own System judges it: the block in
-        the copy's own numbering, its LDL^T's pivots counted
-        (:meth:`~flexval.reducedmodels.tangent.DenseTangent.negative_eigenvalues`,
-        LAPACK's ``dsytrf``: two thirds of the time of its eigenvalues on
-        ``prbm``'s 21 x 21 saddle points). Larger
+        A copy whose own tangent is dense is judged as its own System judges
+        it: the block in the copy's own numbering, the pivots of its
+        Bunch-Kaufman LDL^T counted
+        (:meth:`~flexval.reducedmodels.tangent.DenseTangent.negative_eigenvalues`),
+        every block of the batch in one compiled loop
+        (:func:`~flexval.reducedmodels.ldlkernel.negative_counts`). Larger
         copies, banded alone, have their eigenvalues computed in one stacked
         call; those below -``ROUND_OFF`` times the block's largest in size
         count, as the copy's own band counts its eigenvalues.
         """
         m, i, j, rows, columns, multipliers = self._block_maps()
         chosen = np.flatnonzero(among)
+        negative = np.zeros(self.n_copies, np.int64)
+        if self.template.layout.kind == "dense":
+            own = np.argsort(self._tangent_order)  # each block in its copy's own numbering
+            counts = negative_counts(tangent.storage, self.layout.b, m, chosen, own, ROUND_OFF)
+            negative[chosen] = np.where(counts >= 0, counts - multipliers, 0)  # -1: not finite,
+            return negative  # not judged (as its own System's check)
         values = tangent.storage[rows[None, :], columns[chosen]]
         blocks = np.zeros((chosen.size, m, m))
         blocks[:, i, j] = values
         blocks[:, j, i] = values
-        negative = np.zeros(self.n_copies, np.int64)
         if not np.isfinite(blocks).all():
-            return negative
-        if self.template.layout.kind == "dense":
-            own = np.argsort(self._tangent_order)  # each block in its copy's own numbering
-            blocks = blocks[:, own][:, :, own]
-            indefinite = multipliers > 0
-            negative[chosen] = [
-                DenseTangent(block, indefinite).negative_eigenvalues() - multipliers
-                for block in blocks
-            ]
             return negative
         eigenvalues = np.linalg.eigvalsh(blocks)
         limit = -ROUND_OFF * np.abs(eigenvalues).max(axis=1, initial=0.0)
