@@ -56,12 +56,12 @@ from flexval.geometry import LoadCase, Mechanism, SceneError
 
 from .connector import Connector
 from .core import SolverError, SolverSettings, System, case_loads
+from .ldlkernel import negative_counts
 from .linearbatch import linear_responses
 from .loadpath import LoadPath
 from .loads import Loads
 from .newton import BatchNewtonResult, FixedLoad, StepProblem, solve_batch
 from .recorder import PathRecorder, path_peaks
-from .ldlkernel import negative_counts
 from .tangent import ROUND_OFF
 from .tracer import Counters, LoadControl, PathPoint, Solve, TraceFailure, Verdict, trace
 

@@ -65,7 +65,7 @@ from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.kinematics import rotate_xy
 
 from .beamvarying import element_stiffness, graded_stations
-from .connector import Connector, ConnectorGroup, LocalState
+from .connector import Connector, ConnectorGroup, LocalState, Reasons
 from .inertia import MassPoints, chain_mass_points
 from .sections import SectionForces, statics_section_forces, unit_vectors
 from .validity import MAX_CHORD_TURN, MAX_STRAIN, rotation_reasons, stretch_reasons
@@ -312,9 +312,7 @@ class BeamGroup(ConnectorGroup):
         energy = kernel(_coordinates(states), gradient, hessian)
         return energy, gradient, hessian
 
-    def path_end_pass(
-        self, coordinates: np.ndarray
-    ) -> tuple[list[list[list[str]]], list[SectionForces]]:
+    def path_end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[SectionForces]]:
         """:meth:`path_validity` and :meth:`path_section_forces` from one compiled pass.
 
         ``coordinates`` as :meth:`ConnectorGroup.path_end_pass` says, read by
@@ -324,7 +322,7 @@ class BeamGroup(ConnectorGroup):
         ends = self._element_ends(coordinates)
         return self._verdicts(*ends), self._section_forces(*ends[2:])
 
-    def path_validity(self, levels: Sequence[Sequence[LocalState]]) -> list[list[list[str]]]:
+    def path_validity(self, levels: Sequence[Sequence[LocalState]]) -> list[Reasons]:
         """Each connector's :meth:`BeamConnector.validity` at each level, in one compiled pass.
 
         Reasons are worded only for the (connector, level) pairs found invalid.
@@ -363,7 +361,7 @@ class BeamGroup(ConnectorGroup):
 
     def _verdicts(
         self, lengths: np.ndarray, turns: np.ndarray, axial: np.ndarray, moment: np.ndarray
-    ) -> list[list[list[str]]]:
+    ) -> list[Reasons]:
         """The validity reasons per connector and level from the elements' chord measures.
 
         A flexure whose section varies also has its outer-fibre strain
@@ -751,7 +749,7 @@ class BeamConnector(Connector):
         """
         return self.path_validity([(pose_a, pose_b, internal)])[0]
 
-    def path_validity(self, states: Sequence[LocalState]) -> list[list[str]]:
+    def path_validity(self, states: Sequence[LocalState]) -> Reasons:
         """:meth:`validity` at k states, in one compiled pass (:meth:`BeamGroup.path_validity`)."""
         return self._alone.path_validity([[state] for state in states])[0]
 

@@ -29,6 +29,9 @@ if TYPE_CHECKING:
     from .sections import SectionForces
 
 LocalState = tuple[np.ndarray, np.ndarray, np.ndarray]
+Reasons = Sequence[Sequence[str]]
+"""The validity monitor's reasons at each of a path's levels (an empty sequence: valid there;
+a connector valid at every level may give one immutable sequence of empty ones)."""
 """(pose_a, pose_b, internal) of one connector: (3,), (3,), (n_internal,)."""
 
 
@@ -167,7 +170,7 @@ class Connector(ABC):
         """
         return []
 
-    def path_validity(self, states: Sequence[LocalState]) -> list[list[str]]:
+    def path_validity(self, states: Sequence[LocalState]) -> Reasons:
         """:meth:`validity` at each of several states (a load path's levels).
 
         The path recorder asks once per path, so that a connector can screen
@@ -381,7 +384,7 @@ class ConnectorGroup:
         """
         return None
 
-    def path_validity(self, levels: Sequence[Sequence[LocalState]]) -> list[list[list[str]]]:
+    def path_validity(self, levels: Sequence[Sequence[LocalState]]) -> list[Reasons]:
         """Each connector's :meth:`Connector.path_validity`: reasons per connector, then per level.
 
         ``levels`` holds, for each of k states (a load path's levels), the
@@ -403,7 +406,7 @@ class ConnectorGroup:
 
     def path_end_pass(
         self, coordinates: np.ndarray
-    ) -> tuple[list[list[list[str]]], list[SectionForces | None]]:
+    ) -> tuple[list[Reasons], list[SectionForces | None]]:
         """:meth:`path_validity` and :meth:`path_section_forces` of the same k levels, together.
 
         What a path's end pass records (:func:`flexval.reducedmodels.recorder.path_end_pass`).

@@ -33,7 +33,7 @@ import numpy as np
 from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.kinematics import rotate_xy
 
-from .connector import Connector, ConnectorGroup
+from .connector import Connector, ConnectorGroup, Reasons
 from .inertia import MassPoints, line_density, rigid_pieces
 from .sections import SectionForces
 from .subarcs import sub_arcs
@@ -359,7 +359,7 @@ class DcmmConnector(Connector):
             )
         return reasons
 
-    def path_validity(self, states) -> list[list[str]]:
+    def path_validity(self, states) -> Reasons:
         """:meth:`validity` at k states, screened in one vectorised pass
         (see :class:`DcmmGroup`)."""
         return DcmmGroup([self]).path_validity([[state] for state in states])[0]
@@ -616,9 +616,7 @@ class DcmmGroup(ConnectorGroup):
             self._stack = _Stack.of(self.connectors, self._tables)
         return self._stack
 
-    def path_end_pass(
-        self, coordinates: np.ndarray
-    ) -> tuple[list[list[list[str]]], list[SectionForces]]:
+    def path_end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[SectionForces]]:
         """:meth:`path_validity` and :meth:`path_section_forces` on the stacked coordinates.
 
         ``coordinates`` (k, m): the connectors' local coordinates at each
@@ -629,7 +627,7 @@ class DcmmGroup(ConnectorGroup):
         poses = coordinates[:, self._tables.pose_order].reshape(len(coordinates), -1, 3)
         return (self._verdicts(poses, lambda: self.local_levels(coordinates)), self._forces(poses))
 
-    def path_validity(self, levels) -> list[list[list[str]]]:
+    def path_validity(self, levels) -> list[Reasons]:
         """Each connector's :meth:`DcmmConnector.validity` at each level, screened in one pass.
 
         Every level's chord strains and relative rotations come from one
@@ -640,7 +638,7 @@ class DcmmGroup(ConnectorGroup):
         """
         return self._verdicts(self.stack().poses(levels), lambda: levels)
 
-    def _verdicts(self, poses: np.ndarray, levels_of: Callable[[], list]) -> list[list[list[str]]]:
+    def _verdicts(self, poses: np.ndarray, levels_of: Callable[[], list]) -> list[Reasons]:
         """:meth:`path_validity` from the stacked poses; ``levels_of()`` gives the local states."""
         stack, tables = self.stack(), self._tables
         strain, turn = dcmm_kernels().chain_measures(
@@ -655,11 +653,11 @@ class DcmmGroup(ConnectorGroup):
         near = ((strain > MAX_STRAIN - SCREEN_MARGIN) | (turn > limits - SCREEN_MARGIN)).T
         screened = near.any(axis=1).tolist()  # the connectors near a limit at some level
         levels = levels_of() if any(screened) else []
-        steps = range(len(poses))
+        valid = ((),) * len(poses)  # no reason at any level: one shared, immutable
         return [
             [c.validity(*states[j]) if flag else [] for states, flag in zip(levels, near[j])]
             if screen
-            else [[] for _ in steps]
+            else valid
             for j, (c, screen) in enumerate(zip(self.connectors, screened))
         ]
 

@@ -47,7 +47,7 @@ import scipy.sparse as sp
 from flexval.geometry import Mechanism, SceneError
 from flexval.geometry.profiles import quadrature_panels
 
-from .connector import Connector, overrides
+from .connector import Connector, Reasons, overrides
 
 HRZ_ROTARY = 1.0 / 78.0
 """Rotary inertia per end of a lumped segment, as a fraction of m l^2.
@@ -385,7 +385,7 @@ class Weighted(Connector):
         """The wrapped connector's."""
         return self.inner.validity(pose_a, pose_b, internal)
 
-    def path_validity(self, states) -> list[list[str]]:
+    def path_validity(self, states) -> Reasons:
         """The wrapped connector's."""
         return self.inner.path_validity(states)
 

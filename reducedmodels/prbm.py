@@ -119,7 +119,7 @@ from flexval.geometry.compliance import curve_compliance
 from flexval.geometry.kinematics import rotate_xy
 from flexval.geometry.shapes import Shape, arc_semi_axes
 
-from .connector import Connector, ConnectorGroup
+from .connector import Connector, ConnectorGroup, Reasons
 from .inertia import MassPoints, line_density, rigid_pieces
 from .sections import SectionForces, polyline_fractions
 from .spline import NotAKnotSpline
@@ -581,7 +581,7 @@ class PrbmConnector(Connector):
             "chord", np.array([chord]), np.array([self.length]), one_sided=True
         ) + rotation_reasons("end rotation", np.array([turn]), self._fitted_rotation)
 
-    def path_validity(self, states) -> list[list[str]]:
+    def path_validity(self, states) -> Reasons:
         """:meth:`validity` at k states, screened in one vectorised pass
         (:meth:`PrbmGroup.path_validity`)."""
         return PrbmGroup([self]).path_validity([[state] for state in states])[0]
@@ -671,9 +671,7 @@ class PrbmGroup(ConnectorGroup):
         """
         return prbm_kernels().chain_polylines(self._local(levels), self._parameters, self._end_rel)
 
-    def path_end_pass(
-        self, coordinates: np.ndarray
-    ) -> tuple[list[list[list[str]]], list[SectionForces]]:
+    def path_end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[SectionForces]]:
         """:meth:`path_validity` and :meth:`path_section_forces` on the stacked
         coordinates as they are.
 
@@ -685,7 +683,7 @@ class PrbmGroup(ConnectorGroup):
         local = coordinates.reshape(len(coordinates), len(self.connectors), 10)
         return (self._verdicts(local, lambda: self.local_levels(coordinates)), self._forces(local))
 
-    def path_validity(self, levels) -> list[list[list[str]]]:
+    def path_validity(self, levels) -> list[Reasons]:
         """Each connector's :meth:`PrbmConnector.validity` at each level, screened in one pass.
 
         Only (level, connector) pairs whose chord stretch or end rotation
@@ -694,7 +692,7 @@ class PrbmGroup(ConnectorGroup):
         """
         return self._verdicts(self._local(levels), lambda: levels)
 
-    def _verdicts(self, local: np.ndarray, levels_of: Callable[[], list]) -> list[list[list[str]]]:
+    def _verdicts(self, local: np.ndarray, levels_of: Callable[[], list]) -> list[Reasons]:
         """:meth:`path_validity` from the (k, c, 10) table; ``levels_of()`` gives
         the local states."""
         lines = prbm_kernels().chain_polylines(local, self._parameters, self._end_rel)
@@ -707,8 +705,11 @@ class PrbmGroup(ConnectorGroup):
             | (turn > fitted - SCREEN_MARGIN)
         ).T.tolist()
         levels = levels_of() if any(map(any, near)) else [None] * len(local)
+        valid = ((),) * len(local)  # no reason at any level: one shared, immutable
         return [
             [c.validity(*states[j]) if flag else [] for states, flag in zip(levels, flags)]
+            if any(flags)
+            else valid
             for j, (c, flags) in enumerate(zip(self.connectors, near))
         ]
 
