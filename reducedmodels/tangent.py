@@ -203,16 +203,20 @@ class BandedTangent:
     Cholesky first (the usual, stable case: about a third of a banded LU's
     work, and it proves there is no negative eigenvalue), a banded LU with
     pivoting (on the general band storage, mirrored from the upper band)
-    only when the Cholesky meets a non-positive pivot. Up to
-    ``NARROW_BAND`` both are the compiled loops of
+    only when the Cholesky meets a non-positive pivot, and straight away for
+    a saddle point (Lagrange multipliers: ``indefinite``), which has no
+    Cholesky factor. Up to ``NARROW_BAND`` both are the compiled loops of
     :mod:`flexval.reducedmodels.bandkernel` (numba), above it LAPACK's.
     """
 
-    def __init__(self, storage: np.ndarray, perm: np.ndarray, half_bandwidth: int):
+    def __init__(
+        self, storage: np.ndarray, perm: np.ndarray, half_bandwidth: int, indefinite: bool = False
+    ):
         self.storage, self.perm, self.b = storage, perm, half_bandwidth
         self.n = storage.shape[1]
         self._cholesky = None  # upper Cholesky factor in band form, when K is positive definite
         self._lu = None  # (lu, pivots, info) of a banded LU, when it is not
+        self._indefinite = indefinite  # a saddle point: no Cholesky to try
         # the compiled kernels and their token for a narrow band (None: LAPACK's)
         self._narrow = narrow_kernels(half_bandwidth) if half_bandwidth <= NARROW_BAND else None
 
@@ -221,11 +225,15 @@ class BandedTangent:
             b = self.b
             if self._narrow is not None:
                 kernels, token = self._narrow
-                factor, info = kernels.band_cholesky(self.storage, token)
+                factor, info = (
+                    (None, 1) if self._indefinite else kernels.band_cholesky(self.storage, token)
+                )
                 if info:
                     self._lu = kernels.band_lu(self.storage, token)
             else:
-                factor, info = lapack.dpbtrf(self.storage, lower=0)
+                factor, info = (
+                    (None, 1) if self._indefinite else lapack.dpbtrf(self.storage, lower=0)
+                )
                 if info:
                     self._lu = lapack.dgbtrf(self._general_band(), b, b)
             if info == 0:
@@ -244,6 +252,7 @@ class BandedTangent:
         narrow = self._narrow
         if (
             narrow is not None
+            and not self._indefinite
             and self._cholesky is None
             and self._lu is None
             and rhs.ndim == 1
@@ -665,6 +674,8 @@ class TangentLayout:
         if self.kind == "dense":
             return DenseTangent(storage.reshape(self.n, self.n), self.n_multipliers > 0)
         if self.kind == "banded":  # column j contiguous: Fortran order, as LAPACK wants it
-            return BandedTangent(storage.reshape(self.n, self.b + 1).T, self.perm, self.b)
+            return BandedTangent(
+                storage.reshape(self.n, self.b + 1).T, self.perm, self.b, self.n_multipliers > 0
+            )
         matrix = sp.csc_matrix((storage, self._indices, self._indptr), shape=(self.n, self.n))
         return SparseTangent(matrix, self.n_multipliers, self._analysis)
