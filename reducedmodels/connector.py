@@ -325,10 +325,17 @@ class ConnectorGroup:
         coordinate, one after the other; the core asks once, when it builds
         its index maps.
         """
+        patterns = [c.hessian_pattern() for c in self.connectors]
+        sizes = [6 + c.n_internal for c in self.connectors]
+        if patterns and all(p is patterns[0] for p in patterns) and len(set(sizes)) == 1:
+            # connectors alike (a batch's copies): one pattern, shifted by each one's start
+            m, pattern = sizes[0], patterns[0]
+            if pattern is None:
+                pattern = np.repeat(np.arange(m), m), np.tile(np.arange(m), m)
+            starts = (m * np.arange(len(sizes), dtype=np.int64))[:, None]
+            return (pattern[0] + starts).ravel(), (pattern[1] + starts).ravel()
         rows, cols, start = [], [], 0
-        for c in self.connectors:
-            pattern = c.hessian_pattern()
-            m = 6 + c.n_internal
+        for pattern, m in zip(patterns, sizes):
             if pattern is None:
                 pattern = np.repeat(np.arange(m), m), np.tile(np.arange(m), m)
             rows.append(pattern[0] + start), cols.append(pattern[1] + start)

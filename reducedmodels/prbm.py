@@ -746,8 +746,16 @@ class PrbmGroup(ConnectorGroup):
         arc-length order from the flexure's first end; a segment of zero
         length at rest (two points of one rigid member that coincide) has none.
         """
-        out = []
+        alike: dict[bytes, list[int]] = {}  # connectors with the same stations (a batch's copies)
         for j, c in enumerate(self.connectors):
-            at, where = c._stations
-            out.append(SectionForces(at, axial[:, j, where], moment[:, j, where]))
+            alike.setdefault(c._stations[1].tobytes(), []).append(j)
+        out: list = [None] * len(self.connectors)
+        for members in alike.values():
+            where = self.connectors[members[0]]._stations[1]
+            at = np.asarray(members)[:, None], where[None, :]
+            axial_of, moment_of = axial[:, at[0], at[1]], moment[:, at[0], at[1]]  # (k, g, m)
+            for i, j in enumerate(members):
+                out[j] = SectionForces(
+                    self.connectors[j]._stations[0], axial_of[:, i], moment_of[:, i]
+                )
         return out
