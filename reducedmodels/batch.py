@@ -54,9 +54,9 @@ import scipy.sparse as sp
 
 from flexval.geometry import LoadCase, Mechanism, SceneError
 
+from .blocktangent import BlockLayout, BlockMaps, BlockTangent, block_maps
 from .connector import Connector
 from .core import SolverError, SolverSettings, System, case_loads
-from .ldlkernel import negative_counts
 from .linearbatch import linear_responses
 from .loadpath import LoadPath
 from .loads import Loads
@@ -132,6 +132,9 @@ class BatchSystem(System):
         self._copy_table: np.ndarray | None = None
         super().__init__(self._merged_mechanism(pairs, ground, names), merged, settings)
         self._number_copies()
+        self._dense = self._dense_blocks()
+        if self._dense is not None and self.n_multipliers > 0:  # saddle points: block by block
+            self.layout = BlockLayout(self.layout, self._dense)
 
     def _number_connectors(self) -> tuple[np.ndarray, np.ndarray, list[int], np.ndarray]:
         """:meth:`System._number_connectors` of copies all numbered as copy 0, as one table.
@@ -583,6 +586,17 @@ class BatchSystem(System):
             self._blocks = (m, i, j, b + i - j, columns, multipliers)
         return self._blocks
 
+    def _dense_blocks(self) -> BlockMaps | None:
+        """Where copies all alike whose own tangents are dense have their blocks in the band
+        and their unknowns in the batch, each block in its copy's own numbering; None for
+        other batches."""
+        if not (self.uniform and self.template.layout.kind == "dense"):
+            return None
+        if self.layout.kind != "banded":
+            return None
+        own = np.argsort(self._tangent_order)  # a copy's own unknown p: its block's row own[p]
+        return block_maps(own, self.layout.b, self._copy_table)
+
     def _block_inertia(self, tangent, among: np.ndarray) -> np.ndarray:
         """The negative eigenvalues beyond its multipliers of every copy of ``among`` (bool per
         copy; 0 for the others), from its diagonal block.
@@ -592,7 +606,8 @@ class BatchSystem(System):
         Bunch-Kaufman LDL^T counted
         (:meth:`~flexval.reducedmodels.tangent.DenseTangent.negative_eigenvalues`),
         every block of the batch in one compiled loop
-        (:func:`~flexval.reducedmodels.ldlkernel.negative_counts`). Larger
+        (:meth:`~flexval.reducedmodels.blocktangent.BlockTangent.copy_negative`:
+        a saddle point's tangent is one already, factorised for its solves). Larger
         copies, banded alone, have their eigenvalues computed in one stacked
         call; those below -``ROUND_OFF`` times the block's largest in size
         count, as the copy's own band counts its eigenvalues.
@@ -600,9 +615,11 @@ class BatchSystem(System):
         m, i, j, rows, columns, multipliers = self._block_maps()
         chosen = np.flatnonzero(among)
         negative = np.zeros(self.n_copies, np.int64)
-        if self.template.layout.kind == "dense":
-            own = np.argsort(self._tangent_order)  # each block in its copy's own numbering
-            counts = negative_counts(tangent.storage, self.layout.b, m, chosen, own, ROUND_OFF)
+        if self._dense is not None:
+            if not isinstance(tangent, BlockTangent):
+                flat = tangent.storage.ravel(order="F")  # the layout's flat storage
+                tangent = BlockTangent(flat, tangent.perm, tangent.b, self._dense)
+            counts = tangent.copy_negative()[chosen]
             negative[chosen] = np.where(counts >= 0, counts - multipliers, 0)  # -1: not finite,
             return negative  # not judged (as its own System's check)
         values = tangent.storage[rows[None, :], columns[chosen]]

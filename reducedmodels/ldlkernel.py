@@ -1,19 +1,22 @@
-"""Compiled inertia of many small symmetric blocks: Bunch-Kaufman LDL^T (numba, on-disk cache).
+"""Compiled Bunch-Kaufman LDL^T of many small symmetric blocks: solves and inertia (numba).
 
-A batch of copies whose own tangents are small and dense (``prbm``'s 21 x
-21 saddle points on the open chain) judges each copy's stability on its
-diagonal block, as the copy's own System judges it
-(:meth:`flexval.reducedmodels.tangent.DenseTangent.negative_eigenvalues`):
-the symmetric indefinite factorisation P K P^T = U D U^T with Bunch and
+A batch of copies whose own tangents are small dense saddle points
+(``prbm``'s 21 x 21 on the open chain: Lagrange multipliers, so no
+Cholesky factor) is factorised block by block as each copy's own System
+factorises it (:class:`flexval.reducedmodels.tangent.DenseTangent`): the
+symmetric indefinite factorisation P K P^T = U D U^T with Bunch and
 Kaufman's partial pivoting, whose block-diagonal D (1 x 1 and 2 x 2
-blocks) has K's inertia (Sylvester's law). Called once per block through
-SciPy's LAPACK wrapper (``dsytrf``) that cost 17 us a block, almost all of
-it the call; here one compiled loop runs over every block of the batch.
+blocks) has K's inertia (Sylvester's law), so that one factorisation
+serves the Newton solves and the stability check
+(:class:`flexval.reducedmodels.blocktangent.BlockTangent`). Through SciPy's
+LAPACK wrappers (``dsytrf``, ``dsytrs``) a block cost 17 us, almost all of it
+the call; here one compiled loop runs over every block of the batch.
 
-The factorisation is LAPACK's unblocked upper one (``dsytf2``, which
-``dsytrf`` runs on any matrix smaller than its block size of 64): the same
-pivot choices with alpha = (1 + sqrt(17)) / 8, the same updates in the same
-order, so D is LAPACK's to round-off and the count of its negative
+The factorisation and the solve are LAPACK's unblocked upper ones
+(``dsytf2``, which ``dsytrf`` runs on any matrix smaller than its block
+size of 64, and ``dsytrs``): the same pivot choices with alpha =
+(1 + sqrt(17)) / 8, the same updates in the same order, so D and the
+solutions are LAPACK's to round-off and the count of D's negative
 eigenvalues, with the same margin, is the count the copy alone makes.
 
 Units: whatever the matrix's (N/mm, N, N mm for a tangent).
@@ -32,24 +35,31 @@ ALPHA = (1.0 + math.sqrt(17.0)) / 8.0
 
 
 @kernel
-def ldl_pivot_eigenvalues(a: np.ndarray) -> np.ndarray:
-    """The eigenvalues of D in P A P^T = U D U^T (Bunch-Kaufman, LAPACK's ``dsytf2``, upper).
+def ldl_factor(a: np.ndarray, pivots: np.ndarray) -> tuple[np.ndarray, int]:
+    """P A P^T = U D U^T in place (Bunch-Kaufman, LAPACK's ``dsytf2``, upper), and D's eigenvalues.
 
     Parameters
     ----------
     a : ndarray (m, m)
-        A symmetric matrix; its upper triangle is read and overwritten by the
-        factorisation.
+        A symmetric matrix; its upper triangle is read and overwritten by
+        U and D as ``dsytf2`` leaves them.
+    pivots : ndarray of int (m,)
+        Filled with the interchanges, as LAPACK's ``ipiv`` but from 0: row k
+        of a 1 x 1 pivot was swapped with row ``pivots[k]``; the rows k - 1, k
+        of a 2 x 2 pivot block both hold -1 - (the row swapped with k - 1).
 
     Returns
     -------
-    ndarray (m,)
+    eigenvalues : ndarray (m,)
         D's 1 x 1 pivots and the two eigenvalues of each 2 x 2 pivot block
-        (smaller first), in the order the factorisation leaves them. A zero
-        column (a singular matrix) gives a zero pivot, as LAPACK's ``info`` > 0.
+        (smaller first), in the order of the factorisation.
+    info : int
+        0, or k + 1 for the first zero pivot k met (a singular matrix, as
+        LAPACK's ``info``; the factorisation goes on past it).
     """
     m = a.shape[0]
     eigenvalues = np.zeros(m)
+    info = 0
     k = m - 1
     while k >= 0:
         step = 1
@@ -59,6 +69,9 @@ def ldl_pivot_eigenvalues(a: np.ndarray) -> np.ndarray:
             if abs(a[i, k]) > column:
                 column, row_max_of_k = abs(a[i, k]), i
         if max(diagonal, column) == 0.0 or math.isnan(diagonal):
+            if info == 0:
+                info = k + 1
+            pivots[k] = k
             eigenvalues[k] = a[k, k]
             k -= 1
             continue
@@ -96,6 +109,7 @@ def ldl_pivot_eigenvalues(a: np.ndarray) -> np.ndarray:
                         a[i, j] += a[i, k] * t
             for i in range(k):
                 a[i, k] *= r1
+            pivots[k] = pivot
             eigenvalues[k] = a[k, k]
         else:
             if k > 1:
@@ -111,67 +125,152 @@ def ldl_pivot_eigenvalues(a: np.ndarray) -> np.ndarray:
                         a[i, j] = a[i, j] - a[i, k] * wk - a[i, k - 1] * wkm1
                     a[j, k] = wk
                     a[j, k - 1] = wkm1
+            pivots[k] = pivots[k - 1] = -1 - pivot
             p, q, r = a[k - 1, k - 1], a[k - 1, k], a[k, k]
             mid, radius = 0.5 * (p + r), math.hypot(0.5 * (p - r), q)
             eigenvalues[k - 1], eigenvalues[k] = mid - radius, mid + radius
         k -= step
-    return eigenvalues
+    return eigenvalues, info
 
 
 @kernel
-def negative_counts(
+def ldl_solve(a: np.ndarray, pivots: np.ndarray, x: np.ndarray) -> None:
+    """Solve A x = b in place (``x`` holds b) with :func:`ldl_factor`'s U, D and pivots
+    (LAPACK's ``dsytrs``, upper, one right-hand side)."""
+    m = a.shape[0]
+    k = m - 1
+    while k >= 0:  # U D y = b, from the last row up
+        if pivots[k] >= 0:
+            p = pivots[k]
+            x[k], x[p] = x[p], x[k]
+            for i in range(k):
+                x[i] -= a[i, k] * x[k]
+            x[k] *= 1.0 / a[k, k]
+            k -= 1
+        else:
+            p = -1 - pivots[k]
+            x[k - 1], x[p] = x[p], x[k - 1]
+            for i in range(k - 1):
+                x[i] -= a[i, k] * x[k]
+            for i in range(k - 1):
+                x[i] -= a[i, k - 1] * x[k - 1]
+            akm1k = a[k - 1, k]
+            akm1 = a[k - 1, k - 1] / akm1k
+            ak = a[k, k] / akm1k
+            denominator = akm1 * ak - 1.0
+            bkm1 = x[k - 1] / akm1k
+            bk = x[k] / akm1k
+            x[k - 1] = (ak * bkm1 - bk) / denominator
+            x[k] = (akm1 * bk - bkm1) / denominator
+            k -= 2
+    k = 0
+    while k < m:  # U^T x = y, from the first row down
+        if pivots[k] >= 0:
+            total = 0.0
+            for i in range(k):
+                total += a[i, k] * x[i]
+            x[k] -= total
+            p = pivots[k]
+            x[k], x[p] = x[p], x[k]
+            k += 1
+        else:
+            total = 0.0
+            for i in range(k):
+                total += a[i, k] * x[i]
+            x[k] -= total
+            total = 0.0
+            for i in range(k):
+                total += a[i, k + 1] * x[i]
+            x[k + 1] -= total
+            p = -1 - pivots[k]
+            x[k], x[p] = x[p], x[k]
+            k += 2
+
+
+@kernel
+def block_factor(
     storage: np.ndarray,
-    b: int,
-    m: int,
-    copies: np.ndarray,
-    own: np.ndarray,
-    round_off: float,
-) -> np.ndarray:
-    """The negative eigenvalues of each copy's diagonal block of a banded tangent.
+    places: np.ndarray,
+    stride: int,
+    factors: np.ndarray,
+    pivots: np.ndarray,
+    eigenvalues: np.ndarray,
+    info: np.ndarray,
+) -> None:
+    """:func:`ldl_factor` of every copy's diagonal block of a block-diagonal matrix.
 
     Parameters
     ----------
-    storage : ndarray (b + 1, n)
-        The batch's tangent in LAPACK's upper band form: K[i, j], i <= j <=
-        i + b, is ``storage[b + i - j, j]``.
-    b, m : int
-        The half-bandwidth, and the unknowns of one copy (copy c's block is
-        K[c m : c m + m, c m : c m + m]).
-    copies : ndarray of int
-        The copies to judge.
-    own : ndarray of int (m,)
-        The block's rows in the copy's own numbering: entry (p, q) of the
-        judged matrix is the block's (own[p], own[q]).
-    round_off : float
-        Eigenvalues of D below -round_off times the largest in size count.
-
-    Returns
-    -------
-    ndarray of int (len(copies),)
-        Per copy, the count; -1 where its block is not finite.
+    storage : ndarray (n_values,)
+        The matrix's values, flat (a band's storage, say).
+    places : ndarray of int (m, m)
+        Where entry (p, q), p <= q, of copy 0's block lies in ``storage``
+        (-1: a structural zero); copy c's is ``c * stride`` further on. Only
+        the upper triangle is read.
+    stride : int
+        The values between one copy's block and the next's.
+    factors, pivots, eigenvalues, info : ndarray (copies, m, m), (copies, m), (copies, m), (copies,)
+        Filled with each copy's :func:`ldl_factor` results, ``factors[c]``
+        holding the factorised block transposed (so that the columns of U,
+        which the updates run along, are contiguous in memory: a quarter less
+        time than row by row on ``prbm``'s blocks); a copy whose block is not
+        finite is not factorised: info -1, eigenvalues NaN.
     """
-    counts = np.zeros(copies.size, np.int64)
-    block = np.empty((m, m))
-    for c in range(copies.size):
-        first = copies[c] * m
-        finite = True
+    m = places.shape[0]
+    for c in range(info.size):
+        first = c * stride
+        block = factors[c]
+        total = 0.0  # not finite if any entry is not
         for p in range(m):
             for q in range(p, m):
-                i, j = own[p], own[q]
-                if i > j:
-                    i, j = j, i
-                value = storage[b + i - j, first + j] if j - i <= b else 0.0
-                finite = finite and math.isfinite(value)
-                block[p, q] = value
-                block[q, p] = value
-        if not finite:
-            counts[c] = -1
+                place = places[p, q]
+                value = storage[first + place] if place >= 0 else 0.0
+                total += value
+                block[q, p] = value  # the transpose: U's columns contiguous
+        if not math.isfinite(total):
+            info[c] = -1
+            eigenvalues[c, :] = np.nan
             continue
-        eigenvalues = ldl_pivot_eigenvalues(block)
-        largest = 0.0
-        for value in eigenvalues:
-            largest = max(largest, abs(value))
-        for value in eigenvalues:
-            if value < -round_off * largest:
-                counts[c] += 1
-    return counts
+        found, info[c] = ldl_factor(block.T, pivots[c])
+        eigenvalues[c, :] = found
+
+
+@kernel
+def block_solve(
+    factors: np.ndarray,
+    pivots: np.ndarray,
+    info: np.ndarray,
+    index: np.ndarray,
+    rhs: np.ndarray,
+    x: np.ndarray,
+) -> None:
+    """x = K^-1 rhs for the block-diagonal K :func:`block_factor` factorised (its factors
+    transposed).
+
+    ``index[c, p]`` is the unknown (the place in ``rhs`` and ``x``) of copy
+    c's own row p. A copy not factorised or singular (``info`` non-zero)
+    gets NaN.
+    """
+    m = index.shape[1]
+    work = np.empty(m)
+    for c in range(info.size):
+        if info[c] != 0:
+            for p in range(m):
+                x[index[c, p]] = np.nan
+            continue
+        for p in range(m):
+            work[p] = rhs[index[c, p]]
+        ldl_solve(factors[c].T, pivots[c], work)
+        for p in range(m):
+            x[index[c, p]] = work[p]
+
+
+def warm_up() -> None:
+    """Compile (or load from the on-disk cache) every kernel on a 3 x 3 saddle point."""
+    matrix = np.array([[2.0, 0.0, 1.0], [0.0, 1.0, 1.0], [1.0, 1.0, 0.0]])
+    places = np.arange(9, dtype=np.int64).reshape(3, 3)
+    factors, pivots = np.empty((1, 3, 3)), np.empty((1, 3), np.int64)
+    eigenvalues, info = np.empty((1, 3)), np.empty(1, np.int64)
+    block_factor(matrix.ravel(), places, 9, factors, pivots, eigenvalues, info)
+    index = np.arange(3, dtype=np.int64)[None, :]
+    block_solve(factors, pivots, info, index, np.ones(3), np.empty(3))

@@ -1,17 +1,21 @@
-"""The compiled Bunch-Kaufman inertia of small blocks against LAPACK and against eigenvalues.
+"""The compiled Bunch-Kaufman LDL^T of small blocks against LAPACK, eigenvalues and solves.
 
 Its D is LAPACK's (``dsytrf``, which runs ``dsytf2`` below its block size)
 to round-off, on positive definite, indefinite, saddle-point (zero diagonal
-block: 2 x 2 pivots) and singular matrices, and its count of negative
-eigenvalues is the dense tangent's and Sylvester's (the eigenvalues' signs).
+block: 2 x 2 pivots) and singular matrices; its count of negative
+eigenvalues is Sylvester's (the eigenvalues' signs) and the dense tangent's;
+its solves are LAPACK's (``dsytrs``) and satisfy K x = b. A batch's
+:class:`BlockTangent` reads each copy's block from the band in the copy's
+own numbering and solves and counts each copy as its own dense tangent does.
 """
 
 import numpy as np
 import pytest
 from scipy.linalg import lapack
 
-from flexval.reducedmodels.ldlkernel import ldl_pivot_eigenvalues, negative_counts
-from flexval.reducedmodels.tangent import ROUND_OFF, DenseTangent
+from flexval.reducedmodels.blocktangent import BlockTangent, block_maps
+from flexval.reducedmodels.ldlkernel import ldl_factor, ldl_solve
+from flexval.reducedmodels.tangent import DenseTangent
 
 
 def _lapack_d(matrix: np.ndarray) -> np.ndarray:
@@ -31,58 +35,95 @@ def _lapack_d(matrix: np.ndarray) -> np.ndarray:
     return d
 
 
+def _saddle(rng: np.random.Generator, m: int) -> np.ndarray:
+    """A stiffness block, constraints and a zero block: a saddle point of m unknowns."""
+    n, c = m - m // 3, m // 3
+    k = rng.standard_normal((n, n))
+    s = np.zeros((m, m))
+    s[:n, :n] = k @ k.T + np.eye(n)
+    s[n:, :n] = rng.standard_normal((c, n))
+    s[:n, n:] = s[n:, :n].T
+    return s
+
+
 def _matrices(rng: np.random.Generator) -> list[np.ndarray]:
     out = []
     for m in (1, 2, 3, 9, 21, 40):
         a = rng.standard_normal((m, m))
         out.append(a @ a.T + m * np.eye(m))  # positive definite
         out.append(a + a.T)  # indefinite
-        if m >= 3:  # a saddle point: stiffness, constraints, zero block
-            n, c = m - m // 3, m // 3
-            k = rng.standard_normal((n, n))
-            s = np.zeros((m, m))
-            s[:n, :n] = k @ k.T + np.eye(n)
-            s[n:, :n] = rng.standard_normal((c, n))
-            s[:n, n:] = s[n:, :n].T
-            out.append(s)
+        if m >= 3:
+            out.append(_saddle(rng, m))
             singular = a + a.T
             singular[:, 0] = singular[0, :] = 0.0  # a zero column: a zero pivot
             out.append(singular)
     return out
 
 
-def test_d_is_lapacks_and_its_inertia_is_sylvesters():
+def test_d_is_lapacks_its_inertia_sylvesters_and_its_solves_lapacks():
     rng = np.random.default_rng(7)
     for matrix in _matrices(rng):
-        d = ldl_pivot_eigenvalues(np.array(matrix))
+        m = matrix.shape[0]
+        factor, pivots = np.array(matrix), np.empty(m, np.int64)
+        d, info = ldl_factor(factor, pivots)
         scale = np.abs(matrix).max()
         assert np.allclose(d, _lapack_d(matrix), rtol=1e-10, atol=1e-12 * scale)
         eigenvalues = np.linalg.eigvalsh(matrix)
         limit = 1e-9 * np.abs(eigenvalues).max()
         assert np.sum(d < -limit) == np.sum(eigenvalues < -limit)
         assert np.sum(d > limit) == np.sum(eigenvalues > limit)
+        assert info == lapack.dsytrf(matrix)[2]
+        if info:
+            continue
+        b = rng.standard_normal(m)
+        x = b.copy()
+        ldl_solve(factor, pivots, x)
+        ldu, ipiv, _ = lapack.dsytrf(matrix)
+        assert np.allclose(x, lapack.dsytrs(ldu, ipiv, b)[0], rtol=1e-9, atol=0.0)
+        assert np.linalg.norm(matrix @ x - b) <= 1e-10 * np.linalg.norm(matrix, 1) * np.linalg.norm(
+            x
+        ) + 1e-12 * np.linalg.norm(b)
 
 
-@pytest.mark.parametrize("b", [2, 5, 30])
-def test_counts_read_each_copy_block_from_the_band_as_the_dense_tangent_counts(b):
-    rng = np.random.default_rng(b)
-    blocks = [_matrices(rng)[k] for k in (8, 9, 10, 9, 8)]  # 9 x 9: definite, indefinite, saddle
-    copies, m = len(blocks), blocks[0].shape[0]
-    own = rng.permutation(m)  # the copy's own row p is the batch's row own[p]
-    n = copies * m
-    storage = np.zeros((b + 1, n))
+def _banded(blocks: list[np.ndarray], own: np.ndarray, b: int) -> np.ndarray:
+    """The blocks in one upper band of half-width b (Fortran order), each in the band order
+    that puts a copy's own row p at the block's row own[p]."""
+    m = blocks[0].shape[0]
+    storage = np.zeros((b + 1, m * len(blocks)), order="F")
     for c, block in enumerate(blocks):
-        # the band holds the block in the batch's order: entry (own[p], own[q]) is (p, q)
         banded = np.zeros((m, m))
         banded[np.ix_(own, own)] = block
         for i in range(m):
             for j in range(i, min(m, i + b + 1)):
                 storage[b + i - j, c * m + j] = banded[i, j]
-    storage[b, 3 * m + 2] = np.nan  # copy 3 not finite: not judged
-    counts = negative_counts(storage, b, m, np.arange(copies), own, ROUND_OFF)
+    return storage
+
+
+@pytest.mark.parametrize("b", [2, 5, 30])
+def test_a_block_tangent_solves_and_counts_each_copy_as_its_own_dense_tangent(b):
+    rng = np.random.default_rng(b)
+    m = 9
+    blocks = [_saddle(rng, m), _matrices(rng)[9], _saddle(rng, m), _saddle(rng, m)]
+    copies = len(blocks)
+    own = rng.permutation(m)  # copy c's own row p is the band's row c m + own[p]
+    index = np.arange(copies * m).reshape(copies, m)  # the system numbers copy by copy
+    perm = (np.arange(copies)[:, None] * m + np.argsort(own)[None, :]).ravel()
+    assert np.array_equal(perm[np.arange(copies)[:, None] * m + own[None, :]], index)
+    storage = _banded(blocks, own, b)
+    storage[b, 3 * m + int(own[0])] = np.nan  # copy 3 not finite: not judged, not solved
+    tangent = BlockTangent(storage.ravel(order="F"), perm, b, block_maps(own, b, index))
+    rhs = rng.standard_normal(copies * m)
+    x = tangent.solve(rhs)
+    counts = tangent.copy_negative()
     for c, block in enumerate(blocks):
         banded = np.zeros((m, m))
         banded[np.ix_(own, own)] = block
-        seen = np.triu(np.tril(banded, b), -b)  # what a band of half-width b keeps
-        want = -1 if c == 3 else DenseTangent(seen[np.ix_(own, own)], True).negative_eigenvalues()
-        assert counts[c] == want
+        kept = np.triu(np.tril(banded, b), -b)[np.ix_(own, own)]  # what the band holds
+        if c == 3:
+            assert counts[c] == -1 and np.isnan(x[index[c]]).all()
+            continue
+        alone = DenseTangent(kept, indefinite=True)
+        assert counts[c] == alone.negative_eigenvalues()
+        assert np.allclose(x[index[c]], alone.solve(rhs[index[c]]), rtol=1e-9, atol=1e-12)
+    assert tangent.negative_eigenvalues() is None
+    assert not tangent.positive_definite()
