@@ -103,7 +103,8 @@ def _banded(blocks: list[np.ndarray], own: np.ndarray, b: int) -> np.ndarray:
 def test_a_block_tangent_solves_and_counts_each_copy_as_its_own_dense_tangent(b):
     rng = np.random.default_rng(b)
     m = 9
-    blocks = [_saddle(rng, m), _matrices(rng)[9], _saddle(rng, m), _saddle(rng, m)]
+    singular = _matrices(rng)[11]  # a zero column
+    blocks = [_saddle(rng, m), _matrices(rng)[9], _saddle(rng, m), _saddle(rng, m), singular]
     copies = len(blocks)
     own = rng.permutation(m)  # copy c's own row p is the band's row c m + own[p]
     index = np.arange(copies * m).reshape(copies, m)  # the system numbers copy by copy
@@ -122,8 +123,24 @@ def test_a_block_tangent_solves_and_counts_each_copy_as_its_own_dense_tangent(b)
         if c == 3:
             assert counts[c] == -1 and np.isnan(x[index[c]]).all()
             continue
+        if c == 4:  # singular: its own copy gets no correction, the others theirs
+            assert np.isnan(x[index[c]]).all()
+            with pytest.raises(np.linalg.LinAlgError):
+                DenseTangent(kept, indefinite=True).solve(rhs[index[c]])
+            continue
         alone = DenseTangent(kept, indefinite=True)
         assert counts[c] == alone.negative_eigenvalues()
         assert np.allclose(x[index[c]], alone.solve(rhs[index[c]]), rtol=1e-9, atol=1e-12)
     assert tangent.negative_eigenvalues() is None
     assert not tangent.positive_definite()
+
+
+def test_a_block_tangent_of_one_singular_copy_raises_as_the_copy_alone():
+    rng = np.random.default_rng(3)
+    singular = _matrices(rng)[11]
+    m, own = singular.shape[0], np.arange(singular.shape[0])
+    storage = _banded([singular], own, m - 1).ravel(order="F")
+    index = np.arange(m)[None, :]
+    tangent = BlockTangent(storage, np.arange(m), m - 1, block_maps(own, m - 1, index))
+    with pytest.raises(np.linalg.LinAlgError, match="singular tangent"):
+        tangent.solve(np.ones(m))
