@@ -107,6 +107,12 @@ def write_vtu(
         },
         cell_data={"flexure": [np.concatenate(flex)]},
     )
+    return save_vtu(path, mesh)
+
+
+def save_vtu(path: str | Path, mesh) -> Path:
+    """Write the meshio Mesh ``mesh`` to ``path`` as VTU, atomically (its folder made if
+    missing); returns the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:

@@ -16,9 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from flexval.geometry.files import atomic_path
-
 from .connector3d import Continuum3DConnector
+from .output import save_vtu
 
 VTK_ORDER = np.array(
     [
@@ -83,8 +82,4 @@ def write_vtu_3d(
         point_data={"displacement": np.vstack(disp)},
         cell_data={"flexure": [np.concatenate(flex)]},
     )
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(path) as tmp:
-        mesh.write(tmp, file_format="vtu")
-    return path
+    return save_vtu(path, mesh)
