@@ -35,7 +35,7 @@ ALPHA = (1.0 + math.sqrt(17.0)) / 8.0
 
 
 @kernel
-def ldl_factor(a: np.ndarray, pivots: np.ndarray) -> tuple[np.ndarray, int]:
+def ldl_factor(a: np.ndarray, pivots: np.ndarray, eigenvalues: np.ndarray) -> int:
     """P A P^T = U D U^T in place (Bunch-Kaufman, LAPACK's ``dsytf2``, upper), and D's eigenvalues.
 
     Parameters
@@ -47,18 +47,17 @@ def ldl_factor(a: np.ndarray, pivots: np.ndarray) -> tuple[np.ndarray, int]:
         Filled with the interchanges, as LAPACK's ``ipiv`` but from 0: row k
         of a 1 x 1 pivot was swapped with row ``pivots[k]``; the rows k - 1, k
         of a 2 x 2 pivot block both hold -1 - (the row swapped with k - 1).
+    eigenvalues : ndarray (m,)
+        Filled with D's 1 x 1 pivots and the two eigenvalues of each 2 x 2
+        pivot block (smaller first), in the order of the factorisation.
 
     Returns
     -------
-    eigenvalues : ndarray (m,)
-        D's 1 x 1 pivots and the two eigenvalues of each 2 x 2 pivot block
-        (smaller first), in the order of the factorisation.
-    info : int
+    int
         0, or k + 1 for the first zero pivot k met (a singular matrix, as
         LAPACK's ``info``; the factorisation goes on past it).
     """
     m = a.shape[0]
-    eigenvalues = np.zeros(m)
     info = 0
     k = m - 1
     while k >= 0:
@@ -130,7 +129,7 @@ def ldl_factor(a: np.ndarray, pivots: np.ndarray) -> tuple[np.ndarray, int]:
             mid, radius = 0.5 * (p + r), math.hypot(0.5 * (p - r), q)
             eigenvalues[k - 1], eigenvalues[k] = mid - radius, mid + radius
         k -= step
-    return eigenvalues, info
+    return info
 
 
 @kernel
@@ -231,8 +230,7 @@ def block_factor(
             info[c] = -1
             eigenvalues[c, :] = np.nan
             continue
-        found, info[c] = ldl_factor(block.T, pivots[c])
-        eigenvalues[c, :] = found
+        info[c] = ldl_factor(block.T, pivots[c], eigenvalues[c])
 
 
 @kernel

@@ -752,8 +752,8 @@ class PrbmGroup(ConnectorGroup):
         out: list = [None] * len(self.connectors)
         for members in alike.values():
             where = self.connectors[members[0]]._stations[1]
-            at = np.asarray(members)[:, None], where[None, :]
-            axial_of, moment_of = axial[:, at[0], at[1]], moment[:, at[0], at[1]]  # (k, g, m)
+            chains, places = np.asarray(members)[:, None], where[None, :]
+            axial_of, moment_of = axial[:, chains, places], moment[:, chains, places]  # (k, g, m)
             for i, j in enumerate(members):
                 out[j] = SectionForces(
                     self.connectors[j]._stations[0], axial_of[:, i], moment_of[:, i]

@@ -64,9 +64,12 @@ def test_d_is_lapacks_its_inertia_sylvesters_and_its_solves_lapacks():
     rng = np.random.default_rng(7)
     for matrix in _matrices(rng):
         m = matrix.shape[0]
-        factor, pivots = np.array(matrix), np.empty(m, np.int64)
-        d, info = ldl_factor(factor, pivots)
+        factor, pivots, d = np.array(matrix), np.empty(m, np.int64), np.empty(m)
+        info = ldl_factor(factor, pivots, d)
         scale = np.abs(matrix).max()
+        # measured over 200 seeds of these matrices: D within 1.7e-13 of LAPACK's relative to
+        # |D| + 0.01 |K| (OpenBLAS's dsyr fuses multiply-adds), the solutions within 1.6e-10
+        # componentwise (the indefinite ones are ill-conditioned); the bounds keep a margin
         assert np.allclose(d, _lapack_d(matrix), rtol=1e-10, atol=1e-12 * scale)
         eigenvalues = np.linalg.eigvalsh(matrix)
         limit = 1e-9 * np.abs(eigenvalues).max()
