@@ -39,9 +39,17 @@ itself costs.
 ``--tolerance [FILE]`` runs a tolerance sweep (default
 ``benchmarks/sweeps/tolerance_open_chain.toml``, 20,000 points) as ``flexval sweep
 --workers N --no-cache`` runs it and prints its wall time split into loading the sweep,
-starting the local cluster, ``run_sweep``, closing the cluster and reading the rows back,
-with the CPU time per point of the driver (all of it, and in ``run_sweep``) and of the
-workers. ``--cluster-start`` times the local cluster's start, first task and close with its
+starting the local cluster, ``run_sweep``, closing the cluster, reading the rows back and
+writing the outputs (summary, figures, tolerance study), with the CPU time per point of the
+driver (all of it, and in ``run_sweep``) and of the workers; ``--points N`` draws every axis
+N times instead. ``--scaling 1,2,4,8,16`` runs such a sweep (default
+``benchmarks/sweeps/scaling_open_chain.toml``: 10,000 points, dcmm:2 and prbm against
+beam:100; ``--tolerance FILE`` another) once per worker count and prints the strong-scaling
+efficiency T1 w1 / (w Tw) against the first count, over the whole wall and over
+``run_sweep`` alone; then the machine's own ceiling: w independent plain loops of
+``--ceiling-points`` points run at once against one alone (what w cores give w processes that
+share nothing: memory bandwidth, turbo and hyper-threads show here, not Dask).
+``--cluster-start`` times the local cluster's start, first task and close with its
 start method (a forkserver) and with Dask's ``spawn``, each in fresh processes,
 alternating.
 """
@@ -220,6 +228,7 @@ def report(label: str, sweep, loop: bool) -> None:
 
 
 TOLERANCE = os.path.join(os.path.dirname(__file__), "sweeps", "tolerance_open_chain.toml")
+SCALING = os.path.join(os.path.dirname(__file__), "sweeps", "scaling_open_chain.toml")
 
 
 def _peak_kb(pid: int | str = "self") -> int:
@@ -228,20 +237,39 @@ def _peak_kb(pid: int | str = "self") -> int:
         return int(next(line.split()[1] for line in f if line.startswith("VmHWM:")))
 
 
-def tolerance_once(path: str, workers: int) -> dict:
-    """One run of the tolerance sweep ``path`` as ``flexval sweep --workers N --no-cache``
-    runs it (load, cluster start, run, read the rows back): wall seconds, points, the CPU
-    seconds of this driver process (scheduler included) and of the workers, the largest
+def load_file(path: str, points: int | None = None):
+    """The sweep file ``path``, every axis drawn ``points`` times instead of its own count
+    when ``points`` is given (a random axis's draws; for a zipped sweep the point count)."""
+    from flexval.validation.sweep import load_sweep
+
+    if points is None:
+        return load_sweep(path)
+    import tomllib
+    from pathlib import Path
+
+    with open(path, "rb") as f:
+        data = tomllib.load(f)
+    for axis in data["axes"]:
+        axis["count"] = points
+    return parse_sweep(data, path, folder=Path(path).parent)
+
+
+def tolerance_once(path: str, workers: int, points: int | None = None) -> dict:
+    """One run of the tolerance sweep ``path`` (``points`` draws, see :func:`load_file`) as
+    ``flexval sweep --workers N --no-cache`` runs it (load, cluster start, run, read the
+    rows back, write the summary, figures and tolerance study): wall seconds, points, the
+    CPU seconds of this driver process (scheduler included) and of the workers, the largest
     peak RSS of them, and the largest task per model."""
     import psutil
 
-    from flexval.validation.sweep import load_sweep, sweep_rows
+    from flexval.validation.sweep import sweep_rows
+    from flexval.validation.sweep.summary import write_outputs
 
     out = tempfile.mkdtemp(prefix="bench_sweep_tol_")
     try:
         wall, cpu = time.perf_counter(), time.process_time()
         split = {}
-        sweep = load_sweep(path)
+        sweep = load_file(path, points)
         split["load"] = time.perf_counter() - wall
         cluster = local_cluster(workers)
         try:
@@ -260,6 +288,8 @@ def tolerance_once(path: str, workers: int) -> dict:
         split["close"] = time.perf_counter() - wall - sum(split.values())
         rows = sweep_rows(sweep, out)
         split["read rows"] = time.perf_counter() - wall - sum(split.values())
+        write_outputs(sweep, rows, out, split["run_sweep"])
+        split["outputs"] = time.perf_counter() - wall - sum(split.values())
         wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
         assert len(rows) == stats.rows_written and stats.rows_failed == 0
         return {
@@ -277,7 +307,7 @@ def tolerance_once(path: str, workers: int) -> dict:
         shutil.rmtree(out)
 
 
-def tolerance(path: str, workers: int, repeats: int) -> None:
+def tolerance(path: str, workers: int, repeats: int, points: int | None = None) -> None:
     """Medians over ``repeats`` runs of :func:`tolerance_once`, one line each and the
     medians: points/s, and the driver's CPU time per point against a worker's."""
     import statistics
@@ -285,7 +315,7 @@ def tolerance(path: str, workers: int, repeats: int) -> None:
     runs = []
     for k in range(repeats):
         load = os.getloadavg()[0]
-        r = tolerance_once(path, workers)
+        r = tolerance_once(path, workers, points)
         runs.append(r)
         print(
             f"  run {k + 1}: {r['wall']:.1f} s wall (cluster start included), "
@@ -312,6 +342,61 @@ def tolerance(path: str, workers: int, repeats: int) -> None:
         f"largest peak RSS {med('peak_mb'):.0f} MB",
         flush=True,
     )
+
+
+def ceiling_child(path: str, points: int) -> None:
+    """Print the seconds of :func:`plain_loop` on ``points`` points of ``path`` (after a
+    20-point warm-up that loads the compiled kernels), for :func:`scaling`."""
+    plain_loop(load_file(path, 20))
+    sweep = load_file(path, points)
+    print(plain_loop(sweep)[0], flush=True)
+
+
+def ceiling(path: str, points: int, processes: int) -> float:
+    """Mean seconds of ``processes`` independent plain loops run at once (no Dask, no
+    driver), each on the same ``points`` points: what the machine gives ``processes``
+    workers when nothing is shared between them."""
+    import subprocess
+    import sys
+
+    argv = [sys.executable, __file__, "--ceiling-child", path, "--points", str(points)]
+    runs = [subprocess.Popen(argv, stdout=subprocess.PIPE, text=True) for _ in range(processes)]
+    seconds = [float(p.communicate(timeout=1800)[0].split()[-1]) for p in runs]
+    assert all(p.returncode == 0 for p in runs)
+    return sum(seconds) / len(seconds)
+
+
+def scaling(path: str, workers: list[int], points: int | None, ceiling_points: int) -> None:
+    """Strong scaling of the sweep ``path`` (``points`` draws) over ``workers``: one run of
+    :func:`tolerance_once` per count, with the efficiency against the first count, T1 w1 /
+    (w Tw), over the whole wall (load and cluster start included) and over ``run_sweep``
+    alone; then the machine's own ceiling: ``w`` independent plain loops on
+    ``ceiling_points`` points each, run at once, against one alone (T1 / Tw; 1 when
+    processes do not slow each other down)."""
+    base = None
+    for w in workers:
+        load = os.getloadavg()[0]
+        r = tolerance_once(path, w, points)
+        run = r["split"]["run_sweep"]
+        base = base or (w * r["wall"], w * run)
+        print(
+            f"  {w:>3} workers: {r['wall']:7.1f} s wall ({r['points'] / r['wall']:,.0f} points/s), "
+            f"efficiency {base[0] / (w * r['wall']):5.1%}; run_sweep {run:7.1f} s "
+            f"({r['points'] / run:,.0f} points/s), efficiency {base[1] / (w * run):5.1%}; "
+            f"driver CPU 1/{r['worker_cpu'] / r['driver_cpu']:.0f} of the workers'; "
+            f"{r['tasks']} tasks; largest peak RSS {r['peak_mb']:.0f} MB "
+            f"(load average before {load:.1f})",
+            flush=True,
+        )
+    if ceiling_points:
+        one = ceiling(path, ceiling_points, 1)
+        for w in workers[1:]:
+            t = ceiling(path, ceiling_points, w)
+            print(
+                f"  ceiling: {w:>3} independent processes of {ceiling_points} points, "
+                f"{t:.2f} s each against {one:.2f} s alone (efficiency {one / t:.0%})",
+                flush=True,
+            )
 
 
 CLUSTER_CHILD = r"""
@@ -409,19 +494,48 @@ def main() -> None:
         help="time the local cluster's start, first task and close, against spawn's instead",
     )
     ap.add_argument(
+        "--scaling",
+        default=None,
+        metavar="W1,W2,...",
+        help="strong scaling of the sweep file of --tolerance (default "
+        "benchmarks/sweeps/scaling_open_chain.toml) over these worker counts",
+    )
+    ap.add_argument(
+        "--points",
+        type=int,
+        default=None,
+        help="draws per axis of --tolerance and --scaling instead of the file's count",
+    )
+    ap.add_argument(
+        "--ceiling-points",
+        type=int,
+        default=1000,
+        help="points of each independent process of --scaling's ceiling (1000; 0: skip)",
+    )
+    ap.add_argument("--ceiling-child", default=None, help=argparse.SUPPRESS)
+    ap.add_argument(
         "--workers", type=int, default=2, help="workers of --tolerance, --cluster-start (2)"
     )
     ap.add_argument(
         "--repeats", type=int, default=3, help="runs of --tolerance, --cluster-start (3)"
     )
     args = ap.parse_args()
+    if args.ceiling_child:
+        ceiling_child(args.ceiling_child, args.points)
+        return
+    if args.scaling:
+        path = args.tolerance or SCALING
+        print(f"{path}; {os.cpu_count()} cores", flush=True)
+        counts = [int(w) for w in args.scaling.split(",")]
+        scaling(path, counts, args.points, args.ceiling_points)
+        return
     if args.cluster_start:
         print(f"local cluster start; {os.cpu_count()} cores", flush=True)
         cluster_start(args.workers, args.repeats)
         return
     if args.tolerance:
         print(f"{args.tolerance}; {os.cpu_count()} cores", flush=True)
-        tolerance(args.tolerance, args.workers, args.repeats)
+        tolerance(args.tolerance, args.workers, args.repeats, args.points)
         return
     cases = args.cases.split(",")
     t0 = time.perf_counter()

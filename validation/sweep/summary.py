@@ -28,6 +28,7 @@ import numpy as np
 
 from ..outputs import save_figure, write_text
 from .spec import Sweep
+from .store import PARAM_PREFIX
 from .tolerancefiles import FILES as TOLERANCE_FILES
 from .tolerancefiles import is_tolerance, write_tolerance
 from .tolerancefiles import summary_lines as tolerance_lines
@@ -382,12 +383,13 @@ def _lines(sweep: Sweep, rows: list[dict], path: Path, value: RowValue, label: s
     axis = sweep.axes[0] if sweep.axes else None
     cases = sweep.load_cases
     fig, axs = plt.subplots(1, len(cases), figsize=(4.2 * len(cases), 3.4), squeeze=False)
+    column = PARAM_PREFIX + axis.path if axis else None  # each row carries its point's value
     for ax, case in zip(axs[0], cases):
         for spec in sweep.models:
             pts = sorted(
-                (sweep.points.params(r["point"]).get(axis.path, 0.0) if axis else 0.0, value(r))
+                (r[column] if column else 0.0, y)
                 for r in rows
-                if r["model"] == spec.id and r["load_case"] == case and value(r) is not None
+                if r["model"] == spec.id and r["load_case"] == case and (y := value(r)) is not None
             )
             if pts:
                 x, y = zip(*pts)

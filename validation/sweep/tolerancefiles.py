@@ -20,7 +20,16 @@ import numpy as np
 
 from ..outputs import write_figure, write_json
 from .spec import Sweep
-from .tolerance import ERRORS, OUTPUTS, Quantity, recorded, rounded, samples, study
+from .tolerance import (
+    ERRORS,
+    OUTPUTS,
+    Columns,
+    Quantity,
+    recorded,
+    rounded,
+    samples,
+    study,
+)
 
 JSON_NAME = "tolerance.json"
 FILES = (JSON_NAME,) + tuple(f"tolerance_{q.name}.png" for q in OUTPUTS + ERRORS)
@@ -54,7 +63,7 @@ def _quantities(sweep: Sweep, kinds: tuple[Quantity, ...]) -> tuple[Quantity, ..
     )
 
 
-def sweep_study(sweep: Sweep, rows: list[dict]) -> dict[str, Any]:
+def sweep_study(sweep: Sweep, rows: list[dict] | Columns) -> dict[str, Any]:
     """The tolerance study of ``sweep``'s rows (unrounded), with the sweep's name, reference,
     load cases and random axes."""
     data = study(
@@ -92,7 +101,7 @@ def bins(values: np.ndarray) -> int | np.ndarray:
 
 
 def histogram(
-    rows: list[dict],
+    rows: list[dict] | Columns,
     quantity: Quantity,
     entry: dict[str, Any],
     cases: tuple[str, ...],
@@ -155,13 +164,14 @@ def histogram(
 def write_tolerance(sweep: Sweep, rows: list[dict], out: Path) -> list[Path]:
     """Write ``tolerance.json`` and the histograms of the quantities some row carries into
     ``out``; the written paths."""
-    data = sweep_study(sweep, rows)
+    table = Columns(rows)  # the study and the histograms read the same columns
+    data = sweep_study(sweep, table)
     written = [write_json(out / JSON_NAME, rounded(data))]
     kinds = {q.name: q for q in OUTPUTS + ERRORS}
     for section in ("outputs", "errors"):
         for name, entry in recorded(data[section]).items():
             path = out / f"tolerance_{name}.png"
-            written.append(histogram(rows, kinds[name], entry, sweep.load_cases, path))
+            written.append(histogram(table, kinds[name], entry, sweep.load_cases, path))
     return written
 
 
