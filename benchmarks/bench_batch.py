@@ -7,7 +7,10 @@ trace, record), and as one batch of N copies
 and one factorisation per Newton iteration; ``ee``'s linear responses are solved and recorded
 together; their connectors are built once, since the copies are of one mechanism). With
 ``--distinct`` every copy is a mechanism of its own (each flexure's section scaled by a factor
-within 1e-3 of 1), as in a sweep: the batch then builds every copy's connectors. Both in this
+within 1e-3 of 1), as in a sweep: the batch then builds every copy's connectors. With
+``--spread 0.02`` the factors are drawn from N(1, 0.02), as in the tolerance study: copies
+then disagree on their steps now and then, and those that leave a batch are traced again in
+smaller ones (the batch sizes column). The one-by-one paths are the first copies'. Both in this
 process, on one core (BLAS limited to one thread), median of ``--repeats`` runs: wall time,
 and the process's CPU time (what a path costs a core, whatever else shares the machine; on a
 busy machine the wall time is that over the share of a core the process gets). The speed-up
@@ -15,7 +18,7 @@ is of the CPU times. The batch's end values are checked against the solo run's (
 agree to 1e-12 of the path's motion) before anything is timed.
 
 Run: ``python benchmarks/bench_batch.py [--scene open_chain] [--case f+] [--n 1000]
-[--distinct]``.
+[--distinct] [--spread S]``.
 """
 
 from __future__ import annotations
@@ -53,17 +56,22 @@ def check(mech, spec, case) -> None:
         raise SystemExit(f"{spec.id}: the batch's path differs from the solo run's ({worst:.2e})")
 
 
-def distinct(mech, n: int) -> list:
-    """n mechanisms of their own: every flexure's section scaled by 1 + 1e-3 (k / n - 1/2)."""
+def distinct(mech, n: int, spread: float | None = None) -> list:
+    """n mechanisms of their own: every flexure's section scaled by 1 + 1e-3 (k / n - 1/2),
+    or with ``spread`` by factors drawn from N(1, spread) (seed 1; a tolerance study's)."""
+    if spread is None:
+        factors = 1.0 + 1e-3 * (np.arange(n) / n - 0.5)
+    else:
+        factors = np.random.default_rng(1).normal(1.0, spread, n)
     return [
         dataclasses.replace(
             mech,
             flexures=tuple(
-                dataclasses.replace(f, section=f.section.scaled(1.0 + 1e-3 * (k / n - 0.5)))
+                dataclasses.replace(f, section=f.section.scaled(float(factor)))
                 for f in mech.flexures
             ),
         )
-        for k in range(n)
+        for factor in factors
     ]
 
 
@@ -89,15 +97,24 @@ def main() -> None:
     ap.add_argument(
         "--distinct", action="store_true", help="every copy a mechanism of its own (a sweep's)"
     )
+    ap.add_argument(
+        "--spread",
+        type=float,
+        default=None,
+        help="distinct copies whose sections are scaled by N(1, SPREAD) draws (0.02: the "
+        "tolerance study's h ~ N(0.1, 0.002) mm); each copy then takes its own steps",
+    )
     args = ap.parse_args()
     limit_threads()
     sc = load_scene(args.scene)
     mech = sc.mechanism
     case = next(c for c in sc.load_cases if c.name == args.case)
-    copies = distinct(mech, args.n) if args.distinct else [mech] * args.n
+    spread = args.spread
+    copies = distinct(mech, args.n, spread) if args.distinct or spread else [mech] * args.n
     print(
         f"{args.scene} {args.case}; batches of {args.n} "
-        f"{'distinct ' if args.distinct else ''}copies; median of {args.repeats}; "
+        f"{'distinct ' if args.distinct or spread else ''}copies"
+        f"{f' (sections scaled by N(1, {spread}))' if spread else ''}; median of {args.repeats}; "
         f"load average {os.getloadavg()[0]:.1f}"
     )
     print(
@@ -110,7 +127,9 @@ def main() -> None:
         heavy = spec.family == "beam" and (spec.resolution or 0) >= 100
         n_solo = SOLO_PATHS // 10 if heavy else SOLO_PATHS
         solo, solo_cpu = per_path(
-            lambda spec=spec, n_solo=n_solo: [run_reduced(mech, spec, case) for _ in range(n_solo)],
+            lambda spec=spec, n_solo=n_solo: [
+                run_reduced(copies[k], spec, case) for k in range(n_solo)
+            ],
             n_solo,
             args.repeats,
         )

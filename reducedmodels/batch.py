@@ -664,6 +664,36 @@ class BatchLoadControl(LoadControl):
         self.last: BatchNewtonResult | None = None
         self._kept_next: np.ndarray | None = None
 
+    def snapshot(self) -> dict:
+        """What load control carries from a reported point on (:meth:`resume` starts there).
+
+        Taken where the tracer yields a point: every value here is replaced, never changed in
+        place, as the path goes on, so the snapshot holds without a copy.
+        """
+        return {name: getattr(self, name) for name in CARRIED}
+
+    def resume(self, carried: dict, take: np.ndarray, loads: Loads) -> None:
+        """Stand where a batch that these copies left stood at a reported point.
+
+        ``carried`` is that batch's :meth:`snapshot`, ``take`` the index in its numbering
+        of each of this batch's unknowns, ``loads`` this batch's. Every value of a copy is
+        its own (the batch's arithmetic is each copy's), so the copies go on as their solo
+        runs do from that point; what the connectors' predictors keep of each state is
+        taken anew.
+        """
+        batch = self.batch
+        self.system, self.loads, self.settings = batch, loads, batch.settings
+        self.__dict__.update(carried)
+        self.q = carried["q"][take]
+        self.tangent = None  # a bifurcation is judged from the copy's own start
+        self.level = (carried["level"][0][take], carried["level"][1])
+        self.history = [(q[take], f) for q, f in carried["history"]]
+        self.past = (
+            [batch.remembered(q) for q, _ in self.history] if batch.predicts_internal else None
+        )
+        self.slope = None if carried["slope"] is None else carried["slope"][take]
+        self.targets = iter([f for f in self.factors if f > self.target])
+
     def newton(self, problem: StepProblem, guess: np.ndarray, settings, origin=None):
         """The batch's Newton solve (:func:`solve_batch`) on the copies still in the batch."""
         self.last = solve_batch(problem, guess, settings, origin, self.active)
@@ -765,6 +795,24 @@ class BatchLoadControl(LoadControl):
         return super().advance(verdict)
 
 
+CARRIED = (
+    "q",
+    "factor",
+    "level",
+    "unstable_above",
+    "refused_unstable",
+    "history",
+    "slope",
+    "spacing",
+    "step",
+    "last_step",
+    "min_step",
+    "target",
+)
+"""The attributes of :class:`BatchLoadControl` (load control's) that go from one reported point
+to the next: the accepted state and factor, the predictor's states and slope, the step."""
+
+
 class CopyView(NamedTuple):
     """What a :class:`~flexval.reducedmodels.recorder.PathRecorder` reads of a copy's System
     to record the path the batch traced for it (no System of its own is built)."""
@@ -781,6 +829,15 @@ on the open chain f+ (2-core machine): beam:100 3.9, 3.7, 4.1 ms in batches of 2
 copies (23,000 to 91,000 unknowns), beam:20 0.84, 0.83, 1.02 ms in batches of 100, 250, 500
 (19,000 to 93,000), dcmm:1 0.19, 0.21, 0.22 ms in batches of 250, 1000, 4000 (2,000 to
 36,000)."""
+
+
+SOLO_UNKNOWNS = 500
+"""Most unknowns of a copy that :func:`run_batch` traces in a batch with others (copies with
+more are traced one by one, each by its family's own runner): a copy's own band is then wide
+enough that sharing the iteration saves little, and copies that part ways cost more than
+that. Open chain f+, 2-core machine: beam:100 (900 unknowns) runs 1.15x faster batched than
+alone with identical copies but 0.84x with sections drawn from N(1, 0.02)
+(``benchmarks/bench_batch.py --spread 0.02``); beam:20 (180 unknowns) 2.6x and 1.3x."""
 
 
 def _shallow_copy(item, attribute: str, value):
@@ -827,11 +884,78 @@ def collection_paused() -> Iterator[None]:
             gc.enable()
 
 
-REBATCH_SHARE = 0.25
-"""Least share of a batch's copies that must stay to the end for the copies that left it by
-a vote to be traced as a new batch together (else each in a batch of one): the copies of a
-batch that split up now and then go on in ever smaller batches, those of one that breaks up
-step by step (a soft stretch that every copy takes in its own sub-steps) one by one."""
+class _Start(NamedTuple):
+    """A reported point of a batch where some of its copies go on as a batch of their own."""
+
+    batch: BatchSystem
+    all_points: list[PathPoint]
+    carried: dict
+    count: int
+    positions: list[int]
+    """The copies' places in ``batch``, in the order of the new batch."""
+
+    def of(self, copies: list[int], these: list[int]) -> _Start:
+        """The start of ``these`` (copy indices) among the batch's ``copies``."""
+        place = {k: j for j, k in enumerate(copies)}
+        return self._replace(positions=[place[k] for k in these])
+
+    def take(self, batch: BatchSystem) -> np.ndarray:
+        """The index, in the old batch's numbering, of each unknown of ``batch``."""
+        take = np.empty(batch.n_dofs, np.int64)
+        for dofs, j in zip(batch.copy_dofs, self.positions):
+            take[dofs] = self.batch.copy_dofs[j]
+        return take
+
+    def points(self, take: np.ndarray) -> list[PathPoint]:
+        """The points up to the start, in the new batch's numbering (as its own would be)."""
+        n, chosen = self.batch.n_copies, self.positions
+        return [
+            PathPoint(
+                p.state[take],
+                p.factor,
+                np.broadcast_to(p.iterations, (n,))[chosen],
+                None,
+                p.step,
+                Counters(
+                    np.broadcast_to(p.counters.newton_iterations, (n,))[chosen],
+                    p.counters.step_cuts,
+                    p.counters.substeps,
+                ),
+                p.bifurcations,
+            )
+            for p in self.all_points[: self.count]
+        ]
+
+
+class _Group(NamedTuple):
+    """Copies to trace as one batch: from rest, or from where they left another batch."""
+
+    copies: list[int]
+    start: _Start | None = None
+
+
+DEAD_WEIGHT = 0.25
+"""Share of a batch's copies that may have left it before the rest go on as a new batch (from
+the point just reached), for copies of at least :data:`REBUILD_UNKNOWNS` unknowns: a copy that
+left still takes its place in every assembly and factorisation of its batch, while a new
+batch costs its build once."""
+REBUILD_UNKNOWNS = 16
+"""Fewest unknowns of a copy for which a batch sheds the copies that left it
+(:data:`DEAD_WEIGHT`): below, a dead copy's share of an iteration costs less than building
+the new batch. Open chain f+, 1000 copies with sections drawn from N(1, 0.02), CPU time per
+path with and without shedding: dcmm:1 (9 unknowns) 0.35 and 0.32 ms, dcmm:2 (18) 0.48 and
+0.47, prbm (21) 0.44 and 0.47, dcmm:3 (27) 0.61 and 0.63, beam:20 (180) 1.44 and 1.74."""
+
+
+def _dead_weight(active: np.ndarray, unknowns: int) -> bool:
+    """Whether a batch of copies of ``unknowns`` unknowns, ``active`` still in it, carries too
+    many that left (:data:`DEAD_WEIGHT`, :data:`REBUILD_UNKNOWNS`)."""
+    dead = active.size - int(np.count_nonzero(active))
+    return (
+        unknowns >= REBUILD_UNKNOWNS
+        and 0 < dead < active.size
+        and dead >= DEAD_WEIGHT * active.size
+    )
 
 
 @collection_paused()
@@ -887,23 +1011,45 @@ def trace_batch(
             )
         ]
     results: list[LoadPath | SolverError | None] = [None] * len(members)
-    groups = [list(range(len(members)))]  # copies to trace as one batch, in turn
+    groups = [_Group(list(range(len(members))))]  # copies to trace as one batch, in turn
     while groups:
         group = groups.pop(0)
+        copies = group.copies
         t0 = time.perf_counter()
-        batch = BatchSystem([members[k] for k in group])
-        loads = batch.use_loads([cases[k] for k in group])
+        batch = BatchSystem([members[k] for k in copies])
+        loads = batch.use_loads([cases[k] for k in copies])
         stepping = BatchLoadControl(factors[0], batch)
+        unknowns = batch.n_dofs // len(copies)
         points: list[PathPoint] = []
+        shared: list[tuple[dict, int]] = []  # at each point: load control's snapshot, points
+        resume = None
+        if group.start is not None:  # go on from the point where these copies left a batch
+            take = group.start.take(batch)
+            points = group.start.points(take)
+            stepping.resume(group.start.carried, take, loads)
+            shared.append((stepping.snapshot(), len(points)))
+            resume = points[-1].counters
+        left_at = np.full(len(copies), -1)  # the snapshot each copy that left goes on from
+        active = stepping.active.copy()
         failure = None
         try:
-            for point in trace(batch, loads, stepping, stepping.newton):
+            for point in trace(batch, loads, stepping, stepping.newton, resume):
+                left_at[active & ~stepping.active] = len(shared) - 1
                 points.append(point)
+                shared.append((stepping.snapshot(), len(points)))
+                active = stepping.active.copy()
+                if not stepping.finished() and _dead_weight(active, unknowns):
+                    left_at[active] = len(shared) - 1  # the rest go on without the dead weight
+                    stepping.leave(active)
+                    active[:] = False
+                    break
         except TraceFailure as exc:
             failure = exc
-        group_cases = [cases[k] for k in group]
-        if failure is not None and len(group) > 1:  # each copy alone: its own way to fail
-            groups += [[k] for k in group]
+        left_at[active & ~stepping.active] = len(shared) - 1
+        group_cases = [cases[k] for k in copies]
+        if failure is not None and (len(copies) > 1 or group.start is not None):
+            # each copy alone from rest: its own way to fail, as its solo run meets it
+            groups += [_Group([k]) for k in copies]
             continue
         kept = [0] if failure is not None else np.flatnonzero(stepping.active).tolist()
         paths = record_batch(batch, points, kept, group_cases, model, scene, settings, failure)
@@ -912,12 +1058,15 @@ def trace_batch(
             recorded = path.path if isinstance(path, SolverError) else path
             recorded.seconds = seconds
             recorded.stats["batch"] = len(kept)
-            results[group[j]] = path
-        left = [k for k in group if results[k] is None]
-        if len(kept) >= REBATCH_SHARE * len(group):
-            groups += [left] if left else []
-        else:
-            groups += [[k] for k in left]
+            results[copies[j]] = path
+        for where in np.unique(left_at[~stepping.active]).tolist():
+            gone = np.flatnonzero(~stepping.active & (left_at == where)).tolist()
+            these = [copies[j] for j in gone if results[copies[j]] is None]
+            if where < 0:  # their first solve failed: each from rest, alone
+                groups += [_Group([k]) for k in these]
+            elif these:  # on together from the last point they shared
+                start = _Start(batch, points, *shared[where], [])
+                groups.append(_Group(these, start.of(copies, these)))
     return results
 
 
@@ -1105,6 +1254,11 @@ def run_batch(
             )
         except RUN_FAILURES as exc:
             built[id(m)] = exc
+        member = built[id(m)]
+        if not linear and not isinstance(member, Exception) and _unknowns(member) > SOLO_UNKNOWNS:
+            for k in range(len(mechanisms)):  # copies this large: each alone (SOLO_UNKNOWNS)
+                alone(k)
+            return results
     for k, m in enumerate(mechanisms):
         if isinstance(built[id(m)], Exception):
             results[k] = built[id(m)]

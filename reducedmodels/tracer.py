@@ -208,7 +208,11 @@ class Stepping(ABC):
 
 
 def trace(
-    system: System, loads: Loads, stepping: Stepping, newton: Newton = solve_step
+    system: System,
+    loads: Loads,
+    stepping: Stepping,
+    newton: Newton = solve_step,
+    resume: Counters | None = None,
 ) -> Iterator[PathPoint]:
     """Yield the converged points of the path ``stepping`` follows under ``loads``.
 
@@ -216,7 +220,11 @@ def trace(
     for a batch of copies traced together
     (:mod:`flexval.reducedmodels.batch`) the same iteration on every copy at
     once, whose iteration counts are then one per copy (the counters carry
-    them as arrays).
+    them as arrays). With ``resume`` (the counts at a reported point) the path
+    goes on from that point, where ``stepping`` stands already (a batch's
+    copies that leave it go on from the last point they shared,
+    :func:`flexval.reducedmodels.batch.trace_batch`): nothing is solved first
+    and that point is not yielded again.
 
     Raises
     ------
@@ -226,7 +234,7 @@ def trace(
         last converged load factor and the counts.
     """
     settings = system.settings
-    counters = Counters()
+    counters = Counters() if resume is None else resume.copy()
 
     def solve(
         problem: StepProblem, guess: np.ndarray, origin: np.ndarray | None = None
@@ -236,17 +244,18 @@ def trace(
         counters.newton_iterations = counters.newton_iterations + result.iterations
         return result
 
-    first = solve(FixedLoad(system, loads, stepping.first_factor), system.initial_state())
-    if first.state is None:
-        raise TraceFailure(first.reason, 0.0, counters)
-    point = PathPoint(
-        first.state, first.factor, first.iterations, first.tangent, 0.0, counters.copy()
-    )
-    try:
-        stepping.begin(system, loads, point)
-    except StepRefused as exc:
-        raise TraceFailure(str(exc), point.factor, counters) from None
-    yield point
+    if resume is None:
+        first = solve(FixedLoad(system, loads, stepping.first_factor), system.initial_state())
+        if first.state is None:
+            raise TraceFailure(first.reason, 0.0, counters)
+        point = PathPoint(
+            first.state, first.factor, first.iterations, first.tangent, 0.0, counters.copy()
+        )
+        try:
+            stepping.begin(system, loads, point)
+        except StepRefused as exc:
+            raise TraceFailure(str(exc), point.factor, counters) from None
+        yield point
     spent, found = 0, ()
     while not stepping.finished():
         problem, guess, origin = stepping.attempt()

@@ -176,6 +176,43 @@ def test_a_hard_copy_leaves_and_equals_its_solo_run():
     assert solo[2].stats["substeps"] != solo[0].stats["substeps"]
 
 
+@pytest.mark.parametrize("model", ["dcmm:1", "prbm", "beam:20"])
+def test_copies_that_part_ways_go_on_from_the_last_point_they_shared(model, monkeypatch):
+    """Sections drawn from N(1, 0.03): copies disagree on their sub-steps, leave their batch
+    and go on as batches of their own from the last reported level they shared; each path is
+    bit for bit the copy's path traced alone (a batch of one from rest), and its solo run's
+    to the batch's agreement."""
+    from flexval.reducedmodels.batch import BatchLoadControl
+
+    rng = np.random.default_rng(3)
+    scales = rng.normal(1.0, 0.03, 24).tolist()
+    mechanisms, cases = variants("open_chain", "f+", scales, [1.0] * len(scales))
+    spec = parse_model(model)
+    resumed = []
+    resume = BatchLoadControl.resume
+
+    def counted(self, carried, take, loads):
+        resumed.append(carried["factor"])
+        resume(self, carried, take, loads)
+
+    monkeypatch.setattr(BatchLoadControl, "resume", counted)
+    batched = run_batch(mechanisms, spec, cases)
+    monkeypatch.undo()
+    sizes = [p.stats["batch"] for p in batched]
+    assert min(sizes) < len(scales)  # some parted ways
+    assert resumed and max(resumed) > cases[0].factors()[0]  # past the first level
+    for k in range(len(scales)):
+        (alone,) = run_batch(mechanisms[k : k + 1], spec, cases[k : k + 1])
+        assert batched[k].dx == alone.dx and batched[k].dy == alone.dy
+        assert batched[k].rotation == alone.rotation and batched[k].load == alone.load
+        assert batched[k].peak_stress == alone.peak_stress
+        assert batched[k].stats["iterations"] == alone.stats["iterations"]
+        assert batched[k].stats["substeps"] == alone.stats["substeps"]
+    solo, _ = solo_and_batch(model, mechanisms[:4], cases[:4])
+    for a, b in zip(solo, batched[:4]):
+        assert_same_path(a, b, mechanisms[0].size())
+
+
 def test_a_failing_copy_fails_as_alone_and_holds_no_one_back():
     """A copy loaded beyond what load control can follow fails with its solo error at the same
     load; the rest converge together."""
@@ -254,11 +291,16 @@ def test_large_sets_of_copies_are_traced_in_batches_of_bounded_size(monkeypatch)
 @pytest.mark.parametrize("model", ["dcmm:1", "prbm", "beam:20", "beam:100"])
 def test_a_copys_path_does_not_depend_on_its_batch(model):
     """Bit for bit the same path for a copy traced alone, with one other copy or with four:
-    a sweep's rows must not depend on how its points were grouped into tasks."""
+    a sweep's rows must not depend on how its points were grouped into tasks. Copies with
+    more than SOLO_UNKNOWNS unknowns (beam:100) are each traced alone."""
+    from flexval.reducedmodels.batch import SOLO_UNKNOWNS
+
     mechanisms, cases = variants("open_chain", "f+", SCALES, LOADS)
     spec = parse_model(model)
     paths = [run_batch(mechanisms[:n], spec, cases[:n])[0] for n in (1, 2, 5)]
-    assert [p.stats["batch"] for p in paths] == [1, 2, 5]
+    alone = build_system(mechanisms[0], spec).n_dofs > SOLO_UNKNOWNS
+    assert [p.stats["batch"] for p in paths] == ([1, 1, 1] if alone else [1, 2, 5])
+    assert alone == (model == "beam:100")
     for other in paths[1:]:
         assert other.dx == paths[0].dx and other.dy == paths[0].dy
         assert other.rotation == paths[0].rotation

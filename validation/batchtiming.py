@@ -88,9 +88,10 @@ as well as 100 at a quarter of the cost."""
 
 REFERENCE_COPIES = 30
 """Copies in a timed batch of :data:`SPEED_REFERENCE`, whose batched cost divides every
-batched speed-up: where its cost per path is flat (``beam:100``, 900 unknowns: 3.82 ms
-alone; 4.07, 3.60, 3.61, 3.57 at N = 10, 30, 100, 300, same benchmark), so that the
-speed-ups are not inflated by a reference timed in too small a batch."""
+batched speed-up. ``beam:100`` (900 unknowns) is past
+:data:`~flexval.reducedmodels.batch.SOLO_UNKNOWNS`: a batch traces its copies one by one,
+so its batched cost is its cost alone, averaged over these copies (30 paths of about 4 ms:
+a median as steady as the small models' 100-copy batches)."""
 
 AGREEMENT_BAR = 1e-9
 """Largest difference allowed between a batched copy's end values and the same path run
