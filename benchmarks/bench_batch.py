@@ -9,8 +9,8 @@ together; their connectors are built once, since the copies are of one mechanism
 ``--distinct`` every copy is a mechanism of its own (each flexure's section scaled by a factor
 within 1e-3 of 1), as in a sweep: the batch then builds every copy's connectors. With
 ``--spread 0.02`` the factors are drawn from N(1, 0.02), as in the tolerance study: copies
-then disagree on their steps now and then, and those that leave a batch are traced again in
-smaller ones (the batch sizes column). The one-by-one paths are the first copies'. Both in this
+then disagree on their steps now and then, and those that leave a batch go on as smaller
+ones (the batch sizes column). The one-by-one paths are the first copies'. Both in this
 process, on one core (BLAS limited to one thread), median of ``--repeats`` runs: wall time,
 and the process's CPU time (what a path costs a core, whatever else shares the machine; on a
 busy machine the wall time is that over the share of a core the process gets). The speed-up

@@ -22,10 +22,15 @@ How copies stay exactly what they are alone:
   cut a step, grow the next) is made per copy as
   :class:`~flexval.reducedmodels.tracer.LoadControl` makes it; where the
   copies disagree, the minority leaves the batch (:class:`BatchLoadControl`)
-  and is traced again alone from the start, so its result is exactly what a
-  solo run gives and the others are not held back. A batch that cannot go
-  on (step cutting fails, the sub-step budget) hands every copy left to a
-  solo run too, which then fails or succeeds as it would alone.
+  and goes on as a batch of its own from the last reported level the copies
+  shared, where each copy stands as its solo run stands, so the others are
+  not held back and no work before that level is done twice. A batch that
+  has lost a quarter of its copies goes on as a new batch without them
+  (:data:`DEAD_WEIGHT`). A batch that cannot go on (step cutting fails, the
+  sub-step budget) hands every copy left to a run alone from rest, which
+  then fails or succeeds as it would alone.
+* copies too large to gain from a batch (:data:`SOLO_UNKNOWNS`) are traced
+  one by one.
 
 A copy's path is its solo run's up to round-off: the batch factorises every
 block in the band (a small copy alone takes dense LAPACK) and combines the
@@ -652,9 +657,9 @@ class BatchLoadControl(LoadControl):
     Every decision LoadControl takes on one path is taken here for every
     copy still in the batch, on its own measures; where copies disagree the
     larger group goes on and the smaller leaves the batch (:attr:`active`
-    false, :attr:`left` true): its coordinates stay at its last accepted
-    state and its tangent block as it was there, and :func:`trace_batch`
-    traces it again alone.
+    false): its coordinates stay at its last accepted state and its tangent
+    block as it was there, and :func:`trace_batch` takes it on from the last
+    reported level (:meth:`snapshot`, :meth:`resume`).
     """
 
     def __init__(self, factors: Sequence[float], batch: BatchSystem):
@@ -983,10 +988,10 @@ def trace_batch(
     -------
     list of LoadPath or SolverError
         Per copy, in order: its path, or the error its solo run raises. The
-        copies that leave a batch by a vote are traced again as a batch of
-        their own (while a batch keeps at least :data:`REBATCH_SHARE` of its
-        copies), else each in a batch of one, as are those of a batch that
-        cannot go on. Every copy is traced by the batch's arithmetic, so its
+        copies that leave a batch by a vote go on together as a batch of
+        their own from the last reported level they shared; the copies of a
+        batch that cannot go on are each traced alone from rest. Every copy
+        is traced by the batch's arithmetic, so its
         path does not depend on which copies it was traced with (a sweep
         gives the same rows whatever its task sizes). Each path's
         ``seconds`` is its share of its batch's wall time,
