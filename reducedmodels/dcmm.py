@@ -36,7 +36,7 @@ from flexval.geometry.kinematics import rotate_xy
 from .connector import Connector, ConnectorGroup, Reasons
 from .inertia import MassPoints, line_density, rigid_pieces
 from .sections import SectionForces
-from .subarcs import sub_arcs
+from .subarcs import GEOMETRY_CACHE, sub_arcs
 from .validity import (
     MAX_RELATIVE_ROTATION,
     MAX_STRAIN,
@@ -194,7 +194,7 @@ class DcmmConnector(Connector):
         parts = [sub.shape for sub in subs]
         self._layout = layout = _chain_layout(n, forward)
         # chain of reference points: body a, cuts (in chain order), body b (float pairs, mm)
-        cuts = [(p.end_points[1] if forward else p.end_points[0]).tolist() for p in parts[:-1]]
+        cuts = [list(_end_points(p)[1 if forward else 0]) for p in parts[:-1]]
         refs = [
             mechanism.bodies[self.bodies[0]].reference.tolist(),
             *cuts,
@@ -221,7 +221,7 @@ class DcmmConnector(Connector):
             )
         self._parameters = np.array(parameters)
         # flexure ends' offsets from the end bodies' reference points, float pairs (mm)
-        ends = shape.end_points.tolist()
+        ends = list(_end_points(shape))
         if not forward:
             ends = ends[::-1]  # body a's first
         self._end_rel = [
@@ -237,12 +237,8 @@ class DcmmConnector(Connector):
         # each sample's point at rest (all sub-arcs' at once: they are equal parts of the
         # centre line) as offsets from its sub-arc's leading and following bodies (mm), and
         # its section's direction towards body b (rad)
-        s = shape.length * layout.sample_at
-        points = shape.point(s)
+        points, self._sample_tangent = _samples(shape, n, forward)
         self._sample_rel = (points[:, None] - self._refs[layout.sample_ends]).reshape(-1, 4)
-        self._sample_tangent = shape.tangent_angle(s)
-        if not forward:
-            self._sample_tangent += np.pi
 
     def mass_points(self, density: float) -> MassPoints:
         """The flexure's mass (density in t/mm^3) on the chain's bodies, as rigid pieces.
@@ -446,6 +442,43 @@ class _StackTables(NamedTuple):
     element_dofs: np.ndarray
     hessian_rows: np.ndarray
     hessian_cols: np.ndarray
+
+
+def _kept(function: Callable) -> Callable:
+    """``function`` of a centre line (and numbers) kept in a cache of
+    :data:`~flexval.reducedmodels.subarcs.GEOMETRY_CACHE` entries where its arguments are
+    hashable (the built-in arcs and segments), computed anew where they are not."""
+    cached = functools.lru_cache(maxsize=GEOMETRY_CACHE)(function)
+
+    @functools.wraps(function)
+    def kept(*args):
+        try:
+            return cached(*args)
+        except TypeError:  # a centre line that cannot key the cache
+            return function(*args)
+
+    return kept
+
+
+@_kept
+def _end_points(shape) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The start and end points of a centre line, as float pairs (mm)."""
+    (x0, y0), (x1, y1) = shape.end_points.tolist()
+    return (x0, y0), (x1, y1)
+
+
+@_kept
+def _samples(shape, n: int, forward: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The points (mm) of the chain's samples at rest on the centre line of n sub-arcs, and
+    the direction of each one's section towards the chain's second body (rad), read-only."""
+    s = shape.length * _chain_layout(n, forward).sample_at
+    points = shape.point(s)
+    tangent = shape.tangent_angle(s)
+    if not forward:
+        tangent += np.pi
+    points.flags.writeable = False
+    tangent.flags.writeable = False
+    return points, tangent
 
 
 @functools.lru_cache(maxsize=64)

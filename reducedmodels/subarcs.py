@@ -23,6 +23,7 @@ Units: mm, N, MPa, rad.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -80,28 +81,59 @@ def has_closed_form(flexure: Flexure) -> bool:
     return flexure.section.is_uniform and flexure.shape.kind in ("arc", "segment")
 
 
+GEOMETRY_CACHE = 1024
+"""Centre lines whose parts :func:`sub_arcs` keeps (per process, least recently used first
+out): the parts of a flexure and their ellipses' geometry depend on its centre line and n
+alone, and the copies of a tolerance study or a sweep over sections and materials share
+their centre lines."""
+
+
+def _split(shape: Shape, n: int) -> tuple[tuple[Shape, float, float], ...]:
+    """The n parts of ``shape`` and their windows [s0, s1] on it (mm)."""
+    length = shape.length
+    windows = [length * k / n for k in range(n)] + [length]
+    return tuple(zip(shape.split(n), windows, windows[1:]))
+
+
+@functools.lru_cache(maxsize=GEOMETRY_CACHE)
+def _unit_parts(shape: Shape, n: int) -> tuple[tuple[Shape, float, float, Ellipse], ...]:
+    """The parts of a closed-form centre line, their windows and their ellipses for EI = 1
+    (whose weight is the part's length; the arrays read-only, shared by every caller)."""
+    out = []
+    for part, s0, s1 in _split(shape, n):
+        unit = part.ellipse(1.0)
+        unit.center.flags.writeable = False
+        unit.axes.flags.writeable = False
+        out.append((part, s0, s1, unit))
+    return tuple(out)
+
+
+def _closed_form_parts(shape: Shape, n: int) -> tuple[tuple[Shape, float, float, Ellipse], ...]:
+    """:func:`_unit_parts`, kept where the centre line is hashable (the built-in arcs and
+    segments are)."""
+    try:
+        return _unit_parts(shape, n)
+    except TypeError:  # a centre line that cannot key the cache
+        return _unit_parts.__wrapped__(shape, n)
+
+
 def sub_arcs(flexure: Flexure, material: Material, n: int) -> list[SubArc]:
     """The flexure cut into n parts of equal arc length, from its start to its end."""
     shape = flexure.shape
-    parts = shape.split(n)
-    length = shape.length
-    windows = [length * k / n for k in range(n)] + [length]
     if has_closed_form(flexure):
         EI = flexure.bending_stiffness(material)
         EA = flexure.axial_stiffness(material)
         out = []
-        for part, s0, s1 in zip(parts, windows, windows[1:]):
-            ell = part.ellipse(EI)
+        for part, s0, s1, unit in _closed_form_parts(shape, n):
+            # the part's ellipse(EI): its weight L / EI, its geometry that of EI = 1
+            ell = Ellipse(unit.weight / EI, unit.center, unit.a, unit.b, unit.axes)
             w = ell.weight
             compliance = [w * ell.b**2, w * ell.a**2, w]  # Ellipse.compliance()
             if ell.b == 0.0:
                 compliance[0] = part.length / EA
             out.append(SubArc(part, s0, s1, ell, tuple(compliance)))
         return out
-    return [
-        _by_quadrature(flexure, material, part, s0, s1)
-        for part, s0, s1 in zip(parts, windows, windows[1:])
-    ]
+    return [_by_quadrature(flexure, material, part, s0, s1) for part, s0, s1 in _split(shape, n)]
 
 
 def _by_quadrature(

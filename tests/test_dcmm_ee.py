@@ -353,3 +353,40 @@ def test_dense_ldl_reads_two_by_two_pivots():
     assert (tangent._ldl[1] < 0).any()  # a 2 x 2 block was read
     rhs = np.arange(1.0, 6.0)
     assert np.allclose(tangent.solve(rhs), np.linalg.solve(K, rhs), rtol=1e-14, atol=0)
+
+
+@pytest.mark.parametrize("n", [1, 3])
+def test_parts_of_a_kept_centre_line_are_those_computed_anew(n):
+    """The parts, windows and ellipses kept per centre line (a tolerance study's copies share
+    it) are bit for bit each part's own ellipse(EI), for any section; their arrays are
+    read-only, so no copy can change another's; two connectors of one flexure, the second
+    from the kept geometry, are equal in every array."""
+    import dataclasses
+
+    from flexval.reducedmodels.subarcs import sub_arcs
+
+    mech = load_scene("open_chain").mechanism
+    for flexure in mech.flexures:
+        for scale in (1.0, 0.97):
+            f = dataclasses.replace(flexure, section=flexure.section.scaled(scale))
+            EI = f.bending_stiffness(mech.material)
+            length = f.shape.length
+            windows = [length * k / n for k in range(n)] + [length]
+            parts = f.shape.split(n)
+            for sub, part, s0, s1 in zip(
+                sub_arcs(f, mech.material, n), parts, windows, windows[1:]
+            ):
+                fresh = part.ellipse(EI)
+                assert sub.shape == part and (sub.start, sub.end) == (s0, s1)
+                assert sub.ellipse.weight == fresh.weight
+                assert (sub.ellipse.a, sub.ellipse.b) == (fresh.a, fresh.b)
+                assert np.array_equal(sub.ellipse.center, fresh.center)
+                assert np.array_equal(sub.ellipse.axes, fresh.axes)
+                assert not sub.ellipse.center.flags.writeable
+                assert not sub.ellipse.axes.flags.writeable
+    first, second = (DcmmConnector(mech.flexures[0], mech, n) for _ in range(2))
+    for name, value in vars(first).items():
+        if isinstance(value, np.ndarray):
+            assert np.array_equal(value, getattr(second, name)), name
+    with pytest.raises(ValueError):
+        second._sample_tangent[0] = 0.0
