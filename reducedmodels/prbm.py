@@ -212,8 +212,10 @@ def _rho_spline() -> tuple[NotAKnotSpline, float]:
     return NotAKnotSpline(widths, [row["rho"] for row in rows]), float(widths[-1])
 
 
+@lru_cache(maxsize=1024)
 def table_parameters(width: float) -> PrbmParameters:
-    """Fitted chain for an arc angle ``width`` (rad), by cubic-spline interpolation of rho.
+    """Fitted chain for an arc angle ``width`` (rad), by cubic-spline interpolation of rho
+    (kept per angle: the copies of a study share their arcs' angles).
 
     Raises
     ------
@@ -379,6 +381,81 @@ def _hessian_pattern() -> tuple[np.ndarray, np.ndarray]:
 _HESSIAN_ROWS, _HESSIAN_COLS = _hessian_pattern()
 
 
+GEOMETRY_CACHE = 1024
+"""Chains whose geometry at rest :func:`_chain_geometry` keeps (per process, least recently
+used first out): it depends on the centre line, the joints and the end bodies' reference
+points alone, which the copies of a study over sections or materials share."""
+
+
+def _station_order(rest: list, fractions: list, forward: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Arc-length fractions of the section-force stations from the flexure's first end and
+    their places among the polyline's segment ends, in increasing order.
+
+    The stations are both ends of each polyline segment (places k and 4 + k
+    of segment k in :func:`flexval.reducedmodels.prbmkernel.chain_statics`); a
+    segment of zero length at rest (two points of one rigid member that
+    coincide) has none. Plain floats: five points.
+    """
+    kept = [k for k in range(len(rest) - 1) if rest[k] != rest[k + 1]]
+    where = kept + [4 + k for k in kept]
+    at = [fractions[k] for k in kept] + [fractions[k + 1] for k in kept]
+    if not forward:
+        at = [1.0 - a for a in at]
+    order = sorted(range(len(at)), key=at.__getitem__)  # stable, as argsort's
+    return (np.array([at[k] for k in order]), np.array([where[k] for k in order], np.int64))
+
+
+def _geometry(shape: Shape, joints: tuple | PrbmParameters, forward: bool, refs: tuple) -> dict:
+    """A chain's geometry at rest (mm): its joints and flexure ends in chain order, the
+    offsets and link vectors as float pairs, the polyline, its fractions and stations.
+    ``joints``: in the centre line's order (mm), or the parameters that place them on a
+    uniform one (:func:`joint_positions`)."""
+    if isinstance(joints, PrbmParameters):
+        joints = joint_positions(shape, joints)
+    joints, ends = np.array(joints), shape.end_points  # [start, end]
+    if not forward:
+        joints, ends = joints[::-1], ends[::-1]
+    reference = np.array(refs)
+    # joint offsets from the body references, link vectors and the flexure ends' offsets,
+    # as float pairs (mm; plain floats: a few numbers)
+    (ra, r2, rb), (ea, eb), (fa, fb) = joints.tolist(), ends.tolist(), reference.tolist()
+    rest = np.array([ea, ra, r2, rb, eb])  # polyline, mm
+    fractions = polyline_fractions(rest)
+    stations = _station_order(rest.tolist(), fractions.tolist(), forward)
+    for array in (joints, ends, reference, rest, fractions, *stations):
+        array.flags.writeable = False
+    return {
+        "joints": joints,  # [R_a, R_2, R_b], chain order a -> b
+        "_ref": reference,
+        "_ends": ends,  # flexure end points on a and b
+        "_r_a": (ra[0] - fa[0], ra[1] - fa[1]),
+        "_r_b": (rb[0] - fb[0], rb[1] - fb[1]),
+        "_v_h": (r2[0] - ra[0], r2[1] - ra[1]),
+        "_v_l": (rb[0] - r2[0], rb[1] - r2[1]),
+        "_end_rel_a": (ea[0] - fa[0], ea[1] - fa[1]),
+        "_end_rel_b": (eb[0] - fb[0], eb[1] - fb[1]),
+        "_rest": rest,
+        "_fractions": fractions,
+        "_stations": stations,
+    }
+
+
+_kept_geometry = lru_cache(maxsize=GEOMETRY_CACHE)(_geometry)
+
+
+def _chain_geometry(
+    shape: Shape, joints: np.ndarray | PrbmParameters, forward: bool, refs: tuple
+) -> dict:
+    """:func:`_geometry`, kept where the centre line is hashable (the built-in arcs and
+    segments are); ``joints`` (3, 2) in the centre line's order (mm), or the parameters of a
+    uniform one."""
+    key = joints if isinstance(joints, PrbmParameters) else tuple(map(tuple, joints.tolist()))
+    try:
+        return _kept_geometry(shape, key, forward, refs)
+    except TypeError:  # a centre line that cannot key the cache
+        return _geometry(shape, key, forward, refs)
+
+
 class PrbmConnector(Connector):
     """Symmetric 3R PRBM of one flexure (a :class:`~flexval.reducedmodels.connector.Connector`).
 
@@ -428,7 +505,7 @@ class PrbmConnector(Connector):
                 params.kappa1 * EI / length,
             ]
             self.closure_scale = EI / length**3
-            joints = joint_positions(shape, params)
+            joints = params  # placed on the centre line by _chain_geometry
         else:  # a taper: the chain of the tapered ellipse, with the rho of the arc's angle
             if params is None:
                 rho = table_rho(width)
@@ -447,21 +524,10 @@ class PrbmConnector(Connector):
             joints = frame.center + length * _local_joints(params) @ frame.axes
         self.params = params
         self.stiffness = np.array(stiffness)
-        ends = shape.end_points  # [start, end]
         self._forward = flexure.start_body == self.bodies[0]
-        if not self._forward:
-            joints, ends = joints[::-1], ends[::-1]
-        self.joints = joints  # [R_a, R_2, R_b], chain order a -> b
-        self._ref = np.array([mechanism.bodies[b].reference for b in self.bodies])
-        self._ends = ends  # flexure end points on a and b
+        refs = tuple(tuple(mechanism.bodies[b].reference.tolist()) for b in self.bodies)
+        self.__dict__.update(_chain_geometry(shape, joints, self._forward, refs))
         self.length = length
-        # joint offsets from the body references, link vectors and the flexure ends' offsets,
-        # as float pairs (mm; plain floats: a few numbers)
-        (ra, r2, rb), (ea, eb), (fa, fb) = joints.tolist(), ends.tolist(), self._ref.tolist()
-        self._r_a, self._r_b = (ra[0] - fa[0], ra[1] - fa[1]), (rb[0] - fb[0], rb[1] - fb[1])
-        self._v_h, self._v_l = (r2[0] - ra[0], r2[1] - ra[1]), (rb[0] - r2[0], rb[1] - r2[1])
-        self._end_rel_a = (ea[0] - fa[0], ea[1] - fa[1])
-        self._end_rel_b = (eb[0] - fb[0], eb[1] - fb[1])
         # the parameters of flexval.reducedmodels.prbmkernel.chain
         self._parameters = np.array(
             [*self._r_a, *self._r_b, *self._v_h, *self._v_l, *stiffness, self.closure_scale]
@@ -469,27 +535,6 @@ class PrbmConnector(Connector):
         self._fitted_rotation = fitted_rotation()
         self._section = flexure.section
         self._shape = shape
-        self._rest = np.array([ea, ra, r2, rb, eb])  # polyline, mm
-        self._fractions = polyline_fractions(self._rest)
-        self._stations = self._station_order()
-
-    def _station_order(self) -> tuple[np.ndarray, np.ndarray]:
-        """Arc-length fractions of the section-force stations from the flexure's first end and
-        their places among the polyline's segment ends, in increasing order.
-
-        The stations are both ends of each polyline segment (places k and 4 + k
-        of segment k in :func:`flexval.reducedmodels.prbmkernel.chain_statics`); a
-        segment of zero length at rest (two points of one rigid member that
-        coincide) has none. Plain floats: five points.
-        """
-        rest, fractions = self._rest.tolist(), self._fractions.tolist()
-        kept = [k for k in range(len(rest) - 1) if rest[k] != rest[k + 1]]
-        where = kept + [4 + k for k in kept]
-        at = [fractions[k] for k in kept] + [fractions[k + 1] for k in kept]
-        if not self._forward:
-            at = [1.0 - a for a in at]
-        order = sorted(range(len(at)), key=at.__getitem__)  # stable, as argsort's
-        return (np.array([at[k] for k in order]), np.array([where[k] for k in order], np.int64))
 
     def mass_points(self, density: float) -> MassPoints:
         """The flexure's mass (density in t/mm^3) on the chain's four rigid members.

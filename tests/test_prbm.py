@@ -424,3 +424,34 @@ def test_end_pass_kernels_against_the_generic_statics():
             scale = np.abs(generic.moment).max()
             np.testing.assert_allclose(forces[j].moment[k], generic.moment, atol=1e-12 * scale)
             np.testing.assert_allclose(forces[j].axial[k], generic.axial, atol=1e-12 * scale)
+
+
+def test_a_chains_kept_geometry_is_the_geometry_computed_anew():
+    """Two connectors of one flexure (the second from the geometry kept for its centre line,
+    as the copies of a tolerance study share it) are equal in every value, for any section;
+    the kept arrays are read-only, so no copy can change another's."""
+    import dataclasses
+
+    from flexval.reducedmodels.prbm import PrbmConnector, _geometry, joint_positions
+
+    mech = load_scene("open_chain").mechanism
+    for flexure in mech.flexures:
+        first = PrbmConnector(flexure, mech)
+        thinner = PrbmConnector(
+            dataclasses.replace(flexure, section=flexure.section.scaled(0.97)), mech
+        )
+        refs = tuple(tuple(mech.bodies[b].reference.tolist()) for b in first.bodies)
+        joints = joint_positions(flexure.shape, first.params).tolist()
+        fresh = _geometry(flexure.shape, tuple(map(tuple, joints)), first._forward, refs)
+        for name, value in fresh.items():
+            for connector in (first, thinner):
+                kept = getattr(connector, name)
+                if isinstance(value, tuple) and isinstance(value[0], np.ndarray):
+                    assert all(np.array_equal(a, b) for a, b in zip(kept, value)), name
+                elif isinstance(value, np.ndarray):
+                    assert np.array_equal(kept, value) and not kept.flags.writeable, name
+                else:
+                    assert kept == value, name
+        assert thinner.stiffness[0] < first.stiffness[0]
+        with pytest.raises(ValueError):
+            first.joints[0, 0] = 0.0
