@@ -994,8 +994,10 @@ def trace_batch(
         is traced by the batch's arithmetic, so its
         path does not depend on which copies it was traced with (a sweep
         gives the same rows whatever its task sizes). Each path's
-        ``seconds`` is its share of its batch's wall time,
-        ``stats["batch"]`` the number of copies it was traced with.
+        ``seconds`` is its share of the wall time of every batch it was
+        traced in (a batch's time split evenly among its copies, so the
+        paths' seconds add up to the whole), ``stats["batch"]`` the number
+        of copies its last batch recorded.
     """
     distinct = {id(case): case for case in cases}.values()  # each case once
     factors = [case.factors(levels) for case in distinct]
@@ -1017,6 +1019,7 @@ def trace_batch(
         ]
     results: list[LoadPath | SolverError | None] = [None] * len(members)
     groups = [_Group(list(range(len(members))))]  # copies to trace as one batch, in turn
+    spent = np.zeros(len(members))  # each copy's share of the batches it was traced in, s
     while groups:
         group = groups.pop(0)
         copies = group.copies
@@ -1054,14 +1057,15 @@ def trace_batch(
         group_cases = [cases[k] for k in copies]
         if failure is not None and (len(copies) > 1 or group.start is not None):
             # each copy alone from rest: its own way to fail, as its solo run meets it
+            spent[copies] += (time.perf_counter() - t0) / len(copies)
             groups += [_Group([k]) for k in copies]
             continue
         kept = [0] if failure is not None else np.flatnonzero(stepping.active).tolist()
         paths = record_batch(batch, points, kept, group_cases, model, scene, settings, failure)
-        seconds = (time.perf_counter() - t0) / max(len(kept), 1)
+        spent[copies] += (time.perf_counter() - t0) / len(copies)
         for j, path in zip(kept, paths):
             recorded = path.path if isinstance(path, SolverError) else path
-            recorded.seconds = seconds
+            recorded.seconds = float(spent[copies[j]])
             recorded.stats["batch"] = len(kept)
             results[copies[j]] = path
         for where in np.unique(left_at[~stepping.active]).tolist():

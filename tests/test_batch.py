@@ -11,6 +11,7 @@ magnitude of their loads.
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import numpy as np
 import pytest
@@ -196,8 +197,12 @@ def test_copies_that_part_ways_go_on_from_the_last_point_they_shared(model, monk
         resume(self, carried, take, loads)
 
     monkeypatch.setattr(BatchLoadControl, "resume", counted)
+    wall = time.perf_counter()
     batched = run_batch(mechanisms, spec, cases)
+    wall = time.perf_counter() - wall
     monkeypatch.undo()
+    # the paths' seconds share out the batches' time, the ones they left included
+    assert 0.5 * wall <= sum(p.seconds for p in batched) <= wall
     sizes = [p.stats["batch"] for p in batched]
     assert min(sizes) < len(scales)  # some parted ways
     assert resumed and max(resumed) > cases[0].factors()[0]  # past the first level
