@@ -385,7 +385,8 @@ def scaling(path: str, workers: list[int], points: int | None, ceiling_points: i
             f"({r['points'] / run:,.0f} points/s), efficiency {base[1] / (w * run):5.1%}; "
             f"driver CPU 1/{r['worker_cpu'] / r['driver_cpu']:.0f} of the workers'; "
             f"{r['tasks']} tasks; largest peak RSS {r['peak_mb']:.0f} MB "
-            f"(load average before {load:.1f})",
+            f"(load average before {load:.1f})\n        wall: "
+            + ", ".join(f"{k} {v:.2f} s" for k, v in r["split"].items()),
             flush=True,
         )
     if ceiling_points:
