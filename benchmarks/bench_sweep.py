@@ -307,6 +307,11 @@ def tolerance_once(path: str, workers: int, points: int | None = None) -> dict:
         shutil.rmtree(out)
 
 
+def split_text(run: dict) -> str:
+    """Where a :func:`tolerance_once` run's wall time went, one phase after the other."""
+    return ", ".join(f"{phase} {seconds:.2f} s" for phase, seconds in run["split"].items())
+
+
 def tolerance(path: str, workers: int, repeats: int, points: int | None = None) -> None:
     """Medians over ``repeats`` runs of :func:`tolerance_once`, one line each and the
     medians: points/s, and the driver's CPU time per point against a worker's."""
@@ -324,8 +329,7 @@ def tolerance(path: str, workers: int, repeats: int, points: int | None = None) 
             f"({1e3 * r['run_cpu'] / r['points']:.3f} in run_sweep), worker CPU "
             f"{1e3 * r['worker_cpu'] / r['points']:.3f} ms/point, largest peak RSS "
             f"{r['peak_mb']:.0f} MB, {r['tasks']} tasks (largest {r['task_points']}) "
-            f"(load average before {load:.1f})\n    wall: "
-            + ", ".join(f"{k} {v:.2f} s" for k, v in r["split"].items()),
+            f"(load average before {load:.1f})\n    wall: {split_text(r)}",
             flush=True,
         )
 
@@ -385,8 +389,7 @@ def scaling(path: str, workers: list[int], points: int | None, ceiling_points: i
             f"({r['points'] / run:,.0f} points/s), efficiency {base[1] / (w * run):5.1%}; "
             f"driver CPU 1/{r['worker_cpu'] / r['driver_cpu']:.0f} of the workers'; "
             f"{r['tasks']} tasks; largest peak RSS {r['peak_mb']:.0f} MB "
-            f"(load average before {load:.1f})\n        wall: "
-            + ", ".join(f"{k} {v:.2f} s" for k, v in r["split"].items()),
+            f"(load average before {load:.1f})\n        wall: {split_text(r)}",
             flush=True,
         )
     if ceiling_points:
