@@ -899,11 +899,6 @@ class _Start(NamedTuple):
     positions: list[int]
     """The copies' places in ``batch``, in the order of the new batch."""
 
-    def of(self, copies: list[int], these: list[int]) -> _Start:
-        """The start of ``these`` (copy indices) among the batch's ``copies``."""
-        place = {k: j for j, k in enumerate(copies)}
-        return self._replace(positions=[place[k] for k in these])
-
     def take(self, batch: BatchSystem) -> np.ndarray:
         """The index, in the old batch's numbering, of each unknown of ``batch``."""
         take = np.empty(batch.n_dofs, np.int64)
@@ -1070,12 +1065,12 @@ def trace_batch(
             results[copies[j]] = path
         for where in np.unique(left_at[~stepping.active]).tolist():
             gone = np.flatnonzero(~stepping.active & (left_at == where)).tolist()
-            these = [copies[j] for j in gone if results[copies[j]] is None]
+            gone = [j for j in gone if results[copies[j]] is None]
             if where < 0:  # their first solve failed: each from rest, alone
-                groups += [_Group([k]) for k in these]
-            elif these:  # on together from the last point they shared
-                start = _Start(batch, points, *shared[where], [])
-                groups.append(_Group(these, start.of(copies, these)))
+                groups += [_Group([copies[j]]) for j in gone]
+            elif gone:  # on together from the last point they shared
+                start = _Start(batch, points, *shared[where], gone)
+                groups.append(_Group([copies[j] for j in gone], start))
     return results
 
 

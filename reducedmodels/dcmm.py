@@ -34,9 +34,10 @@ from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.kinematics import rotate_xy
 
 from .connector import Connector, ConnectorGroup, Reasons
+from .geometrycache import per_centre_line
 from .inertia import MassPoints, line_density, rigid_pieces
 from .sections import SectionForces
-from .subarcs import GEOMETRY_CACHE, sub_arcs
+from .subarcs import sub_arcs
 from .validity import (
     MAX_RELATIVE_ROTATION,
     MAX_STRAIN,
@@ -444,30 +445,14 @@ class _StackTables(NamedTuple):
     hessian_cols: np.ndarray
 
 
-def _kept(function: Callable) -> Callable:
-    """``function`` of a centre line (and numbers) kept in a cache of
-    :data:`~flexval.reducedmodels.subarcs.GEOMETRY_CACHE` entries where its arguments are
-    hashable (the built-in arcs and segments), computed anew where they are not."""
-    cached = functools.lru_cache(maxsize=GEOMETRY_CACHE)(function)
-
-    @functools.wraps(function)
-    def kept(*args):
-        try:
-            return cached(*args)
-        except TypeError:  # a centre line that cannot key the cache
-            return function(*args)
-
-    return kept
-
-
-@_kept
+@per_centre_line
 def _end_points(shape) -> tuple[tuple[float, float], tuple[float, float]]:
     """The start and end points of a centre line, as float pairs (mm)."""
     (x0, y0), (x1, y1) = shape.end_points.tolist()
     return (x0, y0), (x1, y1)
 
 
-@_kept
+@per_centre_line
 def _samples(shape, n: int, forward: bool) -> tuple[np.ndarray, np.ndarray]:
     """The points (mm) of the chain's samples at rest on the centre line of n sub-arcs, and
     the direction of each one's section towards the chain's second body (rad), read-only."""

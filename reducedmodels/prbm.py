@@ -120,6 +120,7 @@ from flexval.geometry.kinematics import rotate_xy
 from flexval.geometry.shapes import Shape, arc_semi_axes
 
 from .connector import Connector, ConnectorGroup, Reasons
+from .geometrycache import GEOMETRY_CACHE, per_centre_line
 from .inertia import MassPoints, line_density, rigid_pieces
 from .sections import SectionForces, polyline_fractions
 from .spline import NotAKnotSpline
@@ -212,7 +213,7 @@ def _rho_spline() -> tuple[NotAKnotSpline, float]:
     return NotAKnotSpline(widths, [row["rho"] for row in rows]), float(widths[-1])
 
 
-@lru_cache(maxsize=1024)
+@lru_cache(maxsize=GEOMETRY_CACHE)
 def table_parameters(width: float) -> PrbmParameters:
     """Fitted chain for an arc angle ``width`` (rad), by cubic-spline interpolation of rho
     (kept per angle: the copies of a study share their arcs' angles).
@@ -381,12 +382,6 @@ def _hessian_pattern() -> tuple[np.ndarray, np.ndarray]:
 _HESSIAN_ROWS, _HESSIAN_COLS = _hessian_pattern()
 
 
-GEOMETRY_CACHE = 1024
-"""Chains whose geometry at rest :func:`_chain_geometry` keeps (per process, least recently
-used first out): it depends on the centre line, the joints and the end bodies' reference
-points alone, which the copies of a study over sections or materials share."""
-
-
 def _station_order(rest: list, fractions: list, forward: bool) -> tuple[np.ndarray, np.ndarray]:
     """Arc-length fractions of the section-force stations from the flexure's first end and
     their places among the polyline's segment ends, in increasing order.
@@ -440,20 +435,16 @@ def _geometry(shape: Shape, joints: tuple | PrbmParameters, forward: bool, refs:
     }
 
 
-_kept_geometry = lru_cache(maxsize=GEOMETRY_CACHE)(_geometry)
+_kept_geometry = per_centre_line(_geometry)
 
 
 def _chain_geometry(
     shape: Shape, joints: np.ndarray | PrbmParameters, forward: bool, refs: tuple
 ) -> dict:
-    """:func:`_geometry`, kept where the centre line is hashable (the built-in arcs and
-    segments are); ``joints`` (3, 2) in the centre line's order (mm), or the parameters of a
-    uniform one."""
+    """:func:`_geometry`, kept per centre line; ``joints`` (3, 2) in the centre line's order
+    (mm), or the parameters of a uniform one."""
     key = joints if isinstance(joints, PrbmParameters) else tuple(map(tuple, joints.tolist()))
-    try:
-        return _kept_geometry(shape, key, forward, refs)
-    except TypeError:  # a centre line that cannot key the cache
-        return _geometry(shape, key, forward, refs)
+    return _kept_geometry(shape, key, forward, refs)
 
 
 class PrbmConnector(Connector):

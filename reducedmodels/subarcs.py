@@ -23,7 +23,6 @@ Units: mm, N, MPa, rad.
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
@@ -33,6 +32,7 @@ from flexval.geometry import Flexure, Material
 from flexval.geometry.compliance import curve_compliance
 from flexval.geometry.shapes import Ellipse, Shape
 
+from .geometrycache import per_centre_line
 from .validity import MAX_RELATIVE_ROTATION, bending_rotation_limit
 
 STRAIGHT_SPREAD = 1e-10
@@ -81,13 +81,6 @@ def has_closed_form(flexure: Flexure) -> bool:
     return flexure.section.is_uniform and flexure.shape.kind in ("arc", "segment")
 
 
-GEOMETRY_CACHE = 1024
-"""Centre lines whose parts :func:`sub_arcs` keeps (per process, least recently used first
-out): the parts of a flexure and their ellipses' geometry depend on its centre line and n
-alone, and the copies of a tolerance study or a sweep over sections and materials share
-their centre lines."""
-
-
 def _split(shape: Shape, n: int) -> tuple[tuple[Shape, float, float], ...]:
     """The n parts of ``shape`` and their windows [s0, s1] on it (mm)."""
     length = shape.length
@@ -95,7 +88,7 @@ def _split(shape: Shape, n: int) -> tuple[tuple[Shape, float, float], ...]:
     return tuple(zip(shape.split(n), windows, windows[1:]))
 
 
-@functools.lru_cache(maxsize=GEOMETRY_CACHE)
+@per_centre_line
 def _unit_parts(shape: Shape, n: int) -> tuple[tuple[Shape, float, float, Ellipse], ...]:
     """The parts of a closed-form centre line, their windows and their ellipses for EI = 1
     (whose weight is the part's length; the arrays read-only, shared by every caller)."""
@@ -108,15 +101,6 @@ def _unit_parts(shape: Shape, n: int) -> tuple[tuple[Shape, float, float, Ellips
     return tuple(out)
 
 
-def _closed_form_parts(shape: Shape, n: int) -> tuple[tuple[Shape, float, float, Ellipse], ...]:
-    """:func:`_unit_parts`, kept where the centre line is hashable (the built-in arcs and
-    segments are)."""
-    try:
-        return _unit_parts(shape, n)
-    except TypeError:  # a centre line that cannot key the cache
-        return _unit_parts.__wrapped__(shape, n)
-
-
 def sub_arcs(flexure: Flexure, material: Material, n: int) -> list[SubArc]:
     """The flexure cut into n parts of equal arc length, from its start to its end."""
     shape = flexure.shape
@@ -124,7 +108,7 @@ def sub_arcs(flexure: Flexure, material: Material, n: int) -> list[SubArc]:
         EI = flexure.bending_stiffness(material)
         EA = flexure.axial_stiffness(material)
         out = []
-        for part, s0, s1, unit in _closed_form_parts(shape, n):
+        for part, s0, s1, unit in _unit_parts(shape, n):
             # the part's ellipse(EI): its weight L / EI, its geometry that of EI = 1
             ell = Ellipse(unit.weight / EI, unit.center, unit.a, unit.b, unit.axes)
             w = ell.weight

@@ -11,7 +11,8 @@ magnitude of their loads.
 from __future__ import annotations
 
 import dataclasses
-import time
+import itertools
+import types
 
 import numpy as np
 import pytest
@@ -183,26 +184,35 @@ def test_copies_that_part_ways_go_on_from_the_last_point_they_shared(model, monk
     and go on as batches of their own from the last reported level they shared; each path is
     bit for bit the copy's path traced alone (a batch of one from rest), and its solo run's
     to the batch's agreement."""
+    from flexval.reducedmodels import batch as batch_module
     from flexval.reducedmodels.batch import BatchLoadControl
 
     rng = np.random.default_rng(3)
     scales = rng.normal(1.0, 0.03, 24).tolist()
     mechanisms, cases = variants("open_chain", "f+", scales, [1.0] * len(scales))
     spec = parse_model(model)
-    resumed = []
-    resume = BatchLoadControl.resume
+    resumed, batches = [], []
+    resume, start = BatchLoadControl.resume, BatchLoadControl.__init__
 
     def counted(self, carried, take, loads):
         resumed.append(carried["factor"])
         resume(self, carried, take, loads)
 
+    def made(self, factors, batch):
+        batches.append(batch.n_copies)
+        start(self, factors, batch)
+
+    # a clock that ticks once per reading: each batch lasts one tick from its start to its
+    # end, and so does building the connectors
+    ticks = itertools.count()
+    clock = types.SimpleNamespace(perf_counter=lambda: float(next(ticks)))
+    monkeypatch.setattr(batch_module, "time", clock)
     monkeypatch.setattr(BatchLoadControl, "resume", counted)
-    wall = time.perf_counter()
+    monkeypatch.setattr(BatchLoadControl, "__init__", made)
     batched = run_batch(mechanisms, spec, cases)
-    wall = time.perf_counter() - wall
     monkeypatch.undo()
-    # the paths' seconds share out the batches' time, the ones they left included
-    assert 0.5 * wall <= sum(p.seconds for p in batched) <= wall
+    # the paths' seconds share out every batch's time, those whose copies all left included
+    assert sum(p.seconds for p in batched) == pytest.approx(len(batches) + 1, rel=1e-12)
     sizes = [p.stats["batch"] for p in batched]
     assert min(sizes) < len(scales)  # some parted ways
     assert resumed and max(resumed) > cases[0].factors()[0]  # past the first level
