@@ -75,7 +75,7 @@ def target_columns(path: Any) -> dict[str, float]:
 
 class Columns:
     """A sweep's rows read as columns, each column once: the float columns as arrays (NaN
-    for a missing or non-finite value), the labels as arrays of objects, and the rows of
+    for a missing or non-finite value), whether each run reached full load, and the rows of
     each model and load case as index arrays.
 
     The distributions of a study take a handful of columns over every row, several times
@@ -85,27 +85,25 @@ class Columns:
 
     def __init__(self, rows: Sequence[dict]):
         self._rows = rows
-        self._cache: dict[str, np.ndarray] = {}
+        self._floats: dict[str, np.ndarray] = {}
+        self._ok: np.ndarray | None = None
         self._groups: dict[tuple[Any, Any], np.ndarray] | None = None
-
-    def __len__(self) -> int:
-        return len(self._rows)
 
     def floats(self, column: str) -> np.ndarray:
         """The column as floats, NaN where a row has no finite value."""
-        if column not in self._cache:
+        if column not in self._floats:
             values = np.array(
                 [np.nan if (v := r.get(column)) is None else v for r in self._rows], dtype=float
             )
             values[~np.isfinite(values)] = np.nan
-            self._cache[column] = values
-        return self._cache[column]
+            self._floats[column] = values
+        return self._floats[column]
 
     def ok(self) -> np.ndarray:
         """Whether each row's run reached full load (status ``ok``)."""
-        if "status ok" not in self._cache:
-            self._cache["status ok"] = np.array([r.get("status") == "ok" for r in self._rows])
-        return self._cache["status ok"]
+        if self._ok is None:
+            self._ok = np.array([r.get("status") == "ok" for r in self._rows], dtype=bool)
+        return self._ok
 
     def units(self, cases: Sequence[str]) -> dict[str, str]:
         """The load unit (``load_unit``: N or N mm) of each of ``cases`` some row gives."""
