@@ -286,7 +286,7 @@ def tolerance_once(path: str, workers: int, points: int | None = None) -> dict:
         finally:
             cluster.close()
         split["close"] = time.perf_counter() - wall - sum(split.values())
-        rows = sweep_rows(sweep, out)
+        rows = sweep_rows(sweep, out, stats)
         split["read rows"] = time.perf_counter() - wall - sum(split.values())
         write_outputs(sweep, rows, out, split["run_sweep"])
         split["outputs"] = time.perf_counter() - wall - sum(split.values())

@@ -891,9 +891,9 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             stats = run_sweep(sweep, out, client, use_cache=not args.no_cache, progress=progress)
     finally:
         _close_cluster(cluster)
-    rows = sweep_rows(sweep, out)
+    rows = sweep_rows(sweep, out, stats)
     write_outputs(sweep, rows, out, stats.seconds)
-    stale = len(results_store(sweep, out).keys()) - len(rows)
+    stale = results_store(sweep, out).key_array().size - len(rows)
     print(
         f"{stats.tasks} tasks, {stats.rows_written} rows written ({stats.rows_failed} failed), "
         f"{stats.rows_skipped} already present; {stats.seconds:.1f} s"

@@ -26,7 +26,11 @@ Resuming: every row's key hashes the point's scene, the model, the load
 case, the reference, the code version and the optional outputs; a (point,
 model) pair whose rows are all stored already is not run again, and the
 summary reads only the rows of the current keys (:func:`current_keys`),
-never those a sweep left under an older code version. A task that raises
+never those a sweep left under an older code version. After a run, those are the
+keys the run wrote and found (:meth:`SweepStats.current_keys`: the workers
+return their rows' keys), so the driver does not hash every point again and
+reads the rows back as Arrow columns (:class:`~flexval.validation.sweep.columns.Columns`),
+making dicts only of the rows the summary lists one by one. A task that raises
 even after Dask's retries (a worker that keeps dying) becomes rows with
 status ``error``: the sweep goes on.
 
@@ -46,6 +50,7 @@ import numpy as np
 from flexval.reducedmodels.catalogue import REFERENCE
 
 from ..cache import code_version
+from .columns import Columns
 from .spec import Point, Sweep
 from .store import ResultStore
 from .tasks import (
@@ -85,6 +90,17 @@ class SweepStats:
     parts: list = field(default_factory=list)
     task_points: dict = field(default_factory=dict)
     """Model id: the points of its largest task."""
+    keys: list = field(default_factory=list)
+    """Arrays of row keys (24-byte strings): the rows this call wrote and the stored rows
+    it found current (see :meth:`current_keys`)."""
+
+    def current_keys(self) -> np.ndarray:
+        """The keys of every stored row of the sweep under the current code, sorted: those
+        :func:`current_keys` gives of the stored rows, known from the run without hashing a
+        point again."""
+        if not self.keys:
+            return np.empty(0, dtype="S24")
+        return np.unique(np.concatenate(self.keys).astype("S24"))
 
 
 def chunks(points: list, size: int) -> Iterator[list]:
@@ -377,6 +393,8 @@ class _Block:
     run: np.ndarray
     skip: list[frozenset]
     stored: int
+    current: np.ndarray
+    """The keys of its stored rows that the sweep gives under the current code."""
     refs: dict = field(default_factory=dict)
     open: int = 0
 
@@ -403,24 +421,32 @@ def _make_block(sweep: Sweep, positions: np.ndarray, done: np.ndarray, sampled, 
         digests = None
     run = np.ones((len(positions), len(specs)), dtype=bool)
     skip = [frozenset()] * len(positions)
+    current = []  # the stored keys the sweep gives now
+    # the reference runs wherever a model runs (it gives the errors), on its sample only
+    on_sample = np.ones(len(positions), bool) if sampled is None else np.isin(positions, sampled)
     if done.size:
         keep = []
         for i, d in enumerate(digests):
-            if not points.checked and np.isin(row_key(d, "-", "-", info).encode(), done):
-                continue  # a lazy sweep's point stored as invalid
+            if not points.checked:
+                invalid = np.array([row_key(d, "-", "-", info)], "S24")
+                if np.isin(invalid, done)[0]:
+                    current.append(invalid)
+                    continue  # a lazy sweep's point stored as invalid
             keys = np.array([[row_key(d, s.id, c, info) for c in cases] for s in specs], "S24")
             stored = np.isin(keys, done)
             run[i] = ~stored.all(axis=1)
             skip[i] = frozenset(k.decode() for k in keys[stored])
+            current.append(keys[1:][stored[1:]])
+            if on_sample[i]:
+                current.append(keys[0][stored[0]])
             keep.append(i)
-        positions, values, run = positions[keep], values[keep], run[keep]
+        positions, values, run, on_sample = (x[keep] for x in (positions, values, run, on_sample))
         digests, indices, skip = ([x[i] for i in keep] for x in (digests, indices, skip))
     # (digests are None only where nothing is stored: the loop above did not run)
-    # the reference runs wherever a model runs (it gives the errors), on its sample only
-    on_sample = np.ones(len(positions), bool) if sampled is None else np.isin(positions, sampled)
     stored = int((~run[:, 1:]).sum() + (~run[:, 0] & on_sample).sum())
     run[:, 0] = on_sample & run.any(axis=1)
-    return _Block(positions, values, digests, indices, run, skip, stored)
+    known = np.concatenate(current) if current else np.empty(0, dtype="S24")
+    return _Block(positions, values, digests, indices, run, skip, stored, known)
 
 
 def _point_blocks(sweep: Sweep, size: Callable[[], int]) -> Iterator[np.ndarray]:
@@ -520,7 +546,10 @@ def run_sweep(
 
     fresh_invalid = []  # the invalid points a checking pass found: their rows, here
     for r in points.invalid_records():
-        if not np.isin(row_key(r.digest, "-", "-", info).encode(), done):
+        key = row_key(r.digest, "-", "-", info)
+        if np.isin(key.encode(), done):
+            stats.keys.append(np.array([key], dtype="S24"))
+        else:
             point = Point(r.index, points.params(r.index), None, r.digest, r.reason)
             fresh_invalid.append(
                 base_row(point, "-", "-", info) | {"status": "invalid_point", "reason": r.reason}
@@ -529,6 +558,7 @@ def run_sweep(
     if part is not None:
         stats.parts.append(part)
     stats.rows_written += len(fresh_invalid)
+    stats.keys.append(np.array([r["key"] for r in fresh_invalid], dtype="S24"))
     del fresh_invalid
 
     workers = max(sum(client.nthreads().values()), 1)
@@ -596,6 +626,7 @@ def run_sweep(
                 return
             b, positions = nxt
             blk = _make_block(sweep, positions, done, sampled, info)
+            stats.keys.append(blk.current)
             for fut, j, chunk in submit(blk):
                 tasks[fut] = (b, j, chunk)
                 blk.open += 1
@@ -615,6 +646,7 @@ def run_sweep(
             result = {
                 "staged": staged,
                 "rows": len(rows),
+                "keys": np.array([r["key"] for r in rows], dtype="S24"),
                 "failed": len(rows),
                 "points": 0,
                 "cpu": 0.0,
@@ -624,6 +656,7 @@ def run_sweep(
         if result["staged"] is not None:
             stats.parts.append(store.publish(result["staged"]))
         stats.rows_written += result["rows"]
+        stats.keys.append(result["keys"])
         stats.rows_failed += result["failed"]
         if result["points"] and not result["first"]:  # a first task pays one-time costs
             cost[j].add(result["points"], result["cpu"])
@@ -645,12 +678,19 @@ def results_store(sweep: Sweep, out_dir: str | Path) -> ResultStore:
     return ResultStore(Path(out_dir) / "results", [a.path for a in sweep.axes])
 
 
-def sweep_rows(sweep: Sweep, out_dir: str | Path) -> list[dict]:
-    """The stored rows of ``sweep`` under the current code (see :func:`current_keys`); the
-    invalid points among them are noted in ``sweep.points`` (a lazy sweep learns its invalid
-    points from its workers, and a resumed one from its stored rows)."""
-    rows = results_store(sweep, out_dir).rows(current_keys(sweep))
-    invalid = {r["point"]: r["reason"] for r in rows if r["status"] == "invalid_point"}
-    if invalid and not sweep.points.checked:
-        sweep.points.note_invalid(invalid)
+def sweep_rows(sweep: Sweep, out_dir: str | Path, stats: SweepStats | None = None) -> Columns:
+    """The stored rows of ``sweep`` under the current code (see :func:`current_keys`), as
+    columns that are also a sequence of dicts; the invalid points among them are noted in
+    ``sweep.points`` (a lazy sweep learns its invalid points from its workers, and a resumed
+    one from its stored rows).
+
+    With the ``stats`` of the :func:`run_sweep` call that just ran, the current rows are
+    those it wrote and found (:meth:`SweepStats.current_keys`): no point is hashed again.
+    """
+    keys = current_keys(sweep) if stats is None else stats.current_keys()
+    rows = results_store(sweep, out_dir).rows(keys)
+    invalid_at = np.flatnonzero(np.equal(rows.column("status"), "invalid_point"))
+    if invalid_at.size and not sweep.points.checked:
+        points, reasons = rows.column("point"), rows.column("reason")
+        sweep.points.note_invalid({points[k]: reasons[k] for k in invalid_at.tolist()})
     return rows

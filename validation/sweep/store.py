@@ -38,6 +38,7 @@ from flexval.geometry import SceneError
 from flexval.geometry.files import atomic_path
 
 from ..compare import METRICS
+from .columns import Columns
 
 PARAM_PREFIX = "param:"
 STAGED = ".staged-"
@@ -198,17 +199,22 @@ class ResultStore:
             for path in self.folder.glob(f"*{STAGED}part-*.parquet"):
                 path.unlink(missing_ok=True)
 
-    def rows(self, keys: set[str] | None = None) -> list[dict]:
-        """The stored rows (those whose key is in ``keys``, if given), sorted by point, model
-        and load case (after :meth:`check`)."""
+    def rows(self, keys: set[str] | np.ndarray | None = None) -> Columns:
+        """The stored rows (those whose key is in ``keys``, if given: strings, or 24-byte
+        strings as :meth:`key_array` gives them), sorted by point, model and load case
+        (after :meth:`check`), as columns that are also a sequence of dicts."""
         self.check()
         tables = [pq.read_table(p, schema=self.schema) for p in self.parts()]
         if not tables:
-            return []
+            return Columns(self.schema.empty_table())
         table = pa.concat_tables(tables)
         if keys is not None:
-            wanted = pa.array(list(keys), type=pa.string())
+            wanted = (
+                pa.array(keys.astype(object), type=pa.binary()).cast(pa.string())
+                if isinstance(keys, np.ndarray)
+                else pa.array(list(keys), type=pa.string())
+            )
             table = table.filter(pc.is_in(table["key"], value_set=wanted))
         # a stable sort (Arrow's is), strings by their UTF-8 bytes: Python's code point order
         order = [("point", "ascending"), ("model", "ascending"), ("load_case", "ascending")]
-        return table.sort_by(order).to_pylist()
+        return Columns(table.sort_by(order))

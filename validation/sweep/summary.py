@@ -21,12 +21,14 @@ parameters in their field's unit.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TypeAlias
 
 import numpy as np
 
 from ..outputs import save_figure, write_text
+from .columns import Columns
 from .spec import Sweep
 from .store import PARAM_PREFIX
 from .tolerancefiles import FILES as TOLERANCE_FILES
@@ -38,43 +40,49 @@ THRESHOLDS = (1.0, 5.0)
 MAX_LISTED = 30
 """Failures and invalid points listed by name in the summary (the rest are counted)."""
 
-RowValue = Callable[[dict], "float | None"]
+Rows: TypeAlias = "Columns | Sequence[dict]"
+"""A sweep's rows: as dicts, or as :class:`~flexval.validation.sweep.columns.Columns`."""
+RowValue = Callable[[Columns], np.ndarray]
+"""A value of every row (percent), NaN where a row has none."""
 
 
-def row_metric(row: dict, metric: str) -> float | None:
-    """The summary metric of one row (percent), None when it has no errors."""
+def row_metric(rows: Columns, metric: str) -> np.ndarray:
+    """The summary metric of every row (percent), NaN where a row has no errors."""
     if metric == "worst":
-        vals = (row["end_disp_vec"], row["end_rot"])
-        return None if None in vals else max(vals)
-    return row[metric]
+        return np.maximum(rows.floats("end_disp_vec"), rows.floats("end_rot"))  # NaN: either
+    return rows.floats(metric)
 
 
-def stress_metric(row: dict) -> float | None:
-    """|peak stress error| of one row (percent), None when it has none."""
-    e = row["peak_stress_error"]
-    return None if e is None else abs(e)
+def stress_metric(rows: Columns) -> np.ndarray:
+    """|peak stress error| of every row (percent), NaN where a row has none."""
+    return np.abs(rows.floats("peak_stress_error"))
 
 
-def point_values(
-    sweep: Sweep, rows: list[dict], value: RowValue
-) -> dict[str, dict[int, float | None]]:
-    """{model: {point: largest ``value`` over the load cases, or None if a case has none}}
-    of the compared models."""
-    out: dict[str, dict[int, float | None]] = {s.id: {} for s in sweep.models}
-    for r in rows:
-        if r["model"] not in out:
-            continue
-        v = value(r)
-        per = out[r["model"]]
-        if r["point"] in per and per[r["point"]] is None:
-            continue
-        per[r["point"]] = None if v is None else max(v, per.get(r["point"]) or 0.0)
+def point_values(sweep: Sweep, rows: Rows, value: RowValue) -> dict[str, dict[int, float | None]]:
+    """{model: {point: largest ``value`` over the load cases (and 0), or None if a case has
+    none}} of the compared models, each model's points in the order of their first row."""
+    rows = Columns.of(rows)
+    values, points = value(rows), rows.column("point")
+    out: dict[str, dict[int, float | None]] = {}
+    for spec in sweep.models:
+        mine = np.flatnonzero(rows.of_model(spec.id))
+        at, first, where = np.unique(
+            points[mine].astype(np.int64), return_index=True, return_inverse=True
+        )
+        largest = np.zeros(at.size)
+        np.fmax.at(largest, where, values[mine])  # NaN: a case without a value, below
+        missing = np.zeros(at.size, dtype=bool)
+        np.logical_or.at(missing, where, np.isnan(values[mine]))
+        order = np.argsort(first, kind="stable")
+        out[spec.id] = {
+            int(at[k]): None if missing[k] else float(largest[k]) for k in order.tolist()
+        }
     return out
 
 
-def point_metrics(sweep: Sweep, rows: list[dict]) -> dict[str, dict[int, float | None]]:
+def point_metrics(sweep: Sweep, rows: Rows) -> dict[str, dict[int, float | None]]:
     """{model: {point: worst summary metric over the load cases, or None}}."""
-    return point_values(sweep, rows, lambda r: row_metric(r, sweep.metric))
+    return point_values(sweep, rows, lambda table: row_metric(table, sweep.metric))
 
 
 def _fmt(x: float | None) -> str:
@@ -131,20 +139,17 @@ def _per_point(sweep: Sweep, metrics: dict, first: tuple[str, dict] | None = Non
     return lines
 
 
-def _reference_peaks(sweep: Sweep, rows: list[dict]) -> dict[int, float]:
+def _reference_peaks(sweep: Sweep, rows: Columns) -> dict[int, float]:
     """{point: the reference's largest peak stress at full load over the load cases (MPa)}."""
     out: dict[int, float] = {}
-    for r in rows:
-        if (
-            r["model"] == sweep.reference.id
-            and r["status"] == "ok"
-            and r["peak_stress"] is not None
-        ):
-            out[r["point"]] = max(r["peak_stress"], out.get(r["point"], 0.0))
+    peaks, points = rows.column("peak_stress"), rows.column("point")
+    chosen = rows.of_model(sweep.reference.id) & rows.ok() & rows.present("peak_stress")
+    for k in np.flatnonzero(chosen).tolist():
+        out[points[k]] = max(peaks[k], out.get(points[k], 0.0))
     return out
 
 
-def _stress_section(sweep: Sweep, rows: list[dict]) -> list[str]:
+def _stress_section(sweep: Sweep, rows: Columns) -> list[str]:
     """Markdown: the peak stresses and their errors against the reference's."""
     ref = sweep.reference.id
     metrics = point_values(sweep, rows, stress_metric)
@@ -176,7 +181,7 @@ def _stress_section(sweep: Sweep, rows: list[dict]) -> list[str]:
     return lines
 
 
-def _limit_section(sweep: Sweep, rows: list[dict]) -> list[str]:
+def _limit_section(sweep: Sweep, rows: Columns) -> list[str]:
     """Markdown: the limit loads found (runs that stopped at a limit point below full load)."""
     lines = [
         "",
@@ -187,7 +192,7 @@ def _limit_section(sweep: Sweep, rows: list[dict]) -> list[str]:
         "(percent) where the reference has one too.",
         "",
     ]
-    found = [r for r in rows if r["limit_load"] is not None]
+    found = rows.take(np.flatnonzero(rows.present("limit_load")))
     if not found:
         return (
             lines
@@ -211,10 +216,10 @@ def _limit_section(sweep: Sweep, rows: list[dict]) -> list[str]:
     return lines + _bifurcations(sweep, rows)
 
 
-def _bifurcations(sweep: Sweep, rows: list[dict]) -> list[str]:
+def _bifurcations(sweep: Sweep, rows: Columns) -> list[str]:
     """Markdown: per model and load case, the points whose path has a bifurcation point,
     and its loads."""
-    found = [r for r in rows if r["bifurcation_load"] is not None]
+    found = rows.take(np.flatnonzero(rows.present("bifurcation_load")))
     lines = [""]
     if not found:
         return lines + ["No run's path has a bifurcation point."]
@@ -239,8 +244,9 @@ def _bifurcations(sweep: Sweep, rows: list[dict]) -> list[str]:
     return lines
 
 
-def format_summary(sweep: Sweep, rows: list[dict]) -> str:
+def format_summary(sweep: Sweep, rows: Rows) -> str:
     """The machine-independent Markdown summary of the sweep's rows."""
+    rows = Columns.of(rows)
     metrics = point_metrics(sweep, rows)
     axes = "\n".join(
         f"- `{a.path}`: {len(a.values)} {'random ' if a.random else ''}values, "
@@ -283,11 +289,12 @@ def format_summary(sweep: Sweep, rows: list[dict]) -> str:
     if "limit_load" in sweep.outputs:
         lines += _limit_section(sweep, rows)
     lines += tolerance_lines(sweep, rows)
-    failed = [r for r in rows if r["status"] != "ok"]
+    failing = np.flatnonzero(~rows.ok())
+    failed = rows.take(failing[:MAX_LISTED])
     lines += ["", "## Failures", ""]
     if not failed:
         lines.append("None: every run reached full load.")
-    for r in failed[:MAX_LISTED]:
+    for r in failed:
         reached = (
             f" (load reached {r['load_reached']:.3g}"
             + (
@@ -307,21 +314,28 @@ def format_summary(sweep: Sweep, rows: list[dict]) -> str:
             f"- point {r['point']} ({_params(sweep, r['point'])}), {r['model']}, "
             f"{r['load_case']}: {r['status']}{reached}: {r['reason']}"
         )
-    if len(failed) > MAX_LISTED:
-        lines.append(f"- ... and {len(failed) - MAX_LISTED} more (see the Parquet dataset)")
-    flagged = [r for r in rows if r["valid"] is False]
+    if failing.size > MAX_LISTED:
+        lines.append(f"- ... and {failing.size - MAX_LISTED} more (see the Parquet dataset)")
+    flagging = np.flatnonzero(np.equal(rows.column("valid"), False))
     lines += ["", "## Validity", ""]
-    if not flagged:
+    if not flagging.size:
         lines.append("The validity monitor flagged no converged run.")
-    for r in flagged[:MAX_LISTED]:
+    for r in rows.take(flagging[:MAX_LISTED]):
         lines.append(f"- point {r['point']}, {r['model']}, {r['load_case']}: {r['validity']}")
-    if len(flagged) > MAX_LISTED:
-        lines.append(f"- ... and {len(flagged) - MAX_LISTED} more (see the Parquet dataset)")
+    if flagging.size > MAX_LISTED:
+        lines.append(f"- ... and {flagging.size - MAX_LISTED} more (see the Parquet dataset)")
     return "\n".join(lines) + "\n"
 
 
-def format_timings(sweep: Sweep, rows: list[dict], wall: float | None) -> str:
+def _seconds(rows: Columns, model: str) -> np.ndarray:
+    """The run times (s) of ``model``'s rows that have one, in row order."""
+    seconds = rows.floats("seconds")
+    return seconds[rows.of_model(model) & rows.present("seconds")]
+
+
+def format_timings(sweep: Sweep, rows: Rows, wall: float | None) -> str:
     """Markdown run-time distribution of each model (s per run of one load case)."""
+    rows = Columns.of(rows)
     lines = [
         f"# Run times of sweep `{sweep.name}` (s per load path)",
         "",
@@ -335,9 +349,7 @@ def format_timings(sweep: Sweep, rows: list[dict], wall: float | None) -> str:
         "|---|---:|---:|---:|---:|---:|---:|",
     ]
     for model in (sweep.reference.id, *(s.id for s in sweep.models)):
-        t = np.array(
-            [r["seconds"] for r in rows if r["model"] == model and r["seconds"] is not None]
-        )
+        t = _seconds(rows, model)
         if t.size:
             q = np.percentile(t, [50, 10, 90])
             lines.append(
@@ -376,23 +388,23 @@ def _finish(fig, axs, path: Path) -> None:
     plt.close(fig)
 
 
-def _lines(sweep: Sweep, rows: list[dict], path: Path, value: RowValue, label: str) -> None:
+def _lines(sweep: Sweep, rows: Columns, path: Path, value: RowValue, label: str) -> None:
     """One panel per load case: ``value`` of each row (percent) against the first axis."""
     import matplotlib.pyplot as plt
 
     axis = sweep.axes[0] if sweep.axes else None
     cases = sweep.load_cases
     fig, axs = plt.subplots(1, len(cases), figsize=(4.2 * len(cases), 3.4), squeeze=False)
-    column = PARAM_PREFIX + axis.path if axis else None  # each row carries its point's value
+    # each row carries its point's value
+    along = rows.floats(PARAM_PREFIX + axis.path) if axis else np.zeros(len(rows))
+    values = value(rows)
     for ax, case in zip(axs[0], cases):
         for spec in sweep.models:
-            pts = sorted(
-                (r[column] if column else 0.0, y)
-                for r in rows
-                if r["model"] == spec.id and r["load_case"] == case and (y := value(r)) is not None
-            )
-            if pts:
-                x, y = zip(*pts)
+            mine = rows.rows_of(spec.id, case)
+            mine = mine[~np.isnan(values[mine])]
+            if mine.size:
+                order = np.lexsort((values[mine], along[mine]))  # by x, then y
+                x, y = along[mine][order], values[mine][order]
                 ax.plot(
                     x,
                     np.maximum(y, 1e-6),
@@ -470,7 +482,7 @@ def _scatter(sweep: Sweep, metrics: dict, path: Path, label: str) -> None:
     _finish(fig, axs, path)
 
 
-def _error_figure(sweep: Sweep, rows: list[dict], path: Path, value: RowValue, label: str) -> Path:
+def _error_figure(sweep: Sweep, rows: Columns, path: Path, value: RowValue, label: str) -> Path:
     """Lines, heat maps or scatter plots (see the module docstring) of ``value`` (percent)."""
     if len(sweep.axes) == 2 and sweep.combine == "grid" and not any(a.random for a in sweep.axes):
         _heatmaps(sweep, point_values(sweep, rows, value), path, label)
@@ -481,21 +493,19 @@ def _error_figure(sweep: Sweep, rows: list[dict], path: Path, value: RowValue, l
     return path
 
 
-def _limits(sweep: Sweep, rows: list[dict], path: Path) -> Path:
+def _limits(sweep: Sweep, rows: Columns, path: Path) -> Path:
     """The limit loads found (N or N mm), per load case, against the first parameter."""
     import matplotlib.pyplot as plt
 
     axis = sweep.axes[0] if sweep.axes else None
     cases = sweep.load_cases
     fig, axs = plt.subplots(1, len(cases), figsize=(4.2 * len(cases), 3.4), squeeze=False)
+    limited = rows.present("limit_load")
     for ax, case in zip(axs[0], cases):
         unit = ""
         for model in (sweep.reference.id, *(s.id for s in sweep.models)):
-            found = [
-                r
-                for r in rows
-                if r["model"] == model and r["load_case"] == case and r["limit_load"] is not None
-            ]
+            mine = rows.rows_of(model, case)
+            found = rows.take(mine[limited[mine]])
             if found:
                 unit = found[0]["load_unit"]
                 pts = sorted(
@@ -514,14 +524,11 @@ def _limits(sweep: Sweep, rows: list[dict], path: Path) -> Path:
     return path
 
 
-def _runtimes(sweep: Sweep, rows: list[dict], path: Path) -> None:
+def _runtimes(sweep: Sweep, rows: Columns, path: Path) -> None:
     import matplotlib.pyplot as plt
 
     models = [sweep.reference.id, *(s.id for s in sweep.models)]
-    data = [
-        [r["seconds"] for r in rows if r["model"] == m and r["seconds"] is not None] for m in models
-    ]
-    keep = [(m, d) for m, d in zip(models, data) if d]
+    keep = [(m, d) for m in models if (d := _seconds(rows, m)).size]
     fig, ax = plt.subplots(figsize=(6, 0.5 * len(keep) + 1.5))
     if keep:
         ax.boxplot([d for _, d in keep], orientation="horizontal", tick_labels=[m for m, _ in keep])
@@ -538,7 +545,7 @@ OPTIONAL_FIGURES = ("stress.png", "limits.png") + TOLERANCE_FILES
 
 
 def write_outputs(
-    sweep: Sweep, rows: list[dict], out_dir: str | Path, wall: float | None = None
+    sweep: Sweep, rows: Rows, out_dir: str | Path, wall: float | None = None
 ) -> list[Path]:
     """Write summary.md, timings.md, errors.png, runtime.png, stress.png (with the
     ``peak_stress`` output), limits.png (when a limit load was found) and, for a tolerance
@@ -552,6 +559,7 @@ def write_outputs(
     matplotlib.use("Agg")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    rows = Columns.of(rows)  # every table and figure reads the same columns
     written = []
     for name, text in (
         ("summary.md", format_summary(sweep, rows)),
@@ -563,7 +571,7 @@ def write_outputs(
             sweep,
             rows,
             out / "errors.png",
-            lambda r: row_metric(r, sweep.metric),
+            lambda table: row_metric(table, sweep.metric),
             f"{sweep.metric} error",
         )
     )
@@ -573,7 +581,7 @@ def write_outputs(
         written.append(
             _error_figure(sweep, rows, out / "stress.png", stress_metric, "|peak stress error|")
         )
-    if any(r["limit_load"] is not None for r in rows):
+    if rows.present("limit_load").any():
         written.append(_limits(sweep, rows, out / "limits.png"))
     if is_tolerance(sweep):
         written += write_tolerance(sweep, rows, out)

@@ -27,8 +27,9 @@ percentiles are interpolations between the two smallest and the two largest valu
 describe the sample, not the population's tails, which a tolerance study of a few dozen
 points cannot resolve.
 
-The functions here take plain rows (dicts, as :meth:`ResultStore.rows` returns them) or
-numpy arrays and return plain dicts; :func:`rounded` turns them into what the summary writes
+The functions here take a sweep's rows (dicts, or
+:class:`~flexval.validation.sweep.columns.Columns`) or numpy arrays and return plain dicts;
+:func:`rounded` turns them into what the summary writes
 (:data:`SIGNIFICANT` significant digits, None for an undefined value: never a NaN).
 """
 
@@ -40,6 +41,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from .columns import Columns
 
 PERCENTILES = (1.0, 50.0, 99.0)
 """The percentiles reported (percent)."""
@@ -71,56 +74,6 @@ def target_columns(path: Any) -> dict[str, float]:
         "target_dy": float(path.dy[-1]),
         "target_rotation": float(path.rotation[-1]),
     }
-
-
-class Columns:
-    """A sweep's rows read as columns, each column once: the float columns as arrays (NaN
-    for a missing or non-finite value), whether each run reached full load, and the rows of
-    each model and load case as index arrays.
-
-    The distributions of a study take a handful of columns over every row, several times
-    each (outputs, errors, histograms); read row by row, a 100,000-point sweep's study costs
-    seconds of the driver's time after the workers are done.
-    """
-
-    def __init__(self, rows: Sequence[dict]):
-        self._rows = rows
-        self._floats: dict[str, np.ndarray] = {}
-        self._ok: np.ndarray | None = None
-        self._groups: dict[tuple[Any, Any], np.ndarray] | None = None
-
-    def floats(self, column: str) -> np.ndarray:
-        """The column as floats, NaN where a row has no finite value."""
-        if column not in self._floats:
-            values = np.array(
-                [np.nan if (v := r.get(column)) is None else v for r in self._rows], dtype=float
-            )
-            values[~np.isfinite(values)] = np.nan
-            self._floats[column] = values
-        return self._floats[column]
-
-    def ok(self) -> np.ndarray:
-        """Whether each row's run reached full load (status ``ok``)."""
-        if self._ok is None:
-            self._ok = np.array([r.get("status") == "ok" for r in self._rows], dtype=bool)
-        return self._ok
-
-    def units(self, cases: Sequence[str]) -> dict[str, str]:
-        """The load unit (``load_unit``: N or N mm) of each of ``cases`` some row gives."""
-        found: dict[str, str] = {}
-        for r in self._rows:
-            if r.get("load_case") in cases and r.get("load_unit"):
-                found.setdefault(r["load_case"], r["load_unit"])
-        return found
-
-    def rows_of(self, model: str, case: str) -> np.ndarray:
-        """The indices of the rows of ``model`` under ``case``, in row order."""
-        if self._groups is None:
-            found: dict[tuple[Any, Any], list[int]] = {}
-            for k, r in enumerate(self._rows):
-                found.setdefault((r.get("model"), r.get("load_case")), []).append(k)
-            self._groups = {key: np.array(v, dtype=np.int64) for key, v in found.items()}
-        return self._groups.get((model, case), np.zeros(0, dtype=np.int64))
 
 
 @dataclass(frozen=True)
@@ -201,7 +154,10 @@ def distribution(values: Iterable[float | None] | np.ndarray) -> dict[str, Any]:
         :data:`PERCENTILE_METHOD`), in the values' unit; each None where it is undefined
         (no value; the standard deviation of fewer than two).
     """
-    a = np.array([np.nan if v is None else v for v in values], dtype=float).ravel()
+    if isinstance(values, np.ndarray) and values.dtype.kind == "f":
+        a = values.ravel()
+    else:
+        a = np.array([np.nan if v is None else v for v in values], dtype=float).ravel()
     a = a[np.isfinite(a)]
     out: dict[str, Any] = {"n": int(a.size)}
     if a.size == 0:
@@ -223,7 +179,7 @@ def samples(
 
     Rows of other models or cases, and rows of invalid points (model ``-``), are left out.
     """
-    table = rows if isinstance(rows, Columns) else Columns(rows)
+    table = Columns.of(rows)
     values = quantity.values(table)
     out = {}
     for m in models:
@@ -266,7 +222,7 @@ def study(
         load case's ``load_unit``, N or N mm, in ``"units"`` per case).
     """
     everyone = [reference, *models]
-    table = rows if isinstance(rows, Columns) else Columns(rows)
+    table = Columns.of(rows)
     units = table.units(cases)
 
     def section(qs: Sequence[Quantity], who: Sequence[str]) -> dict[str, Any]:

@@ -19,11 +19,11 @@ from typing import Any
 import numpy as np
 
 from ..outputs import write_figure, write_json
+from .columns import Columns
 from .spec import Sweep
 from .tolerance import (
     ERRORS,
     OUTPUTS,
-    Columns,
     Quantity,
     recorded,
     rounded,
@@ -164,7 +164,7 @@ def histogram(
 def write_tolerance(sweep: Sweep, rows: list[dict], out: Path) -> list[Path]:
     """Write ``tolerance.json`` and the histograms of the quantities some row carries into
     ``out``; the written paths."""
-    table = Columns(rows)  # the study and the histograms read the same columns
+    table = Columns.of(rows)  # the study and the histograms read the same columns
     data = sweep_study(sweep, table)
     written = [write_json(out / JSON_NAME, rounded(data))]
     kinds = {q.name: q for q in OUTPUTS + ERRORS}
