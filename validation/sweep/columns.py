@@ -15,10 +15,13 @@ Units: those of each column (see :mod:`flexval.validation.sweep.store`).
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
 import pyarrow as pa
+
+Rows: TypeAlias = "Columns | Sequence[dict]"
+"""A sweep's rows: as dicts, or as :class:`Columns` (what every consumer of rows takes)."""
 
 FEW = 64
 """Most rows :meth:`Columns.take` slices one by one: a take gathers every column of a table
@@ -44,7 +47,7 @@ class Columns(Sequence):
         self._groups: dict[tuple[Any, Any], np.ndarray] | None = None
 
     @classmethod
-    def of(cls, rows: Columns | pa.Table | Sequence[dict]) -> Columns:
+    def of(cls, rows: Rows | pa.Table) -> Columns:
         """``rows`` as Columns (the same object if it is one already)."""
         return rows if isinstance(rows, Columns) else cls(rows)
 

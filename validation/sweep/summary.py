@@ -21,14 +21,13 @@ parameters in their field's unit.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from pathlib import Path
-from typing import TypeAlias
 
 import numpy as np
 
 from ..outputs import save_figure, write_text
-from .columns import Columns
+from .columns import Columns, Rows
 from .spec import Sweep
 from .store import PARAM_PREFIX
 from .tolerancefiles import FILES as TOLERANCE_FILES
@@ -40,8 +39,6 @@ THRESHOLDS = (1.0, 5.0)
 MAX_LISTED = 30
 """Failures and invalid points listed by name in the summary (the rest are counted)."""
 
-Rows: TypeAlias = "Columns | Sequence[dict]"
-"""A sweep's rows: as dicts, or as :class:`~flexval.validation.sweep.columns.Columns`."""
 RowValue = Callable[[Columns], np.ndarray]
 """A value of every row (percent), NaN where a row has none."""
 

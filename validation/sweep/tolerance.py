@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from .columns import Columns
+from .columns import Columns, Rows
 
 PERCENTILES = (1.0, 50.0, 99.0)
 """The percentiles reported (percent)."""
@@ -170,7 +170,7 @@ def distribution(values: Iterable[float | None] | np.ndarray) -> dict[str, Any]:
 
 
 def samples(
-    rows: Sequence[dict] | Columns,
+    rows: Rows,
     models: Sequence[str],
     cases: Sequence[str],
     quantity: Quantity,
@@ -191,7 +191,7 @@ def samples(
 
 
 def study(
-    rows: Sequence[dict] | Columns,
+    rows: Rows,
     reference: str,
     models: Sequence[str],
     cases: Sequence[str],

@@ -19,17 +19,9 @@ from typing import Any
 import numpy as np
 
 from ..outputs import write_figure, write_json
-from .columns import Columns
+from .columns import Columns, Rows
 from .spec import Sweep
-from .tolerance import (
-    ERRORS,
-    OUTPUTS,
-    Quantity,
-    recorded,
-    rounded,
-    samples,
-    study,
-)
+from .tolerance import ERRORS, OUTPUTS, Quantity, recorded, rounded, samples, study
 
 JSON_NAME = "tolerance.json"
 FILES = (JSON_NAME,) + tuple(f"tolerance_{q.name}.png" for q in OUTPUTS + ERRORS)
@@ -63,7 +55,7 @@ def _quantities(sweep: Sweep, kinds: tuple[Quantity, ...]) -> tuple[Quantity, ..
     )
 
 
-def sweep_study(sweep: Sweep, rows: list[dict] | Columns) -> dict[str, Any]:
+def sweep_study(sweep: Sweep, rows: Rows) -> dict[str, Any]:
     """The tolerance study of ``sweep``'s rows (unrounded), with the sweep's name, reference,
     load cases and random axes."""
     data = study(
@@ -101,7 +93,7 @@ def bins(values: np.ndarray) -> int | np.ndarray:
 
 
 def histogram(
-    rows: list[dict] | Columns,
+    rows: Rows,
     quantity: Quantity,
     entry: dict[str, Any],
     cases: tuple[str, ...],
@@ -161,7 +153,7 @@ def histogram(
     return write_figure(fig, path, dpi=90)
 
 
-def write_tolerance(sweep: Sweep, rows: list[dict], out: Path) -> list[Path]:
+def write_tolerance(sweep: Sweep, rows: Rows, out: Path) -> list[Path]:
     """Write ``tolerance.json`` and the histograms of the quantities some row carries into
     ``out``; the written paths."""
     table = Columns.of(rows)  # the study and the histograms read the same columns
@@ -175,7 +167,7 @@ def write_tolerance(sweep: Sweep, rows: list[dict], out: Path) -> list[Path]:
     return written
 
 
-def summary_lines(sweep: Sweep, rows: list[dict]) -> list[str]:
+def summary_lines(sweep: Sweep, rows: Rows) -> list[str]:
     """The summary's Markdown section of the tolerance study (empty if ``sweep`` is not one)."""
     if not is_tolerance(sweep):
         return []
