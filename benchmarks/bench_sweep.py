@@ -64,7 +64,13 @@ import time
 
 from distributed import Client, get_task_stream
 
-from flexval.validation.sweep import local_cluster, parse_sweep, results_store, run_sweep
+from flexval.validation.sweep import (
+    local_cluster,
+    parse_sweep,
+    results_store,
+    run_sweep,
+    sweep_models,
+)
 from flexval.validation.sweep.engine import auto_batch, chunks, task_info
 from flexval.validation.sweep.tasks import PointBlock, SweepJob, model_task, reference_task
 
@@ -164,7 +170,7 @@ def on_dask(sweep, workers: int) -> tuple[float, int, int, float, float]:
     LocalCluster."""
     out = tempfile.mkdtemp(prefix="bench_sweep_")
     try:
-        with local_cluster(workers) as cluster, Client(cluster) as client:
+        with local_cluster(workers, sweep_models(sweep)) as cluster, Client(cluster) as client:
             client.wait_for_workers(workers)
             cpu = time.process_time()
             with get_task_stream(client) as stream:
@@ -271,7 +277,7 @@ def tolerance_once(path: str, workers: int, points: int | None = None) -> dict:
         split = {}
         sweep = load_file(path, points)
         split["load"] = time.perf_counter() - wall
-        cluster = local_cluster(workers)
+        cluster = local_cluster(workers, sweep_models(sweep))
         try:
             with Client(cluster) as client:
                 client.wait_for_workers(workers)

@@ -59,6 +59,7 @@ import scipy.sparse as sp
 
 from flexval.geometry import LoadCase, Mechanism, SceneError
 
+from .allocator import keep_freed_memory
 from .blocktangent import BlockLayout, BlockMaps, BlockTangent, block_maps
 from .connector import Connector
 from .core import SolverError, SolverSettings, System, case_loads
@@ -66,7 +67,8 @@ from .linearbatch import linear_responses
 from .loadpath import LoadPath
 from .loads import Loads
 from .newton import BatchNewtonResult, FixedLoad, StepProblem, solve_batch
-from .recorder import PathRecorder, path_peaks
+from .recorder import STACK_FROM, PathRecorder, path_peaks, stack_peaks
+from .sections import SectionForces
 from .tangent import ROUND_OFF
 from .tracer import Counters, LoadControl, PathPoint, Solve, TraceFailure, Verdict, trace
 
@@ -994,6 +996,7 @@ def trace_batch(
         paths' seconds add up to the whole), ``stats["batch"]`` the number
         of copies its last batch recorded.
     """
+    keep_freed_memory()
     distinct = {id(case): case for case in cases}.values()  # each case once
     factors = [case.factors(levels) for case in distinct]
     if any(not np.array_equal(f, factors[0]) for f in factors):
@@ -1092,38 +1095,58 @@ def record_batch(
 
     The validity monitor and the section forces take one pass per group of
     the batch's connectors for every copy and level at once
-    (:meth:`~flexval.reducedmodels.connector.ConnectorGroup.path_end_pass`),
+    (:meth:`~flexval.reducedmodels.connector.ConnectorGroup.path_end_stacks`),
     as :func:`~flexval.reducedmodels.recorder.path_end_pass` takes one per
-    group of a copy; reasons and stresses then go to each copy in its own
-    connectors' order.
+    group of a copy; the stresses of connectors stacked alike come from
+    their stack (:func:`~flexval.reducedmodels.recorder.stack_peaks`), the
+    others' from :func:`~flexval.reducedmodels.recorder.path_peaks`; reasons
+    and stresses then go to each copy in its own connectors' order.
     """
     if not kept:
         return []
     states = np.array([p.state for p in points])
     position = {k: j for j, k in enumerate(kept)}
     reasons: dict[int, list[list[str]]] = {}  # of the copies with any, per level
-    stressed = []  # (copy's place in kept, connector's index in its copy, name)
-    entries = []  # their (forces, section)
+    peaks: list[list] = [[] for _ in kept]  # per copy: (connector's index in it, name, peaks)
+    stressed = []  # (copy's place in kept, connector's index in its copy, name) of entries
+    entries = []  # their (forces, section), whose peaks path_peaks finds
     sections = batch.copy_sections()
     for (group, run), coordinates in zip(batch.groups, batch.group_coordinates(states)):
-        verdicts, stacked = group.path_end_pass(coordinates)
-        for (k, index), c, per_level, found in zip(
-            batch.origin[run], group.connectors, verdicts, stacked
-        ):
-            j = position.get(k)
-            if j is None:
+        verdicts, stacks = group.path_end_stacks(coordinates)
+        origin, connectors = batch.origin[run], group.connectors
+        clean = None  # a verdict without reasons (groups share one among their connectors)
+        for (k, _), c, per_level in zip(origin, connectors, verdicts):
+            if per_level is clean:
                 continue
-            if any(per_level):
-                into_levels = reasons.setdefault(j, [[] for _ in points])
+            if not any(per_level):
+                clean = per_level
+            elif k in position:
+                into_levels = reasons.setdefault(position[k], [[] for _ in points])
                 for into, why in zip(into_levels, per_level):
                     if why:
                         into.extend(f"{c.name}: {w}" for w in why)
-            if found is not None:
-                section = sections[k].get(c.name)
+        for stack in stacks:
+            rows, chosen, where = [], [], []  # the stack's rows with a section, of kept copies
+            for row, member in enumerate(stack.members):
+                k, index = origin[member]
+                j = position.get(k)
+                if j is None:
+                    continue
+                name = connectors[member].name
+                section = sections[k].get(name)
                 if section is not None:
-                    stressed.append((j, index, c.name))
-                    entries.append((found, section))
-    peaks: list[list] = [[] for _ in kept]
+                    rows.append(row), chosen.append(section), where.append((j, index, name))
+            if len(rows) >= STACK_FROM and all(s.profile is None for s in chosen):
+                if len(rows) < len(stack.members):
+                    stack = stack._replace(axial=stack.axial[rows], moment=stack.moment[rows])
+                for (j, index, name), found in zip(where, stack_peaks(stack, chosen)):
+                    peaks[j].append((index, name, found))
+                continue
+            for row, section, at in zip(rows, chosen, where):
+                stressed.append(at)
+                entries.append(
+                    (SectionForces(stack.at, stack.axial[row], stack.moment[row]), section)
+                )
     for (j, index, name), found in zip(stressed, path_peaks(entries)):
         peaks[j].append((index, name, found))
     no_reasons = [[] for _ in points]
@@ -1227,6 +1250,7 @@ def run_batch(
     """
     from .catalogue import LINEAR
 
+    keep_freed_memory()
     family = spec.model_family
     results: list[LoadPath | Exception | None] = [None] * len(mechanisms)
 

@@ -212,6 +212,11 @@ class Family:
     exclusive : tuple of (str, str)
         Pairs of options (a, b) where b means nothing once a is set: an id
         giving a a value other than its default and naming b is refused.
+    load : callable, optional
+        ``load(spec)``: imports the code a run of ``spec`` executes and loads
+        its compiled kernels, the per-process costs a first run pays (a
+        sweep's workers are forked with them paid:
+        :mod:`flexval.validation.sweep.preload`). None: nothing to load ahead.
     """
 
     name: str
@@ -224,6 +229,7 @@ class Family:
     cost: Callable[..., Cost] | None = None
     connectors: Callable[..., Any] | None = None
     exclusive: tuple[tuple[str, str], ...] = ()
+    load: Callable[[ModelSpec], None] | None = None
 
     def __post_init__(self) -> None:
         unknown = set(self.capabilities) - CAPABILITIES

@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     import scipy.sparse as sp
 
     from .inertia import MassPoints
-    from .sections import SectionForces
+    from .sections import ForceStack, SectionForces
 
 LocalState = tuple[np.ndarray, np.ndarray, np.ndarray]
 Reasons = Sequence[Sequence[str]]
@@ -281,6 +281,12 @@ class Connector(ABC):
         )
 
 
+def _same_arrays(a: tuple | None, b: tuple | None) -> bool:
+    """Whether two Hessian patterns are the same arrays (a pattern returned as a new tuple
+    of a connector's fixed rows and columns at each call)."""
+    return a is not None and b is not None and a[0] is b[0] and a[1] is b[1]
+
+
 class ConnectorGroup:
     """Connectors evaluated together: their energies summed, gradients and Hessians concatenated.
 
@@ -327,7 +333,12 @@ class ConnectorGroup:
         """
         patterns = [c.hessian_pattern() for c in self.connectors]
         sizes = [6 + c.n_internal for c in self.connectors]
-        if patterns and all(p is patterns[0] for p in patterns) and len(set(sizes)) == 1:
+        first = patterns[0] if patterns else None
+        if (
+            patterns
+            and all(p is first or _same_arrays(p, first) for p in patterns)
+            and len(set(sizes)) == 1
+        ):
             # connectors alike (a batch's copies): one pattern, shifted by each one's start
             m, pattern = sizes[0], patterns[0]
             if pattern is None:
@@ -425,6 +436,26 @@ class ConnectorGroup:
         """
         levels = self.local_levels(coordinates)
         return self.path_validity(levels), self.path_section_forces(levels)
+
+    def path_end_stacks(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[ForceStack]]:
+        """:meth:`path_end_pass` with the section forces as stacks of connectors whose
+        stations are the same (:class:`~flexval.reducedmodels.sections.ForceStack`).
+
+        What a batch's end pass records
+        (:func:`flexval.reducedmodels.batch.record_batch`): a group whose copies'
+        connectors share their stations (``prbm``'s chains, DCMM's sub-arcs) stacks
+        them as its kernels give them, without a SectionForces per connector.
+        Default: each connector with forces a stack of its own.
+        """
+        from .sections import ForceStack
+
+        verdicts, forces = self.path_end_pass(coordinates)
+        stacks = [
+            ForceStack([j], f.at, f.axial[None], f.moment[None])
+            for j, f in enumerate(forces)
+            if f is not None
+        ]
+        return verdicts, stacks
 
     def local_levels(self, coordinates: np.ndarray) -> list[list[LocalState]]:
         """The connectors' local states at each level from their coordinates laid

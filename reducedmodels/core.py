@@ -681,13 +681,10 @@ def connector_groups(connectors: Sequence[Connector]) -> list[tuple[ConnectorGro
     Runs keep the connectors' order, so the concatenated gradients and
     Hessians are the same as evaluated one by one.
     """
-    groups, start = [], 0
-    for stop in range(1, len(connectors) + 1):
-        if stop == len(connectors) or type(connectors[stop]) is not type(connectors[start]):
-            run = slice(start, stop)
-            groups.append((type(connectors[start]).group(connectors[run]), run))
-            start = stop
-    return groups
+    kinds = [type(c) for c in connectors]
+    starts = [0, *(k for k in range(1, len(kinds)) if kinds[k] is not kinds[k - 1])]
+    runs = [slice(a, b) for a, b in zip(starts, [*starts[1:], len(kinds)]) if b > a]
+    return [(kinds[run.start].group(connectors[run]), run) for run in runs]
 
 
 def hermite_weights(factors: Sequence[float], factor: float) -> tuple[list[float], float]:

@@ -36,7 +36,7 @@ from flexval.geometry.kinematics import rotate_xy
 from .connector import Connector, ConnectorGroup, Reasons
 from .geometrycache import per_centre_line
 from .inertia import MassPoints, line_density, rigid_pieces
-from .sections import SectionForces
+from .sections import ForceStack, SectionForces, column_stacks
 from .subarcs import sub_arcs
 from .validity import (
     MAX_RELATIVE_ROTATION,
@@ -645,6 +645,13 @@ class DcmmGroup(ConnectorGroup):
         poses = coordinates[:, self._tables.pose_order].reshape(len(coordinates), -1, 3)
         return (self._verdicts(poses, lambda: self.local_levels(coordinates)), self._forces(poses))
 
+    def path_end_stacks(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[ForceStack]]:
+        """:meth:`path_end_pass` with the connectors of the same stations stacked (a batch's
+        copies: :meth:`ConnectorGroup.path_end_stacks`)."""
+        poses = coordinates[:, self._tables.pose_order].reshape(len(coordinates), -1, 3)
+        verdicts = self._verdicts(poses, lambda: self.local_levels(coordinates))
+        return verdicts, self._stacks(*self._statics(poses))
+
     def path_validity(self, levels) -> list[Reasons]:
         """Each connector's :meth:`DcmmConnector.validity` at each level, screened in one pass.
 
@@ -690,21 +697,24 @@ class DcmmGroup(ConnectorGroup):
 
     def _forces(self, poses: np.ndarray) -> list[SectionForces]:
         """:meth:`path_section_forces` from the stacked poses (k, bodies, 3)."""
+        return self._split(*self._statics(poses))
+
+    def _statics(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Every sample's normal force (N) and bending moment (N mm), (k, samples), from the
+        stacked poses (k, bodies, 3): each sub-arc's own wrench carried by statics."""
         stack, tables = self.stack(), self._tables
         kernels = dcmm_kernels()
         wrenches = kernels.sub_arc_wrenches(poses, tables.sub_arc_body, stack.parameters)
-        return self._split(
-            *kernels.sample_statics(
-                poses,
-                wrenches,
-                tables.sub_arc,
-                tables.follow,
-                tables.lead,
-                tables.w,
-                stack.rel,
-                stack.tangent,
-                tables.order,
-            )
+        return kernels.sample_statics(
+            poses,
+            wrenches,
+            tables.sub_arc,
+            tables.follow,
+            tables.lead,
+            tables.w,
+            stack.rel,
+            stack.tangent,
+            tables.order,
         )
 
     def section_forces(self, states, gradients) -> list[SectionForces]:
@@ -730,9 +740,24 @@ class DcmmGroup(ConnectorGroup):
         return self._split(axial[0], moment[0])
 
     def _split(self, axial: np.ndarray, moment: np.ndarray) -> list[SectionForces]:
-        """Each connector's section forces from the stack's (..., samples) in station order."""
+        """Each connector's section forces from the stack's (..., samples) in station order
+        (slices: a path's or a state's few connectors; a batch's take :meth:`_stacks`)."""
         bounds = self._tables.sample_start
         return [
             SectionForces(c._layout.stations, axial[..., start:stop], moment[..., start:stop])
             for c, start, stop in zip(self.connectors, bounds, bounds[1:])
         ]
+
+    def _stacks(self, axial: np.ndarray, moment: np.ndarray) -> list[ForceStack]:
+        """The connectors' section forces from the stack's (k, samples), stacked by stations
+        (:func:`~flexval.reducedmodels.sections.column_stacks`): connector j's samples are
+        the columns ``sample_start[j]`` on, in station order."""
+        of_layout: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # a batch's copies share one
+        stations = []
+        for c in self.connectors:
+            found = of_layout.get(id(c._layout))
+            if found is None:
+                at = c._layout.stations
+                found = of_layout[id(c._layout)] = (at, np.arange(at.size))
+            stations.append(found)
+        return column_stacks(axial, moment, stations, np.asarray(self._tables.sample_start[:-1]))

@@ -98,15 +98,33 @@ def _load_solver(spec: ModelSpec) -> None:
     limit_threads()
 
 
+def _load_systems(spec: ModelSpec) -> None:
+    """:func:`_load_solver`, and the compiled kernels that order a System's tangent and
+    factorise a batch's blocks (``Family.load`` of the families traced by Newton)."""
+    _load_solver(spec)
+    from .blocktangent import ldl_kernels
+    from .tangent import order_kernels
+
+    order_kernels()
+    ldl_kernels()
+
+
+def _load_beams(spec: ModelSpec) -> None:
+    """:func:`_load_systems` and the compiled beam and band kernels (the beams' ``Family.load``)."""
+    from .beam import CHAIN_HALF_BANDWIDTH, beam_kernels
+    from .tangent import band_kernels
+
+    beam_kernels()
+    band_kernels(CHAIN_HALF_BANDWIDTH)
+    _load_systems(spec)
+
+
 def _trace_nonlinear(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
     """:func:`flexval.reducedmodels.models.trace_nonlinear` (imported here: see the module text).
 
     The System it builds orders its tangent with compiled kernels, loaded here too.
     """
-    _load_solver(spec)
-    from .tangent import order_kernels
-
-    order_kernels()
+    _load_systems(spec)
     from .models import trace_nonlinear
 
     return trace_nonlinear(mechanism, spec, *args, **kwargs)
@@ -118,12 +136,10 @@ def _trace_beams(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
     Loading them (numba's import and machine code) is a per-process cost
     like importing scipy, not part of the model's time.
     """
-    from .beam import CHAIN_HALF_BANDWIDTH, beam_kernels
-    from .tangent import band_kernels
+    _load_beams(spec)
+    from .models import trace_nonlinear
 
-    beam_kernels()
-    band_kernels(CHAIN_HALF_BANDWIDTH)
-    return _trace_nonlinear(mechanism, spec, *args, **kwargs)
+    return trace_nonlinear(mechanism, spec, *args, **kwargs)
 
 
 def _trace_ee(
@@ -198,6 +214,7 @@ BEAM = register(
         _system_of(_beam),
         connectors=_connectors_of(_beam),
         exclusive=WIDTH_EXCLUDES,
+        load=_load_beams,
     )
 )
 
@@ -212,6 +229,7 @@ PRBM = register(
         _system_of(_prbm),
         connectors=_connectors_of(_prbm),
         exclusive=WIDTH_EXCLUDES,
+        load=_load_systems,
     )
 )
 
@@ -227,6 +245,7 @@ DCMM = register(
         _system_of(_dcmm),
         connectors=_connectors_of(_dcmm),
         exclusive=WIDTH_EXCLUDES,
+        load=_load_systems,
     )
 )
 
@@ -241,5 +260,6 @@ EE = register(
         _system_of(_ee),
         connectors=_connectors_of(_ee),
         exclusive=WIDTH_EXCLUDES,
+        load=_load_solver,
     )
 )

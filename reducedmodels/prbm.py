@@ -122,7 +122,7 @@ from flexval.geometry.shapes import Shape, arc_semi_axes
 from .connector import Connector, ConnectorGroup, Reasons
 from .geometrycache import GEOMETRY_CACHE, per_centre_line
 from .inertia import MassPoints, line_density, rigid_pieces
-from .sections import SectionForces, polyline_fractions
+from .sections import ForceStack, SectionForces, column_stacks, polyline_fractions
 from .spline import NotAKnotSpline
 from .validity import MAX_STRAIN, SCREEN_MARGIN, rotation_reasons, stretch_reasons
 
@@ -667,8 +667,26 @@ class PrbmGroup(ConnectorGroup):
 
     def __init__(self, connectors):
         super().__init__(connectors)
-        self._parameters = np.array([c._parameters for c in self.connectors])
-        self._end_rel = np.array([(*c._end_rel_a, *c._end_rel_b) for c in self.connectors])
+        rows: dict[int, int] = {}  # each distinct connector's row (a batch's copies share theirs)
+        first = []
+        for c in self.connectors:
+            if id(c._parameters) not in rows:
+                rows[id(c._parameters)] = len(first)
+                first.append(c)
+        take = (  # every connector's row; None: each its own (a path's few connectors)
+            None
+            if len(first) == len(self.connectors)
+            else np.array([rows[id(c._parameters)] for c in self.connectors], np.intp)
+        )
+
+        def table(values: list) -> np.ndarray:
+            return np.array(values) if take is None else np.array(values)[take]
+
+        self._parameters = table([c._parameters for c in first])
+        self._end_rel = table([(*c._end_rel_a, *c._end_rel_b) for c in first])
+        #: each connector's length (mm) and fitted end rotation (rad), for the validity screen
+        self._lengths = table([c.length for c in first])
+        self._fitted = table([c._fitted_rotation for c in first])
 
     def assembler(
         self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
@@ -709,15 +727,31 @@ class PrbmGroup(ConnectorGroup):
 
     def path_end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[SectionForces]]:
         """:meth:`path_validity` and :meth:`path_section_forces` on the stacked
-        coordinates as they are.
+        coordinates as they are (:meth:`_end_pass`), each connector's forces apart."""
+        verdicts, axial, moment = self._end_pass(coordinates)
+        return verdicts, self._split(axial, moment)
+
+    def path_end_stacks(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[ForceStack]]:
+        """:meth:`path_end_pass` with the chains of the same stations stacked (a batch's
+        copies: :meth:`ConnectorGroup.path_end_stacks`)."""
+        verdicts, axial, moment = self._end_pass(coordinates)
+        return verdicts, self._stacks(axial, moment)
+
+    def _end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], np.ndarray, np.ndarray]:
+        """The verdicts, and the kernel's normal forces and moments (k, c, 8), of the levels.
 
         ``coordinates`` (k, 10 c): the connectors' local coordinates at each
         level (:meth:`ConnectorGroup.path_end_pass`), which are this group's
-        (k, c, 10) table; local states are made only for the pairs the screen
-        sends to the scalar check.
+        (k, c, 10) table; the polylines are computed once for the validity
+        screen and the statics, and local states are made only for the pairs
+        the screen sends to the scalar check.
         """
         local = coordinates.reshape(len(coordinates), len(self.connectors), 10)
-        return (self._verdicts(local, lambda: self.local_levels(coordinates)), self._forces(local))
+        kernels = prbm_kernels()
+        lines = kernels.chain_polylines(local, self._parameters, self._end_rel)
+        verdicts = self._verdicts(local, lambda: self.local_levels(coordinates), lines)
+        wrenches = kernels.chain_wrenches(local, self._parameters)
+        return (verdicts, *kernels.line_statics(local, lines, wrenches))
 
     def path_validity(self, levels) -> list[Reasons]:
         """Each connector's :meth:`PrbmConnector.validity` at each level, screened in one pass.
@@ -728,26 +762,31 @@ class PrbmGroup(ConnectorGroup):
         """
         return self._verdicts(self._local(levels), lambda: levels)
 
-    def _verdicts(self, local: np.ndarray, levels_of: Callable[[], list]) -> list[Reasons]:
+    def _verdicts(
+        self, local: np.ndarray, levels_of: Callable[[], list], lines: np.ndarray | None = None
+    ) -> list[Reasons]:
         """:meth:`path_validity` from the (k, c, 10) table; ``levels_of()`` gives
-        the local states."""
-        lines = prbm_kernels().chain_polylines(local, self._parameters, self._end_rel)
+        the local states, ``lines`` the polylines if computed already."""
+        if lines is None:
+            lines = prbm_kernels().chain_polylines(local, self._parameters, self._end_rel)
         chord = lines[:, :, 4] - lines[:, :, 0]
         turn = np.abs(local[..., 5] - local[..., 2])
-        length = np.array([c.length for c in self.connectors])
-        fitted = np.array([c._fitted_rotation for c in self.connectors])
         near = (
-            (np.hypot(chord[..., 0], chord[..., 1]) / length - 1.0 > MAX_STRAIN - SCREEN_MARGIN)
-            | (turn > fitted - SCREEN_MARGIN)
-        ).T.tolist()
-        levels = levels_of() if any(map(any, near)) else [None] * len(local)
+            np.hypot(chord[..., 0], chord[..., 1]) / self._lengths - 1.0
+            > MAX_STRAIN - SCREEN_MARGIN
+        ) | (turn > self._fitted - SCREEN_MARGIN)
         valid = ((),) * len(local)  # no reason at any level: one shared, immutable
-        return [
-            [c.validity(*states[j]) if flag else [] for states, flag in zip(levels, flags)]
-            if any(flags)
-            else valid
-            for j, (c, flags) in enumerate(zip(self.connectors, near))
-        ]
+        out: list[Reasons] = [valid] * len(self.connectors)
+        screened = np.flatnonzero(near.any(axis=0)).tolist()  # connectors near a limit somewhere
+        if screened:
+            levels = levels_of()
+            for j in screened:
+                c = self.connectors[j]
+                out[j] = [
+                    c.validity(*states[j]) if flag else []
+                    for states, flag in zip(levels, near[:, j].tolist())
+                ]
+        return out
 
     def path_section_forces(self, levels) -> list[SectionForces]:
         """Each connector's :meth:`PrbmConnector.section_forces` at k levels, stacked (k, m).
@@ -776,22 +815,25 @@ class PrbmGroup(ConnectorGroup):
         return [SectionForces(f.at, f.axial[0], f.moment[0]) for f in self._split(axial, moment)]
 
     def _split(self, axial: np.ndarray, moment: np.ndarray) -> list[SectionForces]:
-        """Each connector's section forces (k, m) from the kernel's (k, c, 8), at its stations.
+        """Each connector's section forces (k, m) from the kernel's (k, c, 8), at its stations
+        (a path's few connectors; a batch's are stacked: :meth:`_stacks`)."""
+        return [
+            SectionForces(at, axial[:, j, where], moment[:, j, where])
+            for j, (at, where) in enumerate(c._stations for c in self.connectors)
+        ]
+
+    def _stacks(self, axial: np.ndarray, moment: np.ndarray) -> list[ForceStack]:
+        """The connectors' section forces from the kernel's (k, c, 8), stacked by stations
+        (:func:`~flexval.reducedmodels.sections.column_stacks`).
 
         A connector's stations are both ends of each polyline segment, in
         arc-length order from the flexure's first end; a segment of zero
         length at rest (two points of one rigid member that coincide) has none.
         """
-        alike: dict[bytes, list[int]] = {}  # connectors with the same stations (a batch's copies)
-        for j, c in enumerate(self.connectors):
-            alike.setdefault(c._stations[1].tobytes(), []).append(j)
-        out: list = [None] * len(self.connectors)
-        for members in alike.values():
-            where = self.connectors[members[0]]._stations[1]
-            chains, places = np.asarray(members)[:, None], where[None, :]
-            axial_of, moment_of = axial[:, chains, places], moment[:, chains, places]  # (k, g, m)
-            for i, j in enumerate(members):
-                out[j] = SectionForces(
-                    self.connectors[j]._stations[0], axial_of[:, i], moment_of[:, i]
-                )
-        return out
+        width = axial.shape[2]
+        return column_stacks(
+            axial.reshape(len(axial), -1),
+            moment.reshape(len(moment), -1),
+            [c._stations for c in self.connectors],
+            width * np.arange(len(self.connectors)),
+        )

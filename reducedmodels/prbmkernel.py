@@ -186,7 +186,15 @@ def chain_statics(
     and N = t . F. Returns (k, c, 8) each; a segment of zero length (a
     joint on the flexure's end) has no axis and gives nan.
     """
-    lines = chain_polylines(local, parameters, end_rel)
+    return line_statics(local, chain_polylines(local, parameters, end_rel), wrenches)
+
+
+@kernel
+def line_statics(
+    local: np.ndarray, lines: np.ndarray, wrenches: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`chain_statics` along polylines computed already (``lines``: :func:`chain_polylines`'s,
+    (k, c, 5, 2) mm), so that the validity screen and the statics share them."""
     states, chains = local.shape[0], local.shape[1]
     axial = np.empty((states, chains, 8))
     moment = np.empty((states, chains, 8))
@@ -227,3 +235,4 @@ def warm_up() -> None:
     local = np.zeros((1, 1, COORDINATES))
     chain_wrenches(local, parameters)
     chain_statics(local, parameters, np.zeros((1, 4)), np.zeros((1, 1, 3)))
+    line_statics(local, np.zeros((1, 1, 5, 2)), np.zeros((1, 1, 3)))

@@ -24,7 +24,7 @@ from flexval.geometry import LoadCase, Section
 from .connector import Connector
 from .core import SolverError, System
 from .loadpath import LoadPath
-from .sections import SectionForces
+from .sections import ForceStack, SectionForces
 from .tracer import LoadControl, PathPoint, TraceFailure, trace
 
 _OBSERVERS: list[Callable[[LoadPath], None]] = []
@@ -212,8 +212,16 @@ class PathRecorder:
         """:meth:`judged` with each flexure's stresses found already (a batch's end pass for
         this copy): (flexure name, :func:`path_peaks` entry), in the connectors' order."""
         self._verdicts(verdicts)
-        for name, found in peaks:
-            append_stress(self.path, name, *found)
+        lp = self.path
+        if lp.peak_stress is None and peaks:  # a path's first stresses: its lists as found
+            lp.peak_stress = {name: found[0] for name, found in peaks}
+            lp.peak_stress_at = {name: found[1] for name, found in peaks}
+            lp.stress_profile = {
+                name: {"at": found[2], "stress": found[3]} for name, found in peaks
+            }
+        else:
+            for name, found in peaks:
+                append_stress(lp, name, *found)
         self.states = []
 
     def _verdicts(self, verdicts: Sequence[list[str]]) -> None:
@@ -439,17 +447,42 @@ def _stacked_stress(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The outer-fibre stresses (c, ..., m) (MPa) and stations (c, m) of uniform sections'
     forces of one shape, stacked; ``constants`` keeps each section's h, A and I by id."""
-    for _, s in chosen:
+    at = np.array([f.at for f, _ in chosen])
+    return (
+        _stress_of_stack(
+            at,
+            np.array([f.axial for f, _ in chosen]),  # np.array of equal shapes: np.stack's copy,
+            np.array([f.moment for f, _ in chosen]),  # at a third the cost
+            [s for _, s in chosen],
+            constants,
+        ),
+        at,
+    )
+
+
+def _stress_of_stack(
+    at: np.ndarray,
+    axial: np.ndarray,
+    moment: np.ndarray,
+    sections: Sequence[Section],
+    constants: dict[int, tuple[float, float, float]],
+) -> np.ndarray:
+    """The outer-fibre stresses (c, ..., m) (MPa) of c uniform sections' stacked forces (N,
+    N mm): :meth:`SectionForces.fibre_stress` elementwise, each as alone; ``constants``
+    keeps each section's h, A and I by id."""
+    for s in sections:
         if id(s) not in constants:
             constants[id(s)] = (s.thickness, s.area, s.inertia)
-    values = np.array([constants[id(s)] for _, s in chosen], float)
-    ndim = chosen[0][0].axial.ndim
-    sections = _Sections(*(values[:, k].reshape(-1, *[1] * ndim) for k in range(3)))
-    at = np.array([f.at for f, _ in chosen])
-    stacked = SectionForces(  # np.array of equal shapes: np.stack's copy, at a third the cost
-        at, np.array([f.axial for f, _ in chosen]), np.array([f.moment for f, _ in chosen])
-    )
-    return stacked.fibre_stress(sections), at
+    values = np.array([constants[id(s)] for s in sections], float)
+    shape = (-1, *[1] * (axial.ndim - 1))
+    stacked = _Sections(*(values[:, k].reshape(shape) for k in range(3)))
+    return SectionForces(at, axial, moment).fibre_stress(stacked)
+
+
+def _unit_peaks(unit: np.ndarray, at: np.ndarray) -> list[Peaks]:
+    """:data:`Peaks` of stacked stresses ``unit`` (c, k, m) (MPa) at stations ``at`` (c, m)."""
+    places = np.take_along_axis(at, unit.argmax(axis=2), axis=1)
+    return list(zip(unit.max(axis=2).tolist(), places.tolist(), at.tolist(), unit[:, -1].tolist()))
 
 
 def path_peaks(entries: Sequence[tuple[SectionForces, Section]]) -> list[Peaks]:
@@ -473,10 +506,23 @@ def path_peaks(entries: Sequence[tuple[SectionForces, Section]]) -> list[Peaks]:
     for j in alone:
         out[j] = _path_peak(*entries[j])
     for members, unit, at in stacks:  # unit (c, k, m)
-        places = np.take_along_axis(at, unit.argmax(axis=2), axis=1)
-        found = zip(unit.max(axis=2).tolist(), places.tolist(), at.tolist(), unit[:, -1].tolist())
-        for j, peaks in zip(members, found):
+        for j, peaks in zip(members, _unit_peaks(unit, at)):
             out[j] = peaks
+    return out
+
+
+def stack_peaks(stack: ForceStack, sections: Sequence[Section]) -> list[Peaks]:
+    """:func:`path_peaks` of a stack's members (forces (g, k, m)) with uniform ``sections``
+    (one per member), in stacks of at most :data:`STACK_SIZE`: the same numbers, without a
+    :class:`SectionForces` per member."""
+    out: list[Peaks] = []
+    constants: dict[int, tuple[float, float, float]] = {}
+    for first in range(0, len(sections), STACK_SIZE):
+        chosen = slice(first, first + STACK_SIZE)
+        unit = _stress_of_stack(
+            stack.at, stack.axial[chosen], stack.moment[chosen], sections[chosen], constants
+        )
+        out += _unit_peaks(unit, np.broadcast_to(stack.at, (unit.shape[0], stack.at.size)))
     return out
 
 

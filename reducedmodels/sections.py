@@ -29,7 +29,9 @@ Units: mm, N, N mm, MPa.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -79,6 +81,71 @@ class SectionForces:
         sigma = self.fibre_stress(section)
         k = int(np.argmax(sigma))
         return float(sigma[k]), float(self.at[k])
+
+
+class ForceStack(NamedTuple):
+    """Section forces of several connectors of a group at the same stations, stacked.
+
+    What a group's end pass gives a batch's copies (whose flexures are
+    alike) without a :class:`SectionForces` per connector: their stresses
+    and peaks are then computed for the whole stack in a few array
+    operations (:func:`flexval.reducedmodels.recorder.stack_peaks`).
+    """
+
+    members: list[int]
+    """The connectors' indices in their group, one per row of the stack."""
+    at: np.ndarray
+    """(m,): the stations' arc-length fractions from the first end, shared by every member."""
+    axial: np.ndarray
+    """(g, k, m): normal force N at each of k levels and m stations of each member (N)."""
+    moment: np.ndarray
+    """(g, k, m): bending moment M (N mm), as :class:`SectionForces` says."""
+
+
+def column_stacks(
+    axial: np.ndarray,
+    moment: np.ndarray,
+    stations: Sequence[tuple[np.ndarray, np.ndarray] | None],
+    offsets: np.ndarray,
+) -> list[ForceStack]:
+    """Connectors' section forces read as columns of a group's arrays, stacked by stations.
+
+    Parameters
+    ----------
+    axial, moment : ndarray (k, S)
+        Normal force (N) and bending moment (N mm) at every station of every
+        connector of a group, at k levels (a group kernel's output).
+    stations : sequence of (at, base) or None
+        Per connector: its stations' fractions ``at`` (m,) and where their
+        forces are, the columns ``offsets[j] + base`` (``base`` (m,) of int);
+        None for a connector without forces. Connectors whose ``at`` and
+        ``base`` are equal (a batch's copies: read once per pair of objects)
+        share a stack, in their order.
+    offsets : ndarray of int
+        Each connector's first column.
+    """
+    by_object: dict[tuple[int, int], list[int]] = {}  # the copies of a connector share both
+    for j, entry in enumerate(stations):
+        if entry is not None:
+            by_object.setdefault((id(entry[0]), id(entry[1])), []).append(j)
+    alike: dict[tuple[bytes, bytes], list[int]] = {}
+    for members in by_object.values():
+        at, base = stations[members[0]]
+        alike.setdefault((at.tobytes(), base.tobytes()), []).extend(members)
+    stacks = []
+    for members in alike.values():
+        members.sort()
+        at, base = stations[members[0]]
+        columns = offsets[members][:, None] + base
+        stacks.append(
+            ForceStack(  # (g, k, m)
+                members,
+                at,
+                axial[:, columns].transpose(1, 0, 2),
+                moment[:, columns].transpose(1, 0, 2),
+            )
+        )
+    return stacks
 
 
 def statics_section_forces(

@@ -474,6 +474,72 @@ def test_stresses_of_many_flexures_at_once_are_each_flexures_alone():
     assert path_peaks(list(zip(paths, sections))[:3]) == path_peaks(list(zip(paths, sections)))[:3]
 
 
+def test_stacks_of_section_forces_hold_each_connectors_columns():
+    """column_stacks puts connectors of equal stations (equal arrays, whether the same objects
+    or not) in one stack, each member's rows its own columns; a connector without forces is in
+    none; stack_peaks gives what path_peaks gives each member alone, across STACK_SIZE."""
+    from flexval.reducedmodels.recorder import STACK_SIZE, path_peaks, stack_peaks
+    from flexval.reducedmodels.sections import SectionForces, column_stacks
+
+    rng = np.random.default_rng(3)
+    at_a, base_a = np.linspace(0.0, 1.0, 4), np.arange(4)
+    at_b, base_b = np.array([0.0, 0.5, 1.0]), np.array([2, 0, 1])  # columns out of order
+    kinds = [(at_a, base_a), (at_a.copy(), base_a.copy()), (at_b, base_b), None]
+    stations = [kinds[j % 4] for j in range(2 * STACK_SIZE + 9)]
+    offsets = 4 * np.arange(len(stations))
+    axial, moment = rng.normal(size=(2, 6, 4 * len(stations)))
+    stacks = column_stacks(axial, moment, stations, offsets)
+    assert sorted(len(s.members) for s in stacks) == [
+        sum(entry is kinds[2] for entry in stations),
+        sum(entry is not None and entry[0].size == 4 for entry in stations),
+    ]
+    for stack in stacks:
+        for row, j in enumerate(stack.members):
+            at, base = stations[j]
+            assert np.array_equal(stack.at, at)
+            assert np.array_equal(stack.axial[row], axial[:, offsets[j] + base])
+            assert np.array_equal(stack.moment[row], moment[:, offsets[j] + base])
+    stacked = sorted(j for stack in stacks for j in stack.members)
+    assert stacked == [j for j, entry in enumerate(stations) if entry is not None]
+    section = load_scene("open_chain").mechanism.flexures[0].section
+    for stack in stacks:
+        sections = [section.scaled(1.0 + 0.01 * j) for j in stack.members]
+        alone = path_peaks(
+            [
+                (SectionForces(stack.at, a, m), s)
+                for a, m, s in zip(stack.axial, stack.moment, sections)
+            ]
+        )
+        assert stack_peaks(stack, sections) == alone
+
+
+@pytest.mark.parametrize("model", ["prbm", "dcmm:2"])
+def test_a_groups_stacked_forces_are_its_connectors_own(model):
+    """A batch's group stacks its copies' section forces (path_end_stacks); each connector's
+    rows must be the forces that connector computes alone (Connector.path_section_forces),
+    copies with other sections included."""
+    mechanisms = variants("open_chain", "f+", [1.0, 1.02, 0.97], [1.0, 1.0, 1.0])[0]
+    copies = [*mechanisms, mechanisms[0], mechanisms[0]]
+    spec = parse_model(model)
+    batch = BatchSystem([build_system(m, spec) for m in copies])
+    rest = batch.initial_state()
+    rng = np.random.default_rng(5)
+    states = [rest + 1e-3 * rng.normal(size=rest.size) for _ in range(3)]
+    for (group, _), coordinates in zip(batch.groups, batch.group_coordinates(states)):
+        verdicts, stacks = group.path_end_stacks(coordinates)
+        levels = group.local_levels(coordinates)
+        stacked = 0
+        for stack in stacks:
+            for row, j in enumerate(stack.members):
+                own = group.connectors[j].path_section_forces([lv[j] for lv in levels])
+                assert np.array_equal(stack.at, own.at)
+                assert np.array_equal(stack.axial[row], own.axial)
+                assert np.array_equal(stack.moment[row], own.moment)
+                stacked += 1
+        assert stacked == len(group.connectors)
+        assert len(verdicts) == len(group.connectors)
+
+
 @pytest.mark.parametrize("scene", ["open_chain", "closed_chain"])
 @pytest.mark.parametrize("model", ["dcmm:1", "dcmm:3", "beam:4", "prbm"])
 def test_a_batch_numbers_copies_as_one_table_as_the_loop_over_its_connectors(scene, model):

@@ -511,3 +511,49 @@ def test_automatic_batches_keep_every_worker_fed(points, workers):
     assert 1 <= batch <= MAX_AUTO_BATCH
     tasks = -(-points // batch)
     assert tasks >= min(points, TASKS_PER_WORKER * workers) or batch == MAX_AUTO_BATCH
+
+
+PRELOAD_PROBE = """
+import os
+from distributed import Client
+from flexval.validation.sweep.engine import local_cluster
+from flexval.validation.sweep.preload import MODELS_ENV
+
+
+def probe(_):
+    from flexval.reducedmodels.dcmm import dcmm_kernels
+    from flexval.reducedmodels.prbm import prbm_kernels
+
+    return prbm_kernels.cache_info().currsize, dcmm_kernels.cache_info().currsize
+
+
+if __name__ == "__main__":
+    with local_cluster(1, ["prbm", "no-such-model"]) as cluster, Client(cluster) as client:
+        print(client.submit(probe, 0).result(), MODELS_ENV in os.environ)
+"""
+
+
+@pytest.mark.skipif(
+    "forkserver" not in __import__("multiprocessing").get_all_start_methods(),
+    reason="workers are forked from a server only where the platform has one",
+)
+def test_a_local_clusters_workers_start_with_the_sweeps_models_loaded(tmp_path):
+    """The workers of local_cluster(models) are forked with those models' kernels loaded (prbm's,
+    not dcmm's, which no model named needs); a model id that does not parse is skipped; the
+    driver's environment is left as it was. In a fresh process: one forkserver serves a
+    process's clusters."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "probe.py"
+    script.write_text(PRELOAD_PROBE)
+    done = subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, timeout=120, check=True
+    )
+    assert done.stdout.split("\n")[-2] == "(1, 0) False"
+
+
+def test_models_load_ahead_by_id_and_bad_ids_are_left_to_their_workers():
+    from flexval.validation.sweep.preload import load_models
+
+    assert load_models(["prbm", "beam:3[nonsense]", "ee", "no-such-model"]) == ["prbm", "ee"]

@@ -805,6 +805,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         local_cluster,
         results_store,
         run_sweep,
+        sweep_models,
         sweep_rows,
         write_outputs,
     )
@@ -884,7 +885,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
                     f"cannot reach the Dask scheduler: {exc}",
                 ) from None
         else:
-            cluster = local_cluster(args.workers)
+            cluster = local_cluster(args.workers, sweep_models(sweep))
             client = Client(cluster)
             stop_workers_on_signals(client)
         with client:

@@ -6,7 +6,15 @@ keeps the rows, :mod:`.summary` writes the Markdown summary and figures,
 :mod:`.builtin` holds the built-in sweeps.
 """
 
-from .engine import SweepStats, current_keys, local_cluster, results_store, run_sweep, sweep_rows
+from .engine import (
+    SweepStats,
+    current_keys,
+    local_cluster,
+    results_store,
+    run_sweep,
+    sweep_models,
+    sweep_rows,
+)
 from .spec import Axis, Point, Sweep, load_sweep, parse_sweep
 from .summary import write_outputs
 
@@ -21,6 +29,7 @@ __all__ = [
     "parse_sweep",
     "results_store",
     "run_sweep",
+    "sweep_models",
     "sweep_rows",
     "write_outputs",
 ]

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -261,10 +261,12 @@ WORKER_MODULES = (
     "flexval.reducedmodels.beam",
     "flexval.reducedmodels.dcmm",
     "flexval.reducedmodels.prbm",
+    "flexval.validation.sweep.preload",
 )
 """What the forkserver imports before it forks the workers: Dask's worker, the sweep's
-tasks and the reduced models with their kernels (a module missing here is imported by
-the worker that needs it)."""
+tasks, the reduced models' modules, and the sweep's models' code and compiled kernels
+(:mod:`flexval.validation.sweep.preload`; a module missing here is imported by the worker
+that needs it)."""
 
 
 QUIET_DASK = {
@@ -281,9 +283,15 @@ cluster of two workers cost the driver 35 ms of CPU a second and each worker 25 
 these, 6 and 2."""
 
 
-def local_cluster(workers: int | None = None):
+def sweep_models(sweep: Sweep) -> list[str]:
+    """The ids of the models a sweep runs, its reference last (what its workers load)."""
+    return [*(s.id for s in sweep.models), sweep.reference.id]
+
+
+def local_cluster(workers: int | None = None, models: Sequence[str] = ()):
     """A LocalCluster of single-threaded worker processes (default: one per core), started
-    by :data:`START_METHOD`.
+    by :data:`START_METHOD`; with a forkserver, the workers are forked with the code and
+    compiled kernels of ``models`` (ids) loaded (:mod:`flexval.validation.sweep.preload`).
 
     Dask keeps :data:`MESSAGE_LOG_LENGTH` recent messages per connection, not a thousand.
     Dask's own log lines below ERROR are silenced: on a loaded machine every
@@ -313,9 +321,19 @@ def local_cluster(workers: int | None = None):
 
         from distributed.utils import get_mp_context
 
+        from .preload import MODELS_ENV, SEPARATOR
+
         # after Dask's own choice, which it makes once; used when the server first starts
         get_mp_context().set_forkserver_preload(list(WORKER_MODULES))
-        forkserver.ensure_running()  # it imports them while this process starts the scheduler
+        before = os.environ.get(MODELS_ENV)
+        os.environ[MODELS_ENV] = SEPARATOR.join(models)  # what the server's environment says
+        try:
+            forkserver.ensure_running()  # it loads them while this process starts the scheduler
+        finally:
+            if before is None:
+                del os.environ[MODELS_ENV]
+            else:
+                os.environ[MODELS_ENV] = before
     n = workers or os.cpu_count() or 1
     return LocalCluster(
         n_workers=n,
