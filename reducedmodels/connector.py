@@ -516,6 +516,42 @@ class ConnectorGroup:
         )
 
 
+class KernelEndPass(ConnectorGroup):
+    """A group whose end pass gives every connector's section forces as one kernel's arrays.
+
+    :meth:`_end_pass` computes the verdicts and the arrays once; a path's
+    few connectors then take their forces apart (:meth:`_split`), a batch's
+    copies stacked by stations (:meth:`_stacks`). ``prbm``'s chains and
+    DCMM's sub-arcs are such groups.
+    """
+
+    def path_end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[SectionForces]]:
+        """:meth:`ConnectorGroup.path_end_pass` from :meth:`_end_pass`, each connector's
+        forces apart."""
+        verdicts, axial, moment = self._end_pass(coordinates)
+        return verdicts, self._split(axial, moment)
+
+    def path_end_stacks(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[ForceStack]]:
+        """:meth:`ConnectorGroup.path_end_stacks` from :meth:`_end_pass`, the connectors of
+        the same stations stacked."""
+        verdicts, axial, moment = self._end_pass(coordinates)
+        return verdicts, self._stacks(axial, moment)
+
+    def _end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], np.ndarray, np.ndarray]:
+        """The verdicts of the k levels of ``coordinates`` (as :meth:`path_end_pass` takes
+        them) and the kernel's normal forces (N) and bending moments (N mm)."""
+        raise NotImplementedError
+
+    def _split(self, axial: np.ndarray, moment: np.ndarray) -> list[SectionForces]:
+        """Each connector's section forces (k, m) from :meth:`_end_pass`'s arrays."""
+        raise NotImplementedError
+
+    def _stacks(self, axial: np.ndarray, moment: np.ndarray) -> list[ForceStack]:
+        """The connectors' section forces from :meth:`_end_pass`'s arrays, stacked by stations
+        (:func:`flexval.reducedmodels.sections.column_stacks`)."""
+        raise NotImplementedError
+
+
 def overrides(connector: Connector, hook: str) -> bool:
     """True if ``connector``'s class replaces the base class's default ``hook``.
 

@@ -33,7 +33,7 @@ import numpy as np
 from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.kinematics import rotate_xy
 
-from .connector import Connector, ConnectorGroup, Reasons
+from .connector import Connector, KernelEndPass, Reasons
 from .geometrycache import per_centre_line
 from .inertia import MassPoints, line_density, rigid_pieces
 from .sections import ForceStack, SectionForces, column_stacks
@@ -579,7 +579,7 @@ class _Stack:
         ).reshape(len(levels), -1, 3)
 
 
-class DcmmGroup(ConnectorGroup):
+class DcmmGroup(KernelEndPass):
     """DCMM connectors evaluated together (:meth:`DcmmConnector.group`).
 
     Every sub-arc of the run is evaluated by one call of the compiled
@@ -634,8 +634,8 @@ class DcmmGroup(ConnectorGroup):
             self._stack = _Stack.of(self.connectors, self._tables)
         return self._stack
 
-    def path_end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[SectionForces]]:
-        """:meth:`path_validity` and :meth:`path_section_forces` on the stacked coordinates.
+    def _end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], np.ndarray, np.ndarray]:
+        """The verdicts, and every sample's normal force and moment (k, samples), of the levels.
 
         ``coordinates`` (k, m): the connectors' local coordinates at each
         level (:meth:`ConnectorGroup.path_end_pass`), taken into the stack's
@@ -643,14 +643,8 @@ class DcmmGroup(ConnectorGroup):
         pairs the screen sends to the scalar check.
         """
         poses = coordinates[:, self._tables.pose_order].reshape(len(coordinates), -1, 3)
-        return (self._verdicts(poses, lambda: self.local_levels(coordinates)), self._forces(poses))
-
-    def path_end_stacks(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[ForceStack]]:
-        """:meth:`path_end_pass` with the connectors of the same stations stacked (a batch's
-        copies: :meth:`ConnectorGroup.path_end_stacks`)."""
-        poses = coordinates[:, self._tables.pose_order].reshape(len(coordinates), -1, 3)
         verdicts = self._verdicts(poses, lambda: self.local_levels(coordinates))
-        return verdicts, self._stacks(*self._statics(poses))
+        return (verdicts, *self._statics(poses))
 
     def path_validity(self, levels) -> list[Reasons]:
         """Each connector's :meth:`DcmmConnector.validity` at each level, screened in one pass.

@@ -38,7 +38,7 @@ from flexval.geometry import LoadCase, Mechanism
 from .connector import Connector
 from .loadpath import LoadPath
 from .loads import Loads
-from .recorder import append_stress, state_peaks
+from .recorder import append_stresses, state_peaks
 from .restnumbering import RestNumbering
 from .validity import MAX_LINEAR_ROTATION
 
@@ -277,8 +277,7 @@ def _solve(
             path.valid, path.validity = _rotation_verdicts(turns[i], poses)
         else:
             path.valid, path.validity = [True] * lam.size, [None] * lam.size
-        for name, found in stresses:
-            append_stress(path, name, *found)
+        append_stresses(path, stresses)
         paths.append(path)
     return paths
 

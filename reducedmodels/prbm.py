@@ -119,7 +119,7 @@ from flexval.geometry.compliance import curve_compliance
 from flexval.geometry.kinematics import rotate_xy
 from flexval.geometry.shapes import Shape, arc_semi_axes
 
-from .connector import Connector, ConnectorGroup, Reasons
+from .connector import Connector, KernelEndPass, Reasons
 from .geometrycache import GEOMETRY_CACHE, per_centre_line
 from .inertia import MassPoints, line_density, rigid_pieces
 from .sections import ForceStack, SectionForces, column_stacks, polyline_fractions
@@ -651,7 +651,7 @@ class PrbmConnector(Connector):
         return PrbmGroup([self]).path_section_forces([[state] for state in states])[0]
 
 
-class PrbmGroup(ConnectorGroup):
+class PrbmGroup(KernelEndPass):
     """PRBM connectors evaluated together (:meth:`PrbmConnector.group`).
 
     Every chain of the run is evaluated by one call of the compiled
@@ -724,18 +724,6 @@ class PrbmGroup(ConnectorGroup):
         order; one compiled call (:func:`flexval.reducedmodels.prbmkernel.chain_polylines`).
         """
         return prbm_kernels().chain_polylines(self._local(levels), self._parameters, self._end_rel)
-
-    def path_end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[SectionForces]]:
-        """:meth:`path_validity` and :meth:`path_section_forces` on the stacked
-        coordinates as they are (:meth:`_end_pass`), each connector's forces apart."""
-        verdicts, axial, moment = self._end_pass(coordinates)
-        return verdicts, self._split(axial, moment)
-
-    def path_end_stacks(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[ForceStack]]:
-        """:meth:`path_end_pass` with the chains of the same stations stacked (a batch's
-        copies: :meth:`ConnectorGroup.path_end_stacks`)."""
-        verdicts, axial, moment = self._end_pass(coordinates)
-        return verdicts, self._stacks(axial, moment)
 
     def _end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], np.ndarray, np.ndarray]:
         """The verdicts, and the kernel's normal forces and moments (k, c, 8), of the levels.

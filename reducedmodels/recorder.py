@@ -13,7 +13,7 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import NamedTuple
 
@@ -212,16 +212,7 @@ class PathRecorder:
         """:meth:`judged` with each flexure's stresses found already (a batch's end pass for
         this copy): (flexure name, :func:`path_peaks` entry), in the connectors' order."""
         self._verdicts(verdicts)
-        lp = self.path
-        if lp.peak_stress is None and peaks:  # a path's first stresses: its lists as found
-            lp.peak_stress = {name: found[0] for name, found in peaks}
-            lp.peak_stress_at = {name: found[1] for name, found in peaks}
-            lp.stress_profile = {
-                name: {"at": found[2], "stress": found[3]} for name, found in peaks
-            }
-        else:
-            for name, found in peaks:
-                append_stress(lp, name, *found)
+        append_stresses(self.path, peaks)
         self.states = []
 
     def _verdicts(self, verdicts: Sequence[list[str]]) -> None:
@@ -341,12 +332,13 @@ def record_stress(
             named.append((c.name, found, section))
     if len(named) < STACK_FROM:  # a path's few flexures: each alone
         factors = [abs(f) for f in np.asarray(scales, float).tolist()]
-        for name, found, section in named:
-            append_stress(path, name, *_state_peak(found, section, factors))
+        append_stresses(
+            path,
+            ((name, _state_peak(found, section, factors)) for name, found, section in named),
+        )
         return
     peaks = state_peaks([(found, section) for _, found, section in named], scales)
-    for (name, _, _), found in zip(named, peaks):
-        append_stress(path, name, *found)
+    append_stresses(path, ((name, found) for (name, _, _), found in zip(named, peaks)))
 
 
 def record_path_stress(
@@ -372,12 +364,12 @@ def record_path_stress(
         if section is not None and stacked is not None:
             named.append((c.name, stacked, section))
     if len(named) < STACK_FROM:  # a path's few flexures: each alone
-        for name, stacked, section in named:
-            append_stress(path, name, *_path_peak(stacked, section))
+        append_stresses(
+            path, ((name, _path_peak(stacked, section)) for name, stacked, section in named)
+        )
         return
     found = path_peaks([(stacked, section) for _, stacked, section in named])
-    for (name, _, _), peaks in zip(named, found):
-        append_stress(path, name, *peaks)
+    append_stresses(path, ((name, peaks) for (name, _, _), peaks in zip(named, found)))
 
 
 class _Sections(NamedTuple):
@@ -582,20 +574,21 @@ def state_peaks(
     return out
 
 
-def append_stress(
-    path: LoadPath,
-    name: str,
-    peaks: list[float],
-    places: list[float],
-    at: list[float],
-    profile: list[float],
-) -> None:
-    """Append one flexure's peak stresses (MPa) and places; its profile replaces the last one."""
+def append_stresses(path: LoadPath, found: Iterable[tuple[str, Peaks]]) -> None:
+    """Append each named flexure's peak stresses (MPa) and their places (:data:`Peaks`, as
+    :func:`path_peaks` gives them: lists of its own, which a flexure's first levels become);
+    its profile replaces the last one."""
     if path.peak_stress is None:
         path.peak_stress, path.peak_stress_at, path.stress_profile = {}, {}, {}
-    path.peak_stress.setdefault(name, []).extend(peaks)
-    path.peak_stress_at.setdefault(name, []).extend(places)
-    path.stress_profile[name] = {"at": at, "stress": profile}
+    stresses, places_of, profiles = path.peak_stress, path.peak_stress_at, path.stress_profile
+    for name, (peaks, places, at, profile) in found:
+        so_far = stresses.get(name)
+        if so_far is None:  # the flexure's first levels
+            stresses[name], places_of[name] = peaks, places
+        else:
+            so_far.extend(peaks)
+            places_of[name].extend(places)
+        profiles[name] = {"at": at, "stress": profile}
 
 
 def solve_path(
