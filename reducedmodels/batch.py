@@ -60,6 +60,7 @@ import scipy.sparse as sp
 from flexval.geometry import LoadCase, Mechanism, SceneError
 
 from .allocator import keep_freed_memory
+from .batchrecord import record_batch
 from .blocktangent import BlockLayout, BlockMaps, BlockTangent, block_maps
 from .connector import Connector
 from .core import SolverError, SolverSettings, System, case_loads
@@ -67,8 +68,6 @@ from .linearbatch import linear_responses
 from .loadpath import LoadPath
 from .loads import Loads
 from .newton import BatchNewtonResult, FixedLoad, StepProblem, solve_batch
-from .recorder import STACK_FROM, PathRecorder, path_peaks, stack_peaks
-from .sections import SectionForces
 from .tangent import ROUND_OFF
 from .tracer import Counters, LoadControl, PathPoint, Solve, TraceFailure, Verdict, trace
 
@@ -106,7 +105,8 @@ class BatchSystem(System):
         Every copy's tangent values at its last accepted state (at rest
         before the first): what a copy's block holds while it takes no part
         in a solve, so that the block-diagonal factorisation stays that of
-        stable blocks.
+        stable blocks. Replaced as copies advance, never changed in place
+        (solves and accepted tangents share it).
     """
 
     def __init__(self, members: Sequence[System | Member], settings: SolverSettings | None = None):
@@ -131,9 +131,9 @@ class BatchSystem(System):
         ground = pairs[0][0].ground
         #: each copy's body names in the batch
         self.copy_names = names = self._names(pairs, ground)
-        merged, origin = self._merged_connectors(pairs, names)
-        #: (copy, index among the copy's connectors) of every connector of the batch
-        self.origin = origin
+        merged, origin = self._merged_connectors(pairs, None if self.uniform else names)
+        #: (copy, index among the copy's connectors) of every connector of the batch, (n, 2)
+        self.origin_table = origin
         self.copy_dofs: list[np.ndarray] | None = None
         #: copy_dofs as one table (copies, unknowns) where every copy is numbered as copy 0
         self._copy_table: np.ndarray | None = None
@@ -157,8 +157,7 @@ class BatchSystem(System):
             return super()._number_connectors()
         template, count = self.template, self.n_copies
         bodies = len(template.body_index)
-        origin = np.array(self.origin, np.int64).reshape(-1, 2)
-        copy, index = origin[:, 0], origin[:, 1]
+        copy, index = self.origin_table[:, 0], self.origin_table[:, 1]
         starts = np.asarray(template._bounds[:-1], np.int64)
         ends = template._all_dofs[starts[:, None] + np.arange(6)][index]  # copy 0's, -1: ground
         pose = np.where(ends >= 0, ends + 3 * bodies * copy[:, None], -1)
@@ -234,31 +233,45 @@ class BatchSystem(System):
     def _names(cls, pairs: list[Member], ground: str) -> list[dict[str, str]]:
         """Each copy's body names in the batch (:meth:`_name`), every copy's bodies being
         copy 0's (:meth:`_check`)."""
-        bodies = list(pairs[0][0].bodies)
-        return [{b: cls._name(k, b, ground) for b in bodies} for k in range(len(pairs))]
+        moving = pairs[0][0].moving_bodies
+        return [
+            {ground: ground, **{b: f"{k}/{b}" for b in moving}}  # _name of each, inline
+            for k in range(len(pairs))
+        ]
 
     @staticmethod
     def _merged_connectors(
-        pairs: list[Member], names: list[dict[str, str]]
-    ) -> tuple[list[Connector], list[tuple[int, int]]]:
-        """Every copy's connectors with the batch's body names (``names``: :meth:`_names`),
-        one class after the other.
+        pairs: list[Member], names: list[dict[str, str]] | None
+    ) -> tuple[list[Connector], np.ndarray]:
+        """Every copy's connectors, one class after the other; with ``names`` (:meth:`_names`)
+        renamed to the batch's body names.
 
         Connectors of one class sit together so that each class is one group
-        (one compiled assembly for all copies). Also returns, per connector,
-        (copy, index among the copy's connectors).
+        (one compiled assembly for all copies). Copies all numbered as copy 0
+        (:attr:`uniform`) keep their connectors as they are: their numbering
+        is copy 0's shifted (:meth:`_number_connectors`), not looked up by body
+        name, and the ground, the one body a connector's names are read for
+        (:meth:`System.reaction`), keeps its name. Also returns, per
+        connector, (copy, index among the copy's connectors), (n, 2).
         """
         kinds = list(dict.fromkeys(type(c) for c in pairs[0][1]))
         bodies = [
             [(j, c.bodies) for j, c in enumerate(pairs[0][1]) if type(c) is kind] for kind in kinds
         ]
-        merged, origin = [], []
+        merged, origin, copies = [], [], np.arange(len(pairs), dtype=np.int64)
         for ends in bodies:  # a class after the other
-            for k, ((_, connectors), named) in enumerate(zip(pairs, names)):
-                for j, (a, b) in ends:
-                    merged.append(_shallow_copy(connectors[j], "bodies", (named[a], named[b])))
-                    origin.append((k, j))
-        return merged, origin
+            for k, (_, connectors) in enumerate(pairs):
+                if names is None:
+                    merged += [connectors[j] for j, _ in ends]
+                else:
+                    named = names[k]
+                    merged += [
+                        _shallow_copy(connectors[j], "bodies", (named[a], named[b]))
+                        for j, (a, b) in ends
+                    ]
+            index = np.array([j for j, _ in ends], np.int64)
+            origin.append(np.stack(np.broadcast_arrays(copies[:, None], index), axis=-1))
+        return merged, np.concatenate(origin).reshape(-1, 2)
 
     @staticmethod
     def _merged_mechanism(
@@ -267,11 +280,13 @@ class BatchSystem(System):
         """The bodies of every copy, renamed (``names``: :meth:`_names`), under the shared
         ground (copy 0 for the rest)."""
         first = pairs[0][0]
+        moving = first.moving_bodies  # every copy's (:meth:`_check`)
         bodies = {ground: first.bodies[ground]}
         for (mechanism, _), named in zip(pairs, names):
-            for name in mechanism.moving_bodies:
+            own = mechanism.bodies
+            for name in moving:
                 new = named[name]
-                bodies[new] = _shallow_copy(mechanism.bodies[name], "name", new)
+                bodies[new] = _shallow_copy(own[name], "name", new)
         return Mechanism(
             bodies,
             first.flexures,
@@ -304,7 +319,7 @@ class BatchSystem(System):
             for i, body in poses:
                 j = self.body_index[self._name(k, body, ground)]
                 copy_dofs[k][3 * i : 3 * i + 3] = range(3 * j, 3 * j + 3)
-        for m, (k, j) in enumerate(self.origin):
+        for m, (k, j) in enumerate(self.origin_table.tolist()):
             copy_dofs[k][self._own(k)._local_to_global[j][6:]] = self._local_to_global[m][6:]
         return copy_dofs
 
@@ -312,15 +327,14 @@ class BatchSystem(System):
         """:meth:`_copy_numbering` of copies all numbered as copy 0, as one table (copies, n):
         each copy's bodies' poses, then the internal coordinates of each of its connectors."""
         template, count = self.template, self.n_copies
-        own_bodies = list(template.body_index)  # in copy 0's order
-        bodies = np.array(
-            [[self.body_index[named[b]] for b in own_bodies] for named in self.copy_names]
-        ).reshape(count, len(own_bodies))
+        per_copy = len(template.body_index)  # copy k's bodies: the batch's k b .. (k + 1) b - 1
         table = np.empty((count, template.n_dofs), np.int64)
-        table[:, : 3 * len(own_bodies)] = (3 * bodies[:, :, None] + np.arange(3)).reshape(count, -1)
+        table[:, : 3 * per_copy] = np.arange(count)[:, None] * 3 * per_copy + np.arange(
+            3 * per_copy
+        )
         sizes = np.diff(self._bounds) - 6  # each connector's internal coordinates
         if sizes.any():
-            origin = np.array(self.origin, np.int64)
+            origin = self.origin_table
             per = np.repeat(np.arange(sizes.size), sizes)  # the connector of each
             offset = np.arange(per.size) - np.repeat(np.cumsum(sizes) - sizes, sizes)
             batch = self._all_dofs[np.asarray(self._bounds[:-1])[per] + 6 + offset]
@@ -374,34 +388,36 @@ class BatchSystem(System):
             for k, dofs in enumerate(copy_dofs):
                 dof_copy[dofs] = k
         self.dof_copy = dof_copy
-        of_mechanism: dict[int, tuple] = {}  # size, target body and offsets (mm): once each
-        for mechanism, _ in self.members:
-            if id(mechanism) not in of_mechanism:
+        # each distinct mechanism's size, target body (its index among a copy's bodies) and
+        # target offsets (mm), read once; copy k's bodies are the batch's k b .. (k + 1) b - 1
+        rows: dict[int, int] = {}
+        row = np.empty(self.n_copies, np.int64)
+        table = []
+        own_bodies = self.template.body_index
+        for k, (mechanism, _) in enumerate(self.members):
+            r = rows.get(id(mechanism))
+            if r is None:
+                r = rows[id(mechanism)] = len(table)
                 body = mechanism.target_body
                 rx, ry = (mechanism.target_point - mechanism.bodies[body].reference).tolist()
                 tx, ty = mechanism.target_point.tolist()
-                of_mechanism[id(mechanism)] = (mechanism.size(), body, rx, ry, tx, ty)
-        found = [of_mechanism[id(mechanism)] for mechanism, _ in self.members]
-        sizes = np.array([size for size, *_ in found])
+                table.append((mechanism.size(), own_bodies[body], rx, ry, tx, ty))
+            row[k] = r
+        found = np.array(table, float)[row]
+        sizes = np.ascontiguousarray(found[:, 0])
         self.copy_sizes = sizes
         self.force_scale = np.where(self.is_rotation, 1.0 / sizes[dof_copy], 1.0)
         self._coordinate_scale = np.where(self.is_rotation, 1.0, sizes[dof_copy])
         self._by_copy = np.argsort(dof_copy, kind="stable")
         self._copy_starts = np.searchsorted(dof_copy[self._by_copy], np.arange(self.n_copies))
-        bodies = self.mechanism.moving_bodies
-        body_copy = dof_copy[3 * np.arange(len(bodies))]
+        body_copy = dof_copy[3 * np.arange(len(self.body_index))]
         self._bodies_by_copy = np.argsort(body_copy, kind="stable")
         self._body_starts = np.searchsorted(
             body_copy[self._bodies_by_copy], np.arange(self.n_copies)
         )
-        target = np.array(
-            [
-                [3 * self.body_index[self.copy_names[k][body]], *offsets]
-                for k, (_, body, *offsets) in enumerate(found)
-            ]
-        )
-        self._target_dof = target[:, 0].astype(np.int64)
-        self._target_geometry = target[:, 1:].T  # rel x, rel y, rest x, rest y (mm)
+        target = np.arange(self.n_copies) * len(own_bodies) + found[:, 1].astype(np.int64)
+        self._target_dof = 3 * target
+        self._target_geometry = found[:, 2:].T  # rel x, rel y, rest x, rest y (mm)
         self._blocks: tuple | None = None  # see _block_maps
         slot_copy = np.full(self.layout.size, self.n_copies, np.int64)
         used = self.layout.slots >= 0
@@ -431,23 +447,13 @@ class BatchSystem(System):
             self._rest = self.merge(states)
         return self._rest.copy()
 
-    def copy_sections(self) -> list[dict]:
-        """Each copy's flexure sections by name (copies of one mechanism share its dict)."""
-        by_mechanism: dict[int, dict] = {}
-        out = []
-        for mechanism, _ in self.members:
-            found = by_mechanism.get(id(mechanism))
-            if found is None:
-                found = by_mechanism[id(mechanism)] = {
-                    f.name: f.section for f in mechanism.flexures
-                }
-            out.append(found)
-        return out
-
     # --- between copies and batch ---------------------------------------
     def merge(self, states: Sequence[np.ndarray]) -> np.ndarray:
         """The batch's coordinates from each copy's (its own numbering)."""
         q = np.empty(self.n_dofs)
+        if self._copy_table is not None:  # every copy numbered as copy 0: one table
+            q[self._copy_table] = np.array(states, float).reshape(self._copy_table.shape)
+            return q
         for dofs, state in zip(self.copy_dofs, states):
             q[dofs] = state
         return q
@@ -471,38 +477,49 @@ class BatchSystem(System):
         The result's ``scale`` is an array: each copy's own load scale (N),
         which its residual is relative to.
         """
-        template, own = self.template, {}  # the loads of a case on a copy, in its numbering
-        keys, copies_of = [], {}
+        template, rows, parts = self.template, {}, []  # the loads of a case on a copy
+        row = np.empty(self.n_copies, np.int64)  # each copy's among parts
         for k, ((mechanism, connectors), case) in enumerate(zip(self.members, cases)):
             key = (id(case), id(mechanism), id(connectors))  # copies of one mechanism and case
-            if key not in own:
+            r = rows.get(key)
+            if r is None:
+                r = rows[key] = len(parts)
                 reference = {b: body.reference for b, body in mechanism.bodies.items()}
-                own[key] = case_loads(
-                    case, template.pose_dofs, reference, mechanism.size(), connectors
+                parts.append(
+                    case_loads(case, template.pose_dofs, reference, mechanism.size(), connectors)
                 )
-            keys.append(key)
-            copies_of.setdefault(key, []).append(k)
+            row[k] = r
         # the copies' bodies' poses in the batch (each copy's own numbering is copy 0's)
         poses = (
             self._copy_table[:, : 3 * len(template.body_index)]
             if self._copy_table is not None
             else np.array([dofs[: 3 * len(template.body_index)] for dofs in self.copy_dofs])
         )
-        dofs, moment_dofs = [None] * self.n_copies, [None] * self.n_copies
-        for key, ks in copies_of.items():  # renumbered for all copies of a key at once
-            p, at = own[key], poses[ks]
-            for into, local in ((dofs, p.dofs), (moment_dofs, p.moment_dofs)):
-                renumbered = np.where(local >= 0, at[:, local], -1)
-                for k, row in zip(ks, renumbered):
-                    into[k] = row
-        parts = [own[key] for key in keys]
+
+        def renumbered(local: list[np.ndarray]) -> np.ndarray:
+            """Each copy's load dofs in its own numbering (parts' ``local``) in the batch's,
+            copy after copy (-1: the ground)."""
+            if len({p.shape for p in local}) == 1:  # as many loads on every copy: one table
+                own = np.stack(local)[row].reshape(self.n_copies, -1)
+                at = np.take_along_axis(poses, np.maximum(own, 0), axis=1)
+                return np.where(own >= 0, at, -1).ravel()
+            return np.concatenate(
+                [np.where(local[r] >= 0, poses[k][local[r]], -1).ravel() for k, r in enumerate(row)]
+            )
+
+        def in_order(values: list[np.ndarray]) -> np.ndarray:
+            """Each copy's part's ``values`` (parts' own), copy after copy, flat."""
+            if len({v.shape for v in values}) == 1:
+                return np.stack(values)[row].ravel()
+            return np.concatenate([values[r].ravel() for r in row.tolist()])
+
         loads = Loads(
-            np.concatenate(dofs).reshape(-1, 3),
-            np.concatenate([p.forces for p in parts]).reshape(-1, 2),
-            np.concatenate([p.rels for p in parts]).reshape(-1, 2),
-            np.concatenate(moment_dofs).astype(np.int64),
-            np.concatenate([p.moments for p in parts]),
-            np.array([p.scale for p in parts]),
+            renumbered([p.dofs for p in parts]).reshape(-1, 3),
+            in_order([p.forces for p in parts]).reshape(-1, 2),
+            in_order([p.rels for p in parts]).reshape(-1, 2),
+            renumbered([p.moment_dofs for p in parts]).astype(np.int64),
+            in_order([p.moments for p in parts]),
+            np.array([p.scale for p in parts])[row],
         )
         loads.vectorise()  # the same arithmetic in a batch of any size
         return loads
@@ -727,8 +744,18 @@ class BatchLoadControl(LoadControl):
         super().begin(system, loads, point)
 
     def _keep(self, storage: np.ndarray) -> None:
-        """Take the active copies' tangent values from ``storage`` as their accepted ones."""
-        self.batch.copy_blocks(self.batch.kept, storage, self.active)
+        """Take the active copies' tangent values from ``storage`` as their accepted ones.
+
+        :attr:`BatchSystem.kept` is replaced, never changed in place (a Newton solve and
+        the accepted tangent may hold it): ``storage`` itself when every copy is active.
+        """
+        batch = self.batch
+        if self.active.all():
+            batch.kept = storage
+        elif self.active.any():
+            kept = batch.kept.copy()
+            batch.copy_blocks(kept, storage, self.active)
+            batch.kept = kept
 
     def attempt(self):
         """LoadControl's sub-step, halved while the copies' predictions move too far."""
@@ -820,15 +847,6 @@ CARRIED = (
 to the next: the accepted state and factor, the predictor's states and slope, the step."""
 
 
-class CopyView(NamedTuple):
-    """What a :class:`~flexval.reducedmodels.recorder.PathRecorder` reads of a copy's System
-    to record the path the batch traced for it (no System of its own is built)."""
-
-    mechanism: Mechanism
-    connectors: Sequence[Connector]
-    n_dofs: int
-
-
 BATCH_UNKNOWNS = 40_000
 """Most unknowns of one batch (larger sets of copies are traced as several): the band of a
 batch this size, some 10 MB with the factor, stays in the processor's caches. Cost per path
@@ -855,8 +873,9 @@ def _shallow_copy(item, attribute: str, value):
     the time; a batch renames every copy's bodies and connectors).
     """
     new = object.__new__(type(item))
-    new.__dict__.update(item.__dict__)
-    object.__setattr__(new, attribute, value)
+    state = new.__dict__  # written directly: a frozen dataclass's __setattr__ refuses
+    state.update(item.__dict__)
+    state[attribute] = value
     return new
 
 
@@ -1075,126 +1094,6 @@ def trace_batch(
                 start = _Start(batch, points, *shared[where], gone)
                 groups.append(_Group([copies[j] for j in gone], start))
     return results
-
-
-def record_batch(
-    batch: BatchSystem,
-    points: Sequence[PathPoint],
-    kept: Sequence[int],
-    cases: Sequence[LoadCase],
-    model: str = "",
-    scene: str = "",
-    settings: dict | None = None,
-    failure: TraceFailure | None = None,
-) -> list[LoadPath | SolverError]:
-    """The LoadPaths of copies ``kept`` from the batch's points, as each copy's recorder makes it.
-
-    With a ``failure`` (the trace of a batch of one copy stopped), the copy's
-    :class:`~flexval.reducedmodels.core.SolverError` carrying the path so far, as its
-    recorder makes it of the same failure.
-
-    The validity monitor and the section forces take one pass per group of
-    the batch's connectors for every copy and level at once
-    (:meth:`~flexval.reducedmodels.connector.ConnectorGroup.path_end_stacks`),
-    as :func:`~flexval.reducedmodels.recorder.path_end_pass` takes one per
-    group of a copy; the stresses of connectors stacked alike come from
-    their stack (:func:`~flexval.reducedmodels.recorder.stack_peaks`), the
-    others' from :func:`~flexval.reducedmodels.recorder.path_peaks`; reasons
-    and stresses then go to each copy in its own connectors' order.
-    """
-    if not kept:
-        return []
-    states = np.array([p.state for p in points])
-    position = {k: j for j, k in enumerate(kept)}
-    reasons: dict[int, list[list[str]]] = {}  # of the copies with any, per level
-    peaks: list[list] = [[] for _ in kept]  # per copy: (connector's index in it, name, peaks)
-    stressed = []  # (copy's place in kept, connector's index in its copy, name) of entries
-    entries = []  # their (forces, section), whose peaks path_peaks finds
-    sections = batch.copy_sections()
-    for (group, run), coordinates in zip(batch.groups, batch.group_coordinates(states)):
-        verdicts, stacks = group.path_end_stacks(coordinates)
-        origin, connectors = batch.origin[run], group.connectors
-        clean = None  # a verdict without reasons (groups share one among their connectors)
-        for (k, _), c, per_level in zip(origin, connectors, verdicts):
-            if per_level is clean:
-                continue
-            if not any(per_level):
-                clean = per_level
-            elif k in position:
-                into_levels = reasons.setdefault(position[k], [[] for _ in points])
-                for into, why in zip(into_levels, per_level):
-                    if why:
-                        into.extend(f"{c.name}: {w}" for w in why)
-        for stack in stacks:
-            rows, chosen, where = [], [], []  # the stack's rows with a section, of kept copies
-            for row, member in enumerate(stack.members):
-                k, index = origin[member]
-                j = position.get(k)
-                if j is None:
-                    continue
-                name = connectors[member].name
-                section = sections[k].get(name)
-                if section is not None:
-                    rows.append(row), chosen.append(section), where.append((j, index, name))
-            if len(rows) >= STACK_FROM and all(s.profile is None for s in chosen):
-                if len(rows) < len(stack.members):
-                    stack = stack._replace(axial=stack.axial[rows], moment=stack.moment[rows])
-                for (j, index, name), found in zip(where, stack_peaks(stack, chosen)):
-                    peaks[j].append((index, name, found))
-                continue
-            for row, section, at in zip(rows, chosen, where):
-                stressed.append(at)
-                entries.append(
-                    (SectionForces(stack.at, stack.axial[row], stack.moment[row]), section)
-                )
-    for (j, index, name), found in zip(stressed, path_peaks(entries)):
-        peaks[j].append((index, name, found))
-    no_reasons = [[] for _ in points]
-    copies = batch.n_copies
-    iterations = np.array([np.broadcast_to(p.iterations, (copies,)) for p in points]).T.tolist()
-    last = points[-1].counters
-    newton = np.broadcast_to(last.newton_iterations, (copies,)).tolist()
-    dx, dy, rotation = (v.T.tolist() for v in batch.copy_targets(states))
-    factors = [p.factor for p in points]
-    paths = []
-    for j, k in enumerate(kept):
-        mechanism, connectors = batch.members[k]
-        recorder = PathRecorder(
-            CopyView(mechanism, connectors, batch.copy_dofs[k].size),
-            cases[k],
-            model,
-            scene,
-            settings,
-        )
-        recorder.record_levels(
-            factors,
-            dx[k],
-            dy[k],
-            rotation[k],
-            iterations[k],
-            Counters(newton[k], last.step_cuts, last.substeps),
-        )
-        recorder.judged_peaks(
-            reasons.get(j, no_reasons),
-            [(name, found) for _, name, found in sorted(peaks[j])],  # by index: unique
-        )
-        if failure is None:
-            paths.append(recorder.finish())
-            continue
-        counts = failure.counters
-        alone = Counters(
-            int(np.broadcast_to(counts.newton_iterations, (copies,))[k]),
-            counts.step_cuts,
-            counts.substeps,
-        )
-        paths.append(
-            recorder.failure(
-                TraceFailure(
-                    failure.reason, failure.factor, alone, failure.bifurcations, failure.bifurcation
-                )
-            )
-        )
-    return paths
 
 
 RUN_FAILURES = (

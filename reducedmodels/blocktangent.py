@@ -96,7 +96,7 @@ class BlockTangent(BandedTangent):
     def _factorise(self) -> None:
         if self._blocks is None:
             copies, m = self.blocks.index.shape
-            factors = np.empty((copies, m, m))
+            factors = np.empty((copies, ldl_kernels().packed_size(m)))
             pivots = np.empty((copies, m), np.int64)
             eigenvalues = np.empty((copies, m))
             info = np.empty(copies, np.int64)

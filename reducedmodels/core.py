@@ -129,10 +129,9 @@ class System:
         mech = self.mechanism
         self.size = mech.size()
         self.body_index = {b: k for k, b in enumerate(mech.moving_bodies)}
-        self.reference = {b: mech.bodies[b].reference for b in mech.bodies}
         #: the target point's offset from its body's reference point and its place at rest (mm)
         self._target_offsets = (
-            (mech.target_point - self.reference[mech.target_body]).tolist(),
+            (mech.target_point - mech.bodies[mech.target_body].reference).tolist(),
             mech.target_point.tolist(),
         )
         # every connector's global dofs [pose_a, pose_b, internal] in one array (ground: -1),
@@ -170,6 +169,12 @@ class System:
             default=NONLINEAR_UPDATE,
         )
         self._build_scatter()
+
+    @cached_property
+    def reference(self) -> dict[str, np.ndarray]:
+        """Every body's reference point by name (mm), read on first use (a batch's thousands
+        of bodies are placed by their copies')."""
+        return {b: body.reference for b, body in self.mechanism.bodies.items()}
 
     @cached_property
     def _local_to_global(self) -> list[np.ndarray]:
@@ -250,7 +255,7 @@ class System:
             r, cc = dofs[local_rows], dofs[local_cols]
             keep = (r >= 0) & (cc >= 0)
             rows.append(r[keep]), cols.append(cc[keep]), hess_keep.append(keep)
-        ground = self.reference[self.mechanism.ground]
+        ground = self.mechanism.bodies[self.mechanism.ground].reference
         self._ground_pose = np.array([ground[0], ground[1], 0.0])
         # assembly's work arrays, reused: [q, ground pose] for the assemblers (q's part
         # overwritten at each assembly) and the loads' tangent diagonal (kept zero); so one

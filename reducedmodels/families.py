@@ -99,14 +99,17 @@ def _load_solver(spec: ModelSpec) -> None:
 
 
 def _load_systems(spec: ModelSpec) -> None:
-    """:func:`_load_solver`, and the compiled kernels that order a System's tangent and
-    factorise a batch's blocks (``Family.load`` of the families traced by Newton)."""
+    """:func:`_load_solver`, and the compiled kernels that order a System's tangent,
+    factorise a batch's blocks and stack its stresses (``Family.load`` of the families
+    traced by Newton)."""
     _load_solver(spec)
     from .blocktangent import ldl_kernels
+    from .recorder import stress_kernels
     from .tangent import order_kernels
 
     order_kernels()
     ldl_kernels()
+    stress_kernels()
 
 
 def _load_beams(spec: ModelSpec) -> None:

@@ -34,6 +34,22 @@ ALPHA = (1.0 + math.sqrt(17.0)) / 8.0
 """Bunch and Kaufman's pivot threshold: the growth bound of a 1 x 1 against a 2 x 2 pivot."""
 
 
+def packed_size(m: int) -> int:
+    """The entries of an m x m matrix's upper triangle: the length of its packed storage."""
+    return m * (m + 1) // 2
+
+
+def pack_upper(matrix: np.ndarray) -> np.ndarray:
+    """A square matrix's upper triangle packed column by column (LAPACK's ``'U'`` packed
+    storage: entry (i, j), i <= j, at i + j (j + 1) / 2), as :func:`ldl_solve` takes a
+    factor."""
+    m = matrix.shape[0]
+    rows, cols = np.triu_indices(m)
+    packed = np.empty(packed_size(m))
+    packed[rows + cols * (cols + 1) // 2] = matrix[rows, cols]
+    return packed
+
+
 @kernel
 def ldl_factor(a: np.ndarray, pivots: np.ndarray, eigenvalues: np.ndarray) -> int:
     """P A P^T = U D U^T in place (Bunch-Kaufman, LAPACK's ``dsytf2``, upper), and D's eigenvalues.
@@ -136,28 +152,31 @@ def ldl_factor(a: np.ndarray, pivots: np.ndarray, eigenvalues: np.ndarray) -> in
 
 @kernel
 def ldl_solve(a: np.ndarray, pivots: np.ndarray, x: np.ndarray) -> None:
-    """Solve A x = b in place (``x`` holds b) with :func:`ldl_factor`'s U, D and pivots
-    (LAPACK's ``dsytrs``, upper, one right-hand side)."""
-    m = a.shape[0]
+    """Solve A x = b in place (``x`` holds b) with :func:`ldl_factor`'s U, D and pivots, the
+    factor packed (:func:`pack_upper`: its columns contiguous, half the square's memory);
+    LAPACK's ``dsytrs``, upper, one right-hand side."""
+    m = pivots.size
     k = m - 1
     while k >= 0:  # U D y = b, from the last row up
+        ck = k * (k + 1) // 2
         if pivots[k] >= 0:
             p = pivots[k]
             x[k], x[p] = x[p], x[k]
             for i in range(k):
-                x[i] -= a[i, k] * x[k]
-            x[k] *= 1.0 / a[k, k]
+                x[i] -= a[ck + i] * x[k]
+            x[k] *= 1.0 / a[ck + k]
             k -= 1
         else:
+            cm = (k - 1) * k // 2
             p = -1 - pivots[k]
             x[k - 1], x[p] = x[p], x[k - 1]
             for i in range(k - 1):
-                x[i] -= a[i, k] * x[k]
+                x[i] -= a[ck + i] * x[k]
             for i in range(k - 1):
-                x[i] -= a[i, k - 1] * x[k - 1]
-            akm1k = a[k - 1, k]
-            akm1 = a[k - 1, k - 1] / akm1k
-            ak = a[k, k] / akm1k
+                x[i] -= a[cm + i] * x[k - 1]
+            akm1k = a[ck + k - 1]
+            akm1 = a[cm + k - 1] / akm1k
+            ak = a[ck + k] / akm1k
             denominator = akm1 * ak - 1.0
             bkm1 = x[k - 1] / akm1k
             bk = x[k] / akm1k
@@ -166,22 +185,24 @@ def ldl_solve(a: np.ndarray, pivots: np.ndarray, x: np.ndarray) -> None:
             k -= 2
     k = 0
     while k < m:  # U^T x = y, from the first row down
+        ck = k * (k + 1) // 2
         if pivots[k] >= 0:
             total = 0.0
             for i in range(k):
-                total += a[i, k] * x[i]
+                total += a[ck + i] * x[i]
             x[k] -= total
             p = pivots[k]
             x[k], x[p] = x[p], x[k]
             k += 1
         else:
+            cn = (k + 1) * (k + 2) // 2  # where column k + 1 starts
             total = 0.0
             for i in range(k):
-                total += a[i, k] * x[i]
+                total += a[ck + i] * x[i]
             x[k] -= total
             total = 0.0
             for i in range(k):
-                total += a[i, k + 1] * x[i]
+                total += a[cn + i] * x[i]
             x[k + 1] -= total
             p = -1 - pivots[k]
             x[k], x[p] = x[p], x[k]
@@ -210,29 +231,37 @@ def block_factor(
         the upper triangle is read.
     stride : int
         The values between one copy's block and the next's.
-    factors, pivots, eigenvalues, info : ndarray (copies, m, m), (copies, m), (copies, m), (copies,)
-        Filled with each copy's :func:`ldl_factor` results, ``factors[c]``
-        holding the factorised block transposed (so that the columns of U,
-        which the updates run along, are contiguous in memory: a quarter less
-        time than row by row on ``prbm``'s blocks); a copy whose block is not
-        finite is not factorised: info -1, eigenvalues NaN.
+    factors, pivots, eigenvalues, info : ndarray
+        (copies, m (m + 1) / 2), (copies, m), (copies, m) and (copies,):
+        filled with each copy's :func:`ldl_factor` results, ``factors[c]``
+        holding the factorised block packed (:func:`pack_upper`; half the
+        square's memory: a 1000-copy ``prbm`` batch's factors stay in a
+        core's 2 MB cache for the solves, which then cost half as much); a
+        copy whose block is not finite is not factorised: info -1,
+        eigenvalues NaN.
     """
     m = places.shape[0]
+    work = np.empty((m, m))  # one copy's block, transposed: U's columns contiguous (a quarter
+    a = work.T  # less time than row by row on prbm's blocks), kept in cache between copies
     for c in range(info.size):
         first = c * stride
-        block = factors[c]
         total = 0.0  # not finite if any entry is not
         for p in range(m):
             for q in range(p, m):
                 place = places[p, q]
                 value = storage[first + place] if place >= 0 else 0.0
                 total += value
-                block[q, p] = value  # the transpose: U's columns contiguous
+                work[q, p] = value
         if not math.isfinite(total):
             info[c] = -1
             eigenvalues[c, :] = np.nan
             continue
-        info[c] = ldl_factor(block.T, pivots[c], eigenvalues[c])
+        info[c] = ldl_factor(a, pivots[c], eigenvalues[c])
+        packed, at = factors[c], 0
+        for q in range(m):  # the upper triangle, column after column
+            for p in range(q + 1):
+                packed[at] = work[q, p]
+                at += 1
 
 
 @kernel
@@ -244,8 +273,7 @@ def block_solve(
     rhs: np.ndarray,
     x: np.ndarray,
 ) -> None:
-    """x = K^-1 rhs for the block-diagonal K :func:`block_factor` factorised (its factors
-    transposed).
+    """x = K^-1 rhs for the block-diagonal K :func:`block_factor` factorised (packed).
 
     ``index[c, p]`` is the unknown (the place in ``rhs`` and ``x``) of copy
     c's own row p. A copy not factorised or singular (``info`` non-zero)
@@ -260,7 +288,7 @@ def block_solve(
             continue
         for p in range(m):
             work[p] = rhs[index[c, p]]
-        ldl_solve(factors[c].T, pivots[c], work)
+        ldl_solve(factors[c], pivots[c], work)
         for p in range(m):
             x[index[c, p]] = work[p]
 
@@ -269,7 +297,7 @@ def warm_up() -> None:
     """Compile (or load from the on-disk cache) every kernel on a 3 x 3 saddle point."""
     matrix = np.array([[2.0, 0.0, 1.0], [0.0, 1.0, 1.0], [1.0, 1.0, 0.0]])
     places = np.arange(9, dtype=np.int64).reshape(3, 3)
-    factors, pivots = np.empty((1, 3, 3)), np.empty((1, 3), np.int64)
+    factors, pivots = np.empty((1, packed_size(3))), np.empty((1, 3), np.int64)
     eigenvalues, info = np.empty((1, 3)), np.empty(1, np.int64)
     block_factor(matrix.ravel(), places, 9, factors, pivots, eigenvalues, info)
     index = np.arange(3, dtype=np.int64)[None, :]

@@ -101,6 +101,13 @@ class Loads:
         )
 
     def __post_init__(self) -> None:
+        self.many = False
+        if len(self.dofs) + len(self.moment_dofs) > MANY_LOADS:  # perhaps many on moving bodies
+            loaded = self.dofs[:, 0] >= 0  # forces on moving bodies (the ground's do no work)
+            if np.count_nonzero(loaded) + np.count_nonzero(self.moment_dofs >= 0) > MANY_LOADS:
+                self.diagonal_dofs = list(dict.fromkeys(self.dofs[loaded, 2].tolist()))
+                self.vectorise()
+                return
         # the loads on moving bodies as plain numbers, read at every assembly
         self._points = [
             (ix, iy, it, fx, fy, rx, ry)
@@ -114,19 +121,19 @@ class Loads:
         ]
         #: the rotation dofs whose tangent diagonal :meth:`add_to` may change (each once)
         self.diagonal_dofs = list(dict.fromkeys(it for _, _, it, *_ in self._points))
-        self.many = False
-        if len(self._points) + len(self._moments) > MANY_LOADS:
-            self.vectorise()
 
     def vectorise(self) -> None:
         """Take one numpy pass over all loads in :meth:`add_to` from now on (many loads: a
         batch of copies, whose copies then see the same arithmetic however many they are)."""
         self.many = True
-        table = np.array(self._points, float).reshape(-1, 7).T
-        self._point_dofs = table[:3].astype(np.int64)
-        self._point_values = table[3:]
-        self._moment_dofs = np.array([d for d, _ in self._moments], np.int64)
-        self._moment_values = np.array([m for _, m in self._moments], float)
+        loaded = self.dofs[:, 0] >= 0
+        self._point_dofs = np.ascontiguousarray(self.dofs[loaded].T, np.int64)  # ix, iy, it
+        self._point_values = np.concatenate(  # fx, fy, rx, ry
+            [np.asarray(self.forces, float)[loaded].T, np.asarray(self.rels, float)[loaded].T]
+        )
+        moved = self.moment_dofs >= 0
+        self._moment_dofs = np.asarray(self.moment_dofs[moved], np.int64)
+        self._moment_values = np.asarray(self.moments[moved], float)
         self.diagonal_array = np.array(self.diagonal_dofs, np.int64)
 
     def add_to(self, q: np.ndarray, factor: float, grad: np.ndarray, diagonal: np.ndarray) -> float:

@@ -274,7 +274,9 @@ def solve_batch(
     best = np.full(copies, np.inf)
     stalled = np.zeros(copies, np.int64)
     last_step = np.full(copies, np.nan)
-    kept = system.kept.copy()  # every copy's tangent values as its solve leaves them
+    # every copy's tangent values as its solve leaves them: the batch's (never changed in
+    # place) until a copy stops, then a copy of them, or this assembly's if all stop at once
+    kept = system.kept
     q = q.copy()
 
     def stop(mask: np.ndarray, count: int, why: str | None) -> None:
@@ -291,6 +293,19 @@ def solve_batch(
             back = mask[dof_copy]
             q[back] = fallback[back]
 
+    def keep(mask: np.ndarray, storage: np.ndarray) -> None:
+        """Copies ``mask`` stop with ``storage``'s tangent values (all: ``storage`` itself,
+        which no iteration changes after it)."""
+        nonlocal kept
+        if mask.all():
+            kept = storage
+        elif mask.any():
+            if kept is system.kept:
+                kept = kept.copy()
+            system.copy_blocks(kept, storage, mask)
+
+    # the last solve's storage and tangent (factorised): every copy's own if all stop after it
+    solved: tuple | None = None
     res = np.full(copies, np.inf)
     for it in range(max_iterations + 1):
         if not running.any():
@@ -313,7 +328,7 @@ def solve_batch(
         res = np.where(running, system.copy_residuals(g, loads), res)
         stop(running & ~np.isfinite(res), it, "non-finite residual")
         done = running & (res <= force_tol)
-        system.copy_blocks(kept, storage, done)  # their tangent: this assembly's
+        keep(done, storage)  # their tangent: this assembly's
         stop(done, it, None)
         fresh = running & np.isnan(res0)
         res0[fresh] = res[fresh]
@@ -334,7 +349,8 @@ def solve_batch(
         everyone = running.all()
         moving = None if everyone else running[dof_copy]
         try:
-            du = system.layout.tangent(storage).solve(-g if everyone else np.where(moving, -g, 0.0))
+            solved = (storage, system.layout.tangent(storage))
+            du = solved[1].solve(-g if everyone else np.where(moving, -g, 0.0))
         except (RuntimeError, np.linalg.LinAlgError) as exc:  # singular factor
             stop(running, it, f"singular tangent ({exc})")
             break
@@ -359,7 +375,7 @@ def solve_batch(
         with np.errstate(divide="ignore", invalid="ignore"):
             estimate = step * np.minimum(1.0, step / last_step)
         small = running & ((step <= step_tol) | (contracting & (estimate <= error_tol)))
-        system.copy_blocks(kept, storage, small)
+        keep(small, storage)
         stop(small, it + 1, None)
         last_step = np.where(running, step, last_step)
         if origin is not None:
@@ -374,13 +390,13 @@ def solve_batch(
             f"no convergence in {max_iterations} iterations (residual {res[k]:.3g})",
         )
     converged = np.asarray(active, bool) & ~failed
-    reason = next((r for r in reasons if r), "")
+    reason = reasons[int(np.argmax(failed))] if failed.any() else ""  # the first failed copy's
     return BatchNewtonResult(
         q if converged.any() else None,
         factor,
         iterations,
         reason,
-        system.layout.tangent(kept),
+        solved[1] if solved is not None and solved[0] is kept else system.layout.tangent(kept),
         failed,
         reasons,
         kept,

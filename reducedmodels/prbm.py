@@ -682,11 +682,20 @@ class PrbmGroup(KernelEndPass):
         def table(values: list) -> np.ndarray:
             return np.array(values) if take is None else np.array(values)[take]
 
+        #: the distinct connectors, and each connector's among them
+        self._distinct, self._kinds = first, np.arange(len(first)) if take is None else take
         self._parameters = table([c._parameters for c in first])
         self._end_rel = table([(*c._end_rel_a, *c._end_rel_b) for c in first])
         #: each connector's length (mm) and fitted end rotation (rad), for the validity screen
         self._lengths = table([c.length for c in first])
         self._fitted = table([c._fitted_rotation for c in first])
+
+    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """(rows, cols) of the chains' Hessian values laid end to end (see the base class):
+        every chain's ten local coordinates have the one pattern of
+        :meth:`PrbmConnector.hessian_pattern`, shifted by ten a chain."""
+        starts = 10 * np.arange(len(self.connectors), dtype=np.int64)[:, None]
+        return (_HESSIAN_ROWS + starts).ravel(), (_HESSIAN_COLS + starts).ravel()
 
     def assembler(
         self, gather: np.ndarray, grad_dofs: np.ndarray, hess_slots: np.ndarray
@@ -822,6 +831,7 @@ class PrbmGroup(KernelEndPass):
         return column_stacks(
             axial.reshape(len(axial), -1),
             moment.reshape(len(moment), -1),
-            [c._stations for c in self.connectors],
+            [c._stations for c in self._distinct],
             width * np.arange(len(self.connectors)),
+            self._kinds,
         )

@@ -15,6 +15,8 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
+from functools import cache
+from types import ModuleType
 from typing import NamedTuple
 
 import numpy as np
@@ -159,36 +161,11 @@ class PathRecorder:
             self.stats["limit_points"].append(len(f) - 2)
         notify(lp)
 
-    def record_levels(
-        self,
-        factors: Sequence[float],
-        dx: Sequence[float],
-        dy: Sequence[float],
-        rotation: Sequence[float],
-        iterations: Sequence[int],
-        counters,
-    ) -> None:
-        """Append several converged points at once from their outputs, as :meth:`record` does
-        one by one: load factors, target motion (mm, rad), Newton iterations per point and the
-        totals after the last (a batch's copy, whose states the batch judges:
-        :meth:`judged`). Poses, shapes and reactions are not recorded this way."""
-        lp, magnitude = self.path, self.magnitude
-        lp.load.extend([f * magnitude for f in factors])
-        lp.dx.extend(dx), lp.dy.extend(dy), lp.rotation.extend(rotation)
-        self.stats["iterations"].extend(iterations)
-        self._count(counters)
-        self.factors.extend(factors)
-        notify(lp)
-
     def _bifurcations(self, factors) -> None:
-        """Append bifurcation points (load factors) as ``{"load", "fraction"}`` (N or N mm)."""
-        self.path.bifurcations.extend({"load": f * self.magnitude, "fraction": f} for f in factors)
+        _append_bifurcations(self.path, factors, self.magnitude)
 
     def _count(self, counters) -> None:
-        stats = self.stats
-        stats["newton_iterations"] = counters.newton_iterations
-        stats["step_cuts"] = counters.step_cuts
-        stats["substeps"] = counters.substeps
+        _count(self.stats, counters)
 
     def _judge(self) -> None:
         """Validity verdicts and section stresses of the states recorded since the last call."""
@@ -206,25 +183,11 @@ class PathRecorder:
         record_path_stress(self.path, forces, self.sections)
         self.states = []
 
-    def judged_peaks(
-        self, verdicts: Sequence[list[str]], peaks: Sequence[tuple[str, tuple]]
-    ) -> None:
-        """:meth:`judged` with each flexure's stresses found already (a batch's end pass for
-        this copy): (flexure name, :func:`path_peaks` entry), in the connectors' order."""
-        self._verdicts(verdicts)
-        append_stresses(self.path, peaks)
-        self.states = []
-
     def _verdicts(self, verdicts: Sequence[list[str]]) -> None:
         """Append the validity monitor's reasons at each level (empty: valid)."""
-        lp = self.path
-        if not any(verdicts):  # every level valid
-            lp.valid.extend([True] * len(verdicts))
-            lp.validity.extend([None] * len(verdicts))
-            return
-        for reasons in verdicts:
-            lp.valid.append(not reasons)
-            lp.validity.append("; ".join(reasons) if reasons else None)
+        valid, validity = _validity(verdicts)
+        self.path.valid.extend(valid)
+        self.path.validity.extend(validity)
 
     def finish(self) -> LoadPath:
         """The path of a successful trace (wall time from the recorder's creation)."""
@@ -236,28 +199,7 @@ class PathRecorder:
     def failure(self, exc: TraceFailure) -> SolverError:
         """The SolverError for a failed trace, carrying the path so far."""
         self._judge()
-        self._count(exc.counters)
-        lam, case = exc.factor, self.case
-        self._bifurcations(exc.bifurcations)
-        reason = exc.reason
-        if exc.bifurcation is not None:
-            self._bifurcations([exc.bifurcation])
-            self.stats["stopped_at_bifurcation"] = exc.bifurcation  # load factor
-            reason = (
-                f"bifurcation at {exc.bifurcation * case.magnitude:.6g} {case.unit} "
-                f"(fraction {exc.bifurcation:.6g}): beyond it load control finds only "
-                "unstable equilibria (trace it with --arclength)"
-            )
-        self.stats["failure"] = reason
-        self.path.converged = False
-        self.path.seconds = time.perf_counter() - self.t0
-        return SolverError(
-            f"{self.model or 'model'} on load case '{case.name}': {reason}; "
-            f"last converged load {lam * case.magnitude:.6g} {case.unit} "
-            f"({100 * lam:.2f} % of full load)",
-            lam,
-            self.path,
-        )
+        return failed_path(self.path, self.case, self.model, exc, time.perf_counter() - self.t0)
 
     def run(
         self, points: Iterator[PathPoint], stop: Callable[[LoadPath], bool] | None = None
@@ -278,6 +220,106 @@ class PathRecorder:
         except TraceFailure as exc:
             raise self.failure(exc) from None
         return self.finish(), last
+
+
+def _append_bifurcations(path: LoadPath, factors: Iterable[float], magnitude: float) -> None:
+    """Append bifurcation points (load factors) as ``{"load", "fraction"}`` (N or N mm; the
+    case's full load ``magnitude``)."""
+    path.bifurcations.extend({"load": f * magnitude, "fraction": f} for f in factors)
+
+
+def _count(stats: dict, counters) -> None:
+    """Set a path's solver totals (Newton iterations, step cuts, sub-steps) from ``counters``."""
+    stats["newton_iterations"] = counters.newton_iterations
+    stats["step_cuts"] = counters.step_cuts
+    stats["substeps"] = counters.substeps
+
+
+def _validity(verdicts: Sequence[list[str]]) -> tuple[list[bool], list[str | None]]:
+    """The validity monitor's ``valid`` and ``validity`` entries of levels with these reasons
+    (empty: valid)."""
+    if not any(verdicts):  # every level valid
+        return [True] * len(verdicts), [None] * len(verdicts)
+    return [not why for why in verdicts], ["; ".join(why) if why else None for why in verdicts]
+
+
+def levels_path(
+    case: LoadCase,
+    model: str,
+    scene: str,
+    settings: dict | None,
+    unknowns: int,
+    load: list[float],
+    dx: list[float],
+    dy: list[float],
+    rotation: list[float],
+    iterations: list[int],
+    counters,
+    verdicts: Sequence[list[str]],
+    peaks: Iterable[tuple[str, Peaks]],
+) -> LoadPath:
+    """The LoadPath a :class:`PathRecorder` makes of converged levels recorded and judged at
+    once: a batch's copy, whose states the batch traced and judged for it.
+
+    The load at each level (N or N mm: its factor times the case's
+    magnitude), the target's motion (mm, rad), each level's Newton
+    iterations (lists the path keeps) and the totals after the last
+    (``counters``), the validity monitor's reasons at each level, and each
+    flexure's :data:`Peaks` (MPa), by name in the connectors' order. Poses,
+    shapes and reactions are not recorded this way; ``seconds`` is left 0.
+    """
+    valid, validity = _validity(verdicts)
+    path = LoadPath(
+        model=model,
+        load_case=case.name,
+        load=load,
+        dx=dx,
+        dy=dy,
+        rotation=rotation,
+        seconds=0.0,
+        settings=settings or {},
+        scene=scene,
+        load_unit=case.unit,
+        valid=valid,
+        validity=validity,
+        bifurcations=[],
+    )
+    path.stats = {"unknowns": unknowns}
+    _count(path.stats, counters)
+    path.stats["iterations"] = iterations
+    append_stresses(path, peaks)
+    notify(path)
+    return path
+
+
+def failed_path(
+    path: LoadPath, case: LoadCase, model: str, exc: TraceFailure, seconds: float
+) -> SolverError:
+    """The SolverError of a trace that failed (``exc``) after recording ``path``: the path
+    marked unconverged (its totals, bifurcations and reason from ``exc``; ``seconds`` its
+    wall time, s), carried by the error."""
+    stats, lam = path.stats, exc.factor
+    _count(stats, exc.counters)
+    _append_bifurcations(path, exc.bifurcations, case.magnitude)
+    reason = exc.reason
+    if exc.bifurcation is not None:
+        _append_bifurcations(path, [exc.bifurcation], case.magnitude)
+        stats["stopped_at_bifurcation"] = exc.bifurcation  # load factor
+        reason = (
+            f"bifurcation at {exc.bifurcation * case.magnitude:.6g} {case.unit} "
+            f"(fraction {exc.bifurcation:.6g}): beyond it load control finds only "
+            "unstable equilibria (trace it with --arclength)"
+        )
+    stats["failure"] = reason
+    path.converged = False
+    path.seconds = seconds
+    return SolverError(
+        f"{model or 'model'} on load case '{case.name}': {reason}; "
+        f"last converged load {lam * case.magnitude:.6g} {case.unit} "
+        f"({100 * lam:.2f} % of full load)",
+        lam,
+        path,
+    )
 
 
 def path_end_pass(
@@ -392,12 +434,13 @@ STACK_FROM = 8
 :func:`path_peaks` and :func:`state_peaks` compute stacked: below it (a path's own few
 flexures) stacking them costs more than it saves."""
 STACK_SIZE = 64
-"""Most flexures in one stack: a batch's flexures are stacked 64 at a time, so that a stack's
-forces, stresses and the temporaries between them stay in the processor's caches (64
-flexures of 11 levels and 17 stations, ``dcmm:1``'s: 96 kB per array) instead of every pass
-going to memory. A ``dcmm:1`` batch of 1000 copies (open chain f+, 3000 flexures) spent
-19.6 us per path in :func:`path_peaks` as one stack, 15 in stacks of 64 (32 to 128 alike
-within the machine's noise, 16 slower)."""
+"""Most flexures in one stack of :func:`path_peaks` and :func:`state_peaks` (a linear batch's
+flexures), so that a stack's forces, stresses and the temporaries between them stay in the
+processor's caches (64 flexures of 11 levels and 17 stations, ``dcmm:1``'s: 96 kB per array)
+instead of every pass going to memory. A ``dcmm:1`` batch of 1000 copies (open chain f+,
+3000 flexures) spent 19.6 us per path in :func:`path_peaks` as one stack, 15 in stacks of
+64 (32 to 128 alike within the machine's noise, 16 slower). A traced batch's stacks take
+:func:`stack_peaks`' one compiled pass, without temporaries."""
 
 
 def _fibre_stresses(
@@ -445,27 +488,30 @@ def _stacked_stress(
             at,
             np.array([f.axial for f, _ in chosen]),  # np.array of equal shapes: np.stack's copy,
             np.array([f.moment for f, _ in chosen]),  # at a third the cost
-            [s for _, s in chosen],
-            constants,
+            section_constants([s for _, s in chosen], constants),
         ),
         at,
     )
 
 
+def section_constants(
+    sections: Sequence[Section], known: dict[int, tuple[float, float, float]] | None = None
+) -> np.ndarray:
+    """Uniform sections' thickness (mm), area (mm^2) and second moment (mm^4), (c, 3);
+    ``known`` keeps each section's by id (sections repeat among a batch's copies)."""
+    known = {} if known is None else known
+    for s in sections:
+        if id(s) not in known:
+            known[id(s)] = (s.thickness, s.area, s.inertia)
+    return np.array([known[id(s)] for s in sections], float).reshape(-1, 3)
+
+
 def _stress_of_stack(
-    at: np.ndarray,
-    axial: np.ndarray,
-    moment: np.ndarray,
-    sections: Sequence[Section],
-    constants: dict[int, tuple[float, float, float]],
+    at: np.ndarray, axial: np.ndarray, moment: np.ndarray, values: np.ndarray
 ) -> np.ndarray:
     """The outer-fibre stresses (c, ..., m) (MPa) of c uniform sections' stacked forces (N,
-    N mm): :meth:`SectionForces.fibre_stress` elementwise, each as alone; ``constants``
-    keeps each section's h, A and I by id."""
-    for s in sections:
-        if id(s) not in constants:
-            constants[id(s)] = (s.thickness, s.area, s.inertia)
-    values = np.array([constants[id(s)] for s in sections], float)
+    N mm): :meth:`SectionForces.fibre_stress` elementwise, each as alone; ``values`` (c, 3)
+    the sections' :func:`section_constants`."""
     shape = (-1, *[1] * (axial.ndim - 1))
     stacked = _Sections(*(values[:, k].reshape(shape) for k in range(3)))
     return SectionForces(at, axial, moment).fibre_stress(stacked)
@@ -503,19 +549,36 @@ def path_peaks(entries: Sequence[tuple[SectionForces, Section]]) -> list[Peaks]:
     return out
 
 
-def stack_peaks(stack: ForceStack, sections: Sequence[Section]) -> list[Peaks]:
-    """:func:`path_peaks` of a stack's members (forces (g, k, m)) with uniform ``sections``
-    (one per member), in stacks of at most :data:`STACK_SIZE`: the same numbers, without a
+@cache
+def stress_kernels() -> ModuleType:
+    """:mod:`flexval.reducedmodels.stresskernel`, imported and loaded on first use (numba is
+    imported only by the runs that stack stresses: a batch's)."""
+    from . import stresskernel
+
+    stresskernel.warm_up()
+    return stresskernel
+
+
+def stack_peaks(stack: ForceStack, constants: np.ndarray) -> list[Peaks]:
+    """:func:`path_peaks` of a stack's members (forces (g, k, m)) with uniform sections, whose
+    :func:`section_constants` are ``constants`` (g, 3): the same numbers, from one compiled
+    pass (:func:`flexval.reducedmodels.stresskernel.stack_peaks`) without a
     :class:`SectionForces` per member."""
-    out: list[Peaks] = []
-    constants: dict[int, tuple[float, float, float]] = {}
-    for first in range(0, len(sections), STACK_SIZE):
-        chosen = slice(first, first + STACK_SIZE)
-        unit = _stress_of_stack(
-            stack.at, stack.axial[chosen], stack.moment[chosen], sections[chosen], constants
-        )
-        out += _unit_peaks(unit, np.broadcast_to(stack.at, (unit.shape[0], stack.at.size)))
-    return out
+    count, levels, stations = stack.axial.shape
+    peaks, places = np.empty((count, levels)), np.empty((count, levels))
+    profile = np.empty((count, stations))
+    at = np.ascontiguousarray(stack.at, float)
+    stress_kernels().stack_peaks(
+        at,
+        stack.axial,
+        stack.moment,
+        np.ascontiguousarray(constants, float),
+        peaks,
+        places,
+        profile,
+    )
+    stations_of = np.broadcast_to(at, (count, stations)).tolist()
+    return list(zip(peaks.tolist(), places.tolist(), stations_of, profile.tolist()))
 
 
 def _path_peak(forces: SectionForces, section: Section) -> Peaks:

@@ -107,6 +107,7 @@ def column_stacks(
     moment: np.ndarray,
     stations: Sequence[tuple[np.ndarray, np.ndarray] | None],
     offsets: np.ndarray,
+    kinds: np.ndarray | None = None,
 ) -> list[ForceStack]:
     """Connectors' section forces read as columns of a group's arrays, stacked by stations.
 
@@ -116,30 +117,39 @@ def column_stacks(
         Normal force (N) and bending moment (N mm) at every station of every
         connector of a group, at k levels (a group kernel's output).
     stations : sequence of (at, base) or None
-        Per connector: its stations' fractions ``at`` (m,) and where their
-        forces are, the columns ``offsets[j] + base`` (``base`` (m,) of int);
-        None for a connector without forces. Connectors whose ``at`` and
-        ``base`` are equal (a batch's copies: read once per pair of objects)
-        share a stack, in their order.
+        Per connector (per kind, with ``kinds``): its stations' fractions
+        ``at`` (m,) and where their forces are, the columns ``offsets[j] +
+        base`` (``base`` (m,) of int); None for a connector without forces.
+        Connectors whose ``at`` and ``base`` are equal (a batch's copies:
+        read once per pair of objects) share a stack, in their order.
     offsets : ndarray of int
         Each connector's first column.
+    kinds : ndarray of int, optional
+        Each connector's entry of ``stations`` (a batch's copies of one
+        connector share theirs, so a group of thousands reads a few);
+        default: its own.
     """
-    by_object: dict[tuple[int, int], list[int]] = {}  # the copies of a connector share both
-    for j, entry in enumerate(stations):
+    if kinds is None:
+        kinds = np.arange(len(stations))
+    order = np.argsort(kinds, kind="stable")  # the connectors of each kind, in their order
+    starts = np.flatnonzero(np.diff(kinds[order], prepend=-1))
+    by_object: dict[tuple[int, int], list[np.ndarray]] = {}  # the same arrays: one stack
+    for members in np.split(order, starts[1:]):
+        entry = stations[kinds[members[0]]]
         if entry is not None:
-            by_object.setdefault((id(entry[0]), id(entry[1])), []).append(j)
-    alike: dict[tuple[bytes, bytes], list[int]] = {}
-    for members in by_object.values():
-        at, base = stations[members[0]]
-        alike.setdefault((at.tobytes(), base.tobytes()), []).extend(members)
+            by_object.setdefault((id(entry[0]), id(entry[1])), []).append(members)
+    alike: dict[tuple[bytes, bytes], list[np.ndarray]] = {}
+    for parts in by_object.values():
+        at, base = stations[kinds[parts[0][0]]]
+        alike.setdefault((at.tobytes(), base.tobytes()), []).extend(parts)
     stacks = []
-    for members in alike.values():
-        members.sort()
-        at, base = stations[members[0]]
+    for parts in alike.values():
+        members = np.sort(np.concatenate(parts))
+        at, base = stations[kinds[members[0]]]
         columns = offsets[members][:, None] + base
         stacks.append(
             ForceStack(  # (g, k, m)
-                members,
+                members.tolist(),
                 at,
                 axial[:, columns].transpose(1, 0, 2),
                 moment[:, columns].transpose(1, 0, 2),

@@ -478,7 +478,12 @@ def test_stacks_of_section_forces_hold_each_connectors_columns():
     """column_stacks puts connectors of equal stations (equal arrays, whether the same objects
     or not) in one stack, each member's rows its own columns; a connector without forces is in
     none; stack_peaks gives what path_peaks gives each member alone, across STACK_SIZE."""
-    from flexval.reducedmodels.recorder import STACK_SIZE, path_peaks, stack_peaks
+    from flexval.reducedmodels.recorder import (
+        STACK_SIZE,
+        path_peaks,
+        section_constants,
+        stack_peaks,
+    )
     from flexval.reducedmodels.sections import SectionForces, column_stacks
 
     rng = np.random.default_rng(3)
@@ -501,6 +506,13 @@ def test_stacks_of_section_forces_hold_each_connectors_columns():
             assert np.array_equal(stack.moment[row], moment[:, offsets[j] + base])
     stacked = sorted(j for stack in stacks for j in stack.members)
     assert stacked == [j for j, entry in enumerate(stations) if entry is not None]
+    # each connector's kind of stations named instead (a batch's copies of one connector)
+    by_kind = column_stacks(axial, moment, kinds, offsets, np.arange(len(stations)) % 4)
+    assert [s.members for s in by_kind] == [s.members for s in stacks]
+    for mine, theirs in zip(by_kind, stacks):
+        assert np.array_equal(mine.at, theirs.at)
+        assert np.array_equal(mine.axial, theirs.axial)
+        assert np.array_equal(mine.moment, theirs.moment)
     section = load_scene("open_chain").mechanism.flexures[0].section
     for stack in stacks:
         sections = [section.scaled(1.0 + 0.01 * j) for j in stack.members]
@@ -510,7 +522,15 @@ def test_stacks_of_section_forces_hold_each_connectors_columns():
                 for a, m, s in zip(stack.axial, stack.moment, sections)
             ]
         )
-        assert stack_peaks(stack, sections) == alone
+        assert stack_peaks(stack, section_constants(sections)) == alone
+        # a NaN force: its level's peak is NaN where numpy's max and argmax put it
+        axial = stack.axial.copy()
+        axial[-1, 1, -1] = np.nan
+        nan = stack._replace(axial=axial)
+        alone = path_peaks(
+            [(SectionForces(nan.at, a, m), s) for a, m, s in zip(axial, nan.moment, sections)]
+        )
+        np.testing.assert_equal(stack_peaks(nan, section_constants(sections)), alone)
 
 
 @pytest.mark.parametrize("model", ["prbm", "dcmm:2"])
@@ -547,16 +567,30 @@ def test_a_batch_numbers_copies_as_one_table_as_the_loop_over_its_connectors(sce
     per copy, without the core's loop over every connector; it must give that loop's numbers
     exactly: every connector's dofs and places in [q, ground pose], where each starts, and
     which unknowns are angles (internal coordinates: dcmm:3's cut bodies, beam:4's nodes,
-    prbm's link angles and multipliers; pins on the closed chain). Copies share connectors
-    or have their own."""
+    prbm's link angles and multipliers; pins on the closed chain), the loop run on the
+    connectors renamed to the batch's bodies (the batch keeps them as they are). Copies share
+    connectors or have their own."""
+    import copy
+
+    from flexval.reducedmodels.batch import _shallow_copy
     from flexval.reducedmodels.core import System
 
     spec = parse_model(model)
     mechanisms, _ = variants(scene, "f+", [1.0, 1.2, 0.9], [1.0, 1.0, 1.0])
     own = [(m, spec.model_family.connectors(m, spec)) for m in mechanisms]
-    batch = BatchSystem([own[0], own[1], own[0], own[2], own[0]])
+    members = [own[0], own[1], own[0], own[2], own[0]]
+    batch = BatchSystem(members)
     assert batch.uniform
-    table, loop = batch._number_connectors(), System._number_connectors(batch)
+    origin = batch.origin_table.tolist()
+    assert [c is members[k][1][j] for c, (k, j) in zip(batch.connectors, origin)] == [True] * len(
+        origin
+    )
+    named = copy.copy(batch)
+    named.connectors = [
+        _shallow_copy(c, "bodies", tuple(batch.copy_names[k][b] for b in c.bodies))
+        for c, (k, _) in zip(batch.connectors, origin)
+    ]
+    table, loop = batch._number_connectors(), System._number_connectors(named)
     for fast, slow in zip(table, loop):
         assert type(fast) is type(slow)
         assert np.array_equal(fast, slow) and np.asarray(fast).dtype == np.asarray(slow).dtype

@@ -14,7 +14,7 @@ import pytest
 from scipy.linalg import lapack
 
 from flexval.reducedmodels.blocktangent import BlockTangent, block_maps
-from flexval.reducedmodels.ldlkernel import ldl_factor, ldl_solve
+from flexval.reducedmodels.ldlkernel import ldl_factor, ldl_solve, pack_upper
 from flexval.reducedmodels.tangent import DenseTangent
 
 
@@ -80,7 +80,7 @@ def test_d_is_lapacks_its_inertia_sylvesters_and_its_solves_lapacks():
             continue
         b = rng.standard_normal(m)
         x = b.copy()
-        ldl_solve(factor, pivots, x)
+        ldl_solve(pack_upper(factor), pivots, x)
         ldu, ipiv, _ = lapack.dsytrf(matrix)
         assert np.allclose(x, lapack.dsytrs(ldu, ipiv, b)[0], rtol=1e-9, atol=0.0)
         assert np.linalg.norm(matrix @ x - b) <= 1e-10 * np.linalg.norm(matrix, 1) * np.linalg.norm(

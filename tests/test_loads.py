@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from flexval.geometry import Force, LoadCase, Moment
-from flexval.reducedmodels.loads import Loads
+from flexval.reducedmodels.loads import MANY_LOADS, Loads
 
 BODIES = {"ground": -1, "a": 0, "b": 1}
 REFERENCE = {"ground": np.array([0.0, 0.0]), "a": np.array([10.0, 2.0]), "b": np.array([-4.0, 7.0])}
@@ -53,6 +53,14 @@ CASES = {
         Moment("b", -25.0),
         Force("a", np.array([0.0, 0.0]), 1.9, 1.5),
     ),
+    "many loads, some on the ground: one numpy pass": case(
+        *[
+            Force(body, np.array([0.5 * k, 3.0 - k]), 0.4 * k - 1.0, 2.0 + 0.5 * k)
+            for k in range(6)
+            for body in ("a", "b", "ground")
+        ],
+        *[Moment(body, 7.0 - 3.0 * k) for k in range(3) for body in ("b", "ground", "a")],
+    ),
 }
 
 
@@ -77,6 +85,8 @@ def potential(load_case: LoadCase, q: np.ndarray, factor: float) -> float:
 def test_add_to_is_the_potential_and_its_derivatives(name: str) -> None:
     load_case, factor = CASES[name], 0.8
     loads = Loads.of_case(load_case, pose_dofs, REFERENCE, SIZE)
+    moving = sum(BODIES[c.body] >= 0 for c in load_case.components)
+    assert loads.many == (moving > MANY_LOADS)  # one numpy pass over many, a loop over few
     rng = np.random.default_rng(3)
     q = np.concatenate([REFERENCE["a"], [0.4], REFERENCE["b"], [-1.1]]) + rng.normal(0, 1, 6)
     grad, diagonal = np.zeros(6), np.zeros(6)
