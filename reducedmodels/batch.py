@@ -52,6 +52,7 @@ import gc
 import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
@@ -419,12 +420,18 @@ class BatchSystem(System):
         self._target_dof = 3 * target
         self._target_geometry = found[:, 2:].T  # rel x, rel y, rest x, rest y (mm)
         self._blocks: tuple | None = None  # see _block_maps
-        slot_copy = np.full(self.layout.size, self.n_copies, np.int64)
-        used = self.layout.slots >= 0
-        slot_copy[self.layout.slots[used]] = dof_copy[self.pattern_rows[used]]
-        self.slot_copy = slot_copy
         self.kept = np.zeros(self.layout.size)
         self._rest: np.ndarray | None = None  # see initial_state
+
+    @cached_property
+    def slot_copy(self) -> np.ndarray:
+        """The copy each value slot of the tangent storage belongs to (``n_copies`` for a slot no
+        entry uses), made on first use: copies that take part in a solve all together never
+        ask."""
+        slot_copy = np.full(self.layout.size, self.n_copies, np.int64)
+        used = self.layout.slots >= 0
+        slot_copy[self.layout.slots[used]] = self.dof_copy[self.pattern_rows[used]]
+        return slot_copy
 
     def initial_state(self) -> np.ndarray:
         """Every copy's undeformed configuration (:meth:`System.initial_state` in its own
@@ -1080,9 +1087,10 @@ def trace_batch(
         kept = [0] if failure is not None else np.flatnonzero(stepping.active).tolist()
         paths = record_batch(batch, points, kept, group_cases, model, scene, settings, failure)
         spent[copies] += (time.perf_counter() - t0) / len(copies)
+        seconds = spent[copies].tolist()
         for j, path in zip(kept, paths):
             recorded = path.path if isinstance(path, SolverError) else path
-            recorded.seconds = float(spent[copies[j]])
+            recorded.seconds = seconds[j]
             recorded.stats["batch"] = len(kept)
             results[copies[j]] = path
         for where in np.unique(left_at[~stepping.active]).tolist():

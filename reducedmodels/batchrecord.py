@@ -162,6 +162,16 @@ def record_batch(
     dx, dy, rotation = (v.T.tolist() for v in batch.copy_targets(states))
     factors = [p.factor for p in points]
     load_of: dict[int, list[float]] = {}  # each case's load at each level (N or N mm), once
+    totals: dict[int, Counters] = {}  # the counts after the last point, by Newton iterations
+
+    def counters_of(newton_iterations: int) -> Counters:
+        found = totals.get(newton_iterations)
+        if found is None:
+            found = totals[newton_iterations] = Counters(
+                newton_iterations, last.step_cuts, last.substeps
+            )
+        return found
+
     paths = []
     for j, k in enumerate(kept):
         case = cases[k]
@@ -179,7 +189,7 @@ def record_batch(
             dy[k],
             rotation[k],
             iterations[k],
-            Counters(newton[k], last.step_cuts, last.substeps),
+            counters_of(newton[k]),
             reasons.get(j, no_reasons),
             [entry for entry in peaks[j] if entry is not None],  # in the connectors' order
         )

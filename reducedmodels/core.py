@@ -17,6 +17,7 @@ Units: mm, N, N mm, rad.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -686,10 +687,12 @@ def connector_groups(connectors: Sequence[Connector]) -> list[tuple[ConnectorGro
     Runs keep the connectors' order, so the concatenated gradients and
     Hessians are the same as evaluated one by one.
     """
-    kinds = [type(c) for c in connectors]
-    starts = [0, *(k for k in range(1, len(kinds)) if kinds[k] is not kinds[k - 1])]
-    runs = [slice(a, b) for a, b in zip(starts, [*starts[1:], len(kinds)]) if b > a]
-    return [(kinds[run.start].group(connectors[run]), run) for run in runs]
+    runs, start = [], 0
+    for kind, run in itertools.groupby(map(type, connectors)):  # one pass in C
+        stop = start + len(list(run))
+        runs.append((kind, slice(start, stop)))
+        start = stop
+    return [(kind.group(connectors[run]), run) for kind, run in runs]
 
 
 def hermite_weights(factors: Sequence[float], factor: float) -> tuple[list[float], float]:

@@ -668,16 +668,15 @@ class PrbmGroup(KernelEndPass):
     def __init__(self, connectors):
         super().__init__(connectors)
         rows: dict[int, int] = {}  # each distinct connector's row (a batch's copies share theirs)
-        first = []
+        first, row_of = [], []
         for c in self.connectors:
-            if id(c._parameters) not in rows:
-                rows[id(c._parameters)] = len(first)
+            row = rows.get(id(c._parameters))
+            if row is None:
+                row = rows[id(c._parameters)] = len(first)
                 first.append(c)
-        take = (  # every connector's row; None: each its own (a path's few connectors)
-            None
-            if len(first) == len(self.connectors)
-            else np.array([rows[id(c._parameters)] for c in self.connectors], np.intp)
-        )
+            row_of.append(row)
+        # every connector's row; None: each its own (a path's few connectors)
+        take = None if len(first) == len(self.connectors) else np.array(row_of, np.intp)
 
         def table(values: list) -> np.ndarray:
             return np.array(values) if take is None else np.array(values)[take]
