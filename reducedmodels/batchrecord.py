@@ -50,8 +50,10 @@ class CopyFlexures(NamedTuple):
     moment (mm^4); NaN for the others."""
     uniform: np.ndarray
     """(rows, connectors) of bool: the connector has a flexure of uniform section (whose
-    stresses are stacked with others'); ``stressed`` those of any section."""
+    stresses are stacked with others')."""
     stressed: np.ndarray
+    """(rows, connectors) of bool: the connector has a flexure, of any section (its stresses
+    are recorded)."""
 
 
 def copy_flexures(members: Sequence[tuple[Mechanism, Sequence[Connector]]]) -> CopyFlexures:
@@ -111,7 +113,6 @@ def record_batch(
     if not kept:
         return []
     states = np.array([p.state for p in points])
-    position = {k: j for j, k in enumerate(kept)}
     place = np.full(batch.n_copies, -1, np.int64)  # each copy's place in kept (-1: not kept)
     place[kept] = np.arange(len(kept))
     flexures = copy_flexures(batch.members)
@@ -130,8 +131,8 @@ def record_batch(
                 continue
             if not any(per_level):
                 clean = per_level
-            elif k in position:
-                into_levels = reasons.setdefault(position[k], [[] for _ in points])
+            elif place[k] >= 0:
+                into_levels = reasons.setdefault(int(place[k]), [[] for _ in points])
                 for into, why in zip(into_levels, per_level):
                     if why:
                         into.extend(f"{c.name}: {w}" for w in why)

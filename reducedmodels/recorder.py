@@ -27,7 +27,7 @@ from .connector import Connector
 from .core import SolverError, System
 from .loadpath import LoadPath
 from .sections import ForceStack, SectionForces
-from .tracer import LoadControl, PathPoint, TraceFailure, trace
+from .tracer import Counters, LoadControl, PathPoint, TraceFailure, trace
 
 _OBSERVERS: list[Callable[[LoadPath], None]] = []
 """Called with the path after each point a :class:`PathRecorder` records (see :func:`observing`)."""
@@ -228,7 +228,7 @@ def _append_bifurcations(path: LoadPath, factors: Iterable[float], magnitude: fl
     path.bifurcations.extend({"load": f * magnitude, "fraction": f} for f in factors)
 
 
-def _count(stats: dict, counters) -> None:
+def _count(stats: dict, counters: Counters) -> None:
     """Set a path's solver totals (Newton iterations, step cuts, sub-steps) from ``counters``."""
     stats["newton_iterations"] = counters.newton_iterations
     stats["step_cuts"] = counters.step_cuts
@@ -254,7 +254,7 @@ def levels_path(
     dy: list[float],
     rotation: list[float],
     iterations: list[int],
-    counters,
+    counters: Counters,
     verdicts: Sequence[list[str]],
     peaks: Iterable[tuple[str, Peaks]],
 ) -> LoadPath:
