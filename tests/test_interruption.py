@@ -322,3 +322,36 @@ def test_sigterm_on_stress_tests_exits_143_and_writes_no_report(tmp_path):
     assert seconds < STOP_S
     assert "the same command starts again" in _interrupted_line(prog.stderr, "SIGTERM")
     assert list(out.iterdir()) == []  # its files are written at the end
+
+
+def test_the_event_loops_report_of_an_unstarted_dask_call_is_dropped_after_an_interrupt(
+    monkeypatch,
+):
+    """Dask's sync, interrupted before the event loop started its call, schedules a cancel
+    that raises NameError in the loop (the call's future unassigned), which the loop logs
+    with a traceback; after a signal that one record is dropped, every other kept."""
+    import logging
+
+    from flexval.validation import interrupt
+
+    namespace: dict = {}
+    source = "def cancel():\n    if future is not None:\n        pass\n"
+    exec(compile(source, "/site-packages/distributed/utils.py", "exec"), namespace)
+
+    def record_of(function) -> logging.LogRecord:
+        try:
+            function()
+        except Exception:
+            exc_info = sys.exc_info()
+        return logging.LogRecord("tornado.application", logging.ERROR, "", 0, "", (), exc_info)
+
+    def elsewhere():
+        return undefined_name  # noqa: F821
+
+    unstarted, other = record_of(namespace["cancel"]), record_of(elsewhere)
+    assert isinstance(unstarted.exc_info[1], NameError)
+    dropped = interrupt.AbandonedDaskCall()
+    monkeypatch.setattr(interrupt._state, "signum", None)
+    assert dropped.filter(unstarted) and dropped.filter(other)  # no signal: kept
+    monkeypatch.setattr(interrupt._state, "signum", signal.SIGINT)
+    assert not dropped.filter(unstarted) and dropped.filter(other)

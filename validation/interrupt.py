@@ -30,6 +30,7 @@ cached load paths).
 from __future__ import annotations
 
 import atexit
+import logging
 import os
 import select
 import signal
@@ -108,9 +109,41 @@ def _on_signal(signum: int, frame) -> None:
     raise Interrupted(signum)
 
 
+class AbandonedDaskCall(logging.Filter):
+    """Drops the event loop's report of Dask's ``sync`` cancelling a call that had not
+    started when the interrupt arrived.
+
+    ``distributed.utils.sync`` answers a ``KeyboardInterrupt`` in its wait by scheduling
+    a ``cancel`` of the call's future on the event loop; when the interrupt comes before
+    the loop started the call, the future was never assigned and ``cancel`` raises
+    ``NameError`` (distributed 2026.8), which the loop logs with its traceback. The call
+    is abandoned either way (the command is stopping), so the record says nothing: every
+    other record passes.
+    """
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        error = record.exc_info[1] if record.exc_info else None
+        if not isinstance(error, NameError) or received() is None:
+            return True
+        frame = error.__traceback__
+        while frame is not None and frame.tb_next is not None:
+            frame = frame.tb_next
+        code = frame.tb_frame.f_code if frame is not None else None
+        return not (
+            code is not None
+            and code.co_name == "cancel"
+            and code.co_filename.replace(os.sep, "/").endswith("distributed/utils.py")
+        )
+
+
+_ABANDONED_DASK_CALL = AbandonedDaskCall()
+
+
 def install() -> None:
     """Handle SIGINT and SIGTERM in this process (main thread; a signal the parent set
     to be ignored stays ignored) and start the watcher thread."""
+    for name in ("tornado.application", "asyncio"):  # the event loop's callback errors
+        logging.getLogger(name).addFilter(_ABANDONED_DASK_CALL)
     handled = False
     for sig in SIGNALS:
         if signal.getsignal(sig) is signal.SIG_IGN:
