@@ -226,19 +226,11 @@ class BatchSystem(System):
         return self._systems[k]
 
     @staticmethod
-    def _name(k: int, body: str, ground: str) -> str:
-        """Copy k's name of ``body`` in the batch (the ground is shared)."""
-        return body if body == ground else f"{k}/{body}"
-
-    @classmethod
-    def _names(cls, pairs: list[Member], ground: str) -> list[dict[str, str]]:
-        """Each copy's body names in the batch (:meth:`_name`), every copy's bodies being
-        copy 0's (:meth:`_check`)."""
+    def _names(pairs: list[Member], ground: str) -> list[dict[str, str]]:
+        """Each copy's body names in the batch: copy k's body b is ``k/b``, the ground is
+        shared, every copy's bodies being copy 0's (:meth:`_check`)."""
         moving = pairs[0][0].moving_bodies
-        return [
-            {ground: ground, **{b: f"{k}/{b}" for b in moving}}  # _name of each, inline
-            for k in range(len(pairs))
-        ]
+        return [{ground: ground, **{b: f"{k}/{b}" for b in moving}} for k in range(len(pairs))]
 
     @staticmethod
     def _merged_connectors(
@@ -311,14 +303,13 @@ class BatchSystem(System):
 
     def _copy_numbering(self) -> list[np.ndarray]:
         """Where each copy's coordinates (its own System's numbering) lie in the batch's."""
-        ground = self.mechanism.ground
         if self.uniform:
             return self._uniform_numbering()
         poses = [(i, body) for body, i in self.template.body_index.items()]
         copy_dofs = [np.empty(self._own(k).n_dofs, np.int64) for k in range(self.n_copies)]
-        for k in range(self.n_copies):
+        for k, named in enumerate(self.copy_names):
             for i, body in poses:
-                j = self.body_index[self._name(k, body, ground)]
+                j = self.body_index[named[body]]
                 copy_dofs[k][3 * i : 3 * i + 3] = range(3 * j, 3 * j + 3)
         for m, (k, j) in enumerate(self.origin_table.tolist()):
             copy_dofs[k][self._own(k)._local_to_global[j][6:]] = self._local_to_global[m][6:]

@@ -153,19 +153,13 @@ class PathRecorder:
             for c, local in zip(system.connectors, system.local_states(q)):
                 lp.shapes[c.name].append(c.shape(*local).tolist())
         self.stats["iterations"].append(point.iterations)
-        self._count(point.counters)
-        self._bifurcations(point.bifurcations)
+        _count(self.stats, point.counters)
+        _append_bifurcations(lp, point.bifurcations, self.magnitude)
         self.factors.append(point.factor)
         f = self.factors
         if "limit_points" in self.stats and len(f) >= 3 and (f[-2] - f[-3]) * (f[-1] - f[-2]) < 0:
             self.stats["limit_points"].append(len(f) - 2)
         notify(lp)
-
-    def _bifurcations(self, factors) -> None:
-        _append_bifurcations(self.path, factors, self.magnitude)
-
-    def _count(self, counters) -> None:
-        _count(self.stats, counters)
 
     def _judge(self) -> None:
         """Validity verdicts and section stresses of the states recorded since the last call."""
@@ -481,17 +475,15 @@ def _stacked_stress(
     chosen: list[tuple[SectionForces, Section]], constants: dict[int, tuple[float, float, float]]
 ) -> tuple[np.ndarray, np.ndarray]:
     """The outer-fibre stresses (c, ..., m) (MPa) and stations (c, m) of uniform sections'
-    forces of one shape, stacked; ``constants`` keeps each section's h, A and I by id."""
+    forces of one shape, stacked: :meth:`SectionForces.fibre_stress` elementwise, each as
+    alone; ``constants`` keeps each section's h, A and I by id."""
     at = np.array([f.at for f, _ in chosen])
-    return (
-        _stress_of_stack(
-            at,
-            np.array([f.axial for f, _ in chosen]),  # np.array of equal shapes: np.stack's copy,
-            np.array([f.moment for f, _ in chosen]),  # at a third the cost
-            section_constants([s for _, s in chosen], constants),
-        ),
-        at,
-    )
+    axial = np.array([f.axial for f, _ in chosen])  # np.array of equal shapes: np.stack's copy,
+    moment = np.array([f.moment for f, _ in chosen])  # at a third the cost
+    values = section_constants([s for _, s in chosen], constants)
+    shape = (-1, *[1] * (axial.ndim - 1))  # each section's constants against its forces
+    stacked = _Sections(*(values[:, k].reshape(shape) for k in range(3)))
+    return SectionForces(at, axial, moment).fibre_stress(stacked), at
 
 
 def section_constants(
@@ -504,17 +496,6 @@ def section_constants(
         if id(s) not in known:
             known[id(s)] = (s.thickness, s.area, s.inertia)
     return np.array([known[id(s)] for s in sections], float).reshape(-1, 3)
-
-
-def _stress_of_stack(
-    at: np.ndarray, axial: np.ndarray, moment: np.ndarray, values: np.ndarray
-) -> np.ndarray:
-    """The outer-fibre stresses (c, ..., m) (MPa) of c uniform sections' stacked forces (N,
-    N mm): :meth:`SectionForces.fibre_stress` elementwise, each as alone; ``values`` (c, 3)
-    the sections' :func:`section_constants`."""
-    shape = (-1, *[1] * (axial.ndim - 1))
-    stacked = _Sections(*(values[:, k].reshape(shape) for k in range(3)))
-    return SectionForces(at, axial, moment).fibre_stress(stacked)
 
 
 def _unit_peaks(unit: np.ndarray, at: np.ndarray) -> list[Peaks]:

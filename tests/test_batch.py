@@ -423,11 +423,11 @@ def test_batch_construction_is_the_per_copy_construction(model, monkeypatch):
     for fast, own in zip(table, batch._copy_numbering()):
         assert np.array_equal(fast, own)
     assert np.array_equal(batch.initial_state(), System.initial_state(batch))
-    loads, ground = batch.batch_loads(cases), batch.mechanism.ground
+    loads = batch.batch_loads(cases)
     parts = [
         case_loads(
             case,
-            lambda body, k=k: batch.pose_dofs(batch._name(k, body, ground)),
+            lambda body, k=k: batch.pose_dofs(batch.copy_names[k][body]),
             {b: body.reference for b, body in mechanism.bodies.items()},
             mechanism.size(),
             connectors,
