@@ -60,6 +60,7 @@ import scipy.sparse as sp
 
 from flexval.geometry import LoadCase, Mechanism, SceneError
 
+from . import stability
 from .allocator import keep_freed_memory
 from .batchrecord import record_batch
 from .blocktangent import BlockLayout, BlockMaps, BlockTangent, block_maps
@@ -69,7 +70,6 @@ from .linearbatch import linear_responses
 from .loadpath import LoadPath
 from .loads import Loads
 from .newton import BatchNewtonResult, FixedLoad, StepProblem, solve_batch
-from .tangent import ROUND_OFF
 from .tracer import Counters, LoadControl, PathPoint, Solve, TraceFailure, Verdict, trace
 
 Member = tuple[Mechanism, Sequence[Connector]]
@@ -620,21 +620,23 @@ class BatchSystem(System):
         return block_maps(own, self.layout.b, self._copy_table)
 
     def _block_inertia(self, tangent, among: np.ndarray) -> np.ndarray:
-        """The negative eigenvalues beyond its multipliers of every copy of ``among`` (bool per
-        copy; 0 for the others), from its diagonal block.
+        """The negative eigenvalues beyond its multipliers of every copy of ``among`` (0 for
+        the others), from its diagonal block, by the kernel its own tangent counts with.
 
         A copy whose own tangent is dense is judged as its own System judges
         it: the block in the copy's own numbering, the pivots of its
-        Bunch-Kaufman LDL^T counted
+        Bunch-Kaufman LDL^T counted by the one rule
         (:meth:`~flexval.reducedmodels.tangent.DenseTangent.negative_eigenvalues`),
         every block of the batch in one compiled loop
         (:meth:`~flexval.reducedmodels.blocktangent.BlockTangent.copy_negative`:
-        a saddle point's tangent is one already, factorised for its solves). Larger
-        copies, banded alone, have their eigenvalues computed in one stacked
-        call; those below -``ROUND_OFF`` times the block's largest in size
-        count, as the copy's own band counts its eigenvalues.
+        a saddle point's tangent is one already, factorised for its solves).
+        A larger copy, banded alone, is its own band in the batch's (the
+        copies are numbered in their own orders, one after the other, with
+        the same half-bandwidth), counted by
+        :func:`~flexval.reducedmodels.stability.band_negative` as its own
+        banded tangent counts it. Not judged counts as stable, as alone.
         """
-        m, i, j, rows, columns, multipliers = self._block_maps()
+        m, _, _, _, _, multipliers = self._block_maps()
         chosen = np.flatnonzero(among)
         negative = np.zeros(self.n_copies, np.int64)
         if self._dense is not None:
@@ -644,15 +646,12 @@ class BatchSystem(System):
             counts = tangent.copy_negative()[chosen]
             negative[chosen] = np.where(counts >= 0, counts - multipliers, 0)  # -1: not finite,
             return negative  # not judged (as its own System's check)
-        values = tangent.storage[rows[None, :], columns[chosen]]
-        blocks = np.zeros((chosen.size, m, m))
-        blocks[:, i, j] = values
-        blocks[:, j, i] = values
-        if not np.isfinite(blocks).all():
-            return negative
-        eigenvalues = np.linalg.eigvalsh(blocks)
-        limit = -ROUND_OFF * np.abs(eigenvalues).max(axis=1, initial=0.0)
-        negative[chosen] = np.count_nonzero(eigenvalues < limit[:, None], axis=1) - multipliers
+        band = np.asarray(tangent.storage)
+        for c in chosen.tolist():
+            block = band[:, c * m : (c + 1) * m]
+            paired, pairs = stability.paired_band(block)
+            count = stability.band_negative(paired, pairs, 0, m)
+            negative[c] = count - multipliers if count >= 0 else 0
         return negative
 
     def use_loads(self, cases: Sequence[LoadCase]) -> Loads:
@@ -787,10 +786,7 @@ class BatchLoadControl(LoadControl):
         accepted = self._split_vote(within)
         if not accepted:  # the copies left all refused this step: LoadControl's reason
             k = int(np.flatnonzero(refused)[0])
-            self.refused_unstable = bool(unstable[k])
-            if self.refused_unstable and (
-                self.unstable_above is None or result.factor < self.unstable_above
-            ):
+            if unstable[k] and (self.unstable_above is None or result.factor < self.unstable_above):
                 self.unstable_above = result.factor
             why = (
                 result.reasons[k]
@@ -800,7 +796,6 @@ class BatchLoadControl(LoadControl):
                 else "step too large"
             )
             return Verdict(None, result.factor, why, None, False)
-        self.refused_unstable = False
         easy = result.iterations <= self.settings.fast_iterations
         fast = self._split_vote(easy & (ratios < 0.5))
         state = result.state.copy()
@@ -832,7 +827,6 @@ CARRIED = (
     "factor",
     "level",
     "unstable_above",
-    "refused_unstable",
     "history",
     "slope",
     "spacing",

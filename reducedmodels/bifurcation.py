@@ -53,7 +53,7 @@ def critical_mode(tangent: Tangent) -> tuple[float, np.ndarray]:
     else:
         import scipy.sparse.linalg as spla
 
-        values, vectors = spla.eigsh(tangent.matrix, k=1, sigma=0.0, which="LM")
+        values, vectors = spla.eigsh(tangent.tosparse(), k=1, sigma=0.0, which="LM")
         value, mode = float(values[0]), vectors[:, 0]
     mode = mode / np.linalg.norm(mode)
     return value, mode if mode[np.argmax(np.abs(mode))] > 0.0 else -mode

@@ -22,12 +22,11 @@ Units: those of the tangent (N/mm, N, N mm).
 from __future__ import annotations
 
 import functools
-from types import ModuleType
 from typing import NamedTuple
 
 import numpy as np
 
-from .tangent import ROUND_OFF, BandedTangent, TangentLayout
+from .tangent import BandedTangent, TangentLayout, ldl_kernels
 
 
 class BlockMaps(NamedTuple):
@@ -50,16 +49,6 @@ def block_maps(own: np.ndarray, half_bandwidth: int, index: np.ndarray) -> Block
     i, j = np.minimum.outer(own, own), np.maximum.outer(own, own)
     places = np.where(j - i <= b, (b + 1) * j + b + i - j, -1).astype(np.int64)
     return BlockMaps(places, (b + 1) * m, np.ascontiguousarray(index, np.int64))
-
-
-@functools.cache
-def ldl_kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.ldlkernel`, imported and compiled (or loaded from the
-    on-disk cache) on first use: numba is imported only by the models that need it."""
-    from . import ldlkernel
-
-    ldlkernel.warm_up()
-    return ldlkernel
 
 
 class BlockTangent(BandedTangent):
@@ -91,7 +80,7 @@ class BlockTangent(BandedTangent):
             storage.reshape(n, half_bandwidth + 1).T, perm, half_bandwidth, indefinite=True
         )
         self.flat, self.blocks = storage, blocks
-        self._blocks: tuple | None = None  # factors, pivots, D's eigenvalues, info per copy
+        self._blocks: tuple | None = None  # factors, pivots, D's eigenvalues, info, negative
 
     def _factorise(self) -> None:
         if self._blocks is None:
@@ -100,6 +89,7 @@ class BlockTangent(BandedTangent):
             pivots = np.empty((copies, m), np.int64)
             eigenvalues = np.empty((copies, m))
             info = np.empty(copies, np.int64)
+            negative = np.empty(copies, np.int64)
             ldl_kernels().block_factor(
                 self.flat,
                 self.blocks.places,
@@ -108,14 +98,15 @@ class BlockTangent(BandedTangent):
                 pivots,
                 eigenvalues,
                 info,
+                negative,
             )
-            self._blocks = (factors, pivots, eigenvalues, info)
+            self._blocks = (factors, pivots, eigenvalues, info, negative)
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """K x = rhs, each copy's part by its own block's LDL^T; NaN for a copy whose block is
         singular or not finite (a batch of one copy raises, as the copy's own tangent does)."""
         self._factorise()
-        factors, pivots, _, info = self._blocks
+        factors, pivots, _, info, _ = self._blocks
         if info.size == 1 and info[0] > 0:
             raise np.linalg.LinAlgError(f"singular tangent (zero pivot {int(info[0])})")
         solve = functools.partial(
@@ -139,19 +130,16 @@ class BlockTangent(BandedTangent):
         eigenvalues, info = self._blocks[2], self._blocks[3]
         return bool((info == 0).all() and (eigenvalues > 0.0).all())
 
-    def copy_negative(self, round_off: float = ROUND_OFF) -> np.ndarray:
-        """Each copy's negative eigenvalues: D's below -``round_off`` times its largest in size
-        (-1: a block that is not finite, not judged)."""
+    def copy_negative(self) -> np.ndarray:
+        """Each copy's negative eigenvalues, D's pivots judged by the one rule
+        (:mod:`flexval.reducedmodels.stability`) in the kernel that factorised the block, the
+        kernel its own dense tangent counts with (-1: a block that is not finite, not judged)."""
         self._factorise()
-        eigenvalues, info = self._blocks[2], self._blocks[3]
-        with np.errstate(invalid="ignore"):
-            limit = -round_off * np.abs(eigenvalues).max(axis=1, initial=0.0)
-            counts = np.count_nonzero(eigenvalues < limit[:, None], axis=1)
-        return np.where(info >= 0, counts, -1)
+        return self._blocks[4]
 
-    def negative_eigenvalues(self, round_off: float = ROUND_OFF) -> int | None:
+    def negative_eigenvalues(self) -> int | None:
         """The sum of :meth:`copy_negative` (None if a block is not finite)."""
-        counts = self.copy_negative(round_off)
+        counts = self.copy_negative()
         return None if (counts < 0).any() else int(counts.sum())
 
 

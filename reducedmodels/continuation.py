@@ -169,7 +169,7 @@ class ArcLength(Stepping):
         self.arc_min = arc0 * 0.5**self.settings.max_cuts
         self.direction = (tangent, 1.0)  # unscaled (dq, dlambda) of the last converged step
         self.was_cut = self.landed = self.switched = False
-        self.count = self.next_count = system.instability(point.tangent, 0.0)
+        self.count = self.next_count = system.instability(point.tangent)
 
     def finished(self) -> bool:
         """True once the path has landed on ``max_load_factor``."""
@@ -224,7 +224,7 @@ class ArcLength(Stepping):
         critical mode (the direction of the crossing branch), sized to half
         the step bounds; the arc-length limits are re-based on that size.
         """
-        count = self.system.instability(verdict.tangent, 0.0)
+        count = self.system.instability(verdict.tangent)
         self.next_count = count
         if count is None or self.count is None or count == self.count:
             return verdict
@@ -271,7 +271,7 @@ class ArcLength(Stepping):
             if result.state is None:
                 break
             tangent = FixedLoad(system, loads, result.factor).assemble(result.state)[1]
-            count = system.instability(tangent, 0.0)
+            count = system.instability(tangent)
             if count is None:
                 break
             if count == before:

@@ -640,21 +640,19 @@ class System:
         negative = self.instability(tangent)
         return negative is not None and negative > 0
 
-    def instability(self, tangent: Tangent | None, round_off: float | None = None) -> int | None:
+    def instability(self, tangent: Tangent | None) -> int | None:
         """The tangent's negative eigenvalues beyond those its multipliers make (None: not judged).
 
         Zero on a stable equilibrium; it changes where the path passes a
         limit point or a bifurcation (an eigenvalue of the tangent crosses
-        zero). ``round_off`` (default the tangent's own margin) sets which
-        eigenvalues are too small to count: 0 counts them all.
+        zero). Counted by the one rule of
+        :mod:`flexval.reducedmodels.stability` (each pivot against its own
+        round-off), so the count does not depend on the units or the
+        resolution.
         """
         if tangent is None:
             return None
-        negative = (
-            tangent.negative_eigenvalues()
-            if round_off is None
-            else tangent.negative_eigenvalues(round_off)
-        )
+        negative = tangent.negative_eigenvalues()
         return None if negative is None else negative - self.n_multipliers
 
     def residual(self, grad: np.ndarray, loads: Loads) -> float:

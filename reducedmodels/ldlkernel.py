@@ -16,8 +16,11 @@ The factorisation and the solve are LAPACK's unblocked upper ones
 (``dsytf2``, which ``dsytrf`` runs on any matrix smaller than its block
 size of 64, and ``dsytrs``): the same pivot choices with alpha =
 (1 + sqrt(17)) / 8, the same updates in the same order, so D and the
-solutions are LAPACK's to round-off and the count of D's negative
-eigenvalues, with the same margin, is the count the copy alone makes.
+solutions are LAPACK's to round-off; the count of D's negative
+eigenvalues (:func:`ldl_negative`, the rule of
+:mod:`flexval.reducedmodels.stability`) is made by the same kernel for a
+copy alone (:class:`flexval.reducedmodels.tangent.DenseTangent`), so a batch
+and its copies alone judge stability bit for bit alike.
 
 Units: whatever the matrix's (N/mm, N, N mm for a tangent).
 """
@@ -29,6 +32,7 @@ import math
 import numpy as np
 
 from .jit import kernel
+from .stability import UNIT_ROUNDOFF, one_negative, pair_negative
 
 ALPHA = (1.0 + math.sqrt(17.0)) / 8.0
 """Bunch and Kaufman's pivot threshold: the growth bound of a 1 x 1 against a 2 x 2 pivot."""
@@ -51,7 +55,9 @@ def pack_upper(matrix: np.ndarray) -> np.ndarray:
 
 
 @kernel
-def ldl_factor(a: np.ndarray, pivots: np.ndarray, eigenvalues: np.ndarray) -> int:
+def ldl_factor(
+    a: np.ndarray, pivots: np.ndarray, eigenvalues: np.ndarray, scales: np.ndarray
+) -> int:
     """P A P^T = U D U^T in place (Bunch-Kaufman, LAPACK's ``dsytf2``, upper), and D's eigenvalues.
 
     Parameters
@@ -66,6 +72,12 @@ def ldl_factor(a: np.ndarray, pivots: np.ndarray, eigenvalues: np.ndarray) -> in
     eigenvalues : ndarray (m,)
         Filled with D's 1 x 1 pivots and the two eigenvalues of each 2 x 2
         pivot block (smaller first), in the order of the factorisation.
+    scales : ndarray (m,)
+        Filled with each pivot's round-off scale, the diagonal of
+        |U| |D| |U^T| (the magnitudes summed into it), row k's at k as the
+        pivots lie in ``a``: what :func:`ldl_negative` judges each pivot
+        against (:mod:`flexval.reducedmodels.stability`). Bookkeeping only:
+        the factor is the same without it.
 
     Returns
     -------
@@ -75,6 +87,8 @@ def ldl_factor(a: np.ndarray, pivots: np.ndarray, eigenvalues: np.ndarray) -> in
     """
     m = a.shape[0]
     info = 0
+    for i in range(m):
+        scales[i] = abs(a[i, i])
     k = m - 1
     while k >= 0:
         step = 1
@@ -115,6 +129,7 @@ def ldl_factor(a: np.ndarray, pivots: np.ndarray, eigenvalues: np.ndarray) -> in
             for j in range(pivot + 1, kk):
                 a[j, kk], a[pivot, j] = a[pivot, j], a[j, kk]
             a[kk, kk], a[pivot, pivot] = a[pivot, pivot], a[kk, kk]
+            scales[kk], scales[pivot] = scales[pivot], scales[kk]
             if step == 2:
                 a[k - 1, k], a[pivot, k] = a[pivot, k], a[k - 1, k]
         if step == 1:
@@ -122,6 +137,7 @@ def ldl_factor(a: np.ndarray, pivots: np.ndarray, eigenvalues: np.ndarray) -> in
             for j in range(k):  # A(0:k-1, 0:k-1) -= r1 x x^T, x = A(0:k-1, k): dsyr's order
                 if a[j, k] != 0.0:
                     t = -r1 * a[j, k]
+                    scales[j] += abs(a[j, k] * t)
                     for i in range(j + 1):
                         a[i, j] += a[i, k] * t
             for i in range(k):
@@ -138,6 +154,7 @@ def ldl_factor(a: np.ndarray, pivots: np.ndarray, eigenvalues: np.ndarray) -> in
                 for j in range(k - 2, -1, -1):
                     wkm1 = d12 * (d11 * a[j, k - 1] - a[j, k])
                     wk = d12 * (d22 * a[j, k] - a[j, k - 1])
+                    scales[j] += abs(a[j, k] * wk) + abs(a[j, k - 1] * wkm1)
                     for i in range(j, -1, -1):
                         a[i, j] = a[i, j] - a[i, k] * wk - a[i, k - 1] * wkm1
                     a[j, k] = wk
@@ -148,6 +165,26 @@ def ldl_factor(a: np.ndarray, pivots: np.ndarray, eigenvalues: np.ndarray) -> in
             eigenvalues[k - 1], eigenvalues[k] = mid - radius, mid + radius
         k -= step
     return info
+
+
+@kernel
+def ldl_negative(a: np.ndarray, pivots: np.ndarray, scales: np.ndarray) -> int:
+    """D's negative eigenvalues after :func:`ldl_factor` (``a`` its factor, square), by the one
+    rule of :mod:`flexval.reducedmodels.stability`: each 1 x 1 pivot and 2 x 2 block judged
+    against its own round-off scale, with gamma_(m+1) (a pivot sums at most m terms)."""
+    m = pivots.size
+    gamma = (m + 1) * UNIT_ROUNDOFF / (1.0 - (m + 1) * UNIT_ROUNDOFF)
+    negative = 0
+    k = m - 1
+    while k >= 0:
+        if pivots[k] >= 0:
+            negative += one_negative(a[k, k], scales[k], gamma)
+            k -= 1
+        else:
+            p, q, r = a[k - 1, k - 1], a[k - 1, k], a[k, k]
+            negative += pair_negative(p, q, r, scales[k - 1], scales[k], gamma)
+            k -= 2
+    return negative
 
 
 @kernel
@@ -218,6 +255,7 @@ def block_factor(
     pivots: np.ndarray,
     eigenvalues: np.ndarray,
     info: np.ndarray,
+    negative: np.ndarray,
 ) -> None:
     """:func:`ldl_factor` of every copy's diagonal block of a block-diagonal matrix.
 
@@ -231,9 +269,10 @@ def block_factor(
         the upper triangle is read.
     stride : int
         The values between one copy's block and the next's.
-    factors, pivots, eigenvalues, info : ndarray
-        (copies, m (m + 1) / 2), (copies, m), (copies, m) and (copies,):
-        filled with each copy's :func:`ldl_factor` results, ``factors[c]``
+    factors, pivots, eigenvalues, info, negative : ndarray
+        (copies, m (m + 1) / 2), (copies, m), (copies, m), (copies,) and
+        (copies,): filled with each copy's :func:`ldl_factor` results and
+        its negative eigenvalues (:func:`ldl_negative`; -1 when not finite), ``factors[c]``
         holding the factorised block packed (:func:`pack_upper`; half the
         square's memory: a 1000-copy ``prbm`` batch's factors stay in a
         core's 2 MB cache for the solves, which then cost half as much); a
@@ -241,6 +280,7 @@ def block_factor(
         eigenvalues NaN.
     """
     m = places.shape[0]
+    scales = np.empty(m)
     work = np.empty((m, m))  # one copy's block, transposed: U's columns contiguous (a quarter
     a = work.T  # less time than row by row on prbm's blocks), kept in cache between copies
     for c in range(info.size):
@@ -254,9 +294,11 @@ def block_factor(
                 work[q, p] = value
         if not math.isfinite(total):
             info[c] = -1
+            negative[c] = -1
             eigenvalues[c, :] = np.nan
             continue
-        info[c] = ldl_factor(a, pivots[c], eigenvalues[c])
+        info[c] = ldl_factor(a, pivots[c], eigenvalues[c], scales)
+        negative[c] = ldl_negative(a, pivots[c], scales)
         packed, at = factors[c], 0
         for q in range(m):  # the upper triangle, column after column
             for p in range(q + 1):
@@ -299,6 +341,7 @@ def warm_up() -> None:
     places = np.arange(9, dtype=np.int64).reshape(3, 3)
     factors, pivots = np.empty((1, packed_size(3))), np.empty((1, 3), np.int64)
     eigenvalues, info = np.empty((1, 3)), np.empty(1, np.int64)
-    block_factor(matrix.ravel(), places, 9, factors, pivots, eigenvalues, info)
+    negative = np.empty(1, np.int64)
+    block_factor(matrix.ravel(), places, 9, factors, pivots, eigenvalues, info, negative)
     index = np.arange(3, dtype=np.int64)[None, :]
     block_solve(factors, pivots, info, index, np.ones(3), np.empty(3))

@@ -19,7 +19,9 @@ adds them as it computes them):
   much for QDLDL's column-by-column arithmetic), whose D gives the inertia.
 
 Every :class:`Tangent` solves K x = b and counts its negative eigenvalues
-(Sylvester's inertia, the stability check of the load stepping).
+(Sylvester's inertia, the stability check of the load stepping) by the one
+rule of :mod:`flexval.reducedmodels.stability`: each pivot of an LDL^T judged
+against its own round-off.
 
 Units: the tangent is in N/mm, N and N mm like the coordinates it pairs.
 """
@@ -27,15 +29,14 @@ Units: the tangent is in N/mm, N and N mm like the coordinates it pairs.
 from __future__ import annotations
 
 import functools
-import math
 from types import ModuleType
 from typing import Protocol
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.linalg import lapack
 
+from . import stability
 from .threads import limit_threads
 
 DENSE_LIMIT = 96  # above ~100 unknowns, multithreaded LAPACK stalls on a loaded 2-core machine
@@ -50,7 +51,6 @@ NARROW_BAND = 8  # compiled banded Cholesky up to this half-bandwidth, LAPACK's 
 NARROW_MIN = 48  # a system that already runs compiled kernels takes a narrow band instead of
 # dense storage from this many unknowns (factor + solve at b = 5, n = 57:
 # 5 us instead of 15 us, n = 90: 8 instead of 36 us; n = 33: 6 against 9)
-ROUND_OFF = 1e-12  # eigenvalues above -ROUND_OFF * |K| count as zero, not as negative
 LDL_FILL_LIMIT = 200  # QDLDL's column-by-column LDL^T up to this many factor entries per
 # column, SuperLU's supernodes (dense blocks, BLAS 3) above. QDLDL's time over symmetric-mode
 # SuperLU's, scikit-fem elasticity matrices: 2D quad9, 28-44 per column at 6,000-23,000
@@ -87,6 +87,16 @@ def band_kernels(b: int) -> ModuleType:
 
 
 @functools.cache
+def ldl_kernels() -> ModuleType:
+    """:mod:`flexval.reducedmodels.ldlkernel`, its kernels loaded: the compiled Bunch-Kaufman
+    LDL^T that counts a dense tangent's inertia (and a batch's blocks')."""
+    from . import ldlkernel
+
+    ldlkernel.warm_up()
+    return ldlkernel
+
+
+@functools.cache
 def order_kernels() -> ModuleType:
     """:mod:`flexval.reducedmodels.orderkernel`, its kernels loaded (a compiled system's ordering).
 
@@ -111,17 +121,21 @@ class Tangent(Protocol):
         """
         ...
 
-    def negative_eigenvalues(self, round_off: float = ROUND_OFF) -> int | None:
-        """Number of eigenvalues below -round_off |K| (None: could not be judged).
+    def negative_eigenvalues(self) -> int | None:
+        """Number of negative eigenvalues (None: could not be judged).
 
-        ``round_off`` 0 counts every negative eigenvalue, however small: the
-        exact inertia a bifurcation search bisects on (the stability test
-        keeps a margin for round-off).
+        Counted by the one rule of :mod:`flexval.reducedmodels.stability`:
+        a pivot of the factorisation counts when it is negative beyond its
+        own round-off, whatever the units or the resolution.
         """
         ...
 
     def toarray(self) -> np.ndarray:
         """The matrix as a dense (n, n) array (for tests and small-system inspection)."""
+        ...
+
+    def tosparse(self) -> sp.csc_matrix:
+        """The matrix as a sparse (n, n) CSC matrix (for eigensolvers of large systems)."""
         ...
 
 
@@ -142,6 +156,7 @@ class DenseTangent:
         self._cholesky = None  # upper Cholesky factor, when K is positive definite
         self._ldl = None  # (ldu, ipiv, info) of dsytrf, when it is not
         self._positive = False if indefinite else None  # dpotrf succeeded (None: not tried)
+        self._negative: int | None = None  # the inertia's count, once made
 
     def _factorise(self) -> None:
         if self._positive is None:
@@ -160,33 +175,35 @@ class DenseTangent:
             raise np.linalg.LinAlgError(f"singular tangent (zero pivot {info})")
         return lapack.dsytrs(ldu, ipiv, rhs)[0]
 
-    def negative_eigenvalues(self, round_off: float = ROUND_OFF) -> int | None:
-        """Zero when the Cholesky succeeded, else the negative eigenvalues of LDL^T's D.
+    def negative_eigenvalues(self) -> int | None:
+        """Zero when the Cholesky succeeded, else the negative eigenvalues of an LDL^T's D.
 
-        D's 1 x 1 blocks and 2 x 2 blocks (rows k, k + 1 of the upper
-        factorisation, marked by ipiv[k] = ipiv[k + 1] < 0) give its
-        eigenvalues directly; those below -``round_off`` times the largest in
-        size count. (Plain floats: at most ``DENSE_LIMIT`` of them.)
+        The LDL^T is the compiled Bunch-Kaufman of
+        :func:`flexval.reducedmodels.ldlkernel.ldl_factor` (LAPACK's
+        ``dsytf2``), whose every pivot comes with its round-off scale, its
+        count made by :func:`~flexval.reducedmodels.ldlkernel.ldl_negative`:
+        the same kernel a batch of copies counts each block with.
         """
         if not np.isfinite(self.matrix).all():
             return None
         self._factorise()
         if self._positive:
             return 0
-        ldu, ipiv, _ = self._ldl
-        eigenvalues = ldu.diagonal().tolist()  # D's 1 x 1 blocks, and the 2 x 2 ones':
-        blocks = [k for k, p in enumerate(ipiv.tolist()) if p < 0][0::2]  # first rows
-        if blocks:
-            off = ldu.diagonal(1).tolist()
-            for k in blocks:
-                a, b, c = eigenvalues[k], off[k], eigenvalues[k + 1]
-                mid, radius = 0.5 * (a + c), math.hypot(0.5 * (a - c), b)
-                eigenvalues[k], eigenvalues[k + 1] = mid - radius, mid + radius
-        limit = -round_off * max(map(abs, eigenvalues), default=0.0)
-        return len([value for value in eigenvalues if value < limit])
+        if self._negative is None:
+            kernels = ldl_kernels()
+            work = np.ascontiguousarray(self.matrix.T)  # as a batch's block: upper read,
+            factor = work.T  # U's columns contiguous
+            pivots, eigenvalues = np.empty(self.n, np.int64), np.empty(self.n)
+            scales = np.empty(self.n)
+            kernels.ldl_factor(factor, pivots, eigenvalues, scales)
+            self._negative = int(kernels.ldl_negative(factor, pivots, scales))
+        return self._negative
 
     def toarray(self) -> np.ndarray:
         return self.matrix
+
+    def tosparse(self) -> sp.csc_matrix:
+        return sp.csc_matrix(self.matrix)
 
 
 class BandedTangent:
@@ -301,11 +318,14 @@ class BandedTangent:
         self._factorise()
         return self._cholesky is not None
 
-    def negative_eigenvalues(self, round_off: float = ROUND_OFF) -> int | None:
+    def negative_eigenvalues(self) -> int | None:
         """Zero when the banded Cholesky of the solves succeeded (O(n b^2), no extra work).
 
-        Otherwise the count comes from banded bisection (``eigvals_banded``),
-        exact but some 30 times slower; saddle-point systems always take it.
+        Otherwise a banded LDL^T without interchanges counts them
+        (:func:`flexval.reducedmodels.stability.band_negative`, O(n b^2)),
+        each Lagrange multiplier's row paired with an unknown it constrains
+        (:func:`~flexval.reducedmodels.stability.paired_band`); None when a
+        pivot cannot be judged.
         """
         upper = self.storage
         if not np.isfinite(upper).all():
@@ -313,11 +333,22 @@ class BandedTangent:
         self._factorise()
         if self._cholesky is not None:
             return 0
-        scale = np.abs(upper).max(initial=0.0) * (2 * self.b + 1)  # >= spectral radius
-        negative = sla.eigvals_banded(
-            upper, select="v", select_range=(-np.inf, -round_off * scale), check_finite=False
+        band, pairs = stability.paired_band(np.asarray(upper))
+        negative = stability.band_negative(band, pairs, 0, self.n)
+        return None if negative < 0 else int(negative)
+
+    def tosparse(self) -> sp.csc_matrix:
+        rows, cols, values = [], [], []
+        for k in range(self.b + 1):  # k = j - i: the k-th super-diagonal and its mirror
+            j = np.arange(k, self.n)
+            value = self.storage[self.b - k, j]
+            rows += [self.perm[j - k]] + ([self.perm[j]] if k else [])
+            cols += [self.perm[j]] + ([self.perm[j - k]] if k else [])
+            values += [value] + ([value] if k else [])
+        return sp.csc_matrix(
+            (np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
+            shape=(self.n, self.n),
         )
-        return int(negative.size)
 
     def toarray(self) -> np.ndarray:
         dense = np.zeros((self.n, self.n))
@@ -477,28 +508,39 @@ class SparseTangent:
         size = self._norm * np.abs(x).max(initial=0.0) + np.abs(rhs).max(initial=0.0)
         return float(np.abs(residual).max(initial=0.0) / size) if size > 0.0 else 0.0
 
-    def negative_eigenvalues(self, round_off: float = ROUND_OFF) -> int | None:
-        """Pivots of the LDL^T below -round_off times the largest in size (Sylvester's inertia).
+    def negative_eigenvalues(self) -> int | None:
+        """Pivots of the LDL^T negative beyond their own round-off (Sylvester's inertia).
 
-        Not judged (None) when K has non-finite entries, or when it fell back
-        to the pivoting LU and is a saddle point or meets a zero pivot in a
-        symmetric-mode SuperLU too.
+        Each pivot's scale is the diagonal of |L| |D| |L^T| of the factor the
+        solves use (QDLDL's or the symmetric SuperLU's), its tolerance
+        gamma_(c+2) for the longest row c of L
+        (:mod:`flexval.reducedmodels.stability`). Not judged (None) when K
+        has non-finite entries, or when it fell back to the pivoting LU and
+        is a saddle point or meets a zero pivot in a symmetric-mode SuperLU
+        too.
         """
         if not np.isfinite(self.matrix.data).all():
             return None
         self._factorise()
-        pivots = self._pivots
-        if pivots is None:  # the fallback: a separate symmetric-mode factorisation
+        if self._pivots is None:  # the fallback: a separate symmetric-mode factorisation
             if self.n_multipliers:
                 return None
             symmetric = _symmetric_superlu(self.matrix)
             if symmetric is None:
                 return None
-            pivots = symmetric.U.diagonal()
-        return int(np.sum(pivots < -round_off * np.abs(pivots).max(initial=0.0)))
+            return _superlu_negative(symmetric)
+        if self._method == "superlu":
+            return _superlu_negative(self._symmetric)
+        if self._analysis.owner != self._token:  # a later tangent refactorised the solver
+            self._ldl()
+        lower, pivots = self._analysis.solver.factors()[:2]
+        return _pivots_negative(sp.csr_matrix(lower), pivots)
 
     def toarray(self) -> np.ndarray:
         return self.matrix.toarray()
+
+    def tosparse(self) -> sp.csc_matrix:
+        return self.matrix
 
 
 def _symmetric_superlu(matrix: sp.csc_matrix):
@@ -522,6 +564,26 @@ def _symmetric_superlu(matrix: sp.csc_matrix):
     if not np.array_equal(lu.perm_r, lu.perm_c) or not np.isfinite(pivots).all():
         return None
     return lu
+
+
+def _pivots_negative(lower: sp.csr_matrix, pivots: np.ndarray) -> int:
+    """D's pivots negative beyond round-off, for K = L D L^T (L unit lower, strictly below
+    its diagonal in ``lower``); scales |D_k| + sum_j L_kj^2 |D_j| (stability's rule)."""
+    magnitudes = np.abs(pivots)
+    squares = lower.multiply(lower).tocsr()
+    scales = magnitudes + squares @ magnitudes
+    longest = int(np.diff(squares.indptr).max(initial=0))
+    return stability.count_pivots(pivots, scales, stability.tolerance(longest + 2))
+
+
+def _superlu_negative(lu) -> int:
+    """:func:`_pivots_negative` of a symmetric-mode SuperLU (U = D L^T: L_kj U_jk = D_j L_kj^2)."""
+    pivots = lu.U.diagonal()
+    lower = sp.csr_matrix(lu.L)
+    lower.setdiag(0.0)
+    lower.eliminate_zeros()
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return _pivots_negative(lower, pivots)
 
 
 def _norm_inf(matrix: sp.csc_matrix) -> float:

@@ -333,7 +333,6 @@ class LoadControl(Stepping):
         self.tangent = point.tangent  # at the last accepted state, to classify a bifurcation
         self.level = (self.q, self.factor)  # the state at the last requested factor reached
         self.unstable_above: float | None = None  # least factor refused as unstable
-        self.refused_unstable = False  # the last refusal was an unstable equilibrium
         self.history = [(self.q, self.factor)]  # converged (state, factor) for the predictor
         # what the connectors' own predictors keep of each state, computed once per state
         self.past = [system.remembered(self.q)] if system.predicts_internal else None
@@ -384,14 +383,12 @@ class LoadControl(Stepping):
         """Refuse non-convergence, a step beyond the bounds and (optionally) instability."""
         q_new, why = result.state, result.reason
         ratio = self.system.motion_ratio(self.q, q_new) if q_new is not None else math.inf
-        self.refused_unstable = False
         if ratio <= 1.0 and self.settings.check_stability and self.system.unstable(result.tangent):
             q_new, ratio, why = (
                 None,
                 math.inf,
                 ("converged to an unstable equilibrium (past a limit point?)"),
             )
-            self.refused_unstable = True
             if self.unstable_above is None or result.factor < self.unstable_above:
                 self.unstable_above = result.factor
         if ratio > 1.0:
@@ -407,8 +404,16 @@ class LoadControl(Stepping):
         )
 
     def cut(self) -> bool:
-        """Halve the sub-step."""
+        """Halve the sub-step; False once the smallest is passed, or once the last stable state
+        and the least unstable one are within ``BIFURCATION_RTOL`` of each other (a crossing
+        located: closer, Newton's near-singular steps may leave the path for a crossing
+        branch)."""
         self.step *= 0.5
+        above = self.unstable_above
+        if above is not None and above - self.factor <= BIFURCATION_RTOL * max(
+            abs(above), self.spacing
+        ):
+            return False
         return self.step >= self.min_step
 
     def advance(self, verdict: Verdict) -> float | None:
@@ -440,23 +445,22 @@ class LoadControl(Stepping):
     def stopped_by_bifurcation(self, solve: Solve) -> float | None:
         """The bifurcation between the last stable state and the nearest unstable one, if it is one.
 
-        When step cutting fails on an unstable equilibrium converged within
-        the step bounds, the crossing lies between the last accepted factor
-        and the least factor refused as unstable (cutting has closed that
-        bracket to ``min_step``). Near a limit point load control can also
-        converge to the unstable twin of the stable state, so the path is
-        probed :data:`BIFURCATION_PROBE` (relative) beyond: a bifurcation
-        leaves an equilibrium there, within the step bounds, unstable, reached
-        from the stable state along a direction that is not the critical
-        mode of the last stable tangent
+        When step cutting fails after an unstable equilibrium was converged
+        within the step bounds, an eigenvalue crossed zero between the last
+        accepted factor and the least factor refused as unstable. That bracket
+        is closed by bisection on the load factor (:meth:`_bracket`, the one
+        stability rule at each state) and the path is probed
+        :data:`BIFURCATION_PROBE` (relative) beyond it: a bifurcation leaves
+        an equilibrium there, within the step bounds, unstable, reached from
+        the stable state along a direction that is not the critical mode of
+        the last stable tangent
         (:func:`~flexval.reducedmodels.bifurcation.classify`); a limit point
         leaves none. Returns the bracket's middle, or None.
         """
         above, system = self.unstable_above, self.system
-        if not self.refused_unstable or above is None or self.tangent is None:
+        if above is None or self.tangent is None:
             return None
-        if above - self.factor > BIFURCATION_RTOL * max(abs(above), abs(self.factor)):
-            return None
+        lo, hi = self._bracket(solve, above)
         trial = self.factor + BIFURCATION_PROBE * max(abs(self.factor), self.spacing)
         q_level, factor_level = self.level  # a linear guess: the sub-steps near the crossing
         span = self.factor - factor_level  # are too close together to extrapolate through
@@ -472,38 +476,33 @@ class LoadControl(Stepping):
             split, _ = classify(system, self.tangent, probe.state - self.q)
         except (ValueError, RuntimeError, np.linalg.LinAlgError):
             return None
-        return self._exact_crossing(solve, 0.5 * (self.factor + above)) if split else None
+        return 0.5 * (lo + hi) if split else None
 
-    def _exact_crossing(self, solve: Solve, found: float) -> float:
-        """The crossing where every negative eigenvalue counts, below ``found`` if it lies there.
+    def _bracket(self, solve: Solve, above: float) -> tuple[float, float]:
+        """The load factors (stable, unstable) closing on a change of inertia, to
+        ``BIFURCATION_RTOL``.
 
-        The stability test leaves eigenvalues above -ROUND_OFF |K| uncounted
-        (on a stiff tangent the crossing is found late by up to 0.2 %:
-        beam:100's column). When the last stable state has a negative
-        eigenvalue that small, the crossing is bisected on the load factor
-        between the last requested level and it, from linear guesses along
-        that stretch, to ``BIFURCATION_RTOL``.
+        Bisection from the last stable state to ``above``, each middle solved
+        from the linearised guess at the stable end (its slope K^-1 f); a
+        middle that does not converge ends it with the bracket so far.
         """
         system, loads = self.system, self.loads
-        if system.instability(self.tangent, 0.0) == 0:
-            return found
-        (q_lo, lo), (q_hi, hi) = self.level, (self.q, self.factor)
-        if system.instability(self.system.assemble(q_lo, loads, lo)[2], 0.0) != 0:
-            return found
-        while hi - lo > BIFURCATION_RTOL * abs(hi):
+        lo, q_lo, hi = self.factor, self.q, above
+        slope = self._slope(self.tangent)
+        while hi - lo > BIFURCATION_RTOL * max(abs(hi), abs(lo)):
             mid = 0.5 * (lo + hi)
-            guess = q_lo + (q_hi - q_lo) * ((mid - lo) / (hi - lo))
+            guess = q_lo if slope is None else system.update(q_lo, slope * (mid - lo))
             result = solve(FixedLoad(system, loads, mid), guess, q_lo)
-            if result.state is None:
-                return found
-            count = system.instability(system.assemble(result.state, loads, mid)[2], 0.0)
+            if result.state is None or system.motion_ratio(q_lo, result.state) > 1.0:
+                break
+            count = system.instability(system.assemble(result.state, loads, mid)[2])
             if count is None:
-                return found
-            if count == 0:
-                q_lo, lo = result.state, mid
+                break
+            if count > 0:
+                hi = mid
             else:
-                q_hi, hi = result.state, mid
-        return 0.5 * (lo + hi)
+                lo, q_lo = mid, result.state
+        return lo, hi
 
     def exhausted(self, counters: Counters) -> str | None:
         """More sub-steps than ``max_substeps``."""

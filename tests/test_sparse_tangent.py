@@ -20,7 +20,6 @@ from test_continuum import E_MOD, cantilever
 
 from flexval.geometry import Force, LoadCase, Segment
 from flexval.reducedmodels.tangent import (
-    ROUND_OFF,
     SparseAnalysis,
     SparseTangent,
     TangentLayout,
@@ -87,7 +86,6 @@ def test_ldl_solves_and_counts_the_inertia_of_symmetric_matrices(negative, seed)
     for tangent in (first, second):
         assert_solves(tangent, rhs)
         assert tangent.negative_eigenvalues() == negative
-        assert tangent.negative_eigenvalues(0.0) == negative  # the gap is far above round-off
     assert second._method == "ldl"
     several = rng.normal(size=(matrix.shape[0], 3))
     assert np.allclose(second.solve(several)[:, 1], second.solve(several[:, 1]), rtol=1e-14)
@@ -228,10 +226,9 @@ def test_a_continuum_tangent_past_buckling_has_numpys_inertia():
     rhs = np.random.default_rng(0).normal(size=dense.shape[0])
     for sparse in (first, second):
         assert sparse.negative_eigenvalues() == 2
-        assert sparse.negative_eigenvalues(0.0) == 2
         assert_solves(sparse, rhs)
     assert second._method == "ldl"
-    assert abs(ev[0]) > ROUND_OFF * np.abs(ev).max()  # the count is not round-off's
+    assert abs(ev[0]) > 1e-12 * np.abs(ev).max()  # far above round-off (u |K| ~ 1e-16 |K|)
 
 
 def test_a_continuum_path_is_superlus_to_round_off():

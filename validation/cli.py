@@ -576,6 +576,55 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_buckle(args: argparse.Namespace) -> int:
+    from flexval.reducedmodels import SolverError, parse_model
+
+    from .buckle import buckle_record, path_stop, run_buckle
+    from .modes import plot_modes
+
+    scene = load_scene(args.scene)
+    spec = parse_model(args.model, "<command line>", "--model")
+    _check_memory([(scene.mechanism, spec, None)], COMMAND_LINE, "--model")
+    json_path = check_file(args.json, "--json") if args.json is not None else None
+    plot_path = check_figure_file(args.plot, "--plot") if args.plot is not None else None
+    case = scene.load_case(args.load_case) if args.load_case else scene.load_cases[0]
+    try:
+        system, found = run_buckle(scene, spec, case, args.at, args.count)
+    except SolverError as exc:
+        print(f"flexval: solver failure: {exc}", file=sys.stderr)
+        return EXIT_SOLVER
+    where = "at rest" if args.at == 0.0 else f"about {args.at:g} of the load"
+    print(f"{spec.id}, load case {case.name}: linearised buckling {where}")
+    rows = [
+        [str(k), sig(f, 6), sig(f * case.magnitude, 6)]
+        for k, f in enumerate(found.factors.tolist(), 1)
+    ]
+    columns = [Column("mode"), Column("factor"), Column(f"load {case.unit}")]
+    for line in text_table(columns, rows, "  "):
+        print(line)
+    if not rows:
+        print("no critical load: the load case does not destabilise this model")
+    stop = path_stop(scene, spec, case)
+    if stop["kind"] == "bifurcation":
+        print(f"load control: bifurcation at {sig(stop['load'], 6)} {case.unit}")
+    elif stop["kind"] == "failure":
+        print(f"load control: stops at {sig(stop['load'], 6)} {case.unit} ({stop['reason']})")
+    else:
+        print(f"load control: stable up to the full load {sig(case.magnitude, 6)} {case.unit}")
+    if json_path:
+        write_json(json_path, buckle_record(scene, spec, case, system, found, stop))
+    if plot_path and rows:
+        from flexval.reducedmodels.modes import Modes
+
+        shapes = Modes(found.factors, found.shapes, found.state)
+        labels = [
+            f"mode {k}: {sig(f * case.magnitude, 4)} {case.unit}"
+            for k, f in enumerate(found.factors.tolist(), 1)
+        ]
+        plot_modes(system, shapes, plot_path, f"{scene.name} {spec.id} {where}", labels)
+    return EXIT_OK
+
+
 def _peak_cells(lp) -> tuple[str, str]:
     """``peak MPa`` and ``at`` of a run line: the largest outer-fibre stress over the flexures
     at the last level and where (``flexure@fraction`` of its length from its first end)."""
@@ -1246,6 +1295,35 @@ def build_parser() -> argparse.ArgumentParser:
         "massless and carry the flexure pieces each model lumps on them",
     )
     q.set_defaults(func=_cmd_modes)
+
+    q = sub.add_parser(
+        "buckle",
+        help="linearised buckling: critical loads and modes of a load case, beside its path",
+    )
+    q.add_argument("scene", help=scene_help)
+    q.add_argument(
+        "--model", required=True, metavar="MODEL", help=f"model id: {ids} (see flexval models)"
+    )
+    q.add_argument("--load-case", metavar="NAME", help="load case (default: the scene's first)")
+    q.add_argument(
+        "--count", type=int, default=3, metavar="K", help="critical loads, lowest first (default 3)"
+    )
+    q.add_argument(
+        "--at",
+        type=float,
+        default=0.0,
+        metavar="FRACTION",
+        help="linearise about the equilibrium at this fraction of the load case (a preload), "
+        "0 (at rest, the classical linear buckling analysis) up to 1 (default 0)",
+    )
+    q.add_argument(
+        "--json",
+        metavar="PATH",
+        help="write the critical loads and factors, the mode shapes and where load control "
+        "stops as JSON",
+    )
+    q.add_argument("--plot", metavar="FILE.png", help="draw the buckling modes")
+    q.set_defaults(func=_cmd_buckle)
 
     q = sub.add_parser("converge", help="resolution study: order, Richardson value, GCI")
     q.add_argument("scene", help=scene_help)

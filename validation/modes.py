@@ -194,8 +194,12 @@ def modes_record(
     }
 
 
-def plot_modes(system, modes: Modes, path: str | Path, title: str) -> None:
+def plot_modes(
+    system, modes: Modes, path: str | Path, title: str, labels: list[str] | None = None
+) -> None:
     """One panel per mode: the equilibrium shape (grey) and the mode shape (colour).
+
+    ``labels`` are the panels' titles (default: each mode's frequency in Hz).
 
     Each mode is scaled so that its largest body or node translation is 10 %
     of the mechanism's size.
@@ -219,7 +223,8 @@ def plot_modes(system, modes: Modes, path: str | Path, title: str) -> None:
                 pts = c.shape(*local)
                 ax.plot(pts[:, 0], pts[:, 1], **style)
         ax.set_aspect("equal")
-        ax.set_title(f"mode {j + 1}: {modes.frequencies_hz[j]:.4g} Hz", fontsize=9)
+        label = labels[j] if labels else f"mode {j + 1}: {modes.frequencies_hz[j]:.4g} Hz"
+        ax.set_title(label, fontsize=9)
         ax.tick_params(labelsize=7)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
