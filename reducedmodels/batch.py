@@ -219,6 +219,16 @@ class BatchSystem(System):
         """The System whose numbering copy k has: copy 0's alone if all are alike."""
         return self.template if self.uniform else self.copy_system(k)
 
+    def judges_stability(self) -> bool:
+        """Whether every copy's stability is judged (each as alone,
+        :meth:`System.judges_stability`)."""
+        return all(self.copy_system(k).judges_stability() for k in range(self.n_copies))
+
+    def stability_note(self) -> str | None:
+        """The first copy's note on stability not judged, if any copy has one."""
+        notes = (self._systems[k].stability_note() for k in sorted(self._systems))
+        return next((note for note in notes if note is not None), None)
+
     def copy_system(self, k: int) -> System:
         """Copy k as a System alone (built on first use: a check of that copy, a solo run)."""
         if k not in self._systems:
@@ -576,7 +586,10 @@ class BatchSystem(System):
         if self._block_maps() is not None:
             if self.n_multipliers == 0 and tangent.positive_definite():
                 return unstable
-            return self._block_inertia(tangent, among) > 0
+            unstable = self._block_inertia(tangent, among) > 0
+            for k in np.flatnonzero(unstable).tolist():  # as alone: judged where its rest is
+                unstable[k] = self.copy_system(k).judges_stability()
+            return unstable
         negative = self.instability(tangent)
         if negative is None or negative <= 0:
             return unstable
@@ -633,7 +646,7 @@ class BatchSystem(System):
         A larger copy, banded alone, is its own band in the batch's (the
         copies are numbered in their own orders, one after the other, with
         the same half-bandwidth), counted by
-        :func:`~flexval.reducedmodels.stability.band_negative` as its own
+        :func:`~flexval.reducedmodels.stability.band_count` as its own
         banded tangent counts it. Not judged counts as stable, as alone.
         """
         m, _, _, _, _, multipliers = self._block_maps()
@@ -648,10 +661,8 @@ class BatchSystem(System):
             return negative  # not judged (as its own System's check)
         band = np.asarray(tangent.storage)
         for c in chosen.tolist():
-            block = band[:, c * m : (c + 1) * m]
-            paired, pairs = stability.paired_band(block)
-            count = stability.band_negative(paired, pairs, 0, m)
-            negative[c] = count - multipliers if count >= 0 else 0
+            count = stability.band_count(band[:, c * m : (c + 1) * m])
+            negative[c] = count - multipliers if count is not None else 0
         return negative
 
     def use_loads(self, cases: Sequence[LoadCase]) -> Loads:

@@ -24,7 +24,14 @@ from flexval.geometry import LoadCase, Mechanism, Section
 from .connector import Connector
 from .core import SolverError
 from .loadpath import LoadPath
-from .recorder import STACK_FROM, failed_path, levels_path, path_peaks, stack_peaks
+from .recorder import (
+    STACK_FROM,
+    failed_path,
+    levels_path,
+    note_stability,
+    path_peaks,
+    stack_peaks,
+)
 from .sections import SectionForces
 from .tracer import Counters, PathPoint, TraceFailure
 
@@ -194,6 +201,8 @@ def record_batch(
             reasons.get(j, no_reasons),
             [entry for entry in peaks[j] if entry is not None],  # in the connectors' order
         )
+        if k in batch._systems:  # a copy judged alone: its stability note, as alone
+            note_stability(path, batch._systems[k])
         if failure is None:
             paths.append(path)
             continue

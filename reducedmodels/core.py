@@ -142,6 +142,7 @@ class System:
         # the poses, then every connector's internal coordinates (its local ones but the six)
         self.n_dofs = 3 * len(self.body_index) + self._bounds[-1] - 6 * len(self.connectors)
         self.n_multipliers = sum(c.n_multipliers for c in self.connectors)
+        self._rest_negative: int | None = None  # the rule's count at rest (judges_stability)
         #: residual weights: forces as is, moments per unit of mechanism size (N)
         self.force_scale = np.where(self.is_rotation, 1.0 / self.size, 1.0)
         #: what :meth:`scaled` divides by: the size for lengths, 1 for angles (mm or 1)
@@ -635,10 +636,41 @@ class System:
 
         Each Lagrange multiplier makes a stable saddle-point tangent one
         eigenvalue indefinite; an inertia that cannot be judged (or no
-        tangent) counts as stable.
+        tangent) counts as stable, and so does every state of a System whose
+        rule cannot judge its rest state (:meth:`judges_stability`).
         """
         negative = self.instability(tangent)
-        return negative is not None and negative > 0
+        return negative is not None and negative > 0 and self.judges_stability()
+
+    def judges_stability(self) -> bool:
+        """Whether the stability rule can judge this System's states (computed once, on the
+        first unstable verdict).
+
+        The unloaded mechanism at rest is a stable structure (a scene is
+        checked to be one), so its tangent has no negative eigenvalue. Where
+        the rule still counts one there, the resolution is beyond what double
+        precision can judge (a beam of 10^4 or more elements per flexure: its
+        tip pivots are formed from terms 10^12 times larger), and no state of
+        the System is judged: its paths carry :meth:`stability_note`.
+        """
+        if self._rest_negative is None:
+            from flexval.geometry import Moment
+
+            rest = LoadCase("rest", (Moment(self.mechanism.target_body, 0.0),), 2)
+            tangent = self.assemble(self.initial_state(), self.loads(rest), 0.0)[2]
+            self._rest_negative = self.instability(tangent) or 0
+        return self._rest_negative == 0
+
+    def stability_note(self) -> str | None:
+        """Why this System's stability verdicts are not judged (None: they are, or no state
+        was found unstable)."""
+        if not self._rest_negative:
+            return None
+        return (
+            "not judged: the tangent at rest, stable by construction, already counts "
+            f"{self._rest_negative} negative pivot(s) beyond round-off (the resolution is "
+            "beyond what double precision can judge)"
+        )
 
     def instability(self, tangent: Tangent | None) -> int | None:
         """The tangent's negative eigenvalues beyond those its multipliers make (None: not judged).

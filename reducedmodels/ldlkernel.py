@@ -32,7 +32,8 @@ import math
 import numpy as np
 
 from .jit import kernel
-from .stability import UNIT_ROUNDOFF, one_negative, pair_negative
+from .stability import UNIT_ROUNDOFF
+from .stabilitykernel import one_negative, pair_negative
 
 ALPHA = (1.0 + math.sqrt(17.0)) / 8.0
 """Bunch and Kaufman's pivot threshold: the growth bound of a 1 x 1 against a 2 x 2 pivot."""

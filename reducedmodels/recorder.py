@@ -186,6 +186,7 @@ class PathRecorder:
     def finish(self) -> LoadPath:
         """The path of a successful trace (wall time from the recorder's creation)."""
         self._judge()
+        note_stability(self.path, self.system)
         self.path.converged = True
         self.path.seconds = time.perf_counter() - self.t0
         return self.path
@@ -193,6 +194,7 @@ class PathRecorder:
     def failure(self, exc: TraceFailure) -> SolverError:
         """The SolverError for a failed trace, carrying the path so far."""
         self._judge()
+        note_stability(self.path, self.system)
         return failed_path(self.path, self.case, self.model, exc, time.perf_counter() - self.t0)
 
     def run(
@@ -214,6 +216,14 @@ class PathRecorder:
         except TraceFailure as exc:
             raise self.failure(exc) from None
         return self.finish(), last
+
+
+def note_stability(path: LoadPath, system: System) -> None:
+    """``stats["stability"]``: why the path's stability was not judged, where it was not
+    (:meth:`~flexval.reducedmodels.core.System.stability_note`)."""
+    note = system.stability_note()
+    if note is not None:
+        path.stats["stability"] = note
 
 
 def _append_bifurcations(path: LoadPath, factors: Iterable[float], magnitude: float) -> None:

@@ -34,8 +34,11 @@ sign, and one within round-off has one eigenvalue without a sign (then
 counted by p and r alone).
 
 Every tangent storage (dense, banded, sparse; a batch's blocks) counts its
-negative eigenvalues with :func:`one_negative` and :func:`pair_negative` and
-the tolerance :func:`tolerance`, in its own factorisation.
+negative eigenvalues by this rule in its own factorisation: the compiled
+kernels of :mod:`flexval.reducedmodels.stabilitykernel` (``one_negative``,
+``pair_negative``, ``band_negative``; loaded on first use, so a model that
+runs no compiled code does not load numba for a stable path) or
+:func:`count_pivots`, with the tolerance :func:`tolerance`.
 
 Units: pivots and scales in the units of K's diagonal (N/mm, N, N mm); the
 rule itself is dimensionless.
@@ -43,9 +46,10 @@ rule itself is dimensionless.
 
 from __future__ import annotations
 
-import numpy as np
+import functools
+from types import ModuleType
 
-from .jit import kernel
+import numpy as np
 
 UNIT_ROUNDOFF = float(np.finfo(float).eps) / 2.0
 """u, half the spacing of doubles at 1 (2^-53)."""
@@ -57,119 +61,28 @@ def tolerance(terms: int) -> float:
     return w / (1.0 - w)
 
 
-@kernel
-def one_negative(pivot: float, scale: float, gamma: float) -> int:
-    """1 if the 1 x 1 pivot is negative beyond its round-off gamma * scale, else 0."""
-    return 1 if pivot < -gamma * scale else 0
+@functools.cache
+def kernels() -> ModuleType:
+    """:mod:`flexval.reducedmodels.stabilitykernel`, compiled (or loaded from the on-disk
+    cache) on first use."""
+    from . import stabilitykernel
+
+    stabilitykernel.warm_up()
+    return stabilitykernel
 
 
-@kernel
-def pair_negative(
-    p: float, q: float, r: float, scale_p: float, scale_r: float, gamma: float
-) -> int:
-    """Negative eigenvalues of the 2 x 2 pivot block [[p, q], [q, r]] beyond round-off.
-
-    ``scale_p`` and ``scale_r`` are the round-off scales (sigma) of its two
-    diagonal entries; see the module for the rule.
-    """
-    determinant = p * r - q * q
-    bound = 2.0 * gamma * (scale_p * scale_r + q * q)
-    if determinant < -bound:
-        return 1
-    if determinant > bound:
-        return 2 if p < 0.0 else 0
-    return max(one_negative(p, scale_p, gamma), one_negative(r, scale_r, gamma))
+def band_count(band: np.ndarray) -> int | None:
+    """Negative eigenvalues of a symmetric band matrix (upper band form (b + 1, n)) by the rule:
+    multipliers paired (:func:`paired_band`), then ``stabilitykernel.band_negative``; None
+    when a pivot cannot be judged."""
+    paired, pairs = paired_band(band)
+    negative = kernels().band_negative(paired, pairs, 0, band.shape[1])
+    return None if negative < 0 else int(negative)
 
 
 def count_pivots(pivots: np.ndarray, scales: np.ndarray, gamma: float) -> int:
     """The 1 x 1 pivots negative beyond round-off (vectorised :func:`one_negative`)."""
     return int(np.count_nonzero(pivots < -gamma * scales))
-
-
-@kernel
-def band_negative(band: np.ndarray, pairs: np.ndarray, first: int, stop: int) -> int:
-    """Negative eigenvalues of a symmetric band matrix by the rule (-1: a pivot not judged).
-
-    An LDL^T without interchanges of columns ``first`` .. ``stop - 1`` of
-    ``band`` (LAPACK's upper band form (b + 1, n): ``band[b + i - j, j]`` is
-    K[i, j]; entries outside those columns are ignored: a diagonal block of a
-    block-diagonal matrix), with a 2 x 2 pivot on rows k, k + 1 where
-    ``pairs[k]`` (a multiplier paired with an unknown it constrains, see
-    :func:`paired_band`; the band keeps its width) and 1 x 1 pivots
-    elsewhere. Each pivot's round-off scale sigma (the module's rule) is
-    summed as the factorisation goes, with gamma_(b+2). Not judged (-1) when
-    a 1 x 1 pivot is exactly zero with entries beside it (a saddle point
-    not paired) or an entry is not finite. O(n b^2), the banded Cholesky's
-    cost.
-    """
-    b = band.shape[0] - 1
-    n = stop - first
-    gamma = (b + 2) * UNIT_ROUNDOFF / (1.0 - (b + 2) * UNIT_ROUNDOFF)
-    work = np.zeros((n + 1, b + 2))  # work[i, t] = K[i, i + t] (rows of the upper band)
-    scales = np.empty(n)
-    for j in range(n):
-        for t in range(min(b, j) + 1):
-            value = band[b - t, first + j]  # K[j - t, j]
-            if not np.isfinite(value):
-                return -1
-            work[j - t, t] = value
-        scales[j] = abs(work[j, 0])
-    negative = 0
-    k = 0
-    while k < n:
-        if pairs[first + k] and k + 1 < n:  # a 2 x 2 pivot on rows k, k + 1
-            p, q, r = work[k, 0], work[k, 1], work[k + 1, 0]
-            negative += pair_negative(p, q, r, scales[k], scales[k + 1], gamma)
-            determinant = p * r - q * q
-            if determinant == 0.0:
-                return -1
-            i00, i01, i11 = r / determinant, -q / determinant, p / determinant
-            for tj in range(2, b + 2):  # rows j = k + tj that rows k, k + 1 reach
-                j = k + tj
-                if j >= n:
-                    break
-                vj0 = work[k, tj] if tj <= b else 0.0
-                vj1 = work[k + 1, tj - 1]
-                if vj0 == 0.0 and vj1 == 0.0:
-                    continue
-                wj0 = i00 * vj0 + i01 * vj1  # B^-1 v_j
-                wj1 = i01 * vj0 + i11 * vj1
-                scales[j] += (
-                    abs(i00) * vj0 * vj0 + 2.0 * abs(i01 * vj0 * vj1) + abs(i11) * vj1 * vj1
-                )
-                for ti in range(tj, b + 2):  # K[j, i] -= v_j^T B^-1 v_i, i >= j
-                    i = k + ti
-                    if i >= n:
-                        break
-                    vi0 = work[k, ti] if ti <= b else 0.0
-                    vi1 = work[k + 1, ti - 1]
-                    work[j, ti - tj] -= wj0 * vi0 + wj1 * vi1
-            k += 2
-            continue
-        d = work[k, 0]
-        negative += one_negative(d, scales[k], gamma)
-        if d == 0.0:
-            for t in range(1, b + 1):
-                if work[k, t] != 0.0:
-                    return -1
-            k += 1
-            continue
-        for t in range(1, b + 1):  # rank-one update of the rows below
-            j = k + t
-            if j >= n:
-                break
-            a = work[k, t]
-            if a == 0.0:
-                continue
-            scales[j] += a * a / abs(d)
-            factor = a / d
-            for s in range(t, b + 1):
-                i = k + s
-                if i >= n:
-                    break
-                work[j, s - t] -= factor * work[k, s]
-        k += 1
-    return negative
 
 
 def paired_band(band: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -179,15 +92,16 @@ def paired_band(band: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     zero pivot. Each such row is paired with the coupled row of largest
     |K_zj| / sqrt|K_jj| (unchanged by the units of either) not yet taken and
     moved right after it, so that the two are one 2 x 2 pivot of
-    :func:`band_negative`, whose determinant -K_zj^2 < 0 is the multiplier's
-    own negative eigenvalue. Returns (the reordered band in the same form,
-    ``pairs``: True at the first row of each pair); the band as it is and no
+    :func:`~flexval.reducedmodels.stabilitykernel.band_negative`, whose
+    determinant -K_zj^2 < 0 is the multiplier's own negative eigenvalue.
+    Returns (the reordered band in the same form, ``pairs``: True at the
+    first row of each pair); the band as it is and no
     pairs when no diagonal is zero or a zero row couples to nothing free.
     """
     b = band.shape[0] - 1
     n = band.shape[1]
     diagonal = band[b]
-    zero = np.flatnonzero(diagonal == 0.0)
+    zero = np.flatnonzero(diagonal == 0.0)  # a multiplier's row
     pairs = np.zeros(n + 1, bool)
     if zero.size == 0:
         return band, pairs
@@ -206,7 +120,8 @@ def paired_band(band: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     for z in zero.tolist():
         near = np.flatnonzero((rows == z) | (cols == z))
         others = np.where(rows[near] == z, cols[near], rows[near])
-        strength = np.abs(values[near]) / np.sqrt(np.abs(diagonal[others]) + 0.0)
+        with np.errstate(divide="ignore"):  # another multiplier's: never taken
+            strength = np.abs(values[near]) / np.sqrt(np.abs(diagonal[others]))
         best, best_value = -1, 0.0
         for other, value in zip(others.tolist(), strength.tolist()):
             if other != z and not taken[other] and value > best_value:

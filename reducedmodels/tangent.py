@@ -322,7 +322,7 @@ class BandedTangent:
         """Zero when the banded Cholesky of the solves succeeded (O(n b^2), no extra work).
 
         Otherwise a banded LDL^T without interchanges counts them
-        (:func:`flexval.reducedmodels.stability.band_negative`, O(n b^2)),
+        (:func:`flexval.reducedmodels.stabilitykernel.band_negative`, O(n b^2)),
         each Lagrange multiplier's row paired with an unknown it constrains
         (:func:`~flexval.reducedmodels.stability.paired_band`); None when a
         pivot cannot be judged.
@@ -333,9 +333,7 @@ class BandedTangent:
         self._factorise()
         if self._cholesky is not None:
             return 0
-        band, pairs = stability.paired_band(np.asarray(upper))
-        negative = stability.band_negative(band, pairs, 0, self.n)
-        return None if negative < 0 else int(negative)
+        return stability.band_count(np.asarray(upper))
 
     def tosparse(self) -> sp.csc_matrix:
         rows, cols, values = [], [], []

@@ -374,6 +374,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
                 f"{'':<{columns[0].size}}{GAP}bifurcation: load {point['load']:.6g} "
                 f"{lp.load_unit} (fraction {point['fraction']:.6g})"
             )
+        if "stability" in lp.stats:
+            print(f"{'':<{columns[0].size}}{GAP}stability {lp.stats['stability']}")
 
     print(header(columns))
     from .campaign import level_progress
