@@ -642,6 +642,24 @@ class System:
         negative = self.instability(tangent)
         return negative is not None and negative > 0 and self.judges_stability()
 
+    def resolves(self, rest: Tangent | None) -> bool:
+        """Whether double precision resolves this System: its tangent at rest proves positive
+        definite.
+
+        The unloaded mechanism is a stable structure, so without multipliers
+        its tangent at rest is positive definite and its Cholesky succeeds.
+        Where it fails, the stiffest and softest parts of the System (the
+        axial stiffness of the shortest element, the bending of the whole
+        flexure) lie further apart than the arithmetic's 16 digits: Newton's
+        corrections are then round-off and the path cannot be traced (beams of
+        about 10^4 elements per flexure on the paper's scenes). Saddle points,
+        and tangents without a Cholesky, are taken as resolved.
+        """
+        if rest is None or self.n_multipliers:
+            return True
+        positive = getattr(rest, "positive_definite", None)
+        return True if positive is None else bool(positive())
+
     def judges_stability(self) -> bool:
         """Whether the stability rule can judge this System's states (computed once, on the
         first unstable verdict).

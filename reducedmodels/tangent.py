@@ -130,6 +130,11 @@ class Tangent(Protocol):
         """
         ...
 
+    def positive_definite(self) -> bool:
+        """True when the factorisation the solves use proves K positive definite (a Cholesky
+        that succeeds, or an LDL^T whose pivots are all positive)."""
+        ...
+
     def toarray(self) -> np.ndarray:
         """The matrix as a dense (n, n) array (for tests and small-system inspection)."""
         ...
@@ -198,6 +203,11 @@ class DenseTangent:
             kernels.ldl_factor(factor, pivots, eigenvalues, scales)
             self._negative = int(kernels.ldl_negative(factor, pivots, scales))
         return self._negative
+
+    def positive_definite(self) -> bool:
+        """True when LAPACK's Cholesky succeeds (the factorisation the solves use)."""
+        self._factorise()
+        return bool(self._positive)
 
     def toarray(self) -> np.ndarray:
         return self.matrix
@@ -533,6 +543,12 @@ class SparseTangent:
             self._ldl()
         lower, pivots = self._analysis.solver.factors()[:2]
         return _pivots_negative(sp.csr_matrix(lower), pivots)
+
+    def positive_definite(self) -> bool:
+        """True when the LDL^T's pivots are all positive (False for the pivoting LU's
+        fallback, which proves nothing)."""
+        self._factorise()
+        return self._pivots is not None and bool((self._pivots > 0.0).all())
 
     def toarray(self) -> np.ndarray:
         return self.matrix.toarray()

@@ -327,7 +327,14 @@ class LoadControl(Stepping):
         self.first_factor = self.factors[0]
 
     def begin(self, system: System, loads: Loads, point: PathPoint) -> None:
-        """Start at the first requested factor."""
+        """Start at the first requested factor (refused at rest where double precision does
+        not resolve the System, :meth:`System.resolves`)."""
+        if point.factor == 0.0 and not system.resolves(point.tangent):
+            raise StepRefused(
+                "the tangent at rest is not positive definite in double precision: the model's "
+                "resolution is beyond what the arithmetic resolves (use fewer elements), or the "
+                "unloaded mechanism is unstable under its own weight"
+            )
         self.system, self.loads, self.settings = system, loads, system.settings
         self.q, self.factor = point.state, point.factor
         self.tangent = point.tangent  # at the last accepted state, to classify a bifurcation

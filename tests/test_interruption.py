@@ -259,6 +259,21 @@ def test_sigint_on_a_slow_run_exits_130_without_its_json(tmp_path):
     assert _temporaries(tmp_path) == []
 
 
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_stops_the_finest_beam_within_the_limit(tmp_path, signum):
+    """beam:100000 on the open chain (900,000 unknowns): building it, factorising its tangent
+    and checking its inertia all let the signal through (no compiled call holds the
+    interpreter lock for longer than the limit)."""
+    argv = ["run", "open_chain", "--model", "beam:100000", "--load-case", "m+"]
+    prog = Program(argv, tmp_path / "cache", tmp_path / "stdout.txt")
+    prog.wait_for("model", where=tmp_path / "stdout.txt")  # the header: building has begun
+    time.sleep(1.0)
+    status, seconds = prog.interrupt(signum)
+    assert status == 128 + signum, prog.stderr
+    assert seconds < STOP_S
+    _interrupted_line(prog.stderr, signal.Signals(signum).name)
+
+
 _STUCK = """
 import sys, time
 from pathlib import Path

@@ -259,3 +259,18 @@ def test_buckle_refuses_a_linear_model_and_a_bad_fraction(tmp_path, capsys):
     assert "no geometric stiffness" in capsys.readouterr().err
     assert main(["buckle", str(GUIDE), "--model", "beam:20", "--at", "1.5"]) == 2
     assert "--at" in capsys.readouterr().err
+
+
+def test_a_resolution_beyond_double_precision_is_refused_at_rest():
+    """beam:10000 on the open chain: the rest tangent's Cholesky fails in double precision
+    (the tip pivots are 10^-12 of their columns' scale, their terms cancel to round-off), and
+    Newton cannot converge from there (the previous behaviour: a stall after minutes). The
+    run stops at once at rest with the reason; beam:3000 (rest Cholesky intact) runs."""
+    import flexval
+
+    scene = load_scene("open_chain")
+    case = next(c for c in scene.load_cases if c.name == "m+")
+    with pytest.raises(SolverError, match="not positive definite in double precision"):
+        run_model(scene, flexval.parse_model("beam:10000"), case)
+    path = run_model(scene, flexval.parse_model("beam:3000"), case)
+    assert path.converged and all(path.valid) and "stability" not in path.stats

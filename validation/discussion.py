@@ -257,7 +257,7 @@ def _bifurcations_bullet(data: ReportData) -> list[str]:
     found = [(r, *b) for r in data.scenes for b in r.bifurcations()]
     if not found:
         return []
-    return [
+    bullets = [
         "- **Bifurcations.** "
         + "; ".join(
             f"`{m}` on `{c}` of {r.scene.name} at {b['load']:.5g} {unit} "
@@ -268,6 +268,21 @@ def _bifurcations_bullet(data: ReportData) -> list[str]:
         "`flexval run --arclength` traces on along it, `--branch-switch` onto the crossing "
         "branch."
     ]
+    missed = [(r, *b) for r in data.scenes for b in r.past_reference_bifurcation()]
+    if missed:
+        bullets.append(
+            "- **Buckling missed.** "
+            + "; ".join(
+                f"`{m}` on `{c}` of {r.scene.name} reaches the full load past the "
+                f"reference's bifurcation at {b['load']:.5g} {unit}"
+                for r, m, c, b, unit in missed
+            )
+            + ". These models have no geometric stiffness in the buckling mode (a linear "
+            "model, or a chain too coarse to bend in it): their results beyond that load "
+            "describe a state the mechanism does not reach stably, and no error is computed "
+            "for them."
+        )
+    return bullets
 
 
 def discussion(data: ReportData) -> list[str]:

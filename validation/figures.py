@@ -222,8 +222,21 @@ def runtime_vs_error(rows: list[dict], title: str, path: Path) -> str:
             )
     pts = [(r["seconds"], max(r["error"], floor)) for r in rows]
     front = pareto_front(pts)
-    fx, fy = zip(*[pts[k] for k in front])
-    ax.step(fx, fy, where="post", color="red", lw=2, alpha=0.4, label="Pareto front")
+    if front:
+        fx, fy = zip(*[pts[k] for k in front])
+        ax.step(fx, fy, where="post", color="red", lw=2, alpha=0.4, label="Pareto front")
+    else:  # no path reached full load beside the reference's: nothing to compare
+        ax.text(
+            0.5,
+            0.5,
+            "no error to plot: no model reached the full load\nbeside the reference",
+            transform=ax.transAxes,
+            ha="center",
+            va="center",
+            fontsize=9,
+        )
+        ax.set_xlim(1e-4, 1.0)
+        ax.set_ylim(floor, 100.0)
     return _finish_loglog(fig, ax, "wall time per load path (s, median)", "error (%)", title, path)
 
 

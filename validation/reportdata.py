@@ -169,6 +169,23 @@ class SceneResults:
             if (lp := self.paths.get((m, c))) is not None and lp.bifurcations
         ]
 
+    def past_reference_bifurcation(self) -> list[tuple[str, str, dict, str]]:
+        """(model, case, the reference's first bifurcation, load unit) of every model that
+        reached the full load on a case where the reference stops at (or passes) a
+        bifurcation below it: a path the mechanism does not follow stably (in model and
+        case order; the reference itself excluded)."""
+        reference = {c: (b, unit) for m, c, b, unit in self.bifurcations() if m == self.reference}
+        return [
+            (m, c, *reference[c])
+            for m in self.models
+            for c in self.cases
+            if m != self.reference
+            and c in reference
+            and reference[c][0]["fraction"] < 1.0
+            and (lp := self.converged(m, c)) is not None
+            and not lp.bifurcations
+        ]
+
     def traces(self, case: str) -> dict[str, LoadPath]:
         """{model: arc-length path through its limit point} of the models failing on ``case``."""
         return {

@@ -152,6 +152,17 @@ def bifurcation_data(
             "unit": unit,
             "error_percent": err,
         }
+    for m in models:  # full load reached past the reference's bifurcation: buckling missed
+        for c in cases:
+            ref, lp = first.get((reference, c)), paths.get((m, c))
+            if ref and (m, c) not in first and lp is not None and lp.converged:
+                out.setdefault(m, {})[c] = {
+                    "load": None,
+                    "fraction": None,
+                    "unit": ref[1],
+                    "error_percent": None,
+                    "missed": ref[0]["load"],
+                }
     return out
 
 
@@ -196,11 +207,14 @@ def limit_load_table(
         lines.append(f"| `{m}` | " + " | ".join(cells) + " |")
     for m, row in (bifurcations or {}).items():
         cells = [
-            _cell(
+            "—"
+            if c not in row
+            else f"none to full load (missed: the reference's at {row[c]['missed']:.5g} "
+            f"{row[c]['unit']})"
+            if row[c]["load"] is None
+            else _cell(
                 row[c], f"{row[c]['load']:.5g} {row[c]['unit']} at {100 * row[c]['fraction']:.2f} %"
             )
-            if c in row
-            else "—"
             for c in cases
         ]
         lines.append(f"| `{m}` bifurcation | " + " | ".join(cells) + " |")
