@@ -797,12 +797,10 @@ class BatchLoadControl(LoadControl):
         accepted = self._split_vote(within)
         if not accepted:  # the copies left all refused this step: LoadControl's reason
             k = int(np.flatnonzero(refused)[0])
-            if unstable[k] and (self.unstable_above is None or result.factor < self.unstable_above):
-                self.unstable_above = result.factor
             why = (
                 result.reasons[k]
                 if result.failed[k]
-                else "converged to an unstable equilibrium (past a limit point?)"
+                else self.unstable_at(result.factor)
                 if unstable[k]
                 else "step too large"
             )

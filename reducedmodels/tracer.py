@@ -57,6 +57,10 @@ Beams with their chains closed by bending and the slope in their chord
 predictor: 1150, 1118, 1116 over the 36 paths with 4, 5, 6 states (6: prbm
 117 -> 119)."""
 
+UNSTABLE = "converged to an unstable equilibrium (past a limit point?)"
+"""Why load control refuses a step that converged where the stability rule counts a negative
+eigenvalue (:meth:`System.unstable`)."""
+
 Solve = Callable[[StepProblem, np.ndarray, "np.ndarray | None"], NewtonResult]
 """solve(problem, guess, origin): the tracer's counted call of the one Newton iteration."""
 
@@ -391,13 +395,7 @@ class LoadControl(Stepping):
         q_new, why = result.state, result.reason
         ratio = self.system.motion_ratio(self.q, q_new) if q_new is not None else math.inf
         if ratio <= 1.0 and self.settings.check_stability and self.system.unstable(result.tangent):
-            q_new, ratio, why = (
-                None,
-                math.inf,
-                ("converged to an unstable equilibrium (past a limit point?)"),
-            )
-            if self.unstable_above is None or result.factor < self.unstable_above:
-                self.unstable_above = result.factor
+            q_new, ratio, why = None, math.inf, self.unstable_at(result.factor)
         if ratio > 1.0:
             return Verdict(
                 None, result.factor, why if q_new is None else "step too large", None, False
@@ -409,6 +407,14 @@ class LoadControl(Stepping):
             result.tangent,
             result.iterations <= self.settings.fast_iterations and ratio < 0.5,
         )
+
+    def unstable_at(self, factor: float) -> str:
+        """Record an unstable equilibrium converged at load ``factor`` (the least one bounds
+        the bracket :meth:`stopped_by_bifurcation` closes); the reason its step is refused.
+        A batch's copies take the same decision (one place for a path and a batch)."""
+        if self.unstable_above is None or factor < self.unstable_above:
+            self.unstable_above = factor
+        return UNSTABLE
 
     def cut(self) -> bool:
         """Halve the sub-step; False once the smallest is passed, or once the last stable state
