@@ -33,6 +33,10 @@ _HOMES = {
 }
 """Module of each name the package offers at its top."""
 
+_REGISTERS = {"parse_model": "flexval.validation"}
+"""A module to import before a name is offered: ``parse_model`` reads every built-in model
+family, and the continuum's registers itself with :mod:`flexval.validation`."""
+
 __all__ = ["__version__", *sorted(_HOMES)]
 
 
@@ -40,6 +44,8 @@ def __getattr__(name: str):
     """Import a top-level name from its module on first use (PEP 562)."""
     if name not in _HOMES:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    if name in _REGISTERS:
+        import_module(_REGISTERS[name])
     value = getattr(import_module(_HOMES[name]), name)
     globals()[name] = value
     return value

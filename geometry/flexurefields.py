@@ -27,9 +27,9 @@ import numpy as np
 
 from .mechanism import Section
 from .overlap import self_crossings
-from .profiles import LinearTaper, NotchProfile
+from .profiles import SEMICIRCLE_ROUND_OFF, LinearTaper, NotchProfile
 from .scenefields import FLEXURES
-from .shapes import Segment, Shape, Spline
+from .shapes import Segment, Shape, Spline, largest_along
 
 SPLINE_SAMPLES = 32
 """Polyline segments per spline interval for the self-crossing and thickness checks."""
@@ -91,16 +91,18 @@ def check_thickness_fits(rd, where: str, value: Any, shape: Shape, section: Sect
         return
     if shape.kind != "spline":
         return
-    s = np.linspace(0.0, shape.length, SPLINE_SAMPLES * (len(shape.points) - 1) + 1)
-    excess = section.thickness_at(s) * np.abs(shape.curvature_at(s))
-    k = int(np.argmax(excess))
-    if excess[k] >= 2.0:
-        radius = 1.0 / abs(float(shape.curvature_at(s[k])))
+    at, excess = largest_along(
+        lambda s: section.thickness_at(s) * np.abs(shape.curvature_at(s)),
+        shape.length,
+        SPLINE_SAMPLES * (len(shape.points) - 1),
+    )
+    if excess >= 2.0:
+        radius = 1.0 / abs(float(shape.curvature_at(at)))
         rd.fail(
             f"{where}thickness",
             value,
-            f"{s[k]:.4g} mm along the spline its radius of curvature is {radius:.4g} mm: a "
-            f"thickness of {float(section.thickness_at(s[k])):.4g} mm, at least twice it, "
+            f"{at:.4g} mm along the spline its radius of curvature is {radius:.4g} mm: a "
+            f"thickness of {float(section.thickness_at(at)):.4g} mm, at least twice it, "
             "has no inner edge",
         )
 
@@ -194,6 +196,14 @@ def read_notch(rd, f: dict, where: str, depth: float, default_t: float) -> tuple
             f"{where}height",
             height,
             f"must be larger than the notch's smallest thickness t = {t:g} mm",
+        )
+    if contour == "circular" and height > (t + length) * (1.0 + SEMICIRCLE_ROUND_OFF):
+        rd.fail(
+            f"{where}height",
+            height,
+            f"a circular notch's cut-outs are arcs of at most half a circle, so H <= t + L = "
+            f"{t + length:g} mm (a taller blank would need the cut-out to overhang its own "
+            "ends); lengthen the notch or take an elliptical contour",
         )
     try:
         profile = NotchProfile(contour, t, height, length, radius, exponent)

@@ -39,6 +39,14 @@ import numpy as np
 NOTCH_CONTOURS = ("circular", "elliptical", "corner-filleted", "power")
 """The notch contours a scene may name (``contour = ...``)."""
 
+SEMICIRCLE_ROUND_OFF = 1e-5
+"""Relative slack of a circular notch's limit H <= t + L (semicircular cut-outs): a scene
+gives its points to a few significant digits (the built-in notch four-bar's axis, from
+(0, 0) to (1.2127, 4.8507), is 4.99999 mm long for 5 mm, and its blank H = t + 5 mm), and a
+blank that much above t + L is the semicircular hinge itself (its modelled end thickness
+is off by about the same fraction); a taller one would need cut-outs larger than half a
+circle."""
+
 
 class ThicknessProfile(Protocol):
     """What every thickness profile provides (lengths in mm)."""
@@ -141,6 +149,13 @@ class NotchProfile:
             r = self.fillet_radius
             if r is None or not 0.0 < r <= 0.5 * self.length:
                 raise ValueError(f"fillet radius must be in (0, L/2], got {r} mm")
+        if self.contour == "circular" and self.height > (self.t + self.length) * (
+            1.0 + SEMICIRCLE_ROUND_OFF
+        ):
+            raise ValueError(
+                f"a circular notch needs H <= t + L (cut-outs of at most half a circle), got "
+                f"H = {self.height} mm, t + L = {self.t + self.length} mm"
+            )
         if self.contour == "power" and (self.exponent is None or not self.exponent > 0.0):
             raise ValueError(f"exponent must be positive, got {self.exponent}")
 

@@ -425,6 +425,45 @@ UNWRAP_SAMPLES = 8
 CURVATURE_SAMPLES = 2048
 """Samples of a free curve's curvature for its largest value (:attr:`_FreeCurve.max_thickness`)."""
 
+REFINED_PEAKS = 64
+"""The largest sampled values of a function along a free curve that :func:`largest_along`
+refines to the true local maximum (a sharp loop's peak lies between two samples, each of
+which already stands out)."""
+
+
+def largest_along(function, length: float, samples: int) -> tuple[float, float]:
+    """(s, value) of the largest value of ``function(s)`` over [0, length] (mm).
+
+    ``function`` takes an array of s. Sampled at ``samples`` + 1 points;
+    the :data:`REFINED_PEAKS` largest samples are then refined at once, each
+    between its neighbours, by golden-section search (vectorised: every
+    step evaluates all of them in one call), so that a peak narrower than
+    the sample spacing (a tight loop of a spline) is found, not skipped.
+    """
+    s = np.linspace(0.0, length, samples + 1)
+    values = np.asarray(function(s), float)
+    order = np.argsort(values)[::-1][:REFINED_PEAKS]
+    low = s[np.maximum(order - 1, 0)]
+    high = s[np.minimum(order + 1, samples)]
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    a, b = high - ratio * (high - low), low + ratio * (high - low)
+    fa, fb = np.asarray(function(a), float), np.asarray(function(b), float)
+    while np.max(high - low) > 1e-9 * max(length, 1e-300):
+        left = fa >= fb  # the maximum lies in [low, b]
+        high = np.where(left, b, high)
+        low = np.where(left, low, a)
+        b, fb = np.where(left, a, b), np.where(left, fa, fb)
+        a_new = np.where(left, high - ratio * (high - low), a)
+        b_new = np.where(left, b, low + ratio * (high - low))
+        moved = np.where(left, a_new, b_new)
+        fm = np.asarray(function(moved), float)
+        a, fa = np.where(left, a_new, b), np.where(left, fm, fb)
+        b, fb = np.where(left, b, b_new), np.where(left, fb, fm)
+    refined = np.concatenate([values[order], fa, fb])
+    places = np.concatenate([s[order], a, b])
+    k = int(np.argmax(refined))
+    return float(places[k]), float(refined[k])
+
 
 def quadrature_ellipse(shape: Shape, bending_stiffness: float, start: float, end: float) -> Ellipse:
     """Ellipse of elasticity of ``shape`` between arc lengths ``start``, ``end`` (mm), uniform EI.
@@ -478,8 +517,9 @@ class _FreeCurve:
     @property
     def max_thickness(self) -> float:
         """Twice the smallest radius of curvature, mm: a thicker band has no inner edge there."""
-        s = np.linspace(0.0, self.length, CURVATURE_SAMPLES + 1)
-        top = float(np.abs(self.curvature_at(s)).max())
+        _, top = largest_along(
+            lambda s: np.abs(self.curvature_at(s)), self.length, CURVATURE_SAMPLES
+        )
         return math.inf if top == 0.0 else 2.0 / top
 
     def ellipse(self, bending_stiffness: float) -> Ellipse:

@@ -10,9 +10,14 @@ are written with ``repr`` precision by the json module).
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
+from pathlib import Path
 
 import numpy as np
+
+RUN_ADDITIONS = frozenset({"first_yield", "safety_factor", "yield_note"})
+"""What ``flexval run --json`` adds to a load path's fields where the scene's material has a
+yield strength (:func:`flexval.validation.yieldpoint.scene_yield`): derived, not stored."""
 
 
 @dataclass
@@ -122,8 +127,26 @@ class LoadPath:
 
     @classmethod
     def from_dict(cls, data: dict) -> LoadPath:
-        """Inverse of :meth:`to_dict`."""
-        return cls(**data)
+        """Inverse of :meth:`to_dict`; also reads a result of ``flexval run --json``, whose
+        first-yield entries (:data:`RUN_ADDITIONS`, derived from the path and the scene's
+        material) are left out.
+
+        Raises
+        ------
+        ValueError
+            A key that is neither a field nor such an entry (naming it).
+        """
+        names = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - names - RUN_ADDITIONS)
+        if unknown:
+            raise ValueError(f"not a load path: unknown keys {unknown}")
+        return cls(**{k: v for k, v in data.items() if k in names})
+
+    @classmethod
+    def read_run_json(cls, path: str | Path) -> list[LoadPath]:
+        """Every load path of a ``flexval run --json`` file (its ``results``), in its order."""
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        return [cls.from_dict(result) for result in data["results"]]
 
     def to_json(self) -> str:
         """JSON text (lossless for floats)."""

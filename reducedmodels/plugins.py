@@ -16,10 +16,11 @@ Loading is lazy: reading the installed packages' metadata costs a few
 milliseconds, so :func:`load_plugins` runs only when a model id names a
 family that is not registered (:func:`~flexval.reducedmodels.catalogue.parse_model`)
 or when every family is listed (``flexval models``), and then once per
-process. A plug-in whose entry point fails to import or run, or whose family
-name is already registered (a built-in family or another package's), is
-refused with a :class:`geometry.SceneError` naming the package (the CLI's
-exit code 2).
+process. A plug-in whose entry point fails to import or run (whatever it
+raises, ``SystemExit`` and ``KeyboardInterrupt`` included: a plug-in that
+exits never ends a command as a success), or whose family name is already
+registered (a built-in family or another package's), is refused with a
+:class:`geometry.SceneError` naming the package (the CLI's exit code 2).
 """
 
 from __future__ import annotations
@@ -85,7 +86,9 @@ def load_plugins() -> tuple[str, ...]:
                 _register_returned(loaded())
         except SceneError:
             raise
-        except Exception as exc:
+        except (Exception, SystemExit, KeyboardInterrupt) as exc:
+            if isinstance(exc, KeyboardInterrupt) and type(exc) is not KeyboardInterrupt:
+                raise  # a signal the command turned into its own interruption: not the plug-in's
             raise SceneError(
                 f"<plug-in package {package}>",
                 f"{GROUP}.{ep.name}",

@@ -110,3 +110,19 @@ def test_a_plugin_that_fails_to_load_exits_2_naming_its_package(tmp_path):
     # a command naming built-in models only never looks at the plug-ins
     proc = _flexval(site, tmp_path, "run", "open_chain", "--model", "ee", "--load-case", "m+")
     assert proc.returncode == 0, proc.stderr
+
+
+def test_a_plugin_that_exits_or_interrupts_on_import_never_makes_a_command_succeed(tmp_path):
+    """``sys.exit(0)`` or a raised ``KeyboardInterrupt`` in a plug-in's module: exit 2 naming
+    the package, never 0 (a gate that checked nothing must not pass) and no traceback."""
+    for name, body in (
+        ("exits", "import sys\nsys.exit(0)\n"),
+        ("stops", "raise KeyboardInterrupt\n"),
+    ):
+        site = tmp_path / name
+        (site / f"plugin_{name}.py").parent.mkdir(parents=True, exist_ok=True)
+        (site / f"plugin_{name}.py").write_text(body)
+        _install(site, f"flexval-{name}", f"{name} = plugin_{name}")
+        proc = _flexval(site, tmp_path, "models")
+        assert proc.returncode == 2, proc.stderr
+        assert f"flexval-{name}" in proc.stderr and "Traceback" not in proc.stderr

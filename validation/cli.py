@@ -27,6 +27,7 @@ from .outputs import (
     check_figure_file,
     check_file,
     check_folder,
+    distinct_files,
     output_path,
     safe_name,
     write_json,
@@ -139,6 +140,7 @@ def _run_request(args: argparse.Namespace, scene) -> tuple[list, list, frozenset
         raise SceneError(
             "<command line>", "--branch-switch", True, "applies to --arclength traces only"
         )
+    _check_dynamic_options(args)
     if args.arclength:
         from .limits import check_arclength
 
@@ -154,6 +156,40 @@ def _run_request(args: argparse.Namespace, scene) -> tuple[list, list, frozenset
             f"VTU and PNG stress fields come from these models only: {with_fields}",
         )
     return specs, list(cases), frozenset(fields)
+
+
+DYNAMIC_OPTIONS = {
+    "duration": ("--duration", None),
+    "damping_ratio": ("--damping-ratio", None),
+    "rayleigh": ("--rayleigh", None),
+    "rho_inf": ("--rho-inf", 0.9),
+    "error_tol": ("--error-tol", 1e-5),
+}
+"""``flexval run``'s options that only a ``--dynamic`` run reads: the argument, its default."""
+
+
+def _check_dynamic_options(args: argparse.Namespace) -> None:
+    """Refuse option combinations of which one would be silently dropped (exit 2): a dynamic
+    option without ``--dynamic``, ``--arclength`` with ``--dynamic``, both damping options."""
+    if args.dynamic and args.arclength:
+        raise SceneError(
+            COMMAND_LINE,
+            "--arclength",
+            True,
+            "traces the static path: it does not go with --dynamic",
+        )
+    if not args.dynamic:
+        for name, (flag, default) in DYNAMIC_OPTIONS.items():
+            value = getattr(args, name)
+            if value is not None and value != default:
+                raise SceneError(COMMAND_LINE, flag, value, "applies to --dynamic runs only")
+    if args.rayleigh is not None and args.damping_ratio is not None:
+        raise SceneError(
+            COMMAND_LINE,
+            "--damping-ratio",
+            args.damping_ratio,
+            "give either --damping-ratio or --rayleigh ALPHA BETA, not both",
+        )
 
 
 def _run_each(specs, cases, run_one, row, scene, json_path) -> int:
@@ -173,6 +209,8 @@ def _run_each(specs, cases, run_one, row, scene, json_path) -> int:
                 print(f"flexval: solver failure: {exc}", file=sys.stderr)
                 if exc.path is not None:
                     results.append(exc.path)
+                    if exc.path.load:  # its last converged level, marked as stopped
+                        row(exc.path)
                 status = EXIT_SOLVER
                 continue
             results.append(lp)
@@ -482,8 +520,10 @@ def _most_levels(args: argparse.Namespace, cases) -> int:
 
 
 def _valid_cell(lp) -> str:
-    """``valid/levels`` of the validity monitor, ``-`` for a model it does not judge."""
-    return "-" if lp.valid is None else f"{sum(lp.valid)}/{len(lp.valid)}"
+    """``valid/levels`` of the validity monitor, ``-`` for a model it does not judge;
+    ``stopped`` after it for a path that did not reach the full load."""
+    cell = "-" if lp.valid is None else f"{sum(lp.valid)}/{len(lp.valid)}"
+    return cell if lp.converged is not False else f"{cell} stopped"
 
 
 def _validity_note(lp) -> str:
@@ -548,6 +588,7 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     _check_memory([(scene.mechanism, spec, None)], COMMAND_LINE, "--model")
     json_path = check_file(args.json, "--json") if args.json is not None else None
     plot_path = check_figure_file(args.plot, "--plot") if args.plot is not None else None
+    distinct_files(("--json", json_path), ("--plot", plot_path))
     scene, density = choose_density(scene, args.density, what="a modal analysis")
     case = (
         scene.load_case(args.load_case)
@@ -589,6 +630,7 @@ def _cmd_buckle(args: argparse.Namespace) -> int:
     _check_memory([(scene.mechanism, spec, None)], COMMAND_LINE, "--model")
     json_path = check_file(args.json, "--json") if args.json is not None else None
     plot_path = check_figure_file(args.plot, "--plot") if args.plot is not None else None
+    distinct_files(("--json", json_path), ("--plot", plot_path))
     case = scene.load_case(args.load_case) if args.load_case else scene.load_cases[0]
     try:
         system, found = run_buckle(scene, spec, case, args.at, args.count)
@@ -972,6 +1014,7 @@ def _cmd_gate(args: argparse.Namespace) -> int:
 
     json_path = check_file(args.json, "--json") if args.json is not None else None
     junit_path = check_file(args.junit, "--junit") if args.junit is not None else None
+    distinct_files(("--json", json_path), ("--junit", junit_path))
     if args.prepare and (json_path or junit_path):
         option = "--json" if json_path else "--junit"
         raise SceneError(

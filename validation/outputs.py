@@ -62,6 +62,28 @@ def _probe(folder: Path) -> str | None:
     return None
 
 
+def distinct_files(*given: tuple[str, Path | None]) -> None:
+    """Refuse two output options that name the same file (one would overwrite the other).
+
+    ``given`` are (option, checked path or None) pairs, in the command line's order.
+
+    Raises
+    ------
+    SceneError
+        Naming the later option and its path.
+    """
+    seen: dict[Path, str] = {}
+    for option, path in given:
+        if path is None:
+            continue
+        key = Path(os.path.realpath(path))
+        if key in seen:
+            raise SceneError(
+                _COMMAND_LINE, option, str(path), f"is the file {seen[key]} writes already"
+            )
+        seen[key] = option
+
+
 def check_file(path: str | Path, option: str) -> Path:
     """Check, before any work, that output file ``path`` (given as ``option``) can be written.
 

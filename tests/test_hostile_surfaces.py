@@ -1,0 +1,91 @@
+"""Hostile inputs on the newer surfaces: notch geometry, run-mode flags, output paths,
+the Python API's model ids and run files (each refused with the field and value, exit 2, or
+answered right; never a traceback)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flexval.geometry.shapes import largest_along
+from flexval.validation.cli import main
+
+SCENES = Path(__file__).parent / "scenes"
+
+
+def test_a_circular_notch_taller_than_its_semicircle_is_refused(tmp_path, capsys):
+    """H > t + L would need cut-outs larger than half a circle: the contour took the other
+    branch of the circle and modelled a strip of thickness t (a taller blank came out more
+    compliant). At H = t + L (semicircles) it is accepted."""
+    text = (SCENES / "notch_hinge.toml").read_text()  # t = 0.1 mm, L = 2 mm, H = 1 mm
+    for height, status in (("2.1", 0), ("2.5", 2), ("40.0", 2)):
+        path = tmp_path / f"notch_{height}.toml"
+        path.write_text(text.replace("height = 1.0", f"height = {height}"))
+        assert main(["info", str(path)]) == status
+        if status:
+            err = capsys.readouterr().err
+            assert "flexures.hinge.height" in err and "t + L = 2.1 mm" in err
+
+
+@pytest.mark.parametrize(
+    "flags, field",
+    [
+        (["--arclength", "--dynamic"], "--arclength"),
+        (["--duration", "2"], "--duration"),
+        (["--damping-ratio", "0.1"], "--damping-ratio"),
+        (["--rayleigh", "1", "0"], "--rayleigh"),
+        (["--rho-inf", "0.5"], "--rho-inf"),
+        (["--error-tol", "1e-6"], "--error-tol"),
+        (["--dynamic", "--rayleigh", "1", "0", "--damping-ratio", "0.1"], "--damping-ratio"),
+    ],
+)
+def test_run_refuses_a_flag_it_would_drop(flags, field, capsys):
+    assert main(["run", "open_chain", "--model", "ee", "--load-case", "m+", *flags]) == 2
+    assert f"field '{field}'" in capsys.readouterr().err
+
+
+def test_two_outputs_on_one_file_are_refused(tmp_path, capsys):
+    same = str(tmp_path / "out.json")
+    gates = tmp_path / "gates.toml"
+    gates.write_text("")
+    assert main(["gate", str(gates), "--json", same, "--junit", same]) == 2
+    assert "field '--junit'" in capsys.readouterr().err
+    plot = str(tmp_path / "m.png")
+    assert main(["modes", "open_chain", "--model", "ee", "--json", plot, "--plot", plot]) == 2
+
+
+def test_parse_model_knows_the_continuum_right_after_import():
+    code = "import flexval; print(flexval.parse_model('continuum:1[plane=strain]').id)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "continuum:1[plane=strain]"
+
+
+def test_a_run_file_with_first_yield_reads_back_as_load_paths(tmp_path):
+    from flexval.reducedmodels import LoadPath
+
+    scene = (SCENES / "euler_column.toml").read_text()
+    scene = scene.replace("poisson_ratio = 0.3", "poisson_ratio = 0.3\nyield_strength = 300.0")
+    (tmp_path / "c.toml").write_text(scene.replace("value = 3.0", "value = 1.0"))
+    out = tmp_path / "run.json"
+    assert main(["run", str(tmp_path / "c.toml"), "--model", "beam:10", "--json", str(out)]) == 0
+    (result,) = json.loads(out.read_text())["results"]
+    assert "first_yield" in result and "safety_factor" in result
+    (path,) = LoadPath.read_run_json(out)
+    assert path.model == "beam:10" and path.dy == result["dy"]
+    with pytest.raises(ValueError, match="unknown keys"):
+        LoadPath.from_dict({**result, "nonsense": 1})
+
+
+def test_the_largest_value_along_a_curve_is_found_between_samples():
+    """A peak 1000 times narrower than the sample spacing (a spline's tight loop)."""
+    width = 1e-6
+    at, top = largest_along(lambda s: 1.0 / (width + (s - 0.3217) ** 2), 1.0, 32)
+    assert at == pytest.approx(0.3217, abs=1e-7) and top == pytest.approx(1.0 / width, rel=1e-6)
+    at, top = largest_along(lambda s: np.sin(3.0 * s), 1.0, 4)
+    assert top == pytest.approx(1.0, abs=1e-12)
