@@ -388,3 +388,14 @@ value = {data["load_cases"][0]["value"] * k * k!r}
     for elements in (20, 400):
         here = _bifurcation(path, f"beam:{elements}") / (k * k)
         assert here == pytest.approx(_bifurcation(COLUMN, f"beam:{elements}"), rel=1e-5)
+
+
+def test_buckle_says_when_the_path_passes_its_linearised_loads(tmp_path):
+    """The closed chain under f+ turns far at small loads: about rest the linearised tangent
+    turns singular at 0.5 % of the load, while load control is stable to the full load; the
+    record says the linearisation does not hold (the leaf guide's does)."""
+    record = _buckle(tmp_path, Path("closed_chain"), "--model", "beam:20", "--load-case", "f+")
+    assert record["load_control"]["kind"] == "none"
+    assert record["critical_factors"][0] < 0.01 and not record["linearisation_holds"]
+    guide = _buckle(tmp_path, GUIDE, "--model", "beam:20", "--count", "1")
+    assert guide["linearisation_holds"]

@@ -85,7 +85,21 @@ def buckle_record(
             for shape in found.shapes
         ],
         "load_control": path,
+        "linearisation_holds": linearisation_holds(found, path, case),
     }
+
+
+def linearisation_holds(found: Buckling, path: dict, case: LoadCase) -> bool:
+    """False where plain load control (``path``, :func:`path_stop`) passes the lowest
+    critical load stably (no bifurcation there, and it reaches beyond it): the path's
+    deformation before that load is too large for the linearisation about the state."""
+    if not found.factors.size:
+        return True
+    lowest = float(found.factors[0]) * abs(case.magnitude)
+    if path["kind"] == "bifurcation":
+        return True
+    reached = abs(case.magnitude) if path["kind"] == "none" else abs(path["load"])
+    return reached < lowest
 
 
 def path_stop(scene: Scene, spec: ModelSpec, case: LoadCase) -> dict:

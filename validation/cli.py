@@ -578,10 +578,11 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     return EXIT_SOLVER if comparison.stopped() else EXIT_OK
 
 
-def _cmd_modes(args: argparse.Namespace) -> int:
-    from flexval.reducedmodels import SolverError, parse_model
-
-    from .modes import choose_density, modes_record, plot_modes, run_modes
+def _analysis_inputs(args: argparse.Namespace):
+    """What an analysis of one model about an equilibrium (``modes``, ``buckle``) reads
+    first: the scene, the model (its memory estimated), and its ``--json`` and ``--plot``
+    paths (checked, distinct; None where not given)."""
+    from flexval.reducedmodels import parse_model
 
     scene = load_scene(args.scene)
     spec = parse_model(args.model, "<command line>", "--model")
@@ -589,6 +590,15 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     json_path = check_file(args.json, "--json") if args.json is not None else None
     plot_path = check_figure_file(args.plot, "--plot") if args.plot is not None else None
     distinct_files(("--json", json_path), ("--plot", plot_path))
+    return scene, spec, json_path, plot_path
+
+
+def _cmd_modes(args: argparse.Namespace) -> int:
+    from flexval.reducedmodels import SolverError
+
+    from .modes import choose_density, modes_record, plot_modes, run_modes
+
+    scene, spec, json_path, plot_path = _analysis_inputs(args)
     scene, density = choose_density(scene, args.density, what="a modal analysis")
     case = (
         scene.load_case(args.load_case)
@@ -620,17 +630,12 @@ def _cmd_modes(args: argparse.Namespace) -> int:
 
 
 def _cmd_buckle(args: argparse.Namespace) -> int:
-    from flexval.reducedmodels import SolverError, parse_model
+    from flexval.reducedmodels import SolverError
 
-    from .buckle import buckle_record, path_stop, run_buckle
+    from .buckle import buckle_record, linearisation_holds, path_stop, run_buckle
     from .modes import plot_modes
 
-    scene = load_scene(args.scene)
-    spec = parse_model(args.model, "<command line>", "--model")
-    _check_memory([(scene.mechanism, spec, None)], COMMAND_LINE, "--model")
-    json_path = check_file(args.json, "--json") if args.json is not None else None
-    plot_path = check_figure_file(args.plot, "--plot") if args.plot is not None else None
-    distinct_files(("--json", json_path), ("--plot", plot_path))
+    scene, spec, json_path, plot_path = _analysis_inputs(args)
     case = scene.load_case(args.load_case) if args.load_case else scene.load_cases[0]
     try:
         system, found = run_buckle(scene, spec, case, args.at, args.count)
@@ -655,6 +660,12 @@ def _cmd_buckle(args: argparse.Namespace) -> int:
         print(f"load control: stops at {sig(stop['load'], 6)} {case.unit} ({stop['reason']})")
     else:
         print(f"load control: stable up to the full load {sig(case.magnitude, 6)} {case.unit}")
+    if rows and not linearisation_holds(found, stop, case):
+        print(
+            "note: load control passes the lowest critical load without a bifurcation: the "
+            "deformation before it is too large for the linearisation about this state; "
+            "trust the path"
+        )
     if json_path:
         write_json(json_path, buckle_record(scene, spec, case, system, found, stop))
     if plot_path and rows:
