@@ -20,7 +20,6 @@ reader ``rd`` is the scene parser's (``value``, ``number``, ``point``,
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import Any
 
 import numpy as np
@@ -107,6 +106,18 @@ def check_thickness_fits(rd, where: str, value: Any, shape: Shape, section: Sect
         )
 
 
+def closest_pair(points: np.ndarray) -> tuple[int, int, float]:
+    """The two closest of ``points`` (n, 2), i < j, and their distance (mm): each point's
+    nearest other by a k-d tree, O(n log n) time and O(n) memory (a spline may have tens of
+    thousands of points)."""
+    from scipy.spatial import cKDTree
+
+    distances, neighbours = cKDTree(points).query(points, k=2)
+    k = int(np.argmin(distances[:, 1]))
+    i, j = sorted((k, int(neighbours[k, 1])))
+    return i, j, float(distances[k, 1])
+
+
 def read_spline(rd, f: dict, where: str) -> Spline:
     """``points``: at least three different points (mm) whose spline does not cross itself."""
     value = f.get("points")
@@ -120,11 +131,8 @@ def read_spline(rd, f: dict, where: str) -> Spline:
         [rd.point({f"points[{i}]": p}, f"points[{i}]", where) for i, p in enumerate(value)]
     )
     extent = float(np.hypot(*(points.max(axis=0) - points.min(axis=0))))
-    gaps = np.hypot(*(points[:, None] - points[None]).transpose(2, 0, 1))
-    gaps[np.diag_indices(len(points))] = math.inf
-    i, j = np.unravel_index(int(np.argmin(gaps)), gaps.shape)
-    if gaps[i, j] <= REPEATED_POINT * extent:
-        i, j = sorted((int(i), int(j)))
+    i, j, gap = closest_pair(points)
+    if gap <= REPEATED_POINT * extent:
         rd.fail(
             f"{where}points[{j}]",
             value[j],

@@ -26,6 +26,7 @@ file, the line and the column. Inside, rotations are radians.
 from __future__ import annotations
 
 import csv
+import io
 import math
 import re
 from dataclasses import dataclass
@@ -44,6 +45,11 @@ VALUE_LIMIT = 1e12
 MAX_ROWS = MAX_LOAD_SUBSTEPS - 1
 """Most data rows: each measured load is a requested level of the traced path (with the
 rest state), and a path has at most :data:`~flexval.geometry.loads.MAX_LOAD_SUBSTEPS`."""
+
+MAX_BYTES = 64 * 2**20
+"""Largest measurement file read (bytes): :data:`MAX_ROWS` rows of a dozen columns of
+full-precision numbers take a few MiB, so a larger file cannot be a measurement; the bound
+keeps the reader's memory bounded whatever it is given."""
 
 _UNITS = {
     "mm": ("mm", {"mm"}),
@@ -183,14 +189,18 @@ def _number(text: str, source: str, line: int, column: str) -> float:
 
 
 def _rows(text: str, source: str) -> list[tuple[int, list[str]]]:
-    """(line, cells) of every row that is neither blank nor a comment."""
-    reader = csv.reader(text.splitlines(keepends=True))
+    """(line, cells) of every row that is neither blank nor a comment: the header and at most
+    :data:`MAX_ROWS` + 1 data rows (one more than a measurement may have, for the check that
+    refuses it, so that a long file is not parsed to its end)."""
+    reader = csv.reader(io.StringIO(text))
     rows = []
     try:
         for cells in reader:
             if not any(c.strip() for c in cells) or cells[0].lstrip().startswith("#"):
                 continue
             rows.append((reader.line_num, cells))
+            if len(rows) > MAX_ROWS + 1:
+                break
     except csv.Error as exc:
         raise SceneError(source, f"line {reader.line_num}", None, f"malformed CSV: {exc}") from None
     return rows
@@ -233,6 +243,30 @@ def _check_loads(load: list[float], lines: list[int], source: str, case: LoadCas
             )
 
 
+def _bounded_bytes(path: Path, source: str) -> bytes:
+    """The file's bytes, read only if it is a regular file of at most :data:`MAX_BYTES`
+    (a device or a pipe, or a larger file, is refused before it is read whole)."""
+    try:
+        if not path.is_file():
+            if not path.exists():
+                raise SceneError(source, "file", source, "no such file")
+            raise SceneError(
+                source, "file", source, "is not a regular file (a device, pipe or folder)"
+            )
+        with open(path, "rb") as stream:
+            raw = stream.read(MAX_BYTES + 1)
+    except OSError as exc:
+        raise SceneError(source, "file", source, f"cannot be read: {exc.strerror}") from None
+    if len(raw) > MAX_BYTES:
+        raise SceneError(
+            source,
+            "file",
+            source,
+            f"larger than {MAX_BYTES // 2**20} MiB: a measurement has at most {MAX_ROWS} rows",
+        )
+    return raw
+
+
 def read_measurement(path: str | Path, case: LoadCase) -> Measurement:
     """Read and check the measurement file ``path`` of load case ``case``.
 
@@ -254,12 +288,7 @@ def read_measurement(path: str | Path, case: LoadCase) -> Measurement:
             case.name,
             "the load case's full load is zero: a measured load is no load factor of it",
         )
-    try:
-        raw = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise SceneError(source, "file", source, "no such file") from None
-    except OSError as exc:
-        raise SceneError(source, "file", source, f"cannot be read: {exc.strerror}") from None
+    raw = _bounded_bytes(Path(path), source)
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

@@ -545,10 +545,13 @@ class SparseTangent:
         return _pivots_negative(sp.csr_matrix(lower), pivots)
 
     def positive_definite(self) -> bool:
-        """True when the LDL^T's pivots are all positive (False for the pivoting LU's
-        fallback, which proves nothing)."""
+        """True when the LDL^T's pivots are all positive (after the pivoting LU's fallback,
+        those of the separate symmetric-mode factorisation its inertia is counted by; a
+        tangent whose inertia cannot be judged counts as positive definite)."""
         self._factorise()
-        return self._pivots is not None and bool((self._pivots > 0.0).all())
+        if self._pivots is not None:
+            return bool((self._pivots > 0.0).all())
+        return not self.negative_eigenvalues()
 
     def toarray(self) -> np.ndarray:
         return self.matrix.toarray()

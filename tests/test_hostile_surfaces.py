@@ -89,3 +89,16 @@ def test_the_largest_value_along_a_curve_is_found_between_samples():
     assert at == pytest.approx(0.3217, abs=1e-7) and top == pytest.approx(1.0 / width, rel=1e-6)
     at, top = largest_along(lambda s: np.sin(3.0 * s), 1.0, 4)
     assert top == pytest.approx(1.0, abs=1e-12)
+
+
+def test_a_report_whose_load_case_no_model_finishes_writes_everything_and_exits_3(tmp_path, capsys):
+    """The leaf guide pushed past its sway load: every model stops at the bifurcation. The
+    report is written whole (text, figures, results, timings) and the command exits 3."""
+    out = tmp_path / "report"
+    argv = ["report", str(SCENES / "leaf_guide.toml"), "--out", str(out), "--quiet"]
+    argv += ["--model", "beam:20", "--model", "prbm", "--no-bench", "--no-converge"]
+    assert main([*argv, "--no-batch", "--no-cache"]) == 3
+    assert "no model reached the full load" in capsys.readouterr().err
+    for name in ("report.md", "results.json", "gates.json", "timings.md", "timings.json"):
+        assert (out / name).is_file()
+    assert "bifurcation" in (out / "report.md").read_text()

@@ -126,3 +126,28 @@ def test_a_plugin_that_exits_or_interrupts_on_import_never_makes_a_command_succe
         proc = _flexval(site, tmp_path, "models")
         assert proc.returncode == 2, proc.stderr
         assert f"flexval-{name}" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_a_plugin_family_that_raises_on_a_scene_is_a_solver_failure_naming_its_package(
+    tmp_path,
+):
+    """The example spring refuses straight flexures (an error raised by its connector): on
+    a scene of straight leaves ``flexval run`` exits 3 naming the package, and ``flexval
+    gate`` fails the gate (the model did not reach the full load) naming it; never a
+    traceback."""
+    site = tmp_path / "site"
+    _install(site, PACKAGE, _entry_point_of_the_example())
+    guide = str(ROOT / "tests" / "scenes" / "leaf_guide.toml")
+    proc = _flexval(site, tmp_path, "run", guide, "--model", "ellipse-spring")
+    assert proc.returncode == 3, proc.stderr
+    assert PACKAGE in proc.stderr and "Traceback" not in proc.stderr
+    light = tmp_path / "guide.toml"  # below its sway load: the reference reaches full load
+    light.write_text(Path(guide).read_text().replace("value = 150.0", "value = 10.0"))
+    (tmp_path / "gates.toml").write_text(
+        f'reference = "beam:20"\nscenes = ["{light}"]\n'
+        '[[gates]]\nmodel = "ellipse-spring"\nend_rot = 1e-9\n'
+    )
+    proc = _flexval(site, tmp_path, "gate", "gates.toml", "--workers", "1")
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    assert PACKAGE in proc.stdout and "did not reach full load" in proc.stdout
+    assert "Traceback" not in proc.stderr

@@ -788,7 +788,8 @@ def _check_report_memory(scenes: list[str], specs: list, args: argparse.Namespac
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    from .report import DEFAULT_MODELS, build_report
+    from .report import DEFAULT_MODELS, write_report
+    from .reportdata import compute_report
 
     scenes = args.scene or ["open_chain", "closed_chain"]
     for name in scenes:
@@ -798,23 +799,47 @@ def _cmd_report(args: argparse.Namespace) -> int:
     _check_report_memory(scenes, specs, args)
     out = check_folder(args.out, "--out")  # created only once the rest is known good
     _keep_cached(not args.no_cache, f"; the files written in {out} are whole")
-    path = build_report(
+    data = compute_report(
         scenes,
-        out,
         models,
-        repeats=args.repeats,
-        use_cache=not args.no_cache,
-        progress=not args.quiet,
-        bench=not args.no_bench,
-        converge=not args.no_converge,
-        workers=args.jobs,
-        protocol=Path(args.protocol) if args.protocol else None,
-        peers=args.peers,
-        threed=Path(args.threed) if args.threed else None,
-        batched=not args.no_batch,
+        args.repeats,
+        not args.no_cache,
+        not args.quiet,
+        not args.no_bench,
+        not args.no_converge,
+        args.jobs,
+        args.peers,
+        not args.no_batch,
+    )
+    path = write_report(
+        data,
+        out,
+        Path(args.protocol) if args.protocol else None,
+        Path(args.threed) if args.threed else None,
     )
     print(f"wrote {path}")
-    return EXIT_OK
+    unfinished = _unfinished_cases(data)
+    for line in unfinished:
+        print(f"flexval: solver failure: {line}", file=sys.stderr)
+    return EXIT_SOLVER if unfinished else EXIT_OK
+
+
+def _unfinished_cases(data) -> list[str]:
+    """The report's (scene, load case) pairs with nothing to compare: the reference stopped
+    before the full load, or every model did. Every file is written all the same; the
+    command then exits 3."""
+    lines = []
+    for r in data.scenes:
+        for case in r.cases:
+            finished = [m for m in r.models if r.converged(m, case) is not None]
+            if not finished:
+                lines.append(f"{r.scene.name}, load case {case}: no model reached the full load")
+            elif r.reference and r.reference not in finished:
+                lines.append(
+                    f"{r.scene.name}, load case {case}: the reference {r.reference} stopped "
+                    "before the full load (the report says where and why)"
+                )
+    return lines
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
@@ -840,7 +865,14 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         print(f"flexval: {f.model} on {f.load_case} {f.summary()}: {f.message}", file=sys.stderr)
     md = write_bench(scene, rows, ref.id, out, failures)
     print(md.read_text(encoding="utf-8"))
-    return EXIT_OK
+    stopped = sorted({f.load_case for f in failures if f.model == ref.id})
+    for case in stopped:  # every file is written; nothing to compare on these cases
+        print(
+            f"flexval: solver failure: the reference {ref.id} stopped before the full load on "
+            f"load case {case}",
+            file=sys.stderr,
+        )
+    return EXIT_SOLVER if stopped else EXIT_OK
 
 
 def _cmd_stress(args: argparse.Namespace) -> int:

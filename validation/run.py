@@ -9,7 +9,8 @@ Only what is requested is built.
 from __future__ import annotations
 
 from flexval.geometry import LoadCase, Scene
-from flexval.reducedmodels import LoadPath, ModelSpec
+from flexval.reducedmodels import LoadPath, ModelSpec, SolverError
+from flexval.reducedmodels.catalogue import plugin_of
 
 
 def run_model(
@@ -37,15 +38,33 @@ def run_model(
     Raises
     ------
     reducedmodels.SolverError
-        If the solver cannot reach the full load (carries the load reached).
+        If the solver cannot reach the full load (carries the load reached), and for a
+        plug-in family's code that raises anything else (naming its package): a plug-in's
+        failure is a failure of that model, never a traceback of the command.
     """
-    return spec.model_family.run(
-        scene.mechanism,
-        spec,
-        case,
-        levels=levels,
-        scene=scene.name,
-        record_poses=record_poses,
-        record_shapes=record_shapes,
-        **extra,
-    )
+
+    def run() -> LoadPath:
+        return spec.model_family.run(
+            scene.mechanism,
+            spec,
+            case,
+            levels=levels,
+            scene=scene.name,
+            record_poses=record_poses,
+            record_shapes=record_shapes,
+            **extra,
+        )
+
+    package = plugin_of(spec.family)
+    if package is None:
+        return run()
+    try:
+        return run()
+    except SolverError:
+        raise
+    except Exception as exc:
+        raise SolverError(
+            f"{spec.id} on load case {case.name!r}: the model family of plug-in package "
+            f"{package!r} raised {type(exc).__name__}: {exc}",
+            0.0,
+        ) from None
