@@ -35,6 +35,9 @@ from .magnitudes import SMALLEST_NORMAL
 
 PLA_DENSITY = 1.24e-9
 """Density of PLA, t/mm^3 (1240 kg/m^3): the default of studies on scenes without mass data."""
+MIN_DENSITY = 1e-13
+"""Smallest flexure density accepted, t/mm^3 (0.1 kg/m^3): below the lightest aerogels
+(about 1e-12), and far above the 1e-300 that makes natural frequencies of 1e148 Hz."""
 MAX_DENSITY = 1e-3
 """Largest accepted density, t/mm^3: a value in kg/m^3 or g/cm^3 by mistake is above it."""
 MASS_LIMIT = 1e12
@@ -50,6 +53,7 @@ DENSITY_FIELD = Field(
     unit="t/mm³",
     default=ABSENT,
     positive=True,
+    minimum=MIN_DENSITY,
     maximum=MAX_DENSITY,
 )
 """``material.density``: optional; without it the flexures are massless."""
@@ -235,11 +239,18 @@ def _point(fail: Fail, field_name: str, value: Any) -> np.ndarray:
 
 
 def parse_density(material: dict, fail: Fail) -> float | None:
-    """``material.density`` (t/mm^3) if given; it must be positive and below 1e-3
+    """``material.density`` (t/mm^3) if given; it must be between 1e-13 and 1e-3
     (a value in kg/m^3 or g/cm^3 by mistake is caught by this bound: steel is 7.85e-9)."""
     if "density" not in material:
         return None
     value = _positive(fail, "material.density", material["density"])
+    if value < DENSITY_FIELD.minimum:
+        fail(
+            "material.density",
+            value,
+            f"below {MIN_DENSITY:g} t/mm^3 (0.1 kg/m^3, under the lightest aerogels'): no "
+            "solid flexure is that light; is this in another unit?",
+        )
     if value > DENSITY_FIELD.maximum:
         fail(
             "material.density",

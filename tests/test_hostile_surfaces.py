@@ -102,3 +102,41 @@ def test_a_report_whose_load_case_no_model_finishes_writes_everything_and_exits_
     for name in ("report.md", "results.json", "gates.json", "timings.md", "timings.json"):
         assert (out / name).is_file()
     assert "bifurcation" in (out / "report.md").read_text()
+
+
+def test_a_sweep_asking_for_first_yield_without_a_yield_strength_is_refused(tmp_path, capsys):
+    sweep = tmp_path / "s.toml"
+    sweep.write_text(
+        'name = "s"\nbase = "open_chain"\nmodels = ["ee"]\nreference = "dcmm:1"\n'
+        'outputs = ["first_yield"]\n[[axes]]\npath = "section.thickness"\nvalues = [0.1, 0.11]\n'
+    )
+    assert main(["sweep", str(sweep), "--out", str(tmp_path / "out")]) == 2
+    assert "field 'outputs'" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.skipif(not Path("/dev/zero").exists(), reason="needs /dev/zero")
+def test_a_measurement_that_is_a_device_is_refused_before_it_is_read(capsys):
+    argv = ["compare", "open_chain", "--measured", "/dev/zero", "--load-case", "m+"]
+    assert main([*argv, "--model", "ee"]) == 2
+    assert "not a regular file" in capsys.readouterr().err
+
+
+def test_a_measurement_of_too_many_rows_is_refused_without_reading_it_all(tmp_path, capsys):
+    """A million rows: refused at the first row past the limit (the file is parsed no
+    further), and a file larger than the byte bound before it is parsed at all."""
+    from flexval.geometry.measured import MAX_BYTES, MAX_ROWS
+
+    rows = tmp_path / "rows.csv"
+    with rows.open("w") as out:
+        out.write("load,dx\n")
+        out.writelines(f"{k * 1e-9:.6e},{k * 1e-6:.6e}\n" for k in range(1, 1_000_001))
+    argv = ["compare", "open_chain", "--load-case", "m+", "--model", "ee", "--measured"]
+    assert main([*argv, str(rows)]) == 2
+    assert f"line {MAX_ROWS + 2}" in capsys.readouterr().err
+    large = tmp_path / "large.csv"
+    with large.open("wb") as out:
+        out.write(b"load,dx\n")
+        out.truncate(MAX_BYTES + 1)
+    assert main([*argv, str(large)]) == 2
+    assert "larger than" in capsys.readouterr().err

@@ -995,6 +995,18 @@ def parse_sweep(
         _fail(source, "axes", [a.path for a in axes], "a path is swept twice")
     for k, a in enumerate(axes):
         _slot(base, a.path, source, f"axes[{k}].path")
+    if (
+        "first_yield" in outputs
+        and base_scene.mechanism.material.yield_strength is None
+        and "material.yield_strength" not in {a.path for a in axes}
+    ):
+        _fail(
+            source,
+            "outputs",
+            list(outputs),
+            "first_yield needs the base scene's material.yield_strength (MPa), which it "
+            "does not give: every first-yield column would be empty",
+        )
 
     count = point_count(axes, combine, source)
     check_point_count(count, source, max_points)
