@@ -162,6 +162,9 @@ class Flexure:
     start_body : str
         Which of ``bodies`` the shape's start point is attached to.
     section : Section
+    crosses : tuple of str
+        Flexures whose centre lines this one may cross: they lie in other layers of the
+        depth (a cross-axis pivot's leaves), so the overlap check lets them cross.
     """
 
     name: str
@@ -169,6 +172,7 @@ class Flexure:
     bodies: tuple[str, str]
     start_body: str
     section: Section
+    crosses: tuple[str, ...] = ()
 
     @property
     def end_body(self) -> str:
@@ -321,6 +325,8 @@ class FlexureSpec:
     start_body : str, optional
         Which of ``bodies`` holds the shape's start point; None: inferred
         from the geometry by :func:`assemble`.
+    crosses : tuple of str
+        Flexures it crosses out of plane (see :class:`Flexure`).
     """
 
     name: str
@@ -328,6 +334,7 @@ class FlexureSpec:
     bodies: tuple[str, str]
     section: Section
     start_body: str | None = None
+    crosses: tuple[str, ...] = ()
 
     def other(self, body: str) -> str:
         """The body at the other end from ``body``."""
@@ -341,6 +348,16 @@ class PinSpec:
     name: str
     bodies: tuple[str, str]
     point: tuple[float, float]
+
+
+def _check_crossings_named(specs: Sequence[FlexureSpec], source: str) -> None:
+    """Each name in a flexure's ``crosses`` is another flexure of the mechanism."""
+    names = {spec.name for spec in specs}
+    for spec in specs:
+        for other in spec.crosses:
+            if other == spec.name or other not in names:
+                why = "is the flexure itself" if other == spec.name else "names no flexure"
+                raise SceneError(source, f"flexures.{spec.name}.crosses", other, why)
 
 
 def assemble(
@@ -403,8 +420,10 @@ def assemble(
     body_names = _check_names_and_graph(specs, pins, ground, target_body, body_points, source)
     known = _known_points(ground, ground_points, body_points, pins)
     start_body = _attach_ends(specs, pins, ground, known, tol, source)
+    _check_crossings_named(specs, source)
     flexures = tuple(
-        Flexure(s.name, s.shape, tuple(s.bodies), start_body[s.name], s.section) for s in specs
+        Flexure(s.name, s.shape, tuple(s.bodies), start_body[s.name], s.section, s.crosses)
+        for s in specs
     )
     pins_built = tuple(Pin(p.name, tuple(p.bodies), np.asarray(p.point, dtype=float)) for p in pins)
     _check_points_used(flexures, pins_built, ground, ground_points, body_points, tol, source)

@@ -35,7 +35,8 @@ def _segments_meeting(
 
 
 def crossings(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Intersection points (k, 2) of polylines p (m+1, 2) and q (n+1, 2), proper crossings only.
+    """Intersection points (k, 2) of polylines p (m+1, 2) and q (n+1, 2), a crossing at a
+    vertex of either included (parallel overlapping segments are left to the outline check).
 
     Only segments inside the overlap of the two polylines' bounding boxes can
     cross, so the all-pairs test runs on those (for neighbours that share an
@@ -51,7 +52,7 @@ def crossings(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         t = _cross(c - a, s) / den
         u = _cross(c - a, r) / den
-    hit = (den != 0) & (t > 0) & (t < 1) & (u > 0) & (u < 1)
+    hit = (den != 0) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)  # a vertex too
     return (a + t[..., None] * r)[hit]
 
 
@@ -87,8 +88,11 @@ def self_crossings(line: np.ndarray) -> np.ndarray:
     return np.concatenate([np.empty((0, 2)), *found])
 
 
-def candidate_pairs(lines: list[np.ndarray]) -> list[tuple[int, int]]:
-    """Index pairs (i < j) of polylines whose bounding boxes overlap, sorted.
+def candidate_pairs(
+    lines: list[np.ndarray], margins: list[float] | None = None
+) -> list[tuple[int, int]]:
+    """Index pairs (i < j) of polylines whose bounding boxes overlap, sorted (each box grown
+    by its ``margins`` entry, mm: a band's half thickness, for outlines).
 
     Sweep and prune: boxes sorted by their lower x; each is compared only with
     the boxes that start before it ends in x, then filtered in y. Two
@@ -96,8 +100,9 @@ def candidate_pairs(lines: list[np.ndarray]) -> list[tuple[int, int]]:
     that matters, and for mechanisms whose flexures are spread in the plane
     (chains, lattices) it costs about n log n instead of n^2.
     """
-    lo = np.array([line.min(axis=0) for line in lines]).reshape(-1, 2)
-    hi = np.array([line.max(axis=0) for line in lines]).reshape(-1, 2)
+    grow = np.zeros(len(lines)) if margins is None else np.asarray(margins, float)
+    lo = np.array([line.min(axis=0) for line in lines]).reshape(-1, 2) - grow[:, None]
+    hi = np.array([line.max(axis=0) for line in lines]).reshape(-1, 2) + grow[:, None]
     order = np.argsort(lo[:, 0], kind="stable")
     lo, hi = lo[order], hi[order]
     pairs = []
@@ -123,20 +128,98 @@ def check_overlaps(flexures, source: str, tol: float) -> None:
                 f"the {f.shape.kind}'s ends are {gap:.3g} mm apart, less than its "
                 f"thickness {f.section.max_thickness:g} mm: the solid closes on itself",
             )
-    for i, j in candidate_pairs(lines):
+    widths = [  # each flexure's thickness at its centre line's samples (mm)
+        np.broadcast_to(
+            f.section.thickness_at(np.linspace(0.0, f.shape.length, SAMPLES + 1)), SAMPLES + 1
+        )
+        for f in flexures
+    ]
+    for i, j in candidate_pairs(lines, [0.5 * float(h.max()) for h in widths]):
         f, g = flexures[i], flexures[j]
-        pts = crossings(lines[i], lines[j])
-        if not len(pts):
+        if g.name in f.crosses or f.name in g.crosses:  # declared: in other layers of the depth
             continue
         shared = [f.end_point_of(b) for b in f.bodies if b in g.bodies] + [
             g.end_point_of(b) for b in g.bodies if b in f.bodies
         ]
-        for x in pts:
+        joints = [  # where an end of each meets: their bands join in the body there
+            p
+            for p in f.shape.end_points
+            if any(np.hypot(*(p - q)) <= tol for q in g.shape.end_points)
+        ]
+        for x in crossings(lines[i], lines[j]):
             if not any(np.hypot(*(x - s)) <= tol for s in shared):
                 raise SceneError(
                     source,
                     f"flexures.{g.name}",
                     g.name,
                     f"crosses flexure {f.name!r} at ({x[0]:.3g}, {x[1]:.3g}) mm: "
-                    "the mechanism intersects itself",
+                    "the mechanism intersects itself (if they lie in different layers of "
+                    f"the depth, as a cross-axis pivot's leaves, say so: crosses = "
+                    f"[{f.name!r}])",
                 )
+        _check_outlines(f, g, (lines[i], widths[i]), (lines[j], widths[j]), joints, source)
+
+
+JOINT_REACH = 2.0
+"""Thicknesses from a body point shared by two flexures within which their bands may meet:
+the body's material around the joint, which a flexure's clamp needs at least its own
+thickness of on either side."""
+
+
+def _check_outlines(f, g, band_f, band_g, shared: list[np.ndarray], source: str) -> None:
+    """Refuse two flexures whose outlines (the bands +-h(s)/2 about their centre lines)
+    overlap away from where they meet a body together.
+
+    ``band_f`` and ``band_g`` are each one's centre-line samples (``SAMPLES`` + 1 points,
+    mm) and its thickness there (mm). Two bands overlap where their centre lines come
+    closer than the sum of their half thicknesses there, less a sample's spacing (a
+    notch on top of another, two notches side by side closer than their blanks allow).
+    Where both attach to one body point they join in that body, and their bands meet
+    within the larger of their thicknesses divided by the sine of the
+    angle between them there, inside the body's own material up to :data:`JOINT_REACH`
+    thicknesses (and a quarter of the shorter flexure) from the point; those stretches
+    are left out (two flexures that leave a point side by side overlap beyond them: one
+    on top of the other).
+    """
+    (p_f, h_f), (p_g, h_g) = band_f, band_g  # centre-line samples and thickness there
+    keep_f, keep_g = np.ones(len(p_f), bool), np.ones(len(p_g), bool)
+    for point in shared:
+        t_f = _tangent_at(f, point)
+        t_g = _tangent_at(g, point)
+        sine = abs(float(t_f[0] * t_g[1] - t_f[1] * t_g[0]))
+        thickest = max(float(h_f.max()), float(h_g.max()))
+        shortest = min(f.shape.length, g.shape.length)
+        reach = min(thickest / max(sine, 1e-12), JOINT_REACH * thickest, 0.25 * shortest)
+        keep_f &= np.hypot(*(p_f - point).T) > reach
+        keep_g &= np.hypot(*(p_g - point).T) > reach
+    reach = 0.5 * (float(h_f.max()) + float(h_g.max()))  # only samples near the other's box
+    keep_f &= np.all((p_f >= p_g.min(axis=0) - reach) & (p_f <= p_g.max(axis=0) + reach), axis=1)
+    keep_g &= np.all((p_g >= p_f.min(axis=0) - reach) & (p_g <= p_f.max(axis=0) + reach), axis=1)
+    if not (keep_f.any() and keep_g.any()):
+        return
+    a, b = p_f[keep_f], p_g[keep_g]
+    gaps = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
+    nearest = np.argmin(gaps, axis=1)
+    distance = gaps[np.arange(len(a)), nearest]
+    room = 0.5 * (h_f[keep_f] + h_g[keep_g][nearest])
+    spacing = max(f.shape.length, g.shape.length) / SAMPLES  # a sample's reach
+    overlap = distance < room - spacing
+    if overlap.any():
+        k = int(np.argmax(room - distance))
+        x = p_f[keep_f][k]
+        raise SceneError(
+            source,
+            f"flexures.{g.name}",
+            g.name,
+            f"its outline overlaps flexure {f.name!r}'s near ({x[0]:.3g}, {x[1]:.3g}) mm: "
+            f"their centre lines are {distance[k]:.3g} mm apart there, their half "
+            f"thicknesses add up to {room[k]:.3g} mm (the material would be counted twice)",
+        )
+
+
+def _tangent_at(flexure, point: np.ndarray) -> np.ndarray:
+    """The unit tangent of a flexure's centre line at its end nearest ``point``."""
+    start, end = flexure.shape.end_points
+    s = 0.0 if np.hypot(*(point - start)) <= np.hypot(*(point - end)) else flexure.shape.length
+    angle = float(flexure.shape.tangent_angle(s))
+    return np.array([np.cos(angle), np.sin(angle)])

@@ -377,7 +377,12 @@ def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> Fle
         value = list(thickness) if isinstance(thickness, tuple) else thickness
         check_thickness_fits(rd, where, value, shape, section)
     start_body = rd.value(f, FLEXURES["start_body"], where)
-    return FlexureSpec(name, shape, tuple(bodies), section, start_body)
+    crosses = f.get("crosses", [])
+    if not isinstance(crosses, list) or not all(isinstance(c, str | int) for c in crosses):
+        rd.fail(f"{where}crosses", crosses, "must be an array of flexure names")
+    return FlexureSpec(
+        name, shape, tuple(bodies), section, start_body, tuple(str(c) for c in crosses)
+    )
 
 
 def _pin_spec(rd: _Reader, p: dict, k: int) -> PinSpec:

@@ -242,6 +242,16 @@ FLEXURES = Table(
             variants=("spline",),
         ),
         Field(
+            "crosses",
+            "texts",
+            "names of flexures whose centre lines this one crosses out of plane: a "
+            "cross-axis pivot's leaves lie in layers of their own, side by side in depth, "
+            "and cross in the plane's projection (otherwise flexures that cross or whose "
+            "outlines overlap are refused)",
+            default=ABSENT,
+            default_text="none",
+        ),
+        Field(
             "start_body",
             "name",
             "the body at the centre line's first end (arcs: the end at axis - width/2); "

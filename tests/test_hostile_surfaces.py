@@ -140,3 +140,44 @@ def test_a_measurement_of_too_many_rows_is_refused_without_reading_it_all(tmp_pa
         out.truncate(MAX_BYTES + 1)
     assert main([*argv, str(large)]) == 2
     assert "larger than" in capsys.readouterr().err
+
+
+def _two_notches(tmp_path, offset: float, extra: str = "") -> Path:
+    """The notch hinge scene with a second, equal notch ``offset`` mm above the first."""
+    text = (SCENES / "notch_hinge.toml").read_text()
+    hinge = text[text.index("[[flexures]]") : text.index("[[load_cases]]")]
+    twin = hinge.replace('name = "hinge"', f'name = "twin"{extra}')
+    twin = twin.replace("start = [0.0, 0.0]", f"start = [0.0, {offset}]")
+    twin = twin.replace("end = [2.0, 0.0]", f"end = [2.0, {offset}]")
+    text = text.replace("[[load_cases]]", twin + "\n[[load_cases]]", 1)
+    if offset:
+        text = text.replace("points = [[0.0, 0.0]]", f"points = [[0.0, 0.0], [0.0, {offset}]]")
+    path = tmp_path / f"twin_{offset}.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("offset, status", [(0.0, 2), (0.5, 2), (1.2, 0)])
+def test_notches_whose_outlines_overlap_are_refused(tmp_path, capsys, offset, status):
+    """A notch on top of another (material counted twice) and one whose blank overlaps the
+    other's (H = 1 mm, 0.5 mm apart) are refused; 1.2 mm apart they are two hinges."""
+    assert main(["info", str(_two_notches(tmp_path, offset))]) == status
+    if status:
+        err = capsys.readouterr().err
+        assert "flexures.twin" in err and "outline overlaps flexure 'hinge'" in err
+
+
+def test_segments_crossing_at_a_sample_point_are_refused_unless_declared(tmp_path, capsys):
+    """The cross-axis pivot's leaves cross at their midpoints, exactly at a sample of both
+    centre lines: refused without ``crosses`` (the test was strict there), accepted with it;
+    ``crosses`` naming no flexure is refused."""
+    text = (SCENES / "cross_pivot.toml").read_text()
+    plain = tmp_path / "plain.toml"
+    plain.write_text(text.replace('crosses = ["a"]', ""))
+    assert main(["info", str(plain)]) == 2
+    assert "crosses flexure 'a' at (0, 10) mm" in capsys.readouterr().err
+    assert main(["info", str(SCENES / "cross_pivot.toml")]) == 0
+    wrong = tmp_path / "wrong.toml"
+    wrong.write_text(text.replace('crosses = ["a"]', 'crosses = ["c"]'))
+    assert main(["info", str(wrong)]) == 2
+    assert "flexures.b.crosses" in capsys.readouterr().err
