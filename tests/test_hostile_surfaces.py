@@ -224,3 +224,25 @@ def test_a_taper_steeper_than_the_arithmetic_resolves_is_refused(tmp_path, capsy
     scene.write_text(text.replace('name = "column"', 'name = "column"\nthickness = [1e-5, 1.0]', 1))
     assert main(["info", str(scene)]) == 2
     assert "flexures.column.thickness" in capsys.readouterr().err
+
+
+def test_another_sweep_over_the_same_folder_is_refused(tmp_path, capsys):
+    """A sweep's folder keeps its identity (sweep.json): a changed sweep file over the same
+    --out would mix two sweeps' rows; refused naming what differs. The same sweep again
+    resumes (nothing run twice)."""
+    first = tmp_path / "first.toml"
+    first.write_text(
+        'name = "s"\nbase = "open_chain"\nmodels = ["ee"]\nreference = "dcmm:1"\n'
+        'load_cases = ["m+"]\n[[axes]]\npath = "section.thickness"\nvalues = [0.1, 0.11]\n'
+    )
+    out = tmp_path / "out"
+    argv = ["--out", str(out), "--workers", "1", "--quiet"]
+    assert main(["sweep", str(first), *argv]) == 0
+    assert json.loads((out / "sweep.json").read_text())["models"] == ["ee"]
+    capsys.readouterr()
+    assert main(["sweep", str(first), *argv]) == 0
+    assert "0 rows written" in capsys.readouterr().err
+    second = tmp_path / "second.toml"
+    second.write_text(first.read_text().replace('models = ["ee"]', 'models = ["prbm"]'))
+    assert main(["sweep", str(second), *argv]) == 2
+    assert "its models differ" in capsys.readouterr().err

@@ -946,6 +946,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         write_outputs,
     )
     from .sweep.engine import stop_workers_on_signals
+    from .sweep.identity import check_identity, keep_identity
 
     if args.scheduler and args.workers is not None:
         raise SceneError(
@@ -982,6 +983,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         args.out if args.out is not None else os.path.join("sweeps", safe_name(sweep.name)), "--out"
     )
     results_store(sweep, out).check()  # a dataset of another format: refused up front
+    check_identity(sweep, out)  # and another sweep's rows
 
     def kept() -> str:
         """What an interruption keeps, once the workers are ended: the published parts;
@@ -994,9 +996,13 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         )
 
     _keep_on_interrupt(kept)
-    invalid = len(sweep.points) - len(sweep.valid_points)
+    invalid = (
+        f"{len(sweep.points) - len(sweep.valid_points)} invalid"
+        if sweep.points.checked
+        else "random draws: the invalid ones are found as they run"
+    )
     print(
-        f"sweep {sweep.name}: {len(sweep.points)} points ({invalid} invalid), "
+        f"sweep {sweep.name}: {len(sweep.points)} points ({invalid}), "
         f"{len(sweep.models)} models + reference {sweep.reference.id}, "
         f"{len(sweep.load_cases)} load cases -> {out}",
         file=sys.stderr,
@@ -1028,6 +1034,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             stats = run_sweep(sweep, out, client, use_cache=not args.no_cache, progress=progress)
     finally:
         _close_cluster(cluster)
+    keep_identity(sweep, out)
     rows = sweep_rows(sweep, out, stats)
     write_outputs(sweep, rows, out, stats.seconds)
     stale = results_store(sweep, out).key_array().size - len(rows)
@@ -1035,7 +1042,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         f"{stats.tasks} tasks, {stats.rows_written} rows written ({stats.rows_failed} failed), "
         f"{stats.rows_skipped} already present; {stats.seconds:.1f} s"
         + (
-            f"; {stale} stored rows of an earlier code version or outputs left out of the summary"
+            f"; {stale} stored rows left out of the summary (of an earlier code version, or "
+            "of points this sweep no longer has)"
             if stale
             else ""
         ),
