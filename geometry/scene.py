@@ -44,6 +44,7 @@ import math
 import tomllib
 import unicodedata
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -127,6 +128,33 @@ class Scene:
     outputs: frozenset[str]
     source: str
     measurements: tuple[Measurement, ...] = ()
+
+    def with_load_cases(self, names: Sequence[str], field: str = "--load-case") -> Scene:
+        """The scene with only the load cases ``names``, in that order (and their
+        measurements): a command's ``--load-case`` filter.
+
+        Raises
+        ------
+        SceneError
+            Naming ``field`` and a name the scene has no load case of.
+        """
+        chosen = []
+        for name in names:
+            if name not in {lc.name for lc in self.load_cases}:
+                raise SceneError(
+                    "<command line>",
+                    field,
+                    name,
+                    f"scene {self.name} has no such load case; it has "
+                    f"{[lc.name for lc in self.load_cases]}",
+                )
+            if name not in chosen:
+                chosen.append(name)
+        return dataclasses.replace(
+            self,
+            load_cases=tuple(self.load_case(n) for n in chosen),
+            measurements=tuple(m for m in self.measurements if m.load_case in chosen),
+        )
 
     def load_case(self, name: str) -> LoadCase:
         """The load case called ``name``."""

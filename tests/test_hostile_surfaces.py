@@ -246,3 +246,16 @@ def test_another_sweep_over_the_same_folder_is_refused(tmp_path, capsys):
     second.write_text(first.read_text().replace('models = ["ee"]', 'models = ["prbm"]'))
     assert main(["sweep", str(second), *argv]) == 2
     assert "its models differ" in capsys.readouterr().err
+
+
+def test_report_bench_and_stress_take_a_load_case_filter(tmp_path, capsys):
+    out = tmp_path / "report"
+    argv = ["report", "open_chain", "--load-case", "m+", "--out", str(out), "--quiet"]
+    argv += ["--model", "beam:20", "--model", "ee", "--no-bench", "--no-converge", "--no-batch"]
+    assert main(argv) == 0
+    results = json.loads((out / "results.json").read_text())["scenes"]["open_chain"]["results"]
+    assert {r["load_case"] for r in results} == {"m+"}
+    for command in ("report", "bench", "stress"):
+        assert main([command, "open_chain", "--load-case", "m0", "--out", str(tmp_path / "x")]) == 2
+        assert "field '--load-case' = 'm0'" in capsys.readouterr().err
+        assert not (tmp_path / "x").exists()

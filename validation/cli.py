@@ -787,13 +787,28 @@ def _check_report_memory(scenes: list[str], specs: list, args: argparse.Namespac
     _check_memory(paths, COMMAND_LINE, "--model", parallel=args.jobs or 1, quiet=args.quiet)
 
 
+def _load_case_option(parser: argparse.ArgumentParser) -> None:
+    """``--load-case NAME`` (repeatable): only these load cases of each scene."""
+    parser.add_argument(
+        "--load-case",
+        action="append",
+        metavar="NAME",
+        help="only this load case of each scene (repeatable; default: all)",
+    )
+
+
+def _chosen_cases(scene, args: argparse.Namespace):
+    """``scene`` with only its load cases named by ``--load-case`` (all without it)."""
+    return scene.with_load_cases(args.load_case) if args.load_case else scene
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     from .report import DEFAULT_MODELS, write_report
     from .reportdata import compute_report
 
     scenes = args.scene or ["open_chain", "closed_chain"]
     for name in scenes:
-        load_scene(name)  # bad input fails before any work
+        _chosen_cases(load_scene(name), args)  # bad input fails before any work
     models = args.model or list(DEFAULT_MODELS)
     specs = _parse_models(models, "<command line>", "--model")
     _check_report_memory(scenes, specs, args)
@@ -810,6 +825,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
         args.jobs,
         args.peers,
         not args.no_batch,
+        load_cases=args.load_case,
     )
     path = write_report(
         data,
@@ -847,7 +863,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from .bench import runtime_vs_error, sweep_specs, write_bench
     from .cache import ResultCache
 
-    scene = load_scene(args.scene)
+    scene = _chosen_cases(load_scene(args.scene), args)
     (ref,) = _parse_models([args.reference], "<command line>", "--reference")
     out = check_folder(args.out, "--out")
     _keep_cached(not args.no_cache)
@@ -878,7 +894,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 def _cmd_stress(args: argparse.Namespace) -> int:
     from .stress import stress_report, write_stress
 
-    scene = load_scene(args.scene)
+    scene = _chosen_cases(load_scene(args.scene), args)
     models = args.model or ["ee", "dcmm:1", "dcmm:2", "prbm", "beam:20"]
     specs = _parse_models(models, "<command line>", "--model")
     from .stress import AMPLIFICATIONS, STEP_COUNTS
@@ -1461,6 +1477,7 @@ def build_parser() -> argparse.ArgumentParser:
         "prbm, dcmm:1, dcmm:2, dcmm:3, ee)",
     )
     _campaign_options(q)
+    _load_case_option(q)
     q.add_argument("--no-bench", action="store_true", help="skip the runtime-vs-error study")
     q.add_argument("--no-converge", action="store_true", help="skip the mesh convergence study")
     q.add_argument("--no-batch", action="store_true", help=NO_BATCH_HELP)
@@ -1505,6 +1522,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     q.add_argument("--out", default="reports/bench", metavar="DIR", help="output folder")
     _campaign_options(q)
+    _load_case_option(q)
     q.add_argument("--no-batch", action="store_true", help=NO_BATCH_HELP)
     q.set_defaults(func=_cmd_bench)
 
@@ -1523,6 +1541,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     q.add_argument("--out", default="reports/stress", metavar="DIR", help="output folder")
     q.add_argument("--quiet", action="store_true", help="no progress lines")
+    _load_case_option(q)
     q.set_defaults(func=_cmd_stress)
 
     q = sub.add_parser(

@@ -532,6 +532,7 @@ def compute_report(
     workers: int = 1,
     peers: bool = False,
     batched: bool = True,
+    load_cases: list[str] | None = None,
 ) -> ReportData:
     """Run and compare everything the report shows (see the module docstring).
 
@@ -551,15 +552,20 @@ def compute_report(
     that many processes (:func:`flexval.validation.campaign.prefetch`); the studies
     then read them, so the results are those of a serial run.
 
+    With ``load_cases``, only those load cases of each scene are studied
+    (:meth:`flexval.geometry.Scene.with_load_cases`).
+
     Raises
     ------
     geometry.SceneError
-        For a bad scene or model id (nothing is run). Solver failures are
-        results, never raised.
+        For a bad scene or model id, or a load case a scene has not (nothing is
+        run). Solver failures are results, never raised.
     """
     t0 = time.perf_counter()
     specs = [parse_model(m, "<report>", "models") for m in (models or DEFAULT_MODELS)]
     scenes = [load_scene(n) for n in scene_names]
+    if load_cases:  # only these cases of each scene (``--load-case``)
+        scenes = [s.with_load_cases(load_cases) for s in scenes]
     memo = RunMemo(ResultCache(enabled=use_cache))
     reference = next((s for s in specs if s.model_family.has(REFERENCE)), None)
     ref_id = reference.id if reference else None
