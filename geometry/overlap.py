@@ -4,8 +4,11 @@ Centre lines are sampled as polylines (``SAMPLES`` segments per flexure);
 pairs whose bounding boxes overlap (found by a sweep, so the check scales
 about linearly with the number of flexures) are tested for proper segment
 crossings, vectorised over the pairs of their segments that lie in the
-overlap of the two boxes. Crossings within ``tol`` of a point where both
-flexures meet the same body (a shared attachment) are allowed. An arc (or a
+overlap of the two boxes, a crossing at a vertex included. Crossings within
+``tol`` of a point where both flexures meet the same body (a shared
+attachment), or where an end of each meets (two bars pinned end to end), are
+allowed; so are crossings of flexures declared to lie in other layers of the
+depth (``crosses``). Outlines are compared too (:func:`_check_outlines`). An arc (or a
 spline) whose two ends come closer than its thickness h would have
 overlapping end faces as a solid. :func:`self_crossings` finds where one
 polyline crosses itself (a spline's centre line). Lengths mm.
@@ -146,8 +149,9 @@ def check_overlaps(flexures, source: str, tol: float) -> None:
             for p in f.shape.end_points
             if any(np.hypot(*(p - q)) <= tol for q in g.shape.end_points)
         ]
+        touching = [*shared, *joints]  # a shared attachment, or two ends that meet
         for x in crossings(lines[i], lines[j]):
-            if not any(np.hypot(*(x - s)) <= tol for s in shared):
+            if not any(np.hypot(*(x - s)) <= tol for s in touching):
                 raise SceneError(
                     source,
                     f"flexures.{g.name}",
