@@ -127,9 +127,12 @@ def closest_pair(points: np.ndarray) -> tuple[int, int, float]:
     from scipy.spatial import cKDTree
 
     distances, neighbours = cKDTree(points).query(points, k=2)
-    k = int(np.argmin(distances[:, 1]))
-    i, j = sorted((k, int(neighbours[k, 1])))
-    return i, j, float(distances[k, 1])
+    own = np.arange(len(points))
+    other = np.where(neighbours[:, 0] == own, neighbours[:, 1], neighbours[:, 0])  # a twin
+    gap = np.where(neighbours[:, 0] == own, distances[:, 1], distances[:, 0])  # may come first
+    k = int(np.argmin(gap))
+    i, j = sorted((k, int(other[k])))
+    return i, j, float(gap[k])
 
 
 def read_spline(rd, f: dict, where: str) -> Spline:

@@ -164,10 +164,10 @@ def check_overlaps(flexures, source: str, tol: float) -> None:
         _check_outlines(f, g, (lines[i], widths[i]), (lines[j], widths[j]), joints, source)
 
 
-JOINT_REACH = 2.0
-"""Thicknesses from a body point shared by two flexures within which their bands may meet:
-the body's material around the joint, which a flexure's clamp needs at least its own
-thickness of on either side."""
+JOINT_SHARE = 0.25
+"""Most of a flexure's length, from a body point it shares with another, within which
+their bands may meet in the body (a quarter: two flexures that leave the point side by
+side and stay so, one on top of the other, overlap beyond it)."""
 
 
 def _check_outlines(f, g, band_f, band_g, shared: list[np.ndarray], source: str) -> None:
@@ -180,10 +180,8 @@ def _check_outlines(f, g, band_f, band_g, shared: list[np.ndarray], source: str)
     notch on top of another, two notches side by side closer than their blanks allow).
     Where both attach to one body point they join in that body, and their bands meet
     within the larger of their thicknesses divided by the sine of the
-    angle between them there, inside the body's own material up to :data:`JOINT_REACH`
-    thicknesses (and a quarter of the shorter flexure) from the point; those stretches
-    are left out (two flexures that leave a point side by side overlap beyond them: one
-    on top of the other).
+    angle between them there (up to :data:`JOINT_SHARE` of the shorter one's length) from
+    the point; those stretches are left out.
     """
     (p_f, h_f), (p_g, h_g) = band_f, band_g  # centre-line samples and thickness there
     keep_f, keep_g = np.ones(len(p_f), bool), np.ones(len(p_g), bool)
@@ -193,7 +191,7 @@ def _check_outlines(f, g, band_f, band_g, shared: list[np.ndarray], source: str)
         sine = abs(float(t_f[0] * t_g[1] - t_f[1] * t_g[0]))
         thickest = max(float(h_f.max()), float(h_g.max()))
         shortest = min(f.shape.length, g.shape.length)
-        reach = min(thickest / max(sine, 1e-12), JOINT_REACH * thickest, 0.25 * shortest)
+        reach = min(thickest / max(sine, 1e-12), JOINT_SHARE * shortest)
         keep_f &= np.hypot(*(p_f - point).T) > reach
         keep_g &= np.hypot(*(p_g - point).T) > reach
     reach = 0.5 * (float(h_f.max()) + float(h_g.max()))  # only samples near the other's box
