@@ -51,12 +51,19 @@ class Connector(ABC):
         How many internal coordinates are Lagrange multipliers (default 0);
         each makes the tangent one negative eigenvalue indefinite at a stable
         state, which the core's stability test accounts for.
+    sway_load : float or None
+        For a model of a straight flexure without geometric stiffness for
+        the sway of its ends (it cannot buckle): the compression (N) beyond
+        which its states are outside its validity
+        (:func:`flexval.reducedmodels.validity.sway_load`); None (default)
+        for a model that buckles itself, which the stability test finds.
     """
 
     name: str
     bodies: tuple[str, str]
     n_internal: int = 0
     n_multipliers: int = 0
+    sway_load: float | None = None
 
     # --- required --------------------------------------------------------
     @abstractmethod
@@ -529,12 +536,15 @@ class KernelEndPass(ConnectorGroup):
         """:meth:`ConnectorGroup.path_end_pass` from :meth:`_end_pass`, each connector's
         forces apart."""
         verdicts, axial, moment = self._end_pass(coordinates)
-        return verdicts, self._split(axial, moment)
+        forces = self._split(axial, moment)
+        return with_sway_reasons(self.connectors, verdicts, forces), forces
 
     def path_end_stacks(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[ForceStack]]:
         """:meth:`ConnectorGroup.path_end_stacks` from :meth:`_end_pass`, the connectors of
         the same stations stacked."""
         verdicts, axial, moment = self._end_pass(coordinates)
+        if any(c.sway_load is not None for c in self.connectors):
+            verdicts = with_sway_reasons(self.connectors, verdicts, self._split(axial, moment))
         return verdicts, self._stacks(axial, moment)
 
     def _end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], np.ndarray, np.ndarray]:
@@ -562,3 +572,24 @@ def overrides(connector: Connector, hook: str) -> bool:
     the local states.
     """
     return getattr(type(connector), hook) is not getattr(Connector, hook)
+
+
+def with_sway_reasons(
+    connectors: Sequence[Connector], verdicts: list[Reasons], forces: Sequence
+) -> list[Reasons]:
+    """``verdicts`` with, for every connector that has a :attr:`Connector.sway_load`, the
+    levels whose compression exceeds it named (:func:`flexval.reducedmodels.validity.
+    sway_reasons`); ``forces`` are the connectors' section forces (k levels) in order. New
+    lists where reasons are added: a group may share one verdict among its connectors."""
+    from .validity import sway_reasons
+
+    if not any(c.sway_load is not None for c in connectors):
+        return verdicts
+    out = list(verdicts)
+    for j, (c, found) in enumerate(zip(connectors, forces)):
+        if c.sway_load is None or found is None:
+            continue
+        extra = sway_reasons(found.axial, c.sway_load)
+        if any(extra):
+            out[j] = [[*why, *more] for why, more in zip(verdicts[j], extra)]
+    return out

@@ -45,6 +45,7 @@ from .validity import (
     bending_strain_reasons,
     rotation_reasons,
     stretch_reasons,
+    sway_load,
 )
 
 SAMPLES_PER_SUB_ARC = 16
@@ -187,6 +188,8 @@ class DcmmConnector(Connector):
         self.name = flexure.name
         self.bodies = tuple(flexure.bodies)
         self.n_internal = 3 * (n - 1)
+        # one compliance has no geometric stiffness for a straight flexure's sway
+        self.sway_load = sway_load(flexure, mechanism) if n == 1 else None
         shape = flexure.shape
         subs = sub_arcs(flexure, mechanism.material, n)
         forward = flexure.start_body == self.bodies[0]  # chain runs start -> end

@@ -40,7 +40,7 @@ from .loadpath import LoadPath
 from .loads import Loads
 from .recorder import append_stresses, state_peaks
 from .restnumbering import RestNumbering
-from .validity import MAX_LINEAR_ROTATION
+from .validity import MAX_LINEAR_ROTATION, linear_sway_verdicts, merge_reasons
 
 Member = tuple[Mechanism, Sequence[Connector]]
 """One copy: its mechanism and its connectors (``Family.connectors``)."""
@@ -252,7 +252,7 @@ def _solve(
     b3 = 3 * len(poses)
     turns = np.abs(dq_dead[:, None, 2:b3:3] + lam[None, :, None] * dq[:, None, 2:b3:3])
     too_far = (turns > MAX_LINEAR_ROTATION).any(axis=(1, 2)) if poses else np.zeros(count, bool)
-    forces = _section_forces(numbering, members, copies, rests, dq, dq_dead, gravity, lam)
+    forces, sway = _section_forces(numbering, members, copies, rests, dq, dq_dead, gravity, lam)
     paths: list[LoadPath | Exception] = []
     rows_of = zip((lam * magnitude).tolist(), dx.tolist(), dy.tolist(), rotation.tolist(), forces)
     for i, (k, (load, x, y, turn, stresses)) in enumerate(zip(copies, rows_of)):
@@ -277,6 +277,7 @@ def _solve(
             path.valid, path.validity = _rotation_verdicts(turns[i], poses)
         else:
             path.valid, path.validity = [True] * lam.size, [None] * lam.size
+        path.valid, path.validity = merge_reasons(path.valid, path.validity, sway[i])
         append_stresses(path, stresses)
         paths.append(path)
     return paths
@@ -307,10 +308,12 @@ def _section_forces(
     dq_dead: np.ndarray,
     gravity: list[bool],
     lam: np.ndarray,
-) -> list[list[tuple[str, tuple]]]:
+) -> tuple[list[list[tuple[str, tuple]]], list[list[list[str]]]]:
     """Each copy's flexures' stresses (:func:`~flexval.reducedmodels.recorder.state_peaks`
     entries by flexure name, in its connectors' order) from the section forces of K0 dq on
-    the undeformed centre lines, every copy's connectors of one class in one call."""
+    the undeformed centre lines, every copy's connectors of one class in one call; and each
+    copy's reasons per level where a straight leaf it cannot buckle is compressed beyond its
+    sway load (:func:`~flexval.reducedmodels.validity.linear_sway_verdicts`)."""
     count = len(copies)
     start = numbering.bounds[-1] if numbering.bounds else 0
     hessians = np.array([rest.hessians for rest in rests])
@@ -361,6 +364,14 @@ def _section_forces(
         if sections[i].get(c.name) is not None
     ]
     found: list[list[tuple[str, tuple]]] = [[] for _ in range(count)]
+    sway: list[list[list[str]]] = [[[] for _ in lam] for _ in range(count)]
+    if any(c.sway_load is not None for c in connectors0):  # straight leaves it cannot buckle
+        unit = forces_at(per_unit)
+        dead = forces_at(gradients(dq_dead)) if any(gravity) else None
+        for i, k in enumerate(copies):
+            sway[i] = linear_sway_verdicts(
+                members[k][1], unit[i], lam, None if dead is None else dead[i]
+            )
     if not any(gravity):  # section forces proportional to the load
         forces = forces_at(per_unit)
         chosen = [
@@ -369,7 +380,7 @@ def _section_forces(
         peaks = state_peaks([(f, s) for *_, f, s in chosen], lam)
         for (i, name, _, _), entry in zip(chosen, peaks):
             found[i].append((name, entry))
-        return found
+        return found, sway
     of_weights = gradients(dq_dead)
     for factor in lam:  # the weights' forces, then the load's at this level
         forces = forces_at(of_weights + factor * per_unit)
@@ -378,4 +389,4 @@ def _section_forces(
         ]
         for (i, name, _, _), entry in zip(chosen, state_peaks([(f, s) for *_, f, s in chosen])):
             found[i].append((name, entry))
-    return found
+    return found, sway

@@ -26,7 +26,7 @@ from .loadpath import LoadPath
 from .loads import Loads
 from .recorder import record_stress, solve_path
 from .restnumbering import RestNumbering
-from .validity import MAX_LINEAR_ROTATION
+from .validity import MAX_LINEAR_ROTATION, linear_sway_verdicts, merge_reasons
 
 #: ``make(flexure, mechanism, spec, **options) -> Connector`` of one flexure
 ConnectorFactory = Callable[..., Any]
@@ -329,6 +329,13 @@ def linear_response(
 
     per_unit = section_gradients(dq)
     sections = {f.name: f.section for f in mechanism.flexures}
+    if any(c.sway_load is not None for c in connectors):  # straight leaves it cannot buckle
+        dead = section_forces(section_gradients(dq_dead)) if has_weights else None
+        lp.valid, lp.validity = merge_reasons(
+            lp.valid,
+            lp.validity,
+            linear_sway_verdicts(connectors, section_forces(per_unit), lam, dead),
+        )
     if has_weights:
         of_weights = section_gradients(dq_dead)
         for factor in lam:

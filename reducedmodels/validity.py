@@ -28,6 +28,12 @@ typed in:
   one: :func:`bending_rotation_limit` turns :data:`MAX_STRAIN` into the
   rotation of a notch's pivot or of a DCMM part of it.
 
+* a straight flexure modelled without geometric stiffness for a sway of its
+  ends (``dcmm:1``'s one compliance, ``ee``'s linear response) cannot buckle
+  in the model: :func:`sway_load` bounds its compression by the leaf's Euler
+  load (guided, or a cantilever's), and :func:`sway_reasons` names the
+  levels beyond it.
+
 ``tests/test_validity.py`` checks that every model's states at the paper's
 loads are inside, and that DCMM_1 at 100 and 1000 times them is not.
 
@@ -175,3 +181,82 @@ def rotation_reasons(what: str, angles: np.ndarray, limit: float) -> list[str]:
 def _label(what: str, k: int, count: int) -> str:
     """``what`` with the 1-based entry number when there are several."""
     return what if count == 1 else f"{what} {k + 1}"
+
+
+def sway_load(flexure, mechanism) -> float | None:
+    """The compression (N) beyond which a model blind to a straight flexure's sway misses
+    its buckling, Euler's load with the flexure's effective EI = L / int ds / EI (its end
+    rotation's, exact for a taper or a notch): pi^2 EI / L^2 where both its bodies are held
+    by something else too (the ends stay near parallel: a guided leaf's sway, as in a
+    parallel guide), pi^2 EI / (4 L^2) where one of them hangs on this flexure alone (a
+    cantilever). None for a curved flexure (an arc or a spline bends under its load
+    instead of staying straight until it buckles).
+
+    A screen, not a buckling analysis: ``flexval buckle`` gives the mechanism's own load.
+    """
+    if flexure.shape.kind not in ("segment", "notch"):
+        return None
+    from flexval.geometry.compliance import curve_compliance
+
+    length = flexure.shape.length
+    weight = curve_compliance(flexure.shape, flexure.section, mechanism.material).ellipse.weight
+    effective = length / weight  # N mm^2
+    held = [
+        body == mechanism.ground
+        or sum(body in f.bodies for f in mechanism.flexures)
+        + sum(body in p.bodies for p in mechanism.pins)
+        > 1
+        for body in flexure.bodies
+    ]
+    factor = 1.0 if all(held) else 0.25
+    return factor * math.pi**2 * effective / length**2
+
+
+def sway_reasons(axial: np.ndarray, limit: float) -> list[list[str]]:
+    """Per level (rows of ``axial``, N, tension positive, (k, m)), the reason where the
+    flexure's largest compression exceeds ``limit`` (N, :func:`sway_load`); else none."""
+    compression = -np.min(np.atleast_2d(axial), axis=1)
+    return [
+        [
+            f"compression {c:.4g} N beyond the leaf's Euler load {limit:.4g} N: this model "
+            "has no geometric stiffness for its sway and cannot see it buckle (flexval "
+            "buckle with a beam model gives the mechanism's load)"
+        ]
+        if c > limit
+        else []
+        for c in compression.tolist()
+    ]
+
+
+def linear_sway_verdicts(
+    connectors, unit: list, lam: np.ndarray, dead: list | None = None
+) -> list[list[str]]:
+    """Per level of a linear response, the :func:`sway_reasons` of its connectors.
+
+    ``unit`` and ``dead`` are each connector's section forces (or None) per unit load
+    factor and of the weights alone; level k's normal force is dead + lam[k] unit. Each
+    reason is prefixed with the connector's name, as the validity monitor's are.
+    """
+    found: list[list[str]] = [[] for _ in lam]
+    for j, c in enumerate(connectors):
+        if c.sway_load is None or unit[j] is None:
+            continue
+        base = 0.0 if dead is None or dead[j] is None else np.asarray(dead[j].axial)
+        axial = base + np.outer(lam, np.asarray(unit[j].axial))
+        for into, why in zip(found, sway_reasons(axial, c.sway_load)):
+            into.extend(f"{c.name}: {w}" for w in why)
+    return found
+
+
+def merge_reasons(
+    valid: list[bool], validity: list[str | None], extra: list[list[str]]
+) -> tuple[list[bool], list[str | None]]:
+    """A path's ``valid`` and ``validity`` with further reasons per level joined in."""
+    if not any(extra):
+        return valid, validity
+    out_valid, out_why = [], []
+    for ok, why, more in zip(valid, validity, extra):
+        reasons = ([why] if why else []) + more
+        out_valid.append(ok and not more)
+        out_why.append("; ".join(reasons) if reasons else None)
+    return out_valid, out_why

@@ -399,3 +399,59 @@ def test_buckle_says_when_the_path_passes_its_linearised_loads(tmp_path):
     assert record["critical_factors"][0] < 0.01 and not record["linearisation_holds"]
     guide = _buckle(tmp_path, GUIDE, "--model", "beam:20", "--count", "1")
     assert guide["linearisation_holds"]
+
+
+@pytest.mark.parametrize(
+    "path, model, per_leaf",
+    [
+        (COLUMN, "ee", 0.25),  # a cantilever leaf: pi^2 EI / (4 L^2)
+        (GUIDE, "ee", 1.0),  # guided leaves: pi^2 EI / L^2 each
+        (GUIDE, "dcmm:1", 1.0),
+        (FOLDED, "ee", 1.0),
+        (FOLDED, "dcmm:1", 1.0),
+    ],
+)
+def test_a_model_blind_to_sway_is_invalid_past_the_leafs_euler_load(path, model, per_leaf):
+    """ee is linear and dcmm:1's single compliance has no geometric stiffness for a leaf whose
+    ends stay parallel: they reach the full load, but every level whose leaf compression
+    passes the leaf's Euler load is outside their validity, the first valid level below
+    it (the guide's two leaves share the push: 2 pi^2 EI / L^2 in all)."""
+    import flexval
+
+    scene = load_scene(str(path))
+    case = scene.load_cases[0]
+    lp = run_model(scene, flexval.parse_model(model), case)
+    leaves = 1 if path == COLUMN else 2
+    critical = leaves * _critical(path, per_leaf)
+    for load, valid, why in zip(lp.load, lp.valid, lp.validity):
+        assert valid == (abs(load) <= critical), (load, why)
+        if not valid:
+            assert "no geometric stiffness for its sway" in why
+
+
+@pytest.mark.parametrize("model", ["ee", "dcmm:1"])
+def test_a_batch_of_sway_blind_copies_flags_the_same_levels_as_each_alone(model):
+    import dataclasses
+
+    from flexval.reducedmodels.batch import run_batch
+    from flexval.reducedmodels.catalogue import parse_model
+    from flexval.reducedmodels.models import run_reduced
+
+    scene = load_scene(str(GUIDE))
+    case = scene.load_cases[0]
+    mechanisms = [
+        dataclasses.replace(
+            scene.mechanism,
+            flexures=tuple(
+                dataclasses.replace(f, section=f.section.scaled(s))
+                for f in scene.mechanism.flexures
+            ),
+        )
+        for s in (0.98, 1.0, 1.03)
+    ]
+    spec = parse_model(model)
+    batched = run_batch(mechanisms, spec, [case] * 3)
+    for mechanism, together in zip(mechanisms, batched):
+        alone = run_reduced(mechanism, spec, case)
+        assert together.valid == alone.valid and together.validity == alone.validity
+        assert not all(alone.valid)
