@@ -26,6 +26,7 @@ from .core import SolverError
 from .loadpath import LoadPath
 from .recorder import (
     STACK_FROM,
+    carries_weights,
     failed_path,
     levels_path,
     note_stability,
@@ -34,6 +35,7 @@ from .recorder import (
 )
 from .sections import SectionForces
 from .tracer import Counters, PathPoint, TraceFailure
+from .validity import resolution_reason, unresolved_levels
 
 if TYPE_CHECKING:  # annotations only: the batch imports this module
     from .batch import BatchSystem
@@ -167,8 +169,10 @@ def record_batch(
     iterations = np.array([np.broadcast_to(p.iterations, (copies,)) for p in points]).T.tolist()
     last = points[-1].counters
     newton = np.broadcast_to(last.newton_iterations, (copies,)).tolist()
-    dx, dy, rotation = (v.T.tolist() for v in batch.copy_targets(states))
+    targets = batch.copy_targets(states)
     factors = [p.factor for p in points]
+    _note_resolution(batch, kept, factors, targets, reasons)
+    dx, dy, rotation = (v.T.tolist() for v in targets)
     load_of: dict[int, list[float]] = {}  # each case's load at each level (N or N mm), once
     totals: dict[int, Counters] = {}  # the counts after the last point, by Newton iterations
 
@@ -217,3 +221,31 @@ def record_batch(
         )
         paths.append(failed_path(path, cases[k], model, failed, 0.0))
     return paths
+
+
+def _note_resolution(
+    batch: BatchSystem,
+    kept: Sequence[int],
+    factors: Sequence[float],
+    targets: tuple[np.ndarray, ...],
+    reasons: dict[int, list[list[str]]],
+) -> None:
+    """Add to ``reasons`` (by place in ``kept``, per level) where a kept copy's load is below
+    its round-off (:func:`~flexval.reducedmodels.validity.unresolved_levels`, every copy at
+    once), after its connectors' reasons as :func:`~flexval.reducedmodels.recorder.
+    note_resolution` adds them to a path alone; ``targets`` are the copies' dx, dy (mm) and
+    rotation (rad), each (levels, copies)."""
+    members = [batch.members[k] for k in kept]
+    mask, moved, floor = unresolved_levels(
+        np.asarray(factors),
+        *(v[:, kept].T for v in targets),
+        np.array([mechanism.size() for mechanism, _ in members]),
+        np.array([batch.copy_dofs[k].size for k in kept]),
+        np.array([carries_weights(connectors) for _, connectors in members]),
+    )
+    if not mask.any():
+        return
+    for j in np.flatnonzero(mask.any(axis=1)).tolist():
+        into = reasons.setdefault(j, [[] for _ in factors])
+        for level in np.flatnonzero(mask[j]).tolist():
+            into[level].append(resolution_reason(float(moved[j, level]), float(floor[j])))

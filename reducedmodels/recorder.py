@@ -28,6 +28,7 @@ from .core import SolverError, System
 from .loadpath import LoadPath
 from .sections import ForceStack, SectionForces
 from .tracer import Counters, LoadControl, PathPoint, TraceFailure, trace
+from .validity import merge_reasons, resolution_reason, unresolved_levels
 
 _OBSERVERS: list[Callable[[LoadPath], None]] = []
 """Called with the path after each point a :class:`PathRecorder` records (see :func:`observing`)."""
@@ -187,6 +188,7 @@ class PathRecorder:
         """The path of a successful trace (wall time from the recorder's creation)."""
         self._judge()
         note_stability(self.path, self.system)
+        note_resolution(self.path, self.system.size, carries_weights(self.system.connectors))
         self.path.converged = True
         self.path.seconds = time.perf_counter() - self.t0
         return self.path
@@ -195,6 +197,7 @@ class PathRecorder:
         """The SolverError for a failed trace, carrying the path so far."""
         self._judge()
         note_stability(self.path, self.system)
+        note_resolution(self.path, self.system.size, carries_weights(self.system.connectors))
         return failed_path(self.path, self.case, self.model, exc, time.perf_counter() - self.t0)
 
     def run(
@@ -224,6 +227,28 @@ def note_stability(path: LoadPath, system: System) -> None:
     note = system.stability_note()
     if note is not None:
         path.stats["stability"] = note
+
+
+def note_resolution(path: LoadPath, size: float, weighted: bool) -> None:
+    """Mark the levels of a traced path whose load double precision does not resolve
+    (:func:`~flexval.reducedmodels.validity.unresolved_levels`; ``size`` in mm, ``weighted``
+    where the path's rest carries weights)."""
+    if not path.load:  # stopped before its first level
+        return
+    mask, moved, floor = unresolved_levels(
+        path.load, path.dx, path.dy, path.rotation, size, path.stats["unknowns"], weighted
+    )
+    if mask.any():
+        extra = [
+            [resolution_reason(m, float(floor))] if bad else []
+            for bad, m in zip(mask.tolist(), moved.tolist())
+        ]
+        path.valid, path.validity = merge_reasons(path.valid, path.validity, extra)
+
+
+def carries_weights(connectors: Iterable[Connector]) -> bool:
+    """Whether any connector carries dead loads of its own (``dead_load_scale`` > 0, N)."""
+    return any(getattr(c, "dead_load_scale", 0.0) > 0.0 for c in connectors)
 
 
 def _append_bifurcations(path: LoadPath, factors: Iterable[float], magnitude: float) -> None:

@@ -34,6 +34,11 @@ typed in:
   load (guided, or a cantilever's), and :func:`sway_reasons` names the
   levels beyond it.
 
+* a level whose motion is of the size of the solution's round-off (a load
+  so small that double precision does not resolve what it moves):
+  :func:`unresolved_levels` bounds it by :data:`RESOLVED_MOTION` times the
+  path's noise floor.
+
 ``tests/test_validity.py`` checks that every model's states at the paper's
 loads are inside, and that DCMM_1 at 100 and 1000 times them is not.
 
@@ -260,3 +265,71 @@ def merge_reasons(
         out_valid.append(ok and not more)
         out_why.append("; ".join(reasons) if reasons else None)
     return out_valid, out_why
+
+
+RESOLVED_MOTION = 1e3
+"""A load level's motion must exceed the path's round-off floor this many times
+(:func:`unresolved_levels`): its answer is then within 0.1 % of the exact one."""
+
+ROUND_OFF_GROWTH = 2.0
+"""The round-off of a converged state, in units of double precision times the square root
+of the number of unknowns (random accumulation): the largest measured on the open chain's
+paths at 1e-9 to 1e-17 of the paper's loads was 1.54 (``beam:100`` under f-, 900
+unknowns); ``tests/test_resolution.py`` measures it again."""
+
+
+def unresolved_levels(
+    factors: np.ndarray,
+    dx: np.ndarray,
+    dy: np.ndarray,
+    rotation: np.ndarray,
+    size: np.ndarray | float,
+    unknowns: np.ndarray | int,
+    weighted: np.ndarray | bool = False,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Which levels of traced paths move the target by less than :data:`RESOLVED_MOTION`
+    times the path's round-off: their answers are noise.
+
+    ``factors`` (levels,) are the load factors the paths share (or one path's loads: only
+    where they are zero matters); ``dx``, ``dy`` (mm) and
+    ``rotation`` (rad) are (..., levels), one row per path (a batch's copies at once);
+    ``size`` (mm), ``unknowns`` and ``weighted`` one per path. The motion is the target's
+    translation over the mechanism's size and its rotation, from the level at rest. The
+    floor is the round-off of a state of ``unknowns`` coordinates
+    (:data:`ROUND_OFF_GROWTH`) and, where the paths start at rest without weights
+    (``weighted`` False), the motion reported there: a model whose rest state is in
+    balance only to round-off (the continuum's meshes, to about 1e-13) moves that far
+    under no load, and every level carries it. A nonlinear model's Newton stops on
+    corrections below a fixed fraction of the size, so below the floor its answer can
+    have the wrong sign; a linear response (``ee``) needs no screen.
+
+    Returns
+    -------
+    mask : bool array (..., levels)
+        True at a loaded level within the floor.
+    moved, floor : arrays (..., levels) and (...)
+        Each level's motion and each path's floor (fractions of the size, rad).
+    """
+    factors = np.asarray(factors, float)
+    size = np.asarray(size, float)[..., None]
+    motion = np.stack([np.asarray(dx) / size, np.asarray(dy) / size, np.asarray(rotation)])
+    at_rest = factors.size > 0 and factors[0] == 0.0
+    base = motion[..., :1] if at_rest else np.zeros_like(motion[..., :1])
+    moved = np.abs(motion - base).max(axis=0)
+    offset = np.abs(base[..., 0]).max(axis=0)
+    eps = np.finfo(float).eps
+    floor = ROUND_OFF_GROWTH * eps * np.sqrt(np.maximum(unknowns, 1)) * np.maximum(1.0, offset)
+    if at_rest:
+        floor = np.where(weighted, floor, np.maximum(floor, offset))
+    mask = (moved < RESOLVED_MOTION * floor[..., None]) & (factors != 0.0)
+    return mask, moved, floor
+
+
+def resolution_reason(moved: float, floor: float) -> str:
+    """Why a level of :func:`unresolved_levels` is not valid (``moved`` and ``floor`` as
+    fractions of the mechanism's size)."""
+    return (
+        f"the load moves the target by {moved:.2g} of the mechanism's size, within "
+        f"{RESOLVED_MOTION:.0f} times the round-off of this model's state ({floor:.2g}): "
+        "double precision does not resolve this load"
+    )
