@@ -280,3 +280,36 @@ def test_a_moment_case_takes_its_load_in_n_mm_and_degrees_become_radians(unit, t
     m = read_measurement(csv, load_scene("open_chain").load_case("m+"))
     assert m.unit == "N mm" and m.columns == ("rotation",) and m.lines == (3, 5)
     assert m.rotation == (0.0, math.pi / 2)
+
+
+@pytest.mark.parametrize("unit", [1e-170, 1e-300])
+def test_scores_do_not_depend_on_the_size_of_the_motion(unit, tmp_path):
+    """A model twice the measured motion is 100 % off at any scale: squares of motions near
+    the ends of double precision under- or overflow unless the scores are computed scaled."""
+    from flexval.reducedmodels import LoadPath
+
+    scene = load_scene("open_chain")
+    load = np.linspace(0.0, 3.0e-3, 6)  # N, the f+ case's sign
+    dx, dy = np.linspace(0.0, 2.0, 6) ** 1.5, -np.linspace(0.0, 1.0, 6)
+    rot = np.linspace(0.0, 0.3, 6)
+
+    def scores(scale: float) -> dict:
+        csv = _write(
+            tmp_path / f"m{scale:g}.csv",
+            ["load [N]", "dx [mm]", "dy [mm]", "rotation [deg]"],
+            [load, scale * dx, scale * dy, scale * np.degrees(rot)],
+        )
+        m = read_measurement(csv, scene.load_case("f+"))
+        path = LoadPath(
+            "twice", "f+", list(load), *(list(2.0 * scale * v) for v in (dx, dy, rot)), 0.0
+        )
+        return measuredcompare.score_model(m, "twice", path, None, scene).errors
+
+    plain, scaled = scores(1.0), scores(unit)
+    assert plain["disp_max"] == pytest.approx(100.0, rel=1e-12)
+    assert plain["rot_max"] == pytest.approx(100.0, rel=1e-12)
+    for key, value in plain.items():
+        assert scaled[key] == pytest.approx(value, rel=1e-12), key
+    assert measured_range(unit * np.column_stack([dx, dy])) == pytest.approx(
+        unit * measured_range(np.column_stack([dx, dy])), rel=1e-14
+    )

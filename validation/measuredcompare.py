@@ -146,12 +146,25 @@ def measured_range(values: np.ndarray) -> float:
     v = np.asarray(values, dtype=float)
     if v.ndim == 1:
         return float(v.max() - v.min()) if v.size else 0.0
+    unit = float(np.abs(v).max(initial=0.0))  # squares of tiny or huge values under- or overflow
+    if unit == 0.0:
+        return 0.0
+    v = v / unit
     best = 0.0
     for start in range(0, len(v), _DIAMETER_BLOCK):
         block = v[start : start + _DIAMETER_BLOCK]
         d2 = sum((block[:, None, i] - v[None, :, i]) ** 2 for i in range(v.shape[1]))
         best = max(best, float(d2.max()))
-    return math.sqrt(best)
+    return unit * math.sqrt(best)
+
+
+def _lengths(diff: np.ndarray) -> np.ndarray:
+    """The Euclidean length of each row of ``diff`` (mm or rad), without the under- or
+    overflow of squaring values near the ends of double precision."""
+    unit = float(np.abs(diff).max(initial=0.0))
+    if unit == 0.0:
+        return np.zeros(len(diff))
+    return unit * np.sqrt(((diff / unit) ** 2).sum(axis=1))
 
 
 @dataclass
@@ -231,10 +244,12 @@ def score_model(
             continue
         model = np.column_stack([values[c] for c in cols])[reached]
         diff = model - measured[reached]
-        r = np.sqrt((diff**2).sum(axis=1))
+        r = _lengths(diff)
+        largest = float(r.max())
         if span > 0.0:
-            errors[f"{quantity}_rms"] = 100.0 * math.sqrt(float(np.mean(r**2))) / span
-            errors[f"{quantity}_max"] = 100.0 * float(r.max()) / span
+            rms = largest * math.sqrt(float(np.mean((r / largest) ** 2))) if largest > 0.0 else 0.0
+            errors[f"{quantity}_rms"] = 100.0 * (rms / span)
+            errors[f"{quantity}_max"] = 100.0 * (largest / span)
         stds = [m.std(c) for c in cols]
         if all(s is not None for s in stds):
             u = np.column_stack([np.asarray(s) for s in stds])[reached]
