@@ -1,6 +1,7 @@
 """`flexval sweep`: sweep files, the Dask engine, the Parquet store, resume and failures."""
 
 import dataclasses
+import re
 import textwrap
 from pathlib import Path
 
@@ -92,8 +93,12 @@ def test_tiny_sweep_matches_a_plain_loop_and_resumes(tmp_path, client):
     lost = stats.parts[-1]
     lost_rows = pq.read_table(lost).to_pylist()
     lost.unlink()
-    again = run_sweep(sweep, out, client, use_cache=False)
+    lines = []
+    again = run_sweep(sweep, out, client, use_cache=False, progress=lines.append)
     n_lost = len(lost_rows)
+    # every (point, model) is counted once, as stored or as run, whatever reruns
+    done, total = re.search(r"([\d,]+)/([\d,]+) runs", lines[-1]).groups()
+    assert done == total == "12", lines
     assert n_lost == 2 * 2 and again.rows_written == n_lost
     assert again.tasks == (1 if lost_rows[0]["model"] == "prbm" else 2)
     assert again.rows_skipped == len(rows) - n_lost

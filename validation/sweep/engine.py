@@ -415,6 +415,9 @@ class _Block:
     """The keys of its stored rows that the sweep gives under the current code."""
     refs: dict = field(default_factory=dict)
     open: int = 0
+    rerun: int = 0
+    """Points whose reference rows are stored but whose reference runs again (a model
+    runs there, and needs it): counted as runs, not as stored, in the progress."""
 
 
 def _make_block(sweep: Sweep, positions: np.ndarray, done: np.ndarray, sampled, info) -> _Block:
@@ -461,10 +464,13 @@ def _make_block(sweep: Sweep, positions: np.ndarray, done: np.ndarray, sampled, 
         positions, values, run, on_sample = (x[keep] for x in (positions, values, run, on_sample))
         digests, indices, skip = ([x[i] for i in keep] for x in (digests, indices, skip))
     # (digests are None only where nothing is stored: the loop above did not run)
-    stored = int((~run[:, 1:]).sum() + (~run[:, 0] & on_sample).sum())
+    stored_refs = ~run[:, 0] & on_sample
+    stored = int((~run[:, 1:]).sum() + stored_refs.sum())
     run[:, 0] = on_sample & run.any(axis=1)
     known = np.concatenate(current) if current else np.empty(0, dtype="S24")
-    return _Block(positions, values, digests, indices, run, skip, stored, known)
+    block = _Block(positions, values, digests, indices, run, skip, stored, known)
+    block.rerun = int((stored_refs & run[:, 0]).sum())
+    return block
 
 
 def _point_blocks(sweep: Sweep, size: Callable[[], int]) -> Iterator[np.ndarray]:
@@ -608,7 +614,7 @@ def run_sweep(
 
     def submit(blk: _Block) -> Iterator[tuple[object, int, np.ndarray]]:
         """Submit the tasks of ``blk``: (future, spec, positions in the block)."""
-        bar.skipped += blk.stored
+        bar.skipped += blk.stored - blk.rerun
         stats.rows_skipped += blk.stored * len(cases)
         for j, spec in enumerate(specs):
             todo = np.flatnonzero(blk.run[:, j])
