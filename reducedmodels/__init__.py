@@ -23,6 +23,7 @@ _HOMES = {
     "parse_model": "catalogue",
     "register": "catalogue",
     "Connector": "connector",
+    "PluginFailure": "core",
     "SolverError": "core",
     "SolverSettings": "core",
     "System": "core",

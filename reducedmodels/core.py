@@ -82,6 +82,12 @@ class SolverError(RuntimeError):
         self.path = path
 
 
+class PluginFailure(SolverError):
+    """A plug-in family's own code raised while it ran a model (not a load it could not
+    reach): the message names the plug-in package and what it raised. A command that
+    judges models (``flexval gate``) stops on it instead of scoring the model."""
+
+
 @dataclass
 class SolverSettings:
     """Newton and load-stepping parameters (dimensionless unless stated).

@@ -132,9 +132,9 @@ def test_a_plugin_family_that_raises_on_a_scene_is_a_solver_failure_naming_its_p
     tmp_path,
 ):
     """The example spring refuses straight flexures (an error raised by its connector): on
-    a scene of straight leaves ``flexval run`` exits 3 naming the package, and ``flexval
-    gate`` fails the gate (the model did not reach the full load) naming it; never a
-    traceback."""
+    a scene of straight leaves ``flexval run`` exits 3 naming the package, and so does
+    ``flexval gate``, with no verdict (exit 1 would say the model was judged and failed);
+    never a traceback."""
     site = tmp_path / "site"
     _install(site, PACKAGE, _entry_point_of_the_example())
     guide = str(ROOT / "tests" / "scenes" / "leaf_guide.toml")
@@ -147,7 +147,8 @@ def test_a_plugin_family_that_raises_on_a_scene_is_a_solver_failure_naming_its_p
         f'reference = "beam:20"\nscenes = ["{light}"]\n'
         '[[gates]]\nmodel = "ellipse-spring"\nend_rot = 1e-9\n'
     )
-    proc = _flexval(site, tmp_path, "gate", "gates.toml", "--workers", "1")
-    assert proc.returncode == 1, proc.stdout + proc.stderr
-    assert PACKAGE in proc.stdout and "did not reach full load" in proc.stdout
+    proc = _flexval(site, tmp_path, "gate", "gates.toml", "--workers", "1", "--json", "g.json")
+    assert proc.returncode == 3, proc.stdout + proc.stderr
+    assert PACKAGE in proc.stderr and "solver failure" in proc.stderr
     assert "Traceback" not in proc.stderr
+    assert not (tmp_path / "g.json").exists()  # no verdict on a model whose code broke

@@ -1074,6 +1074,8 @@ EXIT_GATE_FAILED = 1
 
 
 def _cmd_gate(args: argparse.Namespace) -> int:
+    from flexval.reducedmodels import PluginFailure
+
     from .cache import ResultCache
     from .campaign import available_cores
     from .gate import ReferenceFailure, evaluate, prepare, summary_record
@@ -1108,7 +1110,7 @@ def _cmd_gate(args: argparse.Namespace) -> int:
         return EXIT_SOLVER if failed else EXIT_OK
     try:
         checks = evaluate(gates, cache, workers, not args.quiet)
-    except ReferenceFailure as exc:
+    except (ReferenceFailure, PluginFailure) as exc:
         print(f"flexval: solver failure: {exc}", file=sys.stderr)
         return EXIT_SOLVER
     rows = [

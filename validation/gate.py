@@ -28,7 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from flexval.geometry import LoadCase, Scene, SceneError
-from flexval.reducedmodels import LoadPath, ModelSpec, SolverError
+from flexval.reducedmodels import LoadPath, ModelSpec, PluginFailure, SolverError
 from flexval.reducedmodels.catalogue import plugin_of
 
 from .cache import ResultCache
@@ -279,6 +279,8 @@ def _path_checks(gate: Gate, scene: Scene, case: LoadCase, ref: LoadPath, memo: 
     try:
         lp = _path(scene, gate.model, case, memo)
         values, seconds = _values(lp, ref, scene, gate.thresholds), lp.seconds
+    except PluginFailure:
+        raise  # the plug-in's code, not the model's accuracy: no verdict
     except SolverError as exc:
         reason = f"did not reach full load ({100 * exc.load_factor:.0f} %): {exc}"
     except SceneError as exc:
@@ -382,6 +384,8 @@ def evaluate(
     ReferenceFailure
         If the reference cannot give what a gate compares with (see
         :func:`_references`), or cannot represent a scene.
+    flexval.reducedmodels.PluginFailure
+        If a gated plug-in family's code raises: no verdict is given on it.
     """
     memo = RunMemo(cache)
     _prefetch(_jobs(gates, cacheable_only=True), memo, workers, progress)

@@ -9,7 +9,7 @@ Only what is requested is built.
 from __future__ import annotations
 
 from flexval.geometry import LoadCase, Scene
-from flexval.reducedmodels import LoadPath, ModelSpec, SolverError
+from flexval.reducedmodels import LoadPath, ModelSpec, PluginFailure, SolverError
 from flexval.reducedmodels.catalogue import plugin_of
 
 
@@ -38,9 +38,9 @@ def run_model(
     Raises
     ------
     reducedmodels.SolverError
-        If the solver cannot reach the full load (carries the load reached), and for a
-        plug-in family's code that raises anything else (naming its package): a plug-in's
-        failure is a failure of that model, never a traceback of the command.
+        If the solver cannot reach the full load (carries the load reached); its
+        :class:`~flexval.reducedmodels.core.PluginFailure` for a plug-in family's code
+        that raises anything else (naming its package): never a traceback.
     """
 
     def run() -> LoadPath:
@@ -63,7 +63,7 @@ def run_model(
     except SolverError:
         raise
     except Exception as exc:
-        raise SolverError(
+        raise PluginFailure(
             f"{spec.id} on load case {case.name!r}: the model family of plug-in package "
             f"{package!r} raised {type(exc).__name__}: {exc}",
             0.0,
