@@ -65,6 +65,7 @@ from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.kinematics import rotate_xy
 
 from .beamvarying import element_stiffness, graded_stations
+from .chains import NodeChains, chain_kernels, local_coordinates
 from .connector import Connector, ConnectorGroup, LocalState, Reasons
 from .inertia import MassPoints, chain_mass_points
 from .sections import SectionForces, statics_section_forces, unit_vectors
@@ -93,6 +94,7 @@ def beam_kernels() -> ModuleType:
     from . import beamkernel
 
     beamkernel.warm_up()
+    chain_kernels()  # its nodes' predictor and update
     return beamkernel
 
 
@@ -166,9 +168,6 @@ class BeamGroup(ConnectorGroup):
             for name in ("_chord0", "_l0", "_k_axial", "_k11", "_k12", "_k22")
         )
         self._flexibility = np.concatenate([c._flexibility for c in self.connectors])
-        # the chain closure's element flexibilities, l0 / EI and l0 / EA for a uniform section
-        # (beamkernel.close_chains)
-        self._chain_tables = (self._chain_nodes, self._flexibility, 1.0 / self._k_axial)
         # the element kernel's per-element numbers in one table (one argument, not five)
         self._terms = np.column_stack(
             [self._chord0, self._l0, self._k_axial, self._k11, self._k12, self._k22]
@@ -191,6 +190,15 @@ class BeamGroup(ConnectorGroup):
         self._node_rel[ends] = [rel for c in self.connectors for rel in c._end_offsets]
         self._attached = np.zeros(self._n_nodes, bool)
         self._attached[ends] = True
+        # the chain closure's element flexibilities, l0 / EI and l0 / EA for a uniform section
+        self._chains = NodeChains(
+            self._node_dof,
+            self._node_rel,
+            self._attached,
+            self._chain_nodes,
+            self._flexibility,
+            1.0 / self._k_axial,
+        )
         node_dofs = self._node_dof[:, None] + np.arange(NODE_COORDINATES)
         self._dofs = np.hstack([node_dofs[self._first], node_dofs[self._first + 1]])
         # the end pass's tables: each node's initial tangent angle, each connector's first
@@ -250,55 +258,13 @@ class BeamGroup(ConnectorGroup):
     def predictor(
         self, gather: np.ndarray
     ) -> tuple[Callable[[np.ndarray], np.ndarray], Callable[..., np.ndarray]]:
-        """:meth:`predict_internal` on global coordinates (:meth:`ConnectorGroup.predictor`).
-
-        The kernels read the nodes through the global node table
-        ``gather[node table]``, as the assembler does: ``remember`` keeps a
-        converged state's chords and rotations
-        (:func:`flexval.reducedmodels.beamkernel.chain_memory`, once per state),
-        ``predict`` extrapolates them (with the path's slope when given:
-        chord lengths, turns and node rotations one degree higher,
-        :func:`flexval.reducedmodels.beamkernel.predicted_chains`).
-        """
-        kernels = beam_kernels()
-        nodes = (
-            np.ascontiguousarray(gather[self._node_dof], np.int64),
-            self._node_rel,
-            self._attached,
-        )
-        fixed = (*nodes, *self._chain_tables)
-        no_slope = np.zeros(0)  # not read with a zero weight
-
-        def remember(coordinates: np.ndarray) -> np.ndarray:
-            return kernels.chain_memory(coordinates, *nodes, self._chain_nodes)
-
-        def predict(
-            memories: np.ndarray,
-            weights: np.ndarray,
-            guess: np.ndarray,
-            slope: np.ndarray | None = None,
-            slope_weight: float = 0.0,
-        ) -> np.ndarray:
-            return kernels.predicted_chains(
-                memories, weights, guess, *fixed, no_slope if slope is None else slope, slope_weight
-            )
-
-        return remember, predict
+        """:meth:`predict_internal` on global coordinates (:meth:`ConnectorGroup.predictor`):
+        the chains' (:meth:`flexval.reducedmodels.chains.NodeChains.predictor`)."""
+        return self._chains.predictor(gather)
 
     def updater(self, gather: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
         """:meth:`update_internal` on global coordinates (:meth:`ConnectorGroup.updater`)."""
-        updated_chains = beam_kernels().updated_chains
-        fixed = (
-            np.ascontiguousarray(gather[self._node_dof], np.int64),
-            self._node_rel,
-            self._attached,
-            *self._chain_tables,
-        )
-
-        def update(old: np.ndarray, new: np.ndarray) -> np.ndarray:
-            return updated_chains(old, new, *fixed)
-
-        return update
+        return self._chains.updater(gather)
 
     def evaluate(self, states: Sequence[LocalState]) -> tuple[float, np.ndarray, np.ndarray]:
         """Total strain energy (N mm), concatenated gradients and Hessian values.
@@ -309,7 +275,7 @@ class BeamGroup(ConnectorGroup):
         """
         gradient, hessian = np.zeros(self._n_local), np.zeros(36 * len(self._l0))
         kernel = self._kernel(self._node_dof, self._dofs, np.arange(hessian.size))
-        energy = kernel(_coordinates(states), gradient, hessian)
+        energy = kernel(local_coordinates(states), gradient, hessian)
         return energy, gradient, hessian
 
     def path_end_pass(self, coordinates: np.ndarray) -> tuple[list[Reasons], list[SectionForces]]:
@@ -415,41 +381,17 @@ class BeamGroup(ConnectorGroup):
         """Concatenated interior nodes extrapolated in chord lengths and angles.
 
         As :meth:`BeamConnector.predict_internal` documents, for every
-        flexure at once (:func:`flexval.reducedmodels.beamkernel.predicted_chains`).
+        flexure at once (:meth:`flexval.reducedmodels.chains.NodeChains.predict_internal`).
         """
-        kernels = beam_kernels()
-        nodes = (self._node_dof, self._node_rel, self._attached)
-        memories = np.array(
-            [
-                kernels.chain_memory(_coordinates(states), *nodes, self._chain_nodes)
-                for states in past
-            ]
-        )
-        predicted = _coordinates([(*pose, state[2]) for pose, state in zip(poses, past[-1])])
-        return kernels.predicted_chains(
-            memories,
-            np.asarray(weights, float),
-            predicted,
-            *nodes,
-            *self._chain_tables,
-            np.zeros(0),
-            0.0,
-        )
+        return self._chains.predict_internal(past, weights, poses)
 
     def update_internal(self, old: Sequence[LocalState], new: Sequence[LocalState]) -> np.ndarray:
         """Concatenated interior nodes after a Newton correction, chords turned, not sheared.
 
         As :meth:`BeamConnector.update_internal` documents, for every flexure
-        at once (:func:`flexval.reducedmodels.beamkernel.updated_chains`).
+        at once (:meth:`flexval.reducedmodels.chains.NodeChains.update_internal`).
         """
-        return beam_kernels().updated_chains(
-            _coordinates(old),
-            _coordinates(new),
-            self._node_dof,
-            self._node_rel,
-            self._attached,
-            *self._chain_tables,
-        )
+        return self._chains.update_internal(old, new)
 
 
 def fibre_strain_reasons(strain: np.ndarray, stations: np.ndarray) -> list[str]:
@@ -488,11 +430,6 @@ def evenly_spaced(stop: float, n: int) -> np.ndarray:
 def _block_pattern(element_dofs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(rows, cols) of every element's row-major 6 x 6 block, from its coordinates (elements, 6)."""
     return (np.repeat(element_dofs, 6, axis=1).ravel(), np.tile(element_dofs, (1, 6)).ravel())
-
-
-def _coordinates(states: Sequence[LocalState]) -> np.ndarray:
-    """The connectors' local coordinates [pose_a, pose_b, internal] laid end to end (float)."""
-    return np.concatenate([part for state in states for part in state]).astype(float, copy=False)
 
 
 def _levels(levels: Sequence[Sequence[LocalState]]) -> np.ndarray:
@@ -714,7 +651,7 @@ class BeamConnector(Connector):
         chain is then rebuilt from the start body's end node (at its pose
         in ``pose_a``/``pose_b``) and closed at the end body's node by the
         flexure's own least-energy bending
-        (:func:`flexval.reducedmodels.beamkernel.close_chains`). Extrapolating node
+        (:func:`flexval.reducedmodels.chainkernel.close_chains`). Extrapolating node
         positions instead would shorten every chord that turns, and the
         axial stiffness turns that O(h^2) error into forces far larger than
         the load (tens of Newton iterations on slender flexures); so would

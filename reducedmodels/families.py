@@ -54,9 +54,9 @@ def _beam(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
 
 
 def _dcmm(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
-    from .dcmm import DcmmConnector
+    from .dcmm import dcmm_connector
 
-    return DcmmConnector(flexure, mechanism, spec.resolution, **options)
+    return dcmm_connector(flexure, mechanism, spec.resolution, **options)
 
 
 def _ee(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):

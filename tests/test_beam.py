@@ -21,8 +21,9 @@ from scipy.optimize import brentq
 from flexval.geometry import Arc, Force, LoadCase, Material, Moment, Section, Segment, load_scene
 from flexval.geometry.mechanism import FlexureSpec, assemble
 from flexval.reducedmodels import LoadControl, build_system, run_reduced, trace
-from flexval.reducedmodels.beam import BeamConnector, beam_kernels, evenly_spaced
+from flexval.reducedmodels.beam import BeamConnector, evenly_spaced
 from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.chains import chain_kernels
 from flexval.reducedmodels.core import hermite_weights, lagrange_weights, local_hessian
 from flexval.reducedmodels.tracer import PREDICTOR_STATES
 
@@ -289,7 +290,7 @@ def test_chain_closure_is_the_clamped_flexures_linear_response_at_second_order()
         ends = nodes.copy()
         ends[-1] += gap
         closed = (
-            beam_kernels()
+            chain_kernels()
             .close_chains(
                 chord, ends, np.zeros(n + 1), np.array([0, n + 1]), length / EI, length / EA
             )

@@ -390,3 +390,38 @@ def test_parts_of_a_kept_centre_line_are_those_computed_anew(n):
             assert np.array_equal(value, getattr(second, name)), name
     with pytest.raises(ValueError):
         second._sample_tangent[0] = 0.0
+
+
+def test_a_long_chain_is_predicted_and_updated_chordwise_to_the_same_equilibria(monkeypatch):
+    """From CHAIN_PREDICTION_FROM sub-arcs the cut bodies are predicted and corrected as a chain
+    of chords (the beam's way): the update equals the linear one to first order (so Newton
+    stays quadratic), and every level is the equilibrium the coordinate-wise predictor finds,
+    in fewer iterations."""
+    from flexval.reducedmodels import dcmm
+
+    n = dcmm.CHAIN_PREDICTION_FROM + 2
+    mech = cantilever(Arc((0.0, 0.0), 3.0, 0.4, math.radians(240)))
+    chain = dcmm.dcmm_connector(mech.flexures[0], mech, n)
+    assert isinstance(chain, dcmm.DcmmChainConnector)
+    rng = np.random.default_rng(3)
+    pose_a = np.array([*mech.bodies["g"].reference, 0.0])
+    pose_b = np.array([*mech.bodies["t"].reference + [0.2, -0.1], 0.4])
+    old = (pose_a, pose_b, chain.initial_internal() + rng.normal(0, 1e-3, chain.n_internal))
+    direction = rng.normal(0.0, 1.0, 6 + chain.n_internal)
+    gaps = []
+    for h in (1e-3, 1e-4):
+        step = h * direction
+        new = (pose_a + step[:3], pose_b + step[3:6], old[2] + step[6:])
+        gaps.append(np.abs(chain.update_internal(old, new) - new[2]).max())
+    assert gaps[1] < gaps[0] / 50  # second order: a tenth of the step, a hundredth of the gap
+
+    scene = load_scene("open_chain")
+    spec = parse_model(f"dcmm:{n}")
+    for case in scene.load_cases:
+        chordwise = run_reduced(scene.mechanism, spec, case)
+        with monkeypatch.context() as m:
+            m.setattr(dcmm, "CHAIN_PREDICTION_FROM", 10**9)  # every chain coordinate-wise
+            plain = run_reduced(scene.mechanism, spec, case)
+        for key in ("dx", "dy", "rotation"):
+            np.testing.assert_allclose(getattr(chordwise, key), getattr(plain, key), atol=1e-7)
+        assert chordwise.stats["newton_iterations"] <= plain.stats["newton_iterations"]
