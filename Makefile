@@ -1,5 +1,6 @@
 # Two commands on a fresh machine with only Python and pip:
 #   make report   -> creates .venv, installs flexval, builds reports/paper/ and reports/flexures/
+#                    (their run times into build/timings/: a clean checkout stays clean)
 #   make test     -> creates/refreshes .venv the same way, lints (ruff), runs the test suite
 #   make docs     -> the documentation site in site/ (strict: a warning fails it)
 PYTHON ?= python3
@@ -7,7 +8,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: report test lint venv bench docs clean
+.PHONY: report timings test lint venv bench docs clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -30,11 +31,22 @@ $(DOCS): $(STAMP)
 
 venv: $(STAMP)
 
+PAPER_REPORT = --out reports/paper --protocol reports/dynamics/protocol.json --threed reports/threed/threed.json --peers
+FLEXURE_REPORT = notch_fourbar filleted_stage tapered_leaf spline_flexure --out reports/flexures
+# where `make report` writes the run times it measures (ignored by git)
+TIMINGS = build/timings
+
 report: $(PEERS)
 	$(BIN)/flexval info open_chain
 	$(BIN)/flexval info closed_chain
-	$(BIN)/flexval report --out reports/paper --protocol reports/dynamics/protocol.json --threed reports/threed/threed.json --peers
-	$(BIN)/flexval report notch_fourbar filleted_stage tapered_leaf spline_flexure --out reports/flexures
+	$(BIN)/flexval report $(PAPER_REPORT) --timings $(TIMINGS)/paper
+	$(BIN)/flexval report $(FLEXURE_REPORT) --timings $(TIMINGS)/flexures
+
+# the committed run times beside the reports (machine-dependent: refreshed deliberately,
+# never by `make report`, which leaves a clean checkout clean)
+timings: $(PEERS)
+	$(BIN)/flexval report $(PAPER_REPORT)
+	$(BIN)/flexval report $(FLEXURE_REPORT)
 
 # lint and format check first (ruff, configured in pyproject.toml), then the suite
 test: lint

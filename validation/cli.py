@@ -803,16 +803,25 @@ def _chosen_cases(scene, args: argparse.Namespace):
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
+    from flexval.geometry.scene import PAPER_SCENES
+
     from .report import DEFAULT_MODELS, write_report
     from .reportdata import compute_report
+    from .reportfolder import default_report_folder, other_report
 
-    scenes = args.scene or ["open_chain", "closed_chain"]
+    scenes = args.scene or list(PAPER_SCENES)
+    names = []
     for name in scenes:
-        _chosen_cases(load_scene(name), args)  # bad input fails before any work
+        scene = load_scene(name)
+        _chosen_cases(scene, args)  # bad input fails before any work
+        names.append(scene.name)
     models = args.model or list(DEFAULT_MODELS)
     specs = _parse_models(models, "<command line>", "--model")
     _check_report_memory(scenes, specs, args)
-    out = check_folder(args.out, "--out")  # created only once the rest is known good
+    out_arg = args.out if args.out is not None else default_report_folder(names)
+    other_report(out_arg, names, args.force)
+    out = check_folder(out_arg, "--out")  # created only once the rest is known good
+    timings = check_folder(args.timings, "--timings") if args.timings is not None else None
     _keep_cached(not args.no_cache, f"; the files written in {out} are whole")
     data = compute_report(
         scenes,
@@ -832,8 +841,9 @@ def _cmd_report(args: argparse.Namespace) -> int:
         out,
         Path(args.protocol) if args.protocol else None,
         Path(args.threed) if args.threed else None,
+        timings,
     )
-    print(f"wrote {path}")
+    print(f"wrote {path}" + (f" (run times in {timings})" if timings is not None else ""))
     unfinished = _unfinished_cases(data)
     for line in unfinished:
         print(f"flexval: solver failure: {line}", file=sys.stderr)
@@ -1467,9 +1477,22 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("scene", nargs="*", help=f"{scene_help} (default: both built-in scenes)")
     q.add_argument(
         "--out",
-        default="reports/paper",
         metavar="DIR",
-        help="output folder (default: reports/paper)",
+        help="output folder (default: SCENE_report in the current folder, the scenes' "
+        "names joined by '+', paper_report for the paper's scenes); a folder holding "
+        "another scene's report is refused without --force",
+    )
+    q.add_argument(
+        "--force",
+        action="store_true",
+        help="write into --out even where it holds the report of other scenes",
+    )
+    q.add_argument(
+        "--timings",
+        metavar="DIR",
+        help="write the run times (timings.md, timings.json, bench_SCENE.*) into DIR "
+        "instead of beside report.md, whose results are the same from run to run while "
+        "its run times are not (a repository that commits its report keeps them apart)",
     )
     q.add_argument(
         "--model",

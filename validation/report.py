@@ -408,7 +408,8 @@ def _scene_section(
         f"; the paper's {res.paper.percent_table} value in parentheses" if res.paper else ""
     )
     L += [
-        f"### Errors against `{PAPER_REFERENCE}` (the paper's convention)",
+        f"### Errors against `{PAPER_REFERENCE}` "
+        + ("(the paper's convention)" if res.paper else "(the fine beam model)"),
         "",
         f"End-of-ramp displacement-vector error and rotation error in percent{paper_note}.",
         "",
@@ -569,21 +570,28 @@ def render_markdown(
 
 
 def write_report(
-    data: ReportData, out: Path, protocol: Path | None = None, threed: Path | None = None
+    data: ReportData,
+    out: Path,
+    protocol: Path | None = None,
+    threed: Path | None = None,
+    timings: Path | None = None,
 ) -> Path:
     """Write ``report.md`` (with figures), ``results.json`` and ``gates.json`` into ``out``,
-    and the run times (:mod:`flexval.validation.timings`); the figures are drawn on
+    and the run times (:mod:`flexval.validation.timings`) into ``timings`` (default: ``out``;
+    report.md links the ``timings.md`` beside it either way); the figures are drawn on
     ``data.workers`` processes while the text is written. ``protocol``, ``threed``: as in
     :func:`render_markdown`."""
     t0 = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
+    timings = out if timings is None else timings
+    timings.mkdir(parents=True, exist_ok=True)
     with Figures(data.workers) as figs:
         md = write_text(out / "report.md", render_markdown(data, out, figs.draw, protocol, threed))
         write_json(out / "results.json", data.results())
         write_json(out / "gates.json", data.gates())
-        benches = write_benches(data, out, figs.draw)
+        benches = write_benches(data, timings, figs.draw)
         figs.wait()
-    write_timings(data, out, benches, time.perf_counter() - t0)
+    write_timings(data, timings, benches, time.perf_counter() - t0)
     return md
 
 

@@ -43,15 +43,18 @@ def _fmt(v: float | None, digits: int = 2) -> str:
 
 
 def timing_table(res: SceneResults) -> list[str]:
-    """Markdown: our median seconds per load path, alone and batched, beside the paper's, and
-    the speed-ups against :data:`~flexval.validation.reportdata.PAPER_REFERENCE`."""
+    """Markdown: our median seconds per load path, alone and batched, beside the paper's (for
+    the paper's scenes), and the speed-ups against
+    :data:`~flexval.validation.reportdata.PAPER_REFERENCE`."""
     paper = res.paper.seconds if res.paper else {}
+    with_paper = res.paper is not None  # the paper's columns for the paper's scenes only
+    per_case = ("ours (s)", "batched (s)", "paper (s)")[: 3 if with_paper else 2]
     lines = [
         "| model | "
-        + " | ".join(f"{c} ours (s) | {c} batched (s) | {c} paper (s)" for c in res.cases)
+        + " | ".join(f"{c} {what}" for c in res.cases for what in per_case)
         + f" | copies | speed-up vs {PAPER_REFERENCE}, ours | "
-        f"speed-up vs {PAPER_REFERENCE}, batched | paper |",
-        "|---|" + "---:|" * (3 * len(res.cases) + 4),
+        f"speed-up vs {PAPER_REFERENCE}, batched |" + (" paper |" if with_paper else ""),
+        "|---|" + "---:|" * (len(per_case) * len(res.cases) + 3 + with_paper),
     ]
 
     def mean_time(m: str, table: dict | None = None) -> float | None:
@@ -80,14 +83,16 @@ def timing_table(res: SceneResults) -> list[str]:
                 if t is None
                 else sig(t.seconds, 3) + ("" if t.agrees else " †")
             )
-            cells.append(_fmt(paper.get(m, {}).get(c)))
+            if with_paper:
+                cells.append(_fmt(paper.get(m, {}).get(c)))
         ours, pap, bat = mean_time(m), mean_time(m, paper), mean_time(m, batched)
         copies = sorted({t.copies for (mm, _), t in res.batched.items() if mm == m})
         su = f"{ref_ours / ours:.3g}x" if ours and ref_ours else "–"
         sb = f"{ref_batched / bat:.3g}x" if bat and ref_batched else "–"
         sp = f"{ref_paper / pap:.3g}x" if pap and ref_paper else "–"
         n = "/".join(str(k) for k in copies) or "–"
-        lines.append(f"| {m} | " + " | ".join(cells) + f" | {n} | {su} | {sb} | {sp} |")
+        tail = f" | {n} | {su} | {sb} |" + (f" {sp} |" if with_paper else "")
+        lines.append(f"| {m} | " + " | ".join(cells) + tail)
     lines += [
         f"- † `{t.model}` on `{t.load_case}`: "
         + (
