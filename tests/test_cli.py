@@ -1,6 +1,7 @@
 """The flexval command line: info, plot and run, JSON output and exit codes."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -100,3 +101,28 @@ def test_run_writes_requested_continuum_fields(tmp_path):
     assert list(out.glob("*.vtu")) and list(out.glob("*.png"))
     # a beam model has no stress field to write: a named input error
     assert main(["run", str(scene), "--model", "beam:10", "--out-dir", str(out)]) == 2
+
+
+def test_info_gives_the_masses_density_strengths_and_gravity(tmp_path, capsys):
+    """A uniform leaf's mass is rho b h L (computed here by hand); a body's mass data and the
+    material's strengths are shown as the scene gives them."""
+    import json as _json
+
+    text = (Path(__file__).parent / "scenes" / "leaf_guide.toml").read_text()
+    text = text.replace(
+        "[material]",
+        "[material]\ndensity = 7.85e-9\nyield_strength = 1200.0\nfatigue_strength = 500.0",
+    )
+    scene = tmp_path / "heavy.toml"
+    scene.write_text(text)
+    out = tmp_path / "info.json"
+    assert main(["info", str(scene), "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "density = 7.85e-09 t/mm3" in printed and "yield strength = 1200 MPa" in printed
+    assert "fatigue strength = 500 MPa" in printed and "flexure masses:" in printed
+    info = _json.loads(out.read_text())
+    assert info["material"]["yield_strength_MPa"] == 1200.0
+    for f in info["flexures"]:
+        assert f["mass_t"] == pytest.approx(
+            7.85e-9 * f["b_mm"] * f["h_mm"] * f["length_mm"], rel=1e-12
+        )

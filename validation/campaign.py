@@ -40,16 +40,23 @@ def available_cores() -> int:
         return os.cpu_count() or 1
 
 
+LOG_LINES = 10
+"""Lines a bar writes into a log (stderr not a terminal): one per tenth of the work."""
+
+
 class Progress:
-    """Progress on stderr (silent when disabled): a one-line bar redrawn in place, or with
-    ``lines`` one line per unit of work, which also says about how long the rest will take
-    at the rate so far (for logs and for output interleaved with other lines)."""
+    """Progress on stderr (silent when disabled): a one-line bar redrawn in place on a
+    terminal, or with ``lines`` one line per unit of work, which also says about how long
+    the rest will take at the rate so far (for output interleaved with other lines). Into a
+    log (stderr not a terminal) a bar writes such lines at each tenth of the work only,
+    never the carriage returns of a bar redrawn in place."""
 
     def __init__(
         self, total: int, enabled: bool = True, width: int = 24, lines: bool = False
     ) -> None:
         self.total, self.done, self.enabled, self.width = total, 0, enabled, width
         self.lines = lines
+        self.logged = not lines and not _is_terminal(sys.stderr)  # lines, thinned
         self.t0 = time.perf_counter()
 
     def step(self, label: str) -> None:
@@ -57,10 +64,12 @@ class Progress:
         self.done += 1
         if not self.enabled:
             return
+        if self.logged and not self._tenth_reached():
+            return
         filled = int(self.width * min(self.done, self.total) / max(self.total, 1))
         bar = "#" * filled + "." * (self.width - filled)
         elapsed = time.perf_counter() - self.t0
-        if self.lines:
+        if self.lines or self.logged:
             left = elapsed * max(self.total - self.done, 0) / self.done
             print(
                 f"[{bar}] {self.done:>3}/{self.total} {elapsed:7.1f} s, about {left:.0f} s "
@@ -76,6 +85,22 @@ class Progress:
             file=sys.stderr,
             flush=True,
         )
+
+    def _tenth_reached(self) -> bool:
+        """Whether this step completes another tenth of the work (or all of it)."""
+        total = max(self.total, 1)
+        return (
+            self.done >= total
+            or (self.done * LOG_LINES) // total > ((self.done - 1) * LOG_LINES) // total
+        )
+
+
+def _is_terminal(stream) -> bool:
+    """Whether ``stream`` is an interactive terminal (a closed or odd stream is not)."""
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError, OSError):
+        return False
 
 
 @contextmanager

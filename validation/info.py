@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from flexval.geometry import Force, Moment, Scene
 from flexval.reducedmodels.catalogue import parse_model
 
@@ -49,6 +51,8 @@ def scene_info(scene: Scene) -> dict:
         entry.update(f.shape.parameters())
         if varying is not None:
             entry["section"] = varying
+        if mech.inertia.density is not None:
+            entry["mass_t"] = mech.inertia.density * _line_area(f)
         flexures.append(entry)
     cases = []
     for lc in scene.load_cases:
@@ -71,17 +75,52 @@ def scene_info(scene: Scene) -> dict:
         "scene": scene.name,
         "source": scene.source,
         "description": scene.description,
-        "material": {"E_MPa": mech.material.youngs_modulus, "nu": mech.material.poisson_ratio},
-        "ground": mech.ground,
-        "bodies": {
-            n: {"ground": b.is_ground, "attachment_points": b.points.tolist()}
-            for n, b in mech.bodies.items()
+        "material": {
+            "E_MPa": mech.material.youngs_modulus,
+            "nu": mech.material.poisson_ratio,
+            "density_t_per_mm3": mech.inertia.density,
+            "yield_strength_MPa": mech.material.yield_strength,
+            "fatigue_strength_MPa": mech.material.fatigue_strength,
         },
+        "gravity_mm_per_s2": (
+            None if mech.inertia.gravity is None else mech.inertia.gravity.tolist()
+        ),
+        "ground": mech.ground,
+        "bodies": {n: _body_entry(mech, n) for n in mech.bodies},
         "flexures": flexures,
         "target": {"body": mech.target_body, "point": mech.target_point.tolist()},
         "load_cases": cases,
         "models": [parse_model(m, scene.source, "request.models").id for m in scene.models],
     }
+
+
+def _body_entry(mech, name: str) -> dict:
+    """A body's kind, attachment points (mm) and, where the scene gives it, its mass (t),
+    rotary inertia about its centre of mass (t mm^2) and that centre (mm)."""
+    body, mass = mech.bodies[name], mech.inertia.bodies.get(name)
+    entry = {"ground": body.is_ground, "attachment_points": body.points.tolist()}
+    if mass is not None:
+        entry.update(
+            mass_t=mass.mass,
+            inertia_t_mm2=mass.inertia,
+            center_of_mass_mm=np.asarray(mass.center_of_mass, float).tolist(),
+        )
+    return entry
+
+
+def _line_area(flexure) -> float:
+    """The flexure's volume, mm^3: the integral of its section's area along its length."""
+    section, length = flexure.section, flexure.shape.length
+    if section.is_uniform:
+        return section.area * length
+    nodes, weights = np.polynomial.legendre.leggauss(VOLUME_GAUSS_POINTS)
+    s = 0.5 * length * (nodes + 1.0)
+    return float(0.5 * length * np.sum(weights * section.area_at(s)))
+
+
+VOLUME_GAUSS_POINTS = 64
+"""Gauss-Legendre points of a varying section's volume (:func:`_line_area`): a notch's area
+varies smoothly, and 64 points integrate it to round-off."""
 
 
 def varying_section(flexure, material) -> dict:
@@ -148,20 +187,38 @@ def format_info(info: dict) -> str:
     if info["description"]:
         lines.append(f"  {info['description']}")
     m = info["material"]
-    lines.append(f"material  E = {m['E_MPa']:g} MPa, nu = {m['nu']:g}")
+    extra = [
+        f"{label} = {m[key]:g} {unit}"
+        for key, label, unit in (
+            ("density_t_per_mm3", "density", "t/mm3"),
+            ("yield_strength_MPa", "yield strength", "MPa"),
+            ("fatigue_strength_MPa", "fatigue strength", "MPa"),
+        )
+        if m.get(key) is not None
+    ]
+    lines.append(", ".join([f"material  E = {m['E_MPa']:g} MPa, nu = {m['nu']:g}", *extra]))
+    if info.get("gravity_mm_per_s2") is not None:
+        lines.append(f"gravity  {_pt(info['gravity_mm_per_s2'])} mm/s2")
     lines.append("bodies")
-    lines += text_table(
-        [Column("name", "<"), Column("kind", "<"), Column("attachment points mm", "<")],
-        [
-            [
-                name,
-                "ground" if b["ground"] else "link",
-                " -- ".join(_pt(p) for p in b["attachment_points"]),
-            ]
-            for name, b in info["bodies"].items()
-        ],
-        "  ",
-    )
+    massive = any("mass_t" in b for b in info["bodies"].values())
+    columns = [Column("name", "<"), Column("kind", "<"), Column("attachment points mm", "<")]
+    if massive:
+        columns += [Column("mass t"), Column("inertia t mm2"), Column("centre of mass mm")]
+    rows = []
+    for name, b in info["bodies"].items():
+        row = [
+            name,
+            "ground" if b["ground"] else "link",
+            " -- ".join(_pt(p) for p in b["attachment_points"]),
+        ]
+        if massive:
+            row += (
+                [sig(b["mass_t"]), sig(b["inertia_t_mm2"]), _pt(b["center_of_mass_mm"])]
+                if "mass_t" in b
+                else ["–", "–", "–"]
+            )
+        rows.append(row)
+    lines += text_table(columns, rows, "  ")
     lines.append("flexures")
     rows = []
     for f in info["flexures"]:
@@ -197,6 +254,11 @@ def format_info(info: dict) -> str:
         "  ",
     )
     lines += [_section_line(f) for f in info["flexures"] if "section" in f]
+    if any("mass_t" in f for f in info["flexures"]):
+        lines.append(
+            "  flexure masses: "
+            + ", ".join(f"{f['name']} {sig(f['mass_t'])} t" for f in info["flexures"])
+        )
     t = info["target"]
     lines.append(f"target  body {t['body']} at {_pt(t['point'])} mm")
     lines.append("load cases")
