@@ -126,3 +126,25 @@ def test_info_gives_the_masses_density_strengths_and_gravity(tmp_path, capsys):
         assert f["mass_t"] == pytest.approx(
             7.85e-9 * f["b_mm"] * f["h_mm"] * f["length_mm"], rel=1e-12
         )
+
+
+def test_run_prints_the_continuums_fibre_peak_on_a_notch_and_says_so(tmp_path, capsys):
+    """On a notch hinge the continuum's printed peak is its surface fibre stress (the figure its
+    first yield is judged by, in the JSON as ``fibre_stress``), not the beam formula of its
+    section forces, and the line says which; a uniform flexure's peak is the beam formula."""
+    import json as _json
+
+    from flexval.validation.tables import sig
+
+    out = tmp_path / "n.json"
+    argv = ["run", "notch_fourbar", "--model", "continuum:0", "--load-case", "f+"]
+    assert main([*argv, "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    lp = _json.loads(out.read_text())["results"][0]
+    fibre = max(entry["path_stress"][-1] for entry in lp["fibre_stress"].values())
+    beam = max(values[-1] for values in lp["peak_stress"].values())
+    assert fibre > beam * 1.02  # the notch's stress concentration
+    line = next(x for x in printed.splitlines() if x.startswith("continuum:0"))
+    assert f"{sig(fibre)}*" in line and "surface fibre stress at the notch" in printed
+    assert main(["run", "open_chain", "--model", "continuum:0", "--load-case", "m+"]) == 0
+    assert "*" not in capsys.readouterr().out

@@ -398,6 +398,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
         note = _validity_note(lp)
         if note:
             print(note)
+        if _peak_cells(lp)[0].endswith(FIBRE_MARK):
+            print(
+                f"{'':<{columns[0].size}}{GAP}{FIBRE_MARK} peak: the continuum's surface fibre "
+                "stress at the notch, stress concentration included (elsewhere the beam "
+                "formula of its section forces)"
+            )
         strength = _yield_line(scene, lp)
         if strength:
             print(f"{'':<{columns[0].size}}{GAP}{strength}")
@@ -680,13 +686,35 @@ def _cmd_buckle(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _peaks(lp) -> dict[str, tuple[float, float, bool]]:
+    """Each flexure's peak stress at the last level (MPa), where (fraction of its length from
+    its first end) and whether it is the continuum's surface fibre stress: on a notch hinge
+    the continuum's own peak (``fibre_stress``' ``path_stress``, stress concentration
+    included), elsewhere the beam formula of the section forces (``peak_stress``)."""
+    peaks = {
+        name: (values[-1], lp.peak_stress_at[name][-1], False)
+        for name, values in (lp.peak_stress or {}).items()
+    }
+    for name, entry in (lp.fibre_stress or {}).items():
+        if entry.get("path_stress") and len(entry["path_stress"]) == len(lp.load):
+            peaks[name] = (entry["path_stress"][-1], entry["path_at"][-1], True)
+    return peaks
+
+
+FIBRE_MARK = "*"
+"""Marks a run line's peak stress that is the continuum's surface fibre stress."""
+
+
 def _peak_cells(lp) -> tuple[str, str]:
-    """``peak MPa`` and ``at`` of a run line: the largest outer-fibre stress over the flexures
-    at the last level and where (``flexure@fraction`` of its length from its first end)."""
-    if not lp.peak_stress:
+    """``peak MPa`` and ``at`` of a run line: the largest peak stress over the flexures at the
+    last level (:func:`_peaks`, marked with :data:`FIBRE_MARK` where it is the continuum's
+    fibre stress) and where (``flexure@fraction`` of its length from its first end)."""
+    peaks = _peaks(lp)
+    if not peaks:
         return "-", ""
-    name = max(lp.peak_stress, key=lambda f: lp.peak_stress[f][-1])
-    return sig(lp.peak_stress[name][-1]), f"{name}@{lp.peak_stress_at[name][-1]:.2f}"
+    name = max(peaks, key=lambda f: peaks[f][0])
+    value, at, fibre = peaks[name]
+    return sig(value) + (FIBRE_MARK if fibre else ""), f"{name}@{at:.2f}"
 
 
 def _parse_levels(text: str, spec) -> list[int]:
