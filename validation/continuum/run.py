@@ -25,6 +25,7 @@ from flexval.geometry.mesh import ASPECT_RATIO, ELEMENT_ORDER, MESH_VERSION
 from flexval.reducedmodels import LoadControl, LoadPath, PathRecorder, SolverSettings, System, trace
 from flexval.reducedmodels.inertia import with_weights
 from flexval.reducedmodels.threads import limit_threads
+from flexval.reducedmodels.validity import MAX_STRAIN, merge_reasons
 
 from .connector import ContinuumConnector
 from .family import DEFAULT_LEVEL
@@ -157,6 +158,12 @@ def run_continuum(
     for name, peaks in notches.items():
         lp.fibre_stress[name]["path_stress"] = [p[0] for p in peaks]
         lp.fibre_stress[name]["path_at"] = [p[1] for p in peaks]
+    varying = {f.name for f in mechanism.flexures if not f.section.is_uniform}
+    lp.valid, lp.validity = merge_reasons(
+        lp.valid,
+        lp.validity,
+        surface_strain_reasons(lp, mechanism.material.youngs_modulus, varying),
+    )
     if vtu_dir is not None:
         from ..outputs import output_path
         from .output import write_vtu
@@ -173,3 +180,33 @@ def run_continuum(
 
         render_png(png, system, full_load.state, case, f"{scene} {case.name} {model}")
     return lp
+
+
+def surface_strain_reasons(
+    lp: LoadPath, youngs_modulus: float, flexures: set[str]
+) -> list[list[str]]:
+    """Per level, the reason where the surface fibre strain of one of ``flexures`` (those of
+    varying section, which ``beam:N`` judges the same way) exceeds
+    :data:`~flexval.reducedmodels.validity.MAX_STRAIN`: the strain of its peak fibre stress
+    (MPa) over E (MPa), the recovered surface stress at every level on a notch hinge
+    (``fibre_stress``' ``path_stress``, stress concentration included), else the beam
+    formula of its section forces (``peak_stress``). The centre line's stretch alone
+    misses a notch bent beyond the material's range."""
+    per_flexure = {
+        name: (values, lp.peak_stress_at[name])
+        for name, values in (lp.peak_stress or {}).items()
+        if name in flexures
+    }
+    for name, entry in (lp.fibre_stress or {}).items():
+        if name in flexures and len(entry.get("path_stress") or ()) == len(lp.load):
+            per_flexure[name] = (entry["path_stress"], entry["path_at"])
+    reasons: list[list[str]] = [[] for _ in lp.load]
+    for name, (stresses, places) in per_flexure.items():
+        for k, (stress, at) in enumerate(zip(stresses, places)):
+            strain = abs(stress) / youngs_modulus
+            if strain > MAX_STRAIN:
+                reasons[k].append(
+                    f"{name}: surface fibre strain {100 * strain:.3g} % at {at:.2f} of its "
+                    f"length beyond the {100 * MAX_STRAIN:g} % limit"
+                )
+    return reasons
