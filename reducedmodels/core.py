@@ -484,6 +484,11 @@ class System:
         rx, ry = rotate_xy(theta, rel_x, rel_y)
         return (x + rx) - tx, (y + ry) - ty, theta
 
+    def target_arm(self, q: np.ndarray) -> tuple[float, float]:
+        """The target point's offset from its body's reference point in state q, mm."""
+        theta = float(self.pose(q, self.mechanism.target_body)[2])
+        return rotate_xy(theta, *self._target_offsets[0])
+
     def update(self, q: np.ndarray, du: np.ndarray) -> np.ndarray:
         """State after the Newton correction du: q + du, or a connector's own update.
 

@@ -635,6 +635,47 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_stiffness(args: argparse.Namespace) -> int:
+    from flexval.reducedmodels import SolverError
+
+    from .stiffness import MOTIONS, run_stiffness, stiffness_record
+
+    scene, spec, json_path, _ = _analysis_inputs(args)
+    if args.at is not None and args.load_case is None:
+        raise SceneError(COMMAND_LINE, "--at", args.at, "needs --load-case (the preload)")
+    case = scene.load_case(args.load_case) if args.load_case else None
+    fraction = 0.0 if case is None else (1.0 if args.at is None else args.at)
+    try:
+        _, found, linear = run_stiffness(scene, spec, case, fraction)
+    except SolverError as exc:
+        print(f"flexval: solver failure: {exc}", file=sys.stderr)
+        return EXIT_SOLVER
+    where = "at rest" if case is None or fraction == 0.0 else f"at {fraction:g} of {case.name}"
+    if linear and case is not None and fraction > 0.0:
+        where = f"at rest ({spec.id} is linear: the same at every load)"
+    body = scene.mechanism.target_body
+    x, y = found.point.tolist()
+    print(f"{spec.id}: stiffness of body {body} at its target point ({x:.4f}, {y:.4f}) mm, {where}")
+    labels = ("Fx N", "Fy N", "M N mm")
+    columns = [Column("", "<")] + [Column(f"{m}") for m in ("dx mm", "dy mm", "rot rad")]
+    rows = [[label, *(sig(v, 6) for v in row)] for label, row in zip(labels, found.stiffness)]
+    for line in text_table(columns, rows, "  "):
+        print(line)
+    print("compliance")
+    columns = [Column("", "<")] + [Column(f"{m}") for m in ("Fx N", "Fy N", "M N mm")]
+    rows = [
+        [f"{m} {u}", *(sig(v, 6) for v in row)]
+        for m, u, row in zip(MOTIONS, ("mm", "mm", "rad"), found.compliance)
+    ]
+    for line in text_table(columns, rows, "  "):
+        print(line)
+    if found.stable is False:
+        print("note: the state is unstable (the tangent has a negative eigenvalue)")
+    if json_path:
+        write_json(json_path, stiffness_record(scene, spec, case, fraction, found))
+    return EXIT_OK
+
+
 def _cmd_buckle(args: argparse.Namespace) -> int:
     from flexval.reducedmodels import SolverError
 
@@ -1476,6 +1517,28 @@ def build_parser() -> argparse.ArgumentParser:
     )
     q.add_argument("--plot", metavar="FILE.png", help="draw the buckling modes")
     q.set_defaults(func=_cmd_buckle)
+
+    q = sub.add_parser(
+        "stiffness",
+        help="the 3 x 3 stiffness and compliance at the target, at rest or under a load",
+    )
+    q.add_argument("scene", help=scene_help)
+    q.add_argument(
+        "--model", required=True, metavar="MODEL", help=f"model id: {ids} (see flexval models)"
+    )
+    q.add_argument(
+        "--load-case", metavar="NAME", help="load case of the preload (default: none, at rest)"
+    )
+    q.add_argument(
+        "--at",
+        type=float,
+        default=None,
+        metavar="FRACTION",
+        help="about the equilibrium at this fraction of the load case, 0 (at rest) to 1 "
+        "(default: 1 with --load-case)",
+    )
+    q.add_argument("--json", metavar="PATH", help="write the matrices, their units and where")
+    q.set_defaults(func=_cmd_stiffness, plot=None)
 
     q = sub.add_parser("converge", help="resolution study: order, Richardson value, GCI")
     q.add_argument("scene", help=scene_help)
