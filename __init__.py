@@ -29,6 +29,7 @@ _HOMES = {
     "Scene": "flexval.geometry.scene",
     "parse_model": "flexval.reducedmodels.catalogue",
     "LoadPath": "flexval.reducedmodels.loadpath",
+    "read_results": "flexval.reducedmodels.loadpath",
     "run_model": "flexval.validation.run",
 }
 """Module of each name the package offers at its top."""

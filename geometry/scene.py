@@ -39,13 +39,14 @@ generated from the same declarations (:func:`field_reference`). In short::
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 import tomllib
 import unicodedata
 from collections import Counter
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -82,6 +83,8 @@ from .scenefields import (
 )
 from .shapes import Arc, Segment
 from .timelaw import parse_time_law
+
+NO_DATA = "this scene was not read from scene data (load_scene or parse_scene): nothing to change"
 
 PAPER_SCENES = ("open_chain", "closed_chain")
 """The reference paper's two case studies (Sorgonà et al. 2024, Sect. 4)."""
@@ -128,6 +131,37 @@ class Scene:
     outputs: frozenset[str]
     source: str
     measurements: tuple[Measurement, ...] = ()
+    data: dict | None = field(default=None, compare=False, repr=False)
+    """The scene file's parsed TOML it was built from (read, never edited: :meth:`with_changes`
+    edits a copy); None for a scene built otherwise."""
+
+    def with_changes(self, changes: Mapping[str, float]) -> Scene:
+        """The scene with numeric fields changed, each named by its path as a sweep axis names
+        it (:mod:`flexval.geometry.scenepaths`), e.g. ``{"section.thickness": 0.2,
+        "flexures.e34.width_deg": 200}`` (units as in a scene file: mm, MPa, N, degrees),
+        checked as a scene file is.
+
+        Raises
+        ------
+        SceneError
+            Naming the path where it addresses no numeric field, or the field whose new
+            value the scene refuses (the value with it).
+        """
+        from .scenepaths import field_slot
+
+        if self.data is None:
+            raise SceneError(self.source, "with_changes", dict(changes), NO_DATA)
+        data = copy.deepcopy(self.data)
+        for path, value in changes.items():
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise SceneError(self.source, path, value, "must be a number")
+            node, key = field_slot(data, str(path), self.source, str(path))
+            node[key] = value
+        changed = parse_scene(data, f"{self.source} with {dict(changes)}", default_name=self.name)
+        names = [c.name for c in self.load_cases]
+        if [c.name for c in changed.load_cases] != names:  # a filtered scene stays filtered
+            changed = changed.with_load_cases(names)
+        return changed
 
     def with_load_cases(self, names: Sequence[str], field: str = "--load-case") -> Scene:
         """The scene with only the load cases ``names``, in that order (and their
@@ -770,6 +804,7 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
         frozenset(outputs),
         source,
         _measurements(rd, data, cases),
+        data,
     )
 
 

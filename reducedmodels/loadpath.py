@@ -121,6 +121,41 @@ class LoadPath:
         """Magnitude of the target point displacement at each level, mm."""
         return np.hypot(np.asarray(self.dx), np.asarray(self.dy))
 
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The per-level results as numpy arrays: ``load`` (N or N mm), ``dx``, ``dy`` and
+        ``displacement`` (mm), ``rotation`` (rad) and ``valid`` (bool; all True where the
+        path has no verdicts)."""
+        valid = self.valid if self.valid is not None else [True] * len(self.load)
+        return {
+            "load": np.asarray(self.load, float),
+            "dx": np.asarray(self.dx, float),
+            "dy": np.asarray(self.dy, float),
+            "displacement": self.displacement,
+            "rotation": np.asarray(self.rotation, float),
+            "valid": np.asarray(valid, bool),
+        }
+
+    def to_dataframe(self):
+        """:meth:`arrays` as a pandas DataFrame, one row per level, with the model and the
+        load case as columns (pandas: the optional extra ``frames``).
+
+        Raises
+        ------
+        ImportError
+            Saying how to install pandas, where it is missing.
+        """
+        try:
+            import pandas
+        except ImportError:
+            raise ImportError(
+                "LoadPath.to_dataframe needs pandas: pip install 'flexval[frames]' "
+                "(or pandas); LoadPath.arrays() gives the same columns as numpy arrays"
+            ) from None
+        frame = pandas.DataFrame(self.arrays())
+        frame.insert(0, "load_case", self.load_case)
+        frame.insert(0, "model", self.model)
+        return frame
+
     def to_dict(self) -> dict:
         """Plain JSON-ready dict (None fields omitted)."""
         return {k: v for k, v in asdict(self).items() if v is not None}
@@ -156,3 +191,9 @@ class LoadPath:
     def from_json(cls, text: str) -> LoadPath:
         """Inverse of :meth:`to_json`."""
         return cls.from_dict(json.loads(text))
+
+
+def read_results(path: str | Path) -> list[LoadPath]:
+    """Every load path of a ``flexval run --json`` file, in its order
+    (:meth:`LoadPath.read_run_json`)."""
+    return LoadPath.read_run_json(path)

@@ -66,7 +66,7 @@ from flexval.geometry import BUILTIN_SCENES, Scene, SceneError
 from flexval.geometry.errors import did_you_mean
 from flexval.geometry.fields import ABSENT, Field, Table, markdown_table
 from flexval.geometry.scene import parse_scene, read_scene_data
-from flexval.geometry.scenefields import BODIES, FLEXURES, LOAD_CASES, MATERIAL, PINS, SECTION
+from flexval.geometry.scenepaths import field_slot
 from flexval.reducedmodels import ModelSpec, parse_model, run_reduced
 
 from ..compare import METRICS
@@ -86,17 +86,6 @@ that stops below full load, found by arc length (costly: only on request); ``fir
 the load at first yield and the safety factors at full load against the scene's
 ``material.yield_strength`` (free; null without one)."""
 DEFAULT_OUTPUTS = ("peak_stress",)
-NAMED_ARRAYS = ("flexures", "load_cases", "bodies", "pins")
-_SCENE_TABLES = {
-    "section": SECTION,
-    "material": MATERIAL,
-    "flexures": FLEXURES,
-    "load_cases": LOAD_CASES,
-    "bodies": BODIES,
-    "pins": PINS,
-}
-"""The scene tables whose declared fields an axis may set where the base scene leaves
-them out (a flexure's own thickness, the material's density)."""
 MAX_COUNT = 1_000_000
 """Most values of one axis, and most points of one task (``batch``)."""
 MAX_POINTS = 1_000_000
@@ -397,7 +386,7 @@ class PointBuilder:
         marks = {}
         for k, a in enumerate(self.axes):
             mark = f"\x00axis{k}\x00"
-            node, key = _slot(data, a.path, self.source, f"axes[{k}].path")
+            node, key = field_slot(data, a.path, self.source, f"axes[{k}].path")
             node[key] = mark
             marks[json.dumps(mark)] = k
         text = json.dumps(data, sort_keys=True, default=str)
@@ -427,7 +416,7 @@ class PointBuilder:
         """The base scene's data with the axis values ``params`` written in."""
         pdata = copy.deepcopy(self.base)
         for k, (path, v) in enumerate(params.items()):
-            node, key = _slot(pdata, path, self.source, f"axes[{k}].path")
+            node, key = field_slot(pdata, path, self.source, f"axes[{k}].path")
             node[key] = v
         return pdata
 
@@ -759,74 +748,6 @@ def _outputs(source: str, value: Any) -> tuple[str, ...]:
     return tuple(o for o in OPTIONAL_OUTPUTS if o in value)
 
 
-def _slot(data: dict, path: str, source: str, field: str) -> tuple[Any, Any]:
-    """The container and key that ``path`` addresses in the scene data ``data``.
-
-    Raises SceneError (naming ``field`` of the sweep file) when a step of the
-    path does not exist or the addressed value is not a number.
-    """
-    parts = path.split(".")
-    node: Any = data
-    walked = []
-    for depth, part in enumerate(parts):
-        last = depth == len(parts) - 1
-        where = ".".join(walked) or "<scene>"
-        if isinstance(node, dict):
-            if last:
-                if part in node and (
-                    isinstance(node[part], bool) or not isinstance(node[part], (int, float))
-                ):
-                    _fail(source, field, path, f"'{part}' of {where} is not a number")
-                declared = _SCENE_TABLES.get(walked[0]) if walked else None
-                if part not in node and (declared is None or part not in declared):
-                    known = set(node) | (set() if declared is None else declared.keys())
-                    _fail(
-                        source,
-                        field,
-                        path,
-                        f"unknown field '{part}' of {where}{did_you_mean(part, known)}",
-                    )
-                return node, part
-            if part not in node:
-                hint = did_you_mean(part, node)
-                _fail(source, field, path, f"{where} has no field '{part}'{hint}")
-            node = node[part]
-        elif isinstance(node, list):
-            if walked and walked[-1] in NAMED_ARRAYS and all(isinstance(x, dict) for x in node):
-                match = [x for x in node if str(x.get("name")) == part]
-                if not match:
-                    names = [str(x.get("name")) for x in node]
-                    _fail(
-                        source,
-                        field,
-                        path,
-                        f"{where} has no entry named '{part}'{did_you_mean(part, names)}; "
-                        f"names are {names}",
-                    )
-                if last:
-                    _fail(source, field, path, f"{where}.{part} is a table, not a number")
-                node = match[0]
-            else:
-                if not part.isdigit() or int(part) >= len(node):
-                    _fail(
-                        source,
-                        field,
-                        path,
-                        f"{where} is an array of {len(node)}: expected an index",
-                    )
-                if last:
-                    if isinstance(node[int(part)], bool) or not isinstance(
-                        node[int(part)], (int, float)
-                    ):
-                        _fail(source, field, path, f"{where}[{part}] is not a number")
-                    return node, int(part)
-                node = node[int(part)]
-        else:
-            _fail(source, field, path, f"{where} is a value, not a table")
-        walked.append(part)
-    raise AssertionError("unreachable: the loop returns at the last part")
-
-
 def point_count(axes: tuple[Axis, ...], combine: str, source: str) -> int:
     """The number of points the axes give, without building them (zipped axes: checked equal)."""
     if combine == "zip" and axes:
@@ -994,7 +915,7 @@ def parse_sweep(
     if len({a.path for a in axes}) != len(axes):
         _fail(source, "axes", [a.path for a in axes], "a path is swept twice")
     for k, a in enumerate(axes):
-        _slot(base, a.path, source, f"axes[{k}].path")
+        field_slot(base, a.path, source, f"axes[{k}].path")
     if (
         "first_yield" in outputs
         and base_scene.mechanism.material.yield_strength is None
