@@ -57,6 +57,10 @@ class Connector(ABC):
         which its states are outside its validity
         (:func:`flexval.reducedmodels.validity.sway_load`); None (default)
         for a model that buckles itself, which the stability test finds.
+    dead_load_scale : float
+        The largest dead load the connector carries itself (N; its weights,
+        :class:`flexval.reducedmodels.inertia.Weighted`): it joins the force
+        scale of the residual test (default 0).
     """
 
     name: str
@@ -64,6 +68,7 @@ class Connector(ABC):
     n_internal: int = 0
     n_multipliers: int = 0
     sway_load: float | None = None
+    dead_load_scale: float = 0.0
 
     # --- required --------------------------------------------------------
     @abstractmethod

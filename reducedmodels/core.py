@@ -668,8 +668,7 @@ class System:
         """
         if rest is None or self.n_multipliers:
             return True
-        positive = getattr(rest, "positive_definite", None)
-        return True if positive is None else bool(positive())
+        return bool(rest.positive_definite())
 
     def judges_stability(self) -> bool:
         """Whether the stability rule can judge this System's states (computed once, on the
@@ -736,7 +735,7 @@ def case_loads(
     :meth:`System.loads`): the bodies' reference points (mm), the mechanism's size (mm) and
     the connectors, whose own dead loads (``dead_load_scale``, N) join the force scale."""
     loads = Loads.of_case(case, pose_dofs, reference, size)
-    loads.scale = max([loads.scale, *(getattr(c, "dead_load_scale", 0.0) for c in connectors)])
+    loads.scale = max([loads.scale, *(c.dead_load_scale for c in connectors)])
     return loads
 
 

@@ -248,7 +248,7 @@ def note_resolution(path: LoadPath, size: float, weighted: bool) -> None:
 
 def carries_weights(connectors: Iterable[Connector]) -> bool:
     """Whether any connector carries dead loads of its own (``dead_load_scale`` > 0, N)."""
-    return any(getattr(c, "dead_load_scale", 0.0) > 0.0 for c in connectors)
+    return any(c.dead_load_scale > 0.0 for c in connectors)
 
 
 def _append_bifurcations(path: LoadPath, factors: Iterable[float], magnitude: float) -> None:
