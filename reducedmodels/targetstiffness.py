@@ -41,12 +41,17 @@ class TargetStiffness:
     stable : bool or None
         Whether the state is stable (the tangent positive definite), None where the model
         cannot judge it.
+    rigid : array (k, 3) or None
+        The directions along which the model is rigid at the target (the compliance's
+        zero directions, each (dx, dy, rotation) with its largest entry 1), where
+        ``stiffness`` is None; else None.
     """
 
-    stiffness: np.ndarray
+    stiffness: np.ndarray | None
     compliance: np.ndarray
     point: np.ndarray
     stable: bool | None
+    rigid: np.ndarray | None = None
 
 
 def target_stiffness(
@@ -88,10 +93,32 @@ def target_stiffness(
     # at the reference point: C_point = T C_reference T^T
     transport = np.array([[1.0, 0.0, -ry], [0.0, 1.0, rx], [0.0, 0.0, 1.0]])
     compliance = transport @ at_reference @ transport.T
-    stiffness = np.linalg.inv(compliance)
+    stiffness, rigid = _inverse(compliance)
     return TargetStiffness(
-        0.5 * (stiffness + stiffness.T),
+        stiffness,
         compliance,
         np.array([x + rx, y + ry]),
         None if not system.judges_stability() else not system.unstable(tangent),
+        rigid,
     )
+
+
+RIGID_RATIO = 1e-12
+"""A compliance eigenvalue below this fraction of the largest is a rigid direction (the
+round-off of three solves with a factorised tangent is ~1e-15 of it)."""
+
+
+def _inverse(compliance: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(stiffness, None), or (None, the rigid directions) where the compliance has zero
+    directions: a model rigid that way at the target (the PRBM's inextensible links along a
+    straight leaf) has no finite stiffness."""
+    values, vectors = np.linalg.eigh(compliance)
+    rigid = values <= RIGID_RATIO * abs(values).max()
+    if rigid.any():
+        directions = vectors[:, rigid].T
+        directions /= np.abs(directions).max(axis=1, keepdims=True)
+        largest = np.argmax(np.abs(directions), axis=1)
+        directions *= np.sign(directions[np.arange(len(directions)), largest])[:, None]
+        return None, directions
+    stiffness = np.linalg.inv(compliance)
+    return 0.5 * (stiffness + stiffness.T), None

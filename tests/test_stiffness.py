@@ -115,3 +115,20 @@ def test_the_command_prints_and_writes_the_matrices_and_refuses_bad_input(tmp_pa
         assert f"field '{field}'" in capsys.readouterr().err
     assert main(["stiffness", str(GUIDE), "--model", "ee", "--load-case", "push"]) == 0
     assert "linear: the same at every load" in capsys.readouterr().out
+
+
+def test_a_model_rigid_at_the_target_says_so_instead_of_inverting(tmp_path, capsys):
+    """prbm's links are inextensible: on tapered_leaf's stage, held by two straight leaves,
+    it cannot move along the leaves nor turn (rigid links in a parallelogram); its compliance
+    has those zero directions and the command names them, no infinite or NaN stiffness."""
+    out = tmp_path / "k.json"
+    assert main(["stiffness", "tapered_leaf", "--model", "prbm", "--json", str(out)]) == 0
+    assert "no finite stiffness: prbm is rigid at the target along" in capsys.readouterr().out
+    record = json.loads(out.read_text())
+    assert record["stiffness"] is None and len(record["rigid_directions"]) >= 1
+    compliance = np.array(record["compliance"])
+    for direction in record["rigid_directions"]:
+        moved = compliance @ np.array(direction)
+        assert np.abs(moved).max() <= 1e-12 * np.abs(compliance).max()
+    assert main(["stiffness", "tapered_leaf", "--model", "beam:20"]) == 0  # elastic leaves
+    assert "Fx N" in capsys.readouterr().out

@@ -657,10 +657,20 @@ def _cmd_stiffness(args: argparse.Namespace) -> int:
     x, y = found.point.tolist()
     print(f"{spec.id}: stiffness of body {body} at its target point ({x:.4f}, {y:.4f}) mm, {where}")
     labels = ("Fx N", "Fy N", "M N mm")
-    columns = [Column("", "<")] + [Column(f"{m}") for m in ("dx mm", "dy mm", "rot rad")]
-    rows = [[label, *(sig(v, 6) for v in row)] for label, row in zip(labels, found.stiffness)]
-    for line in text_table(columns, rows, "  "):
-        print(line)
+    if found.stiffness is not None:
+        columns = [Column("", "<")] + [Column(f"{m}") for m in ("dx mm", "dy mm", "rot rad")]
+        rows = [[label, *(sig(v, 6) for v in row)] for label, row in zip(labels, found.stiffness)]
+        for line in text_table(columns, rows, "  "):
+            print(line)
+    else:
+        directions = "; ".join(
+            "(" + ", ".join(f"{m} {sig(v, 4)}" for m, v in zip(MOTIONS, row)) + ")"
+            for row in found.rigid
+        )
+        print(
+            f"no finite stiffness: {spec.id} is rigid at the target along {directions} "
+            "(its compliance has zero directions there)"
+        )
     print("compliance")
     columns = [Column("", "<")] + [Column(f"{m}") for m in ("Fx N", "Fy N", "M N mm")]
     rows = [

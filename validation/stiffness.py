@@ -65,7 +65,8 @@ def stiffness_record(
     scene: Scene, spec: ModelSpec, case: LoadCase | None, fraction: float, found: TargetStiffness
 ) -> dict:
     """The JSON record: where, the stiffness and the compliance (rows and columns dx, dy,
-    rotation) with their units, and whether the state is stable."""
+    rotation) with their units, and whether the state is stable; where the model is rigid
+    at the target, the stiffness is null and ``rigid_directions`` say along what."""
     return {
         "scene": scene.name,
         "model": spec.id,
@@ -74,8 +75,9 @@ def stiffness_record(
         "body": scene.mechanism.target_body,
         "point_mm": found.point.tolist(),
         "coordinates": list(MOTIONS),
-        "stiffness": found.stiffness.tolist(),
+        "stiffness": None if found.stiffness is None else found.stiffness.tolist(),
         "compliance": found.compliance.tolist(),
+        "rigid_directions": None if found.rigid is None else found.rigid.tolist(),
         "units": UNITS,
         "stable": found.stable,
     }
