@@ -177,3 +177,19 @@ body = "t"
 value = 0.02
 levels = 6
 """
+
+
+def with_sections_scaled(mechanism, factors):
+    """Copies of ``mechanism`` with every flexure's section scaled by each factor in turn (a
+    batch of copies that part ways)."""
+    import dataclasses
+
+    return [
+        dataclasses.replace(
+            mechanism,
+            flexures=tuple(
+                dataclasses.replace(f, section=f.section.scaled(s)) for f in mechanism.flexures
+            ),
+        )
+        for s in factors
+    ]

@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 import pytest
+from builders import with_sections_scaled
 
 from flexval.geometry import Force, LoadCase, Moment, load_scene
 from flexval.reducedmodels.batch import run_batch
@@ -116,16 +117,7 @@ def test_a_batch_flags_the_same_levels_as_each_copy_alone(chain, model, scale):
     """At these scales the first levels are within the screen's floor and the last not."""
     spec = parse_model(model)
     case = _scaled(chain.load_cases[0], scale)
-    mechanisms = [
-        dataclasses.replace(
-            chain.mechanism,
-            flexures=tuple(
-                dataclasses.replace(f, section=f.section.scaled(s))
-                for f in chain.mechanism.flexures
-            ),
-        )
-        for s in (0.97, 1.0, 1.02)
-    ]
+    mechanisms = with_sections_scaled(chain.mechanism, (0.97, 1.0, 1.02))
     batched = run_batch(mechanisms, spec, [case] * 3)
     flagged = 0
     for mechanism, together in zip(mechanisms, batched):

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from builders import with_sections_scaled
 
 from flexval.geometry import load_scene
 from flexval.reducedmodels import stability
@@ -189,7 +190,6 @@ def test_a_column_in_other_units_buckles_at_the_same_load_factor(tmp_path, facto
 def test_a_batch_of_copies_stops_at_each_copys_own_bifurcation(model):
     """Copies of the leaf guide with their sections scaled traced as one batch stop where each
     stops alone, at the same bifurcation load bit for bit (one rule, one kernel per storage)."""
-    import dataclasses
 
     from flexval.reducedmodels.batch import trace_batch
     from flexval.reducedmodels.catalogue import parse_model
@@ -198,16 +198,7 @@ def test_a_batch_of_copies_stops_at_each_copys_own_bifurcation(model):
 
     scene = load_scene(str(GUIDE))
     spec, case = parse_model(model), scene.load_cases[0]
-    mechanisms = [
-        dataclasses.replace(
-            scene.mechanism,
-            flexures=tuple(
-                dataclasses.replace(f, section=f.section.scaled(s))
-                for f in scene.mechanism.flexures
-            ),
-        )
-        for s in (1.0, 1.0, 0.99, 1.02)
-    ]
+    mechanisms = with_sections_scaled(scene.mechanism, (1.0, 1.0, 0.99, 1.02))
     solo = []
     for mechanism in mechanisms:
         with pytest.raises(SolverError) as caught:
@@ -431,7 +422,6 @@ def test_a_model_blind_to_sway_is_invalid_past_the_leafs_euler_load(path, model,
 
 @pytest.mark.parametrize("model", ["ee", "dcmm:1"])
 def test_a_batch_of_sway_blind_copies_flags_the_same_levels_as_each_alone(model):
-    import dataclasses
 
     from flexval.reducedmodels.batch import run_batch
     from flexval.reducedmodels.catalogue import parse_model
@@ -439,16 +429,7 @@ def test_a_batch_of_sway_blind_copies_flags_the_same_levels_as_each_alone(model)
 
     scene = load_scene(str(GUIDE))
     case = scene.load_cases[0]
-    mechanisms = [
-        dataclasses.replace(
-            scene.mechanism,
-            flexures=tuple(
-                dataclasses.replace(f, section=f.section.scaled(s))
-                for f in scene.mechanism.flexures
-            ),
-        )
-        for s in (0.98, 1.0, 1.03)
-    ]
+    mechanisms = with_sections_scaled(scene.mechanism, (0.98, 1.0, 1.03))
     spec = parse_model(model)
     batched = run_batch(mechanisms, spec, [case] * 3)
     for mechanism, together in zip(mechanisms, batched):

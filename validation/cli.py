@@ -1259,6 +1259,15 @@ def _campaign_options(q: argparse.ArgumentParser) -> None:
     q.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
+def _scene_and_model(q: argparse.ArgumentParser, scene_help: str, ids: str) -> None:
+    """The scene and the one ``--model`` of an analysis about an equilibrium (``modes``,
+    ``buckle``, ``stiffness``)."""
+    q.add_argument("scene", help=scene_help)
+    q.add_argument(
+        "--model", required=True, metavar="MODEL", help=f"model id: {ids} (see flexval models)"
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argparse parser of ``flexval`` (all sub-commands)."""
     p = argparse.ArgumentParser(
@@ -1460,13 +1469,7 @@ def build_parser() -> argparse.ArgumentParser:
     q.set_defaults(func=_cmd_compare)
 
     q = sub.add_parser("modes", help="natural frequencies and mode shapes about an equilibrium")
-    q.add_argument("scene", help=scene_help)
-    q.add_argument(
-        "--model",
-        required=True,
-        metavar="MODEL",
-        help=f"model id: {ids} (see flexval models)",
-    )
+    _scene_and_model(q, scene_help, ids)
     q.add_argument(
         "--at",
         type=float,
@@ -1503,10 +1506,7 @@ def build_parser() -> argparse.ArgumentParser:
         "buckle",
         help="linearised buckling: critical loads and modes of a load case, beside its path",
     )
-    q.add_argument("scene", help=scene_help)
-    q.add_argument(
-        "--model", required=True, metavar="MODEL", help=f"model id: {ids} (see flexval models)"
-    )
+    _scene_and_model(q, scene_help, ids)
     q.add_argument("--load-case", metavar="NAME", help="load case (default: the scene's first)")
     q.add_argument(
         "--count", type=int, default=3, metavar="K", help="critical loads, lowest first (default 3)"
@@ -1532,10 +1532,7 @@ def build_parser() -> argparse.ArgumentParser:
         "stiffness",
         help="the 3 x 3 stiffness and compliance at the target, at rest or under a load",
     )
-    q.add_argument("scene", help=scene_help)
-    q.add_argument(
-        "--model", required=True, metavar="MODEL", help=f"model id: {ids} (see flexval models)"
-    )
+    _scene_and_model(q, scene_help, ids)
     q.add_argument(
         "--load-case", metavar="NAME", help="load case of the preload (default: none, at rest)"
     )
