@@ -62,7 +62,9 @@ PAPER_MODELS = {
 }
 
 
-def _on_reference_levels(model: LoadPath, ref: LoadPath) -> tuple[np.ndarray, ...]:
+def on_reference_levels(model: LoadPath, ref: LoadPath) -> tuple[np.ndarray, ...]:
+    """``model``'s dx, dy (mm) and rotation (rad) at ``ref``'s loads (interpolated in load
+    where the two paths' levels differ)."""
     lm, lr = np.asarray(model.load), np.asarray(ref.load)
     if lm.shape == lr.shape and np.allclose(lm, lr, rtol=1e-12, atol=0.0):
         return np.asarray(model.dx), np.asarray(model.dy), np.asarray(model.rotation)
@@ -123,7 +125,7 @@ def errors(model: LoadPath, ref: LoadPath, length: float) -> dict[str, float]:
         raise ValueError(f"load cases differ: {model.load_case!r} vs {ref.load_case!r}")
     if not ref.converged:
         raise ValueError(f"reference {ref.model} did not reach full load on {ref.load_case}")
-    dx, dy, rot = _on_reference_levels(model, ref)
+    dx, dy, rot = on_reference_levels(model, ref)
     rx, ry, rr = (np.asarray(v) for v in (ref.dx, ref.dy, ref.rotation))
     d_ref = np.hypot(rx, ry)
     vec_err = np.hypot(dx - rx, dy - ry)

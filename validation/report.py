@@ -26,7 +26,7 @@ from pathlib import Path
 
 from flexval.reducedmodels.catalogue import FIELDS, parse_model
 
-from . import figures, frequencies, measuredreport, strength
+from . import figures, frequencies, measuredreport, parasitic, strength
 from .convergence import order_text
 from .failures import Failure
 from .figurejobs import Figures, draw_now
@@ -430,6 +430,7 @@ def _scene_section(
         L += [f"### Errors against the continuum reference `{res.reference}`", ""]
         L += _metrics_table(res, res.reference) + [""]
         L += _bracket_lines(res)
+    L += parasitic.section(res, res.reference if res.has_reference() else PAPER_REFERENCE)
     if threed is not None or res.paper:
         L += threed_section(threed, res.scene.name, code)
     L += strength.section(
