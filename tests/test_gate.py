@@ -446,3 +446,30 @@ def test_prepare_caches_critical_loads_and_frequencies(tmp_path, monkeypatch):
         warm = json.loads(record.read_text())["results"]
         strip = [{k: v for k, v in r.items() if k != "seconds"} for r in warm]
         assert strip == [{k: v for k, v in r.items() if k != "seconds"} for r in cold[gates]]
+
+
+def test_a_parasitic_gate_scores_each_component_against_the_references_own(tmp_path):
+    """On tapered_leaf's stage pushed sideways, beam:100 gives a parasitic dy of -0.21 mm and
+    a rotation of -1.2e-4 rad (CalculiX gives the same to 1 %): dcmm:1 predicts no dy
+    (100 % off), dcmm:2 four times the rotation (312 % off). filleted_stage's vertical
+    push moves its symmetric stage without parasitic motion but round-off: nothing to score,
+    the gate passes and says why."""
+    rows = {}
+    for scene, case, status in (("tapered_leaf", "f+", 1), ("filleted_stage", "v-", 0)):
+        gates = tmp_path / f"{scene}.toml"
+        gates.write_text(
+            f'reference = "beam:100"\nscenes = ["{scene}"]\nload_cases = ["{case}"]\n'
+            '[[gates]]\nmodel = "dcmm:1"\nparasitic = 99.0\n'
+            '[[gates]]\nmodel = "dcmm:2"\nparasitic = 400.0\n'
+        )
+        out = tmp_path / f"{scene}.json"
+        assert _run([str(gates), "--json", str(out)]) == status
+        rows.update({(r["model"], r["scene"]): r for r in json.loads(out.read_text())["results"]})
+    assert not rows["dcmm:1", "tapered_leaf"]["passed"]
+    assert rows["dcmm:1", "tapered_leaf"]["value_percent"] == pytest.approx(100.0, abs=0.01)
+    assert rows["dcmm:2", "tapered_leaf"]["passed"]
+    assert 300.0 < rows["dcmm:2", "tapered_leaf"]["value_percent"] < 330.0
+    for model in ("dcmm:1", "dcmm:2"):
+        row = rows[model, "filleted_stage"]
+        assert row["passed"] and row["value_percent"] is None
+        assert "nothing to score" in row["reason"]

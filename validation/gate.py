@@ -38,12 +38,14 @@ from .frequencies import mode_errors
 from .gatefile import (
     FREQUENCY_METRICS,
     LIMIT_METRICS,
+    PARASITIC_METRICS,
     PATH_METRICS,
     STRESS_METRICS,
     Gate,
     GateFile,
 )
 from .gatemetrics import SEARCH_RANGE, Critical, Frequencies, critical_load, natural_frequencies
+from .parasitic import parasitic_errors
 
 
 @dataclass(frozen=True)
@@ -114,7 +116,7 @@ def _path(scene: Scene, spec: ModelSpec, case: LoadCase, memo: RunMemo) -> LoadP
     return timed_run(scene, spec, case, 1, memo if _cacheable(spec) else None)
 
 
-CASE_METRICS = PATH_METRICS + STRESS_METRICS
+CASE_METRICS = PATH_METRICS + STRESS_METRICS + PARASITIC_METRICS
 """The metrics read from the load-control path at full load (its reference must reach it)."""
 REST = "rest"
 """The load case name of a ``frequency`` check (the report's name for the rest state)."""
@@ -214,8 +216,19 @@ def _peak(lp: LoadPath) -> float | None:
     return float(max(values[-1] for values in lp.peak_stress.values()))
 
 
-def _values(lp: LoadPath, ref: LoadPath, scene: Scene, metrics) -> dict[str, float | None]:
+NOTHING_PARASITIC = (
+    "nothing to score: the load case has no parasitic component, or the reference's is round-off"
+)
+
+
+def _values(
+    lp: LoadPath, ref: LoadPath, scene: Scene, case: LoadCase, metrics
+) -> dict[str, float | None]:
     out: dict[str, float | None] = {}
+    if "parasitic" in metrics:
+        rows = parasitic_errors(lp, ref, case, scene.mechanism.size())
+        scored = [r["end"] for r in rows if r["scored"]]
+        out["parasitic"] = max(scored) if scored else None
     if any(m in PATH_METRICS for m in metrics):
         out.update({k: float(v) for k, v in errors(lp, ref, scene.mechanism.size()).items()})
     if "peak_stress" in metrics:
@@ -278,7 +291,7 @@ def _path_checks(gate: Gate, scene: Scene, case: LoadCase, ref: LoadPath, memo: 
     reason, values, seconds = "", {}, 0.0
     try:
         lp = _path(scene, gate.model, case, memo)
-        values, seconds = _values(lp, ref, scene, gate.thresholds), lp.seconds
+        values, seconds = _values(lp, ref, scene, case, gate.thresholds), lp.seconds
     except PluginFailure:
         raise  # the plug-in's code, not the model's accuracy: no verdict
     except SolverError as exc:
@@ -289,6 +302,19 @@ def _path_checks(gate: Gate, scene: Scene, case: LoadCase, ref: LoadPath, memo: 
         if metric not in CASE_METRICS:
             continue
         value = values.get(metric)
+        if metric == "parasitic" and value is None and not reason:
+            yield Check(
+                gate.model.id,
+                scene.name,
+                case.name,
+                metric,
+                None,
+                threshold,
+                True,
+                NOTHING_PARASITIC,
+                seconds,
+            )
+            continue
         why = reason or ("" if value is not None else NO_PEAK.format(gate.model.id))
         passed = bool(value is not None and value <= threshold)
         yield Check(

@@ -41,13 +41,16 @@ PATH_METRICS = ("end_disp", "end_disp_vec", "end_rot", "path_disp", "path_rot")
 (:data:`flexval.validation.compare.METRICS`, percent)."""
 STRESS_METRICS = ("peak_stress",)
 """|peak fibre stress at full load - the reference's| / the reference's, percent."""
+PARASITIC_METRICS = ("parasitic",)
+"""The largest error of the target's parasitic components at full load, each against the
+reference's own value, percent (:mod:`flexval.validation.parasitic`)."""
 LIMIT_METRICS = ("limit_load",)
 """|first critical load - the reference's| / the reference's, percent (the report's limit
 loads and bifurcations: :func:`flexval.validation.gatemetrics.critical_load`)."""
 FREQUENCY_METRICS = ("frequency",)
 """The largest |f_k - f_k,ref| / f_k,ref over the lowest ``modes`` natural frequencies at
 rest, percent (the report's natural-frequency table: one check per scene, not per case)."""
-METRICS = PATH_METRICS + STRESS_METRICS + LIMIT_METRICS + FREQUENCY_METRICS
+METRICS = PATH_METRICS + STRESS_METRICS + PARASITIC_METRICS + LIMIT_METRICS + FREQUENCY_METRICS
 """The metrics a gate checks, in the order of its tables."""
 
 _METRIC_TEXT = {
@@ -57,6 +60,10 @@ _METRIC_TEXT = {
     "path_disp": "largest displacement error along the path, of the largest reference one",
     "path_rot": "largest rotation error along the path, of the largest reference one",
     "peak_stress": "error of the peak outer-fibre stress at full load",
+    "parasitic": "largest error of the parasitic motion at full load (across a force and the "
+    "rotation; the translation under a moment), each component against the reference's own "
+    "value; passes with nothing to score where the reference's is round-off or the load case "
+    "has several loads",
     "limit_load": "error of the first critical load (limit or bifurcation point) within the "
     "full load; passes where neither model has one, fails where only one has",
     "frequency": "largest error of the lowest `modes` natural frequencies at rest, each "
