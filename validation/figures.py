@@ -63,36 +63,37 @@ def load_path_curves(
 ) -> list[dict]:
     """The curves of the load-path figure: each model's path, then its arc-length trace.
 
-    Each curve is ``{"label", "model", "load" (|load|, N or N mm), "displacement" (|d|, mm),
-    "rotation" (deg), "style"}``. A trace (the branch an arc-length search traced through
-    the model's limit point, see :attr:`flexval.validation.failures.Failure.trace`) is drawn dashed
-    in its model's colour and labelled ``"<model> (arc length)"``.
+    Each curve is ``{"label", "model", "load" (|load|, N or N mm), "dx", "dy",
+    "displacement" (|d|) (mm), "rotation" (deg), "bifurcations" (their |load|),
+    "limit_points" (their levels), "style"}``. A trace (the branch an arc-length search
+    traced through the model's limit point, see
+    :attr:`flexval.validation.failures.Failure.trace`) is drawn dashed in its model's colour
+    and labelled ``"<model> (arc length)"``.
     """
     curves = []
     for model, lp in paths.items():
-        curves.append(
-            dict(
-                label=model,
-                model=model,
-                load=np.abs(lp.load),
-                displacement=np.asarray(lp.displacement),
-                rotation=np.degrees(lp.rotation),
-                style=style(model),
-            )
-        )
+        curves.append(dict(label=model, model=model, style=style(model), **_curve(lp)))
     for model, lp in (traces or {}).items():
         st = dict(color=style(model).get("color"), lw=1.2, ls="--", marker=None)
-        curves.append(
-            dict(
-                label=f"{model} (arc length)",
-                model=model,
-                load=np.abs(lp.load),
-                displacement=np.asarray(lp.displacement),
-                rotation=np.degrees(lp.rotation),
-                style=st,
-            )
-        )
+        curves.append(dict(label=f"{model} (arc length)", model=model, style=st, **_curve(lp)))
     return curves
+
+
+def _curve(lp: LoadPath) -> dict:
+    """A path's arrays for a figure: |load|, dx, dy, |d| (mm), rotation (deg), and its
+    bifurcation loads and limit points (|load|, index of the level)."""
+    limits = [p["index"] for p in lp.limit_points or []] or list(
+        lp.stats.get("limit_points", []) if lp.stats else []
+    )
+    return dict(
+        load=np.abs(lp.load),
+        dx=np.asarray(lp.dx),
+        dy=np.asarray(lp.dy),
+        displacement=np.asarray(lp.displacement),
+        rotation=np.degrees(lp.rotation),
+        bifurcations=[abs(b["load"]) for b in lp.bifurcations or []],
+        limit_points=[k for k in limits if 0 <= k < len(lp.load)],
+    )
 
 
 def load_paths(
@@ -102,47 +103,105 @@ def load_paths(
     path: Path,
     traces: dict[str, LoadPath] | None = None,
 ) -> str:
-    """Target displacement magnitude and target-body rotation versus load, all models
-    (and the arc-length traces through limit points, see :func:`load_path_curves`)."""
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    """The target point's dx and dy and the target body's rotation versus load, all models
+    (and the arc-length traces through limit points, see :func:`load_path_curves`), each
+    component on its own axis so that a parasitic one is seen at its own scale; a
+    bifurcation is marked with a cross, a limit point with a diamond."""
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.4))
     unit = next((lp.load_unit for lp in paths.values()), None)
+    body = scene.mechanism.target_body
+    panels = (
+        ("dx", "target point dx (mm)"),
+        ("dy", "target point dy (mm)"),
+        ("rotation", f"rotation of body {body} (deg)"),
+    )
     for c in load_path_curves(paths, traces):
-        a1.plot(c["load"], c["displacement"], label=c["label"], **c["style"])
-        a2.plot(c["load"], c["rotation"], label=c["label"], **c["style"])
-    a1.set_xlabel(f"|load| ({unit})")
-    a1.set_ylabel("target point displacement |d| (mm)")
-    a2.set_xlabel(f"|load| ({unit})")
-    a2.set_ylabel(f"rotation of body {scene.mechanism.target_body} (deg)")
-    for a in (a1, a2):
-        a.grid(alpha=0.3)
-    a1.legend(fontsize=8)
+        for ax, (key, _) in zip(axes, panels):
+            ax.plot(c["load"], c[key], label=c["label"], **c["style"])
+            color = c["style"].get("color")
+            for k in c["limit_points"]:
+                ax.plot(c["load"][k], c[key][k], "D", ms=7, mfc="none", color=color)
+            for load in c["bifurcations"]:
+                value = np.interp(load, c["load"], c[key]) if len(c["load"]) > 1 else c[key][0]
+                ax.plot(load, value, "X", ms=9, color=color)
+    for ax, (_, label) in zip(axes, panels):
+        ax.set_xlabel(f"|load| ({unit})")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 4), useOffset=False)
+    handles, labels = axes[0].get_legend_handles_labels()
+    curves = load_path_curves(paths, traces)
+    if any(c["bifurcations"] for c in curves):
+        handles.append(plt.Line2D([], [], ls="", marker="X", ms=8, color="0.3"))
+        labels.append("bifurcation")
+    if any(c["limit_points"] for c in curves):
+        handles.append(plt.Line2D([], [], ls="", marker="D", mfc="none", ms=6, color="0.3"))
+        labels.append("limit point")
+    axes[0].legend(handles, labels, fontsize=8)
     fig.suptitle(f"{scene.name}, load case {case_name}")
+    fig.tight_layout()
     return _save(fig, path)
 
 
+VISIBLE_MOTION = 0.1
+"""The share of the mechanism's size the largest motion of a deformed-shape figure is drawn
+at, where the true motion is smaller: the displacements are magnified by a round factor
+(1, 2 or 5 times a power of ten) and the figure says by how much."""
+
+
+def deformation_scale(motion: float, size: float) -> float:
+    """The factor (1, 2 or 5 times a power of ten, at least 1) that draws a largest motion of
+    ``motion`` mm at about :data:`VISIBLE_MOTION` of the mechanism's ``size`` (mm)."""
+    if motion <= 0.0 or motion >= VISIBLE_MOTION * size:
+        return 1.0
+    wanted = VISIBLE_MOTION * size / motion
+    power = 10.0 ** math.floor(math.log10(wanted))
+    return max(1.0, max(f * power for f in (1.0, 2.0, 5.0) if f * power <= wanted))
+
+
 def deformed(scene: Scene, case_name: str, lp: LoadPath, path: Path) -> str:
-    """Deformed configurations at every other level and the tracing-point path."""
+    """Deformed configurations at every other level and the tracing-point path, the
+    displacements magnified (:func:`deformation_scale`, stated in the title) where the
+    motion is too small to see."""
     fig, ax = plt.subplots(figsize=(7, 7))
     draw_mechanism(scene, ax, load_case=case_name)
     mech = scene.mechanism
     n = len(lp.load)
     cmap = plt.get_cmap("viridis")
+    rest_shapes = {name: np.asarray(pts[0]) for name, pts in lp.shapes.items()}
+    placed = {}  # each moving body's drawn points (mm) at each level, true scale
+    for body, poses in lp.poses.items():
+        b = mech.bodies[body]
+        if b.is_ground:
+            continue
+        pts = b.points if body != mech.target_body else np.vstack([b.points, mech.target_point])
+        placed[body] = [place_points(np.asarray(pose), pts - b.reference) for pose in poses]
+    motion = max(
+        [
+            float(np.abs(np.asarray(p) - rest_shapes[name]).max())
+            for name, s in lp.shapes.items()
+            for p in s
+        ]
+        + [float(np.abs(q - qs[0]).max()) for qs in placed.values() for q in qs],
+        default=0.0,
+    )
+    scale = deformation_scale(motion, mech.size())
     for k in range(0, n, max(1, n // 5)) if n > 1 else [0]:
         col = cmap(k / max(n - 1, 1))
-        for pts in lp.shapes.values():
-            p = np.asarray(pts[k])
+        for name, pts in lp.shapes.items():
+            p = rest_shapes[name] + scale * (np.asarray(pts[k]) - rest_shapes[name])
             ax.plot(p[:, 0], p[:, 1], color=col, lw=1.2, alpha=0.9)
-        for body, poses in lp.poses.items():
-            b = mech.bodies[body]
-            if b.is_ground:
-                continue
-            pts = b.points if body != mech.target_body else np.vstack([b.points, mech.target_point])
-            q = place_points(np.asarray(poses[k]), pts - b.reference)
+        for qs in placed.values():
+            q = qs[0] + scale * (qs[k] - qs[0])
             ax.plot(q[:, 0], q[:, 1], color=col, lw=3, alpha=0.6)
-    trace = mech.target_point + np.column_stack([lp.dx, lp.dy])
+    trace = mech.target_point + scale * np.column_stack([lp.dx, lp.dy])
     ax.plot(trace[:, 0], trace[:, 1], "k.-", lw=1, ms=4, label="tracing point path")
     ax.legend(fontsize=8, loc="best")
-    ax.set_title(f"{scene.name} {case_name}: deformed ({lp.model}), levels coloured 0 -> full")
+    magnified = "true scale" if scale == 1.0 else f"displacements x {scale:g}"
+    ax.set_title(
+        f"{scene.name} {case_name}: deformed ({lp.model})\n{magnified}, "
+        "levels coloured 0 -> full load"
+    )
     return _save(fig, path)
 
 
