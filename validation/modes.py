@@ -194,10 +194,15 @@ def modes_record(
     }
 
 
+PANELS_PER_ROW = 3
+"""Mode panels side by side in a figure; more modes take more rows."""
+
+
 def plot_modes(
     system, modes: Modes, path: str | Path, title: str, labels: list[str] | None = None
 ) -> None:
-    """One panel per mode: the equilibrium shape (grey) and the mode shape (colour).
+    """One panel per mode, :data:`PANELS_PER_ROW` to a row: the equilibrium shape (grey)
+    and the mode shape (colour), flexures thin and rigid bodies thick.
 
     ``labels`` are the panels' titles (default: each mode's frequency in Hz).
 
@@ -209,19 +214,27 @@ def plot_modes(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from flexval.geometry.kinematics import place_points
+
     k = modes.eigenvalues.size
-    fig, axes = plt.subplots(1, k, figsize=(3.2 * k, 3.4), squeeze=False)
+    columns = min(k, PANELS_PER_ROW)
+    rows = -(-k // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(3.6 * columns, 3.6 * rows), squeeze=False)
     translations = ~system.is_rotation
-    for j, ax in enumerate(axes[0]):
+    mech = system.mechanism
+    for j, ax in enumerate(axes.ravel()):
+        if j >= k:
+            ax.set_axis_off()
+            continue
         x = modes.shapes[j]
         scale = 0.1 * system.size / max(float(np.abs(x[translations]).max()), 1e-300)
-        for q, style in (
-            (modes.state, dict(color="0.7", lw=1.5)),
-            (modes.state + scale * x, dict(color="tab:red", lw=1.5)),
-        ):
+        for q, color in ((modes.state, "0.7"), (modes.state + scale * x, "tab:red")):
             for c, local in zip(system.connectors, system.local_states(q)):
                 pts = c.shape(*local)
-                ax.plot(pts[:, 0], pts[:, 1], **style)
+                ax.plot(pts[:, 0], pts[:, 1], color=color, lw=1.5)
+            for name, body in mech.bodies.items():  # the rigid bodies, thick
+                pts = place_points(system.pose(q, name), body.points - body.reference)
+                ax.plot(pts[:, 0], pts[:, 1], color=color, lw=4, alpha=0.6, solid_capstyle="round")
         ax.set_aspect("equal")
         label = labels[j] if labels else f"mode {j + 1}: {modes.frequencies_hz[j]:.4g} Hz"
         ax.set_title(label, fontsize=9)
