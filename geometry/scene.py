@@ -84,7 +84,10 @@ from .scenefields import (
 from .shapes import Arc, Segment
 from .timelaw import parse_time_law
 
-NO_DATA = "this scene was not read from scene data (load_scene or parse_scene): nothing to change"
+NO_DATA = (
+    "this scene keeps no scene data (a sweep's point: change the sweep's base or axes instead; "
+    "load_scene and parse_scene give scenes that keep it)"
+)
 
 PAPER_SCENES = ("open_chain", "closed_chain")
 """The reference paper's two case studies (Sorgonà et al. 2024, Sect. 4)."""
@@ -780,8 +783,12 @@ def _measurements(rd: _Reader, data: dict, cases: list[LoadCase]) -> tuple[Measu
     return tuple(out)
 
 
-def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
-    """Build and check a Scene from parsed TOML ``data`` read from ``source``.
+def parse_scene(
+    data: dict, source: str, default_name: str = "scene", keep_data: bool = True
+) -> Scene:
+    """Build and check a Scene from parsed TOML ``data`` read from ``source``; with
+    ``keep_data`` (default) the scene keeps ``data`` for :meth:`Scene.with_changes` (a
+    sweep's points keep none: they change by the sweep's axes).
 
     In passes, each a function named after what it reads: the mechanism
     (material, section, ground, target, flexures, bodies, pins, masses), the
@@ -804,7 +811,7 @@ def parse_scene(data: dict, source: str, default_name: str = "scene") -> Scene:
         frozenset(outputs),
         source,
         _measurements(rd, data, cases),
-        data,
+        data if keep_data else None,
     )
 
 

@@ -67,3 +67,17 @@ def test_a_run_json_reads_back_as_paths_arrays_and_a_frame(tmp_path):
     frame = paths[1].to_dataframe()
     assert list(frame.columns[:2]) == ["model", "load_case"] and len(frame) == 11
     assert frame["rotation"].iloc[-1] == paths[1].rotation[-1]
+
+
+def test_a_sweep_points_scene_keeps_no_data_and_says_so(tmp_path):
+    """A sweep's point is its base with the axis values written in (built without a parse
+    where the incremental build proves it): it changes by the sweep's axes, not by itself."""
+    sweep_file = tmp_path / "s.toml"
+    sweep_file.write_text(
+        'name = "s"\nbase = "open_chain"\nmodels = ["ee"]\n'
+        '[[axes]]\npath = "section.thickness"\nvalues = [0.11, 0.12]\n'
+    )
+    for point in load_sweep(sweep_file).points:
+        assert point.scene.data is None
+        with pytest.raises(SceneError, match="keeps no scene data"):
+            point.scene.with_changes({"section.thickness": 0.2})

@@ -108,8 +108,8 @@ def with_density(scene: Scene, density: float) -> Scene:
     inertia = dataclasses.replace(
         scene.mechanism.inertia, density=parse_density({"density": density}, fail)
     )
-    return dataclasses.replace(
-        scene, mechanism=dataclasses.replace(scene.mechanism, inertia=inertia)
+    return dataclasses.replace(  # its data no longer says what it is: none kept
+        scene, mechanism=dataclasses.replace(scene.mechanism, inertia=inertia), data=None
     )
 
 

@@ -275,7 +275,7 @@ def _invariance(scene: Scene, spec: ModelSpec, case: LoadCase, base: LoadPath | 
     moved, f1 = _attempt(lambda: run_model(moved_scene, spec, case.transformed(RIGID_ANGLE, shift)))
     mech_m, case_m = rescale_lengths(scene.mechanism, case, METRE)
     metres, f2 = _attempt(
-        lambda: run_model(dataclasses.replace(scene, mechanism=mech_m), spec, case_m)
+        lambda: run_model(dataclasses.replace(scene, mechanism=mech_m, data=None), spec, case_m)
     )
     fails = [f["message"] for f in (f1, f2) if f is not None]
     size = scene.mechanism.size()

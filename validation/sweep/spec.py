@@ -435,11 +435,15 @@ class PointBuilder:
         paths = [a.path for a in self.axes]
 
         def template(data: dict) -> Scene:
-            return parse_scene(data, f"{self.source}: base", default_name=self.name)
+            return parse_scene(
+                data, f"{self.source}: base", default_name=self.name, keep_data=False
+            )
 
         def corner(values: tuple) -> Scene:
             params = dict(zip(paths, values))
-            return parse_scene(self._data(params), self._where(-1, params), default_name=self.name)
+            return parse_scene(
+                self._data(params), self._where(-1, params), self.name, keep_data=False
+            )
 
         return incremental_builder(self._key, self.base, paths, template, corner)
 
@@ -472,7 +476,8 @@ class PointBuilder:
         pdata = self._data(params)
         where = self._where(index, params)
         try:
-            scene = parse_scene(pdata, where, default_name=self.name)  # it reads, never writes
+            # it reads, never writes; a point keeps no data: it changes by the axes
+            scene = parse_scene(pdata, where, default_name=self.name, keep_data=False)
         except SceneError as exc:
             if not any(a.random for a in self.axes):
                 raise
@@ -809,7 +814,7 @@ def _normalise(scene: Scene, data: dict, cases: tuple[str, ...], rotation: float
         entry = next(c for c in data["load_cases"] if str(c.get("name")) == case.name)
         for comp in entry.get("loads", [entry]):
             comp["value"] = comp["value"] * factor
-    return dataclasses.replace(scene, load_cases=tuple(scaled))
+    return dataclasses.replace(scene, load_cases=tuple(scaled), data=None)
 
 
 def digest(data: dict) -> str:
