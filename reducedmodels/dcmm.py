@@ -31,6 +31,7 @@ from typing import NamedTuple
 import numpy as np
 
 from flexval.geometry import Flexure, Mechanism
+from flexval.geometry.compliance import curve_compliance
 from flexval.geometry.kinematics import rotate_xy
 
 from .chains import NodeChains, chain_kernels
@@ -855,17 +856,11 @@ def _node_chains(connectors) -> NodeChains:
     )
 
 
-AXIAL_GAUSS_POINTS = 8
-"""Gauss-Legendre points of a varying sub-arc's integral of ds / EA (:func:`_axial_flexibility`):
-it only shares a closure's gap between the chords, never enters an equilibrium."""
-
-
 def _axial_flexibility(flexure: Flexure, material, sub) -> float:
-    """A sub-arc's integral of ds / (E A(s)), mm/N: length / EA for a uniform section."""
-    section, length = flexure.section, sub.end - sub.start
+    """A sub-arc's integral of ds / (E A(s)), mm/N: length / EA for a uniform section, else
+    the trace of its axial compliance integral (the tangent is a unit vector)."""
+    section = flexure.section
     if section.is_uniform:
-        return length / (material.youngs_modulus * section.area)
-    nodes, weights = np.polynomial.legendre.leggauss(AXIAL_GAUSS_POINTS)
-    s = sub.start + 0.5 * length * (nodes + 1.0)
-    area = np.asarray(section.area_at(s), float)
-    return float(0.5 * length * np.sum(weights / (material.youngs_modulus * area)))
+        return (sub.end - sub.start) / (material.youngs_modulus * section.area)
+    part = curve_compliance(flexure.shape, section, material, sub.start, sub.end)
+    return float(np.trace(part.axial))

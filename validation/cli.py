@@ -737,35 +737,23 @@ def _cmd_buckle(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _peaks(lp) -> dict[str, tuple[float, float, bool]]:
-    """Each flexure's peak stress at the last level (MPa), where (fraction of its length from
-    its first end) and whether it is the continuum's surface fibre stress: on a notch hinge
-    the continuum's own peak (``fibre_stress``' ``path_stress``, stress concentration
-    included), elsewhere the beam formula of the section forces (``peak_stress``)."""
-    peaks = {
-        name: (values[-1], lp.peak_stress_at[name][-1], False)
-        for name, values in (lp.peak_stress or {}).items()
-    }
-    for name, entry in (lp.fibre_stress or {}).items():
-        if entry.get("path_stress") and len(entry["path_stress"]) == len(lp.load):
-            peaks[name] = (entry["path_stress"][-1], entry["path_at"][-1], True)
-    return peaks
-
-
 FIBRE_MARK = "*"
 """Marks a run line's peak stress that is the continuum's surface fibre stress."""
 
 
 def _peak_cells(lp) -> tuple[str, str]:
     """``peak MPa`` and ``at`` of a run line: the largest peak stress over the flexures at the
-    last level (:func:`_peaks`, marked with :data:`FIBRE_MARK` where it is the continuum's
-    fibre stress) and where (``flexure@fraction`` of its length from its first end)."""
-    peaks = _peaks(lp)
+    last level (:func:`flexval.validation.yieldpoint.flexure_peaks`, marked with
+    :data:`FIBRE_MARK` where it is the continuum's fibre stress) and where
+    (``flexure@fraction`` of its length from its first end)."""
+    from .yieldpoint import flexure_peaks
+
+    peaks = flexure_peaks(lp)
     if not peaks:
         return "-", ""
-    name = max(peaks, key=lambda f: peaks[f][0])
-    value, at, fibre = peaks[name]
-    return sig(value) + (FIBRE_MARK if fibre else ""), f"{name}@{at:.2f}"
+    name = max(peaks, key=lambda f: peaks[f][0][-1])
+    values, places, fibre = peaks[name]
+    return sig(values[-1]) + (FIBRE_MARK if fibre else ""), f"{name}@{places[-1]:.2f}"
 
 
 def _parse_levels(text: str, spec) -> list[int]:

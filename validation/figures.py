@@ -115,7 +115,8 @@ def load_paths(
         ("dy", "target point dy (mm)"),
         ("rotation", f"rotation of body {body} (deg)"),
     )
-    for c in load_path_curves(paths, traces):
+    curves = load_path_curves(paths, traces)
+    for c in curves:
         for ax, (key, _) in zip(axes, panels):
             ax.plot(c["load"], c[key], label=c["label"], **c["style"])
             color = c["style"].get("color")
@@ -130,7 +131,6 @@ def load_paths(
         ax.grid(alpha=0.3)
         ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 4), useOffset=False)
     handles, labels = axes[0].get_legend_handles_labels()
-    curves = load_path_curves(paths, traces)
     if any(c["bifurcations"] for c in curves):
         handles.append(plt.Line2D([], [], ls="", marker="X", ms=8, color="0.3"))
         labels.append("bifurcation")

@@ -11,6 +11,7 @@ import numpy as np
 
 from flexval.geometry import Force, Moment, Scene
 from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.inertia import line_density, piece_inertia
 
 from .tables import Column, sig, text_table
 
@@ -52,7 +53,10 @@ def scene_info(scene: Scene) -> dict:
         if varying is not None:
             entry["section"] = varying
         if mech.inertia.density is not None:
-            entry["mass_t"] = mech.inertia.density * _line_area(f)
+            mass_per_length = line_density(mech.inertia.density, f.section)  # t/mm
+            entry["mass_t"] = piece_inertia(
+                f.shape, 0.0, f.shape.length, mass_per_length, np.zeros(2)
+            )[0]
         flexures.append(entry)
     cases = []
     for lc in scene.load_cases:
@@ -106,21 +110,6 @@ def _body_entry(mech, name: str) -> dict:
             center_of_mass_mm=np.asarray(mass.center_of_mass, float).tolist(),
         )
     return entry
-
-
-def _line_area(flexure) -> float:
-    """The flexure's volume, mm^3: the integral of its section's area along its length."""
-    section, length = flexure.section, flexure.shape.length
-    if section.is_uniform:
-        return section.area * length
-    nodes, weights = np.polynomial.legendre.leggauss(VOLUME_GAUSS_POINTS)
-    s = 0.5 * length * (nodes + 1.0)
-    return float(0.5 * length * np.sum(weights * section.area_at(s)))
-
-
-VOLUME_GAUSS_POINTS = 64
-"""Gauss-Legendre points of a varying section's volume (:func:`_line_area`): a notch's area
-varies smoothly, and 64 points integrate it to round-off."""
 
 
 def varying_section(flexure, material) -> dict:

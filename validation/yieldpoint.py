@@ -118,6 +118,23 @@ def first_yield(
     return out
 
 
+def flexure_peaks(lp: LoadPath) -> dict[str, tuple[list, list, bool]]:
+    """Each flexure's peak stress at every level (MPa), where (fraction of its length from
+    its first end) and whether it is the continuum's surface fibre stress, in the path's
+    order: a flexure whose true fibre peak the path records at every level (the continuum's
+    notch hinges: ``fibre_stress[name]["path_stress"]``, stress concentration included)
+    with that peak, every other one with its section resultants' beam formula."""
+    fibre = lp.fibre_stress or {}
+    out = {}
+    for name, values in (lp.peak_stress or {}).items():
+        true = fibre.get(name, {})
+        if "path_stress" in true:
+            out[name] = (true["path_stress"], true["path_at"], True)
+        else:
+            out[name] = (values, lp.peak_stress_at[name], False)
+    return out
+
+
 def peak_series(lp: LoadPath, lengths: Mapping[str, float]) -> tuple[np.ndarray, list, np.ndarray]:
     """The path's peak stress per level (MPa), the flexure holding it and where (mm).
 
@@ -128,13 +145,10 @@ def peak_series(lp: LoadPath, lengths: Mapping[str, float]) -> tuple[np.ndarray,
     resultants' beam formula. ``lengths`` gives each flexure's length (mm),
     which turns the recorded fraction of length into arc length.
     """
-    names = list(lp.peak_stress)
-    fibre = lp.fibre_stress or {}
-    true = {n: fibre[n] for n in names if "path_stress" in fibre.get(n, {})}
-    table = np.array(
-        [true[n]["path_stress"] if n in true else lp.peak_stress[n] for n in names], float
-    )
-    where = [true[n]["path_at"] if n in true else lp.peak_stress_at[n] for n in names]
+    peaks = flexure_peaks(lp)
+    names = list(peaks)
+    table = np.array([peaks[n][0] for n in names], float)
+    where = [peaks[n][1] for n in names]
     which = np.argmax(table, axis=0)
     levels = np.arange(table.shape[1])
     places = np.array([where[j][i] * lengths[names[j]] for i, j in zip(levels, which)])

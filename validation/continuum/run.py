@@ -192,16 +192,12 @@ def surface_strain_reasons(
     (``fibre_stress``' ``path_stress``, stress concentration included), else the beam
     formula of its section forces (``peak_stress``). The centre line's stretch alone
     misses a notch bent beyond the material's range."""
-    per_flexure = {
-        name: (values, lp.peak_stress_at[name])
-        for name, values in (lp.peak_stress or {}).items()
-        if name in flexures
-    }
-    for name, entry in (lp.fibre_stress or {}).items():
-        if name in flexures and len(entry.get("path_stress") or ()) == len(lp.load):
-            per_flexure[name] = (entry["path_stress"], entry["path_at"])
+    from ..yieldpoint import flexure_peaks
+
     reasons: list[list[str]] = [[] for _ in lp.load]
-    for name, (stresses, places) in per_flexure.items():
+    for name, (stresses, places, _) in flexure_peaks(lp).items():
+        if name not in flexures:
+            continue
         for k, (stress, at) in enumerate(zip(stresses, places)):
             strain = abs(stress) / youngs_modulus
             if strain > MAX_STRAIN:
