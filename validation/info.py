@@ -11,7 +11,6 @@ import numpy as np
 
 from flexval.geometry import Force, Moment, Scene
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.inertia import line_density, piece_inertia
 
 from .tables import Column, sig, text_table
 
@@ -52,7 +51,9 @@ def scene_info(scene: Scene) -> dict:
         entry.update(f.shape.parameters())
         if varying is not None:
             entry["section"] = varying
-        if mech.inertia.density is not None:
+        if mech.inertia.density is not None:  # (inertia's solvers load only where needed)
+            from flexval.reducedmodels.inertia import line_density, piece_inertia
+
             mass_per_length = line_density(mech.inertia.density, f.section)  # t/mm
             entry["mass_t"] = piece_inertia(
                 f.shape, 0.0, f.shape.length, mass_per_length, np.zeros(2)
