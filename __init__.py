@@ -34,15 +34,22 @@ _HOMES = {
 }
 """Module of each name the package offers at its top."""
 
-_REGISTERS = {"parse_model": "flexval.validation"}
+_MODULES = {"plot": "flexval.validation.plotting"}
+"""Modules the package offers at its top: ``flexval.plot`` draws onto Matplotlib axes."""
+
+_REGISTERS = {"parse_model": "flexval.validation", "run_model": "flexval.validation"}
 """A module to import before a name is offered: ``parse_model`` reads every built-in model
 family, and the continuum's registers itself with :mod:`flexval.validation`."""
 
-__all__ = ["__version__", *sorted(_HOMES)]
+__all__ = ["__version__", *sorted([*_HOMES, *_MODULES])]
 
 
 def __getattr__(name: str):
     """Import a top-level name from its module on first use (PEP 562)."""
+    if name in _MODULES:
+        value = import_module(_MODULES[name])
+        globals()[name] = value
+        return value
     if name not in _HOMES:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     if name in _REGISTERS:

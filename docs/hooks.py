@@ -20,7 +20,11 @@
   ``validation/`` as they are, so their relative links resolve.
 - Every script in ``examples/`` is run with this Python in a scratch folder;
   the gallery page shows its description, its source, what it printed and any
-  figure it wrote there. A failing example fails the build.
+  figure it wrote there. Every notebook in ``examples/`` is executed (nbclient,
+  this Python's kernel) and shown with its outputs (nbconvert), the notebook file
+  offered for download. A failing example fails the build.
+- MathJax is served from the site itself (the copy the ``jupyter-server-mathjax``
+  package ships), so the equations render offline.
 """
 
 from __future__ import annotations
@@ -64,6 +68,7 @@ _ROLE = re.compile(
 """A docstring's Sphinx cross-reference role as Markdown renders it: ``:meth:<code>x</code>``."""
 _MARKER = re.compile(r"^<!-- flexval:([a-z-]+)(?: (.*?))? -->$", re.MULTILINE)
 _examples: dict[str, dict] = {}
+_notebooks_run: dict[str, dict] = {}
 
 
 def _cell(text: str) -> str:
@@ -154,6 +159,7 @@ def _generators() -> dict:
         "cli-reference": cli_reference,
         "catalogue": _catalogue,
         "examples": _gallery,
+        "notebooks": _notebooks,
         "command": _command,
         "toml": _toml_file,
         "file": _source_file,
@@ -194,6 +200,53 @@ def _run_examples() -> dict[str, dict]:
             p for p in run["folder"].rglob("*") if p.suffix.lower() in FIGURE_SUFFIXES
         )
     return runs
+
+
+def _run_notebooks() -> dict[str, dict]:
+    """Execute every notebook of ``examples/`` in a scratch folder and convert it to Markdown
+    with its outputs; each entry holds the Markdown and the output files (name -> bytes),
+    which it links under ``examples/<name>/``."""
+    import nbformat
+    from nbclient import NotebookClient
+    from nbconvert import MarkdownExporter
+
+    found = {}
+    for notebook in sorted((ROOT / "examples").glob("*.ipynb")):
+        folder = Path(tempfile.mkdtemp(prefix=f"flexval-docs-{notebook.stem}-"))
+        node = nbformat.read(notebook, as_version=4)
+        start = time.time()
+        try:
+            NotebookClient(
+                node,
+                timeout=EXAMPLE_TIMEOUT,
+                kernel_name="python3",
+                resources={"metadata": {"path": str(folder)}},
+            ).execute()
+        except Exception as exc:
+            raise RuntimeError(f"notebook {notebook.name} failed: {exc}") from None
+        body, resources = MarkdownExporter().from_notebook_node(
+            node, resources={"output_files_dir": f"examples/{notebook.stem}"}
+        )
+        found[notebook.stem] = {
+            "path": notebook,
+            "folder": folder,
+            "markdown": body,
+            "files": resources.get("outputs", {}),
+            "seconds": time.time() - start,
+        }
+    return found
+
+
+def _notebooks() -> str:
+    """The gallery's notebooks: each executed, with its outputs, and its file to download."""
+    parts = []
+    for name, run in _notebooks_run.items():
+        parts.append(
+            f"`examples/{name}.ipynb` ([download](examples/{name}.ipynb)), executed while this "
+            f"page was built ({run['seconds']:.1f} s)."
+        )
+        parts.append(run["markdown"])
+    return "\n\n".join(parts) + "\n"
 
 
 def _docstring_markdown(text: str) -> str:
@@ -284,14 +337,30 @@ def on_files(files: Files, config) -> Files:
         for fig in run["figures"]:
             rel = fig.relative_to(run["folder"]).as_posix()
             files.append(File.generated(config, f"examples/{name}/{rel}", abs_src_path=str(fig)))
+    _notebooks_run.clear()
+    _notebooks_run.update(_run_notebooks())
+    for name, run in _notebooks_run.items():
+        files.append(
+            File.generated(config, f"examples/{name}.ipynb", abs_src_path=str(run["path"]))
+        )
+        for rel, content in run["files"].items():
+            files.append(File.generated(config, rel, content=content))
     return files
 
 
 def on_post_build(config) -> None:
-    """Remove the examples' scratch folders."""
+    """Copy MathJax into the site; remove the examples' scratch folders."""
     import shutil
 
-    for run in _examples.values():
+    import jupyter_server_mathjax
+
+    shutil.copytree(
+        Path(jupyter_server_mathjax.__file__).parent / "static",
+        Path(config["site_dir"]) / "javascripts" / "mathjax",
+        ignore=shutil.ignore_patterns("localization", "*.eot", "*.otf", "*.svg"),
+        dirs_exist_ok=True,
+    )
+    for run in [*_examples.values(), *_notebooks_run.values()]:
         shutil.rmtree(run["folder"], ignore_errors=True)
 
 

@@ -341,6 +341,7 @@ def solve_arclength(
     max_growth: float = 10.0,
     stop: Callable[[LoadPath], bool] | None = None,
     record_poses: bool = False,
+    record_shapes: bool = False,
     branch_switch: bool = False,
 ) -> LoadPath:
     """Trace the equilibrium path of ``case`` by arc-length continuation.
@@ -371,6 +372,8 @@ def solve_arclength(
         the path there as a success (e.g. once past a limit point).
     record_poses : bool
         Also record every body's pose at each point.
+    record_shapes : bool
+        Also record every connector's shape and section forces at each point.
     branch_switch : bool
         Follow the branch that crosses the path at its first bifurcation
         point (:class:`ArcLength`).
@@ -407,6 +410,7 @@ def solve_arclength(
         {"max_load_factor": max_load_factor, "n_steps": n_steps, "psi": psi}
         | ({"branch_switch": True} if branch_switch else {}),
         record_poses=record_poses,
+        record_shapes=record_shapes,
         limit_points=True,
     )
     stepping = ArcLength(max_load_factor, n_steps, psi, max_steps, max_growth, branch_switch)

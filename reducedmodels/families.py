@@ -161,9 +161,9 @@ def _trace_ee(
     :func:`flexval.reducedmodels.models.linear_response` of the family's connectors:
     the numbers of :func:`flexval.reducedmodels.models.trace_linear` on its System
     (tests/test_joints.py), without the index maps and solver state a System
-    builds for Newton iterations. The ``record_*``
-    flags are accepted for a uniform runner signature and ignored (no
-    deformed configuration).
+    builds for Newton iterations. ``record_poses`` and ``record_shapes`` record
+    the linearised poses and shapes; ``record_reactions`` is accepted for a
+    uniform runner signature and ignored.
     """
     import time
 
@@ -172,7 +172,16 @@ def _trace_ee(
 
     t0 = time.perf_counter()
     connectors = flexure_connectors(mechanism, spec, _ee, {**spec.kwargs, **options})
-    lp = linear_response(mechanism, connectors, case, levels, spec.id, scene)
+    lp = linear_response(
+        mechanism,
+        connectors,
+        case,
+        levels,
+        spec.id,
+        scene,
+        record_poses=record_poses,
+        record_shapes=record_shapes,
+    )
     lp.seconds = time.perf_counter() - t0
     return lp
 

@@ -52,6 +52,13 @@ class LoadPath:
         Every body's pose at each level (mm, rad).
     shapes : dict of flexure -> list of [[x, y], ...], optional
         Deformed centre lines (or boundary) at each level, mm.
+    section_forces : dict of flexure -> {"at", "axial", "moment"}, optional
+        Recorded with the shapes: the model's own normal force (N, tension
+        positive) and bending moment (N mm, counterclockwise on the part
+        towards the flexure's second body) at the stations ``at`` (arc-length
+        fractions from the first end) at every level, ``axial[k][i]`` and
+        ``moment[k][i]``; the fibre-stress fields of a time series
+        (:mod:`flexval.validation.series`) are made from them.
     reactions : list of [Fx, Fy, M], optional
         Total force (N) and moment about the origin (N mm) the ground exerts.
     valid : list of bool, optional
@@ -105,6 +112,7 @@ class LoadPath:
     load_unit: str = "N"
     poses: dict | None = None
     shapes: dict | None = None
+    section_forces: dict | None = None
     reactions: list | None = None
     valid: list | None = None
     validity: list | None = None

@@ -24,8 +24,9 @@ from .core import SolverSettings, System, connector_groups
 from .inertia import with_weights
 from .loadpath import LoadPath
 from .loads import Loads
-from .recorder import record_stress, solve_path
+from .recorder import append_section_forces, record_stress, solve_path
 from .restnumbering import RestNumbering
+from .sections import SectionForces
 from .validity import MAX_LINEAR_ROTATION, linear_sway_verdicts, merge_reasons
 
 #: ``make(flexure, mechanism, spec, **options) -> Connector`` of one flexure
@@ -180,21 +181,45 @@ def trace_linear(
 ) -> LoadPath:
     """Build the model ``spec`` and return its linear response (wall time includes the build).
 
-    The ``record_*`` flags are accepted for a uniform runner signature and
-    ignored: a linear response has no deformed configuration to record.
+    ``record_poses`` and ``record_shapes`` record the linearised poses and
+    shapes q0 + lambda dq (see :func:`linear_response`); ``record_reactions``
+    is accepted for a uniform runner signature and ignored.
     """
     t0 = time.perf_counter()
     system = build_system(mechanism, spec, **options)
-    lp = solve_linear(system, case, levels, model=spec.id, scene=scene)
+    lp = solve_linear(
+        system,
+        case,
+        levels,
+        model=spec.id,
+        scene=scene,
+        record_poses=record_poses,
+        record_shapes=record_shapes,
+    )
     lp.seconds = time.perf_counter() - t0
     return lp
 
 
 def solve_linear(
-    system: System, case: LoadCase, levels: int | None = None, model: str = "ee", scene: str = ""
+    system: System,
+    case: LoadCase,
+    levels: int | None = None,
+    model: str = "ee",
+    scene: str = "",
+    record_poses: bool = False,
+    record_shapes: bool = False,
 ) -> LoadPath:
     """:func:`linear_response` of a System's connectors."""
-    return linear_response(system.mechanism, system.connectors, case, levels, model, scene)
+    return linear_response(
+        system.mechanism,
+        system.connectors,
+        case,
+        levels,
+        model,
+        scene,
+        record_poses=record_poses,
+        record_shapes=record_shapes,
+    )
 
 
 def linear_response(
@@ -204,6 +229,8 @@ def linear_response(
     levels: int | None = None,
     model: str = "ee",
     scene: str = "",
+    record_poses: bool = False,
+    record_shapes: bool = False,
 ) -> LoadPath:
     """Linear response at the undeformed configuration (the EE prediction).
 
@@ -224,6 +251,11 @@ def linear_response(
     coordinates in turn) and assembled the same way, but without the index
     maps, groups and solver state a System builds for many Newton
     assemblies (on the paper's scenes they cost more than the response).
+
+    ``record_poses`` and ``record_shapes`` record every body's pose and every
+    connector's shape (with its section forces) at the linearised coordinates
+    q0 + w + lambda dq of each level: the picture of the linear answer, not a
+    configuration of the mechanism.
     """
     t0 = time.perf_counter()
     ground = mechanism.ground
@@ -347,6 +379,39 @@ def linear_response(
             )
     else:  # section forces proportional to the load
         record_stress(lp, connectors, section_forces(per_unit), sections, lam)
+    if record_poses or record_shapes:
+        states = [q0 + dq_dead + factor * dq for factor in lam.tolist()]
+        ground_q = np.asarray(ground_pose, float)
+        if record_poses:
+            lp.poses = {
+                b: [
+                    (q[first[b] : first[b] + 3] if b != ground else ground_q).tolist()
+                    for q in states
+                ]
+                for b in mechanism.bodies
+            }
+        if record_shapes:
+            lp.shapes = {c.name: [] for c in connectors}
+            for q in states:
+                local = np.concatenate([q, ground_q])[gather]
+                for c, a, b in zip(connectors, places, bounds):
+                    own = local[a:b]
+                    lp.shapes[c.name].append(c.shape(own[:3], own[3:6], own[6:]).tolist())
+            unit = section_forces(per_unit)
+            dead = section_forces(section_gradients(dq_dead)) if has_weights else unit
+            stacked = [
+                None
+                if f is None
+                else SectionForces(
+                    f.at,
+                    (1.0 if has_weights else 0.0) * np.asarray(w.axial)
+                    + lam[:, None] * np.asarray(f.axial)[None],
+                    (1.0 if has_weights else 0.0) * np.asarray(w.moment)
+                    + lam[:, None] * np.asarray(f.moment)[None],
+                )
+                for f, w in zip(unit, dead)
+            ]
+            append_section_forces(lp, zip(connectors, stacked))
     lp.seconds = time.perf_counter() - t0
     return lp
 

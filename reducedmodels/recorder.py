@@ -176,6 +176,8 @@ class PathRecorder:
         judgement, as :func:`path_end_pass` gives them."""
         self._verdicts(verdicts)
         record_path_stress(self.path, forces, self.sections)
+        if self.path.shapes is not None:
+            append_section_forces(self.path, forces)
         self.states = []
 
     def _verdicts(self, verdicts: Sequence[list[str]]) -> None:
@@ -373,6 +375,23 @@ def path_end_pass(
                     found.extend(f"{c.name}: {w}" for w in why)
         forces += zip(group.connectors, stacked)
     return reasons, forces
+
+
+def append_section_forces(
+    path: LoadPath, forces: Iterable[tuple[Connector, SectionForces | None]]
+) -> None:
+    """Append each flexure's section forces (N, N mm), stacked over levels (k, m), to
+    ``path.section_forces`` (connectors without them, pins, are skipped)."""
+    if path.section_forces is None:
+        path.section_forces = {}
+    for c, stacked in forces:
+        if stacked is None:
+            continue
+        kept = path.section_forces.setdefault(
+            c.name, {"at": np.asarray(stacked.at, float).tolist(), "axial": [], "moment": []}
+        )
+        kept["axial"] += np.atleast_2d(stacked.axial).tolist()
+        kept["moment"] += np.atleast_2d(stacked.moment).tolist()
 
 
 def record_stress(

@@ -97,3 +97,37 @@ def test_batch_tolerance_traces_the_solo_paths_and_the_first_order_spread():
     ratio = abs(out["d''(h) (mm/mm^2)"] / 2 * example.STD / out["d'(h) (mm/mm)"])
     bound = ratio**2 + 3 * 2 * ratio / math.sqrt(example.DRAWS)
     assert abs(out["std |d| (mm)"] / out["first-order std (mm)"] - 1) <= bound
+
+
+def test_every_notebook_is_tested():
+    assert {p.stem for p in EXAMPLES.glob("*.ipynb")} == {"designer_walkthrough"}
+
+
+def test_designer_walkthrough_runs_and_its_numbers_hold(monkeypatch, capsys):
+    """The notebook's code cells, run in order as Jupyter would (Agg backend): every reduced
+    model is plain Euler-Bernoulli on the notches, so all are stiffer than the continuum by
+    about the same few percent; two of the four hinges made thicker turn the mechanism less,
+    but not less than all four would (a circular notch's compliance scales as t^(-5/2): 0.5 ->
+    0.6 mm is a factor of 0.634)."""
+    import json
+
+    import matplotlib.pyplot as plt
+
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    notebook = json.loads((EXAMPLES / "designer_walkthrough.ipynb").read_text())
+    names: dict = {}
+    for cell in notebook["cells"]:
+        if cell["cell_type"] == "code":
+            exec(compile("".join(cell["source"]), "designer_walkthrough.ipynb", "exec"), names)
+    plt.close("all")
+    printed = capsys.readouterr().out
+    assert "beam:20" in printed and "end rotation" in printed
+    from flexval.validation.compare import errors
+
+    size = names["scene"].mechanism.size()
+    for lp in names["paths"]:
+        found = errors(lp, names["reference"], size)
+        assert 2.0 < found["end_disp"] < 10.0, lp.model
+        assert lp.dx[-1] < names["reference"].dx[-1]  # stiffer than the continuum
+    ratio = names["stiffer"].dx[-1] / names["paths"][0].dx[-1]
+    assert (0.6 / 0.5) ** -2.5 < ratio < 1.0

@@ -286,6 +286,31 @@ def _keep_cached(enabled: bool, more: str = "") -> None:
     _keep_on_interrupt(description)
 
 
+def _cmd_view(args: argparse.Namespace) -> int:
+    from .view import check_level, has_display, read_levels, screenshot, show
+
+    png = None
+    if args.screenshot is not None:
+        png = check_file(args.screenshot, "--screenshot")
+        if png.suffix.lower() != ".png":
+            raise SceneError(COMMAND_LINE, "--screenshot", args.screenshot, "must end in .png")
+    elif not has_display():
+        raise SceneError(
+            COMMAND_LINE,
+            "--screenshot",
+            None,
+            "no display here (DISPLAY and WAYLAND_DISPLAY unset): give --screenshot "
+            "FILE.png to render off-screen, or open the result in ParaView",
+        )
+    levels = read_levels(args.result)
+    level = check_level(levels, args.level)
+    if png is None:
+        show(levels, level, args.field)
+    else:
+        print(f"wrote {screenshot(levels, level, args.field, png)}")
+    return EXIT_OK
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from flexval.reducedmodels.catalogue import FIELDS
 
@@ -314,17 +339,47 @@ def _cmd_run(args: argparse.Namespace) -> int:
         quiet=args.dynamic,
     )
     if args.dynamic:
+        if args.vtu is not None:
+            raise SceneError(
+                COMMAND_LINE,
+                "--vtu",
+                args.vtu,
+                "applies to static runs (load control or --arclength), not --dynamic",
+            )
         return _run_dynamic(args, scene, specs, cases, json_path)
     out_dir = check_folder(args.out_dir, "--out-dir") if fields else None
+    vtu_dir = check_folder(args.vtu, "--vtu") if args.vtu is not None else None
     cache = ResultCache(enabled=args.cache)
     _keep_cached(cache.enabled and not args.arclength)
     inertia = scene.mechanism.inertia
     massless = inertia.massless_bodies(scene.mechanism.moving_bodies)
     if inertia.gravity is not None and massless:
         print(f"note: bodies without mass data are massless (no weight): {', '.join(massless)}")
-    record = {"record_poses": "poses" in scene.outputs, "record_shapes": "shape" in scene.outputs}
+    record = {
+        "record_poses": "poses" in scene.outputs or vtu_dir is not None,
+        "record_shapes": "shape" in scene.outputs or vtu_dir is not None,
+    }
+    written: list = []
 
     def run_one(spec, case):
+        """One path, its time series written where ``--vtu`` asks (the levels reached, also
+        when the solver stops early)."""
+        from flexval.reducedmodels import SolverError
+
+        if vtu_dir is None:
+            return trace_one(spec, case)
+        from .series import write_series
+
+        try:
+            lp = trace_one(spec, case)
+        except SolverError as exc:
+            if exc.path is not None and exc.path.load and exc.path.shapes is not None:
+                written.append(write_series(vtu_dir, scene, exc.path))
+            raise
+        written.append(write_series(vtu_dir, scene, lp))
+        return lp
+
+    def trace_one(spec, case):
         extra = {}
         if spec.model_family.has(FIELDS) and fields:
             extra["vtu_dir"] = out_dir
@@ -341,6 +396,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
                 max_factor,
                 args.levels - 1 if args.levels else DEFAULT_STEPS,
                 record_poses=record["record_poses"],
+                record_shapes=record["record_shapes"],
                 branch_switch=args.branch_switch,
             )
         # field outputs need the solve
@@ -427,7 +483,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     long = not args.arclength and estimate > long_seconds()  # progress: see --help
     with level_progress(specs, cases, args.levels, enabled=long):
-        return _run_each(specs, cases, run_one, row, scene, json_path)
+        status = _run_each(specs, cases, run_one, row, scene, json_path)
+    if written:
+        print(
+            f"VTK time series: {len(written)} .pvd in {vtu_dir} "
+            f"(ParaView, or: flexval view {written[0]})"
+        )
+    return status
 
 
 def _run_dynamic(args: argparse.Namespace, scene, specs, cases, json_path) -> int:
@@ -1302,6 +1364,30 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("-o", "--output", required=True, metavar="FILE.png", help="output PNG")
     q.set_defaults(func=_cmd_plot)
 
+    from .view import FIELDS as VIEW_FIELDS
+
+    q = sub.add_parser(
+        "view",
+        help="show a time series of run --vtu (or a .vtu) in a PyVista window, or render "
+        "one level to a PNG",
+    )
+    q.add_argument("result", metavar="RESULT", help="a .pvd series of run --vtu, or a .vtu file")
+    q.add_argument(
+        "--level", type=int, default=-1, metavar="K", help="level to show (default -1: the last)"
+    )
+    q.add_argument(
+        "--field",
+        choices=VIEW_FIELDS,
+        default="fibre_stress",
+        help="colour by this point data (default fibre_stress, MPa)",
+    )
+    q.add_argument(
+        "--screenshot",
+        metavar="FILE.png",
+        help="render off-screen to this PNG instead of opening a window (no display needed)",
+    )
+    q.set_defaults(func=_cmd_view)
+
     from .resources import LONG_ENV, LONG_SECONDS
 
     q = sub.add_parser(
@@ -1369,6 +1455,14 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="folder for the continuum's VTU/PNG outputs when the scene requests "
         'them (request.outputs = ["vtu", "png"]; default flexval_out)',
+    )
+    q.add_argument(
+        "--vtu",
+        metavar="DIR",
+        help="write each path as a VTK time series into DIR (any model): STEM.pvd and "
+        "one .vtu per level with the flexures as solids of their thickness, the rigid "
+        "bodies as polygons, point data displacement (mm) and signed fibre_stress (MPa); "
+        "open it in ParaView or with flexval view",
     )
     q.add_argument(
         "--dynamic",

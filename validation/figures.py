@@ -7,9 +7,9 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import matplotlib
+from .outputs import use_file_backend
 
-matplotlib.use("Agg")
+use_file_backend()
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
@@ -96,6 +96,37 @@ def _curve(lp: LoadPath) -> dict:
     )
 
 
+def draw_component(ax, curves: list[dict], key: str, unit: str | None, label: str) -> None:
+    """Draw one component (``dx``, ``dy``, ``displacement``: mm; ``rotation``: deg) of the
+    curves (:func:`load_path_curves`) versus |load| on ``ax``; a bifurcation is marked with
+    a cross, a limit point with a diamond."""
+    for c in curves:
+        ax.plot(c["load"], c[key], label=c["label"], **c["style"])
+        color = c["style"].get("color")
+        for k in c["limit_points"]:
+            ax.plot(c["load"][k], c[key][k], "D", ms=7, mfc="none", color=color)
+        for load in c["bifurcations"]:
+            value = np.interp(load, c["load"], c[key]) if len(c["load"]) > 1 else c[key][0]
+            ax.plot(load, value, "X", ms=9, color=color)
+    ax.set_xlabel(f"|load| ({unit})" if unit else "|load|")
+    ax.set_ylabel(label)
+    ax.grid(alpha=0.3)
+    ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 4), useOffset=False)
+
+
+def legend_entries(ax, curves: list[dict]) -> tuple[list, list]:
+    """The legend of a load-path axis: its curves, and the bifurcation and limit-point
+    markers where a curve has one."""
+    handles, labels = ax.get_legend_handles_labels()
+    if any(c["bifurcations"] for c in curves):
+        handles.append(plt.Line2D([], [], ls="", marker="X", ms=8, color="0.3"))
+        labels.append("bifurcation")
+    if any(c["limit_points"] for c in curves):
+        handles.append(plt.Line2D([], [], ls="", marker="D", mfc="none", ms=6, color="0.3"))
+        labels.append("limit point")
+    return handles, labels
+
+
 def load_paths(
     scene: Scene,
     case_name: str,
@@ -116,28 +147,9 @@ def load_paths(
         ("rotation", f"rotation of body {body} (deg)"),
     )
     curves = load_path_curves(paths, traces)
-    for c in curves:
-        for ax, (key, _) in zip(axes, panels):
-            ax.plot(c["load"], c[key], label=c["label"], **c["style"])
-            color = c["style"].get("color")
-            for k in c["limit_points"]:
-                ax.plot(c["load"][k], c[key][k], "D", ms=7, mfc="none", color=color)
-            for load in c["bifurcations"]:
-                value = np.interp(load, c["load"], c[key]) if len(c["load"]) > 1 else c[key][0]
-                ax.plot(load, value, "X", ms=9, color=color)
-    for ax, (_, label) in zip(axes, panels):
-        ax.set_xlabel(f"|load| ({unit})")
-        ax.set_ylabel(label)
-        ax.grid(alpha=0.3)
-        ax.ticklabel_format(axis="y", style="sci", scilimits=(-3, 4), useOffset=False)
-    handles, labels = axes[0].get_legend_handles_labels()
-    if any(c["bifurcations"] for c in curves):
-        handles.append(plt.Line2D([], [], ls="", marker="X", ms=8, color="0.3"))
-        labels.append("bifurcation")
-    if any(c["limit_points"] for c in curves):
-        handles.append(plt.Line2D([], [], ls="", marker="D", mfc="none", ms=6, color="0.3"))
-        labels.append("limit point")
-    axes[0].legend(handles, labels, fontsize=8)
+    for ax, (key, label) in zip(axes, panels):
+        draw_component(ax, curves, key, unit, label)
+    axes[0].legend(*legend_entries(axes[0], curves), fontsize=8)
     fig.suptitle(f"{scene.name}, load case {case_name}")
     fig.tight_layout()
     return _save(fig, path)
@@ -164,6 +176,28 @@ def deformed(scene: Scene, case_name: str, lp: LoadPath, path: Path) -> str:
     displacements magnified (:func:`deformation_scale`, stated in the title) where the
     motion is too small to see."""
     fig, ax = plt.subplots(figsize=(7, 7))
+    draw_deformed(ax, scene, case_name, lp)
+    return _save(fig, path)
+
+
+def draw_deformed(
+    ax, scene: Scene, case_name: str, lp: LoadPath, scale: float | None = None
+) -> float:
+    """Draw the undeformed mechanism, the deformed flexures and links at about five levels
+    (coloured from 0 to full load) and the tracing point's path on ``ax``; returns the
+    displacement magnification used (``scale``, or :func:`deformation_scale` where None),
+    which the title states. ``lp`` needs its poses and shapes recorded (mm, rad).
+
+    Raises
+    ------
+    ValueError
+        If ``lp`` holds no poses or shapes.
+    """
+    if lp.poses is None or lp.shapes is None:
+        raise ValueError(
+            f"{lp.model} on {lp.load_case}: a deformed picture needs the poses and shapes of "
+            "every level (run with record_poses=True, record_shapes=True)"
+        )
     draw_mechanism(scene, ax, load_case=case_name)
     mech = scene.mechanism
     n = len(lp.load)
@@ -185,7 +219,7 @@ def deformed(scene: Scene, case_name: str, lp: LoadPath, path: Path) -> str:
         + [float(np.abs(q - qs[0]).max()) for qs in placed.values() for q in qs],
         default=0.0,
     )
-    scale = deformation_scale(motion, mech.size())
+    scale = deformation_scale(motion, mech.size()) if scale is None else float(scale)
     for k in range(0, n, max(1, n // 5)) if n > 1 else [0]:
         col = cmap(k / max(n - 1, 1))
         for name, pts in lp.shapes.items():
@@ -202,7 +236,7 @@ def deformed(scene: Scene, case_name: str, lp: LoadPath, path: Path) -> str:
         f"{scene.name} {case_name}: deformed ({lp.model})\n{magnified}, "
         "levels coloured 0 -> full load"
     )
-    return _save(fig, path)
+    return scale
 
 
 def relative_rotations(scene: Scene, case_name: str, lp: LoadPath, path: Path) -> str:

@@ -32,6 +32,7 @@ def trace_arclength(
     max_load_factor: float = 1.0,
     n_steps: int = DEFAULT_STEPS,
     record_poses: bool = False,
+    record_shapes: bool = False,
     branch_switch: bool = False,
 ) -> LoadPath:
     """Trace ``case`` with ``spec`` by arc-length continuation up to ``max_load_factor``.
@@ -49,6 +50,8 @@ def trace_arclength(
         Sets the initial arc length (see ``solve_arclength``).
     record_poses : bool
         Also record every body's pose at each point.
+    record_shapes : bool
+        Also record every flexure's shape and section forces at each point.
     branch_switch : bool
         At the first bifurcation point, follow the crossing branch (see
         :class:`flexval.reducedmodels.continuation.ArcLength`).
@@ -79,6 +82,7 @@ def trace_arclength(
             scene=scene.name,
             max_steps=100 * n_steps,
             record_poses=record_poses,
+            record_shapes=record_shapes,
             branch_switch=branch_switch,
         )
     except SolverError as exc:

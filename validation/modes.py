@@ -209,9 +209,9 @@ def plot_modes(
     Each mode is scaled so that its largest body or node translation is 10 %
     of the mechanism's size.
     """
-    import matplotlib
+    from .outputs import use_file_backend
 
-    matplotlib.use("Agg")
+    use_file_backend()
     import matplotlib.pyplot as plt
 
     from flexval.geometry.kinematics import place_points

@@ -62,6 +62,16 @@ def _probe(folder: Path) -> str | None:
     return None
 
 
+def use_file_backend() -> None:
+    """Draw with Matplotlib's Agg backend (files, no window: the command line, reports,
+    workers), unless ``MPLBACKEND`` names another one, as Jupyter's inline backend does, so
+    that ``flexval.plot`` shows its pictures in a notebook."""
+    import matplotlib
+
+    if not os.environ.get("MPLBACKEND"):
+        matplotlib.use("Agg")
+
+
 def distinct_files(*given: tuple[str, Path | None]) -> None:
     """Refuse two output options that name the same file (one would overwrite the other).
 

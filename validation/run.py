@@ -15,8 +15,8 @@ from flexval.reducedmodels.catalogue import plugin_of
 
 def run_model(
     scene: Scene,
-    spec: ModelSpec,
-    case: LoadCase,
+    spec: ModelSpec | str,
+    case: LoadCase | str,
     levels: int | None = None,
     record_poses: bool = False,
     record_shapes: bool = False,
@@ -26,6 +26,11 @@ def run_model(
 
     Parameters
     ----------
+    scene : Scene
+    spec : ModelSpec or str
+        The model, or its id (``"beam:100"``, ``"continuum:1[3d]"``).
+    case : LoadCase or str
+        The load case, or its name in the scene.
     levels : int, optional
         Number of equally spaced load levels (default: the load case's).
     record_poses, record_shapes : bool
@@ -41,7 +46,15 @@ def run_model(
         If the solver cannot reach the full load (carries the load reached); its
         :class:`~flexval.reducedmodels.core.PluginFailure` for a plug-in family's code
         that raises anything else (naming its package): never a traceback.
+    SceneError
+        For an unknown model id or load-case name (naming it).
     """
+    if isinstance(spec, str):
+        from flexval.reducedmodels.catalogue import parse_model
+
+        spec = parse_model(spec)
+    if isinstance(case, str):
+        case = scene.load_case(case)
 
     def run() -> LoadPath:
         return spec.model_family.run(

@@ -23,9 +23,9 @@ import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-import matplotlib
+from .outputs import use_file_backend
 
-matplotlib.use("Agg")
+use_file_backend()
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 

@@ -66,8 +66,8 @@ def run(
 ) -> LoadPath:
     """Trace ``case`` with the continuum model ``spec`` (see :func:`.run.run_continuum`).
 
-    ``record_poses`` and ``record_reactions`` are accepted for a uniform
-    runner signature and not recorded; ``extra`` are ``vtu_dir`` and ``png``
+    ``record_reactions`` is accepted for a uniform runner signature and not
+    recorded; ``extra`` are ``vtu_dir`` and ``png``
     (:data:`~flexval.reducedmodels.catalogue.FIELDS`) or options overriding the
     spec's. The result carries the spec's canonical id.
     """
@@ -81,6 +81,7 @@ def run(
         level=spec.resolution,
         levels=levels,
         scene=scene,
+        record_poses=record_poses,
         record_shapes=record_shapes,
         model=spec.id,
         **{**spec.kwargs, **extra},

@@ -72,6 +72,7 @@ def run_continuum(
     png: str | Path | None = None,
     model: str | None = None,
     three_d: bool = False,
+    record_poses: bool = False,
 ) -> LoadPath:
     """Trace ``case`` with the continuum model (wall time includes meshing and set-up).
 
@@ -86,7 +87,9 @@ def run_continuum(
     scene : str
         Scene name recorded in the result.
     record_shapes : bool
-        Record the deformed centre lines at every level.
+        Record the deformed centre lines (and section forces) at every level.
+    record_poses : bool
+        Record every body's pose at every level.
     law : {'svk', 'neo-hookean'}
         Hyperelastic law (Saint Venant-Kirchhoff by default).
     plane : {'stress', 'strain'}
@@ -136,7 +139,15 @@ def run_continuum(
         settings.update(plane="3d", layers=layers(level), element_order_3d=27)
     from .fibre import fibre_stresses, notch_peaks
 
-    recorder = PathRecorder(system, case, model, scene, settings, record_shapes=record_shapes)
+    recorder = PathRecorder(
+        system,
+        case,
+        model,
+        scene,
+        settings,
+        record_poses=record_poses,
+        record_shapes=record_shapes,
+    )
     notches: dict[str, list] = {}
     spent = [0.0]  # s in notch_peaks: a recovery of the stress, not the model's solve
 

@@ -551,9 +551,9 @@ def write_outputs(
     An optional figure (:data:`OPTIONAL_FIGURES`) that this call does not write is
     removed if an earlier run left it there, so every figure in the folder is this
     summary's; no other file is touched."""
-    import matplotlib
+    from ..outputs import use_file_backend
 
-    matplotlib.use("Agg")
+    use_file_backend()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     rows = Columns.of(rows)  # every table and figure reads the same columns

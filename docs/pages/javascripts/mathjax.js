@@ -1,20 +1,14 @@
-// MathJax set-up for pymdownx.arithmatex (generic mode), as Material for MkDocs documents it.
+// MathJax 2 set-up for pymdownx.arithmatex (generic mode): typeset only the spans and
+// blocks arithmatex marks, with the TeX fonts the site serves (no image fonts).
 window.MathJax = {
-  tex: {
+  tex2jax: {
     inlineMath: [["\\(", "\\)"]],
     displayMath: [["\\[", "\\]"]],
     processEscapes: true,
-    processEnvironments: true
+    processEnvironments: true,
+    ignoreClass: ".*|",
+    processClass: "arithmatex"
   },
-  options: {
-    ignoreHtmlClass: ".*|",
-    processHtmlClass: "arithmatex"
-  }
+  "HTML-CSS": { availableFonts: ["TeX"], imageFont: null },
+  showMathMenu: false
 };
-
-document$.subscribe(() => {
-  MathJax.startup.output.clearCache()
-  MathJax.typesetClear()
-  MathJax.texReset()
-  MathJax.typesetPromise()
-})
