@@ -26,7 +26,7 @@ import numpy as np
 
 from .mechanism import Section
 from .overlap import self_crossings
-from .profiles import SEMICIRCLE_ROUND_OFF, LinearTaper, NotchProfile
+from .profiles import FLAT_ROUND_OFF, SEMICIRCLE_ROUND_OFF, LinearTaper, NotchProfile
 from .scenefields import FLEXURES
 from .shapes import Segment, Shape, Spline, largest_along
 
@@ -194,7 +194,7 @@ def read_notch(rd, f: dict, where: str, depth: float, default_t: float) -> tuple
             rd.fail(
                 f"{where}fillet_radius", None, "a corner-filleted notch needs its fillet radius"
             )
-        if radius > 0.5 * length:
+        if radius > 0.5 * length * (1.0 + FLAT_ROUND_OFF):  # fillets meeting, to round-off
             rd.fail(
                 f"{where}fillet_radius",
                 radius,

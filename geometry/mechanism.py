@@ -52,12 +52,18 @@ class Material:
     fatigue_strength : float or None
         sigma_f, MPa, below ``yield_strength``: the stress amplitude the
         flexure endures without fatigue failure; None: not given.
+    shear_flexible : bool
+        The reduced models add the section's transverse shear compliance
+        ∫ ds/(k G A) (Timoshenko) to its bending: set on a notch hinge's
+        calibrated material (:mod:`flexval.reducedmodels.notchcorrection`),
+        never by a scene file.
     """
 
     youngs_modulus: float
     poisson_ratio: float
     yield_strength: float | None = field(default=None, compare=False)
     fatigue_strength: float | None = field(default=None, compare=False)
+    shear_flexible: bool = False
 
     @property
     def shear_modulus(self) -> float:

@@ -126,6 +126,11 @@ class LinearTaper:
         return {"thickness": [self.start, self.end]}
 
 
+FLAT_ROUND_OFF = 1e-9
+"""A corner-filleted notch whose fillets leave a flat part shorter than this share of its
+length has none: the fillets meet at the middle (H = t + L, to round-off)."""
+
+
 @dataclass(frozen=True)
 class NotchProfile:
     """Thickness of a notch hinge of axis length ``length`` (mm).
@@ -162,7 +167,7 @@ class NotchProfile:
             raise ValueError(f"need 0 < t < H, got t = {self.t} mm, H = {self.height} mm")
         if self.contour == "corner-filleted":
             r = self.fillet_radius
-            if r is None or not 0.0 < r <= 0.5 * self.length:
+            if r is None or not 0.0 < r <= 0.5 * self.length * (1.0 + FLAT_ROUND_OFF):
                 raise ValueError(f"fillet radius must be in (0, L/2], got {r} mm")
         if self.contour == "circular" and self.height > (self.t + self.length) * (
             1.0 + SEMICIRCLE_ROUND_OFF
@@ -214,7 +219,9 @@ class NotchProfile:
         """The fillets' tangent points (corner-filleted) or the middle (power, n not even), mm."""
         if self.contour == "corner-filleted":
             r = float(self.fillet_radius)
-            return (r, self.length - r) if 2.0 * r < self.length else ()
+            # no flat part left between fillets that meet (to round-off: a flat of 1e-9 L
+            # would be a stretch no mesh or integral can grade)
+            return (r, self.length - r) if 2.0 * r < self.length * (1.0 - FLAT_ROUND_OFF) else ()
         if self.contour == "power" and self.exponent % 2.0 != 0.0:
             return (0.5 * self.length,)  # |u|^n is smooth at u = 0 for even n only
         return ()

@@ -507,6 +507,7 @@ class BeamConnector(Connector):
         self._l0 = l0
         self._chord0 = chord / l0[:, None]
         material = mechanism.material
+        shear = shear or material.shear_flexible
         if section.is_uniform:
             self._k_axial = flexure.axial_stiffness(material) / l0
             bending = flexure.bending_stiffness(material)

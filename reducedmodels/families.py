@@ -35,6 +35,12 @@ WIDTH = Option.flag(
     "kept; excludes plate",
 )
 
+EB = Option.flag(
+    "eb",
+    "notch hinges by plain Euler-Bernoulli beam theory (the integral of ds/EI, no shear): "
+    "without the calibrated 2D correction the default takes from the continuum",
+)
+
 WIDTH_EXCLUDES = (("width", "plate"),)
 """``plate`` is ``width``'s limit of a flexure much deeper than sqrt(R h): an id gives one."""
 
@@ -221,6 +227,7 @@ BEAM = register(
             Option.flag("shear", "Timoshenko beams (shear deformation of the rectangular section)"),
             PLATE,
             WIDTH,
+            EB,
         ),
         frozenset({ARCLENGTH}),
         _system_of(_beam),
@@ -236,7 +243,7 @@ PRBM = register(
         "symmetric 3R pseudo-rigid-body chain per flexure, exact in the linear limit",
         _trace_nonlinear,
         None,
-        (PLATE, WIDTH),
+        (PLATE, WIDTH, EB),
         frozenset({ARCLENGTH}),
         _system_of(_prbm),
         connectors=_connectors_of(_prbm),
@@ -252,7 +259,7 @@ DCMM = register(
         "compliance at its centre of elasticity",
         _trace_nonlinear,
         Resolution("N", "sub-arcs per flexure", 1, 1, MAX_ELEMENTS, True, (1, 8)),
-        (FRAME, PLATE, WIDTH),
+        (FRAME, PLATE, WIDTH, EB),
         frozenset({ARCLENGTH}),
         _system_of(_dcmm),
         connectors=_connectors_of(_dcmm),
@@ -267,7 +274,7 @@ EE = register(
         "linear ellipse-of-elasticity prediction (the small-load limit of dcmm:1)",
         _trace_ee,
         None,
-        (PLATE, WIDTH),
+        (PLATE, WIDTH, EB),
         frozenset({LINEAR}),
         _system_of(_ee),
         connectors=_connectors_of(_ee),

@@ -46,6 +46,9 @@ def flexure_connectors(
     modulus (:func:`~flexval.geometry.anticlastic.effective_material`): 1 on a
     straight uniform flexure, tending to ``plate``'s constants as the depth grows
     (the catalogue refuses an id giving both).
+    A notch hinge takes its calibrated bending and shear compliance
+    (:mod:`flexval.reducedmodels.notchcorrection`: the continuum's, where beam
+    theory's ∫ ds/EI is 1-50 % stiff) unless ``eb`` (plain Euler-Bernoulli) is given.
     Pins (``mechanism.pins``) are added as exact Lagrange-multiplier joints
     (:class:`flexval.reducedmodels.joints.PinConnector`) whatever the model. With
     ``[gravity]`` in the scene, the weights of the flexures and bodies are
@@ -60,6 +63,7 @@ def flexure_connectors(
     """
     options = dict(options)
     plate, width = options.pop("plate", False), options.pop("width", False)
+    plain = options.pop("eb", False)
     flexible = mechanism  # the plate option: the flexures' constants of a wide section
     if plate:
         flexible = dataclasses.replace(mechanism, material=mechanism.material.plane_strain())
@@ -67,6 +71,8 @@ def flexure_connectors(
     for f in mechanism.flexures:
         try:
             own = _of_its_depth(mechanism, f) if width else flexible
+            if not plain:
+                own = _calibrated_notch(own, f)
             conns.append(make(f, own, spec, **options))
         except ValueError as exc:  # the model cannot represent this flexure
             raise SceneError(mechanism.source, f"flexures.{f.name}", spec.id, str(exc)) from None
@@ -75,6 +81,17 @@ def flexure_connectors(
 
         conns += pin_connectors(mechanism)
     return with_weights(mechanism, conns)
+
+
+def _calibrated_notch(mechanism: Mechanism, flexure: Flexure) -> Mechanism:
+    """``mechanism`` with the calibrated material of ``flexure`` if it is a notch hinge
+    (:func:`flexval.reducedmodels.notchcorrection.corrected_material`), else itself."""
+    if flexure.section.profile is None or flexure.section.profile.kind != "notch":
+        return mechanism
+    from .notchcorrection import corrected_material, factors_of
+
+    found = factors_of(flexure, mechanism.material.poisson_ratio)
+    return dataclasses.replace(mechanism, material=corrected_material(mechanism.material, found))
 
 
 def _of_its_depth(mechanism: Mechanism, flexure: Flexure) -> Mechanism:

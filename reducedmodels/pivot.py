@@ -19,10 +19,13 @@ bodies):
 
 so the pivot is practically rigid (these compliances are a few 1e-4 of the
 bending ones), no Lagrange multiplier is needed and hinges in parallel stay
-well posed. Left out, as in the classic model: the transverse motion of the
-hinge's centre from bending (the ellipse's w a^2; the compliance is
-concentrated at the thinnest section, so a is a small fraction of the
-hinge's length). The energy of the relative state is
+well posed. Left out of the classic model (the option ``eb``): the transverse
+motion of the hinge's centre from bending (the ellipse's w a^2; the compliance
+is concentrated at the thinnest section, so a is a small fraction of the
+hinge's length). A calibrated hinge (the default,
+:mod:`flexval.reducedmodels.notchcorrection`) takes it, c_2 = ∫ ds / (k_s G A) + w a^2
+with its corrected E and G, so that the pivot's linear compliance is the hinge's own
+(the ellipse of elasticity's, about its centre). The energy of the relative state is
 
     E = 1/2 k (theta_b - theta_a)^2 + 1/2 d^T S(phi) d,
     d = p_b(P) - p_a(P),   S(phi) = R(phi) Q diag(1/c_1, 1/c_2) Q^T R(phi)^T,
@@ -79,6 +82,10 @@ class NotchPivotConnector(Connector):
         across = np.array([-axis[1], axis[0]])
         axial = float(axis @ found.axial @ axis)  # ∫ ds / EA, mm/N
         shear = float(across @ found.shear @ across)  # ∫ ds / (k_s G A), mm/N
+        if material.shear_flexible:  # a calibrated hinge: its whole linear compliance
+            ell = found.ellipse
+            spread = ell.axes @ np.diag([ell.a**2, ell.b**2]) @ ell.axes.T * ell.weight
+            shear += float(axis @ spread @ axis)  # the bending term w a^2 across the axis
         self.translation = (1.0 / axial, 1.0 / shear)  # N/mm along and across the axis
         frame = np.column_stack([axis, across])
         self._s0 = frame @ np.diag(self.translation) @ frame.T  # S at rest, N/mm

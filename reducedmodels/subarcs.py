@@ -131,7 +131,10 @@ def _by_quadrature(
         e1 = np.asarray(part.tangent(0.5 * part.length), float)
         e2 = np.array([-e1[1], e1[0]])
         ell = Ellipse(w, ell.center, ell.a, 0.0, np.column_stack([e1, e2]))
-        compliance = (float(e1 @ found.axial @ e1), w * ell.a**2, w)
+        across = w * ell.a**2
+        if material.shear_flexible:  # a calibrated notch: Timoshenko's shear term too
+            across += float(e2 @ found.shear @ e2)
+        compliance = (float(e1 @ found.axial @ e1), across, w)
     else:
         compliance = (w * ell.b**2, w * ell.a**2, w)
     return SubArc(part, s0, s1, ell, compliance, _strain_limit(flexure, material, w, s0, s1))

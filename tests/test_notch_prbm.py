@@ -45,7 +45,7 @@ def test_pivot_turns_by_the_euler_bernoulli_integral_at_any_rotation(contour):
     mech = notch(contour, angle=0.6, origin=(1.0, -2.0))
     c_theta = notch_rotational_compliance(NOTCHES[contour])
     for rotation in (1e-3, 0.3):
-        lp = run_reduced(mech, parse_model("prbm"), tip_moment(rotation / c_theta, levels=3))
+        lp = run_reduced(mech, parse_model("prbm[eb]"), tip_moment(rotation / c_theta, levels=3))
         assert lp.converged
         assert lp.rotation[-1] == pytest.approx(rotation, rel=1e-9)
 
@@ -69,12 +69,12 @@ def test_pivot_under_a_transverse_force_bends_about_its_centre():
     shear = integral(lambda s: 1.0 / (SHEAR_CORRECTION * G * DEPTH * float(profile.thickness(s))))
     spread = integral(lambda s: (s - lever) ** 2 / EI(s))
     force = 1e-6
-    uy = response(mech, "prbm", tip_force(mech, 0.0, force, levels=2))[1]
+    uy = response(mech, "prbm[eb]", tip_force(mech, 0.0, force, levels=2))[1]
     assert uy == pytest.approx(force * (lever * lever * w + shear), rel=1e-6)
-    ee = response(mech, "ee", tip_force(mech, 0.0, force, levels=2))[1]
+    ee = response(mech, "ee[eb]", tip_force(mech, 0.0, force, levels=2))[1]
     assert ee == pytest.approx(force * (lever * lever * w + spread), rel=1e-6)
     # the axial spring: ∫ ds / EA
-    ux = response(mech, "prbm", tip_force(mech, force, 0.0, levels=2))[0]
+    ux = response(mech, "prbm[eb]", tip_force(mech, force, 0.0, levels=2))[0]
     axial = integral(
         lambda s: 1.0 / (MATERIAL.youngs_modulus * DEPTH * float(profile.thickness(s)))
     )
@@ -101,11 +101,11 @@ def test_pivot_strain_limit_flags_rotations_beyond_it():
     w = notch_rotational_compliance(profile)
     limit = MAX_STRAIN * MATERIAL.youngs_modulus * DEPTH * profile.t**2 / 6.0 * w
     assert connector.rotation_limit == pytest.approx(limit, rel=1e-12)
-    lp = run_reduced(mech, parse_model("prbm"), tip_moment(1.2 * limit / w, levels=4))
+    lp = run_reduced(mech, parse_model("prbm[eb]"), tip_moment(1.2 * limit / w, levels=4))
     assert lp.valid == [True, True, True, False]
     assert "strain limit" in lp.validity[-1]
     # DCMM knows the same limit per sub-arc: dcmm:1 is the whole hinge
-    lp = run_reduced(mech, parse_model("dcmm:1"), tip_moment(1.2 * limit / w, levels=4))
+    lp = run_reduced(mech, parse_model("dcmm:1[eb]"), tip_moment(1.2 * limit / w, levels=4))
     assert lp.valid == [True, True, True, False]
 
 
@@ -167,7 +167,7 @@ def test_a_closed_chain_of_notch_hinges_and_a_pin():
     the pin form a triangle, a rigid truss: only the pivots' elastic translations and
     the hinges' bending about their centres let body a turn, so the pivot model, which
     leaves out the hinges' transverse bending compliance w a^2, is stiffer (measured
-    1.5e-8 rad against ee's 7.5e-8)."""
+    1.5e-8 rad against ee's 7.5e-8) by plain Euler-Bernoulli (``[eb]``)."""
     from flexval.geometry import LoadCase, Material, Moment
     from flexval.geometry.mechanism import FlexureSpec, PinSpec, assemble
 
@@ -188,8 +188,13 @@ def test_a_closed_chain_of_notch_hinges_and_a_pin():
         pin_specs=[PinSpec("p", ("a", "b"), (5.0, 8.0))],
     )
     case = LoadCase("M", (Moment("a", 1e-4),), 2)
-    ee = run_reduced(mech, parse_model("ee"), case)
-    dcmm = run_reduced(mech, parse_model("dcmm:3"), case)
-    prbm = run_reduced(mech, parse_model("prbm"), case)
+    ee = run_reduced(mech, parse_model("ee[eb]"), case)
+    dcmm = run_reduced(mech, parse_model("dcmm:3[eb]"), case)
+    prbm = run_reduced(mech, parse_model("prbm[eb]"), case)
     assert dcmm.rotation[-1] == pytest.approx(ee.rotation[-1], rel=1e-4)
     assert prbm.converged and 0.0 < prbm.rotation[-1] <= ee.rotation[-1] * (1 + 1e-6)
+    # calibrated (the default), the pivot takes the hinge's w a^2 and its linear compliance
+    # is the hinge's: the three agree
+    ee, dcmm, prbm = (run_reduced(mech, parse_model(m), case) for m in ("ee", "dcmm:3", "prbm"))
+    assert dcmm.rotation[-1] == pytest.approx(ee.rotation[-1], rel=1e-4)
+    assert prbm.rotation[-1] == pytest.approx(ee.rotation[-1], rel=1e-4)

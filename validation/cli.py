@@ -311,6 +311,27 @@ def _cmd_view(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _uncalibrated_notes(scene, specs) -> list[str]:
+    """A note per notch hinge outside the calibrated range of the reduced models' correction
+    (:mod:`flexval.reducedmodels.notchcorrection`), where a reduced model without ``eb``
+    runs: its factors are the nearest calibrated hinge's, not its own."""
+    reduced = [s for s in specs if s.family in ("beam", "dcmm", "prbm", "ee")]
+    if not any(not s.kwargs.get("eb") for s in reduced):
+        return []
+    from flexval.reducedmodels.notchcorrection import factors_of
+
+    notes = []
+    for flexure in scene.mechanism.flexures:
+        found = factors_of(flexure, scene.mechanism.material.poisson_ratio)
+        if found is not None and not found.inside:
+            notes.append(
+                f"note: notch hinge {flexure.name} ({found.where}) lies outside the range the "
+                "reduced models' 2D correction is calibrated on: they take the nearest "
+                "calibrated hinge's factors (compare with the continuum, or [eb])"
+            )
+    return notes
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from flexval.reducedmodels.catalogue import FIELDS
 
@@ -355,6 +376,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     massless = inertia.massless_bodies(scene.mechanism.moving_bodies)
     if inertia.gravity is not None and massless:
         print(f"note: bodies without mass data are massless (no weight): {', '.join(massless)}")
+    for line in _uncalibrated_notes(scene, specs):
+        print(line)
     record = {
         "record_poses": "poses" in scene.outputs or vtu_dir is not None,
         "record_shapes": "shape" in scene.outputs or vtu_dir is not None,

@@ -30,6 +30,8 @@ _STYLE = {
     "dcmm:2": dict(color="tab:orange", lw=1.4, ls=":", marker="D", ms=4),
     "dcmm:3": dict(color="tab:purple", lw=1.4, ls=":", marker="P", ms=5),
     "ee": dict(color="0.5", lw=1.2, ls="--", marker=None),
+    "beam:100[eb]": dict(color="tab:blue", lw=1.0, ls="--", marker="x", ms=5),
+    "prbm[eb]": dict(color="tab:green", lw=1.0, ls=":", marker="x", ms=5),
 }
 
 

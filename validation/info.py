@@ -142,6 +142,16 @@ def varying_section(flexure, material) -> dict:
         "EA_N": length / axial,
         "ellipse": found.ellipse,
     }
+    if profile.kind == "notch":
+        from flexval.reducedmodels.notchcorrection import factors_of
+
+        factors = factors_of(flexure, material.poisson_ratio)
+        out["calibrated"] = {
+            "bending_factor": factors.bending,
+            "shear_factor": factors.shear,
+            "inside_range": factors.inside,
+            "ratios": factors.where,
+        }
     return out
 
 
@@ -160,11 +170,24 @@ def _section_line(f: dict) -> str:
     else:
         h0, h1 = sec["thickness"]
         law = f"taper from h = {h0:g} mm to {h1:g} mm"
-    return (
+    line = (
         f"  {f['name']}: {law}; stiffness 1/∫ds/EI = {sig(sec['rotational_stiffness_Nmm'])} "
         f"N mm/rad, 1/∫ds/EA = {sig(sec['axial_stiffness_N_per_mm'])} N/mm (EI, EA above: "
         "L over these integrals)"
     )
+    calibrated = sec.get("calibrated")
+    if calibrated:
+        line += (
+            f"\n      reduced models (unless [eb]): bending compliance x "
+            f"{calibrated['bending_factor']:.4f}, shear x {calibrated['shear_factor']:.4f} "
+            f"(calibrated against the continuum; {calibrated['ratios']}"
+            + (
+                ")"
+                if calibrated["inside_range"]
+                else ": OUTSIDE the calibrated range, the nearest calibrated hinge's factors)"
+            )
+        )
+    return line
 
 
 def _pt(p) -> str:

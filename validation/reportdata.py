@@ -48,6 +48,9 @@ DEFAULT_MODELS = ("continuum", "beam:100", "beam:20", "prbm", "dcmm:1", "dcmm:2"
 PAPER_REFERENCE = "beam:100"
 #: reference of the runtime-versus-error study when no reference model is requested
 BENCH_REFERENCE = "beam:400"
+NOTCH_COMPARED = ("beam:100", "prbm")
+"""Models a scene with notch hinges is also run with plain Euler-Bernoulli hinges (``[eb]``):
+the calibrated correction's effect (:mod:`flexval.reducedmodels.notchcorrection`) beside it."""
 #: option whose values the frame-sensitivity table compares (DCMM's measuring frame)
 FRAME_OPTION = "frame"
 #: option of the reference whose other value brackets it (a wide flexure, b >> h, lies
@@ -486,10 +489,23 @@ class _Plan:
         """Timing repeats of ``spec``: one for a reference model (its runs are long)."""
         return 1 if spec.model_family.has(REFERENCE) else self.repeats
 
+    def scene_specs(self, scene: Scene) -> list[ModelSpec]:
+        """The models of ``scene``'s tables: the requested ones and, where the scene has notch
+        hinges, the :data:`NOTCH_COMPARED` among them with plain Euler-Bernoulli hinges."""
+        notched = any(
+            f.section.profile is not None and f.section.profile.kind == "notch"
+            for f in scene.mechanism.flexures
+        )
+        if not notched:
+            return list(self.specs)
+        have = {s.id for s in self.specs}
+        plain = [parse_model(f"{s.id}[eb]") for s in self.specs if s.id in NOTCH_COMPARED]
+        return [*self.specs, *(v for v in plain if v.id not in have)]
+
     def jobs(self, scene: Scene) -> list[Job]:
         """Every load path the report computes on ``scene`` (with repeats), some twice."""
         cases = list(scene.load_cases)
-        per_case = list(self.specs)
+        per_case = self.scene_specs(scene)
         per_case += [v for s in self.specs for _, v in _frame_variants(s) if v.id != s.id]
         plane = _plane_variant(self.reference) if self.reference is not None else None
         per_case += [plane] if plane is not None else []
@@ -503,7 +519,7 @@ class _Plan:
     def batch_tasks(self, scene: Scene) -> list[tuple[Scene, ModelSpec, LoadCase]]:
         """Every (scene, model, case) whose batched cost per path the run times show: the
         models of the tables and of the runtime-versus-error study on every case."""
-        specs = list(self.specs)
+        specs = self.scene_specs(scene)
         if self.bench_reference is not None:
             specs += sweep_specs(self.bench_reference)
         return [(scene, s, c) for s in specs for c in scene.load_cases]
@@ -580,12 +596,15 @@ def compute_report(
     tables = {s.id for s in specs}  # the other resolutions of the bench: one batch per case
     batches = BatchMemo(repeats, memo.disk, batched, lambda s: repeats if s.id in tables else 1)
     batches.prefetch([t for sc in scenes for t in plan.batch_tasks(sc)], workers, progress)
-    bar = Progress(sum(len(specs) * len(s.load_cases) for s in scenes), enabled=progress)
+    bar = Progress(
+        sum(len(plan.scene_specs(s)) * len(s.load_cases) for s in scenes), enabled=progress
+    )
     out: list[SceneResults] = []
     for sc in scenes:
+        scene_specs = plan.scene_specs(sc)
         paths, failures = run_campaign(
             sc,
-            specs,
+            scene_specs,
             list(sc.load_cases),
             repeats,
             memo,
@@ -593,10 +612,10 @@ def compute_report(
             record_models=plan.record,
             repeats_for=plan.repeats_for,
         )
-        res = SceneResults(sc, paths, failures, [s.id for s in specs], ref_id)
+        res = SceneResults(sc, paths, failures, [s.id for s in scene_specs], ref_id)
         res.batched = {
             (s.id, c.name): t
-            for s in specs
+            for s in scene_specs
             for c in sc.load_cases
             if (t := batches.get(sc, s, c)) is not None
         }

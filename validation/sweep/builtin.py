@@ -49,7 +49,8 @@ NOTCH_LEVER = 10.0  # mm, from the hinge's free end to the loaded tip
 NOTCH_RATIOS = (0.05, 0.1, 0.2, 0.5, 1.0)
 """t / R of the notch sweep: from a slender neck to one as thick as the cut-outs' radius."""
 NOTCH_ROTATION = 0.02  # rad
-NOTCH_MODELS = ("beam:20", "dcmm:1", "dcmm:2", "prbm", "ee")
+NOTCH_MODELS = ("beam:20", "dcmm:1", "dcmm:2", "prbm", "ee", "beam:20[eb]")
+"""The notch chart's models: the calibrated defaults, and beam theory's plain hinge beside them."""
 FILE_SWEEPS = ("open_chain_arcs", "open_chain_tolerance")
 BUILTIN_SWEEPS = FILE_SWEEPS + ("slenderness", "arc_angle", "notch_ratio")
 

@@ -1,0 +1,168 @@
+"""Notch hinges in the reduced models: beam theory with the continuum's calibrated factors.
+
+Independent answers: ``continuum:2`` (2D elasticity of the true outline) on hinges that are
+not points of the calibration grid (``benchmarks/calibrate_notch.py``), at small and large
+rotation; beam theory's own integral ∫ ds/EI for the plain option ``eb``; the uniform
+flexures, which the correction must leave bit for bit as they were.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from calibrate_notch import LENGTH, beam_theory, notch_scene, scaled
+
+import flexval
+from flexval.reducedmodels.notchcorrection import calibration_table, factors_of
+
+# hinges off the calibration grid (t/L, H/t and n between its nodes), every contour
+HELD_OUT = [
+    ("circular", 0.043, 3.8, None),
+    ("circular", 0.157, 4.79, None),
+    ("elliptical", 0.081, 19.8, None),
+    ("elliptical", 0.17, 8.7, None),
+    ("corner-filleted", 0.029, 5.5, None),
+    ("corner-filleted", 0.106, 2.7, None),
+    ("power", 0.096, 19.5, 2.02),
+    ("power", 0.159, 12.5, 2.98),
+]
+REDUCED = ["beam:100", "dcmm:1", "prbm", "ee"]
+SMALL = 1e-3  # rad: the linear range, where the calibration holds by construction
+
+
+def _loaded(scene, case: str, rotation: float):
+    """The scene with only ``case``, loaded to turn the hinge by about ``rotation`` rad."""
+    c_theta, _, _ = beam_theory(scene)
+    value = rotation / c_theta if case == "moment" else rotation / (c_theta * 0.5 * LENGTH)
+    return scaled(scene, case, value)
+
+
+@pytest.fixture(scope="module")
+def references():
+    """continuum:2 on each held-out hinge, both load cases, small rotation."""
+    out = {}
+    for hinge in HELD_OUT:
+        scene = notch_scene(*hinge)
+        for case in ("moment", "force"):
+            loaded = _loaded(scene, case, SMALL)
+            out[hinge, case] = (loaded, flexval.run_model(loaded, "continuum:2", case, levels=2))
+    return out
+
+
+@pytest.mark.parametrize("hinge", HELD_OUT, ids=lambda h: f"{h[0]}-{h[1]}-{h[2]}")
+def test_reduced_models_meet_the_continuum_on_held_out_hinges(references, hinge):
+    """Within 0.5 % of continuum:2 in rotation (moment and force) and deflection (force);
+    the table's interpolation error on such hinges is at most 0.15 % (power contours,
+    between exponents), circular, elliptical and filleted ones 0.09 %."""
+    for case in ("moment", "force"):
+        loaded, ref = references[hinge, case]
+        for model in REDUCED:
+            lp = flexval.run_model(loaded, model, case, levels=2)
+            assert lp.rotation[-1] == pytest.approx(ref.rotation[-1], rel=5e-3), (model, case)
+            if case == "force":
+                assert lp.dy[-1] == pytest.approx(ref.dy[-1], rel=5e-3), (model, case)
+
+
+def test_plain_euler_bernoulli_is_the_integral_of_ds_over_ei():
+    scene = notch_scene("circular", 0.1, 10.0)
+    c_theta, _, _ = beam_theory(scene)
+    loaded = _loaded(scene, "moment", SMALL)
+    moment = loaded.load_case("moment").magnitude
+    for model in ("beam:100[eb]", "dcmm:1[eb]", "prbm[eb]", "ee[eb]"):
+        lp = flexval.run_model(loaded, model, "moment", levels=2)
+        assert lp.rotation[-1] == pytest.approx(moment * c_theta, rel=2e-4), model
+    # and the default is more compliant by the calibrated factor
+    found = factors_of(scene.mechanism.flexures[0], scene.mechanism.material.poisson_ratio)
+    lp = flexval.run_model(loaded, "beam:100", "moment", levels=2)
+    assert lp.rotation[-1] == pytest.approx(found.bending * moment * c_theta, rel=2e-4)
+    assert 1.05 < found.bending < 1.09  # a circular hinge of t/L 0.1: about 7 % (table)
+
+
+@pytest.mark.parametrize("model", ["beam:20", "dcmm:2", "prbm", "ee"])
+def test_uniform_flexures_are_untouched(model):
+    """Arcs and segments: the default and eb give the same path, bit for bit."""
+    scene = flexval.load_scene("open_chain")
+    plain = f"{model}[eb]"
+    for case in ("f+", "m-"):
+        a = flexval.run_model(scene, model, case)
+        b = flexval.run_model(scene, plain, case)
+        assert a.dx == b.dx and a.dy == b.dy and a.rotation == b.rotation
+
+
+def test_notch_fourbar_meets_the_continuum():
+    """Every reduced model 6.6 % stiff by plain Euler-Bernoulli; within 0.05 % calibrated
+    (the mechanism's hinges, t/L 0.1 and H/t 11, are between grid points)."""
+    scene = flexval.load_scene("notch_fourbar")
+    ref = flexval.run_model(scene, "continuum:2", "f+")
+    for model in ("beam:100", "dcmm:1", "prbm", "ee"):
+        lp = flexval.run_model(scene, model, "f+")
+        assert lp.dx[-1] == pytest.approx(ref.dx[-1], rel=5e-4), model
+        assert lp.rotation[-1] == pytest.approx(ref.rotation[-1], rel=5e-4), model
+        plain = flexval.run_model(scene, f"{model}[eb]", "f+")
+        assert plain.dx[-1] / ref.dx[-1] - 1.0 == pytest.approx(-0.066, abs=0.002), model
+
+
+LARGE = {"beam:100": 6e-3, "dcmm:1": 8e-3, "prbm": 1e-2}
+"""Largest share off the continuum at 0.2 rad, rotation and deflection, over the hinges below
+and three more (elliptical, power, slender circular): measured 0.51 %, 0.71 %, 0.89 % (the
+short circular hinge of t/L 0.25; the slender ones 0.01 %, 0.5 %, 0.8 %). Beyond the linear
+range the beam's nonlinearity is not the short hinge's (its stretch under rotation), and the
+one-sub-arc and one-pivot models add their own kinematic error under a force."""
+
+
+@pytest.mark.parametrize(
+    "hinge",
+    [
+        ("circular", 0.1, 10.0, None),
+        ("circular", 0.25, 4.0, None),
+        ("corner-filleted", 0.029, 5.5, None),
+    ],
+    ids=lambda h: f"{h[0]}-{h[1]}-{h[2]}",
+)
+def test_large_rotation(hinge):
+    """0.2 rad: the corrected models stay within :data:`LARGE` of the continuum."""
+    scene = notch_scene(*hinge)
+    for case in ("moment", "force"):
+        loaded = _loaded(scene, case, 0.2)
+        ref = flexval.run_model(loaded, "continuum:2", case)
+        for model, tolerance in LARGE.items():
+            lp = flexval.run_model(loaded, model, case)
+            assert lp.rotation[-1] == pytest.approx(ref.rotation[-1], rel=tolerance), model
+            assert lp.dy[-1] == pytest.approx(ref.dy[-1], rel=tolerance), model
+
+
+def test_grid_points_are_reproduced_and_outside_is_flagged():
+    rows = calibration_table()["rows"]
+    for row in rows[:: max(1, len(rows) // 40)]:
+        scene = notch_scene(row["contour"], row["t_over_l"], row["h_over_t"], row["exponent"])
+        found = factors_of(scene.mechanism.flexures[0], calibration_table()["poisson_ratio"])
+        assert found.inside
+        assert found.bending == pytest.approx(row["bending"], rel=1e-9)
+        assert found.shear == pytest.approx(row["shear"], rel=1e-9)
+    outside = notch_scene("elliptical", 0.4, 1.25)
+    found = factors_of(outside.mechanism.flexures[0], 0.33)
+    assert not found.inside and math.isfinite(found.bending)
+    assert "t/L 0.4" in found.where
+
+
+def test_shear_factor_follows_poisson_ratio():
+    """The table holds r_s at nu = 0.33; G changes with nu, the excess compliance does not."""
+    flexure = notch_scene("circular", 0.1, 10.0).mechanism.flexures[0]
+    a, b = factors_of(flexure, 0.33), factors_of(flexure, 0.25)
+    assert a.bending == b.bending
+    assert b.shear * 1.25 == pytest.approx(a.shear * 1.33, rel=1e-12)
+
+
+@pytest.mark.parametrize("t_over_l", [0.16, 0.025])
+def test_fillets_that_meet_to_round_off_mesh_and_run(t_over_l):
+    """H = t + L within round-off (a fillet radius 1 ulp under or over L/2): the fillets meet
+    at the middle, no sliver of flat part, no refusal."""
+    scene = notch_scene("corner-filleted", t_over_l, 1.0 + 1.0 / t_over_l)
+    profile = scene.mechanism.flexures[0].section.profile
+    assert profile.breakpoints == ()
+    loaded = _loaded(scene, "moment", SMALL)
+    for model in ("continuum:0", "beam:20"):
+        lp = flexval.run_model(loaded, model, "moment", levels=2)
+        assert np.isfinite(lp.rotation[-1]) and lp.rotation[-1] > 0.0
