@@ -45,6 +45,7 @@ def read_levels(path: str | Path) -> list:
     """
     import pyvista
 
+    _quiet_vtk()
     target = Path(path)
     if target.suffix.lower() not in (".pvd", ".vtu"):
         raise SceneError(COMMAND_LINE, "RESULT", str(path), "expected a .pvd series or a .vtu file")
@@ -63,9 +64,27 @@ def read_levels(path: str | Path) -> list:
         raise SceneError(
             COMMAND_LINE, "RESULT", str(path), f"not readable as VTK ({type(exc).__name__}: {exc})"
         ) from None
-    if not levels or any(g is None or g.n_points == 0 for g in levels):
-        raise SceneError(COMMAND_LINE, "RESULT", str(path), "holds no mesh")
+    if not levels:
+        raise SceneError(COMMAND_LINE, "RESULT", str(path), "holds no level")
+    empty = [k for k, g in enumerate(levels) if g is None or g.n_points == 0]
+    if empty:
+        raise SceneError(
+            COMMAND_LINE,
+            "RESULT",
+            str(path),
+            f"level {empty[0]} holds no mesh (its file missing or damaged)",
+        )
     return levels
+
+
+def _quiet_vtk() -> None:
+    """Keep VTK's own log off the terminal: a reader's failure is raised and reported as
+    bad input, and an off-screen render's failed X connection before its fallback is not
+    the user's concern."""
+    from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
+
+    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
+    vtkObject.GlobalWarningDisplayOff()
 
 
 def prepared(grid, field: str):
@@ -134,12 +153,10 @@ def screenshot(levels: list, level: int, field: str, png: Path) -> Path:
     """Render ``levels[level]`` off-screen, in the plane, coloured by ``field``; write ``png``
     atomically."""
     import pyvista
-    from vtkmodules.vtkCommonCore import vtkLogger
 
     from flexval.geometry.files import atomic_path
 
-    # VTK tries an X server before its off-screen fallback and logs the failed attempt
-    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
+    _quiet_vtk()
     plotter = pyvista.Plotter(off_screen=True, window_size=(1200, 900))
     _add(plotter, levels[level], level % len(levels), field, _limits(levels, field))
     plotter.view_xy()
