@@ -138,6 +138,9 @@ LOADS = [1.0, 0.98, 1.01, 1.0, 0.995]
         ("prbm", "closed_chain", "f+"),
         ("beam:10", "tapered_leaf", None),
         ("dcmm:4", "notch_fourbar", None),
+        ("prbm", "notch_fourbar", None),
+        ("beam:20", "filleted_stage", None),
+        ("dcmm:2[eb]", "filleted_stage", None),
         ("beam:12", "spline_flexure", None),
     ],
 )

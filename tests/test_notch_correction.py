@@ -166,3 +166,62 @@ def test_fillets_that_meet_to_round_off_mesh_and_run(t_over_l):
     for model in ("continuum:0", "beam:20"):
         lp = flexval.run_model(loaded, model, "moment", levels=2)
         assert np.isfinite(lp.rotation[-1]) and lp.rotation[-1] > 0.0
+
+
+@pytest.mark.parametrize("option", ["width", "plate"])
+def test_the_correction_composes_with_the_depth_options(option):
+    """[width] and [plate] change E (and nu) of the hinge's material first; the calibrated
+    factor then divides that E: a moment turns the hinge by r_b times the plain option's
+    rotation, exactly (r_b does not depend on nu)."""
+    scene = notch_scene("elliptical", 0.07, 6.0)
+    loaded = _loaded(scene, "moment", SMALL)
+    found = factors_of(scene.mechanism.flexures[0], scene.mechanism.material.poisson_ratio)
+    corrected = flexval.run_model(loaded, f"beam:100[{option}]", "moment", levels=2)
+    plain = flexval.run_model(loaded, f"beam:100[eb,{option}]", "moment", levels=2)
+    assert corrected.rotation[-1] / plain.rotation[-1] == pytest.approx(found.bending, rel=1e-6)
+
+
+WIDE_HINGE = """
+name = "wide"
+[material]
+youngs_modulus = 70000.0
+poisson_ratio = 0.33
+[section]
+depth = 5.0
+thickness = 1.6
+[ground]
+name = "ground"
+points = [[0.0, 0.0]]
+[target]
+body = "lever"
+point = [2.0, 0.0]
+[[flexures]]
+name = "hinge"
+bodies = ["ground", "lever"]
+shape = "notch"
+start = [0.0, 0.0]
+end = [2.0, 0.0]
+contour = "elliptical"
+thickness = 1.6
+height = 2.0
+[[load_cases]]
+name = "moment"
+kind = "moment"
+body = "lever"
+value = 10.0
+"""
+# t/L = 0.8: beyond the table's largest t/L (0.5)
+
+
+def test_run_notes_a_hinge_outside_the_calibrated_range(tmp_path, capsys):
+    from flexval.validation.cli import main
+
+    path = tmp_path / "wide.toml"
+    path.write_text(WIDE_HINGE)
+    assert main(["run", str(path), "--model", "beam:20"]) == 0
+    out = capsys.readouterr().out
+    assert "notch hinge hinge (t/L 0.8, H/t 1.25) lies outside the range" in out
+    assert main(["run", str(path), "--model", "beam:20[eb]", "--model", "continuum:0"]) == 0
+    assert "outside the range" not in capsys.readouterr().out
+    assert main(["info", str(path)]) == 0
+    assert "OUTSIDE the calibrated range" in capsys.readouterr().out
