@@ -25,8 +25,14 @@ at the end point) and the shear integral S = ∫ ds/(k G A) (k = 5/6):
     bending factor  r_b = theta_continuum / (M C_theta)             (the excess of ∫ ds/EI),
     shear factor    r_s = (dy_continuum / F - r_b C_yy) / S          (what is left, in S).
 
+and the stress concentration at the waist
+
+    K = sigma_fibre / (6 M / (b t^2))     (the continuum's recovered surface fibre peak under
+                                           the moment over the beam formula at the waist).
+
 The reduced models then take E / r_b for bending and G / r_s for shear on the hinge (and
-include the shear term), which reproduces both measurements; the moment and the force also
+include the shear term), which reproduces both measurements, and report K times their beam
+formula as the hinge's peak fibre stress; the moment and the force also
 turn the hinge by r_b as well as each other (checked in the held-out table). r_b does not
 depend on Poisson's ratio (1.0699, 1.0696, 1.0691 at nu = 0.25, 0.33, 0.42 on a circular
 hinge of t/L 0.1, H/t 10); r_s (1 + nu) nearly does not (1.2945, 1.3046, 1.3142), so the
@@ -151,6 +157,8 @@ def measure(contour: str, t_over_l: float, h_over_t: float, exponent=None, model
     theta = m.rotation[-1] / moment
     deflection = f.dy[-1] / force
     r_b = theta / c_theta
+    t = scene.mechanism.flexures[0].section.profile.t
+    waist = 6.0 * moment / (DEPTH * t * t)  # the beam formula at the waist, MPa
     return {
         "contour": contour,
         "t_over_l": t_over_l,
@@ -161,6 +169,7 @@ def measure(contour: str, t_over_l: float, h_over_t: float, exponent=None, model
         "theta_per_moment": theta,
         "dy_per_force": deflection,
         "force_turn": (f.rotation[-1] / force) / (c_theta * 0.5 * LENGTH) / r_b,
+        "stress": m.fibre_stress["hinge"]["stress"] / waist,
     }
 
 
@@ -193,6 +202,11 @@ def held_out(count: int, seed: int = 7) -> list[tuple]:
     return points
 
 
+KEY = ("contour", "t_over_l", "h_over_t", "exponent")
+FACTORS = ("bending", "shear", "stress")
+"""What the table holds per hinge: its shape, and r_b, r_s and the stress concentration K."""
+
+
 def write_table(rows: list[dict], path: Path) -> None:
     table = {
         "description": (
@@ -203,10 +217,7 @@ def write_table(rows: list[dict], path: Path) -> None:
         "poisson_ratio": POISSON,
         "rotation": ROTATION,
         "grid": {"t_over_l": T_OVER_L, "h_over_t": H_OVER_T, "exponents": EXPONENTS},
-        "rows": [
-            {k: row[k] for k in ("contour", "t_over_l", "h_over_t", "exponent", "bending", "shear")}
-            for row in rows
-        ],
+        "rows": [{k: row[k] for k in (*KEY, *FACTORS)} for row in rows],
     }
     path.write_text(json.dumps(table, indent=1) + "\n")
 
@@ -226,7 +237,8 @@ def main(argv: list[str] | None = None) -> int:
     kept = {}
     if args.resume and args.output.is_file():
         for row in json.loads(args.output.read_text())["rows"]:
-            kept[(row["contour"], row["t_over_l"], row["h_over_t"], row["exponent"])] = row
+            if all(k in row for k in FACTORS):  # rows of an older table are measured again
+                kept[tuple(row[k] for k in KEY)] = row
     rows, start = [], time.time()
     points = grid()
     for k, (contour, tl, ht, n) in enumerate(points):
@@ -237,7 +249,7 @@ def main(argv: list[str] | None = None) -> int:
         r = rows[-1]
         print(
             f"{k + 1:4d}/{len(points)} {contour:16s} t/L {tl:<6g} H/t {ht:<8.4g} n {n!s:4s} "
-            f"r_b {r['bending']:.5f} r_s {r['shear']:.5f} turn {r['force_turn']:.5f} "
+            f"r_b {r['bending']:.5f} r_s {r['shear']:.5f} K {r['stress']:.4f} "
             f"{time.time() - start:6.0f} s",
             flush=True,
         )

@@ -16,7 +16,10 @@ A corrected hinge takes E / r_b and G / r_s (:func:`corrected_material`) and its
 models add the shear term (the material's ``shear_flexible``): its end rotation under a
 moment, and its rotation and deflection under a force, are the continuum's (to the table's
 interpolation error). r_b does not depend on Poisson's ratio (within 0.1 % over 0.25-0.42);
-r_s (1 + nu) nearly does not (within 0.8 %), so the table holds r_s at nu = 0.33.
+r_s (1 + nu) nearly does not (within 0.8 %), so the table holds r_s at nu = 0.33. The
+table also holds the notch's stress concentration K at the waist (the continuum's recovered
+surface fibre peak under a moment over the beam formula there): a reduced model's peak
+fibre stress on a hinge is K times its beam formula (:mod:`flexval.validation.yieldpoint`).
 
 The table is interpolated in (log t/L, log H/t) by a C1 piecewise-cubic (Clough-Tocher)
 interpolant over its points; power contours by their exponent too (a cubic spline in log n
@@ -55,6 +58,9 @@ class NotchFactors:
         r_b: the hinge's bending compliance over ∫ ds/EI.
     shear : float
         r_s: its transverse shear compliance over ∫ ds/(k G A), at its own Poisson's ratio.
+    stress : float
+        K: the continuum's surface fibre peak under a moment over the beam formula
+        6 M / (b t^2) at the waist (the stress concentration of the notch).
     inside : bool
         Whether the hinge lies in the calibrated range (else: the nearest tabulated hinge's).
     where : str
@@ -63,6 +69,7 @@ class NotchFactors:
 
     bending: float
     shear: float
+    stress: float
     inside: bool
     where: str
 
@@ -76,7 +83,7 @@ def calibration_table() -> dict:
 
 @cache
 def _slices() -> dict[tuple[str, float | None], tuple]:
-    """Per contour (and power exponent): the interpolants of (r_b, r_s) over
+    """Per contour (and power exponent): the interpolants of (r_b, r_s, K) over
     (log t/L, log H/t), Clough-Tocher and nearest-point."""
     from scipy.interpolate import CloughTocher2DInterpolator, NearestNDInterpolator
 
@@ -86,13 +93,13 @@ def _slices() -> dict[tuple[str, float | None], tuple]:
     out = {}
     for key, rows in groups.items():
         xy = np.array([[math.log(r["t_over_l"]), math.log(r["h_over_t"])] for r in rows])
-        values = np.array([[r["bending"], r["shear"]] for r in rows])
+        values = np.array([[r["bending"], r["shear"], r["stress"]] for r in rows])
         out[key] = (CloughTocher2DInterpolator(xy, values), NearestNDInterpolator(xy, values))
     return out
 
 
 def _at(key: tuple[str, float | None], x: float, y: float) -> tuple[np.ndarray, bool]:
-    """(r_b, r_s) of one slice at (log t/L, log H/t), and whether it is inside the slice."""
+    """(r_b, r_s, K) of one slice at (log t/L, log H/t), and whether it is inside it."""
     smooth, nearest = _slices()[key]
     found = np.asarray(smooth(x, y), float).reshape(-1)
     if np.all(np.isfinite(found)):
@@ -138,7 +145,7 @@ def _factors(
         values, inside = _at((contour, None), x, y)
     calibrated = calibration_table()["poisson_ratio"]
     shear = float(values[1]) * (1.0 + calibrated) / (1.0 + poisson_ratio)
-    return NotchFactors(float(values[0]), shear, bool(inside), where)
+    return NotchFactors(float(values[0]), shear, float(values[2]), bool(inside), where)
 
 
 def corrected_material(material: Material, factors: NotchFactors) -> Material:

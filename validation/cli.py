@@ -467,7 +467,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
                     f"{lp.dy[-1]:.4f}",
                     f"{lp.displacement[-1]:.4f}",
                     f"{math.degrees(lp.rotation[-1]):.3f}",
-                    *_peak_cells(lp),
+                    *_peak_cells(lp, scene),
                     str(lp.stats.get("newton_iterations", 0)),
                     sig(lp.seconds, 3),
                     _valid_cell(lp),
@@ -477,12 +477,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         note = _validity_note(lp)
         if note:
             print(note)
-        if _peak_cells(lp)[0].endswith(FIBRE_MARK):
-            print(
-                f"{'':<{columns[0].size}}{GAP}{FIBRE_MARK} peak: the continuum's surface fibre "
-                "stress at the notch, stress concentration included (elsewhere the beam "
-                "formula of its section forces)"
-            )
+        if _peak_cells(lp, scene)[0].endswith(FIBRE_MARK):
+            print(f"{'':<{columns[0].size}}{GAP}{FIBRE_MARK} peak: {_fibre_note(lp)}")
         strength = _yield_line(scene, lp)
         if strength:
             print(f"{'':<{columns[0].size}}{GAP}{strength}")
@@ -823,17 +819,31 @@ def _cmd_buckle(args: argparse.Namespace) -> int:
 
 
 FIBRE_MARK = "*"
-"""Marks a run line's peak stress that is the continuum's surface fibre stress."""
+"""Marks a run line's peak stress that is a notch's surface fibre stress (the continuum's,
+or a reduced model's beam formula times the calibrated stress concentration)."""
 
 
-def _peak_cells(lp) -> tuple[str, str]:
+def _fibre_note(lp) -> str:
+    """What a run line's :data:`FIBRE_MARK` means for ``lp``'s model."""
+    if lp.model.startswith("continuum"):
+        return (
+            "the continuum's surface fibre stress at the notch, stress concentration "
+            "included (elsewhere the beam formula of its section forces)"
+        )
+    return (
+        "the notch's surface fibre stress: the beam formula at its waist times the "
+        "notch's stress concentration, calibrated against the continuum"
+    )
+
+
+def _peak_cells(lp, scene) -> tuple[str, str]:
     """``peak MPa`` and ``at`` of a run line: the largest peak stress over the flexures at the
     last level (:func:`flexval.validation.yieldpoint.flexure_peaks`, marked with
-    :data:`FIBRE_MARK` where it is the continuum's fibre stress) and where
+    :data:`FIBRE_MARK` where it is a notch's surface fibre stress) and where
     (``flexure@fraction`` of its length from its first end)."""
-    from .yieldpoint import flexure_peaks
+    from .yieldpoint import flexure_peaks, notch_concentrations
 
-    peaks = flexure_peaks(lp)
+    peaks = flexure_peaks(lp, notch_concentrations(scene, lp))
     if not peaks:
         return "-", ""
     name = max(peaks, key=lambda f: peaks[f][0][-1])

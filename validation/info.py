@@ -149,6 +149,7 @@ def varying_section(flexure, material) -> dict:
         out["calibrated"] = {
             "bending_factor": factors.bending,
             "shear_factor": factors.shear,
+            "stress_concentration": factors.stress,
             "inside_range": factors.inside,
             "ratios": factors.where,
         }
@@ -179,7 +180,8 @@ def _section_line(f: dict) -> str:
     if calibrated:
         line += (
             f"\n      reduced models (unless [eb]): bending compliance x "
-            f"{calibrated['bending_factor']:.4f}, shear x {calibrated['shear_factor']:.4f} "
+            f"{calibrated['bending_factor']:.4f}, shear x {calibrated['shear_factor']:.4f}, "
+            f"peak fibre stress x {calibrated['stress_concentration']:.4f} "
             f"(calibrated against the continuum; {calibrated['ratios']}"
             + (
                 ")"
