@@ -5,7 +5,9 @@ compliance and the elements' flexibilities by scipy.integrate.quad, the
 exact large rotation of a straight beam under an end moment (every element
 carries the same moment), its deflected shape by solve_ivp, observed
 orders of convergence, central differences of the energy, and the
-uniform flexure for a taper of equal ends.
+uniform flexure for a taper of equal ends. Notch hinges are run as plain
+Euler-Bernoulli beams (``[eb]``): these are beam theory's references; the
+calibrated default is tested against the continuum (tests/test_notch_correction.py).
 Units: mm, N, MPa, N mm, rad.
 """
 
@@ -279,7 +281,7 @@ def test_tapered_arc_compliance_converges_at_second_order():
 def test_notch_rotation_under_a_small_moment_is_the_eb_integral(contour):
     mech = notch(contour)
     moment = 1e-6 / eb_rotation_compliance(NOTCHES[contour])  # 1e-6 rad
-    rotation = tip(mech, "beam:8", moment_case(moment))[2]
+    rotation = tip(mech, "beam:8[eb]", moment_case(moment))[2]
     assert rotation == pytest.approx(
         moment * eb_rotation_compliance(NOTCHES[contour]), rel=NEWTON_TOL
     )
@@ -314,7 +316,7 @@ def test_notch_under_a_large_moment(contour):
     reference = elastica_under_moment(profile, moment)
     errors = []
     for n in (8, 16, 32):
-        dx, dy, rotation = tip(mech, f"beam:{n}", moment_case(moment, levels=5))
+        dx, dy, rotation = tip(mech, f"beam:{n}[eb]", moment_case(moment, levels=5))
         assert rotation == pytest.approx(1.0, rel=NEWTON_TOL)
         errors.append(np.hypot(dx - reference[0], dy - reference[1]) / NOTCH_LENGTH)
     assert errors[1] < 2e-4
@@ -331,7 +333,7 @@ def test_notch_under_a_large_force_converges_at_second_order(contour):
     force = 0.6 / (eb_rotation_compliance(profile) * NOTCH_LENGTH)
     mech = notch(contour)
     case = force_case(mech, 0.0, force, levels=5)
-    rotations = [tip(mech, f"beam:{n}", case)[2] for n in (16, 32, 64)]
+    rotations = [tip(mech, f"beam:{n}[eb]", case)[2] for n in (16, 32, 64)]
     assert 1.9 < observed_order(rotations) < 2.2
 
 
@@ -376,7 +378,7 @@ def test_section_forces_and_mass_of_a_notch():
     n = 10
     moment = 1e-3
     case = moment_case(moment)
-    system = build_system(mech, parse_model(f"beam:{n}"))
+    system = build_system(mech, parse_model(f"beam:{n}[eb]"))
     *_, last = trace(system, system.loads(case), LoadControl(case.factors()))
     conn = system.connectors[0]
     forces = conn.section_forces(*system.local_states(last.state)[0])
@@ -394,7 +396,7 @@ def test_outer_fibre_stress_takes_the_thickness_at_each_station():
     # a pure moment M: sigma(s) = 6 M / (b h(s)^2) at every station, largest at the waist
     mech = notch("elliptical")
     moment = 1e-3
-    path = run_reduced(mech, parse_model("beam:10"), moment_case(moment))
+    path = run_reduced(mech, parse_model("beam:10[eb]"), moment_case(moment))
     profile = path.stress_profile["f"]
     at = np.asarray(profile["at"])
     expected = 6.0 * moment / (DEPTH * NOTCHES["elliptical"].thickness(at * NOTCH_LENGTH) ** 2)
@@ -409,7 +411,7 @@ def test_validity_checks_the_outer_fibre_strain_at_the_waist(share):
     # a station there (the density is symmetric); beyond MAX_STRAIN the state is invalid
     mech = notch("circular")
     moment = share * MAX_STRAIN * MATERIAL.youngs_modulus * DEPTH * WAIST**2 / 6.0
-    path = run_reduced(mech, parse_model("beam:10"), moment_case(moment, levels=3))
+    path = run_reduced(mech, parse_model("beam:10[eb]"), moment_case(moment, levels=3))
     assert path.valid[-1] is (share < 1.0)
     if share > 1.0:
         reason = path.validity[-1]

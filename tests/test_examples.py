@@ -104,11 +104,11 @@ def test_every_notebook_is_tested():
 
 
 def test_designer_walkthrough_runs_and_its_numbers_hold(monkeypatch, capsys):
-    """The notebook's code cells, run in order as Jupyter would (Agg backend): every reduced
-    model is plain Euler-Bernoulli on the notches, so all are stiffer than the continuum by
-    about the same few percent; two of the four hinges made thicker turn the mechanism less,
-    but not less than all four would (a circular notch's compliance scales as t^(-5/2): 0.5 ->
-    0.6 mm is a factor of 0.634)."""
+    """The notebook's code cells, run in order as Jupyter would (Agg backend): the calibrated
+    reduced models meet the continuum on the notch hinges (within 0.2 %: measured 0.07 %),
+    plain Euler-Bernoulli (``beam:20[eb]``) is 5-8 % stiff (measured 6.5 %); two of the four
+    hinges made thicker turn the mechanism less, but not less than all four would (a
+    circular notch's compliance scales as t^(-5/2): 0.5 -> 0.6 mm is a factor of 0.634)."""
     import json
 
     import matplotlib.pyplot as plt
@@ -121,13 +121,16 @@ def test_designer_walkthrough_runs_and_its_numbers_hold(monkeypatch, capsys):
             exec(compile("".join(cell["source"]), "designer_walkthrough.ipynb", "exec"), names)
     plt.close("all")
     printed = capsys.readouterr().out
-    assert "beam:20" in printed and "end rotation" in printed
+    assert "beam:20[eb]" in printed and "end rotation" in printed
     from flexval.validation.compare import errors
 
     size = names["scene"].mechanism.size()
     for lp in names["paths"]:
         found = errors(lp, names["reference"], size)
-        assert 2.0 < found["end_disp"] < 10.0, lp.model
-        assert lp.dx[-1] < names["reference"].dx[-1]  # stiffer than the continuum
+        if lp.model.endswith("[eb]"):
+            assert 5.0 < found["end_disp"] < 8.0
+            assert lp.dx[-1] < names["reference"].dx[-1]  # stiffer than the continuum
+        else:
+            assert found["end_disp"] < 0.2, lp.model
     ratio = names["stiffer"].dx[-1] / names["paths"][0].dx[-1]
     assert (0.6 / 0.5) ** -2.5 < ratio < 1.0

@@ -222,8 +222,15 @@ def test_continuum_notch_hinge_yields_by_its_true_peak(tmp_path):
     b, t = flexure.section.depth, flexure.section.thickness
     moment_y = b * t**2 * 60.0 / 6.0
     case = scene.load_case("moment")
-    reduced = run_model(scene, parse_model("dcmm:4"), case)
+    reduced = run_model(scene, parse_model("dcmm:4[eb]"), case)  # plain: the beam formula
     assert scene_yield(scene, reduced)["first_yield"]["load"] == pytest.approx(moment_y, rel=1e-6)
+    # calibrated (the default): the beam formula times the hinge's calibrated concentration
+    from flexval.reducedmodels.notchcorrection import factors_of
+
+    concentrated = factors_of(flexure, scene.mechanism.material.poisson_ratio).stress
+    calibrated = run_model(scene, parse_model("dcmm:4"), case)
+    calibrated_yield = scene_yield(scene, calibrated)["first_yield"]["load"]
+    assert calibrated_yield == pytest.approx(moment_y / concentrated, rel=1e-6)
     lp = run_model(scene, parse_model("continuum:0"), case)
     true = np.asarray(lp.fibre_stress["hinge"]["path_stress"])
     assert true[-1] == lp.fibre_stress["hinge"]["stress"]  # the full-load peak, level by level
@@ -236,6 +243,8 @@ def test_continuum_notch_hinge_yields_by_its_true_peak(tmp_path):
     assert concentration[k - 1] <= moment_y / fy["load"] <= concentration[k]
     assert concentration[k] > 1.01  # the notch's own concentration, not round-off
     assert fy["at"] == pytest.approx(0.5 * flexure.shape.length, rel=1e-9)  # at the root
+    # the calibration's K (continuum:2) against this coarse mesh's own: within 1 %
+    assert calibrated_yield == pytest.approx(fy["load"], rel=1e-2)
 
 
 def test_sweep_rows_carry_first_yield(tmp_path):
