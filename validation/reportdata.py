@@ -359,9 +359,10 @@ class ReportData:
 
 
 #: LoadPath fields left out of results.json: the run time (in timings.json) and the
-#: per-level drawing data (deformed shapes, stress profiles along the flexures: drawn in
-#: the figures, kept in the result cache, recorded again by ``flexval run``)
-LEFT_OUT = ("seconds", "shapes", "stress_profile")
+#: per-level drawing data (deformed shapes, section forces and stress profiles along the
+#: flexures: drawn in the figures, kept in the result cache, recorded again by
+#: ``flexval run``)
+LEFT_OUT = ("seconds", "shapes", "section_forces", "stress_profile")
 #: solver statistics that are run times or cache state (in timings.json)
 TIMING_STATS = ("seconds_median", "seconds_samples", "cached")
 
