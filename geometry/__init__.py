@@ -6,7 +6,7 @@ Units everywhere: mm, N, MPa, N mm, rad (degrees only in scene files).
 from .errors import SceneError
 from .inertia import MassData, RigidMass
 from .kinematics import rotation
-from .loads import Force, LoadCase, Moment
+from .loads import Displacement, Force, LoadCase, Moment
 from .mechanism import Body, Flexure, FlexureSpec, Material, Mechanism, PinSpec, Section
 from .scene import BUILTIN_SCENES, Scene, load_scene
 from .shapes import Arc, Ellipse, Segment, Spline
@@ -18,6 +18,7 @@ __all__ = [
     "Ellipse",
     "Flexure",
     "FlexureSpec",
+    "Displacement",
     "Force",
     "LoadCase",
     "MassData",

@@ -1,9 +1,11 @@
-"""Load cases: dead moments and forces on bodies, ramped proportionally from zero.
+"""Load cases: dead moments and forces on bodies, and prescribed motions, ramped from zero.
 
 A load case is a set of components all scaled by one load factor
 lambda in [0, 1]; the requested load levels are ``levels`` equally spaced
 values of lambda from 0 to 1 (default 11). Forces keep their direction
-(dead loads). Units: N, N mm, mm, rad.
+(dead loads). A :class:`Displacement` prescribes a body point's motion
+(displacement control): its components are reached at lambda = 1, and the
+force and moment that hold them are the output. Units: N, N mm, mm, rad.
 """
 
 from __future__ import annotations
@@ -23,9 +25,13 @@ MAX_LOAD_SUBSTEPS = 20_000
 Each of a load case's ``levels - 1`` increments takes at least one sub-step, so a load
 case may have at most this many levels; more would run long and then stop at the cap."""
 
-LOAD_KINDS = ("moment", "force")
+LOAD_KINDS = ("moment", "force", "displacement")
 LOAD_VALUE_LIMIT = 1e9
 """Largest magnitude of a load's value (N or N mm) a scene may give."""
+DISPLACEMENT_LIMIT = 1e6
+"""Largest prescribed displacement (mm) a scene may give."""
+ROTATION_LIMIT_DEG = 3600.0
+"""Largest prescribed rotation (deg, ten turns) a scene may give."""
 
 LOAD_FIELDS = (
     Field("kind", "choice", "what the load is", choices=LOAD_KINDS),
@@ -33,9 +39,11 @@ LOAD_FIELDS = (
         "value",
         "number",
         "full value at load factor 1: N mm for a moment (counterclockwise positive), "
-        "N for a force (may be negative)",
+        "N for a force (may be negative); not for a displacement",
         unit="N or N mm",
         limit=LOAD_VALUE_LIMIT,
+        default=ABSENT,
+        default_text="required for a moment or a force",
     ),
     Field(
         "body",
@@ -47,7 +55,8 @@ LOAD_FIELDS = (
     Field(
         "point",
         "point",
-        "point of application in the undeformed configuration (force only); it moves with the body",
+        "point of application in the undeformed configuration (force or displacement); "
+        "it moves with the body",
         unit="mm",
         default=ABSENT,
         default_text="the target point",
@@ -55,9 +64,37 @@ LOAD_FIELDS = (
     Field(
         "angle_deg",
         "number",
-        "direction of a force, from the x axis, counterclockwise (force only; "
-        "required for a force); the force keeps it (dead load)",
+        "direction of a force, from the x axis, counterclockwise (required for a force); "
+        "the force keeps it (dead load). For a displacement: the direction of its dx "
+        "(default 0, the x axis)",
         unit="deg",
+        default=ABSENT,
+    ),
+    Field(
+        "dx",
+        "number",
+        "displacement only: the point's prescribed motion along x (or along angle_deg) at "
+        "full load; left out: free",
+        unit="mm",
+        limit=DISPLACEMENT_LIMIT,
+        default=ABSENT,
+    ),
+    Field(
+        "dy",
+        "number",
+        "displacement only: the point's prescribed motion along y (or normal to angle_deg, "
+        "counterclockwise) at full load; left out: free",
+        unit="mm",
+        limit=DISPLACEMENT_LIMIT,
+        default=ABSENT,
+    ),
+    Field(
+        "rotation_deg",
+        "number",
+        "displacement only: the body's prescribed rotation at full load, counterclockwise; "
+        "left out: free",
+        unit="deg",
+        limit=ROTATION_LIMIT_DEG,
         default=ABSENT,
     ),
 )
@@ -112,14 +149,67 @@ class Force:
 
 
 @dataclass(frozen=True)
+class Displacement:
+    """A prescribed motion of the material point ``point`` of ``body`` (displacement control).
+
+    At load factor lambda the point has moved by lambda ``dx`` along the
+    frame direction ``angle`` and lambda ``dy`` normal to it (mm), and the body
+    has turned by lambda ``rotation`` (rad); a component given as None is
+    free. The force and moment that impose the motion are the load path's
+    output (:attr:`flexval.reducedmodels.LoadPath.drive_reactions`).
+
+    Attributes
+    ----------
+    body : str
+    point : array (2,)
+        The driven point in the undeformed configuration, mm.
+    dx, dy : float or None
+        Prescribed motion at full load along the frame's axes, mm.
+    rotation : float or None
+        Prescribed rotation at full load, rad.
+    angle : float
+        The frame's direction (its dx axis) from the x axis, rad.
+    """
+
+    body: str
+    point: np.ndarray
+    dx: float | None = None
+    dy: float | None = None
+    rotation: float | None = None
+    angle: float = 0.0
+
+    @property
+    def prescribed(self) -> tuple[tuple[int, float], ...]:
+        """(component, value at full load) of the prescribed components: 0 dx, 1 dy (mm),
+        2 rotation (rad)."""
+        values = (self.dx, self.dy, self.rotation)
+        return tuple((k, float(v)) for k, v in enumerate(values) if v is not None)
+
+    @property
+    def value(self) -> float:
+        """The first prescribed component at full load (mm, or rad for a rotation alone)."""
+        return self.prescribed[0][1]
+
+    @property
+    def unit(self) -> str:
+        """Unit of :attr:`value`: 'mm', or 'rad' when only the rotation is prescribed."""
+        return "rad" if self.prescribed[0][0] == 2 else "mm"
+
+    def transformed(self, angle: float, shift: np.ndarray) -> Displacement:
+        """The same drive for a mechanism rotated by ``angle`` (rad) and shifted (mm)."""
+        p = rotation(angle) @ np.asarray(self.point, float) + shift
+        return Displacement(self.body, p, self.dx, self.dy, self.rotation, self.angle + angle)
+
+
+@dataclass(frozen=True)
 class LoadCase:
     """A named proportional load case.
 
     Attributes
     ----------
     name : str
-    components : tuple of Moment | Force
-        Loads at full value (load factor 1).
+    components : tuple of Moment | Force | Displacement
+        Loads at full value (load factor 1); at most one :class:`Displacement`.
     levels : int
         Number of equally spaced load levels from 0 to full load (>= 2).
     time_law : TimeLaw or None
@@ -137,13 +227,25 @@ class LoadCase:
         return np.linspace(0.0, 1.0, levels or self.levels)
 
     @property
+    def drive(self) -> Displacement | None:
+        """The prescribed motion of a displacement-controlled case, or None."""
+        return next((c for c in self.components if isinstance(c, Displacement)), None)
+
+    @property
     def magnitude(self) -> float:
-        """Signed full value of the first component (N or N mm), for tables and plots."""
-        return float(self.components[0].value)
+        """Signed full value of the load factor's axis (N, N mm, mm or rad), for tables and
+        plots: the drive's first component where the case prescribes a motion, else the
+        first load's value."""
+        drive = self.drive
+        return float(drive.value if drive is not None else self.components[0].value)
 
     @property
     def unit(self) -> str:
-        """Unit of ``magnitude``: 'N' for a force, 'N mm' for a moment."""
+        """Unit of ``magnitude``: 'N' for a force, 'N mm' for a moment, 'mm' or 'rad' for a
+        prescribed motion."""
+        drive = self.drive
+        if drive is not None:
+            return drive.unit
         return "N" if isinstance(self.components[0], Force) else "N mm"
 
     def transformed(self, angle: float, shift: np.ndarray) -> LoadCase:

@@ -24,6 +24,7 @@ import numpy as np
 
 from .errors import SceneError
 from .inertia import MassData
+from .loads import Displacement, LoadCase
 from .magnitudes import check_magnitudes
 from .mobility import check_structure
 from .overlap import check_overlaps
@@ -264,6 +265,10 @@ class Mechanism:
     inertia : MassData
         Density, rigid-body masses and gravity (default: none, see
         :mod:`flexval.geometry.inertia`).
+    drive : Displacement or None
+        The prescribed motion of a displacement-controlled load case (see
+        :meth:`driven_by`), joined to the ground by an exact constraint in
+        every model; None (the default): no body is driven.
     """
 
     bodies: dict[str, Body]
@@ -275,6 +280,15 @@ class Mechanism:
     source: str = field(default="<scene>", compare=False)
     pins: tuple[Pin, ...] = ()
     inertia: MassData = field(default_factory=MassData, compare=False)
+    drive: Displacement | None = field(default=None, compare=False)
+
+    def driven_by(self, case: LoadCase) -> Mechanism:
+        """The mechanism as ``case`` loads it: with the case's prescribed motion as its
+        :attr:`drive` (itself where the case prescribes none and none is set)."""
+        drive = case.drive
+        if drive is self.drive:
+            return self
+        return dataclasses.replace(self, drive=drive)
 
     @property
     def moving_bodies(self) -> list[str]:
@@ -313,6 +327,7 @@ class Mechanism:
             transform_mechanism(self, angle, shift),
             pins=pins,
             inertia=self.inertia.transformed(angle, shift),
+            drive=None if self.drive is None else self.drive.transformed(angle, shift),
         )
 
 

@@ -57,7 +57,7 @@ from .errors import SceneError, did_you_mean
 from .fields import REQUIRED, Field, Table
 from .flexurefields import check_thickness_fits, read_notch, read_spline, read_thickness, section_of
 from .inertia import MassData, parse_body_mass, parse_density, parse_gravity
-from .loads import LOAD_KINDS, Force, LoadCase, Moment
+from .loads import LOAD_KINDS, Displacement, Force, LoadCase, Moment
 from .magnitudes import SMALLEST_NORMAL
 from .measured import Measurement, read_measurement
 from .mechanism import FlexureSpec, Material, Mechanism, PinSpec, Section, assemble
@@ -470,7 +470,7 @@ def _load_component(
     target_point: np.ndarray,
     table: Table,
     variant: str | None = None,
-) -> Moment | Force:
+) -> Moment | Force | Displacement:
     """One load: the fields of ``table`` (of ``variant``) in ``c``."""
     rd.known_keys(c, table, where, variant)
     kind = c.get("kind")
@@ -479,9 +479,16 @@ def _load_component(
         if kind is None:
             force = [k for k in ("point", "angle_deg") if k in c]
             hint = f" ({' and '.join(force)} belong to a force)" if force else ""
-        rd.fail(f"{where}kind", kind, f"must be 'moment' or 'force'{hint}")
-    value = rd.value(c, table["value"], where)
+        rd.fail(f"{where}kind", kind, f"must be 'moment', 'force' or 'displacement'{hint}")
     body = rd.value(c, table["body"], where, default=target_body)
+    if kind == "displacement":
+        return _displacement(rd, c, where, body, target_body, target_point, table)
+    for key in _DRIVE_KEYS:
+        if key in c:
+            rd.fail(f"{where}{key}", c[key], f"belongs to kind = 'displacement', not a {kind}")
+    if "value" not in c:
+        rd.fail(f"{where}value", None, f"missing: a {kind} needs its full value")
+    value = rd.value(c, table["value"], where)
     if kind == "moment":
         for key in ("point", "angle_deg"):
             if key in c:
@@ -492,14 +499,7 @@ def _load_component(
                     "direction (it acts on the whole body): remove it or use kind = 'force'",
                 )
         return Moment(body, value)
-    if "point" not in c and body != target_body:
-        rd.fail(
-            f"{where}point",
-            None,
-            f"missing: a force on body {body!r} needs its point of application [x, y] in mm "
-            f"(the default, the target point, is on the target body {target_body!r})",
-        )
-    point = rd.value(c, table["point"], where, default=target_point)
+    point = _point_of(rd, c, where, body, target_body, target_point, table, "a force")
     if "angle_deg" not in c:
         rd.fail(
             f"{where}angle_deg",
@@ -509,6 +509,66 @@ def _load_component(
         )
     angle = rd.value(c, table["angle_deg"], where)
     return Force(body, point, math.radians(angle), value)
+
+
+_DRIVE_KEYS = ("dx", "dy", "rotation_deg")
+"""The fields of a prescribed motion (kind = 'displacement')."""
+
+
+def _point_of(
+    rd: _Reader,
+    c: dict,
+    where: str,
+    body: str,
+    target_body: str,
+    target_point: np.ndarray,
+    table: Table,
+    what: str,
+) -> np.ndarray:
+    """The ``point`` of a force or a drive; the target point only on the target body."""
+    if "point" not in c and body != target_body:
+        rd.fail(
+            f"{where}point",
+            None,
+            f"missing: {what} on body {body!r} needs its point of application [x, y] in mm "
+            f"(the default, the target point, is on the target body {target_body!r})",
+        )
+    return rd.value(c, table["point"], where, default=target_point)
+
+
+def _displacement(
+    rd: _Reader,
+    c: dict,
+    where: str,
+    body: str,
+    target_body: str,
+    target_point: np.ndarray,
+    table: Table,
+) -> Displacement:
+    """A prescribed motion: dx, dy (mm) and rotation_deg (deg) of a body point, at least one."""
+    if "value" in c:
+        rd.fail(
+            f"{where}value",
+            c["value"],
+            "a displacement has no value: give its dx, dy (mm) and/or rotation_deg",
+        )
+    if not any(key in c for key in _DRIVE_KEYS):
+        rd.fail(
+            f"{where}dx",
+            None,
+            "missing: a displacement prescribes at least one of dx, dy (mm) and rotation_deg",
+        )
+    point = _point_of(rd, c, where, body, target_body, target_point, table, "a displacement")
+    dx, dy, turn = (rd.value(c, table[key], where) for key in _DRIVE_KEYS)
+    angle = rd.value(c, table["angle_deg"], where, default=0.0)
+    return Displacement(
+        body,
+        point,
+        dx,
+        dy,
+        None if turn is None else math.radians(turn),
+        math.radians(angle),
+    )
 
 
 _UNSAFE_NAME_CHARACTERS = set('/\\<>:"|?*')
@@ -704,6 +764,13 @@ def _load_case(rd: _Reader, c: Any, k: int, mech: Mechanism) -> LoadCase:
                 LOAD_CASES,
                 "single",
             ),
+        )
+    drives = [comp for comp in comps if isinstance(comp, Displacement)]
+    if len(drives) > 1:
+        rd.fail(
+            f"{where}loads",
+            len(drives),
+            "a load case prescribes the motion of one point at most (one kind = 'displacement')",
         )
     for comp in comps:
         if comp.body not in mech.bodies:

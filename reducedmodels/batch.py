@@ -1126,8 +1126,9 @@ def run_batch(
     connectors at rest) as
     :func:`~flexval.reducedmodels.linearbatch.linear_responses`, every copy's
     small solve and outputs at once; another linear family copy by copy
-    through its own runner. Copies given the same mechanism object share its
-    connectors (built once). Each path's ``seconds`` includes its share of
+    through its own runner, and so does every copy of a batch whose cases
+    prescribe a motion (displacement control). Copies given the same mechanism
+    object share its connectors (built once). Each path's ``seconds`` includes its share of
     building the connectors.
 
     Parameters
@@ -1157,7 +1158,7 @@ def run_batch(
 
     def alone(k: int) -> None:
         try:
-            path = family.run(mechanisms[k], spec, cases[k], levels=levels, scene=scene)
+            path = family.trace(mechanisms[k], spec, cases[k], levels=levels, scene=scene)
         except RUN_FAILURES as exc:
             results[k] = exc
             return
@@ -1165,7 +1166,8 @@ def run_batch(
         results[k] = path
 
     linear = family.has(LINEAR)
-    if family.system is None or (linear and family.connectors is None):
+    driven = any(case.drive is not None for case in cases)  # a prescribed motion: each alone
+    if family.system is None or (linear and family.connectors is None) or driven:
         for k in range(len(mechanisms)):
             alone(k)
         return results

@@ -46,7 +46,10 @@ LINEAR = "linear"
 #: capability: a reference model: its default resolution is the reports' reference, its
 #: coarser resolutions join the runtime-versus-error study and it is timed once (seconds a run)
 REFERENCE = "reference"
-CAPABILITIES = frozenset({FIELDS, ARCLENGTH, LINEAR, REFERENCE})
+#: capability: traces a load case that prescribes a motion (``Mechanism.drive``: the family
+#: joins :func:`flexval.reducedmodels.drives.constraint_connectors` to its connectors)
+DISPLACEMENT = "displacement"
+CAPABILITIES = frozenset({FIELDS, ARCLENGTH, LINEAR, REFERENCE, DISPLACEMENT})
 
 _ID_RE = re.compile(
     r"^(?P<family>[A-Za-z][\w-]*)(?::(?P<res>[^\[\]]*))?"
@@ -250,6 +253,39 @@ class Family:
     def has(self, capability: str) -> bool:
         """Whether the family has ``capability``."""
         return capability in self.capabilities
+
+    def trace(self, mechanism, spec: ModelSpec, case, **keywords) -> Any:
+        """``run`` of ``case`` on ``mechanism`` as the case loads it (its drive, if it
+        prescribes a motion: :meth:`flexval.geometry.Mechanism.driven_by`).
+
+        Raises
+        ------
+        SceneError
+            If ``case`` prescribes a motion and the family cannot trace one (no
+            :data:`DISPLACEMENT` capability).
+        """
+        return self.run(self.loaded(mechanism, case), spec, case, **keywords)
+
+    def loaded(self, mechanism, case):
+        """``mechanism`` as ``case`` loads it, for this family's ``run`` or ``system``: with
+        the case's drive where it prescribes a motion
+        (:meth:`flexval.geometry.Mechanism.driven_by`).
+
+        Raises
+        ------
+        SceneError
+            If ``case`` prescribes a motion and the family cannot trace one (no
+            :data:`DISPLACEMENT` capability).
+        """
+        if case.drive is not None and not self.has(DISPLACEMENT):
+            raise SceneError(
+                mechanism.source,
+                f"load_cases.{case.name}.kind",
+                "displacement",
+                f"model family {self.name!r} does not trace a prescribed motion "
+                "(displacement control); use a force or a moment",
+            )
+        return mechanism.driven_by(case)
 
     def option(self, name: str) -> Option | None:
         """The option called ``name``, or None."""

@@ -398,7 +398,33 @@ class System:
         ``dead_load_scale`` (N); it joins the force scale of the residual test,
         so that a case without load (or a small one) still has a meaningful one.
         """
-        return case_loads(case, self.pose_dofs, self.reference, self.size, self.connectors)
+        return case_loads(
+            case, self.pose_dofs, self.reference, self.size, self.connectors, self.drive_loads()
+        )
+
+    def _drive(self) -> tuple[int, Connector] | None:
+        """(index, connector) of the mechanism's drive, if it has one."""
+        from .drives import DriveConnector
+
+        return next(
+            ((k, c) for k, c in enumerate(self.connectors) if isinstance(c, DriveConnector)), None
+        )
+
+    def drive_loads(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The global dofs of the drive's multipliers and their loads (N), or None."""
+        found = self._drive()
+        if found is None:
+            return None
+        k, drive = found
+        return self._local_to_global[k][6:], drive.multiplier_loads()
+
+    def drive_reaction(self, q: np.ndarray) -> np.ndarray | None:
+        """[Fx, Fy, M] the drive applies to its body at its point (N, N, N mm), or None."""
+        found = self._drive()
+        if found is None:
+            return None
+        k, drive = found
+        return drive.reaction(q[self._local_to_global[k][6:]])
 
     # --- assembly --------------------------------------------------------
     def assemble(
@@ -730,11 +756,13 @@ def case_loads(
     reference: dict,
     size: float,
     connectors: Sequence[Connector],
+    multipliers: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> Loads:
     """Dead loads of ``case`` at full value, numbered by ``pose_dofs(body)`` (see
     :meth:`System.loads`): the bodies' reference points (mm), the mechanism's size (mm) and
-    the connectors, whose own dead loads (``dead_load_scale``, N) join the force scale."""
-    loads = Loads.of_case(case, pose_dofs, reference, size)
+    the connectors, whose own dead loads (``dead_load_scale``, N) join the force scale;
+    ``multipliers``: a drive's (:meth:`System.drive_loads`)."""
+    loads = Loads.of_case(case, pose_dofs, reference, size, multipliers)
     loads.scale = max([loads.scale, *(c.dead_load_scale for c in connectors)])
     return loads
 

@@ -11,7 +11,16 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .catalogue import ARCLENGTH, LINEAR, Family, ModelSpec, Option, Resolution, register
+from .catalogue import (
+    ARCLENGTH,
+    DISPLACEMENT,
+    LINEAR,
+    Family,
+    ModelSpec,
+    Option,
+    Resolution,
+    register,
+)
 
 if TYPE_CHECKING:
     from flexval.geometry import Flexure, LoadCase, Mechanism
@@ -229,7 +238,7 @@ BEAM = register(
             WIDTH,
             EB,
         ),
-        frozenset({ARCLENGTH}),
+        frozenset({ARCLENGTH, DISPLACEMENT}),
         _system_of(_beam),
         connectors=_connectors_of(_beam),
         exclusive=WIDTH_EXCLUDES,
@@ -244,7 +253,7 @@ PRBM = register(
         _trace_nonlinear,
         None,
         (PLATE, WIDTH, EB),
-        frozenset({ARCLENGTH}),
+        frozenset({ARCLENGTH, DISPLACEMENT}),
         _system_of(_prbm),
         connectors=_connectors_of(_prbm),
         exclusive=WIDTH_EXCLUDES,
@@ -260,7 +269,7 @@ DCMM = register(
         _trace_nonlinear,
         Resolution("N", "sub-arcs per flexure", 1, 1, MAX_ELEMENTS, True, (1, 8)),
         (FRAME, PLATE, WIDTH, EB),
-        frozenset({ARCLENGTH}),
+        frozenset({ARCLENGTH, DISPLACEMENT}),
         _system_of(_dcmm),
         connectors=_connectors_of(_dcmm),
         exclusive=WIDTH_EXCLUDES,
@@ -275,7 +284,7 @@ EE = register(
         _trace_ee,
         None,
         (PLATE, WIDTH, EB),
-        frozenset({LINEAR}),
+        frozenset({LINEAR, DISPLACEMENT}),
         _system_of(_ee),
         connectors=_connectors_of(_ee),
         exclusive=WIDTH_EXCLUDES,

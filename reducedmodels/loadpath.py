@@ -61,6 +61,12 @@ class LoadPath:
         (:mod:`flexval.validation.series`) are made from them.
     reactions : list of [Fx, Fy, M], optional
         Total force (N) and moment about the origin (N mm) the ground exerts.
+    drive_reactions : list of [Fx, Fy, M], optional
+        Of a load case that prescribes a motion (displacement control): at
+        every level, the force (N) and the moment (N mm, about the driven
+        point) the drive applies to the driven body, what holds the
+        prescribed motion. ``load`` is then the prescribed motion (mm, or rad
+        for a rotation alone).
     valid : list of bool, optional
         The validity monitor at each level: True when every connector's state
         is inside its model's range of meaning (chord stretch, rotation per
@@ -114,6 +120,7 @@ class LoadPath:
     shapes: dict | None = None
     section_forces: dict | None = None
     reactions: list | None = None
+    drive_reactions: list | None = None
     valid: list | None = None
     validity: list | None = None
     time: list | None = None

@@ -11,7 +11,9 @@ potential and -lambda F . d2x/dtheta2 = lambda F . R(theta) rel to its
 theta-theta tangent entry. The load vector f = -d(grad V)/d(lambda) = J^T F
 (+ M) is what arc-length continuation borders the tangent with. Both come
 from :meth:`Loads.add_to`, the one place the loads' kinematics is
-written.
+written. A prescribed motion (:mod:`flexval.reducedmodels.drives`) is a
+constant load m on its constraint's multipliers, held with the moments
+(a potential -lambda m mu, linear in its coordinate as a moment's is).
 
 Units: mm, N, N mm, rad.
 """
@@ -66,11 +68,26 @@ class Loads:
         pose_dofs: Callable[[str], np.ndarray],
         reference: Mapping[str, np.ndarray],
         size: float,
+        multipliers: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> Loads:
         """The loads of ``case`` in ``pose_dofs(body)`` numbering; bodies' reference points in mm.
 
-        ``size`` (mm) turns moments into forces for :attr:`scale`.
+        ``size`` (mm) turns moments into forces for :attr:`scale`. ``multipliers``:
+        the global dofs of a drive's multipliers and their loads (N,
+        :meth:`flexval.reducedmodels.drives.DriveConnector.multiplier_loads`), required
+        where ``case`` prescribes a motion.
+
+        Raises
+        ------
+        ValueError
+            If ``case`` prescribes a motion and no ``multipliers`` are given (a
+            System built without the case's drive: it would silently not move).
         """
+        if case.drive is not None and multipliers is None:
+            raise ValueError(
+                f"load case {case.name!r} prescribes a motion of body {case.drive.body!r}; "
+                "this system was built without its drive (Mechanism.driven_by)"
+            )
         fd, ff, fr, md, mv = [], [], [], [], []
         for comp in case.components:
             dofs = pose_dofs(comp.body)
@@ -91,6 +108,11 @@ class Loads:
                 1e-300,
             ]
         )
+        if multipliers is not None:  # a drive's loads (N) on its multipliers, with the moments
+            dofs, values = multipliers
+            md += np.asarray(dofs, int).tolist()
+            moments = np.concatenate([moments, np.asarray(values, float)])
+            scale = max([scale, *map(abs, np.asarray(values, float).tolist())])
         return cls(
             np.array(fd, int).reshape(-1, 3),
             forces,

@@ -50,7 +50,8 @@ def flexure_connectors(
     (:mod:`flexval.reducedmodels.notchcorrection`: the continuum's, where beam
     theory's ∫ ds/EI is 1-50 % stiff) unless ``eb`` (plain Euler-Bernoulli) is given.
     Pins (``mechanism.pins``) are added as exact Lagrange-multiplier joints
-    (:class:`flexval.reducedmodels.joints.PinConnector`) whatever the model. With
+    (:class:`flexval.reducedmodels.joints.PinConnector`) whatever the model, and so is
+    a prescribed motion (``mechanism.drive``, :mod:`flexval.reducedmodels.drives`). With
     ``[gravity]`` in the scene, the weights of the flexures and bodies are
     dead loads in the potential (:func:`flexval.reducedmodels.inertia.with_weights`).
 
@@ -76,10 +77,10 @@ def flexure_connectors(
             conns.append(make(f, own, spec, **options))
         except ValueError as exc:  # the model cannot represent this flexure
             raise SceneError(mechanism.source, f"flexures.{f.name}", spec.id, str(exc)) from None
-    if mechanism.pins:
-        from .joints import pin_connectors
+    if mechanism.pins or mechanism.drive is not None:
+        from .drives import constraint_connectors
 
-        conns += pin_connectors(mechanism)
+        conns += constraint_connectors(mechanism)
     return with_weights(mechanism, conns)
 
 
@@ -317,7 +318,10 @@ def linear_response(
     q0 = np.zeros(n)
     q0[: 3 * len(bodies)] = [x for b in bodies for x in poses[b]]
     q0[dofs[moving]] = at_rest[moving]  # and the internal coordinates
-    loads = Loads.of_case(case, pose_dofs, reference, mechanism.size())
+    drive = _drive_of(connectors, dofs, places, bounds)
+    loads = Loads.of_case(
+        case, pose_dofs, reference, mechanism.size(), None if drive is None else drive[1:]
+    )
     g_unit = g_zero.copy()  # g = grad E(q0) - f = -f at rest
     loads.add_to(q0, 1.0, g_unit, np.zeros_like(g_unit))
     dq = K0.solve(g_zero - g_unit)  # per unit load factor
@@ -429,8 +433,30 @@ def linear_response(
                 for f, w in zip(unit, dead)
             ]
             append_section_forces(lp, zip(connectors, stacked))
+    if drive is not None:  # the drive's force and moment, linear in its multipliers
+        connector, multipliers = drive[0], drive[1]
+        lp.drive_reactions = [
+            connector.reaction(
+                q0[multipliers] + dq_dead[multipliers] + f * dq[multipliers]
+            ).tolist()
+            for f in lam.tolist()
+        ]
     lp.seconds = time.perf_counter() - t0
     return lp
+
+
+def _drive_of(
+    connectors: Sequence[Connector], dofs: np.ndarray, places: Sequence[int], bounds: Sequence[int]
+) -> tuple | None:
+    """(connector, its multipliers' global dofs, their loads in N) of the drive among
+    ``connectors`` (numbered end to end: connector k's local coordinates are
+    ``dofs[places[k]:bounds[k]]``), or None."""
+    from .drives import DriveConnector
+
+    for c, a, b in zip(connectors, places, bounds):
+        if isinstance(c, DriveConnector):
+            return c, dofs[a + 6 : b], c.multiplier_loads()
+    return None
 
 
 def run_reduced(
@@ -454,7 +480,7 @@ def run_reduced(
     core.SolverError
         If the path cannot be followed to full load.
     """
-    return spec.model_family.run(
+    return spec.model_family.trace(
         mechanism,
         spec,
         case,

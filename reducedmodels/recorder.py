@@ -113,6 +113,7 @@ class PathRecorder:
             poses={b: [] for b in system.mechanism.bodies} if record_poses else None,
             shapes={c.name: [] for c in system.connectors} if record_shapes else None,
             reactions=[] if record_reactions else None,
+            drive_reactions=[] if case.drive is not None else None,
             valid=[],
             validity=[],
             bifurcations=[],
@@ -147,6 +148,8 @@ class PathRecorder:
         self.states.append(q)
         if lp.reactions is not None:
             lp.reactions.append(system.reaction(q).tolist())
+        if lp.drive_reactions is not None:
+            lp.drive_reactions.append(system.drive_reaction(q).tolist())
         if lp.poses is not None:
             for b in system.mechanism.bodies:
                 lp.poses[b].append(system.pose(q, b).tolist())

@@ -37,8 +37,10 @@ def run_buckle(
     flexval.reducedmodels.core.SolverError
         If the equilibrium cannot be reached, or its tangent is singular.
     """
+    from flexval.reducedmodels.drives import refuse_prescribed_motion
     from flexval.reducedmodels.models import build_system
 
+    refuse_prescribed_motion(case, COMMAND_LINE, "--load-case", "buckle")
     if not 0.0 <= fraction < 1.0 or not math.isfinite(fraction):
         raise SceneError(
             COMMAND_LINE, "--at", fraction, "must be a load fraction from 0 (at rest) up to 1"

@@ -477,6 +477,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         note = _validity_note(lp)
         if note:
             print(note)
+        if lp.drive_reactions:
+            print(f"{'':<{columns[0].size}}{GAP}{_drive_line(lp)}")
         if _peak_cells(lp, scene)[0].endswith(FIBRE_MARK):
             print(f"{'':<{columns[0].size}}{GAP}{FIBRE_MARK} peak: {_fibre_note(lp)}")
         strength = _yield_line(scene, lp)
@@ -509,6 +511,19 @@ def _cmd_run(args: argparse.Namespace) -> int:
             f"(ParaView, or: flexval view {written[0]})"
         )
     return status
+
+
+def _drive_line(lp) -> str:
+    """What holds a prescribed motion: the drive's force (N) and moment (N mm) at the path's
+    last point, and the largest force along it with the motion it was at."""
+    fx, fy, moment = lp.drive_reactions[-1]
+    size = [math.hypot(x, y) for x, y, _ in lp.drive_reactions]
+    k = max(range(len(size)), key=size.__getitem__)
+    return (
+        f"drive reaction: Fx {fx:.6g} N, Fy {fy:.6g} N, M {moment:.6g} N mm at load "
+        f"{lp.load[-1]:.6g} {lp.load_unit}; largest |F| {size[k]:.6g} N at "
+        f"{lp.load[k]:.6g} {lp.load_unit}"
+    )
 
 
 def _run_dynamic(args: argparse.Namespace, scene, specs, cases, json_path) -> int:

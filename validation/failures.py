@@ -88,7 +88,7 @@ def first_limit(scene: Scene, spec: ModelSpec, case: LoadCase) -> tuple[float, L
     """
     if not spec.model_family.has(ARCLENGTH):
         return None
-    system = build_system(scene.mechanism, spec, LIMIT_SETTINGS)
+    system = build_system(spec.model_family.loaded(scene.mechanism, case), spec, LIMIT_SETTINGS)
     try:
         lp = solve_arclength(
             system,

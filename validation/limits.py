@@ -71,7 +71,8 @@ def trace_arclength(
         If the trace fails; its partial path carries the limit points passed.
     """
     check_arclength(spec)
-    system = spec.model_family.system(scene.mechanism, spec, ARCLENGTH_SETTINGS)
+    family = spec.model_family
+    system = family.system(family.loaded(scene.mechanism, case), spec, ARCLENGTH_SETTINGS)
     try:
         lp = solve_arclength(
             system,

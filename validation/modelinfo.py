@@ -14,6 +14,7 @@ import textwrap
 from flexval.reducedmodels.catalogue import (
     ARCLENGTH,
     CAPABILITIES,
+    DISPLACEMENT,
     FIELDS,
     LINEAR,
     REFERENCE,
@@ -27,6 +28,7 @@ from .tables import Column, text_table
 
 CAPABILITY_DOCS = {
     ARCLENGTH: "traced through limit points by `flexval run --arclength`",
+    DISPLACEMENT: "traces a load case that prescribes a motion (displacement control)",
     FIELDS: "writes stress fields of the deformed flexures (VTU, PNG)",
     LINEAR: "linear response: the path is proportional to the load, no limit points",
     REFERENCE: "the reference of reports and benchmarks (its default resolution)",

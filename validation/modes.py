@@ -140,6 +140,10 @@ def run_modes(
             fraction,
             "must be a load fraction from 0 (unloaded) to 1 (full load)",
         )
+    if fraction:
+        from flexval.reducedmodels.drives import refuse_prescribed_motion
+
+        refuse_prescribed_motion(case, "<command line>", "--load-case", "modes about a preload")
     if spec.model_family.has(LINEAR) and fraction != 0.0:
         raise SceneError(
             "<command line>",

@@ -57,7 +57,7 @@ def run_model(
         case = scene.load_case(case)
 
     def run() -> LoadPath:
-        return spec.model_family.run(
+        return spec.model_family.trace(
             scene.mechanism,
             spec,
             case,

@@ -14,6 +14,7 @@ import math
 
 from flexval.geometry import LoadCase, Scene, SceneError
 from flexval.reducedmodels.catalogue import LINEAR, ModelSpec
+from flexval.reducedmodels.drives import refuse_prescribed_motion
 from flexval.reducedmodels.models import build_system
 from flexval.reducedmodels.modes import equilibrium, scaled_case
 from flexval.reducedmodels.targetstiffness import TargetStiffness, target_stiffness
@@ -51,6 +52,8 @@ def run_stiffness(
         raise SceneError(
             COMMAND_LINE, "--at", fraction, "must be a load fraction from 0 (at rest) to 1"
         )
+    if fraction:
+        refuse_prescribed_motion(case, COMMAND_LINE, "--load-case", "stiffness about a preload")
     system = build_system(scene.mechanism, spec)
     linear = spec.model_family.has(LINEAR)
     if linear or case is None or fraction == 0.0:

@@ -12,6 +12,7 @@ from flexval.geometry.mesh import MAX_LEVEL
 from flexval.reducedmodels import LoadPath
 from flexval.reducedmodels.catalogue import (
     ARCLENGTH,
+    DISPLACEMENT,
     FIELDS,
     REFERENCE,
     Family,
@@ -132,7 +133,7 @@ CONTINUUM = register(
                 keyword="three_d",
             ),
         ),
-        frozenset({FIELDS, REFERENCE, ARCLENGTH}),
+        frozenset({FIELDS, REFERENCE, ARCLENGTH, DISPLACEMENT}),
         system,
         path_cost,
         exclusive=(("3d", "plane"),),

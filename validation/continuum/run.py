@@ -39,12 +39,13 @@ def build_system(
     settings: SolverSettings | None = None,
     three_d: bool = False,
 ) -> System:
-    """The multibody System with every flexure meshed at ``level`` (pins as exact joints).
+    """The multibody System with every flexure meshed at ``level`` (pins and a drive as exact
+    constraints).
 
     ``three_d``: the flexures as 3D solids of half their depth
     (:class:`.connector3d.Continuum3DConnector`; ``plane`` is not used).
     """
-    from flexval.reducedmodels.joints import pin_connectors
+    from flexval.reducedmodels.drives import constraint_connectors
 
     if three_d:
         from .connector3d import Continuum3DConnector
@@ -55,7 +56,7 @@ def build_system(
             ContinuumConnector(f, mechanism, level, law=law, plane=plane)
             for f in mechanism.flexures
         ]
-    conns += pin_connectors(mechanism)
+    conns += constraint_connectors(mechanism)
     return System(mechanism, with_weights(mechanism, conns), settings or SolverSettings())
 
 
