@@ -8,13 +8,14 @@ from .inertia import MassData, RigidMass
 from .kinematics import rotation
 from .loads import Displacement, Force, LoadCase, Moment
 from .mechanism import Body, Flexure, FlexureSpec, Material, Mechanism, PinSpec, Section
-from .scene import BUILTIN_SCENES, Scene, load_scene
+from .scene import BUILTIN_SCENES, MECHANISM_SCENES, Scene, load_scene
 from .shapes import Arc, Ellipse, Segment, Spline
 
 __all__ = [
     "Arc",
     "Body",
     "BUILTIN_SCENES",
+    "MECHANISM_SCENES",
     "Ellipse",
     "Flexure",
     "FlexureSpec",

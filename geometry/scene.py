@@ -2,8 +2,9 @@
 
 A scene is the one input of every flexval command. ``load_scene`` accepts a
 built-in name (:data:`BUILTIN_SCENES`: the paper's ``open_chain`` and
-``closed_chain`` and the flexure scenes ``notch_fourbar``, ``filleted_stage``,
-``tapered_leaf``, ``spline_flexure``) or a path. Every value is
+``closed_chain``, the flexure scenes ``notch_fourbar``, ``filleted_stage``,
+``tapered_leaf``, ``spline_flexure`` and the canonical mechanisms
+``parallel_guide``, ``folded_guide``, ``cross_pivot``, ``bistable_truss``) or a path. Every value is
 checked; a bad one raises :class:`SceneError` naming the file, the field and
 the value. Angles are degrees in the file and radians in memory; lengths mm,
 moduli MPa, forces N, moments N mm.
@@ -94,12 +95,16 @@ PAPER_SCENES = ("open_chain", "closed_chain")
 FLEXURE_SCENES = ("notch_fourbar", "filleted_stage", "tapered_leaf", "spline_flexure")
 """Mechanisms of varying-section and free-form flexures: circular notch hinges,
 corner-filleted notch hinges, tapered leaves and an S-shaped spline."""
-BUILTIN_SCENES = PAPER_SCENES + FLEXURE_SCENES
+MECHANISM_SCENES = ("parallel_guide", "folded_guide", "cross_pivot", "bistable_truss")
+"""Canonical mechanisms designers build, each with an independent anchor in the tests: a
+parallel leaf guide, a folded guide, a cross-axis pivot and a bistable truss."""
+BUILTIN_SCENES = PAPER_SCENES + FLEXURE_SCENES + MECHANISM_SCENES
 """Every scene ``load_scene`` knows by name (files in ``flexval/geometry/scenes``)."""
 
 __all__ = [
     "BUILTIN_SCENES",
     "FLEXURE_SCENES",
+    "MECHANISM_SCENES",
     "PAPER_SCENES",
     "MAX_NAME_LENGTH",
     "OUTPUTS",

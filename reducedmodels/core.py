@@ -418,6 +418,37 @@ class System:
         k, drive = found
         return self._local_to_global[k][6:], drive.multiplier_loads()
 
+    def check_drive(self, case: LoadCase, model: str = "") -> None:
+        """Refuse a prescribed motion this System cannot follow, before tracing it.
+
+        A well-posed drive makes the saddle-point tangent at rest exactly one
+        negative eigenvalue per multiplier (:meth:`unstable`). Fewer mean zero
+        eigenvalues: the drive prescribes a direction the model already holds
+        rigid (the PRBM's inextensible straight leaves), so no motion of it
+        exists and load control would cut its steps to nothing.
+
+        Raises
+        ------
+        SolverError
+            At load factor 0, naming the model and the drive's body.
+        """
+        if case.drive is None or self._drive() is None:
+            return
+        from flexval.geometry import Moment
+
+        rest = LoadCase("rest", (Moment(self.mechanism.target_body, 0.0),), 2)
+        tangent = self.assemble(self.initial_state(), self.loads(rest), 0.0)[2]
+        negative = self.instability(tangent)
+        if negative is not None and negative < 0:
+            raise SolverError(
+                f"{model or 'model'} on load case '{case.name}': the prescribed motion of body "
+                f"{case.drive.body!r} moves it along a direction this model holds rigid "
+                f"(its tangent at rest is singular there: {-negative} zero eigenvalue(s); "
+                "the PRBM's straight leaves are inextensible links): prescribe fewer "
+                "components, or 'flexval stiffness' names the rigid directions",
+                0.0,
+            )
+
     def drive_reaction(self, q: np.ndarray) -> np.ndarray | None:
         """[Fx, Fy, M] the drive applies to its body at its point (N, N, N mm), or None."""
         found = self._drive()

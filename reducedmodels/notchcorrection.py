@@ -159,3 +159,10 @@ def corrected_material(material: Material, factors: NotchFactors) -> Material:
         poisson_ratio=young / (2.0 * shear_modulus) - 1.0,
         shear_flexible=True,
     )
+
+
+def takes_correction(spec) -> bool:
+    """Whether the model ``spec`` (a ModelSpec) takes this module's correction on its notch
+    hinges: its family offers the plain Euler-Bernoulli option ``eb`` (the reduced
+    families) and the spec does not set it."""
+    return spec.model_family.option("eb") is not None and not spec.kwargs.get("eb")

@@ -97,6 +97,7 @@ class PathRecorder:
         limit_points: bool = False,
     ):
         self.t0 = time.perf_counter()
+        system.check_drive(case, model)
         self.system, self.case, self.model = system, case, model
         self.magnitude = case.magnitude  # the full load (N or N mm), read at every level
         self.path = LoadPath(

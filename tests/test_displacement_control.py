@@ -318,3 +318,18 @@ def test_the_builtin_scenes_still_parse_without_drives():
         scene = load_scene(name)
         assert all(case.drive is None for case in scene.load_cases)
         assert scene.mechanism.driven_by(scene.load_cases[0]) is scene.mechanism
+
+
+def test_a_motion_the_model_holds_rigid_is_refused_before_tracing():
+    # prbm's straight leaves are inextensible: holding dy as well as driving dx
+    # over-constrains the shuttle (its tangent at rest has a zero eigenvalue: one negative
+    # pivot short of its multipliers), and the pinned truss cannot move at all
+    from flexval.reducedmodels import SolverError
+
+    with pytest.raises(SolverError, match="prbm on load case 'drive': the prescribed") as info:
+        run_model(guide(), "prbm", "drive")
+    assert info.value.load_factor == 0.0 and "holds rigid" in str(info.value)
+    with pytest.raises(SolverError, match="holds rigid"):
+        run_model(load_scene("bistable_truss"), "prbm", "snap")
+    # the same drive without dy is well posed in the PRBM
+    assert run_model(guide(), "prbm", "slide", levels=2).converged

@@ -315,10 +315,10 @@ def _uncalibrated_notes(scene, specs) -> list[str]:
     """A note per notch hinge outside the calibrated range of the reduced models' correction
     (:mod:`flexval.reducedmodels.notchcorrection`), where a reduced model without ``eb``
     runs: its factors are the nearest calibrated hinge's, not its own."""
-    reduced = [s for s in specs if s.family in ("beam", "dcmm", "prbm", "ee")]
-    if not any(not s.kwargs.get("eb") for s in reduced):
+    from flexval.reducedmodels.notchcorrection import factors_of, takes_correction
+
+    if not any(takes_correction(s) for s in specs):
         return []
-    from flexval.reducedmodels.notchcorrection import factors_of
 
     notes = []
     for flexure in scene.mechanism.flexures:
@@ -330,6 +330,30 @@ def _uncalibrated_notes(scene, specs) -> list[str]:
                 "calibrated hinge's factors (compare with the continuum, or [eb])"
             )
     return notes
+
+
+def _plain_width_notes(scene, specs) -> list[str]:
+    """A note naming the straight uniform leaves where a model with ``width`` runs: the
+    strip theory gives them no anticlastic term (r = 1,
+    :func:`flexval.geometry.anticlastic.flexure_ratio`), so ``[width]`` leaves them plain
+    plane-stress beam theory, and the stiffening of a deep leaf by its clamps is not
+    modelled."""
+    if not any(s.kwargs.get("width") for s in specs):
+        return []
+    from flexval.geometry import Segment
+
+    leaves = [
+        f"{f.name} (b/h {f.section.depth / f.section.thickness:.3g})"
+        for f in scene.mechanism.flexures
+        if isinstance(f.shape, Segment) and f.section.is_uniform
+    ]
+    if not leaves:
+        return []
+    return [
+        f"note: [width] leaves the straight leaves {', '.join(leaves)} at plane-stress beam "
+        "theory: the anticlastic strip theory has no term for a straight leaf, nor for the "
+        "plate stiffening its clamps give a deep one (compare with continuum:1[3d])"
+    ]
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -376,7 +400,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     massless = inertia.massless_bodies(scene.mechanism.moving_bodies)
     if inertia.gravity is not None and massless:
         print(f"note: bodies without mass data are massless (no weight): {', '.join(massless)}")
-    for line in _uncalibrated_notes(scene, specs):
+    for line in [*_uncalibrated_notes(scene, specs), *_plain_width_notes(scene, specs)]:
         print(line)
     record = {
         "record_poses": "poses" in scene.outputs or vtu_dir is not None,
@@ -478,7 +502,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         if note:
             print(note)
         if lp.drive_reactions:
-            print(f"{'':<{columns[0].size}}{GAP}{_drive_line(lp)}")
+            drive = scene.load_case(lp.load_case).drive
+            print(f"{'':<{columns[0].size}}{GAP}{_drive_line(lp, drive)}")
         if _peak_cells(lp, scene)[0].endswith(FIBRE_MARK):
             print(f"{'':<{columns[0].size}}{GAP}{FIBRE_MARK} peak: {_fibre_note(lp)}")
         strength = _yield_line(scene, lp)
@@ -513,17 +538,30 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return status
 
 
-def _drive_line(lp) -> str:
-    """What holds a prescribed motion: the drive's force (N) and moment (N mm) at the path's
-    last point, and the largest force along it with the motion it was at."""
+def _drive_line(lp, drive) -> str:
+    """What holds a prescribed motion (``drive``, a Displacement): the force (N) and moment
+    (N mm) at the path's last point, the range of the reaction along the drive's first
+    prescribed component and where it is zero (the unloaded equilibria a bistable mechanism
+    passes)."""
     fx, fy, moment = lp.drive_reactions[-1]
-    size = [math.hypot(x, y) for x, y, _ in lp.drive_reactions]
-    k = max(range(len(size)), key=size.__getitem__)
-    return (
+    component, _ = drive.prescribed[0]
+    c, s = math.cos(drive.angle), math.sin(drive.angle)
+    along = [(x * c + y * s, -x * s + y * c, m)[component] for x, y, m in lp.drive_reactions]
+    unit = "N mm" if component == 2 else "N"
+    text = (
         f"drive reaction: Fx {fx:.6g} N, Fy {fy:.6g} N, M {moment:.6g} N mm at load "
-        f"{lp.load[-1]:.6g} {lp.load_unit}; largest |F| {size[k]:.6g} N at "
-        f"{lp.load[k]:.6g} {lp.load_unit}"
+        f"{lp.load[-1]:.6g} {lp.load_unit}; along the drive from {min(along):.6g} to "
+        f"{max(along):.6g} {unit}"
     )
+    zeros = [
+        lp.load[i] + (lp.load[i + 1] - lp.load[i]) * along[i] / (along[i] - along[i + 1])
+        for i in range(1, len(along) - 1)
+        if along[i] * along[i + 1] < 0 or (along[i + 1] == 0 and along[i] != 0)
+    ]
+    if zeros:
+        listed = ", ".join(f"{z:.4g}" for z in zeros)
+        text += f"; zero at {listed} {lp.load_unit} (unloaded equilibria)"
+    return text
 
 
 def _run_dynamic(args: argparse.Namespace, scene, specs, cases, json_path) -> int:

@@ -153,13 +153,13 @@ def notch_concentrations(scene, lp: LoadPath) -> dict[str, float]:
     plain Euler-Bernoulli hinges (``eb``) and for a model id the catalogue does not know."""
     from flexval.geometry import SceneError
     from flexval.reducedmodels.catalogue import parse_model
-    from flexval.reducedmodels.notchcorrection import factors_of
+    from flexval.reducedmodels.notchcorrection import factors_of, takes_correction
 
     try:
         spec = parse_model(lp.model.split(":arclength")[0])
     except SceneError:
         return {}
-    if spec.family not in ("beam", "dcmm", "prbm", "ee") or spec.kwargs.get("eb"):
+    if not takes_correction(spec):
         return {}
     nu = scene.mechanism.material.poisson_ratio
     out = {}
