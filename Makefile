@@ -1,5 +1,6 @@
 # Two commands on a fresh machine with only Python and pip:
-#   make report   -> creates .venv, installs flexval, builds reports/paper/ and reports/flexures/
+#   make report   -> creates .venv, installs flexval, builds reports/paper/, reports/flexures/
+#                    and reports/mechanisms/
 #                    (their run times into build/timings/: a clean checkout stays clean)
 #   make test     -> creates/refreshes .venv the same way, lints (ruff), runs the test suite
 #   make docs     -> the documentation site in site/ (strict: a warning fails it)
@@ -38,6 +39,7 @@ venv: $(STAMP)
 
 PAPER_REPORT = --out reports/paper --protocol reports/dynamics/protocol.json --threed reports/threed/threed.json --peers
 FLEXURE_REPORT = notch_fourbar filleted_stage tapered_leaf spline_flexure --out reports/flexures
+MECHANISM_REPORT = parallel_guide folded_guide cross_pivot bistable_truss --out reports/mechanisms
 # where `make report` writes the run times it measures (ignored by git)
 TIMINGS = build/timings
 
@@ -46,12 +48,14 @@ report: $(PEERS)
 	$(BIN)/flexval info closed_chain
 	$(BIN)/flexval report $(PAPER_REPORT) --timings $(TIMINGS)/paper
 	$(BIN)/flexval report $(FLEXURE_REPORT) --timings $(TIMINGS)/flexures
+	$(BIN)/flexval report $(MECHANISM_REPORT) --timings $(TIMINGS)/mechanisms
 
 # the committed run times beside the reports (machine-dependent: refreshed deliberately,
 # never by `make report`, which leaves a clean checkout clean)
 timings: $(PEERS)
 	$(BIN)/flexval report $(PAPER_REPORT)
 	$(BIN)/flexval report $(FLEXURE_REPORT)
+	$(BIN)/flexval report $(MECHANISM_REPORT)
 
 # lint and format check first (ruff, configured in pyproject.toml), then the suite
 test: lint

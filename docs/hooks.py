@@ -14,7 +14,7 @@
   fails the build.
 - The package as it installs is linked under ``build/docs-src`` for
   mkdocstrings (see :func:`_link_package`).
-- The published reports (``reports/paper``, ``reports/flexures``,
+- The published reports (``reports/paper``, ``reports/flexures``, ``reports/mechanisms``,
   ``reports/dynamics``, ``reports/threed``, ``reports/sweep_example``: Markdown
   and figures) are added to the site under
   ``validation/`` as they are, so their relative links resolve.
@@ -47,6 +47,7 @@ ROOT = Path(__file__).resolve().parent.parent
 REPORTS = {
     "paper": "reports/paper",
     "flexures": "reports/flexures",
+    "mechanisms": "reports/mechanisms",
     "dynamics": "reports/dynamics",
     "threed": "reports/threed",
     "sweep_example": "reports/sweep_example",

@@ -333,3 +333,34 @@ def test_a_motion_the_model_holds_rigid_is_refused_before_tracing():
         run_model(load_scene("bistable_truss"), "prbm", "snap")
     # the same drive without dy is well posed in the PRBM
     assert run_model(guide(), "prbm", "slide", levels=2).converged
+
+
+def test_a_drives_free_components_are_its_parasitic_motion():
+    from flexval.validation.parasitic import parasitic_components
+
+    scene = guide()
+    target = (scene.mechanism.target_body, scene.mechanism.target_point)
+    slide, held = scene.load_case("slide"), scene.load_case("drive")
+    assert [n for n, _ in parasitic_components(slide, target)] == ["dy", "rotation"]
+    assert [n for n, _ in parasitic_components(held, target)] == ["rotation"]
+    elsewhere = (scene.mechanism.target_body, np.array([0.0, 50.0]))
+    assert parasitic_components(slide, elsewhere) == []  # another point: not the target's
+
+
+def test_reaction_errors_and_zero_crossings():
+    from flexval.validation.drivereaction import reaction_errors, zero_crossings
+
+    mech, load = von_mises_truss()
+    drive = Displacement("c", mech.target_point, dy=-50.0)
+    case = LoadCase("snap", (drive,), 26)
+    ref = run_reduced(mech, parse_model("beam:4"), case)
+    (same,) = reaction_errors(ref, ref, drive)
+    assert same["component"] == "Fv" and same["end"] == 0.0 and same["path"] == 0.0
+    scaled = copy.deepcopy(ref)
+    scaled.drive_reactions = [[1.1 * x for x in row] for row in ref.drive_reactions]
+    (off,) = reaction_errors(scaled, ref, drive)
+    assert off["end"] == pytest.approx(10.0) and off["path"] == pytest.approx(10.0)
+    # the truss's force vanishes with both bars level (20 mm) and mirrored (40 mm), levels
+    # of this path: exact crossings there
+    fv = np.asarray(ref.drive_reactions)[:, 1]
+    np.testing.assert_allclose(zero_crossings(ref, fv), [-20.0, -40.0], atol=1e-9)

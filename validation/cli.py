@@ -542,22 +542,19 @@ def _drive_line(lp, drive) -> str:
     """What holds a prescribed motion (``drive``, a Displacement): the force (N) and moment
     (N mm) at the path's last point, the range of the reaction along the drive's first
     prescribed component and where it is zero (the unloaded equilibria a bistable mechanism
-    passes)."""
+    passes; :mod:`.drivereaction`)."""
+    from .drivereaction import along_drive, zero_crossings
+
     fx, fy, moment = lp.drive_reactions[-1]
     component, _ = drive.prescribed[0]
-    c, s = math.cos(drive.angle), math.sin(drive.angle)
-    along = [(x * c + y * s, -x * s + y * c, m)[component] for x, y, m in lp.drive_reactions]
+    along = along_drive(lp, drive)[:, component]
     unit = "N mm" if component == 2 else "N"
     text = (
         f"drive reaction: Fx {fx:.6g} N, Fy {fy:.6g} N, M {moment:.6g} N mm at load "
-        f"{lp.load[-1]:.6g} {lp.load_unit}; along the drive from {min(along):.6g} to "
-        f"{max(along):.6g} {unit}"
+        f"{lp.load[-1]:.6g} {lp.load_unit}; along the drive from {along.min():.6g} to "
+        f"{along.max():.6g} {unit}"
     )
-    zeros = [
-        lp.load[i] + (lp.load[i + 1] - lp.load[i]) * along[i] / (along[i] - along[i + 1])
-        for i in range(1, len(along) - 1)
-        if along[i] * along[i + 1] < 0 or (along[i + 1] == 0 and along[i] != 0)
-    ]
+    zeros = zero_crossings(lp, along)
     if zeros:
         listed = ", ".join(f"{z:.4g}" for z in zeros)
         text += f"; zero at {listed} {lp.load_unit} (unloaded equilibria)"

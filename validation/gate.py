@@ -226,7 +226,13 @@ def _values(
 ) -> dict[str, float | None]:
     out: dict[str, float | None] = {}
     if "parasitic" in metrics:
-        rows = parasitic_errors(lp, ref, case, scene.mechanism.size())
+        rows = parasitic_errors(
+            lp,
+            ref,
+            case,
+            scene.mechanism.size(),
+            (scene.mechanism.target_body, scene.mechanism.target_point),
+        )
         scored = [r["end"] for r in rows if r["scored"]]
         out["parasitic"] = max(scored) if scored else None
     if any(m in PATH_METRICS for m in metrics):

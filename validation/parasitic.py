@@ -10,8 +10,9 @@ is 100 % off in that component. This module measures each component apart:
 
 * the **parasitic components** of a load case: for a single force, the
   target's translation across the force and its rotation; for a single
-  moment, the target's translation (dx and dy); a case of several loads has
-  none named;
+  moment, the target's translation (dx and dy); for a prescribed motion of
+  the target point, the components it leaves free (along its frame's axes,
+  and the rotation); a case of several loads has none named;
 * each component's error at full load against the reference's own value of
   that component (100 % for a model that predicts 0), in percent, and its
   largest difference over the path in its own unit (mm, rad);
@@ -27,7 +28,7 @@ import math
 
 import numpy as np
 
-from flexval.geometry import Force, LoadCase, Moment
+from flexval.geometry import Displacement, Force, LoadCase, Moment
 from flexval.reducedmodels import LoadPath
 
 from .compare import on_reference_levels
@@ -38,13 +39,24 @@ target's translation and its rotation times the mechanism's size) is round-off: 
 states are converged to about 1e-10 of the size, so anything smaller is no motion at all."""
 
 
-def parasitic_components(case: LoadCase) -> list[tuple[str, np.ndarray | None]]:
+def parasitic_components(
+    case: LoadCase, target: tuple[str, np.ndarray] | None = None
+) -> list[tuple[str, np.ndarray | None]]:
     """The parasitic components of ``case``: (name, unit vector in the (dx, dy) plane, or None
     for the rotation). A single force along u: the translation across u (``across``, along
-    u rotated by +90 deg) and the rotation; a single moment: dx and dy; several loads: none."""
+    u rotated by +90 deg) and the rotation; a single moment: dx and dy; a prescribed motion
+    of ``target`` (its body and point, mm), those it leaves free (``dx``/``dy`` along its
+    frame's axes, ``rotation``); several loads: none."""
     if len(case.components) != 1:
         return []
     load = case.components[0]
+    if isinstance(load, Displacement):
+        if target is None or load.body != target[0] or not np.allclose(load.point, target[1]):
+            return []
+        c, s = math.cos(load.angle), math.sin(load.angle)
+        axes = (("dx", np.array([c, s])), ("dy", np.array([-s, c])), ("rotation", None))
+        held = {k for k, _ in load.prescribed}
+        return [axis for k, axis in enumerate(axes) if k not in held]
     if isinstance(load, Force):
         across = np.array([-math.sin(load.angle), math.cos(load.angle)])
         return [("across", across), ("rotation", None)]
@@ -66,8 +78,15 @@ def motion_scale(ref: LoadPath, size: float) -> float:
     return float(max(d.max(initial=0.0), np.abs(ref.rotation).max(initial=0.0) * size))
 
 
-def parasitic_errors(model: LoadPath, ref: LoadPath, case: LoadCase, size: float) -> list[dict]:
-    """Each parasitic component of ``case`` (:func:`parasitic_components`) of ``model`` against
+def parasitic_errors(
+    model: LoadPath,
+    ref: LoadPath,
+    case: LoadCase,
+    size: float,
+    target: tuple[str, np.ndarray] | None = None,
+) -> list[dict]:
+    """Each parasitic component of ``case`` (:func:`parasitic_components`; ``target`` the
+    mechanism's target body and point) of ``model`` against
     ``ref`` (both paths to full load, on the same case): ``component``, ``unit`` (mm or rad),
     ``reference`` and ``model`` at full load, ``end`` (percent of the reference's value, None
     where that is round-off), ``path`` (the largest difference over the path, in the unit)
@@ -75,7 +94,7 @@ def parasitic_errors(model: LoadPath, ref: LoadPath, case: LoadCase, size: float
     dx, dy, rot = on_reference_levels(model, ref)
     floor = ROUND_OFF_FLOOR * motion_scale(ref, size)
     rows = []
-    for name, direction in parasitic_components(case):
+    for name, direction in parasitic_components(case, target):
         theirs = _component(ref.dx, ref.dy, ref.rotation, direction)
         ours = _component(dx, dy, rot, direction)
         unit_floor = floor if direction is not None else floor / size
@@ -100,18 +119,19 @@ def section(res, reference: str) -> list[str]:
     reference's value of each component at full load, and each model's, with its error in
     percent of that value (a model that predicts none is 100 % off) and the largest
     difference over the path; nothing where no load case has a parasitic component."""
-    size = res.scene.mechanism.size()
+    mech = res.scene.mechanism
+    size, target = mech.size(), (mech.target_body, mech.target_point)
     lines: list[str] = []
     for c in res.cases:
         case, ref = res.scene.load_case(c), res.converged(reference, c)
-        if ref is None or not parasitic_components(case):
+        if ref is None or not parasitic_components(case, target):
             continue
         rows = []
         for m in res.models:
             lp = res.converged(m, c)
             if m == reference or lp is None:
                 continue
-            for e in parasitic_errors(lp, ref, case, size):
+            for e in parasitic_errors(lp, ref, case, size, target):
                 end = f"{e['end']:.2f}" if e["scored"] else "round-off"
                 rows.append(
                     f"| {m} | {e['component']} ({e['unit']}) | {e['model']:.4g} | {end} | "
@@ -121,7 +141,7 @@ def section(res, reference: str) -> list[str]:
             continue
         names = ", ".join(
             f"{e['component']} {e['reference']:.4g} {e['unit']}"
-            for e in parasitic_errors(ref, ref, case, size)
+            for e in parasitic_errors(ref, ref, case, size, target)
         )
         lines += [f"`{c}` — `{reference}`: {names} at full load.", ""]
         lines += [
@@ -137,7 +157,8 @@ def section(res, reference: str) -> list[str]:
         "### Parasitic motion",
         "",
         "The target's motion across its load (a force: the translation across it and the "
-        "rotation; a moment: dx and dy), each component against the reference's own value of "
+        "rotation; a moment: dx and dy; a prescribed motion: the components it leaves free), "
+        "each component against the reference's own value of "
         "it: the path metrics above measure it against the whole motion, where a model that "
         f"predicts none looks a fraction of a percent off. A reference component below "
         f"{ROUND_OFF_FLOOR:g} of the mechanism's motion is round-off, not scored.",

@@ -26,7 +26,7 @@ from pathlib import Path
 
 from flexval.reducedmodels.catalogue import FIELDS, parse_model
 
-from . import figures, frequencies, measuredreport, parasitic, strength
+from . import drivereaction, figures, frequencies, measuredreport, parasitic, strength
 from .convergence import order_text
 from .failures import Failure
 from .figurejobs import Figures, draw_now
@@ -347,6 +347,12 @@ def _levels_text(data: ReportData) -> str:
     return " or ".join(str(n) for n in levels)
 
 
+def _loads_text(data: ReportData) -> str:
+    """'dead loads', and prescribed motions where a scene's load case has one."""
+    driven = any(case.drive is not None for r in data.scenes for case in r.scene.load_cases)
+    return "dead loads and prescribed motions (the reaction the answer)" if driven else "dead loads"
+
+
 def _thickness_words(section) -> str:
     """``h = 0.5 mm``, or a varying section's law (a taper's ends, a notch's t and H)."""
     profile = section.profile
@@ -431,6 +437,7 @@ def _scene_section(
         L += _metrics_table(res, res.reference) + [""]
         L += _bracket_lines(res)
     L += parasitic.section(res, res.reference if res.has_reference() else PAPER_REFERENCE)
+    L += drivereaction.section(res, res.reference if res.has_reference() else PAPER_REFERENCE)
     if threed is not None or res.paper:
         L += threed_section(threed, res.scene.name, code)
     L += strength.section(
@@ -544,8 +551,8 @@ def render_markdown(
         "## Setup",
         "",
         f"- Models: {', '.join(f'`{m}`' for m in data.models)}.",
-        f"- Loads: dead loads ramped from zero in {_levels_text(data)} equal levels; errors "
-        "are compared at matched load levels.",
+        f"- Loads: {_loads_text(data)} ramped from zero in {_levels_text(data)} equal "
+        "levels; errors are compared at matched load levels.",
         "- Error metrics (percent): **end disp vec** = |d_model − d_ref| / |d_ref| at full "
         "load (d = target point displacement vector); **end |d|** = relative difference of "
         "the displacement magnitudes; **end rot** = |θ_model − θ_ref| / |θ_ref| at full load "
