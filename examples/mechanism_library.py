@@ -3,13 +3,16 @@
 What it shows
 -------------
 * the built-in scenes a designer starts from (:data:`flexval.geometry.MECHANISM_SCENES`):
-  a parallel leaf guide, a folded guide, a cross-axis pivot and a bistable truss;
+  a parallel leaf guide, a folded guide, three rotary hinges (a cross-axis pivot, a
+  cartwheel hinge, a trapezoidal pivot turning about a remote centre) and a bistable
+  truss;
 * displacement control: each scene's first load case prescribes the motion of its
   shuttle (or top body, or apex), and the force or moment that holds it is the
   output (``LoadPath.drive_reactions``);
 * each answer next to its textbook anchor: the guide's 24 EI / L^3 (its shuttle free
   to tilt on the leaves' axial compliance here: 0.1 % softer), the folded guide's
-  12 EI / L^3, the pivot's 2 EI / L, the truss's snap-through force;
+  12 EI / L^3, the hinges' 2 EI / L, 8 EI / L and 26 EI / L, the truss's snap-through
+  force;
 * :func:`flexval.plot.deformed` drawing each mechanism deformed over its outline,
   into one figure ``mechanisms.png``.
 
@@ -51,8 +54,10 @@ def anchor(name: str) -> tuple[str, float, float]:
     path = flexval.run_model(scene, MODEL, case.name, levels=41)
     first = np.asarray(path.drive_reactions[1])
     length = scene.mechanism.flexures[0].shape.length
-    if name == "cross_pivot":
-        return "turning stiffness, N mm/rad", first[2] / path.load[1], 2 * ei / length
+    hinges = {"cross_pivot": 2.0, "cartwheel_hinge": 8.0, "trapezoid_pivot": 26.0}
+    if name in hinges:  # K = factor EI / L, L the whole leaf
+        whole = 2 * length if name == "cartwheel_hinge" else length  # its half-leaves
+        return "turning stiffness, N mm/rad", first[2] / path.load[1], hinges[name] * ei / whole
     stiffness = first[0] / path.dx[1]
     guides = 1 if name == "parallel_guide" else 2  # guides in series
     return "primary stiffness, N/mm", stiffness, 24 * ei / length**3 / guides
@@ -69,7 +74,7 @@ def main() -> dict[str, float]:
         what, value, exact = anchor(name)
         errors[name] = value / exact - 1.0
         print(f"{name:<16} {what:<28} {value:10.5g} {exact:12.5g} {errors[name]:8.2%}")
-    fig, axes = plt.subplots(2, 2, figsize=(10, 10))
+    fig, axes = plt.subplots(2, 3, figsize=(15, 10))
     for ax, name in zip(axes.ravel(), MECHANISM_SCENES):
         scene = load_scene(name)
         case = scene.load_cases[0].name

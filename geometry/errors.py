@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+COMMAND_LINE = "<command line>"
+"""The source a :class:`SceneError` names for a value given on the command line (or in a
+call standing for it), where a scene file names its path."""
+
 
 class SceneError(ValueError):
     """Invalid scene input.

@@ -4,7 +4,8 @@ A scene is the one input of every flexval command. ``load_scene`` accepts a
 built-in name (:data:`BUILTIN_SCENES`: the paper's ``open_chain`` and
 ``closed_chain``, the flexure scenes ``notch_fourbar``, ``filleted_stage``,
 ``tapered_leaf``, ``spline_flexure`` and the canonical mechanisms
-``parallel_guide``, ``folded_guide``, ``cross_pivot``, ``bistable_truss``) or a path. Every value is
+``parallel_guide``, ``folded_guide``, ``cross_pivot``, ``cartwheel_hinge``,
+``trapezoid_pivot``, ``bistable_truss``) or a path. Every value is
 checked; a bad one raises :class:`SceneError` naming the file, the field and
 the value. Angles are degrees in the file and radians in memory; lengths mm,
 moduli MPa, forces N, moments N mm.
@@ -54,7 +55,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import SceneError, did_you_mean
+from .errors import COMMAND_LINE, SceneError, did_you_mean
 from .fields import REQUIRED, Field, Table
 from .flexurefields import check_thickness_fits, read_notch, read_spline, read_thickness, section_of
 from .inertia import MassData, parse_body_mass, parse_density, parse_gravity
@@ -95,9 +96,17 @@ PAPER_SCENES = ("open_chain", "closed_chain")
 FLEXURE_SCENES = ("notch_fourbar", "filleted_stage", "tapered_leaf", "spline_flexure")
 """Mechanisms of varying-section and free-form flexures: circular notch hinges,
 corner-filleted notch hinges, tapered leaves and an S-shaped spline."""
-MECHANISM_SCENES = ("parallel_guide", "folded_guide", "cross_pivot", "bistable_truss")
+MECHANISM_SCENES = (
+    "parallel_guide",
+    "folded_guide",
+    "cross_pivot",
+    "cartwheel_hinge",
+    "trapezoid_pivot",
+    "bistable_truss",
+)
 """Canonical mechanisms designers build, each with an independent anchor in the tests: a
-parallel leaf guide, a folded guide, a cross-axis pivot and a bistable truss."""
+parallel leaf guide, a folded guide, a cross-axis pivot, a cartwheel hinge, a
+leaf-type isosceles-trapezoidal pivot and a bistable truss."""
 BUILTIN_SCENES = PAPER_SCENES + FLEXURE_SCENES + MECHANISM_SCENES
 """Every scene ``load_scene`` knows by name (files in ``flexval/geometry/scenes``)."""
 
@@ -184,7 +193,7 @@ class Scene:
         for name in names:
             if name not in {lc.name for lc in self.load_cases}:
                 raise SceneError(
-                    "<command line>",
+                    COMMAND_LINE,
                     field,
                     name,
                     f"scene {self.name} has no such load case; it has "

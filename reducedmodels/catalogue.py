@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from flexval.geometry import SceneError
+from flexval.geometry.errors import COMMAND_LINE
 
 #: capability: writes stress fields (VTU files, PNG renderings) of the deformed flexures
 FIELDS = "fields"
@@ -442,7 +443,7 @@ def _parse_options(
     return tuple(sorted((k, v) for k, v in given.items() if v != fam.option(k).default))
 
 
-def parse_model(text: str, source: str = "<command line>", field: str = "model") -> ModelSpec:
+def parse_model(text: str, source: str = COMMAND_LINE, field: str = "model") -> ModelSpec:
     """Parse a model id (see the module docstring) into a checked, canonical ModelSpec.
 
     Raises

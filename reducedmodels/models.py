@@ -382,12 +382,11 @@ def linear_response(
 
     per_unit = section_gradients(dq)
     sections = {f.name: f.section for f in mechanism.flexures}
+    unit = section_forces(per_unit)  # the section forces per unit load factor
+    dead = section_forces(section_gradients(dq_dead)) if has_weights else None  # the weights'
     if any(c.sway_load is not None for c in connectors):  # straight leaves it cannot buckle
-        dead = section_forces(section_gradients(dq_dead)) if has_weights else None
         lp.valid, lp.validity = merge_reasons(
-            lp.valid,
-            lp.validity,
-            linear_sway_verdicts(connectors, section_forces(per_unit), lam, dead),
+            lp.valid, lp.validity, linear_sway_verdicts(connectors, unit, lam, dead)
         )
     if has_weights:
         of_weights = section_gradients(dq_dead)
@@ -399,7 +398,7 @@ def linear_response(
                 sections,
             )
     else:  # section forces proportional to the load
-        record_stress(lp, connectors, section_forces(per_unit), sections, lam)
+        record_stress(lp, connectors, unit, sections, lam)
     if record_poses or record_shapes:
         states = [q0 + dq_dead + factor * dq for factor in lam.tolist()]
         ground_q = np.asarray(ground_pose, float)
@@ -418,19 +417,9 @@ def linear_response(
                 for c, a, b in zip(connectors, places, bounds):
                     own = local[a:b]
                     lp.shapes[c.name].append(c.shape(own[:3], own[3:6], own[6:]).tolist())
-            unit = section_forces(per_unit)
-            dead = section_forces(section_gradients(dq_dead)) if has_weights else unit
             stacked = [
-                None
-                if f is None
-                else SectionForces(
-                    f.at,
-                    (1.0 if has_weights else 0.0) * np.asarray(w.axial)
-                    + lam[:, None] * np.asarray(f.axial)[None],
-                    (1.0 if has_weights else 0.0) * np.asarray(w.moment)
-                    + lam[:, None] * np.asarray(f.moment)[None],
-                )
-                for f, w in zip(unit, dead)
+                None if f is None else _at_every_level(f, w, lam)
+                for f, w in zip(unit, dead or [None] * len(unit))
             ]
             append_section_forces(lp, zip(connectors, stacked))
     if drive is not None:  # the drive's force and moment, linear in its multipliers
@@ -443,6 +432,18 @@ def linear_response(
         ]
     lp.seconds = time.perf_counter() - t0
     return lp
+
+
+def _at_every_level(
+    unit: SectionForces, weights: SectionForces | None, factors: np.ndarray
+) -> SectionForces:
+    """The section forces of a linear response at each load factor, (levels, stations):
+    ``factors`` times those per unit load, plus the weights' where there are any."""
+    axial = factors[:, None] * np.asarray(unit.axial)[None]
+    moment = factors[:, None] * np.asarray(unit.moment)[None]
+    if weights is not None:
+        axial, moment = np.asarray(weights.axial) + axial, np.asarray(weights.moment) + moment
+    return SectionForces(unit.at, axial, moment)
 
 
 def _drive_of(

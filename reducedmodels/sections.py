@@ -68,12 +68,7 @@ class SectionForces:
         each station's arc length s = at L (L the profile's length, the
         flexure's).
         """
-        if section.profile is None:
-            return np.abs(self.axial) / section.area + np.abs(self.moment) * section.thickness / (
-                2.0 * section.inertia
-            )
-        s = np.asarray(self.at, float) * section.profile.length
-        h, area, inertia = section.thickness_at(s), section.area_at(s), section.inertia_at(s)
+        h, area, inertia = constants_at(section, self.at)
         return np.abs(self.axial) / area + np.abs(self.moment) * h / (2.0 * inertia)
 
     def peak(self, section: Section) -> tuple[float, float]:
@@ -81,6 +76,16 @@ class SectionForces:
         sigma = self.fibre_stress(section)
         k = int(np.argmax(sigma))
         return float(sigma[k]), float(self.at[k])
+
+
+def constants_at(section: Section, fractions) -> tuple:
+    """A section's thickness h (mm), area A (mm^2) and second moment I (mm^4) at arc-length
+    ``fractions`` of its flexure: numbers for a uniform section, arrays along a varying one
+    (``section.profile``: at s = fraction L, L the profile's length, the flexure's)."""
+    if section.profile is None:
+        return section.thickness, section.area, section.inertia
+    s = np.asarray(fractions, float) * section.profile.length
+    return section.thickness_at(s), section.area_at(s), section.inertia_at(s)
 
 
 class ForceStack(NamedTuple):

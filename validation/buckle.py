@@ -16,12 +16,11 @@ import math
 import numpy as np
 
 from flexval.geometry import LoadCase, Scene, SceneError
+from flexval.geometry.errors import COMMAND_LINE
 from flexval.reducedmodels.buckling import Buckling, critical_factors
 from flexval.reducedmodels.catalogue import LINEAR, ModelSpec
 from flexval.reducedmodels.core import SolverError
 from flexval.reducedmodels.modes import equilibrium, scaled_case
-
-COMMAND_LINE = "<command line>"
 
 
 def run_buckle(

@@ -21,6 +21,7 @@ import warnings
 from pathlib import Path
 
 from flexval.geometry import BUILTIN_SCENES, SceneError, load_scene
+from flexval.geometry.errors import COMMAND_LINE
 
 from .outputs import (
     OutputError,
@@ -35,7 +36,6 @@ from .outputs import (
 from .tables import GAP, SIG_WIDTH, Column, header, sig, text_row, text_table
 
 EXIT_OK, EXIT_INPUT, EXIT_SOLVER, EXIT_OUTPUT = 0, 2, 3, 4
-COMMAND_LINE = "<command line>"
 MAX_REPEATS = 1000
 """Most timing repeats per load path (a median of more adds nothing but time)."""
 MAX_LOCAL_WORKERS = os.cpu_count() or 1
@@ -118,7 +118,7 @@ def _run_request(args: argparse.Namespace, scene) -> tuple[list, list, frozenset
     """The models, load cases and stress-field outputs ``flexval run`` is asked for, checked."""
     from flexval.reducedmodels.catalogue import FIELDS, families
 
-    specs = _parse_models(args.model or [], "<command line>", "--model")
+    specs = _parse_models(args.model or [], COMMAND_LINE, "--model")
     if not specs:
         specs = _parse_models(scene.models, scene.source, "request.models")
     if not specs:
@@ -131,14 +131,14 @@ def _run_request(args: argparse.Namespace, scene) -> tuple[list, list, frozenset
     cases = [scene.load_case(n) for n in args.load_case] if args.load_case else scene.load_cases
     if args.max_load_factor is not None and not args.arclength:
         raise SceneError(
-            "<command line>",
+            COMMAND_LINE,
             "--max-load-factor",
             args.max_load_factor,
             "applies to --arclength traces only",
         )
     if args.branch_switch and not args.arclength:
         raise SceneError(
-            "<command line>", "--branch-switch", True, "applies to --arclength traces only"
+            COMMAND_LINE, "--branch-switch", True, "applies to --arclength traces only"
         )
     _check_dynamic_options(args)
     if args.arclength:
@@ -369,7 +369,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     max_factor = 1.0 if args.max_load_factor is None else args.max_load_factor
     if not (math.isfinite(max_factor) and 0.0 < max_factor <= 1e6):
         raise SceneError(
-            "<command line>", "--max-load-factor", max_factor, "must be a positive number up to 1e6"
+            COMMAND_LINE, "--max-load-factor", max_factor, "must be a positive number up to 1e6"
         )
     if args.density is not None and not args.dynamic:
         raise SceneError(
@@ -380,7 +380,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         )
     estimate = _check_memory(  # a dynamic run's memory too; its time is estimated apart
         [(scene.mechanism, spec, args.levels) for spec in specs for _ in cases],
-        *(("<command line>", "--model") if args.model else (scene.source, "request.models")),
+        *((COMMAND_LINE, "--model") if args.model else (scene.source, "request.models")),
         quiet=args.dynamic,
     )
     if args.dynamic:
@@ -722,7 +722,7 @@ def _analysis_inputs(args: argparse.Namespace):
     from flexval.reducedmodels import parse_model
 
     scene = load_scene(args.scene)
-    spec = parse_model(args.model, "<command line>", "--model")
+    spec = parse_model(args.model, COMMAND_LINE, "--model")
     _check_memory([(scene.mechanism, spec, None)], COMMAND_LINE, "--model")
     json_path = check_file(args.json, "--json") if args.json is not None else None
     plot_path = check_figure_file(args.plot, "--plot") if args.plot is not None else None
@@ -940,12 +940,12 @@ def _cmd_converge(args: argparse.Namespace) -> int:
 
     from .convergence import format_study, study
 
-    (spec,) = _parse_models([args.model], "<command line>", "--model")
+    (spec,) = _parse_models([args.model], COMMAND_LINE, "--model")
     res = spec.model_family.resolution
     if res is None:
         refinable = [f.name for f in families() if f.resolution is not None]
         raise SceneError(
-            "<command line>",
+            COMMAND_LINE,
             "--model",
             args.model,
             f"convergence studies need a model with a resolution: {refinable}",
@@ -1028,7 +1028,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
         _chosen_cases(scene, args)  # bad input fails before any work
         names.append(scene.name)
     models = args.model or list(DEFAULT_MODELS)
-    specs = _parse_models(models, "<command line>", "--model")
+    specs = _parse_models(models, COMMAND_LINE, "--model")
     _check_report_memory(scenes, specs, args)
     out_arg = args.out if args.out is not None else default_report_folder(names)
     other_report(out_arg, names, args.force)
@@ -1086,7 +1086,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from .cache import ResultCache
 
     scene = _chosen_cases(load_scene(args.scene), args)
-    (ref,) = _parse_models([args.reference], "<command line>", "--reference")
+    (ref,) = _parse_models([args.reference], COMMAND_LINE, "--reference")
     out = check_folder(args.out, "--out")
     _keep_cached(not args.no_cache)
     cache = ResultCache(enabled=not args.no_cache)
@@ -1118,7 +1118,7 @@ def _cmd_stress(args: argparse.Namespace) -> int:
 
     scene = _chosen_cases(load_scene(args.scene), args)
     models = args.model or ["ee", "dcmm:1", "dcmm:2", "prbm", "beam:20"]
-    specs = _parse_models(models, "<command line>", "--model")
+    specs = _parse_models(models, COMMAND_LINE, "--model")
     from .stress import AMPLIFICATIONS, STEP_COUNTS
 
     counts = [n for n in STEP_COUNTS if not args.quick or n < 1001]
@@ -1961,9 +1961,7 @@ def _dispatch(args: argparse.Namespace) -> int:
             request_threads(args.blas_threads)
         except ValueError:
             if args.blas_threads is not None:
-                raise SceneError(
-                    "<command line>", "--blas-threads", args.blas_threads, RULE
-                ) from None
+                raise SceneError(COMMAND_LINE, "--blas-threads", args.blas_threads, RULE) from None
             raise SceneError(
                 "<environment>", ENV_VARIABLE, os.environ[ENV_VARIABLE], RULE
             ) from None

@@ -19,6 +19,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 from flexval.geometry import LoadCase, Scene, SceneError
+from flexval.geometry.errors import COMMAND_LINE
 from flexval.geometry.timelaw import TimeLaw
 from flexval.reducedmodels.catalogue import ModelSpec
 from flexval.reducedmodels.core import SolverError
@@ -52,7 +53,7 @@ def time_law(case: LoadCase, duration: float | None, source: str) -> tuple[TimeL
     ``source`` names the scene file in the error raised for a time law too short to run."""
     if duration is not None and not (math.isfinite(duration) and MIN_DURATION <= duration <= 1e6):
         raise SceneError(
-            "<command line>",
+            COMMAND_LINE,
             "--duration",
             duration,
             f"must be a time in s from {MIN_DURATION:g} to 1e6 (the first time "
@@ -86,7 +87,7 @@ def damping_of(system, ratio: float | None, rayleigh: tuple[float, float] | None
         alpha, beta = rayleigh
         if not (math.isfinite(alpha) and math.isfinite(beta) and alpha >= 0.0 and beta >= 0.0):
             raise SceneError(
-                "<command line>",
+                COMMAND_LINE,
                 "--rayleigh",
                 list(rayleigh),
                 "alpha (1/s) and beta (s) must be finite and not negative",
@@ -95,7 +96,7 @@ def damping_of(system, ratio: float | None, rayleigh: tuple[float, float] | None
     if not ratio:
         return Rayleigh()
     if not (math.isfinite(ratio) and 0.0 < ratio <= 10.0):
-        raise SceneError("<command line>", "--damping-ratio", ratio, "must be from 0 to 10")
+        raise SceneError(COMMAND_LINE, "--damping-ratio", ratio, "must be from 0 to 10")
     f = natural_modes(system, count=2).frequencies_hz
     if f.size < 2:
         return Rayleigh(4.0 * math.pi * ratio * f[0], 0.0)
@@ -106,9 +107,9 @@ def check_options(rho_inf: float, error_tol: float) -> None:
     """Refuse (SceneError naming the option) a spectral radius outside [0, 1] or an error
     tolerance outside [1e-14, 0.1]."""
     if not 0.0 <= rho_inf <= 1.0:
-        raise SceneError("<command line>", "--rho-inf", rho_inf, "must be from 0 to 1")
+        raise SceneError(COMMAND_LINE, "--rho-inf", rho_inf, "must be from 0 to 1")
     if not 1e-14 <= error_tol <= 0.1:  # NaN fails too
-        raise SceneError("<command line>", "--error-tol", error_tol, "must be from 1e-14 to 0.1")
+        raise SceneError(COMMAND_LINE, "--error-tol", error_tol, "must be from 1e-14 to 0.1")
 
 
 def run_dynamic(

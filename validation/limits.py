@@ -13,6 +13,7 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 from flexval.geometry import LoadCase, Scene, SceneError
+from flexval.geometry.errors import COMMAND_LINE
 from flexval.reducedmodels import LoadPath, ModelSpec, SolverError, SolverSettings
 from flexval.reducedmodels.catalogue import ARCLENGTH, families
 from flexval.reducedmodels.continuation import limit_loads, solve_arclength
@@ -99,7 +100,7 @@ def check_arclength(spec: ModelSpec) -> None:
     if not spec.model_family.has(ARCLENGTH):
         able = [f.name for f in families() if f.has(ARCLENGTH)]
         raise SceneError(
-            "<command line>",
+            COMMAND_LINE,
             "--arclength",
             spec.id,
             f"arc-length continuation needs a model assembled as a nonlinear "

@@ -14,13 +14,12 @@ from pathlib import Path
 import numpy as np
 
 from flexval.geometry import LoadCase, Scene, SceneError
+from flexval.geometry.errors import COMMAND_LINE
 from flexval.geometry.inertia import PLA_DENSITY
 from flexval.reducedmodels.catalogue import LINEAR, ModelSpec
 from flexval.reducedmodels.modes import Modes, natural_modes
 
 from .outputs import save_figure
-
-COMMAND_LINE = "<command line>"
 
 
 @dataclass(frozen=True)
@@ -135,7 +134,7 @@ def run_modes(
     """
     if not 0.0 <= fraction <= 1.0 or not math.isfinite(fraction):
         raise SceneError(
-            "<command line>",
+            COMMAND_LINE,
             "--at",
             fraction,
             "must be a load fraction from 0 (unloaded) to 1 (full load)",
@@ -143,16 +142,16 @@ def run_modes(
     if fraction:
         from flexval.reducedmodels.drives import refuse_prescribed_motion
 
-        refuse_prescribed_motion(case, "<command line>", "--load-case", "modes about a preload")
+        refuse_prescribed_motion(case, COMMAND_LINE, "--load-case", "modes about a preload")
     if spec.model_family.has(LINEAR) and fraction != 0.0:
         raise SceneError(
-            "<command line>",
+            COMMAND_LINE,
             "--at",
             fraction,
             f"{spec.id} is linear: its modes are those at rest (use --at 0)",
         )
     if not 1 <= count <= 1000:
-        raise SceneError("<command line>", "--count", count, "must be from 1 to 1000")
+        raise SceneError(COMMAND_LINE, "--count", count, "must be from 1 to 1000")
     system = modal_system(scene, spec)
     return system, natural_modes(system, case, fraction, count)
 

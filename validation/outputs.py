@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from flexval.geometry import SceneError
+from flexval.geometry.errors import COMMAND_LINE
 from flexval.geometry.files import OutputError, atomic_path, write_bytes
 
 __all__ = [
@@ -45,7 +46,6 @@ __all__ = [
     "write_text",
 ]
 
-_COMMAND_LINE = "<command line>"
 _UNSAFE = re.compile(r"[^A-Za-z0-9._+-]+")
 MAX_NAME_CHARS = 80
 """Longest name component :func:`safe_name` returns (file systems allow 255 bytes)."""
@@ -89,7 +89,7 @@ def distinct_files(*given: tuple[str, Path | None]) -> None:
         key = Path(os.path.realpath(path))
         if key in seen:
             raise SceneError(
-                _COMMAND_LINE, option, str(path), f"is the file {seen[key]} writes already"
+                COMMAND_LINE, option, str(path), f"is the file {seen[key]} writes already"
             )
         seen[key] = option
 
@@ -105,24 +105,24 @@ def check_file(path: str | Path, option: str) -> Path:
     text = str(path)
     target = Path(path)
     if not text or text.endswith(("/", os.sep)) or target.name in ("", ".", ".."):
-        raise SceneError(_COMMAND_LINE, option, text, "names a folder, expected a file path")
+        raise SceneError(COMMAND_LINE, option, text, "names a folder, expected a file path")
     if target.is_dir():
-        raise SceneError(_COMMAND_LINE, option, text, "is a folder, expected a file path")
+        raise SceneError(COMMAND_LINE, option, text, "is a folder, expected a file path")
     if target.exists() and not target.is_file():
         raise SceneError(
-            _COMMAND_LINE,
+            COMMAND_LINE,
             option,
             text,
             "is not a regular file (a device, pipe or socket); give a file path",
         )
     folder = target.parent
     if not folder.exists():
-        raise SceneError(_COMMAND_LINE, option, text, f"folder {folder} does not exist")
+        raise SceneError(COMMAND_LINE, option, text, f"folder {folder} does not exist")
     if not folder.is_dir():
-        raise SceneError(_COMMAND_LINE, option, text, f"{folder} is not a folder")
+        raise SceneError(COMMAND_LINE, option, text, f"{folder} is not a folder")
     reason = _probe(folder)
     if reason:
-        raise SceneError(_COMMAND_LINE, option, text, reason)
+        raise SceneError(COMMAND_LINE, option, text, reason)
     return target
 
 
@@ -143,7 +143,7 @@ def check_figure_file(path: str | Path, option: str) -> Path:
     formats = FigureCanvasAgg.get_supported_filetypes()
     if fmt and fmt not in formats:
         raise SceneError(
-            _COMMAND_LINE,
+            COMMAND_LINE,
             option,
             str(path),
             f"unknown picture format '.{fmt}'; use one of "
@@ -162,19 +162,19 @@ def check_folder(path: str | Path, option: str) -> Path:
     """
     text = str(path)
     if not text:
-        raise SceneError(_COMMAND_LINE, option, text, "empty folder name")
+        raise SceneError(COMMAND_LINE, option, text, "empty folder name")
     folder = Path(path)
     if folder.exists() and not folder.is_dir():
-        raise SceneError(_COMMAND_LINE, option, text, "is a file, expected a folder")
+        raise SceneError(COMMAND_LINE, option, text, "is a file, expected a folder")
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise SceneError(
-            _COMMAND_LINE, option, text, f"cannot create the folder ({exc.strerror or exc})"
+            COMMAND_LINE, option, text, f"cannot create the folder ({exc.strerror or exc})"
         ) from None
     reason = _probe(folder)
     if reason:
-        raise SceneError(_COMMAND_LINE, option, text, reason)
+        raise SceneError(COMMAND_LINE, option, text, reason)
     return folder
 
 

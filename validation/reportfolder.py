@@ -15,11 +15,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from flexval.geometry import SceneError
+from flexval.geometry.errors import COMMAND_LINE
 from flexval.geometry.scene import PAPER_SCENES
 
 from .outputs import safe_name
-
-_COMMAND_LINE = "<command line>"
 
 
 def default_report_folder(scenes: Sequence[str]) -> Path:
@@ -52,7 +51,7 @@ def other_report(folder: str | Path, scenes: Sequence[str], force: bool) -> None
     if force or found is None or found == sorted(scenes):
         return
     raise SceneError(
-        _COMMAND_LINE,
+        COMMAND_LINE,
         "--out",
         str(folder),
         f"holds the report of {', '.join(found)}, not of {', '.join(scenes)} (another "

@@ -34,6 +34,7 @@ from flexval.geometry import Flexure, Scene
 from flexval.geometry.files import atomic_path
 from flexval.geometry.kinematics import place_points
 from flexval.reducedmodels import LoadPath
+from flexval.reducedmodels.sections import constants_at
 
 from .outputs import inside, output_path, safe_name, write_text
 
@@ -120,12 +121,7 @@ def _fibre_stresses(
     at = np.asarray(forces["at"], float)
     axial = np.interp(u, at, np.asarray(forces["axial"][level], float))
     moment = np.interp(u, at, np.asarray(forces["moment"][level], float))
-    section = flexure.section
-    if section.profile is None:
-        h, area, inertia = section.thickness, section.area, section.inertia
-    else:
-        s = u * section.profile.length
-        h, area, inertia = section.thickness_at(s), section.area_at(s), section.inertia_at(s)
+    h, area, inertia = constants_at(flexure.section, u)
     bending = moment * h / (2.0 * inertia)
     return axial / area + bending, axial / area - bending
 

@@ -13,13 +13,13 @@ from __future__ import annotations
 import math
 
 from flexval.geometry import LoadCase, Scene, SceneError
+from flexval.geometry.errors import COMMAND_LINE
 from flexval.reducedmodels.catalogue import LINEAR, ModelSpec
 from flexval.reducedmodels.drives import refuse_prescribed_motion
 from flexval.reducedmodels.models import build_system
 from flexval.reducedmodels.modes import equilibrium, scaled_case
 from flexval.reducedmodels.targetstiffness import TargetStiffness, target_stiffness
 
-COMMAND_LINE = "<command line>"
 MOTIONS = ("dx", "dy", "rotation")
 """The target's coordinates, in the order of the matrices' rows and columns."""
 UNITS = {

@@ -16,8 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from flexval.geometry import SceneError
-
-COMMAND_LINE = "<command line>"
+from flexval.geometry.errors import COMMAND_LINE
 
 FIELDS = ("fibre_stress", "displacement", "von_mises")
 """The point data a view can colour by: signed fibre stress (MPa), displacement magnitude

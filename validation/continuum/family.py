@@ -8,6 +8,7 @@ continuum model runs.
 from __future__ import annotations
 
 from flexval.geometry import LoadCase, Mechanism, SceneError
+from flexval.geometry.errors import COMMAND_LINE
 from flexval.geometry.mesh import MAX_LEVEL
 from flexval.reducedmodels import LoadPath
 from flexval.reducedmodels.catalogue import (
@@ -75,7 +76,7 @@ def run(
     from .run import run_continuum
 
     if spec.kwargs.get("three_d") and extra.get("png"):
-        raise SceneError("<command line>", "model", spec.id, "the 3D continuum draws no PNG")
+        raise SceneError(COMMAND_LINE, "model", spec.id, "the 3D continuum draws no PNG")
     return run_continuum(
         mechanism,
         case,

@@ -14,6 +14,7 @@ import json
 from pathlib import Path
 
 from flexval.geometry import SceneError
+from flexval.geometry.errors import COMMAND_LINE
 
 from ..outputs import write_json
 
@@ -53,7 +54,7 @@ def check_identity(sweep, out: Path) -> None:
     differ = sorted(k for k in mine if stored.get(k) != mine[k])
     if differ:
         raise SceneError(
-            "<command line>",
+            COMMAND_LINE,
             "--out",
             str(out),
             f"holds the rows of another sweep (its {', '.join(differ)} differ from this "
