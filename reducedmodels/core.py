@@ -396,11 +396,13 @@ class System:
         Connectors that carry dead loads of their own (weights, see
         :mod:`flexval.reducedmodels.inertia`) declare their size as
         ``dead_load_scale`` (N); it joins the force scale of the residual test,
-        so that a case without load (or a small one) still has a meaningful one.
+        so that a case without load (or a small one) still has a meaningful one. A case
+        that prescribes a motion loads the drive's multipliers (:meth:`drive_loads`); a
+        case that does not, on a System with a drive, holds the driven point where it is
+        at rest.
         """
-        return case_loads(
-            case, self.pose_dofs, self.reference, self.size, self.connectors, self.drive_loads()
-        )
+        drives = self.drive_loads() if case.drive is not None else None  # else: held at rest
+        return case_loads(case, self.pose_dofs, self.reference, self.size, self.connectors, drives)
 
     def _drive(self) -> tuple[int, Connector] | None:
         """(index, connector) of the mechanism's drive, if it has one."""
@@ -434,12 +436,8 @@ class System:
         """
         if case.drive is None or self._drive() is None:
             return
-        from flexval.geometry import Moment
-
-        rest = LoadCase("rest", (Moment(self.mechanism.target_body, 0.0),), 2)
-        tangent = self.assemble(self.initial_state(), self.loads(rest), 0.0)[2]
-        negative = self.instability(tangent)
-        if negative is not None and negative < 0:
+        negative = self._rest_instability()
+        if negative < 0:
             raise SolverError(
                 f"{model or 'model'} on load case '{case.name}': the prescribed motion of body "
                 f"{case.drive.body!r} moves it along a direction this model holds rigid "
@@ -738,13 +736,20 @@ class System:
         tip pivots are formed from terms 10^12 times larger), and no state of
         the System is judged: its paths carry :meth:`stability_note`.
         """
+        return self._rest_instability() == 0
+
+    def _rest_instability(self) -> int:
+        """The rule's count (:meth:`instability`) on the tangent at rest, computed once (0
+        where it cannot be judged): 0 for a stable structure the rule resolves, positive
+        beyond what double precision resolves, negative where the tangent is singular along
+        a constraint (:meth:`check_drive`)."""
         if self._rest_negative is None:
             from flexval.geometry import Moment
 
             rest = LoadCase("rest", (Moment(self.mechanism.target_body, 0.0),), 2)
             tangent = self.assemble(self.initial_state(), self.loads(rest), 0.0)[2]
             self._rest_negative = self.instability(tangent) or 0
-        return self._rest_negative == 0
+        return self._rest_negative
 
     def stability_note(self) -> str | None:
         """Why this System's stability verdicts are not judged (None: they are, or no state

@@ -364,3 +364,16 @@ def test_reaction_errors_and_zero_crossings():
     # of this path: exact crossings there
     fv = np.asarray(ref.drive_reactions)[:, 1]
     np.testing.assert_allclose(zero_crossings(ref, fv), [-20.0, -40.0], atol=1e-9)
+
+
+def test_a_driven_system_holds_its_point_under_a_case_without_motion():
+    # the drive's multipliers carry load only for a case that prescribes the motion: a
+    # force case traced on the same System finds the driven point held at rest
+    from flexval.reducedmodels import build_system, solve_path
+
+    scene = guide()
+    driven = scene.mechanism.driven_by(scene.load_case("slide"))
+    system = build_system(driven, parse_model("beam:10"))
+    push = LoadCase("push", (Force("shuttle", scene.mechanism.target_point, 0.0, 5.0),), 3)
+    lp = solve_path(system, push)
+    assert abs(lp.dx[-1]) < 1e-9 and lp.drive_reactions is None
