@@ -147,6 +147,9 @@ def test_cross_pivot_rotational_stiffness():
     frame = frame_target_stiffness(scene)  # at the crossing point, the target
     # each leaf's end turns about its midpoint: k = (EI/L)(12 c^2 - 12 c + 4) = EI/L at
     # c = 1/2 (Wittrick 1948); the pair, with the centre free, K = 2 EI / L
+    assert wittrick(scene, scene.mechanism.target_point) == pytest.approx(
+        2 * ei / length, rel=1e-12
+    )
     assert _turning(frame) == pytest.approx(2 * ei / length, rel=1e-3)
     for model in ("beam:100", "continuum:2"):
         assert _turning(flexval_stiffness(scene, model)) == pytest.approx(
@@ -158,6 +161,23 @@ def test_cross_pivot_rotational_stiffness():
     moments = np.asarray(lp.drive_reactions)[:, 2]
     assert moments[1] == pytest.approx(2 * ei / length * math.radians(1.0), rel=1e-3)
     assert 1.0 < moments[-1] / (10 * moments[1]) < 1.01
+
+
+def wittrick(scene, centre) -> float:
+    """The rotational stiffness (N mm/rad) of the mechanism's leaves when its moving body
+    turns about ``centre`` (mm): each leaf's moving end turns about a point at c L from it
+    along the leaf (c from the geometry, positive towards the fixed end), k = (EI / L)
+    (12 c^2 - 12 c + 4) (beam theory, inextensible leaves; Wittrick 1948), summed."""
+    mech = scene.mechanism
+    total = 0.0
+    for f in mech.flexures:
+        start, end = (np.asarray(p, float) for p in f.shape.end_points)
+        fixed, moving = (start, end) if f.bodies[0] == mech.ground else (end, start)
+        length = math.hypot(*(fixed - moving))
+        c = float((np.asarray(centre, float) - moving) @ (fixed - moving)) / length**2
+        ei = mech.material.youngs_modulus * f.section.inertia
+        total += ei / length * (12 * c**2 - 12 * c + 4)
+    return total
 
 
 def _turning(k: np.ndarray) -> float:
@@ -186,7 +206,9 @@ def test_cartwheel_hinge_is_four_times_the_cross_pivot():
 def test_trapezoid_pivot_turns_about_its_remote_centre():
     scene = load_scene("trapezoid_pivot")
     ei, length = 70000.0 * 8.0 * 0.4**3 / 12.0, math.hypot(10.0, 30.0)
-    expected = 2 * (ei / length) * (12 * 0.25 + 6 + 4)  # c = -1/2: 13 EI / L per leaf
+    # the centre lies 15.81 mm beyond each moving end: c = -1/2, 13 EI / L per leaf
+    expected = wittrick(scene, scene.mechanism.target_point)
+    assert expected == pytest.approx(26 * ei / length, rel=1e-12)
     # at the remote centre (the target); the leaves' axial compliance: 0.13 % below
     assert _turning(frame_target_stiffness(scene)) == pytest.approx(expected, rel=2e-3)
     for model in ("beam:100", "continuum:2"):  # continuum:2 measured 1e-4 from the frame
