@@ -4,15 +4,16 @@ What it shows
 -------------
 * the built-in scenes a designer starts from (:data:`flexval.geometry.MECHANISM_SCENES`):
   a parallel leaf guide, a folded guide, three rotary hinges (a cross-axis pivot, a
-  cartwheel hinge, a trapezoidal pivot turning about a remote centre) and a bistable
-  truss;
+  cartwheel hinge, a trapezoidal pivot turning about a remote centre), a bistable
+  truss and a notch-hinge bridge amplifier;
 * displacement control: each scene's first load case prescribes the motion of its
   shuttle (or top body, or apex), and the force or moment that holds it is the
   output (``LoadPath.drive_reactions``);
 * each answer next to its textbook anchor: the guide's 24 EI / L^3 (its shuttle free
   to tilt on the leaves' axial compliance here: 0.1 % softer), the folded guide's
-  12 EI / L^3, the hinges' 2 EI / L, 8 EI / L and 26 EI / L, the truss's snap-through
-  force;
+  12 EI / L^3, the hinges' stiffness by Wittrick's formula (2 EI / L, 8 EI / L and
+  26 EI / L), the truss's snap-through force, the amplifier's cot(alpha) / 2 of ideal
+  pivots (its notches' axial compliance takes 1.6 % off);
 * :func:`flexval.plot.deformed` drawing each mechanism deformed over its outline,
   into one figure ``mechanisms.png``.
 
@@ -35,12 +36,33 @@ MODEL = "beam:100"
 """The model every mechanism is traced with (any family would do)."""
 
 
+def wittrick(scene) -> float:
+    """The rotational stiffness (N mm/rad) of a pivot's leaves turning about its target
+    point: each leaf's moving end turns about a point c L from it along the leaf (c from
+    the geometry), k = (EI / L) (12 c^2 - 12 c + 4) (Wittrick 1948), summed. A cartwheel's
+    half-leaves meet at its hub, which turns half as far: a quarter of their sum."""
+    mech = scene.mechanism
+    total = 0.0
+    for f in mech.flexures:
+        start, end = (np.asarray(p, float) for p in f.shape.end_points)
+        fixed, moving = (start, end) if f.bodies[0] == mech.ground else (end, start)
+        length = math.dist(fixed, moving)
+        if "hub" in f.bodies:  # the cartwheel's half-leaf: its ends turn theta / 2 apart,
+            # the hub staying on the axis: (4 EI / L) (1/2)^2
+            total += mech.material.youngs_modulus * f.section.inertia / length
+            continue
+        centre = np.asarray(mech.target_point, float)
+        c = float((centre - moving) @ (fixed - moving)) / length**2
+        ei = mech.material.youngs_modulus * f.section.inertia
+        total += ei / length * (12 * c**2 - 12 * c + 4)
+    return total
+
+
 def anchor(name: str) -> tuple[str, float, float]:
     """(what, flexval's value, the closed form) of one mechanism, in the units named."""
     scene = load_scene(name)
     E = scene.mechanism.material.youngs_modulus
     section = scene.mechanism.flexures[0].section
-    ei = E * section.inertia
     case = scene.load_cases[0]
     if name == "bistable_truss":
         path = flexval.run_model(scene, MODEL, case.name, levels=121)
@@ -53,14 +75,16 @@ def anchor(name: str) -> tuple[str, float, float]:
         return "snap-through force, N", float(push.max()), float(exact.max())
     path = flexval.run_model(scene, MODEL, case.name, levels=41)
     first = np.asarray(path.drive_reactions[1])
+    if name == "bridge_amplifier":  # the top block's motion across per unit stroke
+        h1, h2 = (np.add(*f.shape.end_points) / 2 for f in scene.mechanism.flexures[:2])
+        alpha = math.atan2(h2[1] - h1[1], h2[0] - h1[0])
+        return "amplification (ideal pivots)", -path.dy[1] / path.load[1], 0.5 / math.tan(alpha)
+    if name in ("cross_pivot", "cartwheel_hinge", "trapezoid_pivot"):
+        return "turning stiffness, N mm/rad", first[2] / path.load[1], wittrick(scene)
     length = scene.mechanism.flexures[0].shape.length
-    hinges = {"cross_pivot": 2.0, "cartwheel_hinge": 8.0, "trapezoid_pivot": 26.0}
-    if name in hinges:  # K = factor EI / L, L the whole leaf
-        whole = 2 * length if name == "cartwheel_hinge" else length  # its half-leaves
-        return "turning stiffness, N mm/rad", first[2] / path.load[1], hinges[name] * ei / whole
     stiffness = first[0] / path.dx[1]
     guides = 1 if name == "parallel_guide" else 2  # guides in series
-    return "primary stiffness, N/mm", stiffness, 24 * ei / length**3 / guides
+    return "primary stiffness, N/mm", stiffness, 24 * E * section.inertia / length**3 / guides
 
 
 def main() -> dict[str, float]:
@@ -74,7 +98,9 @@ def main() -> dict[str, float]:
         what, value, exact = anchor(name)
         errors[name] = value / exact - 1.0
         print(f"{name:<16} {what:<28} {value:10.5g} {exact:12.5g} {errors[name]:8.2%}")
-    fig, axes = plt.subplots(2, 3, figsize=(15, 10))
+    fig, axes = plt.subplots(2, 4, figsize=(20, 10))
+    for ax in axes.ravel()[len(MECHANISM_SCENES) :]:
+        ax.set_axis_off()
     for ax, name in zip(axes.ravel(), MECHANISM_SCENES):
         scene = load_scene(name)
         case = scene.load_cases[0].name

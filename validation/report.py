@@ -26,7 +26,15 @@ from pathlib import Path
 
 from flexval.reducedmodels.catalogue import FIELDS, parse_model
 
-from . import drivereaction, figures, frequencies, measuredreport, parasitic, strength
+from . import (
+    drivereaction,
+    figures,
+    frequencies,
+    measuredreport,
+    parasitic,
+    stiffnesstable,
+    strength,
+)
 from .convergence import order_text
 from .failures import Failure
 from .figurejobs import Figures, draw_now
@@ -438,6 +446,8 @@ def _scene_section(
         L += _bracket_lines(res)
     L += parasitic.section(res, res.reference if res.has_reference() else PAPER_REFERENCE)
     L += drivereaction.section(res, res.reference if res.has_reference() else PAPER_REFERENCE)
+    if res.stiffness is not None:
+        L += stiffnesstable.section(res.stiffness)
     if threed is not None or res.paper:
         L += threed_section(threed, res.scene.name, code)
     L += strength.section(

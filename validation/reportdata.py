@@ -42,6 +42,7 @@ from .failures import Failure
 from .frequencies import FrequencyTable, frequency_data
 from .measuredcompare import MeasuredComparison, compare_measurement
 from .peers import PeerRow, PeerUnavailable, compare_with_opensees
+from .stiffnesstable import StiffnessTable, stiffness_data
 
 DEFAULT_MODELS = ("continuum", "beam:100", "beam:20", "prbm", "dcmm:1", "dcmm:2", "dcmm:3", "ee")
 #: the paper's reference (its FEM100): every scene is compared against it
@@ -137,6 +138,7 @@ class SceneResults:
     bench_failures: list[Failure] = field(default_factory=list)
     convergence: list[ConvergenceStudy] = field(default_factory=list)
     frequencies: FrequencyTable | None = None
+    stiffness: StiffnessTable | None = None
     bracket: PlaneBracket | None = None
     peers: list[PeerRow] | str | None = None  # the OpenSees comparison, why not, or not asked
     measured: list[MeasuredComparison] = field(default_factory=list)  # [[measurements]]
@@ -622,6 +624,7 @@ def compute_report(
         }
         res.frames = _frame_rows(res, specs, memo)
         res.frequencies = frequency_data(sc, res.models, ref_id or PAPER_REFERENCE)
+        res.stiffness = stiffness_data(sc, res.models, ref_id or PAPER_REFERENCE)
         res.measured = [
             compare_measurement(sc, m, specs, memo, unmodelled_is_failure=True)
             for m in sc.measurements
