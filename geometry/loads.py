@@ -186,14 +186,23 @@ class Displacement:
         return tuple((k, float(v)) for k, v in enumerate(values) if v is not None)
 
     @property
+    def axis(self) -> tuple[int, float]:
+        """(component, value at full load) of the load factor's axis: the first prescribed
+        component that moves (a component held at 0 moves nothing), or the first one if
+        every component is held."""
+        prescribed = self.prescribed
+        return next(((k, v) for k, v in prescribed if v != 0.0), prescribed[0])
+
+    @property
     def value(self) -> float:
-        """The first prescribed component at full load (mm, or rad for a rotation alone)."""
-        return self.prescribed[0][1]
+        """The drive's value at full load along its :attr:`axis` (mm, or rad for a
+        rotation)."""
+        return self.axis[1]
 
     @property
     def unit(self) -> str:
-        """Unit of :attr:`value`: 'mm', or 'rad' when only the rotation is prescribed."""
-        return "rad" if self.prescribed[0][0] == 2 else "mm"
+        """Unit of :attr:`value`: 'mm', or 'rad' when the axis is the rotation."""
+        return "rad" if self.axis[0] == 2 else "mm"
 
     def transformed(self, angle: float, shift: np.ndarray) -> Displacement:
         """The same drive for a mechanism rotated by ``angle`` (rad) and shifted (mm)."""
@@ -234,8 +243,8 @@ class LoadCase:
     @property
     def magnitude(self) -> float:
         """Signed full value of the load factor's axis (N, N mm, mm or rad), for tables and
-        plots: the drive's first component where the case prescribes a motion, else the
-        first load's value."""
+        plots: the drive's :attr:`~Displacement.axis` where the case prescribes a motion,
+        else the first load's value."""
         drive = self.drive
         return float(drive.value if drive is not None else self.components[0].value)
 

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from flexval.geometry import Flexure, LoadCase, Mechanism, SceneError
+from flexval.geometry import Flexure, LoadCase, Mechanism, SceneError, Segment
 
 from .catalogue import ModelSpec
 from .connector import Connector
@@ -65,6 +65,8 @@ def flexure_connectors(
     options = dict(options)
     plate, width = options.pop("plate", False), options.pop("width", False)
     plain = options.pop("eb", False)
+    if width:
+        _refuse_width_without_effect(mechanism, spec)
     flexible = mechanism  # the plate option: the flexures' constants of a wide section
     if plate:
         flexible = dataclasses.replace(mechanism, material=mechanism.material.plane_strain())
@@ -82,6 +84,35 @@ def flexure_connectors(
 
         conns += constraint_connectors(mechanism)
     return with_weights(mechanism, conns)
+
+
+def _refuse_width_without_effect(mechanism: Mechanism, spec: ModelSpec) -> None:
+    """Refuse ``width`` where it would change nothing: every flexure a straight uniform leaf.
+
+    The anticlastic strip theory gives such a leaf r = 1 and knows no clamps, so the model
+    would be plain plane-stress beam theory under a name that promises the 3D stiffening
+    of a deep leaf (several percent at b/h = 20, which only the 3D solid gives).
+
+    Raises
+    ------
+    SceneError
+        Naming the leaves and what to use instead.
+    """
+    leaves = [f for f in mechanism.flexures if isinstance(f.shape, Segment)]
+    if len(leaves) < len(mechanism.flexures) or not all(f.section.is_uniform for f in leaves):
+        return
+    names = ", ".join(
+        f"{f.name} (b/h {f.section.depth / f.section.thickness:.3g})" for f in leaves
+    )
+    raise SceneError(
+        mechanism.source,
+        "model",
+        spec.id,
+        f"[width] has no correction for straight uniform leaves ({names}): the anticlastic "
+        "strip theory gives them r = 1 and knows nothing of the plate stiffening their clamps "
+        "give a deep leaf, so it would be plain beam theory; use continuum:1[3d] for the 3D "
+        "solid, or drop [width]",
+    )
 
 
 def _calibrated_notch(mechanism: Mechanism, flexure: Flexure) -> Mechanism:

@@ -377,3 +377,17 @@ def test_a_driven_system_holds_its_point_under_a_case_without_motion():
     push = LoadCase("push", (Force("shuttle", scene.mechanism.target_point, 0.0, 5.0),), 3)
     lp = solve_path(system, push)
     assert abs(lp.dx[-1]) < 1e-9 and lp.drive_reactions is None
+
+
+def test_the_load_axis_of_a_drive_is_its_first_moving_component():
+    # a component held at 0 moves nothing: the load factor's axis (tables, plots, the
+    # zero crossings) is the first component that moves, whatever the fields' order
+    point = np.zeros(2)
+    held_then_moved = Displacement("b", point, dx=0.0, dy=-2.0, rotation=0.0)
+    assert held_then_moved.axis == (1, -2.0)
+    case = LoadCase("c", (held_then_moved,))
+    assert (case.magnitude, case.unit) == (-2.0, "mm")
+    turned = Displacement("b", point, dx=0.0, rotation=0.5)
+    assert (turned.value, turned.unit) == (0.5, "rad")
+    held = Displacement("b", point, dx=0.0, dy=0.0)
+    assert held.axis == (0, 0.0)

@@ -540,13 +540,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 def _drive_line(lp, drive) -> str:
     """What holds a prescribed motion (``drive``, a Displacement): the force (N) and moment
-    (N mm) at the path's last point, the range of the reaction along the drive's first
-    prescribed component and where it is zero (the unloaded equilibria a bistable mechanism
-    passes; :mod:`.drivereaction`)."""
+    (N mm) at the path's last point, the range of the reaction along the drive's axis (its
+    first moving component) and where it is zero (the unloaded equilibria a bistable
+    mechanism passes; :mod:`.drivereaction`)."""
     from .drivereaction import along_drive, zero_crossings
 
     fx, fy, moment = lp.drive_reactions[-1]
-    component, _ = drive.prescribed[0]
+    component, _ = drive.axis
     along = along_drive(lp, drive)[:, component]
     unit = "N mm" if component == 2 else "N"
     text = (
