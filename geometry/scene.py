@@ -5,7 +5,8 @@ built-in name (:data:`BUILTIN_SCENES`: the paper's ``open_chain`` and
 ``closed_chain``, the flexure scenes ``notch_fourbar``, ``filleted_stage``,
 ``tapered_leaf``, ``spline_flexure`` and the canonical mechanisms
 ``parallel_guide``, ``folded_guide``, ``cross_pivot``, ``cartwheel_hinge``,
-``trapezoid_pivot``, ``bistable_truss``, ``bridge_amplifier``) or a path. Every value is
+``trapezoid_pivot``, ``bistable_truss``, ``bistable_arch``, ``bridge_amplifier``) or a
+path. Every value is
 checked; a bad one raises :class:`SceneError` naming the file, the field and
 the value. Angles are degrees in the file and radians in memory; lengths mm,
 moduli MPa, forces N, moments N mm.
@@ -103,12 +104,13 @@ MECHANISM_SCENES = (
     "cartwheel_hinge",
     "trapezoid_pivot",
     "bistable_truss",
+    "bistable_arch",
     "bridge_amplifier",
 )
 """Canonical mechanisms designers build, each with an independent anchor in the tests: a
 parallel leaf guide, a folded guide, a cross-axis pivot, a cartwheel hinge, a
-leaf-type isosceles-trapezoidal pivot, a bistable truss and a notch-hinge bridge-type
-displacement amplifier."""
+leaf-type isosceles-trapezoidal pivot, a bistable truss, a fully compliant bistable arch
+and a notch-hinge bridge-type displacement amplifier."""
 BUILTIN_SCENES = PAPER_SCENES + FLEXURE_SCENES + MECHANISM_SCENES
 """Every scene ``load_scene`` knows by name (files in ``flexval/geometry/scenes``)."""
 

@@ -52,11 +52,15 @@ class Connector(ABC):
         each makes the tangent one negative eigenvalue indefinite at a stable
         state, which the core's stability test accounts for.
     sway_load : float or None
-        For a model of a straight flexure without geometric stiffness for
-        the sway of its ends (it cannot buckle): the compression (N) beyond
-        which its states are outside its validity
-        (:func:`flexval.reducedmodels.validity.sway_load`); None (default)
-        for a model that buckles itself, which the stability test finds.
+        For a model of a straight (or shallow) flexure without geometric
+        stiffness for the sway of its ends or of its parts (it cannot buckle
+        there): the compression (N) beyond which its states are outside its
+        validity (:func:`flexval.reducedmodels.validity.sway_load`); None
+        (default) for a model that buckles itself, which the stability test
+        finds.
+    sway_span : str
+        What ``sway_load`` is the Euler load of, for messages: ``"leaf"``
+        (default: the whole flexure) or ``"sub-arc"``.
     dead_load_scale : float
         The largest dead load the connector carries itself (N; its weights,
         :class:`flexval.reducedmodels.inertia.Weighted`): it joins the force
@@ -68,6 +72,7 @@ class Connector(ABC):
     n_internal: int = 0
     n_multipliers: int = 0
     sway_load: float | None = None
+    sway_span: str = "leaf"
     dead_load_scale: float = 0.0
 
     # --- required --------------------------------------------------------
@@ -594,7 +599,7 @@ def with_sway_reasons(
     for j, (c, found) in enumerate(zip(connectors, forces)):
         if c.sway_load is None or found is None:
             continue
-        extra = sway_reasons(found.axial, c.sway_load)
+        extra = sway_reasons(found.axial, c.sway_load, c.sway_span)
         if any(extra):
             out[j] = [[*why, *more] for why, more in zip(verdicts[j], extra)]
     return out

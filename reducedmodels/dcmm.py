@@ -191,8 +191,10 @@ class DcmmConnector(Connector):
         self.name = flexure.name
         self.bodies = tuple(flexure.bodies)
         self.n_internal = 3 * (n - 1)
-        # one compliance has no geometric stiffness for a straight flexure's sway
-        self.sway_load = sway_load(flexure, mechanism) if n == 1 else None
+        # one compliance has no geometric stiffness for a straight flexure's sway, nor
+        # a sub-arc's for its own
+        self.sway_load = sway_load(flexure, mechanism, n)
+        self.sway_span = "leaf" if n == 1 else "sub-arc"
         shape = flexure.shape
         subs = sub_arcs(flexure, mechanism.material, n)
         forward = flexure.start_body == self.bodies[0]  # chain runs start -> end

@@ -28,11 +28,14 @@ typed in:
   one: :func:`bending_rotation_limit` turns :data:`MAX_STRAIN` into the
   rotation of a notch's pivot or of a DCMM part of it.
 
-* a straight flexure modelled without geometric stiffness for a sway of its
-  ends (``dcmm:1``'s one compliance, ``ee``'s linear response) cannot buckle
-  in the model: :func:`sway_load` bounds its compression by the leaf's Euler
-  load (guided, or a cantilever's), and :func:`sway_reasons` names the
-  levels beyond it.
+* a straight or shallow flexure modelled without geometric stiffness for a
+  sway of its ends (``dcmm:1``'s one compliance, ``ee``'s linear response)
+  cannot buckle in the model: :func:`sway_load` bounds its compression by the
+  leaf's Euler load (guided, or a cantilever's), and :func:`sway_reasons`
+  names the levels beyond it. A DCMM_n sub-arc has no geometric stiffness
+  within itself either: its compression is bounded by the sub-arc's Euler
+  load, n^2 times the leaf's, which a flexure held at both ends passes only
+  beyond its own first buckling load (4 pi^2 EI / L^2 clamped at both ends).
 
 * a level whose motion is of the size of the solution's round-off (a load
   so small that double precision does not resolve what it moves):
@@ -188,24 +191,48 @@ def _label(what: str, k: int, count: int) -> str:
     return what if count == 1 else f"{what} {k + 1}"
 
 
-def sway_load(flexure, mechanism) -> float | None:
+SHALLOW_RISE = 0.1
+"""Largest distance of a curved flexure's centre line from its chord, as a fraction of the
+chord, for the flexure to count as shallow: under compression it buckles like a column
+(the range of shallow-arch theory), so the sway screen treats it as straight. A deeper
+curve bends under its load instead."""
+
+
+def is_shallow(shape) -> bool:
+    """Whether ``shape`` is straight or within :data:`SHALLOW_RISE` of its chord."""
+    if shape.kind in ("segment", "notch"):
+        return True
+    start, end = (np.asarray(p, float) for p in shape.end_points)
+    chord = end - start
+    span = float(np.hypot(*chord))
+    points = np.asarray(shape.point(np.linspace(0.0, shape.length, 129))) - start
+    rise = np.abs(points[:, 0] * chord[1] - points[:, 1] * chord[0]) / span
+    return float(rise.max()) <= SHALLOW_RISE * span
+
+
+def sway_load(flexure, mechanism, parts: int = 1) -> float | None:
     """The compression (N) beyond which a model blind to a straight flexure's sway misses
     its buckling, Euler's load with the flexure's effective EI = L / int ds / EI (its end
     rotation's, exact for a taper or a notch): pi^2 EI / L^2 where both its bodies are held
     by something else too (the ends stay near parallel: a guided leaf's sway, as in a
     parallel guide), pi^2 EI / (4 L^2) where one of them hangs on this flexure alone (a
-    cantilever). None for a curved flexure (an arc or a spline bends under its load
-    instead of staying straight until it buckles).
+    cantilever). With ``parts`` > 1, the Euler load pi^2 EI / (L / parts)^2 of one of that
+    many equal sub-arcs, each held by its neighbours (a DCMM_n sub-arc, blind to its own
+    sway). A shallow curve (:func:`is_shallow`) counts as straight; None for a deeper one
+    (an arc or a spline bends under its load instead of staying straight until it
+    buckles).
 
     A screen, not a buckling analysis: ``flexval buckle`` gives the mechanism's own load.
     """
-    if flexure.shape.kind not in ("segment", "notch"):
+    if not is_shallow(flexure.shape):
         return None
     from flexval.geometry.compliance import curve_compliance
 
     length = flexure.shape.length
     weight = curve_compliance(flexure.shape, flexure.section, mechanism.material).ellipse.weight
     effective = length / weight  # N mm^2
+    if parts > 1:
+        return math.pi**2 * effective / (length / parts) ** 2
     held = [
         body == mechanism.ground
         or sum(body in f.bodies for f in mechanism.flexures)
@@ -217,15 +244,17 @@ def sway_load(flexure, mechanism) -> float | None:
     return factor * math.pi**2 * effective / length**2
 
 
-def sway_reasons(axial: np.ndarray, limit: float) -> list[list[str]]:
+def sway_reasons(axial: np.ndarray, limit: float, span: str = "leaf") -> list[list[str]]:
     """Per level (rows of ``axial``, N, tension positive, (k, m)), the reason where the
-    flexure's largest compression exceeds ``limit`` (N, :func:`sway_load`); else none."""
+    flexure's largest compression exceeds ``limit`` (N, :func:`sway_load` of the ``span``:
+    ``"leaf"`` or ``"sub-arc"``); else none."""
     compression = -np.min(np.atleast_2d(axial), axis=1)
+    whose = "its" if span == "leaf" else f"a {span}'s"
     return [
         [
-            f"compression {c:.4g} N beyond the leaf's Euler load {limit:.4g} N: this model "
-            "has no geometric stiffness for its sway and cannot see it buckle (flexval "
-            "buckle with a beam model gives the mechanism's load)"
+            f"compression {c:.4g} N beyond the {span}'s Euler load {limit:.4g} N: this "
+            f"model has no geometric stiffness for {whose} sway and cannot see it buckle "
+            "(flexval buckle with a beam model gives the mechanism's load)"
         ]
         if c > limit
         else []
@@ -248,7 +277,7 @@ def linear_sway_verdicts(
             continue
         base = 0.0 if dead is None or dead[j] is None else np.asarray(dead[j].axial)
         axial = base + np.outer(lam, np.asarray(unit[j].axial))
-        for into, why in zip(found, sway_reasons(axial, c.sway_load)):
+        for into, why in zip(found, sway_reasons(axial, c.sway_load, c.sway_span)):
             into.extend(f"{c.name}: {w}" for w in why)
     return found
 
