@@ -170,6 +170,7 @@ class ArcLength(Stepping):
         self.direction = (tangent, 1.0)  # unscaled (dq, dlambda) of the last converged step
         self.was_cut = self.landed = self.switched = False
         self.count = self.next_count = system.instability(point.tangent)
+        self.rest_count = self.count
 
     def finished(self) -> bool:
         """True once the path has landed on ``max_load_factor``."""
@@ -317,6 +318,13 @@ class ArcLength(Stepping):
     def step_size(self) -> float:
         """Arc length of the step last accepted (dimensionless)."""
         return self.taken_arc
+
+    def unstable(self) -> int | None:
+        """The last accepted state's negative eigenvalues beyond the first point's (the
+        count the bifurcation watch keeps), or None where either was not counted."""
+        if self.count is None or self.rest_count is None:
+            return None
+        return max(self.count - self.rest_count, 0)
 
     def exhausted(self, counters) -> str | None:
         """More than ``max_steps`` converged steps without reaching the end."""

@@ -132,6 +132,7 @@ class PathRecorder:
         self.factors: list[float] = []
         self._sections: dict | None = None  # see sections
         self.states: list[np.ndarray] = []  # recorded states not yet judged and stressed
+        self.unstable: list[int | None] = []  # each point's surplus negative eigenvalues
 
     @property
     def sections(self) -> dict:
@@ -158,6 +159,7 @@ class PathRecorder:
             for c, local in zip(system.connectors, system.local_states(q)):
                 lp.shapes[c.name].append(c.shape(*local).tolist())
         self.stats["iterations"].append(point.iterations)
+        self.unstable.append(point.unstable)
         _count(self.stats, point.counters)
         _append_bifurcations(lp, point.bifurcations, self.magnitude)
         self.factors.append(point.factor)
@@ -194,6 +196,7 @@ class PathRecorder:
         """The path of a successful trace (wall time from the recorder's creation)."""
         self._judge()
         note_stability(self.path, self.system)
+        note_unstable_points(self.path, self.unstable)
         note_resolution(self.path, self.system.size, carries_weights(self.system.connectors))
         self.path.converged = True
         self.path.seconds = time.perf_counter() - self.t0
@@ -203,6 +206,7 @@ class PathRecorder:
         """The SolverError for a failed trace, carrying the path so far."""
         self._judge()
         note_stability(self.path, self.system)
+        note_unstable_points(self.path, self.unstable)
         note_resolution(self.path, self.system.size, carries_weights(self.system.connectors))
         return failed_path(self.path, self.case, self.model, exc, time.perf_counter() - self.t0)
 
@@ -233,6 +237,26 @@ def note_stability(path: LoadPath, system: System) -> None:
     note = system.stability_note()
     if note is not None:
         path.stats["stability"] = note
+
+
+def note_unstable_points(path: LoadPath, unstable: Sequence[int | None]) -> None:
+    """Mark the points of a path that are unstable equilibria (``unstable``: each point's
+    negative eigenvalues beyond the path's first point's, None where not counted): an
+    arc-length trace passes them on its way past a limit or bifurcation point, but the load
+    case's control (dead loads, or a prescribed motion) cannot hold the mechanism there, so
+    they are outside what the model can be trusted to show as a reachable state."""
+    if len(unstable) != len(path.load) or not any(unstable):
+        return
+    extra = [
+        [
+            f"an unstable equilibrium ({k} more negative eigenvalue{'s' if k > 1 else ''} of "
+            "the tangent than at rest): the load case's control cannot hold the mechanism here"
+        ]
+        if k
+        else []
+        for k in unstable
+    ]
+    path.valid, path.validity = merge_reasons(path.valid, path.validity, extra)
 
 
 def note_resolution(path: LoadPath, size: float, weighted: bool) -> None:

@@ -104,6 +104,10 @@ class PathPoint:
     bifurcations : tuple of float
         Load factors of the bifurcation points located since the previous
         point (see :mod:`flexval.reducedmodels.bifurcation`).
+    unstable : int or None
+        How many more negative eigenvalues the tangent has here than at the path's first
+        point (0: as stable as at rest; > 0: an equilibrium the load case's control
+        cannot hold), where the stepping judges it (:meth:`Stepping.unstable`); else None.
     """
 
     state: np.ndarray
@@ -113,6 +117,7 @@ class PathPoint:
     step: float
     counters: Counters
     bifurcations: tuple[float, ...] = ()
+    unstable: int | None = None
 
 
 class TraceFailure(Exception):
@@ -210,6 +215,12 @@ class Stepping(ABC):
         """
         return None
 
+    def unstable(self) -> int | None:
+        """How many more negative eigenvalues the last accepted state's tangent has than the
+        first point's, or None where this stepping does not count them (load control
+        refuses an unstable state instead of reporting it)."""
+        return None
+
 
 def trace(
     system: System,
@@ -289,6 +300,7 @@ def trace(
                 stepping.step_size(),
                 counters.copy(),
                 found,
+                stepping.unstable(),
             )
             spent, found = 0, ()
         why = stepping.exhausted(counters)

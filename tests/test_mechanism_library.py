@@ -11,9 +11,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
-from flexval.geometry import MECHANISM_SCENES, load_scene
+from flexval.geometry import MECHANISM_SCENES, SceneError, load_scene
+from flexval.geometry.scene import parse_scene, read_scene_data
+from flexval.reducedmodels import SolverError
 from flexval.reducedmodels.catalogue import parse_model
+from flexval.validation.limits import trace_arclength
 from flexval.validation.run import run_model
 from flexval.validation.stiffness import run_stiffness
 
@@ -251,10 +255,6 @@ def test_bistable_truss_snaps_through_as_the_closed_form_says(model):
 @pytest.mark.parametrize("name", MECHANISM_SCENES)
 @pytest.mark.parametrize("model", ["beam:20", "dcmm:2", "prbm", "ee", "continuum:0"])
 def test_every_family_runs_every_mechanism_or_says_why(name, model):
-    from flexval.reducedmodels import SolverError
-
-    from flexval.geometry import SceneError
-
     scene = load_scene(name)
     for case in scene.load_cases:
         try:
@@ -279,7 +279,6 @@ def test_width_on_straight_leaves_is_refused_by_name(capsys, tmp_path):
     # the strip theory's ratio is 1 on a straight uniform leaf and it knows no clamps: on a
     # mechanism of such leaves only, [width] would be plain beam theory under a name that
     # promises the 3D stiffening, so it is refused, naming the leaves and what to use
-    from flexval.geometry import SceneError
     from flexval.validation.cli import main
 
     code = main(["run", "parallel_guide", "--model", "beam:20[width]", "--load-case", "lateral"])
@@ -368,8 +367,6 @@ class ShallowArch:
 
 def arch_scene(rise: float):
     """The built-in bistable arch with another rise (mm): its spline points recomputed."""
-    from flexval.geometry.scene import parse_scene, read_scene_data
-
     data = read_scene_data("bistable_arch")[1]
     span = 60.0
     for f in data["flexures"]:
@@ -385,9 +382,6 @@ def arch_scene(rise: float):
 def _arch_branch(scene, model="beam:100"):
     """(d, pushing force) of the arc-length trace switched onto the bifurcating branch, up
     to its first turn of d (the branch's end), and the trace's bifurcations."""
-    from flexval.reducedmodels import SolverError
-    from flexval.validation.limits import trace_arclength
-
     try:
         lp = trace_arclength(scene, parse_model(model), scene.load_case("snap"), branch_switch=True)
     except SolverError as exc:  # back along the branch, it may wander off: only the first
@@ -398,8 +392,6 @@ def _arch_branch(scene, model="beam:100"):
 
 
 def test_bistable_arch_snaps_as_shallow_arch_theory_says():
-    from flexval.reducedmodels import SolverError
-
     scene = load_scene("bistable_arch")
     theory = ShallowArch(60.0, 3.0, 0.5, 5.0, 2800.0)
     (d_top, f_top), (d_bot, f_bot) = sorted(
@@ -434,12 +426,8 @@ def test_bistable_arch_snaps_as_shallow_arch_theory_says():
 
 @pytest.mark.parametrize("model", ["beam:100", "continuum:0"])
 def test_bistable_arch_free_to_turn_buckles_antisymmetrically_first(model):
-    from flexval.reducedmodels import SolverError
-
     # free to turn, the arch leaves the symmetric path where its compression reaches the
     # antisymmetric mode's EI (lambda / L)^2, tan(lambda / 2) = lambda / 2 (lambda = 8.987)
-    from scipy.optimize import brentq
-
     theory = ShallowArch(60.0, 3.0, 0.5, 5.0, 2800.0)
     lam = brentq(lambda x: math.tan(x / 2) - x / 2, 8.5, 9.2)
     d_expected = min(d for d, _ in theory.symmetric_path_at(theory.EI * (lam / 60.0) ** 2))
@@ -452,8 +440,6 @@ def test_bistable_arch_free_to_turn_buckles_antisymmetrically_first(model):
 def test_dcmm_sub_arcs_blind_to_their_sway_are_invalid_beyond_it():
     # two sub-arcs per half cannot bend in the half's full wave: the sub-arc's Euler load
     # bounds the states flexval calls valid, before the path runs past the bifurcation
-    from flexval.reducedmodels import SolverError
-
     scene = load_scene("bistable_arch")
     try:
         lp = run_model(scene, "dcmm:2", "snap")
@@ -464,3 +450,39 @@ def test_dcmm_sub_arcs_blind_to_their_sway_are_invalid_beyond_it():
     theory = ShallowArch(60.0, 3.0, 0.5, 5.0, 2800.0)
     d_top = min(d for d, _ in theory.symmetric_path_at(theory.second_mode))
     assert -lp.dy[first_invalid] < d_top
+
+
+def test_an_arc_length_trace_marks_the_unstable_equilibria_it_passes():
+    # a dead load past the truss's snap-through force: between the two limit points the
+    # equilibria are unstable under that load (one negative eigenvalue), outside they are not
+    data = read_scene_data("bistable_truss")[1]
+    press = next(c for c in data["load_cases"] if c["name"] == "press")
+    press["value"] = 60.0
+    scene = parse_scene(data, "<truss>")
+    lp = trace_arclength(scene, parse_model("beam:4"), scene.load_case("press"))
+    load = np.abs(lp.load)
+    first, second = (p["index"] for p in lp.limit_points[:2])
+    assert load[first] == pytest.approx(43.27, rel=2e-3)
+    # (the recorded points nearest the turns may lie on either side of them)
+    assert all(lp.valid[:first]) and all(lp.valid[second + 1 :])
+    between = lp.validity[first + 1 : second]
+    assert between and all(
+        "an unstable equilibrium (1 more negative eigenvalue" in w for w in between
+    )
+
+    # the arch held level, traced by arc length along its symmetric path: unstable from
+    # the bifurcation (both halves' mode) until the path's stable far end; switched onto
+    # the crossing branch instead, every point is stable
+    arch = load_scene("bistable_arch")
+    lp = trace_arclength(arch, parse_model("beam:100"), arch.load_case("snap"))
+    d = -np.asarray(lp.dy)
+    top = -lp.bifurcations[0]["load"]
+    assert all(lp.valid[k] for k in range(len(d)) if d[k] < top and k < lp.valid.index(False))
+    assert not lp.valid[lp.valid.index(False)] and lp.valid[-1]
+    assert (
+        "an unstable equilibrium (2 more negative eigenvalues" in lp.validity[lp.valid.index(False)]
+    )
+    branch = trace_arclength(
+        arch, parse_model("beam:100"), arch.load_case("snap"), 0.8, branch_switch=True
+    )
+    assert all(branch.valid) and len(branch.valid) > 10
