@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.integrate import quad
 from scipy.optimize import brentq
 
 from flexval.geometry import MECHANISM_SCENES, SceneError, load_scene
@@ -20,27 +21,44 @@ from flexval.reducedmodels.catalogue import parse_model
 from flexval.validation.limits import trace_arclength
 from flexval.validation.run import run_model
 from flexval.validation.stiffness import run_stiffness
+from flexval.validation.stiffnesstable import section, stiffness_data
 
 
 def leaf_matrix(p0, p1, ea: float, ei: float) -> np.ndarray:
-    """A straight leaf's stiffness (6 x 6) in global (x, y, theta) of its two end nodes."""
-    d = np.asarray(p1, float) - np.asarray(p0, float)
-    length = math.hypot(*d)
-    c, s = d / length
-    a, b1, b2, b3 = ea / length, 12 * ei / length**3, 6 * ei / length**2, ei / length
-    local = np.array(
+    """A straight uniform leaf's stiffness (6 x 6) in global (x, y, theta) of its two end
+    nodes: its tip compliance L/EA, L^3/3EI, L^2/2EI, L/EI (Euler-Bernoulli)."""
+    length = math.dist(p0, p1)
+    compliance = np.array(
         [
-            [a, 0, 0, -a, 0, 0],
-            [0, b1, b2, 0, -b1, b2],
-            [0, b2, 4 * b3, 0, -b2, 2 * b3],
-            [-a, 0, 0, a, 0, 0],
-            [0, -b1, -b2, 0, b1, -b2],
-            [0, b2, 2 * b3, 0, -b2, 4 * b3],
+            [length / ea, 0, 0],
+            [0, length**3 / (3 * ei), length**2 / (2 * ei)],
+            [0, length**2 / (2 * ei), length / ei],
         ]
     )
-    rotation = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
-    transform = np.kron(np.eye(2), rotation)
-    return transform.T @ local @ transform
+    return element_matrix(p0, p1, compliance)
+
+
+def assemble_frame(elements, ground: str, origin: dict) -> tuple[np.ndarray, dict]:
+    """The direct stiffness method on rigid bodies: each element (its two bodies, its two
+    end nodes, its 6 x 6 matrix in global (x, y, theta) of the nodes) carried to the poses
+    of its bodies about ``origin`` (body -> point, mm), the ground's rows left out. Returns
+    the matrix and each body's first row."""
+    index = {b: 3 * k for k, b in enumerate(origin)}
+    total = np.zeros((3 * len(origin), 3 * len(origin)))
+    for bodies, ends, k in elements:
+        for i, (body, node) in enumerate(zip(bodies, ends)):
+            if body == ground:
+                continue
+            rx, ry = np.asarray(node, float) - origin[body]
+            carry_i = np.array([[1, 0, -ry], [0, 1, rx], [0, 0, 1.0]])  # node from body pose
+            for j, (other, node_j) in enumerate(zip(bodies, ends)):
+                if other == ground:
+                    continue
+                sx, sy = np.asarray(node_j, float) - origin[other]
+                carry_j = np.array([[1, 0, -sy], [0, 1, sx], [0, 0, 1.0]])
+                block = carry_i.T @ k[3 * i : 3 * i + 3, 3 * j : 3 * j + 3] @ carry_j
+                total[index[body] : index[body] + 3, index[other] : index[other] + 3] += block
+    return total, index
 
 
 def frame_target_stiffness(scene) -> np.ndarray:
@@ -48,28 +66,18 @@ def frame_target_stiffness(scene) -> np.ndarray:
     pose (x, y, theta) about its own reference (the target point for the target body), the
     ground's removed, every other body condensed out."""
     mech = scene.mechanism
-    moving = mech.moving_bodies
-    origin = {b: mech.bodies[b].reference for b in moving}
+    origin = {b: mech.bodies[b].reference for b in mech.moving_bodies}
     origin[mech.target_body] = mech.target_point
-    index = {b: 3 * k for k, b in enumerate(moving)}
-    total = np.zeros((3 * len(moving), 3 * len(moving)))
     E = mech.material.youngs_modulus
-    for f in mech.flexures:
-        area, inertia = f.section.area, f.section.inertia
-        ends = f.shape.end_points
-        k = leaf_matrix(ends[0], ends[1], E * area, E * inertia)
-        for i, (body, node) in enumerate(zip(f.bodies, ends)):
-            if body == mech.ground:
-                continue
-            rx, ry = np.asarray(node) - origin[body]
-            carry_i = np.array([[1, 0, -ry], [0, 1, rx], [0, 0, 1.0]])  # node from body pose
-            for j, (other, node_j) in enumerate(zip(f.bodies, ends)):
-                if other == mech.ground:
-                    continue
-                sx, sy = np.asarray(node_j) - origin[other]
-                carry_j = np.array([[1, 0, -sy], [0, 1, sx], [0, 0, 1.0]])
-                block = carry_i.T @ k[3 * i : 3 * i + 3, 3 * j : 3 * j + 3] @ carry_j
-                total[index[body] : index[body] + 3, index[other] : index[other] + 3] += block
+    elements = [
+        (
+            f.bodies,
+            f.shape.end_points,
+            leaf_matrix(*f.shape.end_points, E * f.section.area, E * f.section.inertia),
+        )
+        for f in mech.flexures
+    ]
+    total, index = assemble_frame(elements, mech.ground, origin)
     t = index[mech.target_body]
     compliance = np.linalg.inv(total)[t : t + 3, t : t + 3]
     return np.linalg.inv(compliance)
@@ -486,3 +494,166 @@ def test_an_arc_length_trace_marks_the_unstable_equilibria_it_passes():
         arch, parse_model("beam:100"), arch.load_case("snap"), 0.8, branch_switch=True
     )
     assert all(branch.valid) and len(branch.valid) > 10
+
+
+def notch_local_compliance(flexure: dict, E: float, depth: float) -> np.ndarray:
+    """A circular notch hinge's compliance (3 x 3, local axial / transverse / rotation) at
+    its second end with the first clamped, by Euler-Bernoulli integrals of its thickness
+    t(s) along the axis (Castigliano; the contour read from the scene's own fields): the
+    circle through the ends (thickness H) and the neck (thickness t)."""
+    length = math.dist(flexure["start"], flexure["end"])
+    t, H = flexure["thickness"], flexure["height"]
+    radius = ((length / 2) ** 2 + ((H - t) / 2) ** 2) / (H - t)
+
+    def thickness(s):
+        return t + 2 * (radius - math.sqrt(radius**2 - (s - length / 2) ** 2))
+
+    def integral(f):
+        return quad(f, 0.0, length, points=[length / 2], epsabs=0, epsrel=1e-12, limit=200)[0]
+
+    axial = integral(lambda s: 1 / (E * depth * thickness(s)))
+    bend = [
+        integral(lambda s, k=k: (length - s) ** k * 12 / (E * depth * thickness(s) ** 3))
+        for k in (0, 1, 2)
+    ]
+    return np.array([[axial, 0, 0], [0, bend[2], bend[1]], [0, bend[1], bend[0]]])
+
+
+def element_matrix(p0, p1, local_compliance: np.ndarray) -> np.ndarray:
+    """A flexure's stiffness (6 x 6) in global (x, y, theta) of its two end nodes from its
+    local compliance at the second end (first end clamped): the deformation is the second
+    end's motion less the first end's carried rigidly, d = q1 - Phi q0."""
+    d = np.asarray(p1, float) - np.asarray(p0, float)
+    length = math.hypot(*d)
+    c, s = d / length
+    k11 = np.linalg.inv(local_compliance)
+    carry = np.array([[1, 0, 0], [0, 1, length], [0, 0, 1.0]])
+    local = np.block([[carry.T @ k11 @ carry, -carry.T @ k11], [-k11 @ carry, k11]])
+    rotation = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]])
+    transform = np.kron(np.eye(2), rotation)
+    return transform.T @ local @ transform
+
+
+def bridge_linear_response(data: dict, axial: bool = True) -> tuple[float, float]:
+    """(amplification, input stiffness N/mm) of the bridge amplifier scene ``data`` by the
+    compliance-matrix model: rigid arms and blocks, each notch hinge's Euler-Bernoulli
+    compliances, the stack's end moved along x (free across and in rotation), the top
+    block's motion across the stack per unit stroke. ``axial=False`` makes the hinges
+    inextensible: the ideal-pivot kinematics."""
+    E, depth = data["material"]["youngs_modulus"], data["section"]["depth"]
+    ground = data["ground"]["name"]
+    drive = data["load_cases"][0]
+    bodies = sorted({b for f in data["flexures"] for b in f["bodies"]} - {ground})
+    origin = {b: np.zeros(2) for b in bodies}
+    origin[data["target"]["body"]] = np.asarray(data["target"]["point"], float)
+    origin[drive["body"]] = np.asarray(drive["point"], float)
+    elements = []
+    for f in data["flexures"]:
+        compliance = notch_local_compliance(f, E, depth)
+        if not axial:
+            compliance[0, 0] = 1e-9 * compliance[1, 1]
+        k = element_matrix(f["start"], f["end"], compliance)
+        elements.append((f["bodies"], (f["start"], f["end"]), k))
+    total, index = assemble_frame(elements, ground, origin)
+    driven = index[drive["body"]]
+    free = np.setdiff1d(np.arange(len(total)), [driven])
+    motion = np.zeros(len(total))
+    motion[driven] = 1.0
+    motion[free] = np.linalg.solve(total[np.ix_(free, free)], -total[free, driven])
+    top = index[data["target"]["body"]]
+    return -motion[top + 1], float(total[driven] @ motion)
+
+
+def _bridge_angle(data: dict) -> float:
+    """The arms' angle to the stack (rad), from the top-left arm's hinge centres."""
+    (h1, h2) = (np.add(f["start"], f["end"]) / 2 for f in data["flexures"][:2])
+    return math.atan2(h2[1] - h1[1], h2[0] - h1[0])
+
+
+def _small_stroke(model: str, data: dict) -> tuple[float, float, float]:
+    """flexval's (amplification, input stiffness N/mm) at zero stroke, the driven path's
+    first two levels extrapolated to zero (both change linearly with the stroke), and its
+    amplification at the full stroke."""
+    lp = run_model(parse_scene(data, "<bridge>"), model, "stroke", levels=21)
+    strokes = data["load_cases"][0]["dx"] * np.array([0.05, 0.1])
+    ratio = -np.asarray(lp.dy[1:3]) / strokes
+    force = np.asarray(lp.drive_reactions)[1:3, 0] / strokes
+    full = -lp.dy[-1] / data["load_cases"][0]["dx"]
+    return 2 * ratio[0] - ratio[1], 2 * force[0] - force[1], full
+
+
+def test_bridge_amplifier_against_the_compliance_matrix_model():
+    data = read_scene_data("bridge_amplifier")[1]
+    alpha = _bridge_angle(data)
+    ratio, stiffness = bridge_linear_response(data)
+    # the reference itself: inextensible hinges give the ideal pivots' cot(alpha) / 2 (to
+    # the scene's coordinates, given to 1e-4 mm); the hinges' axial compliance takes 1.6 %
+    ideal, _ = bridge_linear_response(data, axial=False)
+    assert ideal == pytest.approx(1 / (2 * math.tan(alpha)), rel=1e-5)
+    assert 0.98 * ideal < ratio < 0.99 * ideal
+    # the lumped-hinge closed form: each hinge a rotational spring k_theta = 1/C_theta and
+    # an axial one k_a = 1/C_axial at its centre, rigid arms l apart; minimising the
+    # energy over the output's motion v per half-stroke u gives
+    # v/u = sin cos (k_a/2 - 2 k_theta/l^2) / (2 k_theta/l^2 cos^2 + k_a/2 sin^2);
+    # it leaves out the hinges' shear-free transverse compliance (measured 2e-5 of the
+    # ratio, 0.15 % of the input stiffness)
+    hinge = notch_local_compliance(data["flexures"][0], 71700.0, 5.0)
+    k_theta, k_axial = 1 / hinge[2, 2], 1 / hinge[0, 0]
+    centres = [np.add(f["start"], f["end"]) / 2 for f in data["flexures"][:2]]
+    arm = math.dist(*centres)
+    s, c, bend = math.sin(alpha), math.cos(alpha), 2 * k_theta / arm**2
+    lumped = 0.5 * s * c * (k_axial / 2 - bend) / (bend * c * c + k_axial / 2 * s * s)
+    assert lumped == pytest.approx(ratio, rel=1e-4)
+    half, across = 0.5, -lumped
+    energy = 4 * (
+        k_theta * ((-half * s + across * c) / arm) ** 2 + k_axial / 4 * (half * c + across * s) ** 2
+    )
+    assert 2 * energy == pytest.approx(stiffness, rel=5e-3)
+
+    # flexval's Euler-Bernoulli hinges: ee integrates the same compliances (measured
+    # 1e-12); the beam and DCMM elements discretise them (measured 1e-5 of the ratio,
+    # 4e-5 of the stiffness); the PRBM lumps each hinge (measured 8e-4 of the stiffness)
+    for model, tolerance in (("ee[eb]", 1e-9), ("beam:100[eb]", 2e-4), ("dcmm:1[eb]", 2e-4)):
+        r, k, _ = _small_stroke(model, data)
+        assert r == pytest.approx(ratio, rel=tolerance), model
+        assert k == pytest.approx(stiffness, rel=tolerance), model
+    r, k, _ = _small_stroke("prbm[eb]", data)
+    assert r == pytest.approx(ratio, rel=2e-4) and k == pytest.approx(stiffness, rel=2e-3)
+
+    # the continuum: the amplification is the bridge's kinematics (measured 3e-4), but its
+    # notches are 6.6 % softer than Euler-Bernoulli theory gives (t/R = 0.2); the
+    # calibrated beam follows it (measured 0.04 %)
+    r_solid, k_solid, full_solid = _small_stroke("continuum:1", data)
+    assert r_solid == pytest.approx(ratio, rel=1e-3)
+    assert 0.92 < k_solid / stiffness < 0.95
+    r_beam, k_beam, full_beam = _small_stroke("beam:100", data)
+    assert k_beam == pytest.approx(k_solid, rel=2e-3)
+    # at the full 40 um stroke the arms flatten: the amplification grows by 3.0 % (beam,
+    # continuum), as the ideal pivots' kinematics, l (sin alpha - sin alpha'), say (3.3 %);
+    # a linear model keeps its small-stroke ratio
+    u = data["load_cases"][0]["dx"] / 2
+    flattened = math.acos(math.cos(alpha) + u / arm)
+    ideal_gain = arm * (math.sin(alpha) - math.sin(flattened)) / (2 * u) / ideal - 1
+    for full, small in ((full_beam, r_beam), (full_solid, r_solid)):
+        assert full / small - 1 == pytest.approx(ideal_gain, abs=5e-3)
+    r_ee, _, full_ee = _small_stroke("ee", data)
+    assert full_ee == pytest.approx(r_ee, rel=1e-9)
+
+
+def test_the_reports_stiffness_table_is_one_over_the_frames_diagonal_compliance():
+    scene = load_scene("parallel_guide")
+    table = stiffness_data(scene, ["ee", "prbm"], "continuum:0")
+    assert table.models == ["continuum:0", "ee", "prbm"]
+    # each coordinate's stiffness with the other two free: 1 / C_ii of the exact frame
+    exact = 1 / np.diag(np.linalg.inv(frame_target_stiffness(scene)))
+    np.testing.assert_allclose(table.axial["ee"], exact, rtol=1e-9)
+    solid = np.asarray(table.axial["continuum:0"])
+    np.testing.assert_allclose(table.errors["ee"], 100 * (exact / solid - 1), rtol=1e-9)
+    assert table.errors["continuum:0"] == [0.0, 0.0, 0.0]
+    # the PRBM's leaves are inextensible: rigid along them and in rotation, never a
+    # large finite number; along the stroke its 24 EI / L^3 (measured 0.07 % above)
+    assert table.axial["prbm"][1:] == [None, None]
+    assert table.axial["prbm"][0] == pytest.approx(exact[0], rel=2e-3)
+    text = "\n".join(section(table))
+    assert "### Stiffness at the target against `continuum:0`" in text
+    assert "| `prbm` | 2.7" in text and "| rigid | rigid |" in text
