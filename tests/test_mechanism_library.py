@@ -1,9 +1,11 @@
 """The canonical mechanisms built in (geometry/scenes), each against an independent anchor.
 
-Two kinds of reference, both written here and sharing no code with flexval: the textbook
-closed forms each scene's header cites, and the direct stiffness method of linear
-Euler-Bernoulli frames (each leaf's 6 x 6 matrix, axial stiffness included, joined
-through the rigid bodies' poses), which is exact for straight leaves at rest.
+Three kinds of reference, all written here and sharing no code with flexval: the textbook
+closed forms each scene's header cites; the direct stiffness method of linear
+Euler-Bernoulli frames (each leaf's or notch hinge's 6 x 6 matrix from its compliance
+integrals, axial stiffness included, joined through the rigid bodies' poses), exact for
+straight leaves at rest and the compliance-matrix model of a notch-hinge mechanism; and
+shallow-arch theory by Galerkin on the buckling modes, for the bistable arch.
 """
 
 import math
