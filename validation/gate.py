@@ -45,7 +45,7 @@ from .gatefile import (
     GateFile,
 )
 from .gatemetrics import SEARCH_RANGE, Critical, Frequencies, critical_load, natural_frequencies
-from .parasitic import parasitic_errors
+from .parasitic import largest_parasitic_error
 
 
 @dataclass(frozen=True)
@@ -226,15 +226,7 @@ def _values(
 ) -> dict[str, float | None]:
     out: dict[str, float | None] = {}
     if "parasitic" in metrics:
-        rows = parasitic_errors(
-            lp,
-            ref,
-            case,
-            scene.mechanism.size(),
-            (scene.mechanism.target_body, scene.mechanism.target_point),
-        )
-        scored = [r["end"] for r in rows if r["scored"]]
-        out["parasitic"] = max(scored) if scored else None
+        out["parasitic"] = largest_parasitic_error(lp, ref, scene, case)
     if any(m in PATH_METRICS for m in metrics):
         out.update({k: float(v) for k, v in errors(lp, ref, scene.mechanism.size()).items()})
     if "peak_stress" in metrics:

@@ -113,6 +113,17 @@ def parasitic_errors(
     return rows
 
 
+def largest_parasitic_error(model: LoadPath, ref: LoadPath, scene, case: LoadCase) -> float | None:
+    """The largest end error (percent) of the target's parasitic components of ``case`` on
+    ``scene``, each against the reference's own value (:func:`parasitic_errors`); None where
+    none is scored (no parasitic component, or the reference's is round-off). The gates'
+    and the sweeps' ``parasitic`` metric."""
+    mech = scene.mechanism
+    rows = parasitic_errors(model, ref, case, mech.size(), (mech.target_body, mech.target_point))
+    scored = [r["end"] for r in rows if r["scored"]]
+    return max(scored) if scored else None
+
+
 def section(res, reference: str) -> list[str]:
     """Markdown: the parasitic motion of every load case of a scene's results ``res``
     (:class:`flexval.validation.reportdata.SceneResults`) against ``reference``: the

@@ -71,6 +71,7 @@ _FIXED = [
     ("peak_stress_at", pa.float64()),
     ("peak_stress_load", pa.float64()),
     ("peak_stress_error", pa.float64()),
+    ("parasitic", pa.float64()),
     ("limit_load", pa.float64()),
     ("limit_load_error", pa.float64()),
     ("bifurcation_load", pa.float64()),
@@ -89,7 +90,11 @@ stress over the flexures (MPa) at the load ``peak_stress_load`` (fraction of ful
 for a converged row; for a ``solver_failure``, the last recorded level of the path, at or
 below ``load_reached``), on ``peak_stress_flexure`` at the fraction ``peak_stress_at`` of
 its length from its first end; ``peak_stress_error``: (model - reference) / reference at
-full load (converged rows only), percent. ``limit_load``: the first limit point below full load of a
+full load (converged rows only), percent. ``parasitic``: the largest error of the target's
+parasitic components at full load (across a force and the rotation; a moment's dx and dy;
+a prescribed motion's free components), each against the reference's own value, percent
+(:func:`flexval.validation.parasitic.largest_parasitic_error`; converged rows only, null
+where none is scored). ``limit_load``: the first limit point below full load of a
 run that stopped there (N or N mm, ``load_unit``; asked for with ``outputs``);
 ``limit_load_error``: against the reference's, percent. ``bifurcation_load``: the first
 bifurcation point on the run's load-control path, where it stopped or one it passed (N or

@@ -48,6 +48,7 @@ from flexval.reducedmodels.batch import RUN_FAILURES, run_batch
 from ..cache import ResultCache, result_key
 from ..compare import METRICS, errors
 from ..failures import first_limit
+from ..parasitic import largest_parasitic_error
 from ..run import run_model
 from ..yieldpoint import yield_columns
 from .spec import Point, PointBuilder
@@ -110,6 +111,7 @@ def _row_template(model: str, case: str, info: TaskInfo) -> dict:
         "peak_stress_at": None,
         "peak_stress_load": None,
         "peak_stress_error": None,
+        "parasitic": None,
         "limit_load": None,
         "limit_load_error": None,
         "bifurcation_load": None,
@@ -478,6 +480,9 @@ def _errors(p: Point, lp: LoadPath | None, ref: LoadPath | None, row: dict, info
     """Fill ``row``'s errors of ``lp`` against the reference's path ``ref`` (percent)."""
     if lp is not None and ref is not None:
         row.update(errors(lp, ref, p.scene.mechanism.size()))
+        if lp.converged and ref.converged:
+            case = p.scene.load_case(row["load_case"])
+            row["parasitic"] = largest_parasitic_error(lp, ref, p.scene, case)
         ref_peak = None
         if row["peak_stress"] is not None:
             from ..strength import peak_at_full_load  # see _peak
