@@ -49,7 +49,9 @@ monotonically with beta. Fibre stretching u/R is linear in u, so the ratio
 does not depend on kappa: it is the stiffness of the pre-curved flexure for
 any small bending about its initial radius R. A straight flexure (R = inf,
 beta = 0) in that linear theory bends as a narrow beam whatever its depth:
-the ratio is exactly 1.
+the ratio is exactly 1; its clamps, which hold the end faces flat, make a deep
+one stiffer all the same (:mod:`flexval.geometry.clampedleaf`, calibrated
+against the 3D solid).
 
 A straight strip bent to a finite radius R (Ashwell's nonlinear problem)
 has the same foundation with 1/R the current curvature (a fibre at u from
@@ -80,6 +82,7 @@ import math
 
 import numpy as np
 
+from .clampedleaf import clamped_leaf_ratio
 from .mechanism import Flexure, Material, Mechanism
 from .profiles import quadrature_panels
 from .shapes import Arc, Segment
@@ -173,7 +176,9 @@ def flexure_ratio(flexure: Flexure, poisson_ratio: float) -> float:
     """The bending stiffness ratio of one flexure (:func:`stiffness_ratio`).
 
     A uniform arc: beta = b² / (R h) with its radius R. A uniform segment:
-    1 exactly (a straight strip in the linear theory). A varying section (taper,
+    the plate stiffening its clamps give it (:func:`flexval.geometry.clampedleaf.
+    clamped_leaf_ratio`, calibrated against the 3D solid), where the strip theory alone
+    gives 1 (a straight strip whose section curls freely). A varying section (taper,
     notch hinge) or a spline centre line: the local ratio r(s) from the local
     curvature and thickness, beta(s) = b² |kappa(s)| / h(s) (the strip theory
     taken section by section, valid where both change little over a length b),
@@ -190,7 +195,7 @@ def flexure_ratio(flexure: Flexure, poisson_ratio: float) -> float:
     """
     shape, section = flexure.shape, flexure.section
     if section.is_uniform and isinstance(shape, Segment):
-        return 1.0
+        return clamped_leaf_ratio(section.depth, shape.length, poisson_ratio)
     if section.is_uniform and isinstance(shape, Arc):
         return _arc_ratio(section.depth, section.thickness, shape.radius, poisson_ratio)
     beta, weight = _along(flexure)

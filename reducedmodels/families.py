@@ -39,8 +39,9 @@ PLATE = Option.flag(
 WIDTH = Option.flag(
     "width",
     "flexures of finite depth b: each flexure's bending modulus E r(beta) from the "
-    "anticlastic curvature of its section, beta = b^2/(R h) (Searle's parameter; r = 1 "
-    "on a straight flexure, tending to plate's 1/(1-nu^2) as beta grows), shear modulus "
+    "anticlastic curvature of its section, beta = b^2/(R h) (Searle's parameter, tending "
+    "to plate's 1/(1-nu^2) as beta grows); a straight uniform leaf's from the plate "
+    "stiffening its clamps give it (fitted to the 3D solid over b/L); shear modulus "
     "kept; excludes plate",
 )
 

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from flexval.geometry import Flexure, LoadCase, Mechanism, SceneError, Segment
+from flexval.geometry import Flexure, LoadCase, Mechanism, SceneError
 
 from .catalogue import ModelSpec
 from .connector import Connector
@@ -65,8 +65,6 @@ def flexure_connectors(
     options = dict(options)
     plate, width = options.pop("plate", False), options.pop("width", False)
     plain = options.pop("eb", False)
-    if width:
-        _refuse_width_without_effect(mechanism, spec)
     flexible = mechanism  # the plate option: the flexures' constants of a wide section
     if plate:
         flexible = dataclasses.replace(mechanism, material=mechanism.material.plane_strain())
@@ -86,35 +84,6 @@ def flexure_connectors(
     return with_weights(mechanism, conns)
 
 
-def _refuse_width_without_effect(mechanism: Mechanism, spec: ModelSpec) -> None:
-    """Refuse ``width`` where it would change nothing: every flexure a straight uniform leaf.
-
-    The anticlastic strip theory gives such a leaf r = 1 and knows no clamps, so the model
-    would be plain plane-stress beam theory under a name that promises the 3D stiffening
-    of a deep leaf (several percent at b/h = 20, which only the 3D solid gives).
-
-    Raises
-    ------
-    SceneError
-        Naming the leaves and what to use instead.
-    """
-    leaves = [f for f in mechanism.flexures if isinstance(f.shape, Segment)]
-    if len(leaves) < len(mechanism.flexures) or not all(f.section.is_uniform for f in leaves):
-        return
-    names = ", ".join(
-        f"{f.name} (b/h {f.section.depth / f.section.thickness:.3g})" for f in leaves
-    )
-    raise SceneError(
-        mechanism.source,
-        "model",
-        spec.id,
-        f"[width] has no correction for straight uniform leaves ({names}): the anticlastic "
-        "strip theory gives them r = 1 and knows nothing of the plate stiffening their clamps "
-        "give a deep leaf, so it would be plain beam theory; use continuum:1[3d] for the 3D "
-        "solid, or drop [width]",
-    )
-
-
 def _calibrated_notch(mechanism: Mechanism, flexure: Flexure) -> Mechanism:
     """``mechanism`` with the calibrated material of ``flexure`` if it is a notch hinge
     (:func:`flexval.reducedmodels.notchcorrection.corrected_material`), else itself."""
@@ -131,7 +100,7 @@ def _of_its_depth(mechanism: Mechanism, flexure: Flexure) -> Mechanism:
 
     The connectors read the material from the mechanism they are given, so
     each flexure gets a copy carrying its own; a flexure whose ratio is 1 (a
-    straight uniform one) gets the mechanism itself.
+    tapered straight one) gets the mechanism itself.
     """
     from flexval.geometry.anticlastic import effective_material, flexure_ratio
 

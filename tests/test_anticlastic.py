@@ -29,6 +29,7 @@ from flexval.geometry.anticlastic import (
     searle_parameters,
     stiffness_ratio,
 )
+from flexval.geometry.clampedleaf import clamped_leaf_ratio
 from flexval.geometry.profiles import LinearTaper
 from flexval.reducedmodels import parse_model
 from flexval.reducedmodels.models import run_reduced
@@ -226,9 +227,8 @@ def test_open_chain_flexures_take_their_own_ratio():
         assert 1.0 < ratio < 1.0 / (1.0 - nu * nu)
 
 
-def test_a_straight_uniform_flexure_is_a_narrow_beam():
+def test_a_straight_uniform_flexure_has_no_searle_parameter():
     f = cantilever(Segment((0.0, 0.0), (10.0, 0.0)), b=5.0, h=0.1).flexures[0]
-    assert flexure_ratio(f, NU) == 1.0
     assert flexure_searle(f) == 0.0
 
 
@@ -323,14 +323,23 @@ def test_a_shallow_depth_gives_the_plain_model_and_a_deep_one_the_plate():
     assert ratio * (1 - NU * NU) == pytest.approx(1.0, abs=1e-4)
 
 
-def test_straight_flexures_alone_refuse_the_option():
-    # r = 1 on a straight uniform leaf: the option would be the plain model under another
-    # name, so a mechanism of such leaves only is refused (naming the field and the model)
+def test_a_straight_leaf_takes_its_clamps_plate_stiffening():
+    # the strip theory leaves a straight leaf at r = 1; its clamps hold the end faces flat,
+    # so the ratio runs from the narrow beam (b/L -> 0) to the plate (b/L -> inf), rising
     mech = cantilever(Segment((0.0, 0.0), (10.0, 0.0)), b=5.0, h=0.1, nu=NU)
-    assert flexure_ratio(mech.flexures[0], NU) == 1.0
-    case = tip_force(mech, 0.0, 0.01, levels=3)
-    with pytest.raises(SceneError, match=r"'model' = 'beam:10\[width\]'.*straight uniform"):
-        run_reduced(mech, parse_model("beam:10[width]"), case)
+    assert flexure_ratio(mech.flexures[0], NU) == clamped_leaf_ratio(5.0, 10.0, NU)
+    # narrow: r - 1 in proportion to b/L (the clamps' boundary layers, c b long)
+    narrow = clamped_leaf_ratio(1e-3, 10.0, NU) - 1
+    assert 0 < narrow < 1e-4
+    assert clamped_leaf_ratio(1e-2, 10.0, NU) - 1 == pytest.approx(10 * narrow, rel=1e-2)
+    assert clamped_leaf_ratio(1e5, 10.0, NU) == pytest.approx(1 / (1 - NU * NU), rel=1e-9)
+    ratios = [clamped_leaf_ratio(b, 10.0, NU) for b in (0.1, 1.0, 5.0, 20.0, 100.0)]
+    assert all(
+        a < b for a, b in zip(ratios[:3], ratios[1:3])
+    )  # the plate from b / L = 1 / (2 c ln 2)
+    assert ratios[-1] == ratios[-2] == pytest.approx(1 / (1 - NU * NU), rel=1e-12)
+    with pytest.raises(ValueError, match="positive"):
+        clamped_leaf_ratio(0.0, 10.0, NU)
 
 
 PURE_MOMENT_BEAM = 1e-6

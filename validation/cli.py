@@ -332,30 +332,6 @@ def _uncalibrated_notes(scene, specs) -> list[str]:
     return notes
 
 
-def _plain_width_notes(scene, specs) -> list[str]:
-    """A note naming the straight uniform leaves where a model with ``width`` runs: the
-    strip theory gives them no anticlastic term (r = 1,
-    :func:`flexval.geometry.anticlastic.flexure_ratio`), so ``[width]`` leaves them plain
-    plane-stress beam theory, and the stiffening of a deep leaf by its clamps is not
-    modelled."""
-    if not any(s.kwargs.get("width") for s in specs):
-        return []
-    from flexval.geometry import Segment
-
-    leaves = [
-        f"{f.name} (b/h {f.section.depth / f.section.thickness:.3g})"
-        for f in scene.mechanism.flexures
-        if isinstance(f.shape, Segment) and f.section.is_uniform
-    ]
-    if not leaves:
-        return []
-    return [
-        f"note: [width] leaves the straight leaves {', '.join(leaves)} at plane-stress beam "
-        "theory: the anticlastic strip theory has no term for a straight leaf, nor for the "
-        "plate stiffening its clamps give a deep one (compare with continuum:1[3d])"
-    ]
-
-
 def _cmd_run(args: argparse.Namespace) -> int:
     from flexval.reducedmodels.catalogue import FIELDS
 
@@ -400,7 +376,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     massless = inertia.massless_bodies(scene.mechanism.moving_bodies)
     if inertia.gravity is not None and massless:
         print(f"note: bodies without mass data are massless (no weight): {', '.join(massless)}")
-    for line in [*_uncalibrated_notes(scene, specs), *_plain_width_notes(scene, specs)]:
+    for line in _uncalibrated_notes(scene, specs):
         print(line)
     record = {
         "record_poses": "poses" in scene.outputs or vtu_dir is not None,
