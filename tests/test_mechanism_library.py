@@ -448,7 +448,8 @@ def test_bistable_arch_free_to_turn_buckles_antisymmetrically_first(model):
     with pytest.raises(SolverError, match="bifurcation") as stop:
         run_model(load_scene("bistable_arch"), model, "free")
     found = -stop.value.path.bifurcations[0]["load"]
-    assert found == pytest.approx(d_expected, rel=0.03)  # measured 2 % above
+    # measured 0.6 % (beam) and 0.4 % (continuum:0) below shallow-arch theory's 0.242 mm
+    assert found == pytest.approx(d_expected, rel=0.015)
 
 
 def test_dcmm_sub_arcs_blind_to_their_sway_are_invalid_beyond_it():
