@@ -40,7 +40,7 @@ venv: $(STAMP)
 PAPER_REPORT = --out reports/paper --protocol reports/dynamics/protocol.json --threed reports/threed/threed.json --peers
 FLEXURE_REPORT = notch_fourbar filleted_stage tapered_leaf spline_flexure --out reports/flexures
 MECHANISM_REPORT = parallel_guide folded_guide cross_pivot cartwheel_hinge trapezoid_pivot
-MECHANISM_REPORT += bistable_truss bistable_arch bridge_amplifier --out reports/mechanisms
+MECHANISM_REPORT += bistable_truss bridge_amplifier --out reports/mechanisms
 # where `make report` writes the run times it measures (ignored by git)
 TIMINGS = build/timings
 
