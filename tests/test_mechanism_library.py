@@ -492,11 +492,10 @@ def test_an_arc_length_trace_marks_the_unstable_equilibria_it_passes():
     lp = trace_arclength(arch, parse_model("beam:100"), arch.load_case("snap"))
     d = -np.asarray(lp.dy)
     top = -lp.bifurcations[0]["load"]
-    assert all(lp.valid[k] for k in range(len(d)) if d[k] < top and k < lp.valid.index(False))
-    assert not lp.valid[lp.valid.index(False)] and lp.valid[-1]
-    assert (
-        "an unstable equilibrium (2 more negative eigenvalues" in lp.validity[lp.valid.index(False)]
-    )
+    past = int(np.argmax(d > top))  # the first point beyond the bifurcation
+    assert past > 0 and all(lp.valid[:past]) and lp.valid.index(False) == past
+    assert "an unstable equilibrium (2 more negative eigenvalues" in lp.validity[past]
+    assert lp.valid[-1]  # stable again beyond the second stable state
     branch = trace_arclength(
         arch, parse_model("beam:100"), arch.load_case("snap"), 0.8, branch_switch=True
     )
