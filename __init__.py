@@ -37,10 +37,6 @@ _HOMES = {
 _MODULES = {"plot": "flexval.validation.plotting"}
 """Modules the package offers at its top: ``flexval.plot`` draws onto Matplotlib axes."""
 
-_REGISTERS = {"parse_model": "flexval.validation", "run_model": "flexval.validation"}
-"""A module to import before a name is offered: ``parse_model`` reads every built-in model
-family, and the continuum's registers itself with :mod:`flexval.validation`."""
-
 __all__ = ["__version__", *sorted([*_HOMES, *_MODULES])]
 
 
@@ -52,8 +48,6 @@ def __getattr__(name: str):
         return value
     if name not in _HOMES:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    if name in _REGISTERS:
-        import_module(_REGISTERS[name])
     value = getattr(import_module(_HOMES[name]), name)
     globals()[name] = value
     return value

@@ -102,7 +102,7 @@ def convergence() -> None:
     from flexval.geometry import Arc, Material, Section
     from flexval.geometry.extrude import boundary_layer, extrude, layer_bounds, layers
     from flexval.geometry.mechanism import FlexureSpec, assemble
-    from flexval.geometry.mesh import flexure_mesh
+    from flexval.geometry.outline import flexure_mesh
     from flexval.reducedmodels.core import local_hessian
     from flexval.validation.continuum.connector3d import Continuum3DConnector
     from flexval.validation.convergence import richardson

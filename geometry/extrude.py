@@ -2,7 +2,7 @@
 
 The 3D continuum reference (``continuum:LEVEL[3d]``) meshes a flexure as a
 solid: the same in-plane quad9 mesh the 2D continuum uses at that level
-(:func:`flexval.geometry.mesh.flexure_mesh`), repeated on layers across the
+(:func:`flexval.geometry.outline.flexure_mesh`), repeated on layers across the
 out-of-plane depth b. By default only half the depth is meshed, z in
 [0, b/2]: a planar mechanism loads its flexures symmetrically about the
 mid-plane z = 0, so the mid-plane nodes keep z = 0 and the half carries half
@@ -36,7 +36,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .mesh import FlexureMesh, flexure_mesh
+from .mesh import FlexureMesh
+from .outline import flexure_mesh
 
 
 @dataclass(frozen=True)

@@ -61,7 +61,7 @@ from pathlib import Path
 import numpy as np
 
 from .files import CacheWarning, atomic_path, cache_dir
-from .shapes import Arc, FlexureShape, Segment
+from .shapes import Arc, FlexureShape
 
 MESH_VERSION = 2
 """Bumped whenever the meshing code changes what it produces (invalidates the cache)."""
@@ -198,7 +198,7 @@ def mesh_flexure(
         nodes, elements, faces = _gmsh_band(shape, thickness, n_t, n_l)
         if isinstance(shape, Arc):
             nodes = _snap_polar(nodes, elements, shape)
-        elements = _counterclockwise(nodes, elements)
+        elements = counterclockwise(nodes, elements)
         start, end = (
             _face_nodes(nodes, faces[k], _face_segment(shape, thickness, k), thickness)
             for k in (0, 1)
@@ -227,32 +227,6 @@ def cached_mesh(
     if path is not None:
         _save(path, key, mesh)
     return mesh
-
-
-def flexure_mesh(shape, section, level: int, use_cache: bool = True) -> FlexureMesh:
-    """The quad9 mesh of a flexure of any shape and section (cached on disk).
-
-    A uniform arc or segment is meshed by :func:`mesh_flexure` (Gmsh); a
-    varying section (``section.profile``: a taper or a notch) or any other
-    centre line (a spline) by its true outline,
-    :func:`flexval.geometry.outline.mesh_outline`.
-
-    Parameters
-    ----------
-    shape : Shape
-        Centre line, mm.
-    section : Section
-        Thickness, uniform or h(s), mm.
-    level : int
-        Mesh level, 0 .. MAX_LEVEL.
-    use_cache : bool
-        Read and write the on-disk cache.
-    """
-    if section.profile is None and isinstance(shape, (Arc, Segment)):
-        return mesh_flexure(shape, section.thickness, level, use_cache)
-    from .outline import mesh_outline
-
-    return mesh_outline(shape, section, level, use_cache)
 
 
 def _load(path: Path, key: str, level: int, n_t: int, n_l: int) -> FlexureMesh | None:
@@ -423,7 +397,7 @@ def _snap_polar(nodes: np.ndarray, elements: np.ndarray, arc: Arc) -> np.ndarray
     return out
 
 
-def _counterclockwise(nodes: np.ndarray, elements: np.ndarray) -> np.ndarray:
+def counterclockwise(nodes: np.ndarray, elements: np.ndarray) -> np.ndarray:
     """Elements reordered so that all are counterclockwise (positive area)."""
     x = nodes[elements[:, :4]]
     area2 = np.sum(

@@ -59,9 +59,11 @@ from .mesh import (
     ELEMENT_ORDER,
     MAX_LEVEL,
     FlexureMesh,
-    _counterclockwise,
     cached_mesh,
+    counterclockwise,
+    mesh_flexure,
 )
+from .shapes import Arc, Segment
 
 OUTLINE_VERSION = 2
 """Bumped whenever the outline meshing changes what it produces (invalidates the cache)."""
@@ -221,7 +223,7 @@ def _build(shape, s: np.ndarray, h: np.ndarray, n_t: int, n_l: int, level: int) 
     dk = np.array([0, 2, 2, 0, 1, 2, 1, 0, 1])
     dm = np.array([0, 0, 2, 2, 0, 1, 2, 1, 1])
     elements = (k0[:, None] + dk) * width + (m0[:, None] + dm)
-    elements = _counterclockwise(nodes, elements)
+    elements = counterclockwise(nodes, elements)
     index = np.arange(s.size)[:, None] * width + np.arange(width)
     return FlexureMesh(
         nodes,
@@ -233,3 +235,27 @@ def _build(shape, s: np.ndarray, h: np.ndarray, n_t: int, n_l: int, level: int) 
         n_t,
         n_l,
     )
+
+
+def flexure_mesh(shape, section, level: int, use_cache: bool = True) -> FlexureMesh:
+    """The quad9 mesh of a flexure of any shape and section (cached on disk).
+
+    A uniform arc or segment is meshed by :func:`mesh_flexure` (Gmsh); a
+    varying section (``section.profile``: a taper or a notch) or any other
+    centre line (a spline) by its true outline,
+    :func:`mesh_outline`.
+
+    Parameters
+    ----------
+    shape : Shape
+        Centre line, mm.
+    section : Section
+        Thickness, uniform or h(s), mm.
+    level : int
+        Mesh level, 0 .. MAX_LEVEL.
+    use_cache : bool
+        Read and write the on-disk cache.
+    """
+    if section.profile is None and isinstance(shape, (Arc, Segment)):
+        return mesh_flexure(shape, section.thickness, level, use_cache)
+    return mesh_outline(shape, section, level, use_cache)

@@ -1,9 +1,9 @@
 """flexval.reducedmodels: the paper's reduced flexibility models on one multibody core.
 
-Importing the package registers the model families (beam, prbm, dcmm, ee)
-in the catalogue and nothing else: each name below is imported from its
-module on first use (PEP 562), so a command that only reads the catalogue
-does not load the solver core and scipy (about 0.15 s of CPU time).
+Importing the package loads nothing: each name below is imported from its
+module on first use (PEP 562), and the catalogue declares the model families
+the first time it is asked for one, so a command that only reads the
+catalogue does not load the solver core and scipy.
 
 Units: mm, N, N mm, rad.
 """
@@ -11,8 +11,6 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 from importlib import import_module
-
-from . import families as _families  # noqa: F401  (registers beam, prbm, dcmm, ee)
 
 _HOMES = {
     "Family": "catalogue",

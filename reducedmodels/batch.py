@@ -113,11 +113,11 @@ class BatchSystem(System):
     def __init__(self, members: Sequence[System | Member], settings: SolverSettings | None = None):
         if not members:
             raise ValueError("a batch needs at least one copy")
-        self._systems: dict[int, System] = {}
+        self.solo_systems: dict[int, System] = {}
         pairs, lists = [], {}  # copies given one sequence of connectors share one list
         for k, member in enumerate(members):
             if isinstance(member, System):
-                self._systems[k] = member
+                self.solo_systems[k] = member
                 settings = settings or member.settings
             mechanism, connectors = _parts(member)
             if id(connectors) not in lists:
@@ -125,7 +125,7 @@ class BatchSystem(System):
             pairs.append((mechanism, lists[id(connectors)][1]))
         settings = settings or SolverSettings()
         #: copy 0 as a System alone: the numbering and band order every copy shares
-        self.template = self._systems.get(0) or System(*pairs[0], settings)
+        self.template = self.solo_systems.get(0) or System(*pairs[0], settings)
         #: every copy numbered as copy 0 (the same connectors' sizes): no System per copy
         self.uniform = self._check(pairs)
         self.members, self.n_copies = pairs, len(pairs)
@@ -144,8 +144,8 @@ class BatchSystem(System):
         if self._dense is not None and self.n_multipliers > 0:  # saddle points: block by block
             self.layout = BlockLayout(self.layout, self._dense)
 
-    def _number_connectors(self) -> tuple[np.ndarray, np.ndarray, list[int], np.ndarray]:
-        """:meth:`System._number_connectors` of copies all numbered as copy 0, as one table.
+    def number_connectors(self) -> tuple[np.ndarray, np.ndarray, list[int], np.ndarray]:
+        """:meth:`System.number_connectors` of copies all numbered as copy 0, as one table.
 
         Copy k's bodies are the batch's bodies k b .. (k + 1) b - 1 (b bodies a
         copy, in copy 0's order), so a connector's pose dofs are its copy 0
@@ -155,15 +155,17 @@ class BatchSystem(System):
         loop over every connector gives (``tests/test_batch.py``), without it.
         """
         if not self.uniform:
-            return super()._number_connectors()
+            return super().number_connectors()
         template, count = self.template, self.n_copies
         bodies = len(template.body_index)
         copy, index = self.origin_table[:, 0], self.origin_table[:, 1]
-        starts = np.asarray(template._bounds[:-1], np.int64)
-        ends = template._all_dofs[starts[:, None] + np.arange(6)][index]  # copy 0's, -1: ground
+        starts = np.asarray(template.connector_offsets[:-1], np.int64)
+        ends = template.all_dofs[starts[:, None] + np.arange(6)][index]  # copy 0's, -1: ground
         pose = np.where(ends >= 0, ends + 3 * bodies * copy[:, None], -1)
         poses = 3 * bodies * count
-        sizes = (np.diff(template._bounds) - 6)[index]  # each connector's internal coordinates
+        sizes = (np.diff(template.connector_offsets) - 6)[
+            index
+        ]  # each connector's internal coordinates
         total = poses + int(sizes.sum())
         place = np.where(pose >= 0, pose, total + np.arange(6) % 3)
         bounds = np.concatenate([[0], np.cumsum(6 + sizes)])
@@ -189,7 +191,9 @@ class BatchSystem(System):
                     )
                 )
         row = np.array([rows[id(connectors)] for _, connectors in self.members])
-        first = np.cumsum(np.diff(template._bounds) - 6) - (np.diff(template._bounds) - 6)
+        first = np.cumsum(np.diff(template.connector_offsets) - 6) - (
+            np.diff(template.connector_offsets) - 6
+        )
         internal = np.array(table)[row[copy[per]], first[index[per]] + offset]
         return dofs, places, bounds.tolist(), np.concatenate([angles, internal])
 
@@ -226,14 +230,14 @@ class BatchSystem(System):
 
     def stability_note(self) -> str | None:
         """The first copy's note on stability not judged, if any copy has one."""
-        notes = (self._systems[k].stability_note() for k in sorted(self._systems))
+        notes = (self.solo_systems[k].stability_note() for k in sorted(self.solo_systems))
         return next((note for note in notes if note is not None), None)
 
     def copy_system(self, k: int) -> System:
         """Copy k as a System alone (built on first use: a check of that copy, a solo run)."""
-        if k not in self._systems:
-            self._systems[k] = System(*self.members[k], self.settings)
-        return self._systems[k]
+        if k not in self.solo_systems:
+            self.solo_systems[k] = System(*self.members[k], self.settings)
+        return self.solo_systems[k]
 
     @staticmethod
     def _names(pairs: list[Member], ground: str) -> list[dict[str, str]]:
@@ -252,7 +256,7 @@ class BatchSystem(System):
         Connectors of one class sit together so that each class is one group
         (one compiled assembly for all copies). Copies all numbered as copy 0
         (:attr:`uniform`) keep their connectors as they are: their numbering
-        is copy 0's shifted (:meth:`_number_connectors`), not looked up by body
+        is copy 0's shifted (:meth:`number_connectors`), not looked up by body
         name, and the ground, the one body a connector's names are read for
         (:meth:`System.reaction`), keeps its name. Also returns, per
         connector, (copy, index among the copy's connectors), (n, 2).
@@ -322,7 +326,7 @@ class BatchSystem(System):
                 j = self.body_index[named[body]]
                 copy_dofs[k][3 * i : 3 * i + 3] = range(3 * j, 3 * j + 3)
         for m, (k, j) in enumerate(self.origin_table.tolist()):
-            copy_dofs[k][self._own(k)._local_to_global[j][6:]] = self._local_to_global[m][6:]
+            copy_dofs[k][self._own(k).local_to_global[j][6:]] = self.local_to_global[m][6:]
         return copy_dofs
 
     def _uniform_numbering(self) -> list[np.ndarray]:
@@ -334,19 +338,19 @@ class BatchSystem(System):
         table[:, : 3 * per_copy] = np.arange(count)[:, None] * 3 * per_copy + np.arange(
             3 * per_copy
         )
-        sizes = np.diff(self._bounds) - 6  # each connector's internal coordinates
+        sizes = np.diff(self.connector_offsets) - 6  # each connector's internal coordinates
         if sizes.any():
             origin = self.origin_table
             per = np.repeat(np.arange(sizes.size), sizes)  # the connector of each
             offset = np.arange(per.size) - np.repeat(np.cumsum(sizes) - sizes, sizes)
-            batch = self._all_dofs[np.asarray(self._bounds[:-1])[per] + 6 + offset]
-            own_start = np.asarray(template._bounds[:-1]) + 6
-            own = template._all_dofs[own_start[origin[per, 1]] + offset]
+            batch = self.all_dofs[np.asarray(self.connector_offsets[:-1])[per] + 6 + offset]
+            own_start = np.asarray(template.connector_offsets[:-1]) + 6
+            own = template.all_dofs[own_start[origin[per, 1]] + offset]
             table[origin[per, 0], own] = batch
         self._copy_table = table
         return list(table)
 
-    def _tangent_ordering(self) -> np.ndarray | None:
+    def tangent_ordering(self) -> np.ndarray | None:
         """The copies one after the other, each in its own band order.
 
         A copy whose own tangent is banded keeps its order (its block is
@@ -448,7 +452,7 @@ class BatchSystem(System):
                     q = np.zeros(numbering.n_dofs)
                     for b, i in numbering.body_index.items():
                         q[3 * i : 3 * i + 2] = mechanism.bodies[b].reference
-                    for c, idx in zip(connectors, numbering._local_to_global):
+                    for c, idx in zip(connectors, numbering.local_to_global):
                         q[idx[6:]] = c.initial_internal()
                     own[key] = q
                 states.append(own[key])

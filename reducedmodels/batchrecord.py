@@ -205,8 +205,8 @@ def record_batch(
             reasons.get(j, no_reasons),
             [entry for entry in peaks[j] if entry is not None],  # in the connectors' order
         )
-        if k in batch._systems:  # a copy judged alone: its stability note, as alone
-            note_stability(path, batch._systems[k])
+        if k in batch.solo_systems:  # a copy judged alone: its stability note, as alone
+            note_stability(path, batch.solo_systems[k])
         if failure is None:
             paths.append(path)
             continue

@@ -18,11 +18,12 @@ its id syntax (:class:`Resolution`), its :class:`Option` set, a runner that
 traces a load case (imports its code lazily, so ``flexval info`` never loads
 a solver) and its capabilities (:data:`FIELDS`, :data:`ARCLENGTH`,
 :data:`LINEAR`, :data:`REFERENCE`). Adding a family is one module that calls
-:func:`register`; the reduced models register in :mod:`flexval.reducedmodels.families`,
-the continuum in :mod:`flexval.validation.continuum.family`, and an installed
-package's families through the entry-point group ``flexval.families``
-(:mod:`flexval.reducedmodels.plugins`), loaded the first time an id names a
-family that is not registered.
+:func:`register`. The built-in ones are named in :data:`BUILT_IN_FAMILIES`
+(the reduced models in :mod:`flexval.reducedmodels.families`, the continuum
+in :mod:`flexval.validation.continuum.family`) and imported the first time
+the catalogue is asked for a family; an installed package's families come
+through the entry-point group ``flexval.families`` (:func:`load_plugins`),
+loaded the first time an id names a family that is not registered.
 
 Bad ids raise :class:`geometry.SceneError` naming the source, the field and
 the text (the CLI turns it into exit code 2).
@@ -31,7 +32,7 @@ the text (the CLI turns it into exit code 2).
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -349,20 +350,42 @@ class ModelSpec:
         return family(self.family).spec(self.resolution, **{**dict(self.options), **options})
 
 
+BUILT_IN_FAMILIES = {
+    "beam": "flexval.reducedmodels.families",
+    "prbm": "flexval.reducedmodels.families",
+    "dcmm": "flexval.reducedmodels.families",
+    "ee": "flexval.reducedmodels.families",
+    "continuum": "flexval.validation.continuum.family",
+}
+"""Every built-in family and the module that declares it, imported the first time the
+catalogue is asked for a family (registration by name: importing a package registers
+nothing). Declaring a family imports none of its solver code."""
+
 _FAMILIES: dict[str, Family] = {}
 _PLUGIN_OF: dict[str, str] = {}
 """Family name -> the distribution package whose entry point registered it."""
 _LOADING: list[str] = []
-"""The package whose entry point is being loaded (:mod:`flexval.reducedmodels.plugins`)."""
+"""The package whose entry point is being loaded (:func:`load_plugins`)."""
+_loaded = {"built-in": False, "plug-ins": False}
+
+
+def _load_built_ins() -> None:
+    """Import the modules of :data:`BUILT_IN_FAMILIES` (once per process)."""
+    if _loaded["built-in"]:
+        return
+    _loaded["built-in"] = True
+    from importlib import import_module
+
+    for module in dict.fromkeys(BUILT_IN_FAMILIES.values()):
+        import_module(module)
 
 
 def register(fam: Family) -> Family:
     """Add ``fam`` to the catalogue (re-registering the same name replaces it).
 
-    While a plug-in package's entry point is loaded
-    (:func:`flexval.reducedmodels.plugins.load_plugins`), a name that is
-    already registered is refused instead: a plug-in never replaces a
-    built-in family or another package's.
+    While a plug-in package's entry point is loaded (:func:`load_plugins`), a
+    name that is already registered is refused instead: a plug-in never
+    replaces a built-in family or another package's.
 
     Raises
     ------
@@ -385,6 +408,54 @@ def register(fam: Family) -> Family:
     return fam
 
 
+def _register_returned(result: object) -> None:
+    """Register what a plug-in entry point's callable returned (a Family, several, or None)."""
+    if result is None:
+        return
+    fams = [result] if isinstance(result, Family) else result
+    if not isinstance(fams, Iterable) or not all(isinstance(f, Family) for f in fams):
+        raise TypeError(
+            f"returned {type(result).__name__}, expected Family, a list of them or None"
+        )
+    for fam in fams:
+        register(fam)
+
+
+def load_plugins() -> tuple[str, ...]:
+    """Register every installed plug-in's families (once per process).
+
+    The entry points of the group ``flexval.families``
+    (:mod:`flexval.reducedmodels.plugins`): a module whose import calls
+    :func:`register`, or a callable that does so or returns a :class:`Family`
+    (or a list of them).
+
+    Returns
+    -------
+    tuple of str
+        The family names the plug-ins registered (empty on later calls).
+
+    Raises
+    ------
+    SceneError
+        A plug-in that fails to load or clashes with a registered family name;
+        the source names the distribution package.
+    """
+    if _loaded["plug-ins"]:
+        return ()
+    _loaded["plug-ins"] = True
+    _load_built_ins()
+    from .plugins import installed, run_entry_point
+
+    before = set(_FAMILIES)
+    for package, ep in installed():
+        _LOADING.append(package)
+        try:
+            run_entry_point(package, ep, _register_returned)
+        finally:
+            _LOADING.pop()
+    return tuple(name for name in _FAMILIES if name not in before)
+
+
 def plugin_of(name: str) -> str | None:
     """The distribution package that registered the family ``name`` as a plug-in (None:
     registered by flexval or by a direct :func:`register` call)."""
@@ -398,18 +469,20 @@ def unregister(name: str) -> None:
 
 
 def families() -> tuple[Family, ...]:
-    """Every registered family, in registration order."""
+    """Every registered family, the built-in ones first, in registration order."""
+    _load_built_ins()
     return tuple(_FAMILIES.values())
 
 
 def family(name: str) -> Family:
     """The registered family ``name`` (KeyError if there is none)."""
+    _load_built_ins()
     return _FAMILIES[name]
 
 
 def expected_ids() -> str:
     """Human-readable list of the accepted id forms, e.g. for error messages and help."""
-    return ", ".join(f.syntax for f in _FAMILIES.values())
+    return ", ".join(f.syntax for f in families())
 
 
 def _parse_options(
@@ -458,11 +531,10 @@ def parse_model(text: str, source: str = COMMAND_LINE, field: str = "model") -> 
 
     if not isinstance(text, str):
         fail(f"expected a model id string: {expected_ids()}")
+    _load_built_ins()
     m = _ID_RE.match(text.strip())
     if m and m.group("family") not in _FAMILIES:
-        from .plugins import load_plugins  # entry points are looked up only for unknown names
-
-        load_plugins()
+        load_plugins()  # entry points are looked up only for unknown names
     if not m or m.group("family") not in _FAMILIES:
         fail(f"expected {expected_ids()}")
     fam = _FAMILIES[m.group("family")]

@@ -141,12 +141,16 @@ class System:
             (mech.target_point - mech.bodies[mech.target_body].reference).tolist(),
             mech.target_point.tolist(),
         )
-        # every connector's global dofs [pose_a, pose_b, internal] in one array (ground: -1),
-        # and their places in [q, ground pose] (the ground's pose read after q); connector
-        # k's are _all_dofs[_bounds[k]:_bounds[k + 1]]
-        self._all_dofs, self._all_gather, self._bounds, self.is_rotation = self._number_connectors()
+        #: every connector's global dofs [pose_a, pose_b, internal] in one array (ground: -1);
+        #: connector k's are ``all_dofs[connector_offsets[k]:connector_offsets[k + 1]]``, and
+        #: ``_all_gather`` holds their places in [q, ground pose] (the ground's pose after q)
+        self.all_dofs, self._all_gather, self.connector_offsets, self.is_rotation = (
+            self.number_connectors()
+        )
         # the poses, then every connector's internal coordinates (its local ones but the six)
-        self.n_dofs = 3 * len(self.body_index) + self._bounds[-1] - 6 * len(self.connectors)
+        self.n_dofs = (
+            3 * len(self.body_index) + self.connector_offsets[-1] - 6 * len(self.connectors)
+        )
         self.n_multipliers = sum(c.n_multipliers for c in self.connectors)
         self._rest_negative: int | None = None  # the rule's count at rest (judges_stability)
         #: residual weights: forces as is, moments per unit of mechanism size (N)
@@ -159,7 +163,7 @@ class System:
         # the core computes for every coordinate anyway)
         self._predictors, self._updaters = (
             [
-                (group, run, np.concatenate([idx[6:] for idx in self._local_to_global[run]]))
+                (group, run, np.concatenate([idx[6:] for idx in self.local_to_global[run]]))
                 for group, run in self._groups
                 if overrides(group.connectors[0], hook)
                 and sum(c.n_internal for c in group.connectors)
@@ -185,24 +189,26 @@ class System:
         return {b: body.reference for b, body in self.mechanism.bodies.items()}
 
     @cached_property
-    def _local_to_global(self) -> list[np.ndarray]:
-        """Each connector's global dofs [pose_a, pose_b, internal] (views of ``_all_dofs``),
+    def local_to_global(self) -> list[np.ndarray]:
+        """Each connector's global dofs [pose_a, pose_b, internal] (views of ``all_dofs``),
         made on first use: a batch of thousands of connectors reads few of them."""
-        return self._split(self._all_dofs, self._bounds)
+        return self._split(self.all_dofs, self.connector_offsets)
 
     @cached_property
     def _gather(self) -> list[np.ndarray]:
         """Each connector's local coordinates' places in [q, ground pose] (views of
         ``_all_gather``), made on first use."""
-        return self._split(self._all_gather, self._bounds)
+        return self._split(self._all_gather, self.connector_offsets)
 
-    def _number_connectors(self) -> tuple[np.ndarray, np.ndarray, list[int], np.ndarray]:
+    def number_connectors(self) -> tuple[np.ndarray, np.ndarray, list[int], np.ndarray]:
         """The unknowns: the moving bodies' poses, then each connector's internal coordinates.
 
         Returns every connector's global dofs [pose_a, pose_b, internal] laid
         end to end (ground: -1), their places in [q, ground pose] (the
         ground's pose read after q), where each connector's start (and the
-        end), and which unknowns are angles; built from plain lists.
+        end), and which unknowns are angles; built from plain lists. A
+        subclass numbering many connectors at once (a batch of copies,
+        :class:`flexval.reducedmodels.batch.BatchSystem`) overrides it.
         """
         mech = self.mechanism
         n = 3 * len(self.body_index)
@@ -249,7 +255,7 @@ class System:
           :meth:`~flexval.reducedmodels.connector.ConnectorGroup.updater`) as a fourth
           entry, None where the group has none.
         """
-        n, bounds, all_gather = self.n_dofs, self._bounds, self._all_gather
+        n, bounds, all_gather = self.n_dofs, self.connector_offsets, self._all_gather
 
         def of_run(values: np.ndarray, offsets: list[int], run: slice) -> np.ndarray:
             """The entries of a run of consecutive connectors (a view)."""
@@ -258,7 +264,7 @@ class System:
         # each group's Hessian entries in global dofs, ground entries dropped (kept: keep)
         rows, cols, hess_keep = [], [], []
         for group, run in self._groups:
-            dofs = of_run(self._all_dofs, bounds, run)
+            dofs = of_run(self.all_dofs, bounds, run)
             local_rows, local_cols = group.hessian_pattern()
             r, cc = dofs[local_rows], dofs[local_cols]
             keep = (r >= 0) & (cc >= 0)
@@ -282,7 +288,7 @@ class System:
             self.pattern_cols,
             self.n_multipliers,
             compiled,
-            self._tangent_ordering(),
+            self.tangent_ordering(),
         )
         # each group's Hessian values -> storage slots (-1: a ground entry, dropped)
         group_slots, start = [], 0
@@ -300,7 +306,7 @@ class System:
         self._assemblers, self._generic, generic_slots = [], [], []
         for (group, run), slots in zip(self._groups, group_slots):
             assembler = group.assembler(
-                of_run(all_gather, bounds, run), of_run(self._all_dofs, bounds, run), slots
+                of_run(all_gather, bounds, run), of_run(self.all_dofs, bounds, run), slots
             )
             if assembler is None:
                 self._generic.append((group, run))
@@ -317,7 +323,7 @@ class System:
             for group, run, internal in self._updaters
         ]
         all_grad = np.concatenate(
-            [of_run(self._all_dofs, bounds, run) for _, run in self._generic] or [np.zeros(0, int)]
+            [of_run(self.all_dofs, bounds, run) for _, run in self._generic] or [np.zeros(0, int)]
         )
         self._grad_keep = all_grad >= 0
         self._grad_dofs = all_grad[self._grad_keep]
@@ -325,9 +331,10 @@ class System:
         self._hess_keep = generic_slots >= 0
         self._hess_slots = generic_slots[self._hess_keep]
 
-    def _tangent_ordering(self) -> np.ndarray | None:
+    def tangent_ordering(self) -> np.ndarray | None:
         """The unknowns' order for a banded tangent, or None for the layout's own (see
-        :class:`~flexval.reducedmodels.tangent.TangentLayout`)."""
+        :class:`~flexval.reducedmodels.tangent.TangentLayout`); a batch of copies gives
+        each copy's block its copy's order."""
         return None
 
     @staticmethod
@@ -347,7 +354,7 @@ class System:
         q = np.zeros(self.n_dofs)
         for b, k in self.body_index.items():
             q[3 * k : 3 * k + 2] = self.reference[b]
-        for c, idx in zip(self.connectors, self._local_to_global):
+        for c, idx in zip(self.connectors, self.local_to_global):
             q[idx[6:]] = c.initial_internal()
         return q
 
@@ -418,7 +425,7 @@ class System:
         if found is None:
             return None
         k, drive = found
-        return self._local_to_global[k][6:], drive.multiplier_loads()
+        return self.local_to_global[k][6:], drive.multiplier_loads()
 
     def check_drive(self, case: LoadCase, model: str = "") -> None:
         """Refuse a prescribed motion this System cannot follow, before tracing it.
@@ -453,7 +460,7 @@ class System:
         if found is None:
             return None
         k, drive = found
-        return drive.reaction(q[self._local_to_global[k][6:]])
+        return drive.reaction(q[self.local_to_global[k][6:]])
 
     # --- assembly --------------------------------------------------------
     def assemble(

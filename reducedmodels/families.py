@@ -9,7 +9,8 @@ that only read the catalogue (``flexval --help``, ``flexval info``) start fast.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from .catalogue import (
     ARCLENGTH,
@@ -87,38 +88,24 @@ def _prbm(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
     return prbm_connector(flexure, mechanism, **options)
 
 
-_CONNECTOR_MODULES = {"beam": ".beam", "dcmm": ".dcmm", "ee": ".dcmm", "prbm": ".prbm"}
-"""The module of each family's connectors (imported by its factory above)."""
+def _load_core() -> None:
+    """Import the multibody core (scipy.linalg with it) and cap the BLAS threads.
 
-_KERNEL_LOADERS = {"dcmm": "dcmm_kernels", "ee": "dcmm_kernels", "prbm": "prbm_kernels"}
-"""The function of the connector module that loads a family's compiled kernels (numba)."""
-
-
-def _load_solver(spec: ModelSpec) -> None:
-    """Import the code a run of ``spec`` executes and cap the BLAS threads, before its clock starts.
-
-    Both are per-process costs, like importing scipy, not the model's: left
+    Both are per-process costs, like importing scipy, not a model's: left
     inside the timed build, they made a process's first ``dcmm:1``, ``prbm``
     or ``ee`` run print 22-27 ms for a path its second run does in 1-6 ms.
-    So is loading the family's compiled kernels (numba's import and their
-    machine code).
+    So is loading a family's compiled kernels (numba's import and their
+    machine code), which the loaders below do before their clock starts.
     """
-    from importlib import import_module
-
+    from . import models  # noqa: F401  (the core, imported ahead of the timed build)
     from .threads import limit_threads
 
-    module = import_module(_CONNECTOR_MODULES[spec.family], __package__)
-    if spec.family in _KERNEL_LOADERS:
-        getattr(module, _KERNEL_LOADERS[spec.family])()
-    import_module(".models", __package__)  # the core and scipy.linalg with it
     limit_threads()
 
 
-def _load_systems(spec: ModelSpec) -> None:
-    """:func:`_load_solver`, and the compiled kernels that order a System's tangent,
-    factorise a batch's blocks and stack its stresses (``Family.load`` of the families
-    traced by Newton)."""
-    _load_solver(spec)
+def _load_newton_kernels() -> None:
+    """The compiled kernels that order a System's tangent, factorise a batch's blocks and
+    stack its stresses (every family traced by Newton)."""
     from .blocktangent import ldl_kernels
     from .recorder import stress_kernels
     from .tangent import order_kernels
@@ -128,37 +115,52 @@ def _load_systems(spec: ModelSpec) -> None:
     stress_kernels()
 
 
+def _load_ee(spec: ModelSpec) -> None:
+    """``Family.load`` of ``ee``: the DCMM connectors' kernels and the core."""
+    from .dcmm import dcmm_kernels
+
+    dcmm_kernels()
+    _load_core()
+
+
+def _load_dcmm(spec: ModelSpec) -> None:
+    """``Family.load`` of ``dcmm:N``: :func:`_load_ee` and the Newton kernels."""
+    _load_ee(spec)
+    _load_newton_kernels()
+
+
+def _load_prbm(spec: ModelSpec) -> None:
+    """``Family.load`` of ``prbm``: its kernels, the core and the Newton kernels."""
+    from .prbm import prbm_kernels
+
+    prbm_kernels()
+    _load_core()
+    _load_newton_kernels()
+
+
 def _load_beams(spec: ModelSpec) -> None:
-    """:func:`_load_systems` and the compiled beam and band kernels (the beams' ``Family.load``)."""
+    """``Family.load`` of ``beam:N``: the beam and band kernels, the core and the Newton
+    kernels."""
     from .beam import CHAIN_HALF_BANDWIDTH, beam_kernels
     from .tangent import band_kernels
 
     beam_kernels()
     band_kernels(CHAIN_HALF_BANDWIDTH)
-    _load_systems(spec)
+    _load_core()
+    _load_newton_kernels()
 
 
-def _trace_nonlinear(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
-    """:func:`flexval.reducedmodels.models.trace_nonlinear` (imported here: see the module text).
+def _traced_by_newton(load: Callable[[ModelSpec], None]) -> Callable[..., Any]:
+    """``Family.run`` of a family traced by Newton: ``load`` (outside the path's time),
+    then :func:`flexval.reducedmodels.models.trace_nonlinear`."""
 
-    The System it builds orders its tangent with compiled kernels, loaded here too.
-    """
-    _load_systems(spec)
-    from .models import trace_nonlinear
+    def run(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
+        load(spec)
+        from .models import trace_nonlinear
 
-    return trace_nonlinear(mechanism, spec, *args, **kwargs)
+        return trace_nonlinear(mechanism, spec, *args, **kwargs)
 
-
-def _trace_beams(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
-    """:func:`trace_nonlinear` once the compiled beam kernels are loaded (outside the path's time).
-
-    Loading them (numba's import and machine code) is a per-process cost
-    like importing scipy, not part of the model's time.
-    """
-    _load_beams(spec)
-    from .models import trace_nonlinear
-
-    return trace_nonlinear(mechanism, spec, *args, **kwargs)
+    return run
 
 
 def _trace_ee(
@@ -183,7 +185,7 @@ def _trace_ee(
     """
     import time
 
-    _load_solver(spec)
+    _load_ee(spec)
     from .models import flexure_connectors, linear_response
 
     t0 = time.perf_counter()
@@ -231,7 +233,7 @@ BEAM = register(
         "beam",
         "geometrically exact corotational beam elements (Euler-Bernoulli, or Timoshenko "
         "with the option shear); beam:100 and beam:20 are the paper's FEM100 and FEM20",
-        _trace_beams,
+        _traced_by_newton(_load_beams),
         Resolution("N", "beam elements per flexure", 20, 1, MAX_ELEMENTS, True, (5, 320)),
         (
             Option.flag("shear", "Timoshenko beams (shear deformation of the rectangular section)"),
@@ -251,14 +253,14 @@ PRBM = register(
     Family(
         "prbm",
         "symmetric 3R pseudo-rigid-body chain per flexure, exact in the linear limit",
-        _trace_nonlinear,
+        _traced_by_newton(_load_prbm),
         None,
         (PLATE, WIDTH, EB),
         frozenset({ARCLENGTH, DISPLACEMENT}),
         _system_of(_prbm),
         connectors=_connectors_of(_prbm),
         exclusive=WIDTH_EXCLUDES,
-        load=_load_systems,
+        load=_load_prbm,
     )
 )
 
@@ -267,14 +269,14 @@ DCMM = register(
         "dcmm",
         "Displaced Compliance Matrix Method: each arc cut into N sub-arcs, each a diagonal "
         "compliance at its centre of elasticity",
-        _trace_nonlinear,
+        _traced_by_newton(_load_dcmm),
         Resolution("N", "sub-arcs per flexure", 1, 1, MAX_ELEMENTS, True, (1, 8)),
         (FRAME, PLATE, WIDTH, EB),
         frozenset({ARCLENGTH, DISPLACEMENT}),
         _system_of(_dcmm),
         connectors=_connectors_of(_dcmm),
         exclusive=WIDTH_EXCLUDES,
-        load=_load_systems,
+        load=_load_dcmm,
     )
 )
 
@@ -289,6 +291,6 @@ EE = register(
         _system_of(_ee),
         connectors=_connectors_of(_ee),
         exclusive=WIDTH_EXCLUDES,
-        load=_load_solver,
+        load=_load_ee,
     )
 )

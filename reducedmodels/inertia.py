@@ -496,7 +496,7 @@ class MassModel:
         self.density = mech.inertia.density
         self.system = system
         tables, self._consistent = [], []
-        for k, (c, idx) in enumerate(zip(system.connectors, system._local_to_global)):
+        for k, (c, idx) in enumerate(zip(system.connectors, system.local_to_global)):
             own = c.inner if isinstance(c, Weighted) else c
             if self.density is not None and overrides(own, "mass_matrix"):
                 self._consistent.append(k)
@@ -547,7 +547,7 @@ class MassModel:
             states = self.system.local_states(q)
             for k in self._consistent:
                 local = self.system.connectors[k].mass_matrix(self.density, *states[k]).tocoo()
-                idx = self.system._local_to_global[k]
+                idx = self.system.local_to_global[k]
                 r, c = idx[local.row], idx[local.col]
                 keep = (r >= 0) & (c >= 0)
                 rows.append(r[keep]), cols.append(c[keep]), vals.append(local.data[keep])
@@ -575,7 +575,7 @@ class MassModel:
         if self._consistent:
             states = self.system.local_states(q)
             for k in self._consistent:
-                idx = self.system._local_to_global[k]
+                idx = self.system.local_to_global[k]
                 local_v = np.where(idx >= 0, v[np.maximum(idx, 0)], 0.0)
                 c = self.system.connectors[k].convective_forces(self.density, *states[k], local_v)
                 keep = idx >= 0
@@ -599,7 +599,7 @@ def describe_massless(system, mask: np.ndarray) -> list[str]:
         for j in range(3):
             if mask[3 * k + j]:
                 names.append(f"body {b!r} ({labels[j]})")
-    for c, idx in zip(system.connectors, system._local_to_global):
+    for c, idx in zip(system.connectors, system.local_to_global):
         for j, g in enumerate(idx[6:]):
             if mask[g]:
                 names.append(f"{c.name} internal {j}")

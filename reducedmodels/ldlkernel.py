@@ -32,7 +32,7 @@ import math
 import numpy as np
 
 from .jit import kernel
-from .stability import UNIT_ROUNDOFF
+from .roundoff import UNIT_ROUNDOFF
 from .stabilitykernel import one_negative, pair_negative
 
 ALPHA = (1.0 + math.sqrt(17.0)) / 8.0

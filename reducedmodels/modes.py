@@ -150,7 +150,7 @@ def sparse_tangent(system: System, q: np.ndarray, loads: Loads, factor: float) -
     """
     n = system.n_dofs
     rows, cols, vals = [], [], []
-    for c, idx, local in zip(system.connectors, system._local_to_global, system.local_states(q)):
+    for c, idx, local in zip(system.connectors, system.local_to_global, system.local_states(q)):
         h = sp.coo_matrix(local_hessian(c, c.evaluate(*local)[2]))
         r, cc = idx[h.row], idx[h.col]
         keep = (r >= 0) & (cc >= 0)

@@ -51,14 +51,7 @@ from types import ModuleType
 
 import numpy as np
 
-UNIT_ROUNDOFF = float(np.finfo(float).eps) / 2.0
-"""u, half the spacing of doubles at 1 (2^-53)."""
-
-
-def tolerance(terms: int) -> float:
-    """gamma_w = w u / (1 - w u): the relative round-off of a sum of ``terms`` products."""
-    w = max(int(terms), 1) * UNIT_ROUNDOFF
-    return w / (1.0 - w)
+from .roundoff import UNIT_ROUNDOFF, tolerance  # noqa: F401  (part of the rule's interface)
 
 
 @functools.cache

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .jit import kernel
-from .stability import UNIT_ROUNDOFF
+from .roundoff import UNIT_ROUNDOFF
 
 
 @kernel

@@ -89,7 +89,7 @@ def assembled_one_by_one(
     """
     n = system.n_dofs
     energy, grad, tangent = 0.0, np.zeros(n), np.zeros((n, n))
-    for conn, idx, local in zip(system.connectors, system._local_to_global, system.local_states(q)):
+    for conn, idx, local in zip(system.connectors, system.local_to_global, system.local_states(q)):
         e, g, h = conn.evaluate(*local)
         h = local_hessian(conn, h)
         h = h.toarray() if hasattr(h, "toarray") else h

@@ -593,7 +593,7 @@ def test_a_batch_numbers_copies_as_one_table_as_the_loop_over_its_connectors(sce
         _shallow_copy(c, "bodies", tuple(batch.copy_names[k][b] for b in c.bodies))
         for c, (k, _) in zip(batch.connectors, origin)
     ]
-    table, loop = batch._number_connectors(), System._number_connectors(named)
+    table, loop = batch.number_connectors(), System.number_connectors(named)
     for fast, slow in zip(table, loop):
         assert type(fast) is type(slow)
         assert np.array_equal(fast, slow) and np.asarray(fast).dtype == np.asarray(slow).dtype

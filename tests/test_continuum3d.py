@@ -31,7 +31,7 @@ from flexval.geometry.extrude import (
     layers,
     mean_radius,
 )
-from flexval.geometry.mesh import flexure_mesh
+from flexval.geometry.outline import flexure_mesh
 from flexval.reducedmodels import SolverSettings, System, parse_model, solve_path
 from flexval.reducedmodels.core import local_hessian
 from flexval.validation.continuum import ContinuumConnector
@@ -445,7 +445,7 @@ def test_a_3d_run_writes_its_hexahedra_and_refuses_a_picture(tmp_path):
     assert mesh.cells[0].type == "hexahedron27"
     assert mesh.cells[0].data.shape == conn.mesh.elements.shape
     assert np.allclose(mesh.points, conn.mesh.nodes)
-    tip = mesh.point_data["displacement"][conn._face[1], :2]
+    tip = mesh.point_data["displacement"][conn.end_faces[1], :2]
     assert np.abs(tip).max() > 0.0 and lp.rotation[-1] > 0.0
     with pytest.raises(ValueError, match="PNG"):
         run_continuum(mech, case, level=0, three_d=True, png=tmp_path / "x.png")

@@ -108,7 +108,7 @@ def _turning(conn: ContinuumConnector, rate: float):
     X = conn.mesh.nodes
     bent = X + 0.02 * np.column_stack([X[:, 1] ** 2, -X[:, 0] * X[:, 1]])  # a deformed shape
     pivot = np.array([0.5, -1.0])
-    refs = [X[face[0]] - rel[0] for face, rel in zip(conn._face, conn._rel)]
+    refs = [X[face[0]] - rel[0] for face, rel in zip(conn.end_faces, conn.end_offsets)]
 
     def rotation(factor: float) -> np.ndarray:
         c, s = math.cos(rate * factor), math.sin(rate * factor)
@@ -180,7 +180,9 @@ def test_with_the_slope_one_state_predicts_a_rigid_turn_exactly(start_on_ground)
 
 def _rest(conn: ContinuumConnector) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The rest state (pose_a, pose_b, internal) of a connector."""
-    refs = [conn.mesh.nodes[face[0]] - rel[0] for face, rel in zip(conn._face, conn._rel)]
+    refs = [
+        conn.mesh.nodes[face[0]] - rel[0] for face, rel in zip(conn.end_faces, conn.end_offsets)
+    ]
     return (np.array([*refs[0], 0.0]), np.array([*refs[1], 0.0]), np.zeros(conn.n_internal))
 
 

@@ -15,8 +15,8 @@ import pytest
 from scipy.integrate import quad
 
 from flexval.geometry import Arc, Section, Segment
-from flexval.geometry.mesh import flexure_mesh, mesh_flexure
-from flexval.geometry.outline import mesh_outline, stations
+from flexval.geometry.mesh import mesh_flexure
+from flexval.geometry.outline import flexure_mesh, mesh_outline, stations
 from flexval.geometry.profiles import LinearTaper, NotchProfile
 from flexval.geometry.shapes import Spline
 

@@ -30,7 +30,7 @@ SCENES = Path(__file__).parent / "scenes"
 def plain_entries(system) -> tuple[np.ndarray, np.ndarray]:
     """Rows and columns of every kept Hessian entry, connector by connector, then the diagonal."""
     rows, cols = [], []
-    for c, idx in zip(system.connectors, system._local_to_global):
+    for c, idx in zip(system.connectors, system.local_to_global):
         pattern = c.hessian_pattern()
         if pattern is None:
             r, cc = np.repeat(idx, idx.size), np.tile(idx, idx.size)
@@ -134,7 +134,7 @@ def test_gather_maps_read_the_ground_pose_after_the_coordinates(scene, model):
     ground the ground pose's three entries after q."""
     system = build_system(load_scene(scene).mechanism, parse_model(model))
     n = system.n_dofs
-    for idx, gather in zip(system._local_to_global, system._gather):
+    for idx, gather in zip(system.local_to_global, system._gather):
         expected = np.where(idx >= 0, idx, n + np.arange(idx.size) % 3)
         np.testing.assert_array_equal(gather, expected)
         assert gather.dtype == np.int64

@@ -2,5 +2,3 @@
 
 Units: mm, N, N mm, MPa, rad (degrees only at the edges: files, CLI, reports).
 """
-
-from .continuum import family as _continuum_family  # noqa: F401  (registers ``continuum``)

@@ -92,7 +92,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 def _cmd_models(args: argparse.Namespace) -> int:
-    from flexval.reducedmodels.plugins import load_plugins
+    from flexval.reducedmodels.catalogue import load_plugins
 
     from .modelinfo import catalogue_record, format_models
 
@@ -963,14 +963,14 @@ def _check_report_memory(scenes: list[str], specs: list, args: argparse.Namespac
     above the reference's; :data:`flexval.validation.reportdata.DEFAULT_MODELS`)."""
     from flexval.reducedmodels.catalogue import REFERENCE
 
-    from .reportdata import _convergence_specs
+    from .reportdata import convergence_specs
 
     paths = []
     for name in scenes:
         scene = load_scene(name)
         reference = next((s for s in specs if s.model_family.has(REFERENCE)), None)
         if not args.no_converge and reference is not None and reference.resolution is not None:
-            paths += [(scene.mechanism, s, None) for s in _convergence_specs(reference)]
+            paths += [(scene.mechanism, s, None) for s in convergence_specs(reference)]
         paths += [(scene.mechanism, s, None) for s in specs for _ in scene.load_cases]
     _check_memory(paths, COMMAND_LINE, "--model", parallel=args.jobs or 1, quiet=args.quiet)
 

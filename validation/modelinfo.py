@@ -3,7 +3,7 @@
 Nothing here names a family: the listing is built from
 :func:`flexval.reducedmodels.catalogue.families`, so a family registered by a
 plug-in module appears like the built-in ones; the CLI loads the installed
-plug-in packages' families first (:func:`flexval.reducedmodels.plugins.load_plugins`),
+plug-in packages' families first (:func:`flexval.reducedmodels.catalogue.load_plugins`),
 and each one's package is named. Only the catalogue is imported, no solver.
 """
 

@@ -467,7 +467,7 @@ def _plane_bracket(res: SceneResults, reference: ModelSpec, cache: RunMemo) -> P
     )
 
 
-def _convergence_specs(reference: ModelSpec) -> list[ModelSpec]:
+def convergence_specs(reference: ModelSpec) -> list[ModelSpec]:
     """The reference's resolutions of the convergence study: its lowest to one above its own."""
     low = reference.model_family.resolution.low
     return [reference.with_resolution(n) for n in range(low, reference.resolution + 2)]
@@ -516,7 +516,7 @@ class _Plan:
             per_case += [self.bench_reference] + sweep_specs(self.bench_reference)
         runs = [(s, c) for s in per_case for c in cases]
         if self.converge and self.reference is not None:
-            runs += [(s, cases[0]) for s in _convergence_specs(self.reference)]
+            runs += [(s, cases[0]) for s in convergence_specs(self.reference)]
         return [Job(scene, s, c, self.repeats_for(s), s.id in self.record) for s, c in runs]
 
     def batch_tasks(self, scene: Scene) -> list[tuple[Scene, ModelSpec, LoadCase]]:
@@ -643,7 +643,7 @@ def compute_report(
                 study(
                     sc,
                     reference,
-                    [s.resolution for s in _convergence_specs(reference)],
+                    [s.resolution for s in convergence_specs(reference)],
                     case,
                     run=lambda spec, sc=sc, case=case: timed_run(
                         sc, spec, case, 1, memo, record=spec.id in plan.record

@@ -35,8 +35,8 @@ from flexval.reducedmodels import LoadPath  # noqa: E402
 from .convergence import ConvergenceStudy, order_text  # noqa: E402
 from .failures import LIMIT_POINT, Failure  # noqa: E402
 from .figurejobs import draw_now  # noqa: E402
-from .figures import _save, style  # noqa: E402
-from .outputs import output_path  # noqa: E402
+from .figures import style  # noqa: E402
+from .outputs import output_path, write_figure  # noqa: E402
 from .yieldtable import yield_section  # noqa: E402
 
 
@@ -338,7 +338,7 @@ def stress_profiles(scene: Scene, case_name: str, paths: dict[str, LoadPath], pa
     if axes[0, 0].get_legend_handles_labels()[0]:
         axes[0, 0].legend(fontsize=7)
     fig.suptitle(f"{scene.name}, load case {case_name}: stress along the flexures at full load")
-    return _save(fig, path)
+    return write_figure(fig, path).name
 
 
 def section(

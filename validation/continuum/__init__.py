@@ -15,7 +15,7 @@ imported on first use of ``ContinuumConnector`` or ``run_continuum``, so
 registering the family costs no scikit-fem import. Units: mm, N, MPa, N mm, rad.
 """
 
-from .family import DEFAULT_LEVEL
+from .level import DEFAULT_LEVEL
 
 __all__ = ["ContinuumConnector", "DEFAULT_LEVEL", "run_continuum"]
 

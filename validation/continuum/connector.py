@@ -20,7 +20,8 @@ import scipy.sparse as sp
 
 from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.kinematics import rigid_points
-from flexval.geometry.mesh import FlexureMesh, flexure_mesh
+from flexval.geometry.mesh import FlexureMesh
+from flexval.geometry.outline import flexure_mesh
 from flexval.reducedmodels.connector import Connector, ConnectorGroup, LocalState
 from flexval.reducedmodels.inertia import MassPoints
 from flexval.reducedmodels.sections import (
@@ -49,7 +50,7 @@ class ContinuumConnector(HeldEndFaces, Connector):
     law : {'svk', 'neo-hookean'}
     plane : {'stress', 'strain'}
     mesh : FlexureMesh, optional
-        A ready mesh (default: :func:`flexval.geometry.mesh.flexure_mesh` of the flexure:
+        A ready mesh (default: :func:`flexval.geometry.outline.flexure_mesh` of the flexure:
         the true outline of a varying section or a free-form centre line).
     """
 
@@ -82,16 +83,16 @@ class ContinuumConnector(HeldEndFaces, Connector):
         faces = [self.mesh.start_face, self.mesh.end_face]
         if flexure.start_body != self.bodies[0]:
             faces.reverse()
-        self._face = faces  # end-face nodes held by body a, by body b
+        self.end_faces = faces  # end-face nodes held by body a, by body b
         role = np.full(self.mesh.nodes.shape[0], -1)
         role[faces[0]], role[faces[1]] = 0, 1
-        self._rel = [
+        self.end_offsets = [
             self.mesh.nodes[faces[s]] - mechanism.bodies[self.bodies[s]].reference for s in (0, 1)
         ]
         self._free = np.flatnonzero(role < 0)
-        self._end_slot = self.bodies.index(flexure.end_body)
+        self.end_slot = self.bodies.index(flexure.end_body)
         self._centre_fractions = polyline_fractions(self.mesh.nodes[self.mesh.centre_line])
-        end_face = self._face[self._end_slot]
+        end_face = self.end_faces[self.end_slot]
         self.elastic = self.solid  # what HeldEndFaces evaluates
         self._end_kernel = self.solid.kernel.subset(
             np.flatnonzero(np.isin(self.mesh.elements, end_face).any(axis=1))
@@ -117,12 +118,12 @@ class ContinuumConnector(HeldEndFaces, Connector):
         exp_z[start[free_dofs]] = 6 + np.arange(free_dofs.size)
         theta_pos = []
         for s in (0, 1):
-            d = (2 * self._face[s][:, None] + np.arange(2)).ravel()  # (x, y) per face node
-            exp_z[start[d]] = 3 * s + np.tile([0, 1], self._face[s].size)
+            d = (2 * self.end_faces[s][:, None] + np.arange(2)).ravel()  # (x, y) per face node
+            exp_z[start[d]] = 3 * s + np.tile([0, 1], self.end_faces[s].size)
             exp_z[start[d] + 1] = 3 * s + 2
             theta_pos.append(start[d] + 1)
-        self._exp_dof, self._exp_z = exp_dof, exp_z
-        self._theta_pos = theta_pos  # positions of the rotation coefficients
+        self.exp_dof, self.exp_z = exp_dof, exp_z
+        self.theta_pos = theta_pos  # positions of the rotation coefficients
         # element-matrix entries -> pairs of expansions
         r, c = self.solid.rows, self.solid.cols
         nr, nc = counts[r], counts[c]
@@ -132,12 +133,12 @@ class ContinuumConnector(HeldEndFaces, Connector):
         p = start[r][t] + within // nc[t]
         q = start[c][t] + within % nc[t]
         plain = (counts[r][t] == 1) & (counts[c][t] == 1)
-        self._plain_src = t[plain]
-        self._mixed = (t[~plain], p[~plain], q[~plain])
-        self._mixed_first = within[~plain] == 0  # both first expansions: coefficient 1
+        self.plain_src = t[plain]
+        self.mixed = (t[~plain], p[~plain], q[~plain])
+        self.mixed_first = within[~plain] == 0  # both first expansions: coefficient 1
         rows = np.concatenate([exp_z[p[plain]], exp_z[p[~plain]], [2, 5]])
         cols = np.concatenate([exp_z[q[plain]], exp_z[q[~plain]], [2, 5]])
-        self._rows, self._cols = rows, cols
+        self.pattern_rows, self.pattern_cols = rows, cols
 
     @classmethod
     def group(cls, connectors: Sequence[ContinuumConnector]) -> ConnectorGroup:
@@ -170,7 +171,7 @@ class ContinuumConnector(HeldEndFaces, Connector):
         x = self.mesh.nodes.copy()
         x[self._free] += internal.reshape(-1, 2)
         for s, pose in enumerate((pose_a, pose_b)):
-            x[self._face[s]] = rigid_points(np.asarray(pose, float), self._rel[s])[0]
+            x[self.end_faces[s]] = rigid_points(np.asarray(pose, float), self.end_offsets[s])[0]
         return x
 
     def predict_internal(
@@ -214,8 +215,8 @@ class ContinuumConnector(HeldEndFaces, Connector):
         dofs[self._free, 0] = 6 + 2 * np.arange(self._free.size)
         dofs[self._free, 1] = dofs[self._free, 0] + 1
         for s in (0, 1):
-            dofs[self._face[s]] = np.arange(3 * s, 3 * s + 3)
-            rel[self._face[s]] = self._rel[s]
+            dofs[self.end_faces[s]] = np.arange(3 * s, 3 * s + 3)
+            rel[self.end_faces[s]] = self.end_offsets[s]
         return MassPoints(dofs, rel, lumped, np.zeros(lumped.size))
 
     def _mass_kinematics(
@@ -226,9 +227,9 @@ class ContinuumConnector(HeldEndFaces, Connector):
             self._unit_mass = sp.kron(scalar_mass(self.solid), sp.identity(2), format="csr")
         rotated = [
             rigid_points(np.asarray(p, float), r)[0] - np.asarray(p, float)[:2]
-            for p, r in zip((pose_a, pose_b), self._rel)
+            for p, r in zip((pose_a, pose_b), self.end_offsets)
         ]
-        T = node_jacobian(self.mesh.nodes.shape[0], self._free, self._face, rotated)
+        T = node_jacobian(self.mesh.nodes.shape[0], self._free, self.end_faces, rotated)
         return self._unit_mass * density, rotated, T
 
     def mass_matrix(
@@ -252,7 +253,10 @@ class ContinuumConnector(HeldEndFaces, Connector):
         """
         m, rotated, T = self._mass_kinematics(density, pose_a, pose_b)
         a_c = face_accelerations(
-            self.mesh.nodes.shape[0], self._face, rotated, (float(velocity[2]), float(velocity[5]))
+            self.mesh.nodes.shape[0],
+            self.end_faces,
+            rotated,
+            (float(velocity[2]), float(velocity[5])),
         )
         return T.T @ (m @ a_c)
 

@@ -97,16 +97,16 @@ class Continuum3DConnector(HeldEndFaces, Connector):
         )
         n_layers = mesh.z.size
         self._n_layers = n_layers
-        self._face = [mesh.layer_nodes(self.plane._face[s]).ravel() for s in (0, 1)]
-        self._rel = [np.tile(self.plane._rel[s], (n_layers, 1)) for s in (0, 1)]
+        self.end_faces = [mesh.layer_nodes(self.plane.end_faces[s]).ravel() for s in (0, 1)]
+        self.end_offsets = [np.tile(self.plane.end_offsets[s], (n_layers, 1)) for s in (0, 1)]
         self._free = mesh.layer_nodes(self.plane.free_nodes).ravel()
         z_layers = np.arange(n_layers)
         if mesh.half:
             z_layers = z_layers[z_layers != mesh.mid_layer]
         self._free_z = mesh.layer_nodes(self.plane.free_nodes, z_layers).ravel()
-        self._end_slot = self.plane._end_slot
+        self.end_slot = self.plane.end_slot
         self._centre_fractions = polyline_fractions(mesh.plane.nodes[mesh.plane.centre_line])
-        end_face = self._face[self._end_slot]
+        end_face = self.end_faces[self.end_slot]
         self.elastic = self.solid3d  # what HeldEndFaces evaluates
         self._end_kernel = self.solid3d.subset(
             np.flatnonzero(np.isin(mesh.elements, end_face).any(axis=1))
@@ -134,9 +134,9 @@ class Continuum3DConnector(HeldEndFaces, Connector):
         first[3 * self._free_z + 2] = 6 + 2 * n_free + np.arange(self._free_z.size)
         face_dofs = []
         for s in (0, 1):
-            d = (3 * self._face[s][:, None] + np.arange(2)).ravel()  # (x, y) per face node
+            d = (3 * self.end_faces[s][:, None] + np.arange(2)).ravel()  # (x, y) per face node
             counts[d] = 2
-            first[d] = 3 * s + np.tile([0, 1], self._face[s].size)
+            first[d] = 3 * s + np.tile([0, 1], self.end_faces[s].size)
             face_dofs.append(d)
         start = np.concatenate([[0], np.cumsum(counts)])
         exp_dof = np.repeat(np.arange(n_dofs), counts)
@@ -147,7 +147,7 @@ class Continuum3DConnector(HeldEndFaces, Connector):
         for s, d in enumerate(face_dofs):
             exp_z[start[d] + 1] = 3 * s + 2
             theta_pos.append(start[d] + 1)
-        self._exp_dof, self._exp_z, self._theta_pos = exp_dof, exp_z, theta_pos
+        self.exp_dof, self.exp_z, self.theta_pos = exp_dof, exp_z, theta_pos
         # element-matrix entries (e, r, c), flat, -> plain ones and expanded ones
         edofs = self.solid3d.element_dofs
         per_el = 81 * 81
@@ -165,7 +165,7 @@ class Continuum3DConnector(HeldEndFaces, Connector):
             mixed.append((base + rest, r[rest], c[rest]))
         # int32 where it fits: the largest index array, one entry per plain Hessian value
         index = np.int32 if edofs.shape[0] * per_el < 2**31 else np.int64
-        self._plain_src = np.concatenate(plain_src).astype(index)
+        self.plain_src = np.concatenate(plain_src).astype(index)
         t = np.concatenate([m[0] for m in mixed])
         r = np.concatenate([m[1] for m in mixed])
         c = np.concatenate([m[2] for m in mixed])
@@ -175,11 +175,11 @@ class Continuum3DConnector(HeldEndFaces, Connector):
         within = np.arange(total.sum()) - np.repeat(np.cumsum(total) - total, total)
         p = start[r][tt] + within // nc[tt]
         q = start[c][tt] + within % nc[tt]
-        self._mixed = (t[tt], p, q)
-        flat_r = edofs[self._plain_src // per_el, r_of[self._plain_src % per_el]]
-        flat_c = edofs[self._plain_src // per_el, c_of[self._plain_src % per_el]]
-        self._rows = np.concatenate([first[flat_r], exp_z[p], [2, 5]])
-        self._cols = np.concatenate([first[flat_c], exp_z[q], [2, 5]])
+        self.mixed = (t[tt], p, q)
+        flat_r = edofs[self.plain_src // per_el, r_of[self.plain_src % per_el]]
+        flat_c = edofs[self.plain_src // per_el, c_of[self.plain_src % per_el]]
+        self.pattern_rows = np.concatenate([first[flat_r], exp_z[p], [2, 5]])
+        self.pattern_cols = np.concatenate([first[flat_c], exp_z[q], [2, 5]])
 
     @functools.cached_property
     def _layers(self) -> ContinuumGroup:
@@ -198,7 +198,7 @@ class Continuum3DConnector(HeldEndFaces, Connector):
         x[self._free, :2] += internal[:n].reshape(-1, 2)
         x[self._free_z, 2] += internal[n:]
         for s, pose in enumerate((pose_a, pose_b)):
-            x[self._face[s], :2] = rigid_points(np.asarray(pose, float), self._rel[s])[0]
+            x[self.end_faces[s], :2] = rigid_points(np.asarray(pose, float), self.end_offsets[s])[0]
         return x
 
     def predict_internal(

@@ -42,9 +42,12 @@ from __future__ import annotations
 import math
 
 from flexval.geometry import Mechanism
+from flexval.geometry.loads import DEFAULT_LEVELS
 from flexval.geometry.mesh import ASPECT_RATIO, MAX_LEVEL
 from flexval.geometry.shapes import Arc, Segment
 from flexval.reducedmodels.catalogue import Cost, ModelSpec
+
+from .level import DEFAULT_LEVEL
 
 BASE_BYTES = 70e6
 """Resident memory of a process that has imported the solver (numpy, scipy, scikit-fem)."""
@@ -65,7 +68,6 @@ TIME_EXPONENT = 1.32
 ITERATIONS_PER_STEP = 3.2
 """Newton iterations per load step (open_chain m+: 2.9-3.4 at levels 0-3, closed_chain f+:
 3.6; notch_fourbar f+: 1.3-1.7)."""
-DEFAULT_LEVELS = 11
 BYTES_PER_ENTRY_3D = 190.0
 """3D model: peak memory per element-matrix entry (the element matrices, the Hessian values
 with their pattern and storage slots, the sparse tangent; SuperLU's factor, about 10 n w
@@ -157,8 +159,6 @@ def path_cost(mechanism: Mechanism, spec: ModelSpec, levels: int | None = None) 
     levels : int, optional
         Load levels of the path (default 11, the scenes' usual).
     """
-    from .family import DEFAULT_LEVEL
-
     level = DEFAULT_LEVEL if spec.resolution is None else spec.resolution
     steps = max(1, (levels or DEFAULT_LEVELS) - 1)
     if spec.kwargs.get("three_d"):

@@ -51,13 +51,13 @@ class HeldEndFaces:
         The whole mesh's kernel: ``evaluate(x) -> (energy N mm, nodal forces N,
         element matrices)``.
     _end_kernel
-        The kernel of the elements touching the end face of body ``_end_slot``:
+        The kernel of the elements touching the end face of body ``end_slot``:
         ``forces(x)`` (N).
-    _face, _rel
+    end_faces, end_offsets
         Each body's end-face nodes and their offsets from the body's reference (mm).
-    _exp_dof, _exp_z, _theta_pos, _mixed, _plain_src, _rows, _cols, _n
+    exp_dof, exp_z, theta_pos, mixed, mixed_first, plain_src, pattern_rows, pattern_cols, _n
         The expansion's index arrays (see the module docstring).
-    _end_slot, _centre_fractions
+    end_slot, _centre_fractions
         The body whose face reaction gives the section forces, and the centre-line
         nodes' arc-length fractions.
     """
@@ -66,7 +66,7 @@ class HeldEndFaces:
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         """Local (rows, cols) of the Hessian values :meth:`evaluate` returns (duplicates sum)."""
-        return self._rows, self._cols
+        return self.pattern_rows, self.pattern_cols
 
     def evaluate(
         self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
@@ -83,18 +83,18 @@ class HeldEndFaces:
         x = self.positions(pose_a, pose_b, internal)
         energy, forces, Ke = self.elastic.evaluate(x)
         nodal = forces.reshape(-1, self.node_dim)
-        coef = np.ones(self._exp_z.size)
+        coef = np.ones(self.exp_z.size)
         second = np.zeros(2)
         for s, pose in enumerate((pose_a, pose_b)):
-            _, jac, d2 = rigid_points(np.asarray(pose, float), self._rel[s])
-            coef[self._theta_pos[s]] = jac[:, :, 2].ravel()
-            second[s] = np.sum(nodal[self._face[s], :2] * d2)
-        grad = np.bincount(self._exp_z, weights=forces[self._exp_dof] * coef, minlength=self._n)
+            _, jac, d2 = rigid_points(np.asarray(pose, float), self.end_offsets[s])
+            coef[self.theta_pos[s]] = jac[:, :, 2].ravel()
+            second[s] = np.sum(nodal[self.end_faces[s], :2] * d2)
+        grad = np.bincount(self.exp_z, weights=forces[self.exp_dof] * coef, minlength=self._n)
         ke = Ke.ravel()
-        t, p, q = self._mixed
-        n_plain = self._plain_src.size
-        hess = np.empty(self._rows.size)  # filled in place: no third copy of the entries
-        np.take(ke, self._plain_src, out=hess[:n_plain])
+        t, p, q = self.mixed
+        n_plain = self.plain_src.size
+        hess = np.empty(self.pattern_rows.size)  # filled in place: no third copy of the entries
+        np.take(ke, self.plain_src, out=hess[:n_plain])
         hess[n_plain:-2] = ke[t] * coef[p] * coef[q]
         hess[-2:] = second
         return energy, grad, hess
@@ -134,13 +134,13 @@ class HeldEndFaces:
         of the rigidly held end faces, it converges with the mesh at the rate
         of the reactions.
         """
-        s = self._end_slot
+        s = self.end_slot
         pose = np.asarray((pose_a, pose_b)[s], float)
         if gradient is not None:
             wrench = gradient[3 * s : 3 * s + 3]
         else:  # the end face's nodal forces: only its elements contribute
             x = self.positions(pose_a, pose_b, internal)
-            face = self._face[s]
+            face = self.end_faces[s]
             f = self._end_kernel.forces(x).reshape(-1, self.node_dim)[face]
             arm = x[face, :2] - pose[:2]
             wrench = np.array(

@@ -51,7 +51,9 @@ class ContinuumGroup(ConnectorGroup):
         self._nodes = np.vstack([c.mesh.nodes for c in self.connectors])
         self._free = np.concatenate([c.free_nodes + o for c, o in zip(self.connectors, offsets)])
         faces = [
-            (c._face[s] + o, c._rel[s]) for c, o in zip(self.connectors, offsets) for s in (0, 1)
+            (c.end_faces[s] + o, c.end_offsets[s])
+            for c, o in zip(self.connectors, offsets)
+            for s in (0, 1)
         ]
         self._face_nodes = np.concatenate([f for f, _ in faces])
         self._face_rel = np.vstack([r for _, r in faces])
@@ -301,23 +303,23 @@ class ContinuumGroup(ConnectorGroup):
             nodal = np.empty(2 * c.mesh.nodes.shape[0], np.int64)
             nodal[(2 * c.free_nodes[:, None] + np.arange(2)).ravel()] = g_dof[6:]
             for s in (0, 1):
-                nodal[(2 * c._face[s][:, None] + np.arange(2)).ravel()] = np.tile(
-                    g_dof[3 * s : 3 * s + 2], c._face[s].size
+                nodal[(2 * c.end_faces[s][:, None] + np.arange(2)).ravel()] = np.tile(
+                    g_dof[3 * s : 3 * s + 2], c.end_faces[s].size
                 )
             first_dof.append(nodal)
             # Hessian values of the pattern: [plain, mixed, second (2)]
-            slots = hess_slots[hess_block : hess_block + c._rows.size]
-            t_mixed, p_mixed, q_mixed = c._mixed
-            n_plain = c._plain_src.size
+            slots = hess_slots[hess_block : hess_block + c.pattern_rows.size]
+            t_mixed, p_mixed, q_mixed = c.mixed
+            n_plain = c.plain_src.size
             first = np.full(c.solid.rows.size, -1, np.int64)
-            first[c._plain_src] = slots[:n_plain]
-            is_first = c._mixed_first
+            first[c.plain_src] = slots[:n_plain]
+            is_first = c.mixed_first
             first[t_mixed[is_first]] = slots[n_plain : n_plain + t_mixed.size][is_first]
             slot_first.append(first)
-            coef_at = np.full(c._exp_z.size, unit)
+            coef_at = np.full(c.exp_z.size, unit)
             for s in (0, 1):
-                coef_at[c._theta_pos[s]] = face_dofs + np.arange(c._theta_pos[s].size)
-                face_dofs += c._theta_pos[s].size
+                coef_at[c.theta_pos[s]] = face_dofs + np.arange(c.theta_pos[s].size)
+                face_dofs += c.theta_pos[s].size
             rest = ~is_first
             keep = slots[n_plain : n_plain + t_mixed.size] >= 0
             extra_src.append(t_mixed[rest & keep])
@@ -326,7 +328,7 @@ class ContinuumGroup(ConnectorGroup):
             extra_slot.append(slots[n_plain : n_plain + t_mixed.size][rest & keep])
             second_slot.append(slots[-2:])
             block += 6 + c.n_internal
-            hess_block += c._rows.size
+            hess_block += c.pattern_rows.size
         first_dof = np.concatenate(first_dof)
         theta_dof = np.array(theta_dof)
         second_slot = np.concatenate(second_slot)

@@ -28,7 +28,7 @@ from flexval.reducedmodels.threads import limit_threads
 from flexval.reducedmodels.validity import MAX_STRAIN, merge_reasons
 
 from .connector import ContinuumConnector
-from .family import DEFAULT_LEVEL
+from .level import DEFAULT_LEVEL
 
 
 def build_system(
