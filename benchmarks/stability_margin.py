@@ -32,7 +32,7 @@ import scipy.sparse.linalg as spla
 import flexval
 from flexval.reducedmodels import stability
 from flexval.reducedmodels.models import build_system
-from flexval.reducedmodels.newton import FixedLoad, solve_step
+from flexval.reducedmodels.newton import FixedLoad, solve
 
 COLUMN = Path(__file__).resolve().parents[1] / "tests" / "scenes" / "euler_column.toml"
 
@@ -78,7 +78,7 @@ def band_of(tangent) -> np.ndarray:
 
 def straight_state(system, loads, factor: float):
     """The straight column's equilibrium at ``factor`` (Newton from rest: no imperfection)."""
-    result = solve_step(FixedLoad(system, loads, factor), system.initial_state(), system.settings)
+    result = solve(FixedLoad(system, loads, factor), system.initial_state(), system.settings)
     return system.assemble(result.state, loads, factor)[2]
 
 

@@ -10,7 +10,7 @@ their connectors join the same groups (one compiled assembly for all), their
 tangent is block-diagonal (one banded factorisation, whose band is one
 copy's), and :func:`trace_batch` steps them together through the one tracer
 (:func:`flexval.reducedmodels.tracer.trace`) with the one Newton iteration
-applied to every copy at once (:func:`flexval.reducedmodels.newton.solve_batch`).
+applied to every copy at once (:func:`flexval.reducedmodels.newton.solve`).
 
 How copies stay exactly what they are alone:
 
@@ -21,7 +21,7 @@ How copies stay exactly what they are alone:
 * every decision of load control (halve a predicted sub-step, accept or
   cut a step, grow the next) is made per copy as
   :class:`~flexval.reducedmodels.tracer.LoadControl` makes it; where the
-  copies disagree, the minority leaves the batch (:class:`BatchLoadControl`)
+  copies disagree, the minority leaves the batch
   and goes on as a batch of its own from the last reported level the copies
   shared, where each copy stands as its solo run stands, so the others are
   not held back and no work before that level is done twice. A batch that
@@ -69,8 +69,7 @@ from .core import SolverError, SolverSettings, System, case_loads
 from .linearbatch import linear_responses
 from .loadpath import LoadPath
 from .loads import Loads
-from .newton import BatchNewtonResult, FixedLoad, StepProblem, solve_batch
-from .tracer import Counters, LoadControl, PathPoint, Solve, TraceFailure, Verdict, trace
+from .tracer import Counters, LoadControl, PathPoint, TraceFailure, trace
 
 Member = tuple[Mechanism, Sequence[Connector]]
 """One copy of a batch: its mechanism and the connectors a System of it joins."""
@@ -681,177 +680,6 @@ class BatchSystem(System):
         return self.copy_system(k).loads(self._cases[k])
 
 
-class BatchLoadControl(LoadControl):
-    """:class:`~flexval.reducedmodels.tracer.LoadControl` of a batch: each copy's decisions,
-    taken together while they agree.
-
-    Every decision LoadControl takes on one path is taken here for every
-    copy still in the batch, on its own measures; where copies disagree the
-    larger group goes on and the smaller leaves the batch (:attr:`active`
-    false): its coordinates stay at its last accepted state and its tangent
-    block as it was there, and :func:`trace_batch` takes it on from the last
-    reported level (:meth:`snapshot`, :meth:`resume`).
-    """
-
-    def __init__(self, factors: Sequence[float], batch: BatchSystem):
-        super().__init__(factors)
-        self.batch = batch
-        self.active = np.ones(batch.n_copies, bool)
-        self.last: BatchNewtonResult | None = None
-        self._kept_next: np.ndarray | None = None
-
-    def snapshot(self) -> dict:
-        """What load control carries from a reported point on (:meth:`resume` starts there).
-
-        Taken where the tracer yields a point: every value here is replaced, never changed in
-        place, as the path goes on, so the snapshot holds without a copy.
-        """
-        return {name: getattr(self, name) for name in CARRIED}
-
-    def resume(self, carried: dict, take: np.ndarray, loads: Loads) -> None:
-        """Stand where a batch that these copies left stood at a reported point.
-
-        ``carried`` is that batch's :meth:`snapshot`, ``take`` the index in its numbering
-        of each of this batch's unknowns, ``loads`` this batch's. Every value of a copy is
-        its own (the batch's arithmetic is each copy's), so the copies go on as their solo
-        runs do from that point; what the connectors' predictors keep of each state is
-        taken anew.
-        """
-        batch = self.batch
-        self.system, self.loads, self.settings = batch, loads, batch.settings
-        self.__dict__.update(carried)
-        self.q = carried["q"][take]
-        self.tangent = None  # a bifurcation is judged from the copy's own start
-        self.level = (carried["level"][0][take], carried["level"][1])
-        self.history = [(q[take], f) for q, f in carried["history"]]
-        self.past = (
-            [batch.remembered(q) for q, _ in self.history] if batch.predicts_internal else None
-        )
-        self.slope = None if carried["slope"] is None else carried["slope"][take]
-        self.targets = iter([f for f in self.factors if f > self.target])
-
-    def newton(self, problem: StepProblem, guess: np.ndarray, settings, origin=None):
-        """The batch's Newton solve (:func:`solve_batch`) on the copies still in the batch."""
-        self.last = solve_batch(problem, guess, settings, origin, self.active)
-        return self.last
-
-    def leave(self, mask: np.ndarray) -> None:
-        """Copies ``mask`` leave the batch (to be traced alone)."""
-        self.active &= ~mask
-
-    def _split_vote(self, yes: np.ndarray) -> bool:
-        """The decision of the larger group of the active copies (ties: yes); the rest leave."""
-        among = self.active
-        ayes = int(np.count_nonzero(yes & among))
-        noes = int(np.count_nonzero(among)) - ayes
-        decision = ayes >= noes
-        self.leave(among & (yes != decision))
-        return decision
-
-    def begin(self, system, loads, point: PathPoint) -> None:
-        """Start from the first point; copies whose first solve failed leave."""
-        if self.last is not None:
-            self.leave(self.last.failed)
-            self._keep(self.last.storage)
-        super().begin(system, loads, point)
-
-    def _keep(self, storage: np.ndarray) -> None:
-        """Take the active copies' tangent values from ``storage`` as their accepted ones.
-
-        :attr:`BatchSystem.kept` is replaced, never changed in place (a Newton solve and
-        the accepted tangent may hold it): ``storage`` itself when every copy is active.
-        """
-        batch = self.batch
-        if self.active.all():
-            batch.kept = storage
-        elif self.active.any():
-            kept = batch.kept.copy()
-            batch.copy_blocks(kept, storage, self.active)
-            batch.kept = kept
-
-    def attempt(self):
-        """LoadControl's sub-step, halved while the copies' predictions move too far."""
-        batch = self.batch
-        while True:
-            trial = min(self.factor + self.step, self.target)
-            guess = self._predict(trial)  # the copies that left: their guess set below
-            if 0.5 * self.step < self.min_step:
-                break
-            if not self._split_vote(batch.motion_ratios(self.q, guess) > 1.0):
-                break
-            self.step *= 0.5
-        still = ~self.active[batch.dof_copy]
-        guess[still] = self.q[still]
-        self.last_step = trial - self.factor
-        return FixedLoad(batch, self.loads, trial), guess, self.q
-
-    def review(self, result: BatchNewtonResult, solve: Solve) -> Verdict:
-        """LoadControl's review of every copy; the majority's verdict, the others leave."""
-        batch, active = self.batch, self.active  # active: changed in place by the votes
-        ratios = np.full(batch.n_copies, np.inf)
-        ok = active & ~result.failed
-        if result.state is not None and ok.any():
-            ratios = np.where(ok, batch.motion_ratios(self.q, result.state), np.inf)
-        within = ok & (ratios <= 1.0)
-        unstable = np.zeros(batch.n_copies, bool)
-        if within.any() and self.settings.check_stability:
-            unstable = batch.copy_unstable(result.state, result.tangent, result.factor, within)
-            within &= ~unstable
-        refused = active & ~within
-        accepted = self._split_vote(within)
-        if not accepted:  # the copies left all refused this step: LoadControl's reason
-            k = int(np.flatnonzero(refused)[0])
-            why = (
-                result.reasons[k]
-                if result.failed[k]
-                else self.unstable_at(result.factor)
-                if unstable[k]
-                else "step too large"
-            )
-            return Verdict(None, result.factor, why, None, False)
-        easy = result.iterations <= self.settings.fast_iterations
-        fast = self._split_vote(easy & (ratios < 0.5))
-        state = result.state.copy()
-        still = ~self.active[batch.dof_copy]
-        state[still] = self.q[still]
-        storage, tangent = result.storage, result.tangent  # factorised by the stability check
-        if not self.active.all():
-            storage = storage.copy()
-            batch.copy_blocks(storage, batch.kept, ~self.active)
-            tangent = batch.layout.tangent(storage)
-        self._kept_next = storage
-        return Verdict(state, result.factor, "", tangent, fast)
-
-    def stopped_by_bifurcation(self, solve: Solve) -> float | None:
-        """LoadControl's probe for a batch of one copy (its solo path's reason to stop); a
-        batch of several that cannot go on hands its copies to batches of one."""
-        if self.batch.n_copies != 1:
-            return None
-        return super().stopped_by_bifurcation(solve)
-
-    def advance(self, verdict: Verdict) -> float | None:
-        """LoadControl's advance; the accepted tangent values become the copies' kept ones."""
-        self._keep(self._kept_next)
-        return super().advance(verdict)
-
-
-CARRIED = (
-    "q",
-    "factor",
-    "level",
-    "unstable_above",
-    "history",
-    "slope",
-    "spacing",
-    "step",
-    "last_step",
-    "min_step",
-    "target",
-)
-"""The attributes of :class:`BatchLoadControl` (load control's) that go from one reported point
-to the next: the accepted state and factor, the predictor's states and slope, the step."""
-
-
 BATCH_UNKNOWNS = 40_000
 """Most unknowns of one batch (larger sets of copies are traced as several): the band of a
 batch this size, some 10 MB with the factor, stays in the processor's caches. Cost per path
@@ -1048,7 +876,7 @@ def trace_batch(
         t0 = time.perf_counter()
         batch = BatchSystem([members[k] for k in copies])
         loads = batch.use_loads([cases[k] for k in copies])
-        stepping = BatchLoadControl(factors[0], batch)
+        stepping = LoadControl(factors[0], batch)
         unknowns = batch.n_dofs // len(copies)
         points: list[PathPoint] = []
         shared: list[tuple[dict, int]] = []  # at each point: load control's snapshot, points

@@ -28,7 +28,7 @@ grown by 1.5 after easy steps (at most ``fast_iterations`` Newton iterations,
 no cut), up to ``max_growth`` times its initial value.
 
 The corrector is the core's one Newton iteration
-(:func:`flexval.reducedmodels.newton.solve_step`, with all its safeguards) on the
+(:func:`flexval.reducedmodels.newton.solve`, with all its safeguards) on the
 bordered problem :class:`ArcLengthStep`; the stepping is the strategy
 :class:`ArcLength` of the one path tracer (:func:`flexval.reducedmodels.tracer.trace`).
 

@@ -97,7 +97,7 @@ class SolverSettings:
     Newton converges quadratically, the error left after a correction of
     1e-8 is of order 1e-16. ``error_tol`` bounds the error left after a
     correction as estimated from the contraction of the last two (see
-    :func:`flexval.reducedmodels.newton.solve_step`); 1e-10 keeps equilibrium
+    :func:`flexval.reducedmodels.newton.solve`); 1e-10 keeps equilibrium
     to ~1e-8 of the load even on stiff (axial) modes.
     ``max_rotation_step`` (rad) and ``max_translation_step`` (fraction of the
     mechanism size) bound how far any body may move in one sub-step, so the

@@ -28,7 +28,7 @@ b = (g + 1/2)^2 / 4 (Chung and Hulbert 1993): second order, unconditionally
 stable, spectral radius rho_inf at infinite frequency. rho_inf = 1 has no
 numerical dissipation (A = a, Newmark's trapezoidal rule: energy conserved
 exactly on a linear undamped system); rho_inf < 1 damps the high
-frequencies. Each step is one :func:`flexval.reducedmodels.newton.solve_step` on
+frequencies. Each step is one :func:`flexval.reducedmodels.newton.solve` on
 :class:`DynamicStep`, whose tangent is K + g/(b h) D + (1 - am)/((1 - af) b h^2) M
 + beta dK(q)[v] (the last the damping force's derivative along the motion),
 summed in the System's tangent storage and factorised like the static tangent.
@@ -60,7 +60,7 @@ from .inertia import MassModel
 from .loadpath import LoadPath
 from .loads import Loads
 from .modes import refuse_massless_bodies
-from .newton import FixedLoad, StepProblem, solve_step
+from .newton import FixedLoad, StepProblem, solve
 from .recorder import notify
 from .tangent import Tangent
 
@@ -302,7 +302,7 @@ def solve_dynamic(
             path,
         )
 
-    first = solve_step(FixedLoad(system, loads, law(0.0)), system.initial_state(), system.settings)
+    first = solve(FixedLoad(system, loads, law(0.0)), system.initial_state(), system.settings)
     if first.state is None:
         raise fail(f"no initial equilibrium ({first.reason})", 0.0)
     q = first.state
@@ -316,7 +316,7 @@ def solve_dynamic(
         h = min(h, s.max_step * duration, duration - t)
         step = DynamicStep(system, loads, law(t + h), mass, (q, v, a, A), h, scheme, damping)
         guess = q + h * v + h * h * (0.5 - scheme.beta) * A + h * h * scheme.beta * A
-        result = solve_step(step, guess, system.settings)
+        result = solve(step, guess, system.settings)
         stats["newton_iterations"] += result.iterations
         error = math.inf
         if result.state is not None:

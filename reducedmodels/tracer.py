@@ -3,7 +3,7 @@
 :func:`trace` solves the first point at a fixed load factor from rest and
 then asks a *stepping strategy* for one step after the other: the strategy
 proposes a step problem and a predictor, the one Newton iteration
-(:func:`flexval.reducedmodels.newton.solve_step`) corrects it, the strategy reviews
+(:func:`flexval.reducedmodels.newton.solve`) corrects it, the strategy reviews
 the result (step bounds, stability, ...), and the tracer either cuts the
 step or accepts it and, when the strategy says the point is one to report,
 yields it as a :class:`PathPoint`. The caller records what it needs (the
@@ -30,10 +30,11 @@ import numpy as np
 
 from .bifurcation import BIFURCATION_RTOL, classify
 from .loads import Loads
-from .newton import FixedLoad, NewtonResult, StepProblem, StepRefused, solve_step
+from .newton import FixedLoad, NewtonResult, StepProblem, StepRefused, solve
 from .tangent import Tangent
 
 if TYPE_CHECKING:
+    from .batch import BatchSystem
     from .core import System
 
 BIFURCATION_PROBE = 0.02
@@ -226,18 +227,18 @@ def trace(
     system: System,
     loads: Loads,
     stepping: Stepping,
-    newton: Newton = solve_step,
+    newton: Newton = solve,
     resume: Counters | None = None,
 ) -> Iterator[PathPoint]:
     """Yield the converged points of the path ``stepping`` follows under ``loads``.
 
-    ``newton`` is the Newton solve of a step problem: :func:`solve_step`, or
-    for a batch of copies traced together
-    (:mod:`flexval.reducedmodels.batch`) the same iteration on every copy at
-    once, whose iteration counts are then one per copy (the counters carry
-    them as arrays). With ``resume`` (the counts at a reported point) the path
-    goes on from that point, where ``stepping`` stands already (a batch's
-    copies that leave it go on from the last point they shared,
+    ``newton`` is the Newton solve of a step problem: :func:`solve`, which
+    a batch of copies traced together (:mod:`flexval.reducedmodels.batch`)
+    calls with the copies still in the batch; the iteration counts are then
+    one per copy (the counters carry them as arrays). With ``resume`` (the
+    counts at a reported point) the path goes on from that point, where
+    ``stepping`` stands already (a batch's copies that leave it go on from the
+    last point they shared,
     :func:`flexval.reducedmodels.batch.trace_batch`): nothing is solved first
     and that point is not yielded again.
 
@@ -251,7 +252,7 @@ def trace(
     settings = system.settings
     counters = Counters() if resume is None else resume.copy()
 
-    def solve(
+    def counted(
         problem: StepProblem, guess: np.ndarray, origin: np.ndarray | None = None
     ) -> NewtonResult:
         result = newton(problem, guess, settings, origin)
@@ -260,7 +261,7 @@ def trace(
         return result
 
     if resume is None:
-        first = solve(FixedLoad(system, loads, stepping.first_factor), system.initial_state())
+        first = counted(FixedLoad(system, loads, stepping.first_factor), system.initial_state())
         if first.state is None:
             raise TraceFailure(first.reason, 0.0, counters)
         point = PathPoint(
@@ -275,7 +276,7 @@ def trace(
     while not stepping.finished():
         problem, guess, origin = stepping.attempt()
         before = counters.newton_iterations
-        verdict = stepping.review(solve(problem, guess, origin), solve)
+        verdict = stepping.review(counted(problem, guess, origin), counted)
         spent += counters.newton_iterations - before
         if verdict.state is None:
             counters.step_cuts += 1
@@ -285,7 +286,7 @@ def trace(
                     stepping.factor,
                     counters,
                     found,
-                    stepping.stopped_by_bifurcation(solve),
+                    stepping.stopped_by_bifurcation(counted),
                 )
             continue
         counters.substeps += 1
@@ -330,21 +331,43 @@ class LoadControl(Stepping):
     leave the bounds: on the open chain's f- soft stretch such attempts
     cost 4 to 17 iterations each). Only the requested factors are reported.
 
+    A batch of copies (``batch``, traced by
+    :func:`flexval.reducedmodels.batch.trace_batch`) is load-controlled by
+    the same decisions, taken for every copy still in the batch on its own
+    measures: where the copies disagree the larger group goes on and the
+    smaller leaves the batch (:attr:`active` false): its coordinates stay at
+    its last accepted state and its tangent block as it was there, and
+    ``trace_batch`` takes it on from the last reported level
+    (:meth:`snapshot`, :meth:`resume`). A single path takes each decision on
+    plain floats (a batch's per-copy bookkeeping would cost a small model
+    more than its path).
+
     Parameters
     ----------
     factors : sequence of float
         Increasing load factors to report, the first solved from rest.
+    batch : BatchSystem, optional
+        The copies traced together (None: one path).
     """
 
     cut_name = "step"
 
-    def __init__(self, factors: Sequence[float]):
+    def __init__(self, factors: Sequence[float], batch: BatchSystem | None = None):
         self.factors = [float(f) for f in factors]
         self.first_factor = self.factors[0]
+        self.batch = batch
+        #: which copies are still in the batch (None: one path)
+        self.active = None if batch is None else np.ones(batch.n_copies, bool)
+        self.last: NewtonResult | None = None  # the last Newton solve of :meth:`newton`
+        self._kept_next: np.ndarray | None = None  # a batch's tangent values, once accepted
 
     def begin(self, system: System, loads: Loads, point: PathPoint) -> None:
         """Start at the first requested factor (refused at rest where double precision does
-        not resolve the System, :meth:`System.resolves`)."""
+        not resolve the System, :meth:`System.resolves`); a batch's copies whose first
+        solve failed leave it."""
+        if self.batch is not None and self.last is not None:
+            self.leave(self.last.failed)
+            self._keep(self.last.storage)
         if point.factor == 0.0 and not system.resolves(point.tangent):
             raise StepRefused(
                 "the tangent at rest is not positive definite in double precision: the model's "
@@ -375,16 +398,26 @@ class LoadControl(Stepping):
         """Fixed load at the next sub-step (never past the next requested factor).
 
         The sub-step is halved (down to the smallest allowed) while the
-        prediction moves a body beyond the step bounds.
+        prediction moves a body beyond the step bounds (:meth:`_too_far`).
         """
         while True:
             trial = min(self.factor + self.step, self.target)
             guess = self._predict(trial)
-            if self.system.motion_ratio(self.q, guess) <= 1.0 or 0.5 * self.step < self.min_step:
+            if 0.5 * self.step < self.min_step or not self._too_far(guess):
                 break
             self.step *= 0.5
+        if self.active is not None:  # the copies that left keep their state
+            still = ~self.active[self.batch.dof_copy]
+            guess[still] = self.q[still]
         self.last_step = trial - self.factor
         return FixedLoad(self.system, self.loads, trial), guess, self.q
+
+    def _too_far(self, guess: np.ndarray) -> bool:
+        """Whether the predicted state moves a body beyond the step bounds (a batch: the
+        verdict of the larger group of its copies; the others leave)."""
+        if self.active is None:
+            return not self.system.motion_ratio(self.q, guess) <= 1.0
+        return self._split_vote(self.batch.motion_ratios(self.q, guess) > 1.0)
 
     def _slope(self, tangent: Tangent | None) -> np.ndarray | None:
         """dq/dfactor at the last state, K^-1 f (mm, rad), or None when K cannot give it."""
@@ -403,7 +436,10 @@ class LoadControl(Stepping):
         return self.system.predict(self.history, factor, self.past, self.slope)
 
     def review(self, result: NewtonResult, solve: Solve) -> Verdict:
-        """Refuse non-convergence, a step beyond the bounds and (optionally) instability."""
+        """Refuse non-convergence, a step beyond the bounds and (optionally) instability (a
+        batch: :meth:`_review_copies`)."""
+        if self.active is not None:
+            return self._review_copies(result)
         q_new, why = result.state, result.reason
         ratio = self.system.motion_ratio(self.q, q_new) if q_new is not None else math.inf
         if ratio <= 1.0 and self.settings.check_stability and self.system.unstable(result.tangent):
@@ -419,6 +455,44 @@ class LoadControl(Stepping):
             result.tangent,
             result.iterations <= self.settings.fast_iterations and ratio < 0.5,
         )
+
+    def _review_copies(self, result: NewtonResult) -> Verdict:
+        """:meth:`review` of every copy of a batch; the majority's verdict, the others
+        leave."""
+        batch, active = self.batch, self.active  # active: changed in place by the votes
+        ratios = np.full(batch.n_copies, np.inf)
+        ok = active & ~result.failed
+        if result.state is not None and ok.any():
+            ratios = np.where(ok, batch.motion_ratios(self.q, result.state), np.inf)
+        within = ok & (ratios <= 1.0)
+        unstable = np.zeros(batch.n_copies, bool)
+        if within.any() and self.settings.check_stability:
+            unstable = batch.copy_unstable(result.state, result.tangent, result.factor, within)
+            within &= ~unstable
+        refused = active & ~within
+        accepted = self._split_vote(within)
+        if not accepted:  # the copies left all refused this step: one path's reason
+            k = int(np.flatnonzero(refused)[0])
+            why = (
+                result.reasons[k]
+                if result.failed[k]
+                else self.unstable_at(result.factor)
+                if unstable[k]
+                else "step too large"
+            )
+            return Verdict(None, result.factor, why, None, False)
+        easy = result.iterations <= self.settings.fast_iterations
+        fast = self._split_vote(easy & (ratios < 0.5))
+        state = result.state.copy()
+        still = ~self.active[batch.dof_copy]
+        state[still] = self.q[still]
+        storage, tangent = result.storage, result.tangent  # factorised by the stability check
+        if not self.active.all():
+            storage = storage.copy()
+            batch.copy_blocks(storage, batch.kept, ~self.active)
+            tangent = batch.layout.tangent(storage)
+        self._kept_next = storage
+        return Verdict(state, result.factor, "", tangent, fast)
 
     def unstable_at(self, factor: float) -> str:
         """Record an unstable equilibrium converged at load ``factor`` (the least one bounds
@@ -445,8 +519,11 @@ class LoadControl(Stepping):
         """Take the state; report it at the requested factor once that is reached.
 
         What the predictor keeps of the state (history, slope) is computed
-        only if the path goes on after it.
+        only if the path goes on after it. A batch's accepted tangent values become its
+        copies' kept ones.
         """
+        if self._kept_next is not None:
+            self._keep(self._kept_next)
         self.q, self.factor, self.tangent = verdict.state, verdict.factor, verdict.tangent
         if self.unstable_above is not None and self.factor >= self.unstable_above:
             self.unstable_above = None  # that unstable state lay on another branch
@@ -480,8 +557,11 @@ class LoadControl(Stepping):
         the stable state along a direction that is not the critical mode of
         the last stable tangent
         (:func:`~flexval.reducedmodels.bifurcation.classify`); a limit point
-        leaves none. Returns the bracket's middle, or None.
+        leaves none. Returns the bracket's middle, or None. A batch of several
+        copies that cannot go on hands its copies to batches of one instead (None).
         """
+        if self.batch is not None and self.batch.n_copies != 1:
+            return None
         above, system = self.unstable_above, self.system
         if above is None or self.tangent is None:
             return None
@@ -533,3 +613,83 @@ class LoadControl(Stepping):
         """More sub-steps than ``max_substeps``."""
         limit = self.settings.max_substeps
         return f"more than {limit} load sub-steps" if counters.substeps > limit else None
+
+    def snapshot(self) -> dict:
+        """What load control carries from a reported point on (:meth:`resume` starts there).
+
+        Taken where the tracer yields a point: every value here is replaced, never changed in
+        place, as the path goes on, so the snapshot holds without a copy.
+        """
+        return {name: self.__dict__[name] for name in CARRIED}
+
+    def resume(self, carried: dict, take: np.ndarray, loads: Loads) -> None:
+        """Stand where a batch that these copies left stood at a reported point.
+
+        ``carried`` is that batch's :meth:`snapshot`, ``take`` the index in its numbering
+        of each of this batch's unknowns, ``loads`` this batch's. Every value of a copy is
+        its own (the batch's arithmetic is each copy's), so the copies go on as their solo
+        runs do from that point; what the connectors' predictors keep of each state is
+        taken anew.
+        """
+        batch = self.batch
+        self.system, self.loads, self.settings = batch, loads, batch.settings
+        self.__dict__.update(carried)
+        self.q = carried["q"][take]
+        self.tangent = None  # a bifurcation is judged from the copy's own start
+        self.level = (carried["level"][0][take], carried["level"][1])
+        self.history = [(q[take], f) for q, f in carried["history"]]
+        self.past = (
+            [batch.remembered(q) for q, _ in self.history] if batch.predicts_internal else None
+        )
+        self.slope = None if carried["slope"] is None else carried["slope"][take]
+        self.targets = iter([f for f in self.factors if f > self.target])
+
+    def newton(self, problem: StepProblem, guess: np.ndarray, settings, origin=None):
+        """The one Newton solve (:func:`~flexval.reducedmodels.newton.solve`), on the
+        copies still in the batch where there is one."""
+        self.last = solve(problem, guess, settings, origin, self.active)
+        return self.last
+
+    def leave(self, mask: np.ndarray) -> None:
+        """Copies ``mask`` leave the batch (to be traced alone)."""
+        self.active &= ~mask
+
+    def _split_vote(self, yes: np.ndarray) -> bool:
+        """The decision of the larger group of the active copies (ties: yes); the rest leave."""
+        among = self.active
+        ayes = int(np.count_nonzero(yes & among))
+        noes = int(np.count_nonzero(among)) - ayes
+        decision = ayes >= noes
+        self.leave(among & (yes != decision))
+        return decision
+
+    def _keep(self, storage: np.ndarray) -> None:
+        """Take the active copies' tangent values from ``storage`` as their accepted ones.
+
+        :attr:`BatchSystem.kept` is replaced, never changed in place (a Newton solve and
+        the accepted tangent may hold it): ``storage`` itself when every copy is active.
+        """
+        batch = self.batch
+        if self.active.all():
+            batch.kept = storage
+        elif self.active.any():
+            kept = batch.kept.copy()
+            batch.copy_blocks(kept, storage, self.active)
+            batch.kept = kept
+
+
+CARRIED = (
+    "q",
+    "factor",
+    "level",
+    "unstable_above",
+    "history",
+    "slope",
+    "spacing",
+    "step",
+    "last_step",
+    "min_step",
+    "target",
+)
+"""The attributes of :class:`LoadControl` that go from one reported point
+to the next: the accepted state and factor, the predictor's states and slope, the step."""

@@ -188,20 +188,20 @@ def test_copies_that_part_ways_go_on_from_the_last_point_they_shared(model, monk
     bit for bit the copy's path traced alone (a batch of one from rest), and its solo run's
     to the batch's agreement."""
     from flexval.reducedmodels import batch as batch_module
-    from flexval.reducedmodels.batch import BatchLoadControl
+    from flexval.reducedmodels.tracer import LoadControl
 
     rng = np.random.default_rng(3)
     scales = rng.normal(1.0, 0.03, 24).tolist()
     mechanisms, cases = variants("open_chain", "f+", scales, [1.0] * len(scales))
     spec = parse_model(model)
     resumed, batches = [], []
-    resume, start = BatchLoadControl.resume, BatchLoadControl.__init__
+    resume, start = LoadControl.resume, LoadControl.__init__
 
     def counted(self, carried, take, loads):
         resumed.append(carried["factor"])
         resume(self, carried, take, loads)
 
-    def made(self, factors, batch):
+    def made(self, factors, batch=None):
         batches.append(batch.n_copies)
         start(self, factors, batch)
 
@@ -210,8 +210,8 @@ def test_copies_that_part_ways_go_on_from_the_last_point_they_shared(model, monk
     ticks = itertools.count()
     clock = types.SimpleNamespace(perf_counter=lambda: float(next(ticks)))
     monkeypatch.setattr(batch_module, "time", clock)
-    monkeypatch.setattr(BatchLoadControl, "resume", counted)
-    monkeypatch.setattr(BatchLoadControl, "__init__", made)
+    monkeypatch.setattr(LoadControl, "resume", counted)
+    monkeypatch.setattr(LoadControl, "__init__", made)
     batched = run_batch(mechanisms, spec, cases)
     monkeypatch.undo()
     # the paths' seconds share out every batch's time, those whose copies all left included

@@ -24,7 +24,7 @@ from flexval.geometry.mechanism import FlexureSpec, assemble
 from flexval.geometry.mesh import mesh_flexure
 from flexval.reducedmodels import solve_path
 from flexval.reducedmodels.core import local_hessian
-from flexval.reducedmodels.newton import FixedLoad, solve_step
+from flexval.reducedmodels.newton import FixedLoad, solve
 from flexval.validation.continuum import ContinuumConnector
 from flexval.validation.continuum.material import make_law
 from flexval.validation.continuum.run import build_system
@@ -114,7 +114,7 @@ def test_strip_in_tension_has_the_plane_law(law, b_over_h, plane):
     system = build_system(mech, 1, law=law, plane=plane)
     force = eps * E_MOD * b_over_h * h * h  # plane-stress axial strain eps
     case = LoadCase("pull", (Force("2", np.array([length, 0.0]), 0.0, force),))
-    q, _, _, why, _ = solve_step(
+    q, _, _, why, *_ = solve(
         FixedLoad(system, system.loads(case), 1.0), system.initial_state(), system.settings
     )
     assert q is not None, why
@@ -295,7 +295,7 @@ def test_small_loads_give_the_thin_curved_beam_compliance(r_over_h):
     for k, load in enumerate(unit_loads):
         scale = 1e-7 / ref[k, k]  # displacement ~1e-7 of the size: linear
         loads = system.loads(LoadCase("u", (load(scale),)))
-        q, _, _, why, _ = solve_step(
+        q, _, _, why, *_ = solve(
             FixedLoad(system, loads, 1.0), system.initial_state(), system.settings
         )
         assert q is not None, why
