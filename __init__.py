@@ -28,8 +28,8 @@ _HOMES = {
     "load_scene": "flexval.geometry.scene",
     "Scene": "flexval.geometry.scene",
     "parse_model": "flexval.reducedmodels.catalogue",
-    "LoadPath": "flexval.reducedmodels.loadpath",
-    "read_results": "flexval.reducedmodels.loadpath",
+    "LoadPath": "flexval.reducedmodels.core.loadpath",
+    "read_results": "flexval.reducedmodels.core.loadpath",
     "run_model": "flexval.validation.run",
 }
 """Module of each name the package offers at its top."""

@@ -3,7 +3,7 @@
 The same path (a scene's load case, default the open chain under f+) is traced N times: one
 by one through the model's runner (:func:`flexval.reducedmodels.models.run_reduced`: build,
 trace, record), and as one batch of N copies
-(:func:`flexval.reducedmodels.batch.run_batch`: the copies share one System, one assembly
+(:func:`flexval.reducedmodels.core.batch.run_batch`: the copies share one System, one assembly
 and one factorisation per Newton iteration; ``ee``'s linear responses are solved and recorded
 together; their connectors are built once, since the copies are of one mechanism). With
 ``--distinct`` every copy is a mechanism of its own (each flexure's section scaled by a factor
@@ -34,10 +34,10 @@ import time
 import numpy as np
 
 from flexval.geometry import load_scene
-from flexval.reducedmodels.batch import run_batch
 from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.core.batch import run_batch
+from flexval.reducedmodels.core.threads import limit_threads
 from flexval.reducedmodels.models import run_reduced
-from flexval.reducedmodels.threads import limit_threads
 
 MODELS = ("ee", "dcmm:1", "dcmm:3", "prbm", "beam:20", "beam:100")
 """The reduced models timed (the paper's four, at their usual resolutions)."""

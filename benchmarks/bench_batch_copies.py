@@ -2,14 +2,14 @@
 
 Runs one load case of a scene with each model alone (median of the repeats)
 and as batches of N identical copies through the report's own timing code
-(:func:`flexval.validation.batchtiming.batch_paths`: the copies' Systems built,
+(:func:`flexval.validation.studies.batchtiming.batch_paths`: the copies' Systems built,
 traced together and recorded inside the clock), and prints per N the
 median wall time of the batch divided by N, in ms, with the fastest repeat
 beside it. Where that cost stops falling, the per-batch costs are spread thin:
-the figures behind :data:`flexval.validation.batchtiming.BATCH_COPIES`,
-:data:`~flexval.validation.batchtiming.BATCH_LADDER`,
-:data:`~flexval.validation.batchtiming.BATCH_GAIN` and
-:data:`~flexval.validation.batchtiming.BATCH_UNKNOWNS`. Each model is warmed up
+the figures behind :data:`flexval.validation.studies.batchtiming.BATCH_COPIES`,
+:data:`~flexval.validation.studies.batchtiming.BATCH_LADDER`,
+:data:`~flexval.validation.studies.batchtiming.BATCH_GAIN` and
+:data:`~flexval.validation.studies.batchtiming.BATCH_UNKNOWNS`. Each model is warmed up
 first (one path alone, one batch of two) so that loading its compiled kernels
 is not timed.
 
@@ -26,8 +26,8 @@ import statistics
 
 from flexval.geometry import load_scene
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.validation.batchtiming import batch_paths
 from flexval.validation.run import run_model
+from flexval.validation.studies.batchtiming import batch_paths
 
 MODELS = ("dcmm:1", "beam:20", "beam:100", "prbm")
 SIZES = (10, 30, 100, 300, 1000)

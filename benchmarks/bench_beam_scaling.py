@@ -29,9 +29,9 @@ import time
 from flexval.geometry import load_scene
 from flexval.reducedmodels import run_reduced
 from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.core.newton import FixedLoad
+from flexval.reducedmodels.core.tracer import LoadControl, trace
 from flexval.reducedmodels.models import build_system
-from flexval.reducedmodels.newton import FixedLoad
-from flexval.reducedmodels.tracer import LoadControl, trace
 
 SIZES = (10, 20, 50, 100, 200, 500, 1000, 2000)
 ITERATION_BUDGET = 0.2

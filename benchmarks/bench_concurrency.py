@@ -12,7 +12,7 @@ used, so that a load that changes meanwhile does not pass for a slow-down.
 Times are wall seconds: measure on an otherwise idle machine.
 
 It does so twice: with flexval's thread control (the default cap of
-``flexval.reducedmodels.threads``) and without it (``FLEXVAL_BLAS_THREADS=0``).
+``flexval.reducedmodels.core.threads``) and without it (``FLEXVAL_BLAS_THREADS=0``).
 ``OPENBLAS_NUM_THREADS``, ``OMP_NUM_THREADS`` and ``MKL_NUM_THREADS`` are
 removed from the workers' environment so that flexval's control is what
 limits the pools: without it OpenBLAS starts one busy-waiting thread per

@@ -8,7 +8,7 @@ the other processes) and where the time goes: set-up (Gmsh mesh or cache,
 scikit-fem basis), the element kernels (``ElementKernel.evaluate``), the
 rest of the assembly (the connector group's scatter into the band storage
 and the core's), the banded factorisation and solves of the tangent
-(``flexval.reducedmodels.tangent``), the section-wise predictor and Newton update
+(``flexval.reducedmodels.core.tangent``), the section-wise predictor and Newton update
 (``ContinuumGroup.predict_internal`` / ``update_internal``) and the rest.
 The breakdown comes from cProfile over the same run (its overhead is a few
 per cent: few, heavy calls).
@@ -25,7 +25,7 @@ import time
 
 from flexval.geometry import SceneError, load_scene
 from flexval.reducedmodels import System
-from flexval.reducedmodels.tangent import BandedTangent, SparseTangent
+from flexval.reducedmodels.core.tangent import BandedTangent, SparseTangent
 from flexval.validation.continuum import DEFAULT_LEVEL, run_continuum
 from flexval.validation.continuum.group import ContinuumGroup
 from flexval.validation.continuum.run import build_system

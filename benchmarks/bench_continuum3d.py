@@ -12,7 +12,7 @@ start, rotation per end moment and deflection per end force) refined in all
 three directions (mesh levels 0, 1, 2: in-plane elements and layers through
 the depth halved together), in plane only (4 layers) and through the depth
 only (level 1 in plane): observed order, Richardson extrapolation and GCI
-(:func:`flexval.validation.convergence.richardson`).
+(:func:`flexval.validation.studies.convergence.richardson`).
 
 Usage: ``python benchmarks/bench_continuum3d.py table [--levels 0 1] [--cases m+ m- f+ f-]
 [--json out.json]`` or ``python benchmarks/bench_continuum3d.py convergence``.
@@ -103,9 +103,9 @@ def convergence() -> None:
     from flexval.geometry.extrude import boundary_layer, extrude, layer_bounds, layers
     from flexval.geometry.mechanism import FlexureSpec, assemble
     from flexval.geometry.outline import flexure_mesh
-    from flexval.reducedmodels.core import local_hessian
+    from flexval.reducedmodels.core.system import local_hessian
     from flexval.validation.continuum.connector3d import Continuum3DConnector
-    from flexval.validation.convergence import richardson
+    from flexval.validation.studies.convergence import richardson
 
     arc = Arc((0.0, 0.0), 3.0, math.radians(90.0), math.radians(30.0))
     h, b = 0.1, 1.0

@@ -24,11 +24,11 @@ import flexval.validation  # noqa: F401  (registers the continuum family: --mode
 from flexval.geometry import MassData, load_scene
 from flexval.geometry.inertia import PLA_DENSITY
 from flexval.geometry.timelaw import TimeLaw
+from flexval.reducedmodels.analyses.dynamics import DynamicSettings, Rayleigh, solve_dynamic
+from flexval.reducedmodels.analyses.modes import natural_modes
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
+from flexval.reducedmodels.core.recorder import solve_path
 from flexval.reducedmodels.models import build_system
-from flexval.reducedmodels.modes import natural_modes
-from flexval.reducedmodels.recorder import solve_path
 
 MODELS = ("dcmm:1", "dcmm:2", "prbm", "beam:20", "beam:100")
 RAMP_PERIODS, HOLD_PERIODS = 40.0, 10.0

@@ -1,7 +1,7 @@
 """flexval ``beam:N`` side by side with OpenSeesPy's corotational beams, in one process.
 
 The models, the orders of timing and what the columns mean are in
-:mod:`flexval.validation.peers`. Per load case: both median wall times of the
+:mod:`flexval.validation.studies.peers`. Per load case: both median wall times of the
 interleaved runs (model build included), OpenSees' sub-steps per level,
 the ratio, the agreement of the end values in per cent (the bar: 0.01 %),
 the ratio of the fastest CPU times (``time.process_time``: on a shared
@@ -22,7 +22,7 @@ import statistics
 import sys
 
 from flexval.geometry import load_scene
-from flexval.validation.peers import (
+from flexval.validation.studies.peers import (
     AGREEMENT_BAR,
     PeerUnavailable,
     compare_with_opensees,

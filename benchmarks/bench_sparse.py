@@ -8,7 +8,7 @@ repeats):
 * ``superlu x2`` -- a pivoting SuperLU for the solve and a second, symmetric-mode
   SuperLU for the inertia (what the sparse storage's fallback path does,
   written out here);
-* ``ldl`` -- :class:`flexval.reducedmodels.tangent.SparseTangent`: one LDL^T
+* ``ldl`` -- :class:`flexval.reducedmodels.core.tangent.SparseTangent`: one LDL^T
   (QDLDL with the pattern's analysis reused, or one symmetric-mode SuperLU
   where the factor fills in beyond ``LDL_FILL_LIMIT`` entries per column).
 
@@ -44,8 +44,8 @@ import scipy.sparse.linalg as spla
 
 from flexval.geometry import Force, LoadCase, Material, Section, Segment
 from flexval.geometry.mechanism import FlexureSpec, assemble
-from flexval.reducedmodels import tangent as storage
-from flexval.reducedmodels.tangent import SparseAnalysis, SparseTangent
+from flexval.reducedmodels.core import tangent as storage
+from flexval.reducedmodels.core.tangent import SparseAnalysis, SparseTangent
 from flexval.validation.continuum.run import build_system
 
 

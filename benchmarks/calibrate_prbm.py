@@ -1,6 +1,6 @@
 """Offline calibration of the PRBM table ``reducedmodels/data/prbm_table.json``.
 
-Fits rho(arc angle) of :mod:`flexval.reducedmodels.prbm` against the elastica. It is
+Fits rho(arc angle) of :mod:`flexval.reducedmodels.prbm.connector` against the elastica. It is
 not part of the runtime package (nothing under ``reducedmodels`` imports it);
 the runtime only reads the table it writes. Run from the repository root
 
@@ -14,7 +14,7 @@ samples, the Su 2009 figures) in CI, so it stays runnable.
 
 What is fitted
 --------------
-The chain of :mod:`flexval.reducedmodels.prbm` matches the arc's linear compliance
+The chain of :mod:`flexval.reducedmodels.prbm.connector` matches the arc's linear compliance
 exactly for every rho; rho (the share of the compliance L/EI lumped in the
 two outer joints) is chosen per arc angle 2 gamma so that the chain best
 follows a nonlinear beam at large deflection.
@@ -121,7 +121,7 @@ from scipy.optimize import minimize_scalar
 import flexval.reducedmodels
 from flexval.geometry import Arc, Segment
 from flexval.geometry.files import write_bytes
-from flexval.reducedmodels.prbm import (
+from flexval.reducedmodels.prbm.parameters import (
     TABLE_RESOURCE,
     PrbmParameters,
     joint_positions,
@@ -507,7 +507,7 @@ def build_table(settings: FitSettings, progress: bool = True) -> dict:
     return {
         "metadata": {
             "description": "Symmetric 3R PRBM of uniform arcs: rho(arc angle) with exact "
-            "linear compliance (see flexval.reducedmodels.prbm).",
+            "linear compliance (see flexval.reducedmodels.prbm.connector).",
             "parameter": "rho = 2 c1 / (L/EI), share of the rotational compliance in the two "
             "outer joints; x1, y1, y2 (units of L, ellipse frame {C, e1, e2}) "
             "and kappa1, kappa2 (units of EI/L) follow from rho and the angle.",

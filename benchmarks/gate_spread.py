@@ -18,7 +18,7 @@ from flexval.geometry import load_scene
 from flexval.reducedmodels import SolverSettings, build_system, parse_model, solve_path
 from flexval.reducedmodels.catalogue import LINEAR
 from flexval.reducedmodels.models import solve_linear
-from flexval.validation.compare import errors
+from flexval.validation.studies.compare import errors
 
 GATES = Path(__file__).resolve().parents[1] / "reports" / "paper" / "gates.json"
 GATED = ("end_disp_vec", "end_rot", "path_disp", "path_rot")

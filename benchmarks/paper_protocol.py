@@ -6,10 +6,10 @@ minimize dynamic effects", and errors read at the end of the ramp against
 FEM100. Its open-chain f- figures for FEM20 and DCMM (Table 2) are far above
 our static ones. This script asks whether a dynamic run explains them: for
 ``beam:20``, ``dcmm:1`` and the reference ``beam:100`` it integrates the
-case (``flexval.reducedmodels.dynamics``, generalised-alpha, rho_inf 0.9) with the
+case (``flexval.reducedmodels.analyses.dynamics``, generalised-alpha, rho_inf 0.9) with the
 load ramped by Eq. 15 from t = 0 to the ramp time t1 and stops at t1 (the
 end of the ramp), over a grid of ramp times (multiples of the reference's
-first natural period at rest, from ``flexval.reducedmodels.modes``) and damping
+first natural period at rest, from ``flexval.reducedmodels.analyses.modes``) and damping
 ratios (Rayleigh damping with that ratio exactly at each model's two lowest
 natural frequencies at rest). Each model's end-of-ramp state is compared
 with the reference's under the SAME protocol and with the reference's
@@ -17,22 +17,22 @@ static end state; the static errors are listed too.
 
 Masses: the scene's own mass data if it has any, else PLA flexures
 (density 1.24e-9 t/mm^3) with massless links (the bodies carry the
-flexures' end pieces; ``flexval.reducedmodels.inertia``). Errors in percent:
+flexures' end pieces; ``flexval.reducedmodels.core.inertia``). Errors in percent:
 end-of-ramp displacement-vector error of the target point and rotation
-error of the target body (``flexval.validation.compare``'s ``end_disp_vec`` and
+error of the target body (``flexval.validation.studies.compare``'s ``end_disp_vec`` and
 ``end_rot``; the vector error is the metric that reproduces the paper's
 "disp" column elsewhere).
 
 Run: ``python benchmarks/paper_protocol.py [--ramps 2 4 8 12 16 24 32]
 [--ratios 0.05 0.2 1] [--error-tol 1e-8] [--check-factor 10]
 [--out reports/dynamics]``. ``--error-tol`` is the integrator's local error bound
-(:class:`flexval.reducedmodels.dynamics.DynamicSettings`; :data:`ERROR_TOL` says why the
+(:class:`flexval.reducedmodels.analyses.dynamics.DynamicSettings`; :data:`ERROR_TOL` says why the
 protocol's is tighter than ``flexval run``'s); every run is repeated with
 ``--check-factor`` times it, and the change of each cell is printed as its
 integration error estimate (0: no check runs, half the time). Writes
 ``protocol.md`` (results; stable for a given grid and tolerance), ``protocol.json``
 (the same results for ``flexval report --protocol``, with the code version and the
-tolerance; format in :mod:`flexval.validation.protocolsection`) and ``timings.md`` (wall
+tolerance; format in :mod:`flexval.validation.report.protocol`) and ``timings.md`` (wall
 times: machine-dependent) atomically.
 """
 
@@ -48,16 +48,17 @@ from pathlib import Path
 from flexval.geometry import LoadCase, MassData, Scene, load_scene
 from flexval.geometry.inertia import PLA_DENSITY
 from flexval.geometry.timelaw import TimeLaw
+from flexval.reducedmodels.analyses.dynamics import DynamicSettings, Rayleigh, solve_dynamic
+from flexval.reducedmodels.analyses.modes import natural_modes
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.core import SolverError, System
-from flexval.reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
+from flexval.reducedmodels.core.recorder import solve_path
+from flexval.reducedmodels.core.settings import SolverError
+from flexval.reducedmodels.core.system import System
 from flexval.reducedmodels.models import build_system
-from flexval.reducedmodels.modes import natural_modes
-from flexval.reducedmodels.recorder import solve_path
 from flexval.validation.cache import code_version
-from flexval.validation.compare import denominator, errors, paper_percent, scale_of
 from flexval.validation.outputs import write_json, write_text
-from flexval.validation.protocolsection import PROTOCOL_FORMAT
+from flexval.validation.report.protocol import PROTOCOL_FORMAT
+from flexval.validation.studies.compare import denominator, errors, paper_percent, scale_of
 
 RHO_INF = 0.9
 """Spectral radius at infinite frequency of the generalised-alpha scheme (as ``flexval run``)."""
@@ -105,9 +106,10 @@ class EndState:
 def end_errors(model: EndState, ref: EndState, scale: dict[str, float]) -> tuple[float, float]:
     """Displacement-vector and rotation errors (percent) of ``model`` against ``ref``.
 
-    Same formulas as ``end_disp_vec`` and ``end_rot`` of :func:`flexval.validation.compare.errors`,
+    Same formulas as ``end_disp_vec`` and ``end_rot`` of
+    :func:`flexval.validation.studies.compare.errors`,
     a reference value near zero measured against ``scale`` (``{"disp": mm, "rot": rad}``,
-    :func:`flexval.validation.compare.scale_of` of the reference's static path).
+    :func:`flexval.validation.studies.compare.scale_of` of the reference's static path).
     """
     d_ref = math.hypot(ref.dx, ref.dy)
     return (
@@ -255,7 +257,7 @@ def rows(runs: dict[str, ModelRuns], reference: str, models: list[str]) -> list[
 
 def reference_scale(runs: dict[str, ModelRuns], reference: str) -> dict[str, float]:
     """The scales (mm, rad) every end state is measured against: those of the reference's
-    static path on the mechanism's size (:func:`flexval.validation.compare.scale_of`)."""
+    static path on the mechanism's size (:func:`flexval.validation.studies.compare.scale_of`)."""
     ref = runs[reference]
     return scale_of(ref.static_path, ref.system.mechanism.size())
 
@@ -265,7 +267,7 @@ def static_errors(
 ) -> dict[str, tuple[float, float]]:
     """Static end-of-ramp errors (disp vector, rot; percent) by model.
 
-    Computed with :mod:`flexval.validation.compare`.
+    Computed with :mod:`flexval.validation.studies.compare`.
     """
     out = {}
     for m in models:

@@ -10,7 +10,7 @@ each beam resolution. Printed per N:
 * ``lambda/|K|``: what a rule "negative below -1e-12 |K|" compares with
   1e-12: it falls as N^-3 and hides the buckled state from about N = 400;
 * ``pivot margin``: the critical pivot d_k over its own round-off bound
-  gamma sigma_k (:mod:`flexval.reducedmodels.stability`), below the load
+  gamma sigma_k (:mod:`flexval.reducedmodels.core.stability`), below the load
   (positive) and above it (negative); the rule counts a pivot whose margin is
   below -1, and the margin stays far from 1 in size while N grows;
 * the rule's count above and below the load.
@@ -30,9 +30,9 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 import flexval
-from flexval.reducedmodels import stability
+from flexval.reducedmodels.core import stability
+from flexval.reducedmodels.core.newton import FixedLoad, solve
 from flexval.reducedmodels.models import build_system
-from flexval.reducedmodels.newton import FixedLoad, solve
 
 COLUMN = Path(__file__).resolve().parents[1] / "tests" / "scenes" / "euler_column.toml"
 

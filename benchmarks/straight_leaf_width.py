@@ -25,7 +25,7 @@ from flexval.geometry.scene import parse_scene, read_scene_data
 from flexval.reducedmodels.catalogue import parse_model
 from flexval.validation.cache import code_version
 from flexval.validation.outputs import write_json
-from flexval.validation.stiffness import run_stiffness
+from flexval.validation.studies.stiffness import run_stiffness
 
 SOLID = "continuum:1[3d]"
 """The 3D reference the fit is made against."""

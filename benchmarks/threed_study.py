@@ -4,11 +4,11 @@ reduced models with and without their width options.
 For every load case of each scene it traces ``continuum:L[3d]`` on the given mesh
 levels (coarse to fine), the 2D continuum in plane stress and in plane strain,
 and the reduced models, and measures each end-of-load error against the finest
-3D level that reached full load (:func:`flexval.validation.compare.errors`).
+3D level that reached full load (:func:`flexval.validation.studies.compare.errors`).
 It writes, into ``--out`` (default ``reports/threed``):
 
 - ``threed.json``: the results (format
-  :data:`flexval.validation.threedsection.THREED_FORMAT`, no timings), read by
+  :data:`flexval.validation.report.threed.THREED_FORMAT`, no timings), read by
   ``flexval report --threed``;
 - ``threed.md``: the full table (every level's end values and unknowns);
 - ``timings.md``: the wall time of every run (s), apart so that a rerun
@@ -35,12 +35,12 @@ from flexval.geometry import Scene, load_scene
 from flexval.geometry.anticlastic import searle_parameters
 from flexval.reducedmodels import LoadPath
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.core import SolverError
+from flexval.reducedmodels.core.settings import SolverError
 from flexval.validation.cache import code_version
-from flexval.validation.compare import errors
 from flexval.validation.outputs import write_json, write_text
+from flexval.validation.report.threed import THREED_FORMAT
 from flexval.validation.run import run_model
-from flexval.validation.threedsection import THREED_FORMAT
+from flexval.validation.studies.compare import errors
 
 PLANES = {"stress": "continuum:1", "strain": "continuum:1[plane=strain]"}
 """The 2D idealisations: the report's default reference level in plane stress and strain."""

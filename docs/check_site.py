@@ -29,8 +29,8 @@ def _text(site: Path, page: str) -> str:
 def missing_items(site: Path) -> list[str]:
     """What the built ``site`` lacks, one line per item (empty: nothing)."""
     from flexval.geometry.scenefields import SCENE_TABLES
-    from flexval.validation.clireference import commands
-    from flexval.validation.sweep.spec import AXES, SWEEP
+    from flexval.validation.cli.reference import commands
+    from flexval.validation.sweep.fields import AXES, SWEEP
 
     checks = {
         "reference/scene": sorted({f.name for t in SCENE_TABLES for f in t.fields}),

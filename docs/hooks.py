@@ -4,11 +4,11 @@
   line of its own) are replaced by text generated from the code, so the
   references cannot drift from what the code accepts: the scene file fields
   (:func:`flexval.geometry.scene.field_reference`), the sweep file fields
-  (:func:`flexval.validation.sweep.spec.field_reference`), the command line
-  (:func:`flexval.validation.clireference.cli_reference`), the model catalogue,
+  (:func:`flexval.validation.sweep.fields.field_reference`), the command line
+  (:func:`flexval.validation.cli.reference.cli_reference`), the model catalogue,
   the built-in scene and sweep files, a scene file of the repository
   (``<!-- flexval:toml PATH -->``, or any text file: ``<!-- flexval:file PATH -->``), the
-  gates file fields (:func:`flexval.validation.gatefile.field_reference`) and a
+  gates file fields (:func:`flexval.validation.studies.gatefile.field_reference`) and a
   ``flexval`` command's output, run while
   the site is built (``<!-- flexval:command ARGS -->``). An unknown marker
   fails the build.
@@ -147,9 +147,9 @@ def _source_file(path: str) -> str:
 
 def _generators() -> dict:
     from flexval.geometry.scene import field_reference as scene_reference
-    from flexval.validation.clireference import cli_reference
-    from flexval.validation.gatefile import field_reference as gates_reference
-    from flexval.validation.sweep.spec import field_reference as sweep_reference
+    from flexval.validation.cli.reference import cli_reference
+    from flexval.validation.studies.gatefile import field_reference as gates_reference
+    from flexval.validation.sweep.fields import field_reference as sweep_reference
 
     return {
         "scene-reference": scene_reference,

@@ -4,7 +4,7 @@ What it shows
 -------------
 * many copies of one mechanism, each with its own dimensions: the open chain with
   every arc's thickness h drawn from N(0.1, 0.002) mm (200 seeded draws);
-* :func:`flexval.reducedmodels.batch.run_batch` tracing them with ``dcmm:1`` under
+* :func:`flexval.reducedmodels.core.batch.run_batch` tracing them with ``dcmm:1`` under
   f+ as one batch: one System, one assembly and one factorisation per Newton
   iteration for every copy, each copy's tests and step decisions its own;
 * the same copies traced one by one give the same paths (to round-off: checked
@@ -31,7 +31,7 @@ import numpy as np
 
 from flexval.geometry import load_scene
 from flexval.reducedmodels import parse_model
-from flexval.reducedmodels.batch import run_batch
+from flexval.reducedmodels.core.batch import run_batch
 from flexval.reducedmodels.models import run_reduced
 
 DRAWS = 200

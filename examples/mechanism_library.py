@@ -98,7 +98,7 @@ def branch_trace(scene) -> flexval.LoadPath:
     """The arc-length trace of the first case, switched at the first bifurcation onto the
     crossing branch, to where the branch's motion turns back (mm, N)."""
     from flexval.reducedmodels import SolverError
-    from flexval.validation.limits import trace_arclength
+    from flexval.validation.studies.limits import trace_arclength
 
     spec, case = flexval.parse_model(MODEL), scene.load_cases[0]
     try:

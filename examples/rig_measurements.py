@@ -9,7 +9,7 @@ What it shows
   (:func:`flexval.geometry.measured.read_measurement`: a bad cell is refused naming
   its line and column);
 * tracing every model through the measured loads and scoring it
-  (:func:`flexval.validation.measuredcompare.compare_measurement`, what
+  (:func:`flexval.validation.studies.measuredcompare.compare_measurement`, what
   ``flexval compare`` runs), and the figure of the measurement against the models.
 
 The "rig" here is synthetic: ``beam:100`` on the open chain's f+ case, read at
@@ -34,9 +34,9 @@ import numpy as np
 from flexval.geometry import load_scene
 from flexval.geometry.measured import read_measurement
 from flexval.reducedmodels import parse_model
-from flexval.validation.measuredcompare import compare_measurement
-from flexval.validation.measuredreport import plot, text_lines
+from flexval.validation.report.measured import plot, text_lines
 from flexval.validation.run import run_model
+from flexval.validation.studies.measuredcompare import compare_measurement
 
 RIG_MODEL = "beam:100"
 """The model standing in for the rig."""

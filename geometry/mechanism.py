@@ -49,7 +49,7 @@ class Material:
         nu.
     yield_strength : float or None
         sigma_y, MPa: the outer-fibre stress at which the flexure first yields
-        (:mod:`flexval.validation.yieldpoint`); None: not given.
+        (:mod:`flexval.validation.studies.yieldpoint`); None: not given.
     fatigue_strength : float or None
         sigma_f, MPa, below ``yield_strength``: the stress amplitude the
         flexure endures without fatigue failure; None: not given.

@@ -57,16 +57,14 @@ from typing import Any
 import numpy as np
 
 from .errors import COMMAND_LINE, SceneError, did_you_mean
-from .fields import REQUIRED, Field, Table
+from .fields import Table
 from .flexurefields import check_thickness_fits, read_notch, read_spline, read_thickness, section_of
 from .inertia import MassData, parse_body_mass, parse_density, parse_gravity
 from .loads import LOAD_KINDS, Displacement, Force, LoadCase, Moment
-from .magnitudes import SMALLEST_NORMAL
 from .measured import Measurement, read_measurement
 from .mechanism import FlexureSpec, Material, Mechanism, PinSpec, Section, assemble
 from .scenefields import (
     BODIES,
-    COORDINATE_LIMIT,
     FLEXURE_SHAPES,
     FLEXURES,
     GROUND,
@@ -75,7 +73,6 @@ from .scenefields import (
     MATERIAL,
     MAX_NAME_LENGTH,
     MEASUREMENTS,
-    NUMBER_LIMIT,
     OUTPUTS,
     PINS,
     REQUEST,
@@ -85,6 +82,7 @@ from .scenefields import (
     field_reference,
 )
 from .shapes import Arc, Segment
+from .tablereader import TableReader, read_utf8
 from .timelaw import parse_time_law
 
 NO_DATA = (
@@ -127,10 +125,6 @@ __all__ = [
     "parse_scene",
     "read_scene_data",
 ]
-
-_UNIT_WORDS = {"deg": "degrees"}
-"""How a range check's message names a unit, where not by its symbol."""
-_UNSET: Any = object()
 
 
 @dataclass(frozen=True)
@@ -224,173 +218,13 @@ class Scene:
         )
 
 
-class _Reader:
-    """Typed, checked access to a TOML table; every error names the field."""
-
-    def __init__(self, source: str):
-        self.source = source
-
-    def fail(self, field: str, value: Any, reason: str) -> None:
-        raise SceneError(self.source, field, value, reason)
-
-    def table(self, data: dict, key: str, where: str, required: bool = True) -> dict:
-        if key not in data:
-            if required:
-                self.fail(f"{where}{key}", None, "missing table")
-            return {}
-        if not isinstance(data[key], dict):
-            self.fail(f"{where}{key}", data[key], "must be a table")
-        return data[key]
-
-    def number(
-        self,
-        data: dict,
-        key: str,
-        where: str,
-        *,
-        default: float | None = None,
-        positive: bool = False,
-        limit: float = NUMBER_LIMIT,
-    ) -> float:
-        field = f"{where}{key}"
-        if key not in data:
-            if default is None:
-                self.fail(field, None, "missing value")
-            return default
-        v = data[key]
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            self.fail(field, v, "must be a number")
-        v = float(v)
-        if not math.isfinite(v):
-            self.fail(field, v, "must be finite")
-        if abs(v) > limit:
-            self.fail(field, v, f"absurd magnitude (|value| > {limit:g})")
-        if positive and v <= 0.0:
-            self.fail(field, v, "must be positive")
-        if v != 0.0 and abs(v) < SMALLEST_NORMAL:
-            self.fail(
-                field,
-                v,
-                f"is subnormal (|value| < {SMALLEST_NORMAL:.3g}): too small to compute with",
-            )
-        return v
-
-    def point(self, data: dict, key: str, where: str) -> np.ndarray:
-        field = f"{where}{key}"
-        if key not in data:
-            self.fail(field, None, "missing point [x, y]")
-        v = data[key]
-        if not (isinstance(v, list) and len(v) == 2):
-            self.fail(field, v, "must be a point [x, y] in mm")
-        return np.array(
-            [
-                self.number({f"{key}[{i}]": c}, f"{key}[{i}]", where, limit=COORDINATE_LIMIT)
-                for i, c in enumerate(v)
-            ]
-        )
-
-    def name(self, data: dict, key: str, where: str) -> str:
-        field = f"{where}{key}"
-        if key not in data:
-            self.fail(field, None, "missing name")
-        v = data[key]
-        if isinstance(v, bool) or not isinstance(v, (str, int)) or str(v).strip() == "":
-            self.fail(field, v, "must be a non-empty name (string or integer)")
-        return str(v)
-
-    def array(self, data: dict, key: str, where: str, what: str) -> list:
-        """``data[key]`` if it is an array (missing: empty), else a SceneError."""
-        v = data.get(key, [])
-        if not isinstance(v, list):
-            self.fail(f"{where}{key}", v, f"must be an array of {what}")
-        return v
-
-    def item_table(self, item: Any, field: str) -> dict:
-        """An array element that must be a table."""
-        if not isinstance(item, dict):
-            self.fail(field, item, "must be a table")
-        return item
-
-    def body_pair(self, data: dict, where: str, what: str) -> list[str]:
-        """The two distinct body names of a flexure or pin."""
-        bodies = data.get("bodies")
-        if not (isinstance(bodies, list) and len(bodies) == 2):
-            self.fail(f"{where}bodies", bodies, "must list the two bodies it joins, e.g. [1, 2]")
-        bodies = [self.name({"b": b}, "b", f"{where}bodies.") for b in bodies]
-        if bodies[0] == bodies[1]:
-            self.fail(f"{where}bodies", bodies, f"a {what} must join two different bodies")
-        return bodies
-
-    def known_keys(
-        self, data: dict, table: Table | set[str], where: str, variant: str | None = None
-    ) -> None:
-        """Refuse a field of ``data`` that ``table`` (of ``variant``) does not declare."""
-        allowed = table.keys(variant) if isinstance(table, Table) else table
-        for k in data:
-            if k not in allowed:
-                self.fail(
-                    f"{where}{k}",
-                    data[k],
-                    f"unknown field{did_you_mean(k, allowed)}; expected one of {sorted(allowed)}",
-                )
-
-    def value(self, data: dict, field: Field, where: str, default: Any = _UNSET) -> Any:
-        """``data``'s value of the declared ``field``, read and checked as declared.
-
-        ``default`` overrides the declared default (a default the parser computes,
-        such as a flexure's section). Fields of kind number, point, name and choice
-        are read here; a field of another kind is read by its table's own code.
-        """
-        d = field.default if default is _UNSET else default
-        if field.name not in data and d is not REQUIRED:
-            return d
-        kind = field.kind
-        if kind == "number":
-            v = self.number(
-                data,
-                field.name,
-                where,
-                positive=field.positive,
-                limit=NUMBER_LIMIT if field.limit is None else field.limit,
-            )
-            self.in_range(field, v, where)
-            return v
-        if kind == "point":
-            return self.point(data, field.name, where)
-        if kind == "name":
-            return self.name(data, field.name, where)
-        if kind == "choice":
-            v = data.get(field.name)
-            if v not in field.choices:
-                words = [repr(c) for c in field.choices]
-                text = " or ".join([", ".join(words[:-1]), words[-1]] if len(words) > 1 else words)
-                self.fail(
-                    f"{where}{field.name}", v, f"must be {text}{did_you_mean(v, field.choices)}"
-                )
-            return v
-        raise TypeError(f"field {field.name!r} ({kind}) is read by its table's own code")
-
-    def in_range(self, field: Field, v: float, where: str) -> None:
-        """Refuse a number outside ``field``'s declared interval or bounds."""
-        unit = _UNIT_WORDS.get(field.unit, field.unit)
-        unit = f" {unit}" if unit else ""
-        if field.interval is not None:
-            lo, hi = field.interval
-            if not lo < v < hi:
-                self.fail(f"{where}{field.name}", v, f"must be in ({lo:g}, {hi:g}){unit}")
-        lo = -math.inf if field.minimum is None else field.minimum
-        hi = math.inf if field.maximum is None else field.maximum
-        if not lo <= v <= hi:
-            self.fail(f"{where}{field.name}", v, f"must be from {lo:g} to {hi:g}{unit}")
-
-
 def _shapes_text(shapes) -> str:
     """``a segment or a notch``: the shapes (``shape`` values) in words."""
     words = [f"{'an' if s[0] in 'aeiou' else 'a'} {s}" for s in shapes]
     return " or ".join([", ".join(words[:-1]), words[-1]] if len(words) > 1 else words)
 
 
-def _refuse_fields_of_other_shapes(rd: _Reader, f: dict, where: str, kind: str) -> None:
+def _refuse_fields_of_other_shapes(rd: TableReader, f: dict, where: str, kind: str) -> None:
     """Refuse a field that belongs to another shape than ``kind`` (its declared variants).
 
     Without ``shape`` the flexure is an arc: fields of another shape there mean the
@@ -424,7 +258,7 @@ def _refuse_fields_of_other_shapes(rd: _Reader, f: dict, where: str, kind: str) 
     )
 
 
-def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> FlexureSpec:
+def _flexure_spec(rd: TableReader, f: dict, k: int, default_section: Section) -> FlexureSpec:
     if not isinstance(f, dict):
         rd.fail(f"flexures[{k}]", f, "must be a table")
     name = rd.value(f, FLEXURES["name"], f"flexures[{k}].")
@@ -468,7 +302,7 @@ def _flexure_spec(rd: _Reader, f: dict, k: int, default_section: Section) -> Fle
     )
 
 
-def _pin_spec(rd: _Reader, p: dict, k: int) -> PinSpec:
+def _pin_spec(rd: TableReader, p: dict, k: int) -> PinSpec:
     """One ``[[pins]]`` table: a revolute joint between two different bodies at a point."""
     if not isinstance(p, dict):
         rd.fail(f"pins[{k}]", p, "must be a table")
@@ -481,7 +315,7 @@ def _pin_spec(rd: _Reader, p: dict, k: int) -> PinSpec:
 
 
 def _load_component(
-    rd: _Reader,
+    rd: TableReader,
     c: dict,
     where: str,
     target_body: str,
@@ -534,7 +368,7 @@ _DRIVE_KEYS = ("dx", "dy", "rotation_deg")
 
 
 def _point_of(
-    rd: _Reader,
+    rd: TableReader,
     c: dict,
     where: str,
     body: str,
@@ -555,7 +389,7 @@ def _point_of(
 
 
 def _displacement(
-    rd: _Reader,
+    rd: TableReader,
     c: dict,
     where: str,
     body: str,
@@ -593,7 +427,7 @@ _UNSAFE_NAME_CHARACTERS = set('/\\<>:"|?*')
 """Characters that are path separators or not allowed in file names on common systems."""
 
 
-def _scene_name(rd: _Reader, value: Any) -> str:
+def _scene_name(rd: TableReader, value: Any) -> str:
     """The scene's name, which other commands use as a file-name stem: it must be safe as one."""
     if not isinstance(value, str) or not value.strip():
         rd.fail("name", value, "must be a non-empty string")
@@ -618,7 +452,7 @@ def _scene_name(rd: _Reader, value: Any) -> str:
     return value
 
 
-def _material(rd: _Reader, data: dict) -> tuple[Material, dict]:
+def _material(rd: TableReader, data: dict) -> tuple[Material, dict]:
     """``[material]``: E (MPa), nu, the optional yield and fatigue strengths (MPa, the
     fatigue strength below the yield strength), and the raw table (its density is read
     later)."""
@@ -639,7 +473,7 @@ def _material(rd: _Reader, data: dict) -> tuple[Material, dict]:
     return Material(E, nu, yield_strength, fatigue), mat
 
 
-def _section(rd: _Reader, data: dict) -> Section:
+def _section(rd: TableReader, data: dict) -> Section:
     """``[section]``: the default depth b and thickness h of every flexure, mm."""
     sec = rd.table(data, "section", "")
     rd.known_keys(sec, SECTION, "section.")
@@ -649,7 +483,7 @@ def _section(rd: _Reader, data: dict) -> Section:
     )
 
 
-def _ground(rd: _Reader, data: dict) -> tuple[str, np.ndarray]:
+def _ground(rd: TableReader, data: dict) -> tuple[str, np.ndarray]:
     """``[ground]``: its name and the points (mm) where it holds flexures."""
     ground_t = rd.table(data, "ground", "")
     rd.known_keys(ground_t, GROUND, "ground.")
@@ -664,7 +498,7 @@ def _ground(rd: _Reader, data: dict) -> tuple[str, np.ndarray]:
     return ground, np.array([rd.point({"p": p}, "p", "ground.points.") for p in gpts])
 
 
-def _target(rd: _Reader, data: dict) -> tuple[str, np.ndarray]:
+def _target(rd: TableReader, data: dict) -> tuple[str, np.ndarray]:
     """``[target]``: the target body and its tracing point, mm."""
     target_t = rd.table(data, "target", "")
     rd.known_keys(target_t, TARGET, "target.")
@@ -674,7 +508,7 @@ def _target(rd: _Reader, data: dict) -> tuple[str, np.ndarray]:
 
 
 def _bodies(
-    rd: _Reader, data: dict, density: float | None, depth: float
+    rd: TableReader, data: dict, density: float | None, depth: float
 ) -> tuple[dict[str, np.ndarray], dict]:
     """``[[bodies]]``: known points of links (mm) and their mass data, by body name."""
     body_points, body_masses = {}, {}
@@ -696,7 +530,7 @@ def _bodies(
     return body_points, body_masses
 
 
-def _mechanism(rd: _Reader, data: dict, source: str) -> Mechanism:
+def _mechanism(rd: TableReader, data: dict, source: str) -> Mechanism:
     """The mechanism of a scene: material, flexures, bodies, pins, masses and gravity."""
     material, mat = _material(rd, data)
     section = _section(rd, data)
@@ -736,7 +570,7 @@ def _mechanism(rd: _Reader, data: dict, source: str) -> Mechanism:
     )
 
 
-def _load_case(rd: _Reader, c: Any, k: int, mech: Mechanism) -> LoadCase:
+def _load_case(rd: TableReader, c: Any, k: int, mech: Mechanism) -> LoadCase:
     """One ``[[load_cases]]`` entry (a single load, or ``loads`` combined) on ``mech``."""
     c = rd.item_table(c, f"load_cases[{k}]")
     lname = rd.value(c, LOAD_CASES["name"], f"load_cases[{k}].")
@@ -798,7 +632,7 @@ def _load_case(rd: _Reader, c: Any, k: int, mech: Mechanism) -> LoadCase:
     return LoadCase(lname, comps, levels, parse_time_law(c, where, rd.fail))
 
 
-def _load_cases(rd: _Reader, data: dict, mech: Mechanism) -> list[LoadCase]:
+def _load_cases(rd: TableReader, data: dict, mech: Mechanism) -> list[LoadCase]:
     """Every ``[[load_cases]]`` entry, names unique."""
     raw_cases = data.get("load_cases", [])
     if not isinstance(raw_cases, list) or not raw_cases:
@@ -812,7 +646,7 @@ def _load_cases(rd: _Reader, data: dict, mech: Mechanism) -> list[LoadCase]:
     return cases
 
 
-def _refuse_dangling_bodies(rd: _Reader, mech: Mechanism, cases: list[LoadCase]) -> None:
+def _refuse_dangling_bodies(rd: TableReader, mech: Mechanism, cases: list[LoadCase]) -> None:
     """A body held by one flexure only, unloaded and not the target, does nothing."""
     loaded = {c.body for lc in cases for c in lc.components} | {mech.target_body}
     links = Counter(b for link in (*mech.flexures, *mech.pins) for b in link.bodies)
@@ -825,7 +659,7 @@ def _refuse_dangling_bodies(rd: _Reader, mech: Mechanism, cases: list[LoadCase])
             )
 
 
-def _request(rd: _Reader, data: dict) -> tuple[tuple, list]:
+def _request(rd: TableReader, data: dict) -> tuple[tuple, list]:
     """``[request]``: model ids (text, parsed by the model catalogue when used) and outputs."""
     req = rd.table(data, "request", "", required=False)
     rd.known_keys(req, REQUEST, "request.")
@@ -840,7 +674,7 @@ def _request(rd: _Reader, data: dict) -> tuple[tuple, list]:
     return models, outputs
 
 
-def _measurements(rd: _Reader, data: dict, cases: list[LoadCase]) -> tuple[Measurement, ...]:
+def _measurements(rd: TableReader, data: dict, cases: list[LoadCase]) -> tuple[Measurement, ...]:
     """``[[measurements]]``: each file read (relative to the scene file's folder) and checked
     against its load case; a missing or bad file is refused naming the entry."""
     out = []
@@ -880,7 +714,7 @@ def parse_scene(
     load cases on it, the bodies they leave dangling, the request, the measurements. Every
     value is checked where it is read (:class:`SceneError` names the field).
     """
-    rd = _Reader(source)
+    rd = TableReader(source)
     rd.known_keys(data, SCENE, "")
     name = _scene_name(rd, data.get("name", default_name))
     mech = _mechanism(rd, data, source)
@@ -932,7 +766,7 @@ def read_scene_data(name_or_path: str | Path) -> tuple[str, dict, str]:
                 text_id,
                 f"no such file, and not a built-in scene {list(BUILTIN_SCENES)}",
             )
-        source, text, stem = str(path), _read_text(path), path.stem
+        source, text, stem = str(path), read_utf8(path), path.stem
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -945,41 +779,3 @@ def read_scene_data(name_or_path: str | Path) -> tuple[str, dict, str]:
             "arrays or tables nested too deeply to read (a scene needs at most 3 levels)",
         ) from None
     return source, data, stem
-
-
-_BYTE_ORDER_MARKS = {
-    b"\xff\xfe": "UTF-16",
-    b"\xfe\xff": "UTF-16",
-    b"\xff\xfe\x00\x00": "UTF-32",
-    b"\x00\x00\xfe\xff": "UTF-32",
-}
-
-
-def _read_text(path: Path) -> str:
-    """The file's text: UTF-8 as TOML requires (a leading UTF-8 byte-order mark is skipped)."""
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise SceneError(str(path), "scene", str(path), f"cannot be read: {exc.strerror}") from None
-    try:
-        return raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        found = next(
-            (
-                enc
-                for bom, enc in sorted(_BYTE_ORDER_MARKS.items(), reverse=True)
-                if raw.startswith(bom)
-            ),
-            None,
-        )
-        what = (
-            f"it looks like {found}"
-            if found
-            else f"byte 0x{raw[exc.start]:02x} at offset {exc.start} is not UTF-8 (Latin-1?)"
-        )
-        raise SceneError(
-            str(path),
-            "encoding",
-            None,
-            f"a scene file must be UTF-8 text: {what}; save it as UTF-8",
-        ) from None

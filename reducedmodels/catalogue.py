@@ -49,7 +49,7 @@ LINEAR = "linear"
 #: coarser resolutions join the runtime-versus-error study and it is timed once (seconds a run)
 REFERENCE = "reference"
 #: capability: traces a load case that prescribes a motion (``Mechanism.drive``: the family
-#: joins :func:`flexval.reducedmodels.drives.constraint_connectors` to its connectors)
+#: joins :func:`flexval.reducedmodels.core.drives.constraint_connectors` to its connectors)
 DISPLACEMENT = "displacement"
 CAPABILITIES = frozenset({FIELDS, ARCLENGTH, LINEAR, REFERENCE, DISPLACEMENT})
 
@@ -212,7 +212,7 @@ class Family:
     connectors : callable, optional
         ``connectors(mechanism, spec, **options) -> list of Connector``: the
         connectors ``system`` joins, without the System (a batch of copies,
-        :mod:`flexval.reducedmodels.batch`, numbers them once for all
+        :mod:`flexval.reducedmodels.core.batch`, numbers them once for all
         copies). None: a batch builds each copy's System.
     exclusive : tuple of (str, str)
         Pairs of options (a, b) where b means nothing once a is set: an id

@@ -26,7 +26,8 @@ from .catalogue import (
 if TYPE_CHECKING:
     from flexval.geometry import Flexure, LoadCase, Mechanism
 
-    from .core import SolverSettings, System
+    from .core.settings import SolverSettings
+    from .core.system import System
 
 #: largest N of ``beam:N`` and ``dcmm:N`` (a guard against typos, far beyond any use)
 MAX_ELEMENTS = 100_000
@@ -65,25 +66,25 @@ FRAME = Option.choice(
 
 
 def _beam(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
-    from .beam import BeamConnector
+    from .beam.elements import BeamConnector
 
     return BeamConnector(flexure, mechanism, spec.resolution, **options)
 
 
 def _dcmm(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
-    from .dcmm import dcmm_connector
+    from .dcmm.connector import dcmm_connector
 
     return dcmm_connector(flexure, mechanism, spec.resolution, **options)
 
 
 def _ee(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
-    from .dcmm import DcmmConnector
+    from .dcmm.connector import DcmmConnector
 
     return DcmmConnector(flexure, mechanism, 1, **options)
 
 
 def _prbm(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
-    from .prbm import prbm_connector
+    from .prbm.connector import prbm_connector
 
     return prbm_connector(flexure, mechanism, **options)
 
@@ -98,7 +99,7 @@ def _load_core() -> None:
     machine code), which the loaders below do before their clock starts.
     """
     from . import models  # noqa: F401  (the core, imported ahead of the timed build)
-    from .threads import limit_threads
+    from .core.threads import limit_threads
 
     limit_threads()
 
@@ -106,9 +107,9 @@ def _load_core() -> None:
 def _load_newton_kernels() -> None:
     """The compiled kernels that order a System's tangent, factorise a batch's blocks and
     stack its stresses (every family traced by Newton)."""
-    from .blocktangent import ldl_kernels
-    from .recorder import stress_kernels
-    from .tangent import order_kernels
+    from .core.blocktangent import ldl_kernels
+    from .core.recorder import stress_kernels
+    from .core.tangent import order_kernels
 
     order_kernels()
     ldl_kernels()
@@ -117,7 +118,7 @@ def _load_newton_kernels() -> None:
 
 def _load_ee(spec: ModelSpec) -> None:
     """``Family.load`` of ``ee``: the DCMM connectors' kernels and the core."""
-    from .dcmm import dcmm_kernels
+    from .dcmm.connector import dcmm_kernels
 
     dcmm_kernels()
     _load_core()
@@ -131,7 +132,7 @@ def _load_dcmm(spec: ModelSpec) -> None:
 
 def _load_prbm(spec: ModelSpec) -> None:
     """``Family.load`` of ``prbm``: its kernels, the core and the Newton kernels."""
-    from .prbm import prbm_kernels
+    from .prbm.connector import prbm_kernels
 
     prbm_kernels()
     _load_core()
@@ -141,8 +142,8 @@ def _load_prbm(spec: ModelSpec) -> None:
 def _load_beams(spec: ModelSpec) -> None:
     """``Family.load`` of ``beam:N``: the beam and band kernels, the core and the Newton
     kernels."""
-    from .beam import CHAIN_HALF_BANDWIDTH, beam_kernels
-    from .tangent import band_kernels
+    from .beam.elements import CHAIN_HALF_BANDWIDTH, beam_kernels
+    from .core.tangent import band_kernels
 
     beam_kernels()
     band_kernels(CHAIN_HALF_BANDWIDTH)

@@ -19,15 +19,16 @@ import numpy as np
 from flexval.geometry import Flexure, LoadCase, Mechanism, SceneError
 
 from .catalogue import ModelSpec
-from .connector import Connector
-from .core import SolverSettings, System, connector_groups
-from .inertia import with_weights
-from .loadpath import LoadPath
-from .loads import Loads
-from .recorder import append_section_forces, record_stress, solve_path
-from .restnumbering import RestNumbering
-from .sections import SectionForces
-from .validity import MAX_LINEAR_ROTATION, linear_sway_verdicts, merge_reasons
+from .core.connector import Connector
+from .core.inertia import with_weights
+from .core.loadpath import LoadPath
+from .core.loads import Loads
+from .core.recorder import append_section_forces, record_stress, solve_path
+from .core.restnumbering import RestNumbering
+from .core.sections import SectionForces
+from .core.settings import SolverSettings
+from .core.system import System, connector_groups
+from .core.validity import MAX_LINEAR_ROTATION, linear_sway_verdicts, merge_reasons
 
 #: ``make(flexure, mechanism, spec, **options) -> Connector`` of one flexure
 ConnectorFactory = Callable[..., Any]
@@ -50,10 +51,10 @@ def flexure_connectors(
     (:mod:`flexval.reducedmodels.notchcorrection`: the continuum's, where beam
     theory's ∫ ds/EI is 1-50 % stiff) unless ``eb`` (plain Euler-Bernoulli) is given.
     Pins (``mechanism.pins``) are added as exact Lagrange-multiplier joints
-    (:class:`flexval.reducedmodels.joints.PinConnector`) whatever the model, and so is
-    a prescribed motion (``mechanism.drive``, :mod:`flexval.reducedmodels.drives`). With
+    (:class:`flexval.reducedmodels.core.joints.PinConnector`) whatever the model, and so is
+    a prescribed motion (``mechanism.drive``, :mod:`flexval.reducedmodels.core.drives`). With
     ``[gravity]`` in the scene, the weights of the flexures and bodies are
-    dead loads in the potential (:func:`flexval.reducedmodels.inertia.with_weights`).
+    dead loads in the potential (:func:`flexval.reducedmodels.core.inertia.with_weights`).
 
     Raises
     ------
@@ -78,7 +79,7 @@ def flexure_connectors(
         except ValueError as exc:  # the model cannot represent this flexure
             raise SceneError(mechanism.source, f"flexures.{f.name}", spec.id, str(exc)) from None
     if mechanism.pins or mechanism.drive is not None:
-        from .drives import constraint_connectors
+        from .core.drives import constraint_connectors
 
         conns += constraint_connectors(mechanism)
     return with_weights(mechanism, conns)
@@ -258,13 +259,13 @@ def linear_response(
     load case at full value, and reports the linearised target displacement
     J dq; without gravity it is proportional to the load. The validity monitor
     judges it by its body rotations alone
-    (:data:`~flexval.reducedmodels.validity.MAX_LINEAR_ROTATION`): q0 + lambda dq is
+    (:data:`~flexval.reducedmodels.core.validity.MAX_LINEAR_ROTATION`): q0 + lambda dq is
     a linear response, not a configuration, so the connectors' own stretch
     limits do not apply to it (its linearised rigid rotations stretch chords
     by theta^2 / 2, which is exactly what that rotation limit bounds).
 
     One evaluation of each connector at rest and one factorisation: the
-    connectors are numbered as a :class:`~flexval.reducedmodels.core.System` numbers
+    connectors are numbered as a :class:`~flexval.reducedmodels.core.system.System` numbers
     them (the moving bodies' poses, then each connector's internal
     coordinates in turn) and assembled the same way, but without the index
     maps, groups and solver state a System builds for many Newton
@@ -452,7 +453,7 @@ def _drive_of(
     """(connector, its multipliers' global dofs, their loads in N) of the drive among
     ``connectors`` (numbered end to end: connector k's local coordinates are
     ``dofs[places[k]:bounds[k]]``), or None."""
-    from .drives import DriveConnector
+    from .core.drives import DriveConnector
 
     for c, a, b in zip(connectors, places, bounds):
         if isinstance(c, DriveConnector):

@@ -19,7 +19,7 @@ interpolation error). r_b does not depend on Poisson's ratio (within 0.1 % over 
 r_s (1 + nu) nearly does not (within 0.8 %), so the table holds r_s at nu = 0.33. The
 table also holds the notch's stress concentration K at the waist (the continuum's recovered
 surface fibre peak under a moment over the beam formula there): a reduced model's peak
-fibre stress on a hinge is K times its beam formula (:mod:`flexval.validation.yieldpoint`).
+fibre stress on a hinge is K times its beam formula (:mod:`flexval.validation.studies.yieldpoint`).
 
 The table is interpolated in (log t/L, log H/t) by a C1 piecewise-cubic (Clough-Tocher)
 interpolant over its points; power contours by their exponent too (a cubic spline in log n

@@ -10,7 +10,7 @@ import numpy as np
 
 from flexval.geometry import Force, LoadCase, Material, Moment, Section
 from flexval.geometry.mechanism import FlexureSpec, assemble
-from flexval.reducedmodels.core import local_hessian
+from flexval.reducedmodels.core.system import local_hessian
 
 
 def cantilever(

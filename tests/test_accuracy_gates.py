@@ -35,8 +35,8 @@ import pytest
 
 from flexval.geometry import load_scene
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.validation.compare import errors
 from flexval.validation.run import run_model
+from flexval.validation.studies.compare import errors
 
 GATES = Path(__file__).resolve().parents[1] / "reports" / "paper" / "gates.json"
 GATE_TOL = 1e-6

@@ -15,8 +15,8 @@ import pytest
 BATCH = """
 import json, sys
 from flexval.geometry import load_scene
-from flexval.reducedmodels import allocator
-from flexval.reducedmodels.batch import run_batch
+from flexval.reducedmodels.core import allocator
+from flexval.reducedmodels.core.batch import run_batch
 from flexval.reducedmodels.catalogue import parse_model
 
 sc = load_scene("open_chain")

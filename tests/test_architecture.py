@@ -81,14 +81,45 @@ def _private(name: str) -> bool:
 
 
 def test_every_module_is_named_in_the_architecture():
+    """Each module by its folder and name (``core/system.py``): names repeat across rooms."""
     text = (ROOT / "ARCHITECTURE.md").read_text(encoding="utf-8")
     missing = [
         str(path.relative_to(ROOT))
         for package in PACKAGES
         for path in sorted((ROOT / package).rglob("*.py"))
-        if path.name != "__init__.py" and "__pycache__" not in path.parts and path.name not in text
+        if path.name != "__init__.py"
+        and "__pycache__" not in path.parts
+        and f"{path.parent.name}/{path.name}" not in text
     ]
     assert not missing, f"modules ARCHITECTURE.md does not name: {missing}"
+
+
+MAX_LINES = 800
+"""The longest a module may be: beyond it, a module holds more than one idea."""
+
+
+def test_no_module_is_longer_than_the_limit():
+    long = {
+        str(path.relative_to(ROOT)): n
+        for path in MODULES.values()
+        if (n := len(path.read_text(encoding="utf-8").splitlines())) > MAX_LINES
+    }
+    assert not long, long
+
+
+def test_every_package_says_what_it_holds():
+    """Every package has a docstring and a curated ``__all__`` of names it has."""
+    for name, tree in TREES.items():
+        if MODULES[name].name != "__init__.py":
+            continue
+        assert ast.get_docstring(tree), name
+        declared = [
+            node
+            for node in tree.body
+            if isinstance(node, ast.Assign)
+            and any(isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets)
+        ]
+        assert declared, f"{name} has no __all__"
 
 
 def test_no_module_imports_a_private_name_of_another():

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from scipy.linalg import lapack
 
-from flexval.reducedmodels.beam import CHAIN_HALF_BANDWIDTH
-from flexval.reducedmodels.tangent import NARROW_BAND, BandedTangent, band_kernels
+from flexval.reducedmodels.beam.elements import CHAIN_HALF_BANDWIDTH
+from flexval.reducedmodels.core.tangent import NARROW_BAND, BandedTangent, band_kernels
 
 N = 23  # more columns than any band is wide: full and short columns both occur
 WIDTHS = sorted({1, 2, CHAIN_HALF_BANDWIDTH, NARROW_BAND})

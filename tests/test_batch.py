@@ -1,7 +1,7 @@
 """Batches: many copies of one mechanism traced together give each copy's solo path.
 
 The reference of every check is the same copy traced alone by
-:func:`flexval.reducedmodels.recorder.solve_path` (the one tracer on the
+:func:`flexval.reducedmodels.core.recorder.solve_path` (the one tracer on the
 copy's own System): the batch must reproduce its load levels, target motion,
 validity verdicts, peak stresses and Newton iteration counts. Copies differ
 in their flexures' sections (each scaled by its own factor) and in the
@@ -19,11 +19,12 @@ import pytest
 
 import flexval.validation.continuum.family  # noqa: F401  (registers continuum:N)
 from flexval.geometry import load_scene
-from flexval.reducedmodels.batch import BatchSystem, run_batch, trace_batch
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.core import SolverError
+from flexval.reducedmodels.core.batch import run_batch, trace_batch
+from flexval.reducedmodels.core.batchsystem import BatchSystem
+from flexval.reducedmodels.core.recorder import solve_path
+from flexval.reducedmodels.core.settings import SolverError
 from flexval.reducedmodels.models import build_system, run_reduced
-from flexval.reducedmodels.recorder import solve_path
 
 AGREEMENT = 1e-12
 """Largest relative difference allowed between a copy's batched and solo outputs on the
@@ -187,8 +188,8 @@ def test_copies_that_part_ways_go_on_from_the_last_point_they_shared(model, monk
     and go on as batches of their own from the last reported level they shared; each path is
     bit for bit the copy's path traced alone (a batch of one from rest), and its solo run's
     to the batch's agreement."""
-    from flexval.reducedmodels import batch as batch_module
-    from flexval.reducedmodels.tracer import LoadControl
+    from flexval.reducedmodels.core import batch as batch_module
+    from flexval.reducedmodels.core.tracer import LoadControl
 
     rng = np.random.default_rng(3)
     scales = rng.normal(1.0, 0.03, 24).tolist()
@@ -295,7 +296,7 @@ def test_batch_refuses_copies_that_cannot_share_it():
 
 def test_large_sets_of_copies_are_traced_in_batches_of_bounded_size(monkeypatch):
     """Beyond BATCH_UNKNOWNS the copies go in several batches; every path stays its solo one."""
-    from flexval.reducedmodels import batch as batch_module
+    from flexval.reducedmodels.core import batch as batch_module
 
     mechanisms, cases = variants("open_chain", "m+", SCALES, LOADS)
     unknowns = build_system(mechanisms[0], parse_model("dcmm:1")).n_dofs
@@ -311,7 +312,7 @@ def test_a_copys_path_does_not_depend_on_its_batch(model):
     """Bit for bit the same path for a copy traced alone, with one other copy or with four:
     a sweep's rows must not depend on how its points were grouped into tasks. Copies with
     more than SOLO_UNKNOWNS unknowns (beam:100) are each traced alone."""
-    from flexval.reducedmodels.batch import SOLO_UNKNOWNS
+    from flexval.reducedmodels.core.batch import SOLO_UNKNOWNS
 
     mechanisms, cases = variants("open_chain", "f+", SCALES, LOADS)
     spec = parse_model(model)
@@ -413,7 +414,7 @@ def test_batch_construction_is_the_per_copy_construction(model, monkeypatch):
     """The numbering, loads and rest state a batch builds for all copies at once are, bit for
     bit, those built copy by copy: each copy's own numbering placed by its bodies' names, its
     loads numbered by them, the core's rest state of the merged System."""
-    from flexval.reducedmodels.core import System, case_loads
+    from flexval.reducedmodels.core.system import System, case_loads
 
     mechanisms, cases = variants("closed_chain", "f+", [1.0, 0.7, 1.4], [1.0, 2.0, 0.5])
     spec = parse_model(model)
@@ -447,8 +448,8 @@ def test_stresses_of_many_flexures_at_once_are_each_flexures_alone():
     """path_peaks and state_peaks stack flexures of one kind of section (a batch's), in stacks
     of at most STACK_SIZE; each entry must be what its own SectionForces.fibre_stress gives
     (max, argmax and profile, bit for bit), stacked or not, in the first stack or a later one."""
-    from flexval.reducedmodels.recorder import STACK_FROM, STACK_SIZE, path_peaks, state_peaks
-    from flexval.reducedmodels.sections import SectionForces
+    from flexval.reducedmodels.core.recorder import STACK_FROM, STACK_SIZE, path_peaks, state_peaks
+    from flexval.reducedmodels.core.sections import SectionForces
 
     uniform = load_scene("open_chain").mechanism.flexures[0].section
     varying = load_scene("notch_fourbar").mechanism.flexures[0].section
@@ -481,13 +482,13 @@ def test_stacks_of_section_forces_hold_each_connectors_columns():
     """column_stacks puts connectors of equal stations (equal arrays, whether the same objects
     or not) in one stack, each member's rows its own columns; a connector without forces is in
     none; stack_peaks gives what path_peaks gives each member alone, across STACK_SIZE."""
-    from flexval.reducedmodels.recorder import (
+    from flexval.reducedmodels.core.recorder import (
         STACK_SIZE,
         path_peaks,
         section_constants,
         stack_peaks,
     )
-    from flexval.reducedmodels.sections import SectionForces, column_stacks
+    from flexval.reducedmodels.core.sections import SectionForces, column_stacks
 
     rng = np.random.default_rng(3)
     at_a, base_a = np.linspace(0.0, 1.0, 4), np.arange(4)
@@ -575,8 +576,8 @@ def test_a_batch_numbers_copies_as_one_table_as_the_loop_over_its_connectors(sce
     connectors or have their own."""
     import copy
 
-    from flexval.reducedmodels.batch import _shallow_copy
-    from flexval.reducedmodels.core import System
+    from flexval.reducedmodels.core.batchsystem import _shallow_copy
+    from flexval.reducedmodels.core.system import System
 
     spec = parse_model(model)
     mechanisms, _ = variants(scene, "f+", [1.0, 1.2, 0.9], [1.0, 1.0, 1.0])
@@ -642,7 +643,7 @@ def test_a_batch_pauses_the_garbage_collector_only_while_it_runs():
 def test_ee_copies_of_other_topologies_are_refused_together_and_run_apart():
     """linear_responses refuses copies that do not share copy 0's numbering; run_batch
     groups them by topology first, so each still gets its solo path."""
-    from flexval.reducedmodels.linearbatch import linear_responses
+    from flexval.reducedmodels.core.linearbatch import linear_responses
 
     open_m, open_c = variants("open_chain", "f+", [1.0, 1.1], [1.0, 1.0])
     closed_m, closed_c = variants("closed_chain", "f+", [1.0], [1.0])

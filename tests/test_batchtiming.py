@@ -22,7 +22,12 @@ from test_report import TINY
 from flexval.geometry import load_scene
 from flexval.reducedmodels import SolverError
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.validation.batchtiming import (
+from flexval.validation.report.data import PAPER_REFERENCE, compute_report
+from flexval.validation.report.tables import sig
+from flexval.validation.report.timings import render_timings
+from flexval.validation.report.writer import render_markdown, write_report
+from flexval.validation.run import run_model
+from flexval.validation.studies.batchtiming import (
     AGREEMENT_BAR,
     BATCH_COPIES,
     BATCH_SECONDS,
@@ -35,12 +40,7 @@ from flexval.validation.batchtiming import (
     end_agreement,
     time_batch,
 )
-from flexval.validation.bench import runtime_vs_error, write_bench
-from flexval.validation.report import render_markdown, write_report
-from flexval.validation.reportdata import PAPER_REFERENCE, compute_report
-from flexval.validation.run import run_model
-from flexval.validation.tables import sig
-from flexval.validation.timings import render_timings
+from flexval.validation.studies.bench import runtime_vs_error, write_bench
 
 SMALL = 3
 """Copies of the tests' batches: enough for the batch to share one Newton among copies."""

@@ -21,11 +21,12 @@ from scipy.optimize import brentq
 from flexval.geometry import Arc, Force, LoadCase, Material, Moment, Section, Segment, load_scene
 from flexval.geometry.mechanism import FlexureSpec, assemble
 from flexval.reducedmodels import LoadControl, build_system, run_reduced, trace
-from flexval.reducedmodels.beam import BeamConnector, evenly_spaced
+from flexval.reducedmodels.beam.elements import BeamConnector, evenly_spaced
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.chains import chain_kernels
-from flexval.reducedmodels.core import hermite_weights, lagrange_weights, local_hessian
-from flexval.reducedmodels.tracer import PREDICTOR_STATES
+from flexval.reducedmodels.core.chains import chain_kernels
+from flexval.reducedmodels.core.extrapolation import hermite_weights, lagrange_weights
+from flexval.reducedmodels.core.system import local_hessian
+from flexval.reducedmodels.core.tracer import PREDICTOR_STATES
 
 MATERIAL = Material(2000.0, 0.3)
 ARC = Arc((5.0, 2.0), 10.0, 0.3, np.radians(240.0))  # r = 10 mm, L = 41.9 mm

@@ -22,11 +22,11 @@ from flexval.geometry.mechanism import Body, Flexure, Mechanism
 from flexval.geometry.profiles import LinearTaper, NotchProfile
 from flexval.geometry.shapes import Spline
 from flexval.reducedmodels import LoadControl, build_system, run_reduced, trace
-from flexval.reducedmodels.beam import SHEAR_CORRECTION, BeamConnector
-from flexval.reducedmodels.beamvarying import element_stiffness, graded_stations, station_density
+from flexval.reducedmodels.beam.elements import SHEAR_CORRECTION, BeamConnector
+from flexval.reducedmodels.beam.varying import element_stiffness, graded_stations, station_density
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.core import local_hessian
-from flexval.reducedmodels.validity import MAX_STRAIN
+from flexval.reducedmodels.core.system import local_hessian
+from flexval.reducedmodels.core.validity import MAX_STRAIN
 
 MATERIAL = Material(2000.0, 0.3)
 NOTCH_LENGTH, WAIST, DEPTH = 10.0, 0.5, 4.0

@@ -16,7 +16,7 @@ pi^2 EI / (4 L^2) = 2.46740 N (+4e-5); beam:20 at 2.46872 N (+5e-4). The
 discrete models buckle at their own loads: dcmm:1 2.00000 N, dcmm:2
 2.28836 N, dcmm:4 2.41314 N, prbm 2.40006 N. On the buckled branch at 3 N,
 beam:100's tip is within 6e-5 of the elastica's. The critical mode's cosine
-with the path's direction (:func:`flexval.reducedmodels.bifurcation.mode_cosine`)
+with the path's direction (:func:`flexval.reducedmodels.core.bifurcation.mode_cosine`)
 is about 1e-9 at the column's bifurcation; Lee's frame and the deep arch,
 whose limit points are traced in tests/test_limit_loads.py, report none.
 
@@ -42,8 +42,8 @@ from scipy.special import ellipe, ellipk
 from flexval.reducedmodels import LoadPath
 from flexval.validation.cli import main
 from flexval.validation.failures import BIFURCATION
-from flexval.validation.report import write_report
-from flexval.validation.reportdata import compute_report
+from flexval.validation.report.data import compute_report
+from flexval.validation.report.writer import write_report
 from flexval.validation.sweep import load_sweep, results_store, run_sweep, sweep_rows, write_outputs
 
 SCENES = Path(__file__).parent / "scenes"

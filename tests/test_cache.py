@@ -77,7 +77,7 @@ def test_key_changes_with_every_input(field, value):
 
 def test_key_changes_with_gravity_and_mass_data():
     """Static paths carry the weights, which the mechanism's own comparison leaves out."""
-    from flexval.validation.modes import with_density
+    from flexval.validation.studies.modes import with_density
 
     sc = with_density(load_scene("open_chain"), 1.24e-9)
     inertia = sc.mechanism.inertia

@@ -253,8 +253,9 @@ def test_request_models_are_checked_when_used(tmp_path):
 def test_info_imports_no_model_code():
     code = (
         "import sys; from flexval.validation.cli import main; main(['info', 'closed_chain']); "
-        "print(sorted(m for m in sys.modules if m.startswith(('flexval.reducedmodels.beam', "
-        "'flexval.reducedmodels.dcmm', 'flexval.reducedmodels.prbm', "
+        "print(sorted(m for m in sys.modules if m.startswith(("
+        "'flexval.reducedmodels.beam.elements', "
+        "'flexval.reducedmodels.dcmm.connector', 'flexval.reducedmodels.prbm.connector', "
         "'flexval.validation.continuum.run', "
         "'flexval.validation.continuum.connector', 'skfem'))))"
     )

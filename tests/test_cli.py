@@ -63,7 +63,7 @@ def test_run_json_contract(tmp_path, capsys):
 def test_run_solver_failure_exit_3(monkeypatch, capsys):
     # a sub-step budget of 3 cannot follow the soft stretch of f-
     import flexval.reducedmodels.models as models
-    from flexval.reducedmodels.core import SolverSettings
+    from flexval.reducedmodels.core.settings import SolverSettings
 
     monkeypatch.setattr(models, "SolverSettings", lambda: SolverSettings(max_substeps=3))
     code = main(["run", "open_chain", "--model", "dcmm:1", "--load-case", "f-"])
@@ -134,7 +134,7 @@ def test_run_prints_the_continuums_fibre_peak_on_a_notch_and_says_so(tmp_path, c
     section forces, and the line says which; a uniform flexure's peak is the beam formula."""
     import json as _json
 
-    from flexval.validation.tables import sig
+    from flexval.validation.report.tables import sig
 
     out = tmp_path / "n.json"
     argv = ["run", "notch_fourbar", "--model", "continuum:0", "--load-case", "f+"]

@@ -29,8 +29,8 @@ from flexval.reducedmodels.catalogue import (
     unregister,
 )
 from flexval.validation.cli import main
-from flexval.validation.modelinfo import CAPABILITY_DOCS
-from flexval.validation.tables import Column, markdown_table, sig, text_row, text_table
+from flexval.validation.cli.modelinfo import CAPABILITY_DOCS
+from flexval.validation.report.tables import Column, markdown_table, sig, text_row, text_table
 
 TOY = Family(
     "toy-springs-with-a-long-name",
@@ -117,7 +117,7 @@ def test_models_loads_no_solver():
         "import sys, contextlib, io; from flexval.validation.cli import main\n"
         "with contextlib.redirect_stdout(io.StringIO()): main(['models'])\n"
         "print(sorted(m for m in ('scipy', 'numba', 'skfem', 'gmsh', 'matplotlib', "
-        "'flexval.reducedmodels.core') if m in sys.modules))"
+        "'flexval.reducedmodels.core.system') if m in sys.modules))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip().splitlines()[-1] == "[]"

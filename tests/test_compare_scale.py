@@ -1,7 +1,7 @@
 """Relative errors of a quantity whose reference is near zero are taken against its scale.
 
 Closed forms on hand-made paths (the exact percentages follow from the rule in
-:mod:`flexval.validation.compare`), then the case that shows it: a shallow arch pressed
+:mod:`flexval.validation.studies.compare`), then the case that shows it: a shallow arch pressed
 on its axis of symmetry turns its crown by round-off in every model, which
 relative errors turned into tens or hundreds of percent; against the rotation
 scale it is zero.
@@ -17,8 +17,8 @@ from test_report_failures import ARCH
 
 from flexval.geometry import load_scene
 from flexval.reducedmodels import LoadPath, parse_model
-from flexval.validation.compare import NEAR_ZERO, errors, scale_of
 from flexval.validation.run import run_model
+from flexval.validation.studies.compare import NEAR_ZERO, errors, scale_of
 
 
 def _path(dx, rotation, dy=None) -> LoadPath:

@@ -13,7 +13,7 @@ from flexval.geometry import Arc, Force, LoadCase, Material, Section, load_scene
 from flexval.geometry.mechanism import Body, FlexureSpec, Pin, PinSpec, assemble
 from flexval.reducedmodels import SolverError, SolverSettings, build_system, solve_path
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.continuation import limit_loads, solve_arclength
+from flexval.reducedmodels.core.continuation import limit_loads, solve_arclength
 
 DA_DEPPO_SCHMIDT = 8.97
 """Limit load P R^2 / EI of the clamped-hinged 215 deg circular arch under a

@@ -23,8 +23,8 @@ from flexval.geometry.files import cache_dir
 from flexval.geometry.mechanism import FlexureSpec, assemble
 from flexval.geometry.mesh import mesh_flexure
 from flexval.reducedmodels import solve_path
-from flexval.reducedmodels.core import local_hessian
-from flexval.reducedmodels.newton import FixedLoad, solve
+from flexval.reducedmodels.core.newton import FixedLoad, solve
+from flexval.reducedmodels.core.system import local_hessian
 from flexval.validation.continuum import ContinuumConnector
 from flexval.validation.continuum.material import make_law
 from flexval.validation.continuum.run import build_system

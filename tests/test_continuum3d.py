@@ -33,7 +33,7 @@ from flexval.geometry.extrude import (
 )
 from flexval.geometry.outline import flexure_mesh
 from flexval.reducedmodels import SolverSettings, System, parse_model, solve_path
-from flexval.reducedmodels.core import local_hessian
+from flexval.reducedmodels.core.system import local_hessian
 from flexval.validation.continuum import ContinuumConnector
 from flexval.validation.continuum.connector3d import Continuum3DConnector
 from flexval.validation.continuum.cost import size_3d

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from flexval.geometry import load_scene
-from flexval.reducedmodels.connector import ConnectorGroup
+from flexval.reducedmodels.core.connector import ConnectorGroup
 from flexval.validation.continuum import ContinuumConnector
 from flexval.validation.continuum.group import ContinuumGroup
 from flexval.validation.continuum.run import build_system

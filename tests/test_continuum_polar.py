@@ -17,7 +17,7 @@ import pytest
 
 from flexval.geometry import Arc, Material, Section, Segment
 from flexval.geometry.mechanism import FlexureSpec, assemble
-from flexval.reducedmodels.core import hermite_weights
+from flexval.reducedmodels.core.extrapolation import hermite_weights
 from flexval.validation.continuum import ContinuumConnector
 from flexval.validation.continuum.group import ContinuumGroup
 from flexval.validation.continuum.polar import (

@@ -12,7 +12,7 @@ from scipy.integrate import quad
 from flexval.geometry import Arc, Segment, load_scene
 from flexval.reducedmodels import run_reduced
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.dcmm import DcmmConnector, dcmm_kernels
+from flexval.reducedmodels.dcmm.connector import DcmmConnector, dcmm_kernels
 from flexval.reducedmodels.models import build_system
 
 
@@ -125,11 +125,11 @@ def test_end_pass_measures_and_statics_against_direct_numpy_forms():
         for j, (c, (pose_a, pose_b, internal)) in enumerate(zip(group.connectors, states)):
             chain = np.vstack([pose_a, internal.reshape(-1, 3), pose_b])
             points = np.vstack(
-                [place(pose_a, c._end_rel[0]), chain[1:-1, :2], place(pose_b, c._end_rel[1])]
+                [place(pose_a, c.end_rel[0]), chain[1:-1, :2], place(pose_b, c.end_rel[1])]
             )
             chords = np.hypot(*np.diff(points, axis=0).T)
             assert strain[k, j] == pytest.approx(
-                np.max(chords / c._sub_lengths - 1.0), rel=1e-12, abs=1e-15
+                np.max(chords / c.sub_lengths - 1.0), rel=1e-12, abs=1e-15
             )
             assert turn[k, j] == pytest.approx(np.max(np.abs(np.diff(chain[:, 2]))), rel=1e-12)
             start = tables.sample_start[j]
@@ -137,10 +137,10 @@ def test_end_pass_measures_and_statics_against_direct_numpy_forms():
                 e, w = tables.sub_arc[i], tables.w[i]
                 local = e - tables.sub_arc_start[j]
                 lead, follow = chain[local], chain[local + 1]
-                point = (1.0 - w) * place(lead, c._sample_rel[i - start, :2]) + w * place(
-                    follow, c._sample_rel[i - start, 2:]
+                point = (1.0 - w) * place(lead, c.sample_rel[i - start, :2]) + w * place(
+                    follow, c.sample_rel[i - start, 2:]
                 )
-                axis = c._sample_tangent[i - start] + (1.0 - w) * lead[2] + w * follow[2]
+                axis = c.sample_tangent[i - start] + (1.0 - w) * lead[2] + w * follow[2]
                 fx, fy, m = wrenches[k, e]
                 r = follow[:2] - point
                 station = np.flatnonzero(tables.order == i)[0] - start
@@ -296,7 +296,7 @@ def test_one_big_step_does_not_land_on_an_unstable_branch():
 def test_every_tangent_storage_counts_the_inertia():
     import scipy.sparse as sp
 
-    from flexval.reducedmodels.tangent import BandedTangent, DenseTangent, SparseTangent
+    from flexval.reducedmodels.core.tangent import BandedTangent, DenseTangent, SparseTangent
 
     rng = np.random.default_rng(0)
     Q, _ = np.linalg.qr(rng.normal(size=(120, 120)))
@@ -319,7 +319,7 @@ def test_dense_ldl_gives_the_inertia_and_the_solution_of_saddle_points(seed):
     of negative eigenvalues is numpy's eigvalsh count (exact here: the spectrum keeps a gap
     of at least 1e-3 from zero) and the solve agrees with numpy's LU to round-off (1e-10
     relative, condition numbers below 1e6 measured)."""
-    from flexval.reducedmodels.tangent import DenseTangent
+    from flexval.reducedmodels.core.tangent import DenseTangent
 
     rng = np.random.default_rng(seed)
     n, m = 12, 4
@@ -341,7 +341,7 @@ def test_dense_ldl_gives_the_inertia_and_the_solution_of_saddle_points(seed):
 def test_dense_ldl_reads_two_by_two_pivots():
     """A zero diagonal forces a 2 x 2 pivot: [[0, 1], [1, 0]] (eigenvalues -1, 1), beside
     3 and the block [[0, 2], [2, -3]] (eigenvalues 1 and -4): two negative eigenvalues."""
-    from flexval.reducedmodels.tangent import DenseTangent
+    from flexval.reducedmodels.core.tangent import DenseTangent
 
     K = np.zeros((5, 5))
     K[0, 1] = K[1, 0] = 1.0
@@ -363,7 +363,7 @@ def test_parts_of_a_kept_centre_line_are_those_computed_anew(n):
     from the kept geometry, are equal in every array."""
     import dataclasses
 
-    from flexval.reducedmodels.subarcs import sub_arcs
+    from flexval.reducedmodels.dcmm.subarcs import sub_arcs
 
     mech = load_scene("open_chain").mechanism
     for flexure in mech.flexures:
@@ -389,7 +389,7 @@ def test_parts_of_a_kept_centre_line_are_those_computed_anew(n):
         if isinstance(value, np.ndarray):
             assert np.array_equal(value, getattr(second, name)), name
     with pytest.raises(ValueError):
-        second._sample_tangent[0] = 0.0
+        second.sample_tangent[0] = 0.0
 
 
 def test_a_long_chain_is_predicted_and_updated_chordwise_to_the_same_equilibria(monkeypatch):
@@ -397,7 +397,7 @@ def test_a_long_chain_is_predicted_and_updated_chordwise_to_the_same_equilibria(
     of chords (the beam's way): the update equals the linear one to first order (so Newton
     stays quadratic), and every level is the equilibrium the coordinate-wise predictor finds,
     in fewer iterations."""
-    from flexval.reducedmodels import dcmm
+    from flexval.reducedmodels.dcmm import connector as dcmm
 
     n = dcmm.CHAIN_PREDICTION_FROM + 2
     mech = cantilever(Arc((0.0, 0.0), 3.0, 0.4, math.radians(240)))

@@ -1,6 +1,6 @@
 """One flexure density for every analysis with masses: ``flexval modes``,
 ``flexval run --dynamic`` and the report's natural frequencies all go through
-:func:`flexval.validation.modes.choose_density`."""
+:func:`flexval.validation.studies.modes.choose_density`."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import pytest
 from flexval.geometry import SceneError, load_scene
 from flexval.geometry.inertia import PLA_DENSITY
 from flexval.validation.cli import EXIT_INPUT, main
-from flexval.validation.modes import choose_density
+from flexval.validation.studies.modes import choose_density
 
 #: a cantilever segment whose tip body has its own mass data and the material no density
 MASSIVE_BODY = """
@@ -91,7 +91,7 @@ def test_modes_cli_and_report_agree_on_a_massless_scene(tmp_path, capsys):
     """``flexval modes open_chain --model dcmm:2`` refuses (exit 2, naming --density and
     PLA); with ``--density`` PLA it gives exactly the report's frequencies, and the
     report's section says which density it assumed, in the same words."""
-    from flexval.validation import frequencies
+    from flexval.validation.report import frequencies
 
     assert main(["modes", "open_chain", "--model", "dcmm:2"]) == EXIT_INPUT
     err = capsys.readouterr().err

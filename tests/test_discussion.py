@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-from flexval.validation.discussion import SMALL_GAP, _reference_bullet
-from flexval.validation.reportdata import PAPER_REFERENCE
+from flexval.validation.report.data import PAPER_REFERENCE
+from flexval.validation.report.discussion import SMALL_GAP, _reference_bullet
 
 
 def _scene(name: str, gap: float):

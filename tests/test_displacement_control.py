@@ -19,9 +19,9 @@ from test_joints import von_mises_truss
 from flexval.geometry import Displacement, Force, LoadCase, Moment, SceneError, load_scene
 from flexval.geometry.scene import parse_scene
 from flexval.reducedmodels import run_reduced
-from flexval.reducedmodels.batch import run_batch
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.drives import DriveConnector
+from flexval.reducedmodels.core.batch import run_batch
+from flexval.reducedmodels.core.drives import DriveConnector
 from flexval.validation.cli import main
 from flexval.validation.run import run_model
 
@@ -336,7 +336,7 @@ def test_a_motion_the_model_holds_rigid_is_refused_before_tracing():
 
 
 def test_a_drives_free_components_are_its_parasitic_motion():
-    from flexval.validation.parasitic import parasitic_components
+    from flexval.validation.studies.parasitic import parasitic_components
 
     scene = guide()
     target = (scene.mechanism.target_body, scene.mechanism.target_point)
@@ -348,7 +348,7 @@ def test_a_drives_free_components_are_its_parasitic_motion():
 
 
 def test_reaction_errors_and_zero_crossings():
-    from flexval.validation.drivereaction import reaction_errors, zero_crossings
+    from flexval.validation.report.drivereaction import reaction_errors, zero_crossings
 
     mech, load = von_mises_truss()
     drive = Displacement("c", mech.target_point, dy=-50.0)

@@ -20,9 +20,10 @@ import pytest
 from flexval.geometry import SceneError
 from flexval.geometry.scene import field_reference, parse_scene
 from flexval.geometry.scenefields import SCENE_TABLES
-from flexval.validation.clireference import cli_reference, commands
-from flexval.validation.sweep.spec import AXES, SWEEP, parse_sweep
-from flexval.validation.sweep.spec import field_reference as sweep_reference
+from flexval.validation.cli.reference import cli_reference, commands
+from flexval.validation.sweep.fields import AXES, SWEEP
+from flexval.validation.sweep.fields import field_reference as sweep_reference
+from flexval.validation.sweep.spec import parse_sweep
 
 UNDECLARED = "not_a_declared_field"
 

@@ -1,5 +1,6 @@
 """Estimates before a dynamic run: its time steps from the duration, the lowest natural
-frequency at rest and the error tolerance (:data:`flexval.validation.dynamic.STEPS_FIT`), its
+frequency at rest and the error tolerance (:data:`flexval.validation.studies.dynamic.STEPS_FIT`),
+its
 time from one timed Newton iteration; above the long-work threshold the estimate is printed
 and each run shows a progress line per 1/20 of its duration; the results are the same."""
 
@@ -10,12 +11,12 @@ import pytest
 from flexval.geometry import load_scene
 from flexval.reducedmodels import parse_model
 from flexval.validation.cli import EXIT_INPUT, main
-from flexval.validation.dynamic import (
+from flexval.validation.studies.dynamic import (
     PROGRESS_UNITS,
     estimate_dynamic,
     run_dynamic,
 )
-from flexval.validation.modes import choose_density
+from flexval.validation.studies.modes import choose_density
 
 DENSITY = 1.24e-9
 """t/mm^3: the open chain's flexures in PLA (lowest mode 21.6 Hz at rest)."""

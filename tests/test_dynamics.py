@@ -1,4 +1,4 @@
-"""Time integration (flexval.reducedmodels.dynamics) and load time laws
+"""Time integration (flexval.reducedmodels.analyses.dynamics) and load time laws
 (flexval.geometry.timelaw)."""
 
 from __future__ import annotations
@@ -14,14 +14,14 @@ import pytest
 from flexval.geometry import MassData, RigidMass, SceneError, Segment
 from flexval.geometry.scene import parse_scene
 from flexval.geometry.timelaw import TimeLaw, eq15_ramp
+from flexval.reducedmodels.analyses.dynamics import DynamicSettings, Rayleigh, solve_dynamic
+from flexval.reducedmodels.analyses.modes import natural_modes
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.connector import Connector
-from flexval.reducedmodels.core import System
-from flexval.reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
-from flexval.reducedmodels.inertia import MassModel
+from flexval.reducedmodels.core.connector import Connector
+from flexval.reducedmodels.core.inertia import MassModel
+from flexval.reducedmodels.core.recorder import solve_path
+from flexval.reducedmodels.core.system import System
 from flexval.reducedmodels.models import build_system
-from flexval.reducedmodels.modes import natural_modes
-from flexval.reducedmodels.recorder import solve_path
 from tests.builders import cantilever, tip_moment
 from tests.test_inertia import SCENE
 
@@ -317,8 +317,8 @@ def _swinging_cantilever_step(beta: float):
     lumped masses), so M is constant and the convective forces vanish: the
     step's residual then has no term the effective tangent leaves out.
     """
-    from flexval.reducedmodels.dynamics import DynamicStep, GeneralizedAlpha
-    from flexval.reducedmodels.tracer import LoadControl, trace
+    from flexval.reducedmodels.analyses.dynamics import DynamicStep, GeneralizedAlpha
+    from flexval.reducedmodels.core.tracer import LoadControl, trace
 
     mech = cantilever(Segment((0.0, 0.0), (L, 0.0)))
     mech = dataclasses.replace(

@@ -140,7 +140,7 @@ def test_designer_walkthrough_runs_and_its_numbers_hold(monkeypatch, capsys):
     plt.close("all")
     printed = capsys.readouterr().out
     assert "beam:20[eb]" in printed and "end rotation" in printed
-    from flexval.validation.compare import errors
+    from flexval.validation.studies.compare import errors
 
     size = names["scene"].mechanism.size()
     for lp in names["paths"]:

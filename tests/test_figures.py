@@ -8,7 +8,7 @@ import pytest
 
 from flexval.geometry import load_scene
 from flexval.reducedmodels import parse_model
-from flexval.validation import figures
+from flexval.validation.report import figures
 from flexval.validation.run import run_model
 
 GUIDE = Path(__file__).parent / "scenes" / "leaf_guide.toml"

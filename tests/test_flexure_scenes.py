@@ -222,7 +222,7 @@ def test_info_describes_a_notch_by_its_law_and_compliance_stiffnesses(tmp_path, 
 
 
 def test_plot_draws_the_true_outline(tmp_path):
-    from flexval.validation.drawing import flexure_outline
+    from flexval.validation.report.drawing import flexure_outline
 
     flexure = load_scene(NOTCH).mechanism.flexures[0]
     outline = flexure_outline(flexure)
@@ -235,7 +235,7 @@ def test_plot_draws_the_true_outline(tmp_path):
 
 
 def test_opensees_peer_names_a_varying_section_instead_of_running():
-    from flexval.validation.peers import compare_with_opensees
+    from flexval.validation.studies.peers import compare_with_opensees
 
     rows = compare_with_opensees(load_scene(NOTCH))
     assert [r.case for r in rows] == ["moment", "force"]

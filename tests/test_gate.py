@@ -1,13 +1,13 @@
 """``flexval gate``: verdicts, exit codes, the JUnit XML and JSON, the result cache, bad input.
 
 The expected verdicts are computed here from the library's own error
-function (:func:`flexval.validation.compare.errors`) on paths run directly
+function (:func:`flexval.validation.studies.compare.errors`) on paths run directly
 (:func:`flexval.validation.run.run_model`), never typed in; those of
 ``limit_load`` from the report's limit-load and bifurcation tables
-(:func:`flexval.validation.campaign.run_campaign`,
-:func:`flexval.validation.strength.limit_load_data` and ``bifurcation_data``), and
+(:func:`flexval.validation.studies.campaign.run_campaign`,
+:func:`flexval.validation.report.strength.limit_load_data` and ``bifurcation_data``), and
 those of ``frequency`` from the report's natural-frequency table
-(:func:`flexval.validation.frequencies.frequency_data`). The reference is
+(:func:`flexval.validation.report.frequencies.frequency_data`). The reference is
 ``beam:100`` (fast) where the brief's acceptance run uses ``continuum:1``:
 on the open chain's f+ case ``dcmm:1`` is about 15 % off either.
 """
@@ -24,8 +24,8 @@ from flexval.geometry import load_scene
 from flexval.reducedmodels import Family, SolverError, parse_model, register
 from flexval.reducedmodels.catalogue import unregister
 from flexval.validation.cli import main
-from flexval.validation.compare import errors
 from flexval.validation.run import run_model
+from flexval.validation.studies.compare import errors
 
 pytestmark = pytest.mark.usefixtures("private_mesh_cache")
 
@@ -213,7 +213,7 @@ def test_scene_files_are_found_relative_to_the_gates_file(tmp_path, capsys):
 
 
 def test_the_gates_reference_names_every_declared_field():
-    from flexval.validation.gatefile import GATE, GATES, field_reference
+    from flexval.validation.studies.gatefile import GATE, GATES, field_reference
 
     text = field_reference()
     for table in (GATES, GATE):
@@ -236,8 +236,8 @@ def _first_critical(limits: dict, bifurcations: dict, model: str, case: str) -> 
 def limit_expected() -> dict[str, tuple[float, float | None, float | None]]:
     """{scene: (beam:10's limit_load error %, beam:10's, ee's first critical load)} from
     the report's limit-load and bifurcation tables."""
-    from flexval.validation.campaign import run_campaign
-    from flexval.validation.strength import bifurcation_data, limit_load_data
+    from flexval.validation.report.strength import bifurcation_data, limit_load_data
+    from flexval.validation.studies.campaign import run_campaign
 
     models = [REFERENCE, "beam:10", "ee"]
     out = {}
@@ -308,8 +308,8 @@ def test_limit_load_gates_compare_the_reports_first_critical_loads(tmp_path, lim
 
 
 def test_a_limit_load_gate_without_critical_loads_passes_saying_so(tmp_path, capsys):
-    from flexval.validation.campaign import run_campaign
-    from flexval.validation.strength import bifurcation_data, limit_load_data
+    from flexval.validation.report.strength import bifurcation_data, limit_load_data
+    from flexval.validation.studies.campaign import run_campaign
 
     scene = load_scene("open_chain")
     models = [REFERENCE, "beam:20"]
@@ -350,14 +350,14 @@ def frequency_expected(tmp_path_factory) -> dict[tuple[str, int], tuple[float, i
     """{(scene, modes): (dcmm:1's worst mode error in percent, its mode number)} from the
     report's natural-frequency table (modes = 4, its count) and from the same analysis
     with 2 modes."""
-    from flexval.validation.frequencies import (
+    from flexval.validation.report.frequencies import (
         DEFAULT_DENSITY,
         MODE_COUNT,
         frequency_data,
         lowest_frequencies,
         mode_errors,
     )
-    from flexval.validation.modes import choose_density
+    from flexval.validation.studies.modes import choose_density
 
     folder = tmp_path_factory.mktemp("scenes")
     out = {}
@@ -422,7 +422,7 @@ def test_a_frequency_gate_compares_the_lowest_modes_it_names(tmp_path, frequency
 
 def test_prepare_caches_critical_loads_and_frequencies(tmp_path, monkeypatch):
     """A warm gate reads the limit searches and the modal analyses from the cache."""
-    from flexval.validation import gatemetrics
+    from flexval.validation.studies import gatemetrics
 
     cache = tmp_path / "ci-cache"
     limits, modes = _limit_gates(tmp_path, 50.0), _frequency_gates(tmp_path, 50.0)

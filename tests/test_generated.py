@@ -24,7 +24,7 @@ from flexval.geometry.mechanism import FlexureSpec, PinSpec, assemble
 from flexval.geometry.scene import parse_scene
 from flexval.reducedmodels import SolverError, build_system, run_reduced
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.continuation import limit_loads, solve_arclength
+from flexval.reducedmodels.core.continuation import limit_loads, solve_arclength
 
 MODELS = ["dcmm:1", "dcmm:2", "beam:8", "ee", "prbm"]
 LEVELS = 5

@@ -7,7 +7,7 @@ from test_scene_errors import _base, _dump
 
 from flexval.geometry import BUILTIN_SCENES, SceneError, load_scene
 from flexval.geometry.loads import MAX_LOAD_SUBSTEPS
-from flexval.reducedmodels.core import SolverSettings
+from flexval.reducedmodels.core.settings import SolverSettings
 from flexval.validation.cli import EXIT_INPUT, MAX_LOCAL_WORKERS, main
 
 
@@ -62,12 +62,12 @@ def test_a_moment_with_a_point_or_direction_is_refused(tmp_path, key, value):
 def test_a_study_of_one_resolution_is_refused_before_work(model, levels, monkeypatch, capsys):
     """One resolution gives no ratio, order or Richardson value (the table printed
     'refinement ratio nan'); a large single N ran for minutes before saying so."""
-    import flexval.validation.convergence
+    import flexval.validation.studies.convergence
 
     def forbidden(*args, **kwargs):
         raise AssertionError("the study ran although --levels was refused")
 
-    monkeypatch.setattr(flexval.validation.convergence, "study", forbidden)
+    monkeypatch.setattr(flexval.validation.studies.convergence, "study", forbidden)
     argv = ["converge", "open_chain", "--model", model, "--levels", levels]
     assert main(argv) == EXIT_INPUT
     err = capsys.readouterr().err
@@ -367,7 +367,7 @@ def test_a_ten_billion_point_sweep_is_refused_from_its_axes(tmp_path):
 
 def test_a_sweep_accepted_by_max_points_is_still_refused_by_memory(tmp_path):
     """--max-points lifts the count bound, not the memory the points would hold."""
-    from flexval.validation.sweep.spec import BYTES_PER_POINT
+    from flexval.validation.sweep.fields import BYTES_PER_POINT
 
     path = _huge_sweep(tmp_path)
     argv = ["sweep", str(path), "--out", str(tmp_path / "o"), "--max-points", str(10**10)]

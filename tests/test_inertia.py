@@ -1,5 +1,5 @@
 """Mass data in scenes (flexval.geometry.inertia) and gravity as dead loads
-(flexval.reducedmodels.inertia)."""
+(flexval.reducedmodels.core.inertia)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from flexval.geometry import Arc, MassData, RigidMass, SceneError, Segment
 from flexval.geometry.inertia import polygon_properties
 from flexval.geometry.scene import parse_scene
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.inertia import MassModel, Weighted, chain_mass_points
+from flexval.reducedmodels.core.inertia import MassModel, Weighted, chain_mass_points
 from flexval.reducedmodels.models import build_system, run_reduced
 from tests.builders import cantilever, fd_check, tip_moment
 

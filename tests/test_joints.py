@@ -15,7 +15,7 @@ from flexval.geometry.mechanism import FlexureSpec, PinSpec, assemble
 from flexval.geometry.scene import parse_scene
 from flexval.reducedmodels import build_system, run_reduced, solve_path
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.joints import PinConnector
+from flexval.reducedmodels.core.joints import PinConnector
 from flexval.validation.cli import main
 
 FOURBAR = """

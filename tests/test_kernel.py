@@ -27,7 +27,7 @@ from flexval.reducedmodels import (
     trace,
 )
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.continuation import ArcLength, arc_dot
+from flexval.reducedmodels.core.continuation import ArcLength, arc_dot
 
 K1, K2, KT = 40.0, 60.0, 500.0
 """Spring stiffnesses of :class:`SeriesSprings`: N/mm, N/mm, N mm/rad."""
@@ -158,7 +158,7 @@ def test_hessian_product_equals_the_assembled_local_hessian(model):
     """local_hessian_product is the matrix-free form of local_hessian(...) @ x
     (same pattern values; summation order only, so 1e-12 relative)."""
     from flexval.geometry import load_scene
-    from flexval.reducedmodels.core import local_hessian, local_hessian_product
+    from flexval.reducedmodels.core.system import local_hessian, local_hessian_product
     from flexval.reducedmodels.models import build_system
 
     system = build_system(load_scene("closed_chain").mechanism, parse_model(model))

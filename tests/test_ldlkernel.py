@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from scipy.linalg import lapack
 
-from flexval.reducedmodels.blocktangent import BlockTangent, block_maps
-from flexval.reducedmodels.ldlkernel import ldl_factor, ldl_negative, ldl_solve, pack_upper
-from flexval.reducedmodels.tangent import DenseTangent
+from flexval.reducedmodels.core.blocktangent import BlockTangent, block_maps
+from flexval.reducedmodels.core.tangent import DenseTangent
+from flexval.reducedmodels.kernels.ldlkernel import ldl_factor, ldl_negative, ldl_solve, pack_upper
 
 
 def _lapack_d(matrix: np.ndarray) -> np.ndarray:

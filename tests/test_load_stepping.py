@@ -1,6 +1,6 @@
 """Load control's sub-step control: no Newton solve starts from a prediction beyond the bounds.
 
-:class:`flexval.reducedmodels.tracer.LoadControl` halves a sub-step before solving
+:class:`flexval.reducedmodels.core.tracer.LoadControl` halves a sub-step before solving
 it when the predictor itself already moves a body further than the step
 bounds (such a step is refused after its Newton solve anyway, or its
 iterates leave the bounds; on the open chain's f- soft stretch that cost
@@ -18,8 +18,8 @@ import pytest
 from flexval.geometry import load_scene
 from flexval.reducedmodels import LoadControl, build_system, trace
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.core import SolverSettings
-from flexval.reducedmodels.tracer import PREDICTOR_STATES
+from flexval.reducedmodels.core.settings import SolverSettings
+from flexval.reducedmodels.core.tracer import PREDICTOR_STATES
 
 
 class RecordingControl(LoadControl):

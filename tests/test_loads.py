@@ -1,4 +1,4 @@
-"""Dead loads (flexval.reducedmodels.loads) against their potential written out independently.
+"""Dead loads (flexval.reducedmodels.core.loads) against their potential written out independently.
 
 The potential of dead forces F at material points x = p + R(theta) rel and
 moments M on body rotations is V = -lambda (sum F . x + sum M theta); here
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from flexval.geometry import Force, LoadCase, Moment
-from flexval.reducedmodels.loads import MANY_LOADS, Loads
+from flexval.reducedmodels.core.loads import MANY_LOADS, Loads
 
 BODIES = {"ground": -1, "a": 0, "b": 1}
 REFERENCE = {"ground": np.array([0.0, 0.0]), "a": np.array([10.0, 2.0]), "b": np.array([-4.0, 7.0])}

@@ -25,9 +25,9 @@ import pytest
 
 from flexval.geometry import SceneError, load_scene
 from flexval.geometry.measured import read_measurement
-from flexval.validation import measuredcompare
 from flexval.validation.cli import main
-from flexval.validation.measuredcompare import measured_range
+from flexval.validation.studies import measuredcompare
+from flexval.validation.studies.measuredcompare import measured_range
 
 pytestmark = pytest.mark.usefixtures("private_mesh_cache")
 
@@ -243,8 +243,8 @@ def test_a_bad_measurement_entry_is_a_scene_error(entry, field, reason, tmp_path
 
 
 def test_the_report_compares_against_the_scene_measurements(rig, tmp_path):
-    from flexval.validation.report import write_report
-    from flexval.validation.reportdata import compute_report
+    from flexval.validation.report.data import compute_report
+    from flexval.validation.report.writer import write_report
 
     path, _ = rig
     scene = _scene_with(

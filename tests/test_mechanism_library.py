@@ -20,10 +20,10 @@ from flexval.geometry import MECHANISM_SCENES, SceneError, load_scene
 from flexval.geometry.scene import parse_scene, read_scene_data
 from flexval.reducedmodels import SolverError
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.validation.limits import trace_arclength
+from flexval.validation.report.stiffnesstable import section, stiffness_data
 from flexval.validation.run import run_model
-from flexval.validation.stiffness import run_stiffness
-from flexval.validation.stiffnesstable import section, stiffness_data
+from flexval.validation.studies.limits import trace_arclength
+from flexval.validation.studies.stiffness import run_stiffness
 
 ROOT = Path(__file__).parents[1]
 

@@ -1,5 +1,5 @@
-"""Natural frequencies against closed forms (flexval.reducedmodels.modes,
-flexval.reducedmodels.inertia)."""
+"""Natural frequencies against closed forms (flexval.reducedmodels.analyses.modes,
+flexval.reducedmodels.core.inertia)."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import pytest
 from scipy.optimize import brentq
 
 from flexval.geometry import Arc, MassData, RigidMass, SceneError, Segment
+from flexval.reducedmodels.analyses.modes import natural_modes, sparse_modes, sparse_tangent
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.inertia import MassModel
+from flexval.reducedmodels.core.inertia import MassModel
 from flexval.reducedmodels.models import build_system
-from flexval.reducedmodels.modes import natural_modes, sparse_modes, sparse_tangent
 from tests.builders import cantilever, tip_force
 
 L, B, H, E, NU, RHO = 10.0, 1.0, 0.1, 2100.0, 0.3, 1.24e-9

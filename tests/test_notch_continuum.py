@@ -23,7 +23,7 @@ from flexval.geometry.compliance import curve_compliance
 from flexval.geometry.mechanism import FlexureSpec, assemble
 from flexval.geometry.profiles import LinearTaper, NotchProfile
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.validation.convergence import study
+from flexval.validation.studies.convergence import study
 
 pytestmark = pytest.mark.usefixtures("private_mesh_cache")
 
@@ -195,7 +195,7 @@ def test_report_names_the_notch_stress_concentrations():
     its peak at the root."""
     from flexval.geometry import load_scene
     from flexval.validation.continuum.run import run_continuum
-    from flexval.validation.strength import fibre_table
+    from flexval.validation.report.strength import fibre_table
 
     scene = load_scene("notch_fourbar")
     case = scene.load_cases[0]

@@ -236,7 +236,7 @@ def test_peak_fibre_stress_against_the_continuums(references, hinge):
     the axis the peak leaves the waist, where the waist's K is not the local one: beam:100
     within 6 % (measured 0.07-2.4 %, the power hinge of n 2.98 5.2 %); every model's peak
     is at least as close as its plain beam formula (K >= 1 and the beam formula is low)."""
-    from flexval.validation.yieldpoint import flexure_peaks, notch_concentrations
+    from flexval.validation.studies.yieldpoint import flexure_peaks, notch_concentrations
 
     for case in ("moment", "force"):
         loaded, ref = references[hinge, case]
@@ -260,7 +260,7 @@ def test_notch_fourbar_peak_stress_and_the_run_line(capsys):
     model's K times its beam formula, within 1 % (measured 0.4 %; the beam formula alone
     4.2 % low); the run line marks and names it."""
     from flexval.validation.cli import main
-    from flexval.validation.yieldpoint import flexure_peaks, notch_concentrations
+    from flexval.validation.studies.yieldpoint import flexure_peaks, notch_concentrations
 
     scene = flexval.load_scene("notch_fourbar")
     ref = flexval.run_model(scene, "continuum:2", "f+")

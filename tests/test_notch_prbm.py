@@ -25,9 +25,9 @@ from flexval.geometry.compliance import SHEAR_CORRECTION
 from flexval.geometry.profiles import LinearTaper
 from flexval.geometry.shapes import Spline
 from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.core.validity import MAX_STRAIN
 from flexval.reducedmodels.models import run_reduced
-from flexval.reducedmodels.pivot import NotchPivotConnector
-from flexval.reducedmodels.validity import MAX_STRAIN
+from flexval.reducedmodels.prbm.pivot import NotchPivotConnector
 
 
 def notch(contour: str, angle: float = 0.0, origin=(0.0, 0.0)):

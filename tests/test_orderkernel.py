@@ -1,7 +1,7 @@
 """The compiled reverse Cuthill-McKee ordering against scipy's, and the layouts built with it.
 
 A compiled System's TangentLayout orders its unknowns with
-flexval.reducedmodels.orderkernel instead of scipy.sparse.csgraph.reverse_cuthill_mckee;
+flexval.reducedmodels.kernels.orderkernel instead of scipy.sparse.csgraph.reverse_cuthill_mckee;
 the permutation must be scipy's exactly (the same tangent storage, so the
 same numbers in every result). Checked on chains and closed loops in a
 shuffled numbering, disconnected graphs, patterns with duplicates, missing
@@ -17,10 +17,10 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from flexval.geometry import load_scene
-from flexval.reducedmodels import orderkernel
 from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.core.tangent import NARROW_BAND, NARROW_MIN, TangentLayout
+from flexval.reducedmodels.kernels import orderkernel
 from flexval.reducedmodels.models import build_system
-from flexval.reducedmodels.tangent import NARROW_BAND, NARROW_MIN, TangentLayout
 
 
 def scipy_ordering(n: int, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:

@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 
 import flexval.geometry.files
-import flexval.validation.bench
-import flexval.validation.convergence
-import flexval.validation.report
-import flexval.validation.reportdata
+import flexval.validation.report.data
+import flexval.validation.report.writer
 import flexval.validation.run
-import flexval.validation.stress
+import flexval.validation.studies.bench
+import flexval.validation.studies.convergence
+import flexval.validation.studies.stress
 from flexval.geometry import load_scene
 from flexval.geometry.files import OutputError, atomic_path
 from flexval.validation.cli import EXIT_INPUT, EXIT_OUTPUT, main
@@ -54,10 +54,10 @@ def no_work(monkeypatch):
 
     for module, name in (
         (flexval.validation.run, "run_model"),
-        (flexval.validation.convergence, "study"),
-        (flexval.validation.report, "build_report"),
-        (flexval.validation.bench, "runtime_vs_error"),
-        (flexval.validation.stress, "stress_report"),
+        (flexval.validation.studies.convergence, "study"),
+        (flexval.validation.report.writer, "build_report"),
+        (flexval.validation.studies.bench, "runtime_vs_error"),
+        (flexval.validation.studies.stress, "stress_report"),
     ):
         monkeypatch.setattr(module, name, forbidden)
 
@@ -161,10 +161,10 @@ FOLDER_COMMANDS = [
     ],
 )
 def test_bad_output_file_refused_before_work(command, kind, tmp_path, no_work, capsys, monkeypatch):
-    import flexval.validation.drawing
+    import flexval.validation.report.drawing
 
     monkeypatch.setattr(
-        flexval.validation.drawing,
+        flexval.validation.report.drawing,
         "plot_mechanism",
         lambda *a: pytest.fail("plotted before checking the output"),
     )
@@ -394,9 +394,9 @@ def _hostile_scene(name: str, case_name: str):
 )
 def test_report_writes_only_inside_its_folder(name, case_name, tmp_path, monkeypatch):
     scene = _hostile_scene(name, case_name)
-    monkeypatch.setattr(flexval.validation.reportdata, "load_scene", lambda _: scene)
+    monkeypatch.setattr(flexval.validation.report.data, "load_scene", lambda _: scene)
     out = tmp_path / "deep" / "out"
-    md = flexval.validation.report.build_report(
+    md = flexval.validation.report.writer.build_report(
         ["hostile"],
         out,
         ["beam:20", "ee"],
@@ -421,10 +421,12 @@ def test_bench_and_stress_files_stay_inside(name, tmp_path, monkeypatch):
     scene = _hostile_scene(name, "c")
     out = tmp_path / "out"
     rows = [{"model": "ee", "seconds": 1e-3, "error": 1.0, "per_case": {}}]
-    md = flexval.validation.bench.write_bench(scene, rows, "beam:20", out)
+    md = flexval.validation.studies.bench.write_bench(scene, rows, "beam:20", out)
     report = {"scene": name, "models": {}}
-    monkeypatch.setattr(flexval.validation.stress, "format_markdown", lambda r: "# stress\n")
-    smd, sjs = flexval.validation.stress.write_stress(report, out)
+    monkeypatch.setattr(
+        flexval.validation.studies.stress, "format_markdown", lambda r: "# stress\n"
+    )
+    smd, sjs = flexval.validation.studies.stress.write_stress(report, out)
     for p in tmp_path.rglob("*"):
         if p.is_file():
             assert out in p.parents
@@ -434,10 +436,10 @@ def test_bench_and_stress_files_stay_inside(name, tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("name", ["m.xyz", "m.png.exe", "m.json"])
 def test_plot_refuses_unknown_picture_formats(name, tmp_path, capsys, monkeypatch):
-    import flexval.validation.drawing
+    import flexval.validation.report.drawing
 
     monkeypatch.setattr(
-        flexval.validation.drawing,
+        flexval.validation.report.drawing,
         "plot_mechanism",
         lambda *a: pytest.fail("plotted before checking the output"),
     )
@@ -490,10 +492,10 @@ def test_bad_input_creates_no_output_folder(command, tmp_path, no_work):
     "option, name", [("--json", "x/none.json"), ("--plot", "m.xyz"), ("--plot", "x/none.png")]
 )
 def test_modes_outputs_refused_before_work(option, name, tmp_path, capsys, monkeypatch):
-    import flexval.validation.modes
+    import flexval.validation.studies.modes
 
     monkeypatch.setattr(
-        flexval.validation.modes,
+        flexval.validation.studies.modes,
         "run_modes",
         lambda *a: pytest.fail("computed before checking the output"),
     )

@@ -69,7 +69,7 @@ def test_top_level_names_resolve_lazily_to_their_modules():
     """The names a first call needs are the package modules' own objects."""
     from flexval.geometry.scene import load_scene
     from flexval.reducedmodels.catalogue import parse_model
-    from flexval.reducedmodels.loadpath import LoadPath
+    from flexval.reducedmodels.core.loadpath import LoadPath
     from flexval.validation.run import run_model
 
     assert flexval.load_scene is load_scene

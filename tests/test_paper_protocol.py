@@ -3,7 +3,7 @@
 A very slow (40 first periods), critically damped (ratio 1) Eq. 15 ramp must
 end at the static end state within 0.1 % (the quasi-static limit asked of
 dynamic runs); the script's end-of-ramp error must equal
-``flexval.validation.compare.errors``' ``end_disp_vec`` and ``end_rot`` on static paths.
+``flexval.validation.studies.compare.errors``' ``end_disp_vec`` and ``end_rot`` on static paths.
 Its ``protocol.json`` is strict JSON (a failed run's errors are null), carries
 the code version and reads back through the report's reader with the table's
 numbers.
@@ -22,7 +22,7 @@ import pytest
 from flexval.geometry import load_scene
 from flexval.validation.cache import code_version
 from flexval.validation.outputs import write_json
-from flexval.validation.protocolsection import protocol_section, read_protocol
+from flexval.validation.report.protocol import protocol_section, read_protocol
 
 SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "paper_protocol.py"
 

@@ -31,9 +31,9 @@ import pytest
 
 from flexval.geometry import load_scene
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.validation.campaign import run_campaign
-from flexval.validation.compare import paper_percent
-from flexval.validation.report import SceneResults, _paper_table
+from flexval.validation.report.writer import SceneResults, _paper_table
+from flexval.validation.studies.campaign import run_campaign
+from flexval.validation.studies.compare import paper_percent
 
 MODELS = ["beam:100", "beam:20", "prbm", "dcmm:1", "dcmm:2", "dcmm:3", "ee"]
 

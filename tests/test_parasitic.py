@@ -1,4 +1,4 @@
-"""Parasitic motion, component by component (flexval.validation.parasitic).
+"""Parasitic motion, component by component (flexval.validation.studies.parasitic).
 
 * The metric on load paths built by hand: a model that predicts no parasitic motion is
   100 % off, a reference component of round-off size is not scored, and which components
@@ -22,8 +22,12 @@ import pytest
 
 from flexval.geometry import Force, LoadCase, Moment, load_scene
 from flexval.reducedmodels import LoadPath, parse_model
-from flexval.validation.parasitic import ROUND_OFF_FLOOR, parasitic_components, parasitic_errors
 from flexval.validation.run import run_model
+from flexval.validation.studies.parasitic import (
+    ROUND_OFF_FLOOR,
+    parasitic_components,
+    parasitic_errors,
+)
 
 FORCE_X = LoadCase("push", (Force("t", np.zeros(2), 0.0, 1.0),), 3)
 

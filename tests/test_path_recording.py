@@ -19,8 +19,8 @@ from builders import cantilever, tip_moment
 from flexval.geometry import Segment, load_scene
 from flexval.reducedmodels import LoadControl, build_system, trace
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.recorder import path_end_pass
-from flexval.reducedmodels.validity import MAX_RELATIVE_ROTATION, MAX_STRAIN
+from flexval.reducedmodels.core.recorder import path_end_pass
+from flexval.reducedmodels.core.validity import MAX_RELATIVE_ROTATION, MAX_STRAIN
 
 MODELS = ["dcmm:1", "dcmm:3", "dcmm:2[frame=follower]", "prbm", "beam:6"]
 
@@ -145,7 +145,7 @@ def test_recorded_path_matches_the_state_by_state_judgement():
     moment = 1.5 * MAX_RELATIVE_ROTATION * 2100.0 * 0.1**3 / 12.0 / 10.0
     system = build_system(mech, parse_model("dcmm:1"))
     case = tip_moment(moment, levels=5)
-    from flexval.reducedmodels.recorder import solve_path
+    from flexval.reducedmodels.core.recorder import solve_path
 
     lp = solve_path(system, case)
     states = [p.state for p in trace(system, system.loads(case), LoadControl(case.factors()))]

@@ -1,4 +1,5 @@
-"""The OpenSees peer model (flexval.validation.peers) solves the same problem as flexval's beams.
+"""The OpenSees peer model (flexval.validation.studies.peers) solves the same problem as flexval's
+beams.
 
 OpenSees' corotational elasticBeamColumn and flexval's beam:N discretise the
 flexures the same way (N two-node corotational Euler-Bernoulli elements, nodes
@@ -18,7 +19,7 @@ import pytest
 
 from flexval.geometry import load_scene
 from flexval.geometry.inertia import MassData
-from flexval.validation.peers import (
+from flexval.validation.studies.peers import (
     AGREEMENT_BAR,
     PeerRow,
     PeerUnavailable,
@@ -29,7 +30,7 @@ from flexval.validation.peers import (
 
 def _opensees_or_skip():
     try:
-        from flexval.validation.peers import opensees
+        from flexval.validation.studies.peers import opensees
 
         return opensees()
     except PeerUnavailable as exc:
@@ -74,7 +75,7 @@ def test_a_case_opensees_cannot_follow_has_no_times_but_a_reason():
 
 def test_an_opensees_error_is_a_row_not_a_crash(monkeypatch):
     ops = _opensees_or_skip()
-    import flexval.validation.peers as peers
+    import flexval.validation.studies.peers as peers
 
     def broken(*args):
         raise ops.OpenSeesError("See stderr output")
@@ -88,7 +89,7 @@ def test_report_with_peers_says_when_opensees_is_missing(tmp_path, monkeypatch):
     """``flexval report --peers`` reaches the run times, and a missing peer is said there."""
     from test_report import TINY
 
-    import flexval.validation.peers as peers
+    import flexval.validation.studies.peers as peers
     from flexval.validation.cli import main
 
     def missing():

@@ -18,8 +18,8 @@ import flexval.validation.continuum.family  # noqa: F401  (registers continuum:N
 from flexval.geometry import Material, load_scene
 from flexval.reducedmodels import parse_model
 from flexval.reducedmodels.models import run_reduced
-from flexval.validation.compare import errors
 from flexval.validation.run import run_model
+from flexval.validation.studies.compare import errors
 
 
 def test_plane_strain_constants_keep_the_shear_modulus():

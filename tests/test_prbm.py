@@ -31,9 +31,9 @@ from flexval.geometry import Arc, Force, LoadCase, Moment, Segment, load_scene
 from flexval.geometry.shapes import arc_semi_axes
 from flexval.reducedmodels import build_system, run_reduced, solve_path
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.core import local_hessian
-from flexval.reducedmodels.prbm import (
-    PrbmConnector,
+from flexval.reducedmodels.core.system import local_hessian
+from flexval.reducedmodels.prbm.connector import PrbmConnector
+from flexval.reducedmodels.prbm.parameters import (
     PrbmParameters,
     load_table,
     shape_frame,
@@ -386,7 +386,7 @@ def test_end_pass_kernels_against_the_generic_statics():
     sections.statics_section_forces (the generic statics of a polyline) with
     the wrench of PrbmConnector.evaluate. To round-off (1e-12 relative).
     """
-    from flexval.reducedmodels.sections import statics_section_forces
+    from flexval.reducedmodels.core.sections import statics_section_forces
 
     system = build_system(load_scene("closed_chain").mechanism, parse_model("prbm"))
     group = system.groups[0][0]
@@ -432,7 +432,8 @@ def test_a_chains_kept_geometry_is_the_geometry_computed_anew():
     the kept arrays are read-only, so no copy can change another's."""
     import dataclasses
 
-    from flexval.reducedmodels.prbm import PrbmConnector, _geometry, joint_positions
+    from flexval.reducedmodels.prbm.connector import PrbmConnector, _geometry
+    from flexval.reducedmodels.prbm.parameters import joint_positions
 
     mech = load_scene("open_chain").mechanism
     for flexure in mech.flexures:

@@ -4,8 +4,8 @@ import io
 
 import pytest
 
-from flexval.validation import campaign
-from flexval.validation.campaign import LOG_LINES, Progress
+from flexval.validation.studies import campaign
+from flexval.validation.studies.campaign import LOG_LINES, Progress
 
 
 class _Terminal(io.StringIO):

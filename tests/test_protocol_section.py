@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from flexval.validation.outputs import write_json
-from flexval.validation.protocolsection import (
+from flexval.validation.report.protocol import (
     PROTOCOL_FORMAT,
     Cell,
     closest_cell,

@@ -11,10 +11,10 @@ from builders import tiny_scene
 
 from flexval.geometry import load_scene
 from flexval.reducedmodels import parse_model
-from flexval.validation.compare import errors
-from flexval.validation.report import build_report
-from flexval.validation.reportdata import read_results
+from flexval.validation.report.data import read_results
+from flexval.validation.report.writer import build_report
 from flexval.validation.run import run_model
+from flexval.validation.studies.compare import errors
 
 TINY = tiny_scene()
 
@@ -151,8 +151,8 @@ def test_limit_load_table_of_a_scene_with_a_limit_point(tmp_path):
 @pytest.fixture(scope="module")
 def builtin_report(tmp_path_factory):
     """Both built-in scenes with one reduced model (the reference beam:100 is added)."""
-    from flexval.validation.report import write_report
-    from flexval.validation.reportdata import compute_report
+    from flexval.validation.report.data import compute_report
+    from flexval.validation.report.writer import write_report
 
     data = compute_report(
         ["open_chain", "closed_chain"],
@@ -185,10 +185,10 @@ def _frequency_rows(text: str, scene: str) -> dict[str, list[tuple[str, float]]]
 def test_frequency_table_equals_direct_modal_analysis(builtin_report, scene_name):
     """Each scene's table: the reference's own row at 0 %, every cell the frequency of a
     direct modal analysis (PLA flexures, massless links) and its error against the reference's."""
+    from flexval.reducedmodels.analyses.modes import natural_modes
     from flexval.reducedmodels.models import build_system
-    from flexval.reducedmodels.modes import natural_modes
-    from flexval.validation.frequencies import DEFAULT_DENSITY, MODE_COUNT
-    from flexval.validation.modes import with_density
+    from flexval.validation.report.frequencies import DEFAULT_DENSITY, MODE_COUNT
+    from flexval.validation.studies.modes import with_density
 
     data, md = builtin_report
     res = next(r for r in data.scenes if r.scene.name == scene_name)
@@ -210,7 +210,7 @@ def test_frequency_table_equals_direct_modal_analysis(builtin_report, scene_name
 def test_a_failed_modal_analysis_is_a_row_of_the_table(monkeypatch, tmp_path):
     """A model whose modal analysis raises is recorded as a failure; the others are kept."""
     from flexval.reducedmodels import SolverError
-    from flexval.validation import frequencies
+    from flexval.validation.report import frequencies
 
     real = frequencies.run_modes
 
@@ -239,7 +239,7 @@ def test_findings_name_the_levels_a_model_leaves_its_validity(tmp_path):
     """A twist that turns the tip by ~0.47 rad: the linear ee leaves its range (body
     rotations above sqrt(2 MAX_STRAIN)) at the first level whose own rotation passes
     the limit, found here from a direct run; beam:10 stays inside and gets no line."""
-    from flexval.reducedmodels.validity import MAX_LINEAR_ROTATION
+    from flexval.reducedmodels.core.validity import MAX_LINEAR_ROTATION
 
     scene_file = tmp_path / "tiny.toml"
     scene_file.write_text(TINY.replace("value = 0.02", "value = 0.1"))
@@ -269,8 +269,8 @@ def test_peak_stress_in_a_uniform_field_has_no_place():
     # peak's place is round-off, so the table says "uniform"; under f+ it names the place.
     from flexval.geometry import load_scene
     from flexval.reducedmodels.catalogue import parse_model
+    from flexval.validation.report.strength import peak_at_full_load, peak_stress_table
     from flexval.validation.run import run_model
-    from flexval.validation.strength import peak_at_full_load, peak_stress_table
 
     scene = load_scene("open_chain")
     cases = {c.name: c for c in scene.load_cases}
@@ -293,7 +293,7 @@ def test_protocol_section_sits_before_the_discussion_of_an_open_chain_report(
     from test_protocol_section import _document
 
     from flexval.validation.outputs import write_json
-    from flexval.validation.report import render_markdown
+    from flexval.validation.report.writer import render_markdown
 
     data, md = builtin_report
     text = md.read_text()

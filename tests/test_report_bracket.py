@@ -16,10 +16,10 @@ import pytest
 
 from flexval.geometry import load_scene
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.validation.compare import errors
-from flexval.validation.report import write_report
-from flexval.validation.reportdata import compute_report
+from flexval.validation.report.data import compute_report
+from flexval.validation.report.writer import write_report
 from flexval.validation.run import run_model
+from flexval.validation.studies.compare import errors
 
 SCENE = "closed_chain"
 MODELS = ["continuum", "beam:100", "dcmm:1"]

@@ -21,12 +21,12 @@ from flexval.geometry import load_scene
 from flexval.geometry.graph import independent_loops
 from flexval.reducedmodels import build_system, catalogue
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.continuation import limit_loads, solve_arclength
-from flexval.validation import figures
+from flexval.reducedmodels.core.continuation import limit_loads, solve_arclength
 from flexval.validation.cli import main
 from flexval.validation.failures import LIMIT_POINT, LIMIT_SETTINGS
-from flexval.validation.report import write_report
-from flexval.validation.reportdata import compute_report
+from flexval.validation.report import figures
+from flexval.validation.report.data import compute_report
+from flexval.validation.report.writer import write_report
 
 ARCH = """
 name = "arch"

@@ -17,9 +17,9 @@ import re
 import pytest
 from test_report import TINY
 
-from flexval.validation.peers import PeerRow
-from flexval.validation.report import write_report
-from flexval.validation.reportdata import LEFT_OUT, TIMING_STATS, compute_report, read_results
+from flexval.validation.report.data import LEFT_OUT, TIMING_STATS, compute_report, read_results
+from flexval.validation.report.writer import write_report
+from flexval.validation.studies.peers import PeerRow
 
 MODELS = ["continuum:0", "beam:100", "beam:10", "dcmm:1", "ee"]
 RESULT_FILES = ("report.md", "results.json", "gates.json")

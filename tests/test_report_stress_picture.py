@@ -13,9 +13,11 @@ import pytest
 from test_report import TINY
 
 from flexval.reducedmodels import SolverError
-from flexval.validation import campaign, failures, figures
-from flexval.validation.report import render_markdown, write_report
-from flexval.validation.reportdata import compute_report
+from flexval.validation import failures
+from flexval.validation.report import figures
+from flexval.validation.report.data import compute_report
+from flexval.validation.report.writer import render_markdown, write_report
+from flexval.validation.studies import campaign
 
 REFERENCE = "continuum:0"
 FAILING_CASE = "twist"

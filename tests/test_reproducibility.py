@@ -3,11 +3,11 @@ dynamic, with one Dask worker or several, from the cache or recomputed.
 
 ``benchmarks/paper_protocol.py`` sets its ramp times in periods of the reference's
 first natural mode; the reference (beam:100) has more coordinates than
-:data:`flexval.reducedmodels.modes.DENSE_MODES_LIMIT`, so its modes come from ARPACK, whose
+:data:`flexval.reducedmodels.analyses.modes.DENSE_MODES_LIMIT`, so its modes come from ARPACK, whose
 default starting vector is drawn from the operating system's entropy: the frequencies
 would differ in the 9th digit between processes, and the adaptive time stepping carries
 such a difference into end-of-ramp errors that move by up to 0.8 percentage points, so
-the start vector is seeded (:data:`flexval.reducedmodels.modes.LANCZOS_START_SEED`).
+the start vector is seeded (:data:`flexval.reducedmodels.analyses.modes.LANCZOS_START_SEED`).
 The first test repeats that chain (sparse modes, a ramp in periods of them, an adaptive
 run) in one process and in two. The others run the command line in separate processes,
 each with its own cache, and compare every number exactly (floats by their hex form; wall
@@ -30,9 +30,9 @@ import hashlib, json
 import numpy as np
 from flexval.geometry.timelaw import TimeLaw
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.dynamics import DynamicSettings, Rayleigh, solve_dynamic
+from flexval.reducedmodels.analyses.dynamics import DynamicSettings, Rayleigh, solve_dynamic
 from flexval.reducedmodels.models import build_system
-from flexval.reducedmodels.modes import DENSE_MODES_LIMIT, natural_modes
+from flexval.reducedmodels.analyses.modes import DENSE_MODES_LIMIT, natural_modes
 from tests.builders import tip_moment
 from tests.test_modes import RHO, straight
 

@@ -4,7 +4,7 @@ A nonlinear model's Newton iteration stops on corrections below a fixed
 fraction of the mechanism's size, and its states are positions rounded to
 that size: under a load that moves the target by 1e-14 of the size its
 answer can have the wrong sign. The validity monitor's screen
-(:func:`flexval.reducedmodels.validity.resolution_reasons`) must flag every
+(:func:`flexval.reducedmodels.core.validity.resolution_reasons`) must flag every
 level whose answer is further than 0.1 % from the exact one, at any load
 scale, and no level whose answer is right.
 
@@ -22,10 +22,10 @@ import pytest
 from builders import with_sections_scaled
 
 from flexval.geometry import Force, LoadCase, Moment, load_scene
-from flexval.reducedmodels.batch import run_batch
 from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.core.batch import run_batch
+from flexval.reducedmodels.core.validity import RESOLVED_MOTION, ROUND_OFF_GROWTH
 from flexval.reducedmodels.models import run_reduced
-from flexval.reducedmodels.validity import RESOLVED_MOTION, ROUND_OFF_GROWTH
 from flexval.validation.run import run_model
 
 REFERENCE_SCALE = 1e-6  # of the paper's loads: linear to ~1e-6, far above round-off

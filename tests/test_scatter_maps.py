@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 
 from flexval.geometry import MassData, load_scene
-from flexval.reducedmodels.beam import BeamGroup
+from flexval.reducedmodels.beam.elements import BeamGroup
 from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.core.tangent import TangentLayout
 from flexval.reducedmodels.models import build_system
-from flexval.reducedmodels.tangent import TangentLayout
 
 SCENES = Path(__file__).parent / "scenes"
 

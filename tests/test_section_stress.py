@@ -20,8 +20,8 @@ from elastica import cantilever_tip_force
 from flexval.geometry import Arc, Segment
 from flexval.reducedmodels import run_reduced
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.sections import statics_section_forces
-from flexval.validation.convergence import richardson
+from flexval.reducedmodels.core.sections import statics_section_forces
+from flexval.validation.studies.convergence import richardson
 
 B, H, E = 2.0, 0.5, 2100.0
 ARC = Arc((0.0, 0.0), 10.0, math.radians(-30.0), math.radians(150.0))
@@ -166,7 +166,7 @@ def test_curved_beam_factor_is_the_winkler_bach_inner_fibre_stress(r_over_h):
     factor; for r >> h it tends to 1 + h / (3 r)."""
     from scipy.integrate import quad
 
-    from flexval.validation.strength import curved_beam_factor
+    from flexval.validation.report.strength import curved_beam_factor
 
     h, b, M = 1.0, 1.0, 1.0
     r = r_over_h * h
@@ -189,7 +189,7 @@ def test_continuum_fibre_stress_of_a_thick_arc_is_the_curved_beam_value():
     Measured (levels 0, 1, 2): 1.0857, 1.0920, 1.0915 times 6 M / (b h^2) against 1.0905;
     bound 0.2 % at level 2, and the differences shrink."""
     from flexval.validation.continuum.run import run_continuum
-    from flexval.validation.strength import curved_beam_factor
+    from flexval.validation.report.strength import curved_beam_factor
 
     R, h, moment = 4.0, 1.0, 1e-3
     mech = cantilever(Arc((0.0, 0.0), R, math.radians(-60.0), math.radians(120.0)), E=E, b=1.0, h=h)
@@ -207,7 +207,7 @@ def test_continuum_fibre_stress_of_a_thick_arc_is_the_curved_beam_value():
 
 def test_a_quantity_converged_to_round_off_gets_no_observed_order():
     """Changes of 1e-8 of the value are the solver's tolerance: no order is computed from them."""
-    from flexval.validation.convergence import ROUND_OFF_CHANGE, order_text
+    from flexval.validation.studies.convergence import ROUND_OFF_CHANGE, order_text
 
     exact = richardson(3.0, 3.0 + 4.8e-8, 3.0 + 7.2e-8, 2.0)  # m+'s uniform peak stress
     assert exact["order"] is None and exact["extrapolated"] == 3.0 + 7.2e-8
@@ -226,8 +226,8 @@ def test_the_report_and_the_cli_print_why_there_is_no_order(tmp_path):
     """Both printers of a convergence study say "converged to round-off" instead of an order."""
     from types import SimpleNamespace
 
-    from flexval.validation.convergence import ConvergenceStudy, format_study
-    from flexval.validation.report import _convergence_lines
+    from flexval.validation.report.writer import _convergence_lines
+    from flexval.validation.studies.convergence import ConvergenceStudy, format_study
 
     st = ConvergenceStudy("continuum", "m+", 2.0)
     st.summary = {

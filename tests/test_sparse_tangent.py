@@ -19,7 +19,7 @@ import scipy.sparse as sp
 from test_continuum import E_MOD, cantilever
 
 from flexval.geometry import Force, LoadCase, Segment
-from flexval.reducedmodels.tangent import (
+from flexval.reducedmodels.core.tangent import (
     SparseAnalysis,
     SparseTangent,
     TangentLayout,
@@ -177,7 +177,7 @@ def test_an_inaccurate_solve_is_refined_or_redone_by_the_pivoting_lu(monkeypatch
     factor recovers round-off. Without refinement the backward error check sends the
     tangent to the pivoting LU, which solves to round-off. Either way the inertia is
     Sylvester's: each block has the eigenvalues d - 1 < 0 < d + 1."""
-    from flexval.reducedmodels import tangent as module
+    from flexval.reducedmodels.core import tangent as module
 
     d = 1e-15
     K = sp.csc_matrix(sp.block_diag([np.array([[d, 1.0], [1.0, d]])] * 50))

@@ -1,4 +1,4 @@
-"""The not-a-knot cubic spline of the PRBM table (flexval.reducedmodels.spline).
+"""The not-a-knot cubic spline of the PRBM table (flexval.reducedmodels.prbm.spline).
 
 References: scipy.interpolate.CubicSpline (same spline, its default ends);
 the exact reproduction of cubic polynomials, which the not-a-knot ends
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy.interpolate import CubicSpline
 
-from flexval.reducedmodels.prbm import load_table
-from flexval.reducedmodels.spline import NotAKnotSpline
+from flexval.reducedmodels.prbm.parameters import load_table
+from flexval.reducedmodels.prbm.spline import NotAKnotSpline
 
 
 def _values(spline: NotAKnotSpline, xs: np.ndarray) -> np.ndarray:

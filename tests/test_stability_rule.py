@@ -10,7 +10,7 @@ and at every resolution: within 1 % for beams of 10 or more elements, 2 %
 for the continuum (the continuum's own plane-stress column is a little
 stiffer in shear, and its load reaches the leaf through the end faces).
 
-The rule itself (:mod:`flexval.reducedmodels.stability`) is checked against
+The rule itself (:mod:`flexval.reducedmodels.core.stability`) is checked against
 numpy's eigenvalues on matrices whose smallest eigenvalue is far above
 round-off, for every storage (dense, banded, sparse, a batch's blocks) and
 for saddle points, and for invariance under a change of units (a diagonal
@@ -29,9 +29,9 @@ import scipy.sparse as sp
 from builders import with_sections_scaled
 
 from flexval.geometry import load_scene
-from flexval.reducedmodels import stability
-from flexval.reducedmodels.core import SolverError
-from flexval.reducedmodels.tangent import BandedTangent, DenseTangent, SparseTangent
+from flexval.reducedmodels.core import stability
+from flexval.reducedmodels.core.settings import SolverError
+from flexval.reducedmodels.core.tangent import BandedTangent, DenseTangent, SparseTangent
 from flexval.validation.run import run_model
 
 SCENES = Path(__file__).parent / "scenes"
@@ -191,10 +191,10 @@ def test_a_batch_of_copies_stops_at_each_copys_own_bifurcation(model):
     """Copies of the leaf guide with their sections scaled traced as one batch stop where each
     stops alone, at the same bifurcation load bit for bit (one rule, one kernel per storage)."""
 
-    from flexval.reducedmodels.batch import trace_batch
     from flexval.reducedmodels.catalogue import parse_model
+    from flexval.reducedmodels.core.batch import trace_batch
+    from flexval.reducedmodels.core.recorder import solve_path
     from flexval.reducedmodels.models import build_system
-    from flexval.reducedmodels.recorder import solve_path
 
     scene = load_scene(str(GUIDE))
     spec, case = parse_model(model), scene.load_cases[0]
@@ -423,8 +423,8 @@ def test_a_model_blind_to_sway_is_invalid_past_the_leafs_euler_load(path, model,
 @pytest.mark.parametrize("model", ["ee", "dcmm:1"])
 def test_a_batch_of_sway_blind_copies_flags_the_same_levels_as_each_alone(model):
 
-    from flexval.reducedmodels.batch import run_batch
     from flexval.reducedmodels.catalogue import parse_model
+    from flexval.reducedmodels.core.batch import run_batch
     from flexval.reducedmodels.models import run_reduced
 
     scene = load_scene(str(GUIDE))

@@ -40,7 +40,7 @@ DISTRIBUTED = {"dask", "distributed", "pyarrow"}
 COMPILED = {"numba", "llvmlite"}
 MESHING = {"gmsh"}
 CONTINUUM = {"skfem", "flexval.validation.continuum.solid"}
-SOLVERS = {"scipy", "flexval.reducedmodels.core"}
+SOLVERS = {"scipy", "flexval.reducedmodels.core.system"}
 RARE_SCIPY = {
     "scipy.interpolate",
     "scipy.optimize",
@@ -82,7 +82,7 @@ def test_commands_that_only_read_scenes_load_no_solver(argv, tmp_path):
 @pytest.mark.parametrize("model", ["dcmm:1", "ee", "prbm"])
 def test_small_models_load_only_the_core_and_their_kernels(model, tmp_path):
     modules = _imports(["run", "closed_chain", "--model", model, "--load-case", "f+"], tmp_path)
-    assert "flexval.reducedmodels.core" in modules  # the probe did run the model
+    assert "flexval.reducedmodels.core.system" in modules  # the probe did run the model
     assert "numba" in modules  # the connectors' compiled kernels
     heavy = CONTINUUM | MESHING | PLOTTING | DISTRIBUTED | RARE_SCIPY
     assert _loaded(modules, heavy | {"scipy.sparse.linalg", "scipy.sparse.csgraph"}) == set()

@@ -21,12 +21,12 @@ import pytest
 from builders import cantilever
 
 from flexval.geometry import Segment, load_scene
+from flexval.reducedmodels.analyses.modes import scaled_case
+from flexval.reducedmodels.analyses.targetstiffness import target_stiffness
 from flexval.reducedmodels.catalogue import parse_model
 from flexval.reducedmodels.models import build_system
-from flexval.reducedmodels.modes import scaled_case
-from flexval.reducedmodels.targetstiffness import target_stiffness
 from flexval.validation.cli import main
-from flexval.validation.stiffness import run_stiffness
+from flexval.validation.studies.stiffness import run_stiffness
 
 L, E, B, H = 10.0, 2100.0, 1.0, 0.1  # mm, MPa, mm, mm
 OFFSET = (3.0, -2.0)  # the target point from the tip, mm

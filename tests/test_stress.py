@@ -14,9 +14,14 @@ from test_joints import fourbar_scene
 from flexval.geometry import Arc, Scene, load_scene
 from flexval.reducedmodels import run_reduced
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.validation.compare import errors, scale_of
 from flexval.validation.run import run_model
-from flexval.validation.stress import rescale_lengths, scale_case, stress_report, write_stress
+from flexval.validation.studies.compare import errors, scale_of
+from flexval.validation.studies.stress import (
+    rescale_lengths,
+    scale_case,
+    stress_report,
+    write_stress,
+)
 
 
 @pytest.mark.parametrize(
@@ -154,7 +159,8 @@ def test_closed_chain_failure_is_a_limit_point():
 def test_a_rotation_that_vanishes_by_symmetry_is_measured_against_its_scale(tmp_path):
     """The shallow arch pressed on its axis turns its crown by round-off in every model: the
     amplification errors, the step-count spread and the invariance differences take that
-    rotation against its scale (:func:`flexval.validation.compare.scale_of`), not against itself,
+    rotation against its scale (:func:`flexval.validation.studies.compare.scale_of`), not against
+    itself,
     where round-off over round-off read as a 30-500 % failed invariance."""
     scene, case, _ = _arch(tmp_path, -90.0, 0.1)
     L = scene.mechanism.size()

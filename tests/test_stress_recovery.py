@@ -164,9 +164,9 @@ def test_fibre_stress_is_a_converged_quantity_of_the_convergence_study(tmp_path)
 
     from flexval.reducedmodels.catalogue import parse_model
     from flexval.validation.continuum.run import run_continuum
-    from flexval.validation.convergence import format_study, study
-    from flexval.validation.report import _convergence_lines
-    from flexval.validation.strength import fibre_table
+    from flexval.validation.report.strength import fibre_table
+    from flexval.validation.report.writer import _convergence_lines
+    from flexval.validation.studies.convergence import format_study, study
 
     R, h, moment = 10.0, 1.0, 1e-3
     mech = cantilever(Arc((0.0, 0.0), R, math.radians(-45.0), math.radians(90.0)), E=2100.0, h=h)

@@ -13,8 +13,8 @@ from builders import in_process_client
 
 from flexval.reducedmodels import parse_model
 from flexval.validation.cli import main
-from flexval.validation.compare import errors
 from flexval.validation.run import run_model
+from flexval.validation.studies.compare import errors
 from flexval.validation.sweep import load_sweep, results_store, run_sweep, sweep_rows, write_outputs
 from flexval.validation.sweep import tasks as sweep_tasks
 from flexval.validation.sweep.builtin import BUILTIN_SWEEPS
@@ -206,7 +206,8 @@ def test_solver_failure_records_the_load_reached(tmp_path, client):
 
 def test_a_reference_rotation_near_zero_is_measured_against_its_scale(tmp_path, client):
     """The shallow arch pressed on its axis turns its crown by round-off in every model: the
-    sweep's rotation errors are those of flexval.validation.compare.errors with the mechanism's
+    sweep's rotation errors are those of flexval.validation.studies.compare.errors with the
+    mechanism's
     size (about zero, against the rotation scale), not round-off over round-off."""
     from test_compare_scale import _arch
 
@@ -530,8 +531,8 @@ from flexval.validation.sweep.preload import MODELS_ENV
 
 
 def probe(_):
-    from flexval.reducedmodels.dcmm import dcmm_kernels
-    from flexval.reducedmodels.prbm import prbm_kernels
+    from flexval.reducedmodels.dcmm.connector import dcmm_kernels
+    from flexval.reducedmodels.prbm.connector import prbm_kernels
 
     return prbm_kernels.cache_info().currsize, dcmm_kernels.cache_info().currsize
 

@@ -18,7 +18,7 @@ from flexval.validation.sweep.engine import (
     task_info,
     task_points,
 )
-from flexval.validation.sweep.spec import digest
+from flexval.validation.sweep.points import digest
 from flexval.validation.sweep.tasks import PointBlock, SweepJob
 
 TOLERANCE = """

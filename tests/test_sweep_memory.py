@@ -3,7 +3,7 @@ the point count.
 
 Two checks: the driver's own peak memory (``VmHWM``, see ``peakmemory.py``) after checking
 every point of a sweep and listing its row keys grows by far less than a built point holds
-(:data:`~flexval.validation.sweep.spec.BYTES_PER_POINT` before records: 6 kB measured on
+(:data:`~flexval.validation.sweep.fields.BYTES_PER_POINT` before records: 6 kB measured on
 open_chain) from a few hundred points to a few thousand; and the engine, run on an
 in-process Dask cluster, never holds the built points of more than the blocks in flight
 (:data:`~flexval.validation.sweep.engine.BLOCKS_IN_FLIGHT`, each of
@@ -22,7 +22,7 @@ from peakmemory import PEAK_KB
 
 from flexval.validation.sweep import load_sweep, run_sweep
 from flexval.validation.sweep.engine import BLOCK_TASKS, BLOCKS_IN_FLIGHT
-from flexval.validation.sweep.spec import PointSet
+from flexval.validation.sweep.points import PointSet
 
 CHILD = """
 import sys

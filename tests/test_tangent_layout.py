@@ -1,7 +1,7 @@
 """TangentLayout's storage of further matrices: where their entries go, and products with it.
 
 The dynamic step sums the mass matrix into the tangent's storage and multiplies
-the stored matrices by velocities and accelerations (flexval.reducedmodels.dynamics);
+the stored matrices by velocities and accelerations (flexval.reducedmodels.analyses.dynamics);
 checked here against the dense matrix built by scipy from the same entries,
 for each storage kind the layout chooses (dense, banded under a reverse
 Cuthill-McKee permutation, sparse).
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from flexval.reducedmodels.tangent import TangentLayout
+from flexval.reducedmodels.core.tangent import TangentLayout
 
 
 def symmetric_pattern(

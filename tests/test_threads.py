@@ -4,8 +4,8 @@ import pytest
 from threadpoolctl import threadpool_info
 
 from flexval.geometry import load_scene
-from flexval.reducedmodels import threads
 from flexval.reducedmodels.catalogue import parse_model
+from flexval.reducedmodels.core import threads
 from flexval.reducedmodels.models import run_reduced
 from flexval.validation.cli import main
 

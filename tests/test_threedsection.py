@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from flexval.validation.threedsection import (
+from flexval.validation.report.threed import (
     THREED_FORMAT,
     position,
     read_threed,

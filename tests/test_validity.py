@@ -1,4 +1,5 @@
-"""The validity monitor: where each model stops meaning anything (flexval.reducedmodels.validity).
+"""The validity monitor: where each model stops meaning anything
+(flexval.reducedmodels.core.validity).
 
 * limits against closed forms: a straight cantilever under an end moment
   bends into a circle, so a beam element's ends turn by kappa l0 / 2 from
@@ -21,7 +22,7 @@ from builders import cantilever, tip_force, tip_moment
 from flexval.geometry import Segment, load_scene
 from flexval.reducedmodels import LoadPath, run_reduced
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.validity import MAX_CHORD_TURN, MAX_RELATIVE_ROTATION, MAX_STRAIN
+from flexval.reducedmodels.core.validity import MAX_CHORD_TURN, MAX_RELATIVE_ROTATION, MAX_STRAIN
 from flexval.validation.continuum import run_continuum
 from flexval.validation.run import run_model
 
@@ -100,7 +101,7 @@ def test_ee_is_judged_by_its_linearised_rotations():
     (0.2 rad): the open chain's f- turns the target by 0.054 rad (valid at every
     level), m+ by 0.957 rad (invalid from the level where the rotation, linear in the
     load, passes 0.2 rad), and 1000 times f+ is invalid from its first loaded level."""
-    from flexval.reducedmodels.validity import MAX_LINEAR_ROTATION
+    from flexval.reducedmodels.core.validity import MAX_LINEAR_ROTATION
 
     scene = load_scene("open_chain")
     ee = parse_model("ee")

@@ -202,7 +202,7 @@ def test_linear_stress_of_a_notch_peaks_at_its_thinnest_section():
 def test_dcmm_mass_of_a_tapered_flexure_is_its_integral():
     """Mass points of dcmm:3 on a tapered segment: total rho ∫ A(s) ds and centre of mass
     ∫ s A ds / ∫ A ds against quad (the lumping keeps both exact at rest)."""
-    from flexval.reducedmodels.dcmm import DcmmConnector
+    from flexval.reducedmodels.dcmm.connector import DcmmConnector
 
     L, density = 12.0, 1.2e-9
     taper = LinearTaper(0.4, 0.15, L)

@@ -19,7 +19,12 @@ from flexval.reducedmodels import run_reduced
 from flexval.reducedmodels.catalogue import parse_model
 from flexval.validation.cli import main
 from flexval.validation.run import run_model
-from flexval.validation.yieldpoint import first_crossing, first_yield, path_yield, scene_yield
+from flexval.validation.studies.yieldpoint import (
+    first_crossing,
+    first_yield,
+    path_yield,
+    scene_yield,
+)
 
 
 def _scene_file(tmp_path, **material) -> str:
@@ -173,8 +178,8 @@ TINY = tiny_scene("tiny_strong", "yield_strength = 40.0\nfatigue_strength = 20.0
 
 
 def test_report_tabulates_first_yield_against_the_continuum(tmp_path):
-    from flexval.validation.report import build_report
-    from flexval.validation.reportdata import read_results
+    from flexval.validation.report.data import read_results
+    from flexval.validation.report.writer import build_report
 
     path = tmp_path / "tiny_strong.toml"
     path.write_text(TINY)

@@ -12,7 +12,7 @@ i.e. how the scene path was typed) are left out.
 
 The same folder keeps JSON records of results that are not load paths (a
 model's first critical load, its natural frequencies: see
-:mod:`flexval.validation.gatemetrics`), keyed the same way by
+:mod:`flexval.validation.studies.gatemetrics`), keyed the same way by
 :func:`record_key`, which also holds the scene's mass data and gravity.
 
 Location: ``$FLEXVAL_CACHE/results`` or ``~/.cache/flexval/results``

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, fields
 from flexval.geometry import LoadCase, Scene, SceneError
 from flexval.reducedmodels import LoadPath, SolverError, SolverSettings, build_system
 from flexval.reducedmodels.catalogue import ARCLENGTH, ModelSpec
-from flexval.reducedmodels.continuation import limit_loads, solve_arclength
+from flexval.reducedmodels.core.continuation import limit_loads, solve_arclength
 
 LIMIT_SETTINGS = SolverSettings(max_translation_step=0.01, max_rotation_step=0.05)
 """Step bounds (1 % of the size, 0.05 rad) of the arc-length search for limit points: fine
@@ -131,7 +131,7 @@ def stopping_bifurcation(exc: SolverError) -> float | None:
     """The load (N or N mm) of the bifurcation point a load-control path stopped at, or None.
 
     The recorder names it in the partial path's ``stats["stopped_at_bifurcation"]``
-    (its load factor; see :class:`flexval.reducedmodels.recorder.PathRecorder`).
+    (its load factor; see :class:`flexval.reducedmodels.core.recorder.PathRecorder`).
     """
     path = exc.path
     factor = path.stats.get("stopped_at_bifurcation") if path is not None else None

@@ -24,8 +24,8 @@ from collections.abc import Sequence
 from flexval.geometry import Scene
 from flexval.reducedmodels import LoadPath
 
-from .drawing import draw_mechanism
-from .figures import draw_component, draw_deformed, legend_entries, load_path_curves
+from .report.drawing import draw_mechanism
+from .report.figures import draw_component, draw_deformed, legend_entries, load_path_curves
 
 COMPONENTS = {
     "dx": "target point dx (mm)",

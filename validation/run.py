@@ -44,7 +44,7 @@ def run_model(
     ------
     reducedmodels.SolverError
         If the solver cannot reach the full load (carries the load reached); its
-        :class:`~flexval.reducedmodels.core.PluginFailure` for a plug-in family's code
+        :class:`~flexval.reducedmodels.core.settings.PluginFailure` for a plug-in family's code
         that raises anything else (naming its package): never a traceback.
     SceneError
         For an unknown model id or load-case name (naming it).

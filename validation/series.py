@@ -34,7 +34,7 @@ from flexval.geometry import Flexure, Scene
 from flexval.geometry.files import atomic_path
 from flexval.geometry.kinematics import place_points
 from flexval.reducedmodels import LoadPath
-from flexval.reducedmodels.sections import constants_at
+from flexval.reducedmodels.core.sections import constants_at
 
 from .outputs import inside, output_path, safe_name, write_text
 

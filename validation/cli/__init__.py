@@ -23,7 +23,9 @@ import warnings
 
 from flexval.geometry import BUILTIN_SCENES, SceneError
 from flexval.geometry.errors import COMMAND_LINE
-from flexval.validation.cli import (
+
+from ..outputs import OutputError
+from . import (
     bench,
     buckle,
     compare,
@@ -40,7 +42,7 @@ from flexval.validation.cli import (
     sweep,
     view,
 )
-from flexval.validation.cli.common import (
+from .common import (
     EXIT_INPUT,
     EXIT_OK,
     EXIT_OUTPUT,
@@ -49,7 +51,6 @@ from flexval.validation.cli.common import (
     MAX_REPEATS,
     ParserContext,
 )
-from flexval.validation.outputs import OutputError
 
 __all__ = [
     "EXIT_INPUT",
@@ -134,8 +135,8 @@ def main(argv: list[str] | None = None) -> int:
     (:mod:`flexval.validation.interrupt`): exit status 130 or 143.
     """
     if argv is None:
-        from flexval.validation.interrupt import install
-        from flexval.validation.process import discard_output_when_reader_leaves
+        from ..interrupt import install
+        from ..process import discard_output_when_reader_leaves
 
         install()  # SIGINT/SIGTERM: orderly stop, exit 130/143 (flexval.validation.interrupt)
         discard_output_when_reader_leaves()
@@ -145,14 +146,14 @@ def main(argv: list[str] | None = None) -> int:
             warnings.showwarning = _show_warning
             status = _dispatch(args)
     except BaseException:
-        from flexval.validation.interrupt import finish, received
+        from ..interrupt import finish, received
 
         if received() is None:
             raise
         finish(received())  # ends the process: 128 + the signal number
     if argv is None:
-        from flexval.validation.interrupt import uninstall
-        from flexval.validation.process import end_process
+        from ..interrupt import uninstall
+        from ..process import end_process
 
         uninstall()
         end_process(status)
@@ -161,7 +162,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _dispatch(args: argparse.Namespace) -> int:
     """Run the chosen command; bad input, solver and output failures become exit codes."""
-    from flexval.reducedmodels.threads import ENV_VARIABLE, RULE, request_threads
+    from flexval.reducedmodels.core.threads import ENV_VARIABLE, RULE, request_threads
 
     try:
         try:

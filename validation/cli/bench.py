@@ -7,7 +7,11 @@ import sys
 
 from flexval.geometry import load_scene
 from flexval.geometry.errors import COMMAND_LINE
-from flexval.validation.cli.common import (
+
+from ..outputs import (
+    check_folder,
+)
+from .common import (
     EXIT_OK,
     EXIT_SOLVER,
     NO_BATCH_HELP,
@@ -18,16 +22,13 @@ from flexval.validation.cli.common import (
     load_case_option,
     parse_models,
 )
-from flexval.validation.outputs import (
-    check_folder,
-)
 
 
 def run(args: argparse.Namespace) -> int:
     """``flexval bench``: what it does with its parsed ``args``; the exit code."""
-    from flexval.validation.batchtiming import BatchMemo
-    from flexval.validation.bench import runtime_vs_error, sweep_specs, write_bench
-    from flexval.validation.cache import ResultCache
+    from ..cache import ResultCache
+    from ..studies.batchtiming import BatchMemo
+    from ..studies.bench import runtime_vs_error, sweep_specs, write_bench
 
     scene = chosen_cases(load_scene(args.scene), args)
     (ref,) = parse_models([args.reference], COMMAND_LINE, "--reference")

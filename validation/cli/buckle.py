@@ -5,24 +5,25 @@ from __future__ import annotations
 import argparse
 import sys
 
-from flexval.validation.cli.common import (
+from ..outputs import (
+    write_json,
+)
+from ..report.tables import Column, sig, text_table
+from .common import (
     EXIT_OK,
     EXIT_SOLVER,
     ParserContext,
     analysis_inputs,
     scene_and_model,
 )
-from flexval.validation.outputs import (
-    write_json,
-)
-from flexval.validation.tables import Column, sig, text_table
 
 
 def run(args: argparse.Namespace) -> int:
     """``flexval buckle``: what it does with its parsed ``args``; the exit code."""
     from flexval.reducedmodels import SolverError
-    from flexval.validation.buckle import buckle_record, linearisation_holds, path_stop, run_buckle
-    from flexval.validation.modes import plot_modes
+
+    from ..studies.buckle import buckle_record, linearisation_holds, path_stop, run_buckle
+    from ..studies.modes import plot_modes
 
     scene, spec, json_path, plot_path = analysis_inputs(args)
     case = scene.load_case(args.load_case) if args.load_case else scene.load_cases[0]
@@ -58,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     if json_path:
         write_json(json_path, buckle_record(scene, spec, case, system, found, stop))
     if plot_path and rows:
-        from flexval.reducedmodels.modes import Modes
+        from flexval.reducedmodels.analyses.modes import Modes
 
         shapes = Modes(found.factors, found.shapes, found.state)
         labels = [

@@ -10,7 +10,8 @@ from typing import NamedTuple
 
 from flexval.geometry import load_scene
 from flexval.geometry.errors import COMMAND_LINE
-from flexval.validation.outputs import (
+
+from ..outputs import (
     check_figure_file,
     check_file,
     distinct_files,
@@ -69,14 +70,14 @@ def check_memory(paths, source: str, field: str, parallel: int = 1, quiet: bool 
     """Refuse (exit 2) a model whose load path would not fit in memory, before any work; print
     the time estimate of long work (:func:`flexval.validation.resources.check_models`); the
     estimated time, s."""
-    from flexval.validation.resources import check_models
+    from ..resources import check_models
 
     return check_models(paths, source, field, parallel, quiet)
 
 
 def keep_on_interrupt(description) -> None:
     """What SIGINT or SIGTERM keeps from now on (:func:`flexval.validation.interrupt.keep`)."""
-    from flexval.validation.interrupt import keep
+    from ..interrupt import keep
 
     keep(description)
 
@@ -86,7 +87,7 @@ def keep_cached(enabled: bool, more: str = "") -> None:
     used (the same command then reads them), and nothing otherwise."""
 
     def description() -> str:
-        from flexval.validation.cache import ResultCache
+        from ..cache import ResultCache
 
         cache = ResultCache(enabled=enabled)
         if not cache.enabled:

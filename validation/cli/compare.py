@@ -7,7 +7,13 @@ import sys
 
 from flexval.geometry import SceneError, load_scene
 from flexval.geometry.errors import COMMAND_LINE
-from flexval.validation.cli.common import (
+
+from ..outputs import (
+    check_figure_file,
+    check_file,
+    write_json,
+)
+from .common import (
     EXIT_OK,
     EXIT_SOLVER,
     ParserContext,
@@ -15,21 +21,17 @@ from flexval.validation.cli.common import (
     keep_cached,
     parse_models,
 )
-from flexval.validation.outputs import (
-    check_figure_file,
-    check_file,
-    write_json,
-)
 
 
 def run(args: argparse.Namespace) -> int:
     """``flexval compare``: models against a measured load-displacement file
-    (:mod:`flexval.validation.measuredcompare`); exit 3 when a model's path stops before
+    (:mod:`flexval.validation.studies.measuredcompare`); exit 3 when a model's path stops before
     the largest measured load (the JSON and the plot are written all the same)."""
     from flexval.geometry.measured import read_measurement
-    from flexval.validation.cache import ResultCache
-    from flexval.validation.measuredcompare import compare_measurement, traced_case
-    from flexval.validation.measuredreport import plot, text_lines
+
+    from ..cache import ResultCache
+    from ..report.measured import plot, text_lines
+    from ..studies.measuredcompare import compare_measurement, traced_case
 
     json_path = check_file(args.json, "--json") if args.json is not None else None
     plot_path = check_figure_file(args.plot, "--plot") if args.plot is not None else None

@@ -7,16 +7,17 @@ import sys
 
 from flexval.geometry import SceneError, load_scene
 from flexval.geometry.errors import COMMAND_LINE
-from flexval.validation.cli.common import (
+
+from ..outputs import (
+    check_file,
+    write_json,
+)
+from .common import (
     EXIT_OK,
     EXIT_SOLVER,
     ParserContext,
     check_memory,
     parse_models,
-)
-from flexval.validation.outputs import (
-    check_file,
-    write_json,
 )
 
 
@@ -57,7 +58,8 @@ def _parse_levels(text: str, spec) -> list[int]:
 def run(args: argparse.Namespace) -> int:
     """``flexval converge``: what it does with its parsed ``args``; the exit code."""
     from flexval.reducedmodels.catalogue import families
-    from flexval.validation.convergence import format_study, study
+
+    from ..studies.convergence import format_study, study
 
     (spec,) = parse_models([args.model], COMMAND_LINE, "--model")
     res = spec.model_family.resolution

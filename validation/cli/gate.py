@@ -7,7 +7,15 @@ import sys
 
 from flexval.geometry import SceneError
 from flexval.geometry.errors import COMMAND_LINE
-from flexval.validation.cli.common import (
+
+from ..outputs import (
+    check_file,
+    check_folder,
+    distinct_files,
+    write_json,
+)
+from ..report.tables import Column, sig, text_table
+from .common import (
     EXIT_OK,
     EXIT_SOLVER,
     MAX_LOCAL_WORKERS,
@@ -16,13 +24,6 @@ from flexval.validation.cli.common import (
     int_in,
     keep_cached,
 )
-from flexval.validation.outputs import (
-    check_file,
-    check_folder,
-    distinct_files,
-    write_json,
-)
-from flexval.validation.tables import Column, sig, text_table
 
 EXIT_GATE_FAILED = 1
 """``flexval gate``: a gate does not hold."""
@@ -31,10 +32,11 @@ EXIT_GATE_FAILED = 1
 def run(args: argparse.Namespace) -> int:
     """``flexval gate``: what it does with its parsed ``args``; the exit code."""
     from flexval.reducedmodels import PluginFailure
-    from flexval.validation.cache import ResultCache
-    from flexval.validation.campaign import available_cores
-    from flexval.validation.gate import ReferenceFailure, evaluate, prepare, summary_record
-    from flexval.validation.gatefile import load_gates
+
+    from ..cache import ResultCache
+    from ..studies.campaign import available_cores
+    from ..studies.gate import ReferenceFailure, evaluate, prepare, summary_record
+    from ..studies.gatefile import load_gates
 
     json_path = check_file(args.json, "--json") if args.json is not None else None
     junit_path = check_file(args.junit, "--junit") if args.junit is not None else None
@@ -101,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
     if json_path:
         write_json(json_path, summary_record(gates, checks))
     if junit_path:
-        from flexval.validation.junit import write_junit
+        from ..studies.junit import write_junit
 
         write_junit(junit_path, checks, gates.reference.id)
     return EXIT_GATE_FAILED if failed else EXIT_OK

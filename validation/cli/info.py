@@ -5,19 +5,20 @@ from __future__ import annotations
 import argparse
 
 from flexval.geometry import load_scene
-from flexval.validation.cli.common import (
-    EXIT_OK,
-    ParserContext,
-)
-from flexval.validation.outputs import (
+
+from ..outputs import (
     check_file,
     write_json,
+)
+from .common import (
+    EXIT_OK,
+    ParserContext,
 )
 
 
 def run(args: argparse.Namespace) -> int:
     """``flexval info``: what it does with its parsed ``args``; the exit code."""
-    from flexval.validation.info import format_info, scene_info
+    from .sceneinfo import format_info, scene_info
 
     json_path = check_file(args.json, "--json") if args.json is not None else None
     info = scene_info(load_scene(args.scene))

@@ -4,20 +4,21 @@ from __future__ import annotations
 
 import argparse
 
-from flexval.validation.cli.common import (
-    EXIT_OK,
-    ParserContext,
-)
-from flexval.validation.outputs import (
+from ..outputs import (
     check_file,
     write_json,
+)
+from .common import (
+    EXIT_OK,
+    ParserContext,
 )
 
 
 def run(args: argparse.Namespace) -> int:
     """``flexval models``: what it does with its parsed ``args``; the exit code."""
     from flexval.reducedmodels.catalogue import load_plugins
-    from flexval.validation.modelinfo import catalogue_record, format_models
+
+    from .modelinfo import catalogue_record, format_models
 
     json_path = check_file(args.json, "--json") if args.json is not None else None
     load_plugins()

@@ -5,23 +5,24 @@ from __future__ import annotations
 import argparse
 import sys
 
-from flexval.validation.cli.common import (
+from ..outputs import (
+    write_json,
+)
+from ..report.tables import Column, sig, text_table
+from .common import (
     EXIT_OK,
     EXIT_SOLVER,
     ParserContext,
     analysis_inputs,
     scene_and_model,
 )
-from flexval.validation.outputs import (
-    write_json,
-)
-from flexval.validation.tables import Column, sig, text_table
 
 
 def run(args: argparse.Namespace) -> int:
     """``flexval modes``: what it does with its parsed ``args``; the exit code."""
     from flexval.reducedmodels import SolverError
-    from flexval.validation.modes import choose_density, modes_record, plot_modes, run_modes
+
+    from ..studies.modes import choose_density, modes_record, plot_modes, run_modes
 
     scene, spec, json_path, plot_path = analysis_inputs(args)
     scene, density = choose_density(scene, args.density, what="a modal analysis")

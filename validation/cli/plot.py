@@ -5,18 +5,19 @@ from __future__ import annotations
 import argparse
 
 from flexval.geometry import load_scene
-from flexval.validation.cli.common import (
+
+from ..outputs import (
+    check_figure_file,
+)
+from .common import (
     EXIT_OK,
     ParserContext,
-)
-from flexval.validation.outputs import (
-    check_figure_file,
 )
 
 
 def run(args: argparse.Namespace) -> int:
     """``flexval plot``: what it does with its parsed ``args``; the exit code."""
-    from flexval.validation.drawing import plot_mechanism
+    from ..report.drawing import plot_mechanism
 
     output = check_figure_file(args.output, "--output")
     scene = load_scene(args.scene)

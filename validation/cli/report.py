@@ -8,7 +8,11 @@ from pathlib import Path
 
 from flexval.geometry import load_scene
 from flexval.geometry.errors import COMMAND_LINE
-from flexval.validation.cli.common import (
+
+from ..outputs import (
+    check_folder,
+)
+from .common import (
     EXIT_OK,
     EXIT_SOLVER,
     MAX_LOCAL_WORKERS,
@@ -22,17 +26,15 @@ from flexval.validation.cli.common import (
     load_case_option,
     parse_models,
 )
-from flexval.validation.outputs import (
-    check_folder,
-)
 
 
 def _check_report_memory(scenes: list[str], specs: list, args: argparse.Namespace) -> None:
     """:func:`check_memory` of every path the report traces: each model on each scene and
     load case, and the convergence study of its reference family (the resolutions up to one
-    above the reference's; :data:`flexval.validation.reportdata.DEFAULT_MODELS`)."""
+    above the reference's; :data:`flexval.validation.report.data.DEFAULT_MODELS`)."""
     from flexval.reducedmodels.catalogue import REFERENCE
-    from flexval.validation.reportdata import convergence_specs
+
+    from ..report.data import convergence_specs
 
     paths = []
     for name in scenes:
@@ -47,9 +49,10 @@ def _check_report_memory(scenes: list[str], specs: list, args: argparse.Namespac
 def run(args: argparse.Namespace) -> int:
     """``flexval report``: what it does with its parsed ``args``; the exit code."""
     from flexval.geometry.scene import PAPER_SCENES
-    from flexval.validation.report import DEFAULT_MODELS, write_report
-    from flexval.validation.reportdata import compute_report
-    from flexval.validation.reportfolder import default_report_folder, other_report
+
+    from ..report.data import compute_report
+    from ..report.folder import default_report_folder, other_report
+    from ..report.writer import DEFAULT_MODELS, write_report
 
     scenes = args.scene or list(PAPER_SCENES)
     names = []

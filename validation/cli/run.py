@@ -8,7 +8,15 @@ import sys
 
 from flexval.geometry import SceneError, load_scene
 from flexval.geometry.errors import COMMAND_LINE
-from flexval.validation.cli.common import (
+
+from ..outputs import (
+    check_file,
+    check_folder,
+    output_path,
+    write_json,
+)
+from ..report.tables import GAP, SIG_WIDTH, Column, header, sig, text_row
+from .common import (
     EXIT_OK,
     EXIT_SOLVER,
     ParserContext,
@@ -16,18 +24,11 @@ from flexval.validation.cli.common import (
     keep_cached,
     parse_models,
 )
-from flexval.validation.outputs import (
-    check_file,
-    check_folder,
-    output_path,
-    write_json,
-)
-from flexval.validation.tables import GAP, SIG_WIDTH, Column, header, sig, text_row
 
 
 def _check_load_levels(levels: int | None) -> None:
     """``--levels`` of ``run``: 2 .. the solver's sub-step cap (one sub-step per increment)."""
-    from flexval.reducedmodels.core import SolverSettings
+    from flexval.reducedmodels.core.settings import SolverSettings
 
     cap = SolverSettings().max_substeps
     if levels is not None and not 2 <= levels <= cap:
@@ -68,7 +69,7 @@ def _run_request(args: argparse.Namespace, scene) -> tuple[list, list, frozenset
         )
     _check_dynamic_options(args)
     if args.arclength:
-        from flexval.validation.limits import check_arclength
+        from ..studies.limits import check_arclength
 
         for spec in specs:
             check_arclength(spec)
@@ -151,15 +152,15 @@ def _run_each(specs, cases, run_one, row, scene, json_path) -> int:
 def _result(scene, lp) -> dict:
     """A path as the run JSON holds it: its fields and, where the scene's material has a
     yield strength, ``first_yield``, ``safety_factor`` and ``yield_note``
-    (:func:`flexval.validation.yieldpoint.path_yield`)."""
-    from flexval.validation.yieldpoint import scene_yield
+    (:func:`flexval.validation.studies.yieldpoint.path_yield`)."""
+    from ..studies.yieldpoint import scene_yield
 
     return {**lp.to_dict(), **(scene_yield(scene, lp) or {})}
 
 
 def _yield_line(scene, lp) -> str | None:
     """The run table's line on first yield and safety factor (None without a yield strength)."""
-    from flexval.validation.yieldpoint import scene_yield
+    from ..studies.yieldpoint import scene_yield
 
     found = scene_yield(scene, lp)
     if found is None:
@@ -202,8 +203,9 @@ def _uncalibrated_notes(scene, specs) -> list[str]:
 def run(args: argparse.Namespace) -> int:
     """``flexval run``: what it does with its parsed ``args``; the exit code."""
     from flexval.reducedmodels.catalogue import FIELDS
-    from flexval.validation.cache import ResultCache, result_key
-    from flexval.validation.run import run_model
+
+    from ..cache import ResultCache, result_key
+    from ..run import run_model
 
     _check_load_levels(args.levels)
     json_path = check_file(args.json, "--json") if args.json is not None else None
@@ -258,7 +260,7 @@ def run(args: argparse.Namespace) -> int:
 
         if vtu_dir is None:
             return trace_one(spec, case)
-        from flexval.validation.series import write_series
+        from ..series import write_series
 
         try:
             lp = trace_one(spec, case)
@@ -277,7 +279,7 @@ def run(args: argparse.Namespace) -> int:
                 stem = f"{scene.name}_{case.name}_{spec.id.replace(':', '')}"
                 extra["png"] = output_path(out_dir, stem, ".png")
         if args.arclength:  # arc-length traces are not cached
-            from flexval.validation.limits import DEFAULT_STEPS, trace_arclength
+            from ..studies.limits import DEFAULT_STEPS, trace_arclength
 
             return trace_arclength(
                 scene,
@@ -367,8 +369,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"{'':<{columns[0].size}}{GAP}stability {lp.stats['stability']}")
 
     print(header(columns))
-    from flexval.validation.campaign import level_progress
-    from flexval.validation.resources import long_seconds
+    from ..resources import long_seconds
+    from ..studies.campaign import level_progress
 
     long = not args.arclength and estimate > long_seconds()  # progress: see --help
     with level_progress(specs, cases, args.levels, enabled=long):
@@ -386,7 +388,7 @@ def _drive_line(lp, drive) -> str:
     (N mm) at the path's last point, the range of the reaction along the drive's axis (its
     first moving component) and where it is zero (the unloaded equilibria a bistable
     mechanism passes; :mod:`.drivereaction`)."""
-    from flexval.validation.drivereaction import along_drive, zero_crossings
+    from ..report.drivereaction import along_drive, zero_crossings
 
     fx, fy, moment = lp.drive_reactions[-1]
     component, _ = drive.axis
@@ -406,8 +408,8 @@ def _drive_line(lp, drive) -> str:
 
 def _run_dynamic(args: argparse.Namespace, scene, specs, cases, json_path) -> int:
     """``run --dynamic``: one time history per model and load case (final values printed)."""
-    from flexval.validation.dynamic import run_dynamic
-    from flexval.validation.modes import choose_density
+    from ..studies.dynamic import run_dynamic
+    from ..studies.modes import choose_density
 
     scene, density = choose_density(scene, args.density, what="a dynamic run")
     massless = scene.mechanism.inertia.massless_bodies(scene.mechanism.moving_bodies)
@@ -462,8 +464,8 @@ def _run_dynamic(args: argparse.Namespace, scene, specs, cases, json_path) -> in
             )
         )
 
-    from flexval.validation.dynamic import describe, estimate_dynamic, time_progress
-    from flexval.validation.resources import long_seconds
+    from ..resources import long_seconds
+    from ..studies.dynamic import describe, estimate_dynamic, time_progress
 
     estimates = [
         (spec.id, case.name, e)
@@ -493,7 +495,7 @@ def _case_column(cases) -> Column:
 def _most_levels(args: argparse.Namespace, cases) -> int:
     """The most load levels a run line can count in its ``valid`` cell."""
     if args.arclength:
-        from flexval.validation.limits import DEFAULT_STEPS
+        from ..studies.limits import DEFAULT_STEPS
 
         return max(1000, args.levels or DEFAULT_STEPS)
     return args.levels or max((c.levels for c in cases), default=0)
@@ -537,10 +539,10 @@ def _fibre_note(lp) -> str:
 
 def _peak_cells(lp, scene) -> tuple[str, str]:
     """``peak MPa`` and ``at`` of a run line: the largest peak stress over the flexures at the
-    last level (:func:`flexval.validation.yieldpoint.flexure_peaks`, marked with
+    last level (:func:`flexval.validation.studies.yieldpoint.flexure_peaks`, marked with
     :data:`FIBRE_MARK` where it is a notch's surface fibre stress) and where
     (``flexure@fraction`` of its length from its first end)."""
-    from flexval.validation.yieldpoint import flexure_peaks, notch_concentrations
+    from ..studies.yieldpoint import flexure_peaks, notch_concentrations
 
     peaks = flexure_peaks(lp, notch_concentrations(scene, lp))
     if not peaks:
@@ -554,7 +556,7 @@ def add_parser(sub, context: ParserContext) -> None:
     """Declare ``flexval run``, its arguments and options."""
     ids = context.ids
     scene_help = context.scene_help
-    from flexval.validation.resources import LONG_ENV, LONG_SECONDS
+    from ..resources import LONG_ENV, LONG_SECONDS
 
     q = sub.add_parser(
         "run",

@@ -7,23 +7,25 @@ import sys
 
 from flexval.geometry import SceneError
 from flexval.geometry.errors import COMMAND_LINE
-from flexval.validation.cli.common import (
+
+from ..outputs import (
+    write_json,
+)
+from ..report.tables import Column, sig, text_table
+from .common import (
     EXIT_OK,
     EXIT_SOLVER,
     ParserContext,
     analysis_inputs,
     scene_and_model,
 )
-from flexval.validation.outputs import (
-    write_json,
-)
-from flexval.validation.tables import Column, sig, text_table
 
 
 def run(args: argparse.Namespace) -> int:
     """``flexval stiffness``: what it does with its parsed ``args``; the exit code."""
     from flexval.reducedmodels import SolverError
-    from flexval.validation.stiffness import MOTIONS, run_stiffness, stiffness_record
+
+    from ..studies.stiffness import MOTIONS, run_stiffness, stiffness_record
 
     scene, spec, json_path, _ = analysis_inputs(args)
     if args.at is not None and args.load_case is None:

@@ -7,7 +7,11 @@ import sys
 
 from flexval.geometry import load_scene
 from flexval.geometry.errors import COMMAND_LINE
-from flexval.validation.cli.common import (
+
+from ..outputs import (
+    check_folder,
+)
+from .common import (
     EXIT_OK,
     ParserContext,
     check_memory,
@@ -15,19 +19,16 @@ from flexval.validation.cli.common import (
     load_case_option,
     parse_models,
 )
-from flexval.validation.outputs import (
-    check_folder,
-)
 
 
 def run(args: argparse.Namespace) -> int:
     """``flexval stress``: what it does with its parsed ``args``; the exit code."""
-    from flexval.validation.stress import stress_report, write_stress
+    from ..studies.stress import stress_report, write_stress
 
     scene = chosen_cases(load_scene(args.scene), args)
     models = args.model or ["ee", "dcmm:1", "dcmm:2", "prbm", "beam:20"]
     specs = parse_models(models, COMMAND_LINE, "--model")
-    from flexval.validation.stress import AMPLIFICATIONS, STEP_COUNTS
+    from ..studies.stress import AMPLIFICATIONS, STEP_COUNTS
 
     counts = [n for n in STEP_COUNTS if not args.quick or n < 1001]
     check_memory(  # every case: each amplification at 11 levels, then each step count

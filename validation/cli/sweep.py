@@ -8,17 +8,18 @@ import sys
 
 from flexval.geometry import SceneError
 from flexval.geometry.errors import COMMAND_LINE
-from flexval.validation.cli.common import (
+
+from ..outputs import (
+    check_folder,
+    safe_name,
+)
+from .common import (
     EXIT_OK,
     MAX_LOCAL_WORKERS,
     ParserContext,
     check_memory,
     int_in,
     keep_on_interrupt,
-)
-from flexval.validation.outputs import (
-    check_folder,
-    safe_name,
 )
 
 
@@ -28,7 +29,7 @@ def _close_cluster(cluster) -> None:
     After SIGINT or SIGTERM (:mod:`flexval.validation.interrupt`) its worker processes are
     ended first, and the close waits for nothing: Dask's own closing at exit, which waits
     for the workers it lost, is dropped."""
-    from flexval.validation.interrupt import received, stop_children
+    from ..interrupt import received, stop_children
 
     if received() is None:
         if cluster is not None:
@@ -53,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     """``flexval sweep``: what it does with its parsed ``args``; the exit code."""
     import dataclasses
 
-    from flexval.validation.sweep import (
+    from ..sweep import (
         load_sweep,
         local_cluster,
         results_store,
@@ -62,8 +63,8 @@ def run(args: argparse.Namespace) -> int:
         sweep_rows,
         write_outputs,
     )
-    from flexval.validation.sweep.engine import stop_workers_on_signals
-    from flexval.validation.sweep.identity import check_identity, keep_identity
+    from ..sweep.engine import stop_workers_on_signals
+    from ..sweep.identity import check_identity, keep_identity
 
     if args.scheduler and args.workers is not None:
         raise SceneError(
@@ -72,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
             args.workers,
             "sizes the local cluster; an existing one (--scheduler) has its own",
         )
-    from flexval.validation.sweep.spec import MAX_POINTS
+    from ..sweep.fields import MAX_POINTS
 
     def building(line: str) -> None:
         if not args.quiet:

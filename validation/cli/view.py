@@ -6,18 +6,19 @@ import argparse
 
 from flexval.geometry import SceneError
 from flexval.geometry.errors import COMMAND_LINE
-from flexval.validation.cli.common import (
+
+from ..outputs import (
+    check_file,
+)
+from .common import (
     EXIT_OK,
     ParserContext,
-)
-from flexval.validation.outputs import (
-    check_file,
 )
 
 
 def run(args: argparse.Namespace) -> int:
     """``flexval view``: what it does with its parsed ``args``; the exit code."""
-    from flexval.validation.view import check_level, has_display, read_levels, screenshot, show
+    from ..view import check_level, has_display, read_levels, screenshot, show
 
     png = None
     if args.screenshot is not None:
@@ -43,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
 
 def add_parser(sub, context: ParserContext) -> None:
     """Declare ``flexval view``, its arguments and options."""
-    from flexval.validation.view import FIELDS as VIEW_FIELDS
+    from ..view import FIELDS as VIEW_FIELDS
 
     q = sub.add_parser(
         "view",

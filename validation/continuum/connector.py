@@ -22,9 +22,9 @@ from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.kinematics import rigid_points
 from flexval.geometry.mesh import FlexureMesh
 from flexval.geometry.outline import flexure_mesh
-from flexval.reducedmodels.connector import Connector, ConnectorGroup, LocalState
-from flexval.reducedmodels.inertia import MassPoints
-from flexval.reducedmodels.sections import (
+from flexval.reducedmodels.core.connector import Connector, ConnectorGroup, LocalState
+from flexval.reducedmodels.core.inertia import MassPoints
+from flexval.reducedmodels.core.sections import (
     polyline_fractions,
 )
 
@@ -206,7 +206,7 @@ class ContinuumConnector(HeldEndFaces, Connector):
         F = self.solid.deformation_gradient(x)
         return (F[..., 0, 0] * F[..., 1, 1] - F[..., 0, 1] * F[..., 1, 0]).min(axis=1)
 
-    # --- optional mass hook (flexval.reducedmodels.inertia) ---------------------------
+    # --- optional mass hook (flexval.reducedmodels.core.inertia) ---------------------------
     def mass_points(self, density: float) -> MassPoints:
         """Each node's row sum of the consistent mass (t) as a point: carries the weight."""
         lumped = np.asarray(scalar_mass(self.solid).sum(axis=1)).ravel() * density

@@ -36,8 +36,8 @@ import numpy as np
 from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.extrude import ExtrudedMesh, extruded_mesh
 from flexval.geometry.kinematics import rigid_points
-from flexval.reducedmodels.connector import Connector, LocalState
-from flexval.reducedmodels.sections import (
+from flexval.reducedmodels.core.connector import Connector, LocalState
+from flexval.reducedmodels.core.sections import (
     polyline_fractions,
 )
 

@@ -25,8 +25,8 @@ import functools
 import numpy as np
 
 from flexval.geometry.kinematics import rigid_points
-from flexval.reducedmodels.sections import SectionForces, polyline_axes, statics_section_forces
-from flexval.reducedmodels.validity import MIN_DET_F, stretch_reasons
+from flexval.reducedmodels.core.sections import SectionForces, polyline_axes, statics_section_forces
+from flexval.reducedmodels.core.validity import MIN_DET_F, stretch_reasons
 
 
 def _lengths(d: np.ndarray) -> np.ndarray:
@@ -102,7 +102,7 @@ class HeldEndFaces:
     def validity(self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray) -> list[str]:
         """Centre-line fibre stretch beyond MAX_STRAIN; elements near inversion (det F < MIN_DET_F).
 
-        See :mod:`flexval.reducedmodels.validity`; ``_min_det(x)`` gives each element's
+        See :mod:`flexval.reducedmodels.core.validity`; ``_min_det(x)`` gives each element's
         smallest det F.
         """
         x = self.positions(pose_a, pose_b, internal)

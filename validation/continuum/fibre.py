@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexval.reducedmodels.sections import polyline_fractions
+from flexval.reducedmodels.core.sections import polyline_fractions
 
 from .connector import ContinuumConnector
 from .material import out_of_plane

@@ -4,7 +4,7 @@
 other (:meth:`~.solid.ElementKernel.stack`) and its
 :meth:`~ContinuumGroup.assembler` adds the gradient and tangent straight
 into the core's global arrays
-(:meth:`flexval.reducedmodels.connector.ConnectorGroup.assembler`): every element
+(:meth:`flexval.reducedmodels.core.connector.ConnectorGroup.assembler`): every element
 entry goes to the storage slot of its nodal dofs' first expansion (a free
 coordinate, or an end face's body translation) in one ``bincount`` per
 flexure with slots worked out once; only the few entries of end-face nodes
@@ -22,7 +22,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from flexval.reducedmodels.connector import ConnectorGroup, LocalState
+from flexval.reducedmodels.core.connector import ConnectorGroup, LocalState
 
 from .polar import (
     PolarShape,
@@ -170,7 +170,7 @@ class ContinuumGroup(ConnectorGroup):
     ) -> tuple[Callable[[np.ndarray], np.ndarray], Callable[..., np.ndarray]]:
         """:meth:`predict_internal` on global coordinates, with the path's slope.
 
-        See :meth:`flexval.reducedmodels.connector.ConnectorGroup.predictor`.
+        See :meth:`flexval.reducedmodels.core.connector.ConnectorGroup.predictor`.
         ``remember`` keeps a converged state's polar shape, node positions
         and face poses (one flat array: the shapes are not recomputed at
         every prediction); ``predict`` extrapolates the shapes and, given
@@ -286,7 +286,7 @@ class ContinuumGroup(ConnectorGroup):
     ) -> Callable[[np.ndarray, np.ndarray, np.ndarray], float]:
         """The function adding every flexure's gradient and tangent into the global arrays.
 
-        See :meth:`flexval.reducedmodels.connector.ConnectorGroup.assembler` for the
+        See :meth:`flexval.reducedmodels.core.connector.ConnectorGroup.assembler` for the
         arguments; ``hess_slots`` follows the order of each connector's
         :meth:`~.connector.ContinuumConnector.hessian_pattern`.
         """

@@ -3,7 +3,7 @@
 One figure of one state (Matplotlib, Agg):
 
 * the whole mechanism deformed, at true scale: the rigid links at their poses
-  (:func:`flexval.validation.drawing.draw_links`), the hatched ground, pins, the target
+  (:func:`flexval.validation.report.drawing.draw_links`), the hatched ground, pins, the target
   point and the load (an arrow at its point, or a moment symbol round its body);
 * the undeformed mechanism faint underneath (grey flexure outlines, dashed links);
 * every flexure as its filled mesh at true thickness, coloured by a nodal stress (MPa):
@@ -39,7 +39,7 @@ from matplotlib.tri import Triangulation  # noqa: E402
 
 from flexval.geometry import LoadCase, Mechanism  # noqa: E402
 
-from ..drawing import (  # noqa: E402
+from ..report.drawing import (  # noqa: E402
     FAINT_COLOUR,
     Poses,
     draw_ground,

@@ -20,7 +20,7 @@ forces hundreds of times the load, which Newton then spends iterations
 removing (measured on the built-in scenes: predicted residuals fall from
 ~1e3 to ~10 times the load, and whole paths take 20-30 % fewer
 iterations). The same reason made the beam model extrapolate chord lengths
-and angles (:meth:`flexval.reducedmodels.beam.BeamConnector.predict_internal`).
+and angles (:meth:`flexval.reducedmodels.beam.elements.BeamConnector.predict_internal`).
 
 The same description makes the Newton update of a turning flexure exact
 (:func:`increment`): a correction is mapped to the first-order changes of

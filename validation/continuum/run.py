@@ -23,9 +23,9 @@ from pathlib import Path
 from flexval.geometry import LoadCase, Mechanism
 from flexval.geometry.mesh import ASPECT_RATIO, ELEMENT_ORDER, MESH_VERSION
 from flexval.reducedmodels import LoadControl, LoadPath, PathRecorder, SolverSettings, System, trace
-from flexval.reducedmodels.inertia import with_weights
-from flexval.reducedmodels.threads import limit_threads
-from flexval.reducedmodels.validity import MAX_STRAIN, merge_reasons
+from flexval.reducedmodels.core.inertia import with_weights
+from flexval.reducedmodels.core.threads import limit_threads
+from flexval.reducedmodels.core.validity import MAX_STRAIN, merge_reasons
 
 from .connector import ContinuumConnector
 from .level import DEFAULT_LEVEL
@@ -45,7 +45,7 @@ def build_system(
     ``three_d``: the flexures as 3D solids of half their depth
     (:class:`.connector3d.Continuum3DConnector`; ``plane`` is not used).
     """
-    from flexval.reducedmodels.drives import constraint_connectors
+    from flexval.reducedmodels.core.drives import constraint_connectors
 
     if three_d:
         from .connector3d import Continuum3DConnector
@@ -154,7 +154,8 @@ def run_continuum(
 
     def with_notch_peaks(points):
         """The traced points, each notch hinge's fibre peak at every level noted on the way
-        (the true peak that sets a notch's first yield: :mod:`flexval.validation.yieldpoint`)."""
+        (the true peak that sets a notch's first yield:
+        :mod:`flexval.validation.studies.yieldpoint`)."""
         for point in points:
             start = time.perf_counter()
             for name, peak in notch_peaks(system, point.state).items():
@@ -199,12 +200,12 @@ def surface_strain_reasons(
 ) -> list[list[str]]:
     """Per level, the reason where the surface fibre strain of one of ``flexures`` (those of
     varying section, which ``beam:N`` judges the same way) exceeds
-    :data:`~flexval.reducedmodels.validity.MAX_STRAIN`: the strain of its peak fibre stress
+    :data:`~flexval.reducedmodels.core.validity.MAX_STRAIN`: the strain of its peak fibre stress
     (MPa) over E (MPa), the recovered surface stress at every level on a notch hinge
     (``fibre_stress``' ``path_stress``, stress concentration included), else the beam
     formula of its section forces (``peak_stress``). The centre line's stretch alone
     misses a notch bent beyond the material's range."""
-    from ..yieldpoint import flexure_peaks
+    from ..studies.yieldpoint import flexure_peaks
 
     reasons: list[list[str]] = [[] for _ in lp.load]
     for name, (stresses, places, _) in flexure_peaks(lp).items():

@@ -15,7 +15,8 @@ from .engine import (
     sweep_models,
     sweep_rows,
 )
-from .spec import Axis, Point, Sweep, load_sweep, parse_sweep
+from .points import Point
+from .spec import Axis, Sweep, load_sweep, parse_sweep
 from .summary import write_outputs
 
 __all__ = [

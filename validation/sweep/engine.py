@@ -51,7 +51,8 @@ from flexval.reducedmodels.catalogue import REFERENCE
 
 from ..cache import code_version
 from .columns import Columns
-from .spec import Point, Sweep
+from .points import Point
+from .spec import Sweep
 from .store import ResultStore
 from .tasks import (
     PointBlock,
@@ -257,10 +258,10 @@ WORKER_MODULES = (
     "distributed",
     "flexval.validation.sweep.tasks",
     "flexval.reducedmodels.models",
-    "flexval.reducedmodels.tangent",
-    "flexval.reducedmodels.beam",
-    "flexval.reducedmodels.dcmm",
-    "flexval.reducedmodels.prbm",
+    "flexval.reducedmodels.core.tangent",
+    "flexval.reducedmodels.beam.elements",
+    "flexval.reducedmodels.dcmm.connector",
+    "flexval.reducedmodels.prbm.connector",
     "flexval.validation.sweep.preload",
 )
 """What the forkserver imports before it forks the workers: Dask's worker, the sweep's

@@ -51,7 +51,6 @@ import copy
 import dataclasses
 import functools
 import hashlib
-import itertools
 import json
 import math
 import tomllib
@@ -64,232 +63,29 @@ import numpy as np
 
 from flexval.geometry import BUILTIN_SCENES, Scene, SceneError
 from flexval.geometry.errors import did_you_mean
-from flexval.geometry.fields import ABSENT, Field, Table, markdown_table
 from flexval.geometry.scene import parse_scene, read_scene_data
 from flexval.geometry.scenepaths import field_slot
 from flexval.reducedmodels import ModelSpec, parse_model, run_reduced
 
-from ..compare import METRICS
-from ..stress import scale_case
+from ..studies.stress import scale_case
+from .fields import (
+    ALWAYS_OUTPUTS,
+    AXES,
+    AXIS_KINDS,
+    BYTES_PER_POINT,
+    CHECK_BLOCK,
+    COMBINE,
+    DEFAULT_OUTPUTS,
+    MAX_COUNT,
+    MAX_POINTS,
+    OPTIONAL_OUTPUTS,
+    SAMPLES,
+    SECONDS_PER_POINT,
+    SUMMARY_METRICS,
+    SWEEP,
+)
 from .incremental import IncrementalBuilder, builder_key, incremental_builder
-
-COMBINE = ("grid", "zip")
-SAMPLES = {"uniform": ("low", "high"), "normal": ("mean", "std"), "lognormal": ("median", "sigma")}
-SUMMARY_METRICS = ("worst",) + METRICS
-"""``worst`` is max(end_disp_vec, end_rot): a model is as good as its worse end error."""
-ALWAYS_OUTPUTS = ("errors", "times")
-"""Outputs of every row: the error metrics against the reference and the run time."""
-OPTIONAL_OUTPUTS = ("peak_stress", "limit_load", "first_yield")
-"""``peak_stress``: the largest outer-fibre stress at full load and its error against the
-reference's (free: every model records it); ``limit_load``: the first limit point of a run
-that stops below full load, found by arc length (costly: only on request); ``first_yield``:
-the load at first yield and the safety factors at full load against the scene's
-``material.yield_strength`` (free; null without one)."""
-DEFAULT_OUTPUTS = ("peak_stress",)
-MAX_COUNT = 1_000_000
-"""Most values of one axis, and most points of one task (``batch``)."""
-MAX_POINTS = 1_000_000
-"""Default bound on a sweep's points (``flexval sweep --max-points``): the point count is
-computed from the axes before any point is built, and a sweep with more is refused."""
-BYTES_PER_POINT = 10e3
-"""Memory a sweep's driver holds per point, bytes: the points themselves are not held (a
-:class:`PointRecord` each, and the scenes of the blocks in flight), but the keys of their
-stored rows and the rows the summary reads are, 3.8 kB a row measured (open_chain, 20,000
-points, two rows each: 160 MB); a sweep whose points would not fit is refused."""
-RECORD_BLOCK = 4096
-"""Points whose parameters a lazy :class:`PointSet` computes at a time for its records."""
-CHECK_BLOCK = 512
-"""Points whose values the checking pass of :func:`parse_sweep` proves valid together
-(:meth:`PointBuilder.build_block`; it builds them one at a time)."""
-SECONDS_PER_POINT = 6e-3
-"""Time to build one point (parse and check its scene), s: 1.7 ms measured on open_chain,
-5.6 ms on notch_fourbar (2000 points, a loaded 2-core machine)."""
-
-SWEEP = Table(
-    "",
-    "What is swept, with which models, against which reference.",
-    (
-        Field("name", "text", "the sweep's name", default=ABSENT, default_text="the file's stem"),
-        Field("description", "text", "one line for the summary", default=""),
-        Field(
-            "base",
-            "any",
-            "the base scene: a built-in scene name, a scene file path (relative to the "
-            "sweep file) or an inline table of scene fields",
-        ),
-        Field("models", "texts", "model ids to compare with the reference (each once)"),
-        Field(
-            "reference",
-            "text",
-            "model id every error is measured against (not one of models)",
-            default="beam:100",
-        ),
-        Field(
-            "reference_sample",
-            "integer",
-            "run the reference on this many of the valid points only (a tolerance study "
-            "needs the models' outputs at every point but their errors on a subsample): "
-            "error columns exist only on the rows of those points",
-            default=ABSENT,
-            default_text="every point",
-            minimum=1,
-            maximum=MAX_COUNT,
-        ),
-        Field(
-            "load_cases",
-            "texts",
-            "load cases of the base scene to run",
-            default=ABSENT,
-            default_text="all of the base scene's",
-        ),
-        Field(
-            "combine",
-            "choice",
-            "grid: every combination of the axes' values; zip: the i-th value of each axis "
-            "together (axes of equal length)",
-            default=COMBINE[0],
-            choices=COMBINE,
-        ),
-        Field(
-            "metric",
-            "choice",
-            "the summary's metric: worst = max(end_disp_vec, end_rot), or one error metric",
-            default=SUMMARY_METRICS[0],
-            choices=SUMMARY_METRICS,
-        ),
-        Field(
-            "linear_rotation",
-            "number",
-            "scale each load case at every point so that the linear (ee) end rotation is this",
-            unit="rad",
-            default=ABSENT,
-            positive=True,
-        ),
-        Field(
-            "batch",
-            "integer",
-            "points per task of a reduced model",
-            default=ABSENT,
-            default_text="automatic: the first tasks points / (4 workers), 1 to 25; then about "
-            "1 s of measured work each",
-            minimum=1,
-            maximum=MAX_COUNT,
-        ),
-        Field(
-            "outputs",
-            "choices",
-            "what each row holds besides errors and times (always there): peak_stress "
-            "(free), limit_load (an arc-length search on each run that stops early) and "
-            "first_yield (free; against the scene's material.yield_strength)",
-            default=ABSENT,
-            default_text="`" + str(list(DEFAULT_OUTPUTS)).replace("'", '"') + "`",
-            choices=ALWAYS_OUTPUTS + OPTIONAL_OUTPUTS,
-        ),
-        Field("axes", "tables", "the swept parameters", default=ABSENT, default_text="none"),
-    ),
-)
-"""The top level of a sweep file."""
-
-AXIS_KINDS = ("values", "linspace", "logspace", "sample")
-"""How an axis gives its values: exactly one of these fields."""
-
-AXES = Table(
-    "axes",
-    "One swept parameter: a scene field path and its values, given by exactly one of "
-    "`values`, `linspace`, `logspace` or `sample` (random draws with `count` and "
-    "`seed`, and the distribution's two parameters).",
-    (
-        Field(
-            "path",
-            "text",
-            "the scene field, e.g. section.thickness, flexures.e12.thickness, "
-            "load_cases.f+.value, ground.points.0.1 (arrays of tables by name, plain "
-            "arrays by index)",
-        ),
-        Field(
-            "values",
-            "numbers",
-            "the values, listed (numbers, in the field's unit)",
-            default=ABSENT,
-            variants=("values",),
-        ),
-        Field(
-            "linspace",
-            "numbers",
-            "[first, last, count]: count evenly spaced values",
-            default=ABSENT,
-            variants=("linspace",),
-        ),
-        Field(
-            "logspace",
-            "numbers",
-            "[first, last, count]: count values in geometric progression (first, last > 0)",
-            default=ABSENT,
-            variants=("logspace",),
-        ),
-        Field(
-            "sample",
-            "choice",
-            "random draws: uniform (low, high), normal (mean, std), lognormal (median, sigma)",
-            default=ABSENT,
-            choices=tuple(SAMPLES),
-            variants=("sample",),
-        ),
-        Field(
-            "count",
-            "integer",
-            "number of draws",
-            default=ABSENT,
-            minimum=1,
-            maximum=MAX_COUNT,
-            variants=("sample",),
-        ),
-        Field(
-            "seed",
-            "integer",
-            "seed of the draws (repeatable)",
-            default=ABSENT,
-            minimum=0,
-            variants=("sample",),
-        ),
-        Field("low", "number", "lower end of a uniform draw", default=ABSENT, variants=("sample",)),
-        Field(
-            "high",
-            "number",
-            "upper end of a uniform draw (> low)",
-            default=ABSENT,
-            variants=("sample",),
-        ),
-        Field("mean", "number", "mean of a normal draw", default=ABSENT, variants=("sample",)),
-        Field(
-            "std",
-            "number",
-            "standard deviation of a normal draw",
-            default=ABSENT,
-            positive=True,
-            variants=("sample",),
-        ),
-        Field(
-            "median",
-            "number",
-            "median of a lognormal draw",
-            default=ABSENT,
-            positive=True,
-            variants=("sample",),
-        ),
-        Field(
-            "sigma",
-            "number",
-            "standard deviation of the logarithm of a lognormal draw",
-            default=ABSENT,
-            positive=True,
-            variants=("sample",),
-        ),
-    ),
-    array=True,
-    selector="how",
-)
-"""One ``[[axes]]`` entry of a sweep file."""
+from .points import Point, PointSet, ValidPoints, digest
 
 
 @dataclass(frozen=True)
@@ -301,32 +97,6 @@ class Axis:
     random: bool
     seed: int | None = None
     """The seed of a random axis's draws (None for listed values)."""
-
-
-@dataclass(frozen=True)
-class Point:
-    """One point of the sweep: its parameter values and its loaded scene.
-
-    ``scene`` is None for an invalid generated point, whose ``reason`` says
-    why the scene loader refused it. ``digest`` hashes the point's scene
-    data (after every edit), so equal scenes have equal digests.
-    """
-
-    index: int
-    params: dict[str, float]
-    scene: Scene | None
-    digest: str
-    reason: str | None = None
-
-
-@dataclass(frozen=True)
-class PointRecord:
-    """What the driver keeps of a point between building it and the summary: its index, the
-    digest of its scene data and, for an invalid point, why the loader refused it."""
-
-    index: int
-    digest: str
-    reason: str | None = None
 
 
 @dataclass(frozen=True)
@@ -487,152 +257,6 @@ class PointBuilder:
         return Point(index, params, scene, digest(pdata))
 
 
-class PointSet(Sequence):
-    """A sweep's points: built on demand, one at a time, from a :class:`PointBuilder` and the
-    small per-point records (:class:`PointRecord`) of a checking pass, or a given tuple of
-    built points.
-
-    A *lazy* set (``digests`` None, ``count`` points) has had no checking pass: the digests
-    follow from the axis values (:meth:`PointBuilder.digest_of`) and a point is known to be
-    invalid only once a worker built it (:meth:`note_invalid`); until then
-    :attr:`valid_count` counts it valid, and :attr:`checked` is False.
-
-    Indexing and iteration build the points (scenes included); :meth:`records`,
-    :meth:`params` and :attr:`valid_count` do not. Memory: 24 bytes of digest per point of a
-    checked set, none for a lazy one, and the reasons of the invalid points.
-    """
-
-    def __init__(
-        self,
-        builder: PointBuilder | None = None,
-        digests: np.ndarray | None = None,
-        reasons: dict[int, str] | None = None,
-        points: tuple[Point, ...] | None = None,
-        count: int | None = None,
-    ):
-        self._builder, self._points = builder, points
-        self._digests = digests
-        self._count = count
-        self._reasons = reasons or {}
-        if points is not None:
-            self._by_index = {p.index: k for k, p in enumerate(points)}
-
-    @property
-    def builder(self) -> PointBuilder | None:
-        """The builder of the points (None for a set of built points)."""
-        return self._builder
-
-    @property
-    def checked(self) -> bool:
-        """Whether every point's validity is known (a checking pass, or built points)."""
-        return self._points is not None or self._digests is not None
-
-    def digest(self, k: int) -> str:
-        """The scene digest of the point at position ``k``, without building it."""
-        if self._points is not None:
-            return self._points[k].digest
-        if self._digests is not None:
-            return self._digests[k].decode()
-        return self._builder.digest_of(self._builder.values(np.array([k]))[0])
-
-    def reason(self, k: int) -> str | None:
-        """Why the point at position ``k`` is invalid (None: valid, or not known yet)."""
-        if self._points is not None:
-            return self._points[k].reason
-        return self._reasons.get(k)
-
-    def invalid_records(self) -> Iterator[PointRecord]:
-        """The :class:`PointRecord` of every point known to be invalid, in order (a lazy set
-        knows those its workers found; no other point's digest is computed)."""
-        if self._points is not None:
-            yield from (r for r in self.records() if r.reason is not None)
-            return
-        for k in sorted(self._reasons):
-            yield PointRecord(k, self.digest(k), self._reasons[k])
-
-    def note_invalid(self, reasons: dict[int, str]) -> None:
-        """Record the points (by index) that a worker found invalid, with why."""
-        self._reasons.update(reasons)
-
-    @classmethod
-    def of(cls, points: tuple[Point, ...]) -> PointSet:
-        """The set of the built ``points`` (positions and indices may differ)."""
-        return cls(points=tuple(points))
-
-    def __len__(self) -> int:
-        if self._points is not None:
-            return len(self._points)
-        return len(self._digests) if self._digests is not None else self._count
-
-    def __getitem__(self, k: int) -> Point:  # type: ignore[override]
-        """The point at position ``k``, built."""
-        if self._points is not None:
-            return self._points[k]
-        k = range(len(self))[k]
-        point = self._builder.build(k)
-        if point.digest != self.digest(k):
-            raise RuntimeError(f"point {k} of the sweep built differently from its check")
-        return point
-
-    def __iter__(self) -> Iterator[Point]:
-        if self._points is not None:
-            yield from self._points
-            return
-        for k, values in enumerate(_combine(self._builder.axes, self._builder.combine)):
-            yield self._builder.build(k, {a.path: v for a, v in zip(self._builder.axes, values)})
-
-    def records(self) -> Iterator[PointRecord]:
-        """Every point's :class:`PointRecord`, in order, without building a scene."""
-        if self._points is not None:
-            for p in self._points:
-                yield PointRecord(p.index, p.digest, p.reason)
-            return
-        if self._digests is not None:
-            for k, d in enumerate(self._digests):
-                yield PointRecord(k, d.decode(), self._reasons.get(k))
-            return
-        for start in range(0, len(self), RECORD_BLOCK):
-            block = np.arange(start, min(start + RECORD_BLOCK, len(self)))
-            for k, values in zip(block, self._builder.values(block)):
-                yield PointRecord(
-                    int(k), self._builder.digest_of(values), self._reasons.get(int(k))
-                )
-
-    def params(self, index: int) -> dict[str, float]:
-        """The parameters of the point of ``index``, without building it."""
-        if self._points is not None:
-            return self._points[self._by_index[index]].params
-        return self._builder.params(index)
-
-    @property
-    def valid_count(self) -> int:
-        """The number of points whose scene loaded."""
-        if self._points is not None:
-            return sum(p.scene is not None for p in self._points)
-        return len(self) - len(self._reasons)
-
-
-class ValidPoints(Sequence):
-    """The points of a :class:`PointSet` whose scene loaded, built as they are iterated."""
-
-    def __init__(self, points: PointSet):
-        self._all = points
-
-    def __len__(self) -> int:
-        return self._all.valid_count
-
-    def __getitem__(self, k: int) -> Point:  # type: ignore[override]
-        return next(itertools.islice(iter(self), range(len(self))[k], None))
-
-    def __iter__(self) -> Iterator[Point]:
-        if self._all.valid_count == len(self._all):
-            yield from (p for p in self._all if p.scene is not None)  # a lazy set's unknowns
-            return
-        for r in self._all.records():
-            if r.reason is None:
-                yield self._all[r.index]
-
-
 @dataclass(frozen=True)
 class Sweep:
     """A checked sweep: axes, models, reference and its points (built on demand)."""
@@ -768,13 +392,6 @@ def point_count(axes: tuple[Axis, ...], combine: str, source: str) -> int:
     return math.prod(len(a.values) for a in axes)
 
 
-def _combine(axes: tuple[Axis, ...], combine: str) -> Iterator[tuple[float, ...]]:
-    """The parameter tuples of every point, in axis order, one at a time."""
-    if combine == "zip" and axes:
-        return zip(*(a.values for a in axes))
-    return itertools.product(*(a.values for a in axes))
-
-
 def check_point_count(count: int, source: str, max_points: int) -> None:
     """Refuse ``count`` points above ``max_points`` or above what memory holds (SceneError)."""
     if count > max_points:
@@ -815,12 +432,6 @@ def _normalise(scene: Scene, data: dict, cases: tuple[str, ...], rotation: float
         for comp in entry.get("loads", [entry]):
             comp["value"] = comp["value"] * factor
     return dataclasses.replace(scene, load_cases=tuple(scaled), data=None)
-
-
-def digest(data: dict) -> str:
-    """Hash of a point's scene data (24 hex digits)."""
-    text = json.dumps(data, sort_keys=True, default=str)
-    return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
 def _base_data(base: Any, source: str, folder: Path) -> tuple[str, dict]:
@@ -1025,42 +636,4 @@ def load_sweep(
         _fail(str(path), "toml", None, f"malformed TOML: {exc}")
     return parse_sweep(
         data, str(path), path.parent, path.stem, max_points=max_points, progress=progress
-    )
-
-
-_RULES = """\
-Units are those of the scene fields an axis addresses (mm, MPa, N, N mm,
-degrees). Every point is the base scene with the axes' values written in,
-loaded through the scene loader, so every scene check applies: a listed value
-that makes an invalid scene stops the sweep before anything runs (naming the
-point and the field); a random draw that does is recorded as an invalid point.
-A field no table declares is refused, naming it and the fields expected.
-"""
-
-
-def field_reference(level: int = 2) -> str:
-    """The sweep file reference: every field of :data:`SWEEP` and :data:`AXES`, as Markdown.
-
-    Parameters
-    ----------
-    level : int
-        Heading level of each table's section.
-
-    Returns
-    -------
-    str
-        The rules, then one section per table with its fields (kind, unit,
-        default, allowed values, description).
-    """
-    h = "#" * level
-    return "\n\n".join(
-        [
-            _RULES,
-            f"{h} Top level {{#sweep-top}}",
-            SWEEP.description,
-            markdown_table(SWEEP),
-            f"{h} `[[axes]]` {{#sweep-axes}}",
-            AXES.description,
-            markdown_table(AXES),
-        ]
     )

@@ -37,7 +37,7 @@ import pyarrow.parquet as pq
 from flexval.geometry import SceneError
 from flexval.geometry.files import atomic_path
 
-from ..compare import METRICS
+from ..studies.compare import METRICS
 from .columns import Columns
 
 PARAM_PREFIX = "param:"
@@ -93,7 +93,7 @@ its length from its first end; ``peak_stress_error``: (model - reference) / refe
 full load (converged rows only), percent. ``parasitic``: the largest error of the target's
 parasitic components at full load (across a force and the rotation; a moment's dx and dy;
 a prescribed motion's free components), each against the reference's own value, percent
-(:func:`flexval.validation.parasitic.largest_parasitic_error`; converged rows only, null
+(:func:`flexval.validation.studies.parasitic.largest_parasitic_error`; converged rows only, null
 where none is scored). ``limit_load``: the first limit point below full load of a
 run that stopped there (N or N mm, ``load_unit``; asked for with ``outputs``);
 ``limit_load_error``: against the reference's, percent. ``bifurcation_load``: the first
@@ -103,7 +103,7 @@ N mm; asked for with ``limit_load``), null where there is none. ``target_dx``,
 full load (converged rows; :func:`~flexval.validation.sweep.tolerance.target_columns`).
 ``first_yield_*`` and the safety factors: the first yield point and the safety factors at
 full load against the scene's ``material.yield_strength`` and ``fatigue_strength``
-(:func:`flexval.validation.yieldpoint.yield_columns`; asked for with ``first_yield``), null
+(:func:`flexval.validation.studies.yieldpoint.yield_columns`; asked for with ``first_yield``), null
 without them or where the path does not tell."""
 
 

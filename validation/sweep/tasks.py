@@ -18,7 +18,7 @@ rows on a point the reference did not run on (``reference_sample``) carry
 its own outputs and no errors.
 
 With the ``peak_stress`` output (the default), a row carries its peak stress
-at the last level its path recorded (:func:`flexval.validation.strength.peak_at_full_load`
+at the last level its path recorded (:func:`flexval.validation.report.strength.peak_at_full_load`
 of the path so far) and that level's load (``peak_stress_load``: 1 for a
 converged row, at or below ``load_reached`` for a solver failure), and a
 converged row its error against the reference's at full load; with the ``limit_load``
@@ -43,15 +43,16 @@ import numpy as np
 
 from flexval.geometry import LoadCase, SceneError
 from flexval.reducedmodels import LoadPath, ModelSpec, SolverError
-from flexval.reducedmodels.batch import RUN_FAILURES, run_batch
+from flexval.reducedmodels.core.batch import RUN_FAILURES, run_batch
 
 from ..cache import ResultCache, result_key
-from ..compare import METRICS, errors
 from ..failures import first_limit
-from ..parasitic import largest_parasitic_error
 from ..run import run_model
-from ..yieldpoint import yield_columns
-from .spec import Point, PointBuilder
+from ..studies.compare import METRICS, errors
+from ..studies.parasitic import largest_parasitic_error
+from ..studies.yieldpoint import yield_columns
+from .points import Point
+from .spec import PointBuilder
 from .store import PARAM_PREFIX, ResultStore
 from .tolerance import target_columns
 
@@ -62,7 +63,7 @@ FAILURES = RUN_FAILURES
 @dataclass(frozen=True)
 class TaskInfo:
     """What every row of a task shares: sweep name, reference id, code version and the
-    optional outputs asked for (see :data:`flexval.validation.sweep.spec.OPTIONAL_OUTPUTS`)."""
+    optional outputs asked for (see :data:`flexval.validation.sweep.fields.OPTIONAL_OUTPUTS`)."""
 
     sweep: str
     reference: str
@@ -196,7 +197,7 @@ def _peak(lp: LoadPath, case: LoadCase, row: dict, info: TaskInfo) -> None:
         return
     # imported here: the module draws figures too, and matplotlib costs a worker 0.3 s to
     # import; a sweep without peak stresses never needs it
-    from ..strength import peak_at_full_load
+    from ..report.strength import peak_at_full_load
 
     peak = peak_at_full_load(lp)
     if peak is not None:
@@ -325,7 +326,7 @@ def run_model_block(
 
     The only place a sweep solves a model. The scenes of one block are copies of one
     mechanism with other parameter values: without a ``cache`` each load case is one batch
-    (:func:`flexval.reducedmodels.batch.run_batch`: the copies traced together, each path
+    (:func:`flexval.reducedmodels.core.batch.run_batch`: the copies traced together, each path
     what its own run gives, its time its share of the batch's). ``cache`` (costly models
     only) keeps converged paths, one run at a time.
     """
@@ -485,7 +486,7 @@ def _errors(p: Point, lp: LoadPath | None, ref: LoadPath | None, row: dict, info
             row["parasitic"] = largest_parasitic_error(lp, ref, p.scene, case)
         ref_peak = None
         if row["peak_stress"] is not None:
-            from ..strength import peak_at_full_load  # see _peak
+            from ..report.strength import peak_at_full_load  # see _peak
 
             ref_peak = peak_at_full_load(ref)
         row["peak_stress_error"] = _relative(

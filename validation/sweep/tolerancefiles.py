@@ -6,7 +6,8 @@ A sweep whose every axis is random (:func:`is_tolerance`) gets, beside its summa
 undefined) and ``tolerance_<quantity>.png`` for each output and error metric some row
 carries: a panel per model (rows of panels, the reference first) and load case (columns),
 the histogram of the values with the mean (solid), the median (dotted) and the 1st and 99th
-percentiles (dashed). Matplotlib, Agg; model colours from :func:`flexval.validation.figures.style`.
+percentiles (dashed). Matplotlib, Agg; model colours from
+:func:`flexval.validation.report.figures.style`.
 
 Units: those of each quantity (mm, deg, MPa, N or N mm, percent).
 """
@@ -46,7 +47,7 @@ def is_tolerance(sweep: Sweep) -> bool:
 def _quantities(sweep: Sweep, kinds: tuple[Quantity, ...]) -> tuple[Quantity, ...]:
     """The quantities of ``kinds`` that the sweep's outputs give (peak stress, limit load
     only when asked for)."""
-    from .spec import OPTIONAL_OUTPUTS
+    from .fields import OPTIONAL_OUTPUTS
 
     return tuple(
         q
@@ -104,7 +105,7 @@ def histogram(
     import matplotlib.pyplot as plt
     from matplotlib.ticker import MaxNLocator
 
-    from ..figures import style
+    from ..report.figures import style
 
     models = [m for m, per in entry["models"].items() if any(d["n"] for d in per.values())]
     per_model = samples(rows, models, cases, quantity)

@@ -1,0 +1,12 @@
+"""The ``dcmm:N`` and ``ee`` families: compliance matrices of a flexure's sub-arcs.
+
+:mod:`.subarcs` gives each of a flexure's equal parts its ellipse of elasticity
+and diagonal compliance; :mod:`.connector` displaces them (DCMM_n) or keeps them
+at rest (the ellipse of elasticity). Units: mm, N, N mm, rad.
+"""
+
+__all__ = [
+    "connector",
+    "subarcs",
+]
+"""The modules of this package (import the names from them)."""
