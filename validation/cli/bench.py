@@ -25,7 +25,10 @@ from .common import (
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval bench``: what it does with its parsed ``args``; the exit code."""
+    """``flexval bench``: runtime-versus-error study of every model on a scene.
+
+    Returns the exit code.
+    """
     from ..cache import ResultCache
     from ..studies.batchtiming import BatchMemo
     from ..studies.bench import runtime_vs_error, sweep_specs, write_bench

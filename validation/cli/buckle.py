@@ -19,7 +19,11 @@ from .common import (
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval buckle``: what it does with its parsed ``args``; the exit code."""
+    """``flexval buckle``: linearised buckling: critical loads and modes of a load case,
+    beside its path.
+
+    Returns the exit code.
+    """
     from flexval.reducedmodels import SolverError
 
     from ..studies.buckle import buckle_record, linearisation_holds, path_stop, run_buckle

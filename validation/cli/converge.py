@@ -56,7 +56,10 @@ def _parse_levels(text: str, spec) -> list[int]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval converge``: what it does with its parsed ``args``; the exit code."""
+    """``flexval converge``: resolution study: order, Richardson value, GCI.
+
+    Returns the exit code.
+    """
     from flexval.reducedmodels.catalogue import families
 
     from ..studies.convergence import format_study, study

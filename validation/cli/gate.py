@@ -30,7 +30,10 @@ EXIT_GATE_FAILED = 1
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval gate``: what it does with its parsed ``args``; the exit code."""
+    """``flexval gate``: accuracy gates for CI: exit 1 when a model's error exceeds its threshold.
+
+    Returns the exit code.
+    """
     from flexval.reducedmodels import PluginFailure
 
     from ..cache import ResultCache

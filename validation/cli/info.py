@@ -17,7 +17,10 @@ from .common import (
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval info``: what it does with its parsed ``args``; the exit code."""
+    """``flexval info``: describe a scene: bodies, flexures, ellipse data, loads.
+
+    Returns the exit code.
+    """
     from .sceneinfo import format_info, scene_info
 
     json_path = check_file(args.json, "--json") if args.json is not None else None

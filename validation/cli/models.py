@@ -15,7 +15,10 @@ from .common import (
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval models``: what it does with its parsed ``args``; the exit code."""
+    """``flexval models``: list the model families: id syntax, resolutions, options, capabilities.
+
+    Returns the exit code.
+    """
     from flexval.reducedmodels.catalogue import load_plugins
 
     from .modelinfo import catalogue_record, format_models

@@ -19,7 +19,10 @@ from .common import (
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval modes``: what it does with its parsed ``args``; the exit code."""
+    """``flexval modes``: natural frequencies and mode shapes about an equilibrium.
+
+    Returns the exit code.
+    """
     from flexval.reducedmodels import SolverError
 
     from ..studies.modes import choose_density, modes_record, plot_modes, run_modes

@@ -16,7 +16,7 @@ from .common import (
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval plot``: what it does with its parsed ``args``; the exit code."""
+    """``flexval plot``: draw the undeformed mechanism to a PNG; returns the exit code."""
     from ..report.drawing import plot_mechanism
 
     output = check_figure_file(args.output, "--output")

@@ -47,7 +47,10 @@ def _check_report_memory(scenes: list[str], specs: list, args: argparse.Namespac
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval report``: what it does with its parsed ``args``; the exit code."""
+    """``flexval report``: build the validation report (Markdown, PNG, JSON).
+
+    Returns the exit code.
+    """
     from flexval.geometry.scene import PAPER_SCENES
 
     from ..report.data import compute_report

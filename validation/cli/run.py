@@ -201,7 +201,7 @@ def _uncalibrated_notes(scene, specs) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval run``: what it does with its parsed ``args``; the exit code."""
+    """``flexval run``: trace load paths with one or more models; returns the exit code."""
     from flexval.reducedmodels.catalogue import FIELDS
 
     from ..cache import ResultCache, result_key

@@ -22,7 +22,11 @@ from .common import (
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval stiffness``: what it does with its parsed ``args``; the exit code."""
+    """``flexval stiffness``: the 3 x 3 stiffness and compliance at the target, at rest
+    or under a load.
+
+    Returns the exit code.
+    """
     from flexval.reducedmodels import SolverError
 
     from ..studies.stiffness import MOTIONS, run_stiffness, stiffness_record

@@ -22,7 +22,10 @@ from .common import (
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval stress``: what it does with its parsed ``args``; the exit code."""
+    """``flexval stress``: stress tests: load amplification, step count, invariance.
+
+    Returns the exit code.
+    """
     from ..studies.stress import stress_report, write_stress
 
     scene = chosen_cases(load_scene(args.scene), args)

@@ -51,7 +51,11 @@ def _close_cluster(cluster) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval sweep``: what it does with its parsed ``args``; the exit code."""
+    """``flexval sweep``: parameter sweep of a scene on Dask (Parquet results,
+    resumable, error maps).
+
+    Returns the exit code.
+    """
     import dataclasses
 
     from ..sweep import (

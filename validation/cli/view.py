@@ -17,7 +17,11 @@ from .common import (
 
 
 def run(args: argparse.Namespace) -> int:
-    """``flexval view``: what it does with its parsed ``args``; the exit code."""
+    """``flexval view``: show a time series of run --vtu (or a .vtu) in a PyVista
+    window, or render one level to a PNG.
+
+    Returns the exit code.
+    """
     from ..view import check_level, has_display, read_levels, screenshot, show
 
     png = None
