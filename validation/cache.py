@@ -184,6 +184,24 @@ class ResultCache:
         if lp.converged:
             self._write(key, ENTRY_FORMAT, "loadpath", lp.to_dict())
 
+    def path(self, key: str | None, compute: Callable[[], LoadPath]) -> LoadPath:
+        """The path cached under ``key`` (``stats["cached"]`` set), else ``compute()``'s,
+        stored under ``key``: the one cached run of every command and study.
+
+        ``key`` None (a run whose outputs are not a path alone, or no cache wanted):
+        computed, not stored. What ``compute`` raises (a solver failure) passes through
+        and nothing is stored.
+        """
+        if key is not None:
+            hit = self.get(key)
+            if hit is not None:
+                hit.stats.setdefault("cached", True)
+                return hit
+        lp = compute()
+        if key is not None:
+            self.put(key, lp)
+        return lp
+
     def get_record(self, key: str) -> dict | None:
         """The JSON record stored under ``key`` (:func:`record_key`), or None (a bad entry
         is discarded with a warning)."""

@@ -297,14 +297,7 @@ def run(args: argparse.Namespace) -> int:
             if cache.enabled and not extra
             else None
         )
-        lp = cache.get(key) if key else None
-        if lp is not None:
-            lp.stats["cached"] = True
-            return lp
-        lp = run_model(scene, spec, case, args.levels, **record, **extra)
-        if key:
-            cache.put(key, lp)
-        return lp
+        return cache.path(key, lambda: run_model(scene, spec, case, args.levels, **record, **extra))
 
     flexures = scene.mechanism.flexures
     columns = [

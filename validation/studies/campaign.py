@@ -168,6 +168,9 @@ class RunMemo:
         self.disk.put(key, lp)
         self.remember(key, lp)
 
+    path = ResultCache.path
+    """The cache's one cached run (:meth:`ResultCache.path`), over this memo's get and put."""
+
 
 @dataclass(frozen=True)
 class Job:
@@ -238,22 +241,20 @@ def timed_run(
     ``record`` also records body poses and deformed shapes (for figures).
     Raises SolverError on failure (failures are not cached).
     """
-    key = run_key(scene, spec, case, repeats, record)
-    if cache is not None:
-        hit = cache.get(key)
-        if hit is not None:
-            hit.stats.setdefault("cached", True)
-            return hit
-    samples, lp = [], None
-    for _ in range(max(1, repeats)):
-        lp = run_model(scene, spec, case, record_poses=record, record_shapes=record)
-        samples.append(lp.seconds)
-    lp.seconds = statistics.median(samples)
-    lp.stats["seconds_median"] = lp.seconds
-    lp.stats["seconds_samples"] = samples
-    if cache is not None:
-        cache.put(key, lp)
-    return lp
+
+    def timed() -> LoadPath:
+        samples, lp = [], None
+        for _ in range(max(1, repeats)):
+            lp = run_model(scene, spec, case, record_poses=record, record_shapes=record)
+            samples.append(lp.seconds)
+        lp.seconds = statistics.median(samples)
+        lp.stats["seconds_median"] = lp.seconds
+        lp.stats["seconds_samples"] = samples
+        return lp
+
+    if cache is None:
+        return timed()
+    return cache.path(run_key(scene, spec, case, repeats, record), timed)
 
 
 def run_campaign(

@@ -122,22 +122,16 @@ def trace_at_measured(
 
     case = scene.load_case(measurement.load_case)
     traced, _ = traced_case(case, measurement)
-    key = None
-    if cache is not None:
-        extra = {"measured_factors": list(traced.at), "full_load": traced.magnitude}
-        key = result_key(scene, spec.id, case.name, None, extra)
-        hit = cache.get(key)
-        if hit is not None:
-            return hit, None
     caught = (SolverError, SceneError) if unmodelled_is_failure else (SolverError,)
     try:
-        lp = run_model(scene, spec, traced)
+        if cache is None:
+            return run_model(scene, spec, traced), None
+        extra = {"measured_factors": list(traced.at), "full_load": traced.magnitude}
+        key = result_key(scene, spec.id, case.name, None, extra)
+        return cache.path(key, lambda: run_model(scene, spec, traced)), None
     except caught as exc:
         path = exc.path if isinstance(exc, SolverError) else None
         return path, failure_of(exc, scene, spec, traced)
-    if cache is not None:
-        cache.put(key, lp)
-    return lp, None
 
 
 def measured_range(values: np.ndarray) -> float:

@@ -71,6 +71,15 @@ class TaskInfo:
     outputs: tuple[str, ...]
 
 
+def cached_run(cache: ResultCache | None, scene, spec, case) -> LoadPath:
+    """``spec``'s path of ``case`` on a point's scene: from the result cache where there is
+    one (a sweep's runs are keyed apart from a command's: they record no shapes)."""
+    if cache is None:
+        return run_model(scene, spec, case)
+    key = result_key(scene, spec.id, case.name, None, {"sweep": True})
+    return cache.path(key, lambda: run_model(scene, spec, case))
+
+
 def row_key(digest: str, model: str, case: str, info: TaskInfo) -> str:
     """Key of one result row: the point's scene digest, model, case, reference, code and
     outputs (a row without a limit load is not the answer to a sweep that asks for one)."""
@@ -138,16 +147,10 @@ def attempt(
     asked for); the path or None."""
     scene = point.scene
     lc = scene.load_case(case)
-    key = result_key(scene, spec.id, case, None, {"sweep": True}) if cache else None
-    lp = cache.get(key) if cache else None
     try:
         if isinstance(solved, BaseException):
             raise solved
-        lp = solved if solved is not None else lp
-        if lp is None:
-            lp = run_model(scene, spec, lc)
-            if cache:
-                cache.put(key, lp)
+        lp = solved if solved is not None else cached_run(cache, scene, spec, lc)
     except SolverError as exc:
         row.update(status="solver_failure", reason=str(exc), load_reached=exc.load_factor)
         if exc.path is not None and exc.path.load:
@@ -347,13 +350,8 @@ def run_model_block(
     for scene in scenes:
         per = []
         for case in cases:
-            key = result_key(scene, spec.id, case, None, {"sweep": True}) if cache else None
-            lp = cache.get(key) if cache else None
             try:
-                if lp is None:
-                    lp = run_model(scene, spec, scene.load_case(case))
-                    if cache:
-                        cache.put(key, lp)
+                lp = cached_run(cache, scene, spec, scene.load_case(case))
             except FAILURES as exc:
                 lp = exc
             per.append(lp)
