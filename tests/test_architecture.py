@@ -148,14 +148,13 @@ def _defined_private_names(tree: ast.Module) -> set[str]:
     return {n for n in names if _private(n)}
 
 
-def test_no_module_reads_a_private_attribute_only_another_module_defines():
-    """``obj._x`` off anything but ``self``/``cls`` must name an attribute of this module's
-    own making (a class of the same module); stdlib privates (``os._exit``) and
-    named tuples' ``_replace`` are defined by no flexval module and pass."""
-    defined = {name: _defined_private_names(tree) for name, tree in TREES.items()}
+def _foreign_private_reads(trees: dict[str, ast.Module]) -> list[str]:
+    """Every ``obj._x`` read off anything but ``self``/``cls`` whose ``_x`` only another of
+    ``trees``' modules defines."""
+    defined = {name: _defined_private_names(tree) for name, tree in trees.items()}
     everywhere = set().union(*defined.values())
     found = []
-    for name, tree in TREES.items():
+    for name, tree in trees.items():
         for node in ast.walk(tree):
             if not (isinstance(node, ast.Attribute) and _private(node.attr)):
                 continue
@@ -163,7 +162,27 @@ def test_no_module_reads_a_private_attribute_only_another_module_defines():
                 continue
             if node.attr in everywhere and node.attr not in defined[name]:
                 found.append(f"{name}:{node.lineno} reads {ast.unparse(node)}")
+    return found
+
+
+def test_no_module_reads_a_private_attribute_only_another_module_defines():
+    """``obj._x`` off anything but ``self``/``cls`` must name an attribute of this module's
+    own making (a class of the same module); stdlib privates (``os._exit``) and
+    named tuples' ``_replace`` are defined by no flexval module and pass."""
+    found = _foreign_private_reads(TREES)
     assert not found, found
+
+
+def test_the_private_attribute_check_finds_a_foreign_read():
+    owner = ast.parse("class A:\n    def __init__(self):\n        self._hidden = 1\n")
+    reader = ast.parse("import os\ndef f(a):\n    os._exit(0)\n    return a._hidden\n")
+    own = ast.parse("class B:\n    def __init__(self):\n        self._hidden = 2\n")
+    own_reader = ast.parse("def g(b):\n    return b._hidden\n")
+    assert _foreign_private_reads({"owner": owner, "reader": reader}) == [
+        "reader:4 reads a._hidden"
+    ]
+    both = {"owner": owner, "own": ast.parse(ast.unparse(own) + "\n" + ast.unparse(own_reader))}
+    assert _foreign_private_reads(both) == []
 
 
 def _dependencies() -> dict[str, set[str]]:
