@@ -108,7 +108,7 @@ def _load_newton_kernels() -> None:
     """The compiled kernels that order a System's tangent, factorise a batch's blocks and
     stack its stresses (every family traced by Newton)."""
     from .core.blocktangent import ldl_kernels
-    from .core.recorder import stress_kernels
+    from .core.peaks import stress_kernels
     from .core.tangent import order_kernels
 
     order_kernels()

@@ -23,7 +23,9 @@ from .core.connector import Connector
 from .core.inertia import with_weights
 from .core.loadpath import LoadPath
 from .core.loads import Loads
-from .core.recorder import append_section_forces, record_stress, solve_path
+from .core.peaks import record_stress
+from .core.recorder import append_section_forces, solve_path
+from .core.redundancy import redundant_connectors
 from .core.restnumbering import RestNumbering
 from .core.sections import SectionForces
 from .core.settings import SolverSettings
@@ -82,6 +84,19 @@ def flexure_connectors(
         from .core.drives import constraint_connectors
 
         conns += constraint_connectors(mechanism)
+    redundant = redundant_connectors(mechanism, conns)
+    if redundant:
+        raise SceneError(
+            mechanism.source,
+            f"flexures.{redundant[0]}",
+            spec.id,
+            f"{spec.family} holds {', '.join(map(repr, redundant))} rigid along directions "
+            "that lock one motion more than once (straight leaves of the PRBM are "
+            "inextensible: a guide of more than two parallel leaves, or leaves on one line): "
+            "how they share a load along it is statically indeterminate in this model, so "
+            "its forces, stresses and solves are undefined; model them with beam:N or "
+            "dcmm:N, which carry the leaves' axial stiffness",
+        )
     return with_weights(mechanism, conns)
 
 

@@ -448,7 +448,7 @@ def test_stresses_of_many_flexures_at_once_are_each_flexures_alone():
     """path_peaks and state_peaks stack flexures of one kind of section (a batch's), in stacks
     of at most STACK_SIZE; each entry must be what its own SectionForces.fibre_stress gives
     (max, argmax and profile, bit for bit), stacked or not, in the first stack or a later one."""
-    from flexval.reducedmodels.core.recorder import STACK_FROM, STACK_SIZE, path_peaks, state_peaks
+    from flexval.reducedmodels.core.peaks import STACK_FROM, STACK_SIZE, path_peaks, state_peaks
     from flexval.reducedmodels.core.sections import SectionForces
 
     uniform = load_scene("open_chain").mechanism.flexures[0].section
@@ -482,7 +482,7 @@ def test_stacks_of_section_forces_hold_each_connectors_columns():
     """column_stacks puts connectors of equal stations (equal arrays, whether the same objects
     or not) in one stack, each member's rows its own columns; a connector without forces is in
     none; stack_peaks gives what path_peaks gives each member alone, across STACK_SIZE."""
-    from flexval.reducedmodels.core.recorder import (
+    from flexval.reducedmodels.core.peaks import (
         STACK_SIZE,
         path_peaks,
         section_constants,

@@ -19,7 +19,7 @@ from builders import cantilever, tip_moment
 from flexval.geometry import Segment, load_scene
 from flexval.reducedmodels import LoadControl, build_system, trace
 from flexval.reducedmodels.catalogue import parse_model
-from flexval.reducedmodels.core.recorder import path_end_pass
+from flexval.reducedmodels.core.recorder import end_pass
 from flexval.reducedmodels.core.validity import MAX_RELATIVE_ROTATION, MAX_STRAIN
 
 MODELS = ["dcmm:1", "dcmm:3", "dcmm:2[frame=follower]", "prbm", "beam:6"]
@@ -43,7 +43,8 @@ def overloaded_states(model: str, factor: float):
 def test_one_pass_verdicts_and_forces_are_the_state_by_state_ones(model):
     system, states = overloaded_states(model, 30.0)
     levels = [system.local_states(q) for q in states]
-    verdicts, forces = path_end_pass(system, states)
+    judgement = end_pass(system, states, with_forces=True)
+    verdicts, forces = judgement.reasons[0], judgement.forces[0]
     singles = [
         [f"{c.name}: {w}" for c, local in zip(system.connectors, lv) for w in c.validity(*local)]
         for lv in levels
@@ -155,3 +156,42 @@ def test_recorded_path_matches_the_state_by_state_judgement():
     for level, q in enumerate(states):
         sigma, at = c.section_forces(*system.local_states(q)[0]).peak(section)
         assert lp.peak_stress["f"][level] == sigma and lp.peak_stress_at["f"][level] == at
+
+
+@pytest.mark.parametrize("model", ["dcmm:1", "dcmm:2", "beam:4"])
+def test_a_path_of_many_alike_flexures_has_each_flexures_own_stresses(model):
+    """A path alone whose group stacks more flexures than ``STACK_FROM`` (one compiled pass for
+    the stack) records each flexure's peak stress and its place as that flexure's own section
+    forces give them, bit for bit, at every level: a path alone is judged by the same end pass
+    as a batch's copies."""
+    from flexval.geometry import Force, LoadCase, Material, Section
+    from flexval.geometry.mechanism import FlexureSpec, assemble
+    from flexval.reducedmodels.core.peaks import STACK_FROM
+    from flexval.reducedmodels.core.recorder import solve_path
+
+    count = STACK_FROM + 1  # leaves of a parallel guide, each of its own thickness
+    specs = [
+        FlexureSpec(
+            f"f{i}",
+            Segment((2.0 * i, 0.0), (2.0 * i, 10.0)),
+            ("g", "t"),
+            Section(1.0, 0.1 + 0.01 * i),
+            start_body="g",
+        )
+        for i in range(count)
+    ]
+    ground = np.array([[2.0 * i, 0.0] for i in range(count)])
+    mech = assemble(specs, "g", ground, Material(2100.0, 0.3), "t", np.array([0.0, 10.0]))
+    case = LoadCase("F", (Force("t", mech.target_point, 0.0, 0.02),), 4)
+    system = build_system(mech, parse_model(model))
+    lp = solve_path(system, case, record_shapes=True)
+    states = [p.state for p in trace(system, system.loads(case), LoadControl(case.factors()))]
+    sections = {f.name: f.section for f in mech.flexures}
+    assert list(lp.peak_stress) == [c.name for c in system.connectors]
+    for level, q in enumerate(states):
+        for c, local in zip(system.connectors, system.local_states(q)):
+            forces = c.section_forces(*local)
+            sigma, at = forces.peak(sections[c.name])
+            assert lp.peak_stress[c.name][level] == sigma
+            assert lp.peak_stress_at[c.name][level] == at
+            assert lp.section_forces[c.name]["moment"][level] == forces.moment.tolist()

@@ -60,10 +60,10 @@ import numpy as np
 from flexval.geometry import LoadCase, Mechanism, SceneError
 
 from .allocator import keep_freed_memory
-from .batchrecord import record_batch
 from .batchsystem import BatchSystem, Member, copy_parts, copy_unknowns
 from .linearbatch import linear_responses
 from .loadpath import LoadPath
+from .recorder import record_batch
 from .settings import SolverError
 from .system import System
 from .tracer import Counters, LoadControl, PathPoint, TraceFailure, trace

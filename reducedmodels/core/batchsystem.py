@@ -100,6 +100,10 @@ class BatchSystem(System):
         if self._dense is not None and self.n_multipliers > 0:  # saddle points: block by block
             self.layout = BlockLayout(self.layout, self._dense)
 
+    def copy_layout(self) -> tuple[np.ndarray, list[Member]]:
+        """:meth:`System.copy_layout` of the copies: :attr:`origin_table` and :attr:`members`."""
+        return self.origin_table, self.members
+
     def number_connectors(self) -> tuple[np.ndarray, np.ndarray, list[int], np.ndarray]:
         """:meth:`System.number_connectors` of copies all numbered as copy 0, as one table.
 

@@ -196,6 +196,18 @@ class Connector(ABC):
         """
         return [self.validity(*state) for state in states]
 
+    def rigid_directions(self) -> Sequence[tuple[np.ndarray, np.ndarray]]:
+        """The relative motions of its two bodies this connector holds rigid at rest, to first
+        order: each a point (mm) and a unit direction along which the two bodies' points there
+        move alike, both global. Default none: a connector with a stiffness for every motion.
+
+        The PRBM's straight leaf (rigid links on one line) holds its axis; a
+        pin holds both directions at its point. Where such directions lock
+        one motion more than once, how the connectors share a load along it
+        is statically indeterminate (:mod:`flexval.reducedmodels.core.redundancy`).
+        """
+        return ()
+
     # --- optional mass (flexval.reducedmodels.core.inertia) ---------------------------
     def mass_points(self, density: float) -> MassPoints | None:
         """The connector's mass as point masses over its local coordinates.

@@ -108,6 +108,11 @@ class PinConnector(Connector):
             raise ValueError(
                 f"pin {name!r}: scale must be positive and finite, got {self.stiffness!r} N/mm"
             )
+        self._point = point
+
+    def rigid_directions(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Both directions at the pin's point (mm): a pin holds every translation there."""
+        return [(self._point, np.array([1.0, 0.0])), (self._point, np.array([0.0, 1.0]))]
 
     def evaluate(
         self, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray

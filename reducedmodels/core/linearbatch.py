@@ -11,7 +11,7 @@ gradient is one ``bincount`` (each copy's slots offset, each slot summed in
 the order a copy alone sums it), the outputs, the rotation test and the
 section gradients K0 dq are array operations over the copies, the section
 forces take one call per connector class for all copies and the stresses
-one pass (:func:`flexval.reducedmodels.core.recorder.state_peaks`). Each copy's
+one pass (:func:`flexval.reducedmodels.core.peaks.state_peaks`). Each copy's
 K0 is factorised and solved by its own tangent (the LAPACK calls of a copy
 alone), and its loads added by its own :class:`~flexval.reducedmodels.core.loads.Loads`:
 every copy's path is the one it gets alone, bit for bit
@@ -38,7 +38,7 @@ from flexval.geometry import LoadCase, Mechanism
 from .connector import Connector
 from .loadpath import LoadPath
 from .loads import Loads
-from .recorder import append_stresses, state_peaks
+from .peaks import append_stresses, state_peaks
 from .restnumbering import RestNumbering
 from .validity import MAX_LINEAR_ROTATION, linear_sway_verdicts, merge_reasons
 
@@ -309,7 +309,7 @@ def _section_forces(
     gravity: list[bool],
     lam: np.ndarray,
 ) -> tuple[list[list[tuple[str, tuple]]], list[list[list[str]]]]:
-    """Each copy's flexures' stresses (:func:`~flexval.reducedmodels.core.recorder.state_peaks`
+    """Each copy's flexures' stresses (:func:`~flexval.reducedmodels.core.peaks.state_peaks`
     entries by flexure name, in its connectors' order) from the section forces of K0 dq on
     the undeformed centre lines, every copy's connectors of one class in one call; and each
     copy's reasons per level where a straight leaf it cannot buckle is compressed beyond its

@@ -1,13 +1,17 @@
-"""Recording a traced path as a LoadPath, and load control through the requested levels.
+"""Recording traced paths as LoadPaths: a path alone, point by point, or a batch's copies.
 
 :class:`PathRecorder` turns the points :func:`flexval.reducedmodels.core.tracer.trace`
 yields into a :class:`~flexval.reducedmodels.core.loadpath.LoadPath` (target motion,
 optional poses, shapes and reactions, the validity monitor, solver
 statistics) and a tracer failure into a :class:`~flexval.reducedmodels.core.settings.SolverError`
-that carries the path so far. :func:`solve_path` (load control) and
+that carries the path so far. :func:`record_batch` makes each copy's LoadPath of the points
+a batch traced (:func:`flexval.reducedmodels.core.batch.trace_batch`), the one its own
+recorder makes of the same points. Both judge their states with the one :func:`end_pass`
+(a path alone is a batch of one copy) and build paths with the same helpers.
+:func:`solve_path` (load control) and
 :func:`flexval.reducedmodels.core.continuation.solve_arclength` are thin uses of it.
 
-Units: mm, N, N mm, rad.
+Units: mm, N, N mm, MPa, rad.
 """
 
 from __future__ import annotations
@@ -15,21 +19,23 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
-from functools import cache
-from types import ModuleType
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from flexval.geometry import LoadCase, Section
+from flexval.geometry import LoadCase, Mechanism, Section
 
 from .connector import Connector
 from .loadpath import LoadPath
-from .sections import ForceStack, SectionForces
+from .peaks import STACK_FROM, Peaks, append_stresses, path_peaks, stack_peaks
+from .sections import SectionForces
 from .settings import SolverError
 from .system import System
 from .tracer import Counters, LoadControl, PathPoint, TraceFailure, trace
 from .validity import merge_reasons, resolution_reason, unresolved_levels
+
+if TYPE_CHECKING:  # annotations only: the batch's System is built on System
+    from .batchsystem import BatchSystem
 
 _OBSERVERS: list[Callable[[LoadPath], None]] = []
 """Called with the path after each point a :class:`PathRecorder` records (see :func:`observing`)."""
@@ -131,16 +137,8 @@ class PathRecorder:
             self.stats["limit_points"] = []
         self.path.stats = self.stats
         self.factors: list[float] = []
-        self._sections: dict | None = None  # see sections
         self.states: list[np.ndarray] = []  # recorded states not yet judged and stressed
         self.unstable: list[int | None] = []  # each point's surplus negative eigenvalues
-
-    @property
-    def sections(self) -> dict:
-        """The system's flexure sections by name (read when the path is stressed)."""
-        if self._sections is None:
-            self._sections = {f.name: f.section for f in self.system.mechanism.flexures}
-        return self._sections
 
     def record(self, point: PathPoint) -> None:
         """Append one converged point."""
@@ -170,28 +168,19 @@ class PathRecorder:
         notify(lp)
 
     def _judge(self) -> None:
-        """Validity verdicts and section stresses of the states recorded since the last call."""
-        if self.states:
-            self.judged(*path_end_pass(self.system, self.states))
-
-    def judged(
-        self,
-        verdicts: Sequence[list[str]],
-        forces: Sequence[tuple[Connector, SectionForces | None]],
-    ) -> None:
-        """Record the verdicts and section forces of the states recorded since the last
-        judgement, as :func:`path_end_pass` gives them."""
-        self._verdicts(verdicts)
-        record_path_stress(self.path, forces, self.sections)
-        if self.path.shapes is not None:
-            append_section_forces(self.path, forces)
-        self.states = []
-
-    def _verdicts(self, verdicts: Sequence[list[str]]) -> None:
-        """Append the validity monitor's reasons at each level (empty: valid)."""
-        valid, validity = _validity(verdicts)
+        """Validity verdicts and section stresses of the states recorded since the last call
+        (:func:`end_pass`, this path as a batch's one copy)."""
+        if not self.states:
+            return
+        shapes = self.path.shapes is not None
+        judgement = end_pass(self.system, self.states, with_forces=shapes)
+        valid, validity = _validity(judgement.reasons[0])
         self.path.valid.extend(valid)
         self.path.validity.extend(validity)
+        append_stresses(self.path, judgement.peaks[0])
+        if shapes:
+            append_section_forces(self.path, judgement.forces[0])
+        self.states = []
 
     def finish(self) -> LoadPath:
         """The path of a successful trace (wall time from the recorder's creation)."""
@@ -382,30 +371,6 @@ def failed_path(
     )
 
 
-def path_end_pass(
-    system: System, states: Sequence[np.ndarray]
-) -> tuple[list[list[str]], list[tuple[Connector, SectionForces | None]]]:
-    """The validity monitor's reasons at each state and every connector's stacked section forces.
-
-    The reasons are those :meth:`System.validity` gives at each state
-    (prefixed with the connector's name, connectors in order); the section
-    forces (k, m) per connector, None for one without (pins). Each group of
-    connectors computes both for all the states in one call
-    (:meth:`~flexval.reducedmodels.core.connector.ConnectorGroup.path_end_pass`, given its
-    coordinates at every state: :meth:`System.group_coordinates`).
-    """
-    reasons: list[list[str]] = [[] for _ in states]
-    forces = []
-    for (group, _), coordinates in zip(system.groups, system.group_coordinates(states)):
-        verdicts, stacked = group.path_end_pass(coordinates)
-        for c, per_level in zip(group.connectors, verdicts):
-            for found, why in zip(reasons, per_level):
-                if why:
-                    found.extend(f"{c.name}: {w}" for w in why)
-        forces += zip(group.connectors, stacked)
-    return reasons, forces
-
-
 def append_section_forces(
     path: LoadPath, forces: Iterable[tuple[Connector, SectionForces | None]]
 ) -> None:
@@ -421,301 +386,6 @@ def append_section_forces(
         )
         kept["axial"] += np.atleast_2d(stacked.axial).tolist()
         kept["moment"] += np.atleast_2d(stacked.moment).tolist()
-
-
-def record_stress(
-    path: LoadPath, connectors, forces, sections: dict, scales: Sequence[float] = (1.0,)
-) -> None:
-    """Append each flexure's peak outer-fibre stress (MPa) at one state, scaled, to ``path``.
-
-    The linear response's form: one level is appended per entry of
-    ``scales``, with the section forces times it (the load factors of a
-    linear response, whose section forces are computed once). Connectors
-    without section forces (None: pins) or without a section are skipped;
-    the stress profile is kept for the last level only (``path.stress_profile``).
-
-    Parameters
-    ----------
-    path : LoadPath
-    connectors, forces :
-        The system's connectors and their section forces (N, N mm) at the
-        state (:meth:`~flexval.reducedmodels.core.connector.ConnectorGroup.section_forces`).
-    sections : dict of flexure name -> Section
-    scales : sequence of float
-        The factors of the levels to append.
-    """
-    named = []
-    for c, found in zip(connectors, forces):
-        section = sections.get(c.name)
-        if section is not None and found is not None:
-            named.append((c.name, found, section))
-    if len(named) < STACK_FROM:  # a path's few flexures: each alone
-        factors = [abs(f) for f in np.asarray(scales, float).tolist()]
-        append_stresses(
-            path,
-            ((name, _state_peak(found, section, factors)) for name, found, section in named),
-        )
-        return
-    peaks = state_peaks([(found, section) for _, found, section in named], scales)
-    append_stresses(path, ((name, found) for (name, _, _), found in zip(named, peaks)))
-
-
-def record_path_stress(
-    path: LoadPath, forces: Sequence[tuple[Connector, SectionForces | None]], sections: dict
-) -> None:
-    """Append each flexure's peak outer-fibre stress (MPa) and its place at several levels.
-
-    ``forces`` pairs each connector with its section forces stacked over the
-    levels (:func:`path_end_pass`); connectors without section forces (pins)
-    or without a section are skipped, and the stress profile is kept for the
-    last level (``path.stress_profile``).
-
-    Parameters
-    ----------
-    path : LoadPath
-    forces : sequence of (Connector, SectionForces or None)
-        Section forces (N, N mm), (k, m) each, in the order of the levels.
-    sections : dict of flexure name -> Section
-    """
-    named = []
-    for c, stacked in forces:
-        section = sections.get(c.name)
-        if section is not None and stacked is not None:
-            named.append((c.name, stacked, section))
-    if len(named) < STACK_FROM:  # a path's few flexures: each alone
-        append_stresses(
-            path, ((name, _path_peak(stacked, section)) for name, stacked, section in named)
-        )
-        return
-    found = path_peaks([(stacked, section) for _, stacked, section in named])
-    append_stresses(path, ((name, peaks) for (name, _, _), peaks in zip(named, found)))
-
-
-class _Sections(NamedTuple):
-    """Uniform sections of several flexures as arrays (c, 1, ...) (mm, mm^2, mm^4): what
-    :meth:`SectionForces.fibre_stress` reads of one, so one call serves them all."""
-
-    thickness: np.ndarray
-    area: np.ndarray
-    inertia: np.ndarray
-    profile: None = None
-
-
-Peaks = tuple[list[float], list[float], list[float], list[float]]
-"""A flexure's peak stress at each level (MPa), its place (arc-length fraction from the first
-end), the stations' fractions and the stress at each station at the last level (MPa)."""
-
-
-STACK_FROM = 8
-"""Least number of flexures with uniform sections and forces of one shape whose stresses
-:func:`path_peaks` and :func:`state_peaks` compute stacked: below it (a path's own few
-flexures) stacking them costs more than it saves."""
-STACK_SIZE = 64
-"""Most flexures in one stack of :func:`path_peaks` and :func:`state_peaks` (a linear batch's
-flexures), so that a stack's forces, stresses and the temporaries between them stay in the
-processor's caches (64 flexures of 11 levels and 17 stations, ``dcmm:1``'s: 96 kB per array)
-instead of every pass going to memory. A ``dcmm:1`` batch of 1000 copies (open chain f+,
-3000 flexures) spent 19.6 us per path in :func:`path_peaks` as one stack, 15 in stacks of
-64 (32 to 128 alike within the machine's noise, 16 slower). A traced batch's stacks take
-:func:`stack_peaks`' one compiled pass, without temporaries."""
-
-
-def _fibre_stresses(
-    entries: Sequence[tuple[SectionForces, Section]],
-) -> tuple[list[int], list[tuple[list[int], np.ndarray, np.ndarray]]]:
-    """The entries whose outer-fibre stress (MPa) is computed alone, and the stacks of the others.
-
-    Entries with uniform sections and forces of one shape, at least
-    :data:`STACK_FROM` of them, are stacked (their forces (c, ..., m),
-    their sections as arrays), at most :data:`STACK_SIZE` to a stack, and each
-    stack takes one call of :meth:`SectionForces.fibre_stress`, elementwise the
-    arithmetic of each
-    alone, so that a flexure's stress is the same whether it is computed with
-    others (a batch's copies) or alone. Returns the indices of the entries
-    left alone (a varying section, a few flexures) and, per stack, (the
-    entries' indices, their stresses (c, ..., m), their stations (c, m)).
-    """
-    alone: list[int] = []
-    alike: dict[tuple, list[int]] = {}  # uniform sections, by the forces' shape
-    for j, (forces, section) in enumerate(entries):
-        if section.profile is None:
-            alike.setdefault(forces.axial.shape, []).append(j)
-        else:
-            alone.append(j)
-    stacks = []
-    constants: dict[int, tuple[float, float, float]] = {}  # a section's, read once
-    for alike_members in alike.values():
-        if len(alike_members) < STACK_FROM:
-            alone += alike_members
-            continue
-        for first in range(0, len(alike_members), STACK_SIZE):
-            members = alike_members[first : first + STACK_SIZE]
-            stacks.append((members, *_stacked_stress([entries[j] for j in members], constants)))
-    return alone, stacks
-
-
-def _stacked_stress(
-    chosen: list[tuple[SectionForces, Section]], constants: dict[int, tuple[float, float, float]]
-) -> tuple[np.ndarray, np.ndarray]:
-    """The outer-fibre stresses (c, ..., m) (MPa) and stations (c, m) of uniform sections'
-    forces of one shape, stacked: :meth:`SectionForces.fibre_stress` elementwise, each as
-    alone; ``constants`` keeps each section's h, A and I by id."""
-    at = np.array([f.at for f, _ in chosen])
-    axial = np.array([f.axial for f, _ in chosen])  # np.array of equal shapes: np.stack's copy,
-    moment = np.array([f.moment for f, _ in chosen])  # at a third the cost
-    values = section_constants([s for _, s in chosen], constants)
-    shape = (-1, *[1] * (axial.ndim - 1))  # each section's constants against its forces
-    stacked = _Sections(*(values[:, k].reshape(shape) for k in range(3)))
-    return SectionForces(at, axial, moment).fibre_stress(stacked), at
-
-
-def section_constants(
-    sections: Sequence[Section], known: dict[int, tuple[float, float, float]] | None = None
-) -> np.ndarray:
-    """Uniform sections' thickness (mm), area (mm^2) and second moment (mm^4), (c, 3);
-    ``known`` keeps each section's by id (sections repeat among a batch's copies)."""
-    known = {} if known is None else known
-    for s in sections:
-        if id(s) not in known:
-            known[id(s)] = (s.thickness, s.area, s.inertia)
-    return np.array([known[id(s)] for s in sections], float).reshape(-1, 3)
-
-
-def _unit_peaks(unit: np.ndarray, at: np.ndarray) -> list[Peaks]:
-    """:data:`Peaks` of stacked stresses ``unit`` (c, k, m) (MPa) at stations ``at`` (c, m)."""
-    places = np.take_along_axis(at, unit.argmax(axis=2), axis=1)
-    return list(zip(unit.max(axis=2).tolist(), places.tolist(), at.tolist(), unit[:, -1].tolist()))
-
-
-def path_peaks(entries: Sequence[tuple[SectionForces, Section]]) -> list[Peaks]:
-    """Each flexure's peak outer-fibre stress at every level, its place and its last profile.
-
-    Many flexures at once (:func:`_fibre_stresses`: a batch's copies), each as alone.
-
-    Parameters
-    ----------
-    entries : sequence of (SectionForces, Section)
-        Section forces (N, N mm) stacked over k levels, (k, m) each, and the
-        flexure's section.
-
-    Returns
-    -------
-    list of :data:`Peaks`
-        Per entry, plain lists.
-    """
-    out: list = [None] * len(entries)
-    alone, stacks = _fibre_stresses(entries)
-    for j in alone:
-        out[j] = _path_peak(*entries[j])
-    for members, unit, at in stacks:  # unit (c, k, m)
-        for j, peaks in zip(members, _unit_peaks(unit, at)):
-            out[j] = peaks
-    return out
-
-
-@cache
-def stress_kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.kernels.stresskernel`, imported and loaded on first use (numba is
-    imported only by the runs that stack stresses: a batch's)."""
-    from ..kernels import stresskernel
-
-    stresskernel.warm_up()
-    return stresskernel
-
-
-def stack_peaks(stack: ForceStack, constants: np.ndarray) -> list[Peaks]:
-    """:func:`path_peaks` of a stack's members (forces (g, k, m)) with uniform sections, whose
-    :func:`section_constants` are ``constants`` (g, 3): the same numbers, from one compiled
-    pass (:func:`flexval.reducedmodels.kernels.stresskernel.stack_peaks`) without a
-    :class:`SectionForces` per member."""
-    count, levels, stations = stack.axial.shape
-    peaks, places = np.empty((count, levels)), np.empty((count, levels))
-    profile = np.empty((count, stations))
-    at = np.ascontiguousarray(stack.at, float)
-    stress_kernels().stack_peaks(
-        at,
-        stack.axial,
-        stack.moment,
-        np.ascontiguousarray(constants, float),
-        peaks,
-        places,
-        profile,
-    )
-    stations_of = np.broadcast_to(at, (count, stations)).tolist()
-    return list(zip(peaks.tolist(), places.tolist(), stations_of, profile.tolist()))
-
-
-def _path_peak(forces: SectionForces, section: Section) -> Peaks:
-    """:func:`path_peaks` of one flexure alone (forces (k, m))."""
-    unit = forces.fibre_stress(section)
-    return (
-        unit.max(axis=1).tolist(),
-        forces.at[unit.argmax(axis=1)].tolist(),
-        forces.at.tolist(),
-        unit[-1].tolist(),
-    )
-
-
-def _state_peak(forces: SectionForces, section: Section, factors: list[float]) -> Peaks:
-    """:func:`state_peaks` of one flexure alone (forces (m,); ``factors`` the scales' sizes)."""
-    unit = forces.fibre_stress(section)
-    peak = int(np.argmax(unit))
-    top = float(unit[peak])  # plain floats: one product per level
-    return (
-        [f * top for f in factors],
-        [float(forces.at[peak])] * len(factors),
-        forces.at.tolist(),
-        (factors[-1] * unit).tolist(),
-    )
-
-
-def state_peaks(
-    entries: Sequence[tuple[SectionForces, Section]], scales: Sequence[float] = (1.0,)
-) -> list[Peaks]:
-    """Each flexure's peak outer-fibre stress at one state, scaled to several levels.
-
-    The linear response's form (:func:`record_stress`): the stress at the
-    state times each entry of ``scales`` in size (MPa), its place at every
-    level, the stations and the profile at the last level. Many flexures at
-    once (:func:`_fibre_stresses`), each as alone.
-
-    Parameters
-    ----------
-    entries : sequence of (SectionForces, Section)
-        Section forces (N, N mm) at the state, (m,) each, and the flexure's section.
-    scales : sequence of float
-        The factors of the levels.
-    """
-    factors = [abs(f) for f in np.asarray(scales, float).tolist()]
-    out: list = [None] * len(entries)
-    alone, stacks = _fibre_stresses(entries)
-    for j in alone:
-        out[j] = _state_peak(*entries[j], factors)
-    for members, unit, at in stacks:  # unit (c, m)
-        rows = np.arange(len(members))
-        peak = unit.argmax(axis=1)
-        tops, places = unit[rows, peak].tolist(), at[rows, peak].tolist()
-        profiles = (factors[-1] * unit).tolist()
-        for j, top, place, station, profile in zip(members, tops, places, at.tolist(), profiles):
-            out[j] = ([f * top for f in factors], [place] * len(factors), station, profile)
-    return out
-
-
-def append_stresses(path: LoadPath, found: Iterable[tuple[str, Peaks]]) -> None:
-    """Append each named flexure's peak stresses (MPa) and their places (:data:`Peaks`, as
-    :func:`path_peaks` gives them: lists of its own, which a flexure's first levels become);
-    its profile replaces the last one."""
-    if path.peak_stress is None:
-        path.peak_stress, path.peak_stress_at, path.stress_profile = {}, {}, {}
-    stresses, places_of, profiles = path.peak_stress, path.peak_stress_at, path.stress_profile
-    for name, (peaks, places, at, profile) in found:
-        so_far = stresses.get(name)
-        if so_far is None:  # the flexure's first levels
-            stresses[name], places_of[name] = peaks, places
-        else:
-            so_far.extend(peaks)
-            places_of[name].extend(places)
-        profiles[name] = {"at": at, "stress": profile}
 
 
 def solve_path(
@@ -747,3 +417,290 @@ def solve_path(
     )
     points = trace(system, system.loads(case), LoadControl(case.factors(levels)))
     return recorder.run(points)[0]
+
+
+class CopyFlexures(NamedTuple):
+    """The flexure behind each connector of a batch's copies, per distinct copy.
+
+    Copies that share their mechanism and connectors share a row, so a batch
+    of one mechanism reads its flexures once.
+    """
+
+    row: np.ndarray
+    """(copies,): each copy's row."""
+    names: list[list[str]]
+    """Per row, each connector's name (its flexure's), in the copy's connector order."""
+    sections: list[list[Section | None]]
+    """Per row, each connector's flexure section (None: a connector of no flexure, a pin)."""
+    constants: np.ndarray
+    """(rows, connectors, 3): each uniform section's thickness (mm), area (mm^2) and second
+    moment (mm^4); NaN for the others."""
+    uniform: np.ndarray
+    """(rows, connectors) of bool: the connector has a flexure of uniform section (whose
+    stresses are stacked with others')."""
+    stressed: np.ndarray
+    """(rows, connectors) of bool: the connector has a flexure, of any section (its stresses
+    are recorded)."""
+
+
+def copy_flexures(members: Sequence[tuple[Mechanism, Sequence[Connector]]]) -> CopyFlexures:
+    """The :class:`CopyFlexures` of a batch's copies (its ``members``: each copy's mechanism
+    and connectors)."""
+    rows: dict[tuple[int, int], int] = {}
+    row = np.empty(len(members), np.int64)
+    names, sections = [], []
+    for k, (mechanism, connectors) in enumerate(members):
+        key = (id(mechanism), id(connectors))
+        if key not in rows:
+            rows[key] = len(names)
+            by_name = {f.name: f.section for f in mechanism.flexures}
+            names.append([c.name for c in connectors])
+            sections.append([by_name.get(c.name) for c in connectors])
+        row[k] = rows[key]
+    count = len(sections[0]) if sections else 0
+    constants = np.full((len(sections), count, 3), np.nan)
+    uniform = np.zeros((len(sections), count), bool)
+    stressed = np.zeros((len(sections), count), bool)
+    for r, of_row in enumerate(sections):
+        for i, section in enumerate(of_row):
+            if section is None:
+                continue
+            stressed[r, i] = True
+            if section.profile is None:
+                uniform[r, i] = True
+                constants[r, i] = (section.thickness, section.area, section.inertia)
+    return CopyFlexures(row, names, sections, constants, uniform, stressed)
+
+
+class Judgement(NamedTuple):
+    """What the end pass finds at every level of a batch's kept copies (a path alone: one copy),
+    each copy's entries in its own connectors' order."""
+
+    reasons: list[list[list[str]]]
+    """Per kept copy, per level: the validity monitor's reasons, each prefixed with its
+    connector's name (none: valid)."""
+    peaks: list[list[tuple[str, Peaks]]]
+    """Per kept copy: each stressed flexure's name and :data:`~flexval.reducedmodels.core.peaks.
+    Peaks` (MPa)."""
+    forces: list[list[tuple[Connector, SectionForces]]] | None
+    """Per kept copy (when asked for): each connector with section forces and them, (k, m)
+    (N, N mm)."""
+
+
+def end_pass(
+    system: System,
+    states: Sequence[np.ndarray],
+    kept: Sequence[int] = (0,),
+    with_forces: bool = False,
+) -> Judgement:
+    """The validity monitor's verdicts and the flexures' stresses at every state, per kept copy.
+
+    The one end pass of a recorded path, for a path alone (a System: one
+    copy) and for a batch's copies alike. Each group of connectors judges
+    all its connectors at every state in one call
+    (:meth:`~flexval.reducedmodels.core.connector.ConnectorGroup.path_end_stacks`,
+    given its coordinates: :meth:`System.group_coordinates`); connectors
+    stacked alike with uniform sections, at least
+    :data:`~flexval.reducedmodels.core.peaks.STACK_FROM` of them, take their
+    stresses from their stack (:func:`~flexval.reducedmodels.core.peaks.stack_peaks`),
+    the others from :func:`~flexval.reducedmodels.core.peaks.path_peaks`: each
+    flexure's numbers are the same either way, so a copy's path is its solo
+    run's. Which copy and connector a group's row is comes from
+    :meth:`System.copy_layout`. A System of one copy takes each connector's
+    forces as its group gives them
+    (:meth:`~flexval.reducedmodels.core.connector.ConnectorGroup.path_end_pass`),
+    without stacks, which would cost it more than they save.
+
+    Parameters
+    ----------
+    system : System
+        The path's System, or a batch's.
+    states : sequence of ndarray
+        The recorded states (the system's coordinates, mm and rad).
+    kept : sequence of int
+        The copies to judge (default: a path alone's one copy).
+    with_forces : bool
+        Also give each connector's section forces (recorded with a path's shapes).
+    """
+    origin_table, members = system.copy_layout()
+    place = np.full(len(members), -1, np.int64)  # each copy's place in kept (-1: not kept)
+    place[list(kept)] = np.arange(len(kept))
+    alone = len(members) == 1  # one copy: its connectors' forces as its groups give them
+    sections = {f.name: f.section for f in members[0][0].flexures} if alone else None
+    flexures = None if alone else copy_flexures(members)
+    reasons: dict[int, list[list[str]]] = {}  # of the copies with any, per level
+    count = len(members[0][1])  # connectors a copy (every copy's kinds are copy 0's)
+    peaks: list[list] = [[None] * count for _ in kept]  # per copy and connector: (name, peaks)
+    forces = [[None] * count for _ in kept] if with_forces else None
+    stressed = []  # (copy's place in kept, connector's index in its copy, name) of entries
+    entries = []  # their (forces, section), whose peaks path_peaks finds
+    for (group, run), coordinates in zip(system.groups, system.group_coordinates(states)):
+        if alone:
+            verdicts, own = group.path_end_pass(coordinates)
+        else:
+            verdicts, stacks = group.path_end_stacks(coordinates)
+        connectors = group.connectors
+        clean = None  # a verdict without reasons (groups share one among their connectors)
+        for k, c, per_level in zip(origin_table[run, 0].tolist(), connectors, verdicts):
+            if per_level is clean:
+                continue
+            if not any(per_level):
+                clean = per_level
+            elif place[k] >= 0:
+                into_levels = reasons.setdefault(int(place[k]), [[] for _ in states])
+                for into, why in zip(into_levels, per_level):
+                    if why:
+                        into.extend(f"{c.name}: {w}" for w in why)
+        if alone:  # place 0, each connector's index its place in the System
+            for i, (c, found) in enumerate(zip(connectors, own), run.start):
+                if found is None:
+                    continue
+                if forces is not None:
+                    forces[0][i] = (c, found)
+                section = sections.get(c.name)
+                if section is not None:
+                    stressed.append((0, i, c.name))
+                    entries.append((found, section))
+            continue
+        for stack in stacks:
+            copy, index = origin_table[run.start + np.asarray(stack.members, np.int64)].T
+            row, at = flexures.row[copy], place[copy]
+            if forces is not None:
+                for r in np.flatnonzero(at >= 0).tolist():
+                    forces[at[r]][index[r]] = (
+                        connectors[stack.members[r]],
+                        SectionForces(stack.at, stack.axial[r], stack.moment[r]),
+                    )
+            rows = np.flatnonzero((at >= 0) & flexures.stressed[row, index])
+            row, at, index = row[rows], at[rows], index[rows]
+            names = [flexures.names[r][i] for r, i in zip(row.tolist(), index.tolist())]
+            if rows.size >= STACK_FROM and flexures.uniform[row, index].all():
+                if rows.size < len(stack.members):
+                    stack = stack._replace(axial=stack.axial[rows], moment=stack.moment[rows])
+                found = stack_peaks(stack, flexures.constants[row, index])
+                for j, i, name, peak in zip(at.tolist(), index.tolist(), names, found):
+                    peaks[j][i] = (name, peak)
+                continue
+            for r, j, i, name in zip(rows.tolist(), at.tolist(), index.tolist(), names):
+                stressed.append((j, i, name))
+                section = flexures.sections[flexures.row[copy[r]]][i]
+                entries.append((SectionForces(stack.at, stack.axial[r], stack.moment[r]), section))
+    for (j, index, name), found in zip(stressed, path_peaks(entries)):
+        peaks[j][index] = (name, found)
+    no_reasons = [[] for _ in states]
+    return Judgement(
+        [reasons.get(j, no_reasons) for j in range(len(kept))],
+        [[entry for entry in of_copy if entry is not None] for of_copy in peaks],
+        None if forces is None else [[f for f in of_copy if f is not None] for of_copy in forces],
+    )
+
+
+def record_batch(
+    batch: BatchSystem,
+    points: Sequence[PathPoint],
+    kept: Sequence[int],
+    cases: Sequence[LoadCase],
+    model: str = "",
+    scene: str = "",
+    settings: dict | None = None,
+    failure: TraceFailure | None = None,
+) -> list[LoadPath | SolverError]:
+    """The LoadPaths of copies ``kept`` from the batch's points, as each copy's recorder makes it.
+
+    With a ``failure`` (the trace of a batch of one copy stopped), the copy's
+    :class:`~flexval.reducedmodels.core.settings.SolverError` carrying the path so far, as its
+    recorder makes it of the same failure.
+
+    The batch's states are judged by the one :func:`end_pass`, every kept copy at
+    once; each copy's path is then built as :func:`levels_path` says.
+    """
+    if not kept:
+        return []
+    states = np.array([p.state for p in points])
+    judgement = end_pass(batch, states, kept)
+    reasons = {j: of_copy for j, of_copy in enumerate(judgement.reasons) if any(of_copy)}
+    no_reasons = [[] for _ in points]
+    copies = batch.n_copies
+    iterations = np.array([np.broadcast_to(p.iterations, (copies,)) for p in points]).T.tolist()
+    last = points[-1].counters
+    newton = np.broadcast_to(last.newton_iterations, (copies,)).tolist()
+    targets = batch.copy_targets(states)
+    factors = [p.factor for p in points]
+    _note_resolution(batch, kept, factors, targets, reasons)
+    dx, dy, rotation = (v.T.tolist() for v in targets)
+    load_of: dict[int, list[float]] = {}  # each case's load at each level (N or N mm), once
+    totals: dict[int, Counters] = {}  # the counts after the last point, by Newton iterations
+
+    def counters_of(newton_iterations: int) -> Counters:
+        found = totals.get(newton_iterations)
+        if found is None:
+            found = totals[newton_iterations] = Counters(
+                newton_iterations, last.step_cuts, last.substeps
+            )
+        return found
+
+    paths = []
+    for j, k in enumerate(kept):
+        case = cases[k]
+        load = load_of.get(id(case))
+        if load is None:
+            load = load_of[id(case)] = [f * case.magnitude for f in factors]
+        path = levels_path(
+            case,
+            model,
+            scene,
+            settings,
+            batch.copy_dofs[k].size,
+            list(load),
+            dx[k],
+            dy[k],
+            rotation[k],
+            iterations[k],
+            counters_of(newton[k]),
+            reasons.get(j, no_reasons),
+            judgement.peaks[j],
+        )
+        if k in batch.solo_systems:  # a copy judged alone: its stability note, as alone
+            note_stability(path, batch.solo_systems[k])
+        if failure is None:
+            paths.append(path)
+            continue
+        counts = failure.counters
+        alone = Counters(
+            int(np.broadcast_to(counts.newton_iterations, (copies,))[k]),
+            counts.step_cuts,
+            counts.substeps,
+        )
+        failed = TraceFailure(
+            failure.reason, failure.factor, alone, failure.bifurcations, failure.bifurcation
+        )
+        paths.append(failed_path(path, cases[k], model, failed, 0.0))
+    return paths
+
+
+def _note_resolution(
+    batch: BatchSystem,
+    kept: Sequence[int],
+    factors: Sequence[float],
+    targets: tuple[np.ndarray, ...],
+    reasons: dict[int, list[list[str]]],
+) -> None:
+    """Add to ``reasons`` (by place in ``kept``, per level) where a kept copy's load is below
+    its round-off (:func:`~flexval.reducedmodels.core.validity.unresolved_levels`, every copy at
+    once), after its connectors' reasons as :func:`~flexval.reducedmodels.core.recorder.
+    note_resolution` adds them to a path alone; ``targets`` are the copies' dx, dy (mm) and
+    rotation (rad), each (levels, copies)."""
+    members = [batch.members[k] for k in kept]
+    mask, moved, floor = unresolved_levels(
+        np.asarray(factors),
+        *(v[:, kept].T for v in targets),
+        np.array([mechanism.size() for mechanism, _ in members]),
+        np.array([batch.copy_dofs[k].size for k in kept]),
+        np.array([carries_weights(connectors) for _, connectors in members]),
+    )
+    if not mask.any():
+        return
+    for j in np.flatnonzero(mask.any(axis=1)).tolist():
+        into = reasons.setdefault(j, [[] for _ in factors])
+        for level in np.flatnonzero(mask[j]).tolist():
+            into[level].append(resolution_reason(float(moved[j, level]), float(floor[j])))

@@ -94,7 +94,7 @@ class ForceStack(NamedTuple):
     What a group's end pass gives a batch's copies (whose flexures are
     alike) without a :class:`SectionForces` per connector: their stresses
     and peaks are then computed for the whole stack in a few array
-    operations (:func:`flexval.reducedmodels.core.recorder.stack_peaks`).
+    operations (:func:`flexval.reducedmodels.core.peaks.stack_peaks`).
     """
 
     members: list[int]

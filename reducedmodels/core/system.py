@@ -307,6 +307,15 @@ class System:
         k = self.body_index[body]
         return q[3 * k : 3 * k + 3]
 
+    def copy_layout(self) -> tuple[np.ndarray, list[tuple[Mechanism, Sequence[Connector]]]]:
+        """Every connector's (copy, index among its copy's connectors), (n, 2) of int, and each
+        copy's mechanism and connectors: a System alone is one copy, a batch many
+        (:meth:`flexval.reducedmodels.core.batchsystem.BatchSystem.copy_layout`). What the
+        recorder's end pass reads to give each copy its own verdicts and stresses."""
+        count = len(self.connectors)
+        origin = np.column_stack([np.zeros(count, np.int64), np.arange(count, dtype=np.int64)])
+        return origin, [(self.mechanism, self.connectors)]
+
     @property
     def groups(self) -> list[tuple[ConnectorGroup, slice]]:
         """The runs of consecutive connectors of one class, each with its group (built once)."""

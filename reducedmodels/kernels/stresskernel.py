@@ -6,7 +6,7 @@ g flexures of uniform section, k levels, m stations shared by all
 each flexure's outer-fibre stress, its peak at every level and where it lies,
 and its profile at the last level in one pass, without the temporaries of
 the same arithmetic in array operations
-(:func:`flexval.reducedmodels.core.recorder.path_peaks`), whose numbers it gives:
+(:func:`flexval.reducedmodels.core.peaks.path_peaks`), whose numbers it gives:
 each stress is |N|/A + |M| h/(2 I) in that order of operations, and a peak is
 the first largest stress (a NaN, the first NaN), as numpy's ``max`` and
 ``argmax`` find them.

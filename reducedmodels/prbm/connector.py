@@ -338,6 +338,11 @@ class PrbmConnector(Connector):
         refs = tuple(tuple(mechanism.bodies[b].reference.tolist()) for b in self.bodies)
         self.__dict__.update(_chain_geometry(shape, joints, self._forward, refs))
         self.length = length
+        #: a straight leaf's joints lie on its line: its rigid links hold the axis at rest
+        self._axis = None
+        if shape.kind == "segment":
+            start, end = shape.end_points
+            self._axis = (start, (end - start) / length)
         # the parameters of flexval.reducedmodels.kernels.prbmkernel.chain
         self._parameters = np.array(
             [*self._r_a, *self._r_b, *self._v_h, *self._v_l, *stiffness, self.closure_scale]
@@ -345,6 +350,12 @@ class PrbmConnector(Connector):
         self._fitted_rotation = fitted_rotation()
         self._section = flexure.section
         self._shape = shape
+
+    def rigid_directions(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """A straight leaf's axis (a point on it, mm, and its unit direction): its three joints
+        lie on one line, so the rigid links hold the leaf inextensible at rest; an arc's chain
+        holds nothing rigid."""
+        return [] if self._axis is None else [self._axis]
 
     def mass_points(self, density: float) -> MassPoints:
         """The flexure's mass (density in t/mm^3) on the chain's four rigid members.
