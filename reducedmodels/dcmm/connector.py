@@ -46,7 +46,14 @@ from ..core.validity import (
     stretch_reasons,
     sway_load,
 )
-from .stacks import Stack, chain_layout, end_points, sample_points, stack_tables
+from .stacks import (
+    Stack,
+    chain_layout,
+    end_points,
+    sample_points,
+    samples_per_sub_arc,
+    stack_tables,
+)
 from .subarcs import sub_arcs
 
 CHAIN_HALF_BANDWIDTH = 2 * 3 - 1
@@ -108,7 +115,8 @@ class DcmmConnector(Connector):
         if not forward:
             subs = subs[::-1]
         parts = [sub.shape for sub in subs]
-        self._layout = layout = chain_layout(n, forward)
+        self._samples = samples_per_sub_arc(n, not flexure.section.is_uniform)
+        self._layout = layout = chain_layout(n, forward, self._samples)
         # chain of reference points: body a, cuts (in chain order), body b (float pairs, mm)
         cuts = [list(end_points(p)[1 if forward else 0]) for p in parts[:-1]]
         refs = [
@@ -157,7 +165,7 @@ class DcmmConnector(Connector):
         # each sample's point at rest (all sub-arcs' at once: they are equal parts of the
         # centre line) as offsets from its sub-arc's leading and following bodies (mm), and
         # its section's direction towards body b (rad)
-        points, self.sample_tangent = sample_points(shape, n, forward)
+        points, self.sample_tangent = sample_points(shape, n, forward, self._samples)
         self.sample_rel = (points[:, None] - self._refs[layout.sample_ends]).reshape(-1, 4)
 
     def mass_points(self, density: float) -> MassPoints:
@@ -291,7 +299,8 @@ class DcmmConnector(Connector):
 
         Each sub-arc's own generalised force (its gradient on its following
         body's pose) carried by statics to points of its displaced shape,
-        :data:`SAMPLES_PER_SUB_ARC` segments each: the displaced sub-arc is
+        :func:`~flexval.reducedmodels.dcmm.stacks.samples_per_sub_arc` segments each (more on
+        a varying section): the displaced sub-arc is
         the blend (1 - w) x_leading + w x_following of the point carried
         rigidly by each of its bodies, w the fraction along the sub-arc (it
         leaves the leading body's cut and reaches the following body's; a
@@ -372,7 +381,9 @@ class DcmmGroup(KernelEndPass):
     def __init__(self, connectors):
         super().__init__(connectors)
         self._stack: Stack | None = None
-        self._tables = stack_tables(tuple((len(c.parameters), c._forward) for c in self.connectors))
+        self._tables = stack_tables(
+            tuple((len(c.parameters), c._forward, c._samples) for c in self.connectors)
+        )
         self._chains = _node_chains(self.connectors)
 
     def predictor(self, gather: np.ndarray):

@@ -20,11 +20,25 @@ import numpy as np
 from ..core.geometrycache import per_centre_line
 
 SAMPLES_PER_SUB_ARC = 16
-"""Segments of each displaced sub-arc at whose ends the section forces are reported."""
+"""Segments of each displaced sub-arc of a uniform section at whose ends the section forces
+are reported: its stress is M/(I/c) and N/A, whose peak lies at a sub-arc's end or where
+the moment peaks, which a sub-arc's smooth moment puts within a few segments."""
+
+SAMPLES_VARYING = 256
+"""Segments over a whole flexure of varying section (a notch, a taper) at whose ends its
+section forces are reported, at least :data:`SAMPLES_PER_SUB_ARC` per sub-arc: the stress
+there is M c(s)/I(s), whose peak under a force across a notch lies off the waist, where
+a few samples of a sub-arc miss it; the stations of the PRBM's notch pivot
+(:data:`flexval.reducedmodels.prbm.pivot.STATIONS`, 257 points)."""
 
 
-_SAMPLE_FRACTIONS = np.linspace(0.0, 1.0, SAMPLES_PER_SUB_ARC + 1)
-"""Fraction w of each sample along its sub-arc, from its leading body's cut."""
+def samples_per_sub_arc(n: int, varying: bool) -> int:
+    """Segments of each of a flexure's n sub-arcs at whose ends its section forces are
+    reported: :data:`SAMPLES_PER_SUB_ARC`, and on a varying section enough for
+    :data:`SAMPLES_VARYING` over the flexure."""
+    if not varying:
+        return SAMPLES_PER_SUB_ARC
+    return max(SAMPLES_PER_SUB_ARC, -(-SAMPLES_VARYING // n))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -70,11 +84,12 @@ class ChainLayout:
 
 
 @functools.lru_cache(maxsize=64)
-def chain_layout(n: int, forward: bool) -> ChainLayout:
-    """The layout of a chain of n sub-arcs run from the flexure's start (``forward``) or end.
+def chain_layout(n: int, forward: bool, samples: int = SAMPLES_PER_SUB_ARC) -> ChainLayout:
+    """The layout of a chain of n sub-arcs run from the flexure's start (``forward``) or end,
+    each sampled at the ends of ``samples`` equal segments.
 
-    It depends on n and the direction only, so the flexures of a model
-    share it (computed once, like a module constant; the arrays are read-only).
+    It depends on these numbers only, so the flexures of a model share it
+    (computed once, like a module constant; the arrays are read-only).
     """
     slots = (
         [np.arange(0, 3)]
@@ -82,7 +97,7 @@ def chain_layout(n: int, forward: bool) -> ChainLayout:
         + [np.arange(3, 6)]
     )
     element_dofs = np.array([np.concatenate([slots[k], slots[k + 1]]) for k in range(n)], np.int64)
-    w = _SAMPLE_FRACTIONS
+    w = np.linspace(0.0, 1.0, samples + 1)  # each sample's fraction from its leading cut
     sample_w = np.concatenate([w] + [w[1:]] * (n - 1))
     sample_part = np.concatenate(
         [np.zeros(len(w), int)] + [np.full(len(w) - 1, k) for k in range(1, n)]
@@ -172,10 +187,13 @@ def end_points(shape) -> tuple[tuple[float, float], tuple[float, float]]:
 
 
 @per_centre_line
-def sample_points(shape, n: int, forward: bool) -> tuple[np.ndarray, np.ndarray]:
-    """The points (mm) of the chain's samples at rest on the centre line of n sub-arcs, and
-    the direction of each one's section towards the chain's second body (rad), read-only."""
-    s = shape.length * chain_layout(n, forward).sample_at
+def sample_points(
+    shape, n: int, forward: bool, samples: int = SAMPLES_PER_SUB_ARC
+) -> tuple[np.ndarray, np.ndarray]:
+    """The points (mm) of the chain's samples at rest on the centre line of n sub-arcs
+    (``samples`` segments each), and the direction of each one's section towards the chain's
+    second body (rad), read-only."""
+    s = shape.length * chain_layout(n, forward, samples).sample_at
     points = shape.point(s)
     tangent = shape.tangent_angle(s)
     if not forward:
@@ -186,8 +204,9 @@ def sample_points(shape, n: int, forward: bool) -> tuple[np.ndarray, np.ndarray]
 
 
 @functools.lru_cache(maxsize=64)
-def stack_tables(chains: tuple[tuple[int, bool], ...]) -> StackTables:
-    """The tables of a stack of chains given as (sub-arcs, runs forward) each, in order.
+def stack_tables(chains: tuple[tuple[int, bool, int], ...]) -> StackTables:
+    """The tables of a stack of chains given as (sub-arcs, runs forward, samples per sub-arc)
+    each, in order.
 
     They depend on these numbers only (not on the geometry), so the systems
     of a model share them, like :func:`chain_layout` (the arrays are read-only).
@@ -196,8 +215,8 @@ def stack_tables(chains: tuple[tuple[int, bool], ...]) -> StackTables:
     lead, sub_arc, order, last, connector, w, pose_order = [], [], [], [], [], [], []
     element_dofs, rows, cols = [], [], []
     body = start = 0
-    for j, (n, forward) in enumerate(chains):
-        layout = chain_layout(n, forward)
+    for j, (n, forward, samples) in enumerate(chains):
+        layout = chain_layout(n, forward, samples)
         first.append(body)
         sub_arc_body += range(body, body + n)
         part, count = layout.sample_part, layout.sample_part.size
