@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
+from functools import partial
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -429,7 +430,7 @@ def _solve_copies(
             if wide.any():
                 far = wide & (system.motion_ratios(origin, q) > settings.max_excursion)
                 stop(far, it + 1, LEFT_BOUNDS)
-    stop_each(running, max_iterations, _unconverged_reason, [max_iterations] * copies, res)
+    stop_each(running, max_iterations, partial(_unconverged_reason, max_iterations), res)
     converged = np.asarray(active, bool) & ~failed
     reason = reasons[int(np.argmax(failed))] if failed.any() else ""  # the first failed copy's
     return NewtonResult(
