@@ -373,3 +373,33 @@ def test_two_processes_share_an_empty_mesh_cache(tmp_path):
     assert outputs[0] == outputs[1] and len(outputs[0].splitlines()) == 3
     assert len(list((cache / "meshes").glob("*.npz"))) == 3
     assert not [p for p in cache.rglob("*") if ".tmp" in p.name]
+
+
+def test_a_cached_record_is_read_computed_once_and_failures_are_not_kept(tmp_path):
+    """``ResultCache.record``: the first call computes and stores the record ``write`` gives;
+    the next reads it back without computing; a record ``read`` refuses is recomputed; a
+    result ``write`` declines (a failure) and a call without a key are never stored."""
+    cache = ResultCache(root=tmp_path)
+    calls = []
+
+    def compute(value):
+        def run():
+            calls.append(value)
+            return value
+
+        return run
+
+    def read(hit):
+        return hit["value"] if set(hit) == {"value"} else None
+
+    def write(found):
+        return None if found < 0 else {"value": found}
+
+    assert cache.record("a", compute(3.5), read, write) == 3.5
+    assert cache.record("a", compute(9.0), read, write) == 3.5 and calls == [3.5]
+    cache.put_record("a", {"other": 1.0})  # a record of another form: recomputed
+    assert cache.record("a", compute(4.0), read, write) == 4.0 and calls == [3.5, 4.0]
+    assert cache.record("b", compute(-1.0), read, write) == -1.0  # a failure: not kept
+    assert cache.get_record("b") is None
+    assert cache.record(None, compute(2.0), read, write) == 2.0
+    assert calls == [3.5, 4.0, -1.0, 2.0]

@@ -35,6 +35,7 @@ from collections.abc import Callable
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -45,6 +46,8 @@ ENTRY_FORMAT = "flexval-loadpath/2"
 """Format tag of a cache entry (a different tag is a foreign entry)."""
 RECORD_FORMAT = "flexval-record/1"
 """Format tag of a cache entry holding a JSON record (:meth:`ResultCache.get_record`)."""
+
+T = TypeVar("T")
 
 
 @lru_cache(maxsize=1)
@@ -201,6 +204,33 @@ class ResultCache:
         if key is not None:
             self.put(key, lp)
         return lp
+
+    def record(
+        self,
+        key: str | None,
+        compute: Callable[[], T],
+        read: Callable[[dict], T | None],
+        write: Callable[[T], dict | None],
+    ) -> T:
+        """The result whose JSON record is cached under ``key``, else ``compute()``'s, its record
+        stored: the one cached result of the studies that are not a path (critical loads,
+        frequencies, batch timings).
+
+        ``read(record)`` makes the result of a stored record (None: a record of another
+        form, recomputed); ``write(result)`` gives the record to store (None: not stored,
+        a failure). ``key`` None: computed, not stored.
+        """
+        if key is not None:
+            hit = self.get_record(key)
+            found = None if hit is None else read(hit)
+            if found is not None:
+                return found
+        result = compute()
+        if key is not None:
+            kept = write(result)
+            if kept is not None:
+                self.put_record(key, kept)
+        return result
 
     def get_record(self, key: str) -> dict | None:
         """The JSON record stored under ``key`` (:func:`record_key`), or None (a bad entry

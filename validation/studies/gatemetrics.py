@@ -18,7 +18,7 @@ the report's own code, so a gate's numbers are the report's:
   with :data:`flexval.validation.report.frequencies.DEFAULT_DENSITY`).
 
 Both are kept in the result cache as JSON records
-(:meth:`flexval.validation.cache.ResultCache.get_record`) under the exact
+(:meth:`flexval.validation.cache.ResultCache.record`) under the exact
 scene (mass data included), model id, load case or mode count, and code, as
 load paths are; a model of a plug-in family is always computed (the key holds
 flexval's code, not the plug-in's). Units: N or N mm, Hz, t/mm^3.
@@ -124,14 +124,12 @@ def critical_load(
     result cache, else searched and stored there (not when ``cacheable`` is False, nor a
     result without a verdict: ``failure`` set)."""
     key = record_key(scene, spec.id, "critical_load", {"case": case, "range": SEARCH_RANGE})
-    if cacheable:
-        hit = memo.disk.get_record(key)
-        if hit is not None and set(hit) == set(Critical.__dataclass_fields__):
-            return Critical(**hit)
-    found = _search(scene, spec, case, memo if cacheable else None)
-    if cacheable and not found.failure:
-        memo.disk.put_record(key, found.record())
-    return found
+    return memo.disk.record(
+        key if cacheable else None,
+        lambda: _search(scene, spec, case, memo if cacheable else None),
+        lambda hit: Critical(**hit) if set(hit) == set(Critical.__dataclass_fields__) else None,
+        lambda found: None if found.failure else found.record(),
+    )
 
 
 @dataclass(frozen=True)
@@ -164,16 +162,23 @@ def natural_frequencies(
     stored there (not when ``cacheable`` is False, nor a failed analysis)."""
     massive, density = choose_density(scene, None, DEFAULT_DENSITY)
     key = record_key(massive, spec.id, "natural_frequencies", {"count": count})
-    if cacheable:
-        hit = cache.get_record(key)
-        if hit is not None and {"values", "seconds"} <= set(hit):
-            return Frequencies(list(hit["values"]), density, "", hit["seconds"])
-    t0 = time.perf_counter()
-    try:
-        values = lowest_frequencies(massive, spec, count)
-    except MODAL_ERRORS as exc:
-        return Frequencies([], density, modal_reason(exc), _since(t0))
-    found = Frequencies(values, density, "", _since(t0))
-    if cacheable:
-        cache.put_record(key, {"values": values, "seconds": found.seconds})
-    return found
+
+    def compute() -> Frequencies:
+        t0 = time.perf_counter()
+        try:
+            values = lowest_frequencies(massive, spec, count)
+        except MODAL_ERRORS as exc:
+            return Frequencies([], density, modal_reason(exc), _since(t0))
+        return Frequencies(values, density, "", _since(t0))
+
+    def read(hit: dict) -> Frequencies | None:
+        if not {"values", "seconds"} <= set(hit):
+            return None
+        return Frequencies(list(hit["values"]), density, "", hit["seconds"])
+
+    return cache.record(
+        key if cacheable else None,
+        compute,
+        read,
+        lambda found: None if found.failure else {"values": found.values, "seconds": found.seconds},
+    )
