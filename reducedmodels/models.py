@@ -9,7 +9,6 @@ these runners, is registered in :mod:`flexval.reducedmodels.families`.
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -21,6 +20,7 @@ from flexval.geometry import Flexure, LoadCase, Mechanism, SceneError
 from .catalogue import ModelSpec
 from .core.connector import Connector
 from .core.inertia import with_weights
+from .core.linearbatch import rotation_verdicts
 from .core.loadpath import LoadPath
 from .core.loads import Loads
 from .core.peaks import record_stress
@@ -30,7 +30,7 @@ from .core.restnumbering import RestNumbering
 from .core.sections import SectionForces
 from .core.settings import SolverSettings
 from .core.system import System, connector_groups
-from .core.validity import MAX_LINEAR_ROTATION, linear_sway_verdicts, merge_reasons
+from .core.validity import linear_sway_verdicts, merge_reasons
 
 #: ``make(flexure, mechanism, spec, **options) -> Connector`` of one flexure
 ConnectorFactory = Callable[..., Any]
@@ -368,18 +368,10 @@ def linear_response(
     )
     # every level's largest body rotation at once, (levels,) rad
     turns = np.abs(dq_dead[2 : 3 * len(bodies) : 3] + lam[:, None] * dq[2 : 3 * len(bodies) : 3])
-    largest = np.argmax(turns, axis=1).tolist() if bodies else [0] * len(lam)
-    lp.valid, lp.validity = [], []
-    for row, k in zip(turns.tolist(), largest):
-        reason = None
-        if bodies and row[k] > MAX_LINEAR_ROTATION:
-            reason = (
-                f"linear response: body {bodies[k]!r} turned "
-                f"{math.degrees(row[k]):.3g} deg (limit "
-                f"{math.degrees(MAX_LINEAR_ROTATION):.3g} deg: linearised kinematics)"
-            )
-        lp.valid.append(reason is None)
-        lp.validity.append(reason)
+    if bodies:
+        lp.valid, lp.validity = rotation_verdicts(turns, bodies)
+    else:
+        lp.valid, lp.validity = [True] * len(lam), [None] * len(lam)
     # section forces of the linear response: K0 dq on the undeformed centre lines
     groups = connector_groups(connectors)
     ground_pose = poses[ground]

@@ -143,11 +143,11 @@ def linear_responses(
     kinds = [(type(c), c.bodies, c.n_internal) for c in members[0][1]]
     lam = cases[0].factors(levels)
     rests: dict[tuple[int, int], _Rest | Exception] = {}
-    for mechanism, connectors in members:
+    for k, (mechanism, connectors) in enumerate(members):
         key = (id(mechanism), id(connectors))  # copies of one mechanism: evaluated once
         if key in rests:
             continue
-        if (
+        if k > 0 and (  # copy 0 is numbered by its own numbering
             list(mechanism.moving_bodies) != numbering.bodies
             or [(type(c), c.bodies, c.n_internal) for c in connectors] != kinds
             or not numbering.fits(connectors)
@@ -157,7 +157,7 @@ def linear_responses(
             rests[key] = _Rest.of(mechanism, connectors, numbering)
         except (ValueError, FloatingPointError) as exc:
             rests[key] = exc
-    distinct = {id(case): case for case in cases}.values()
+    distinct = {id(case): case for case in cases[1:] if case is not cases[0]}.values()
     if any(not np.array_equal(case.factors(levels), lam) for case in distinct):
         raise ValueError("the copies' load cases request different load factors")
     results: list[LoadPath | Exception | None] = [None] * count
@@ -274,7 +274,7 @@ def _solve(
             load_unit=case.unit,
         )
         if too_far[i]:
-            path.valid, path.validity = _rotation_verdicts(turns[i], poses)
+            path.valid, path.validity = rotation_verdicts(turns[i], poses)
         else:
             path.valid, path.validity = [True] * lam.size, [None] * lam.size
         path.valid, path.validity = merge_reasons(path.valid, path.validity, sway[i])
@@ -283,8 +283,11 @@ def _solve(
     return paths
 
 
-def _rotation_verdicts(turns: np.ndarray, bodies: list[str]) -> tuple[list, list]:
-    """The validity monitor's verdict at each level from the bodies' rotations (levels, bodies)."""
+def rotation_verdicts(turns: np.ndarray, bodies: list[str]) -> tuple[list, list]:
+    """The validity monitor's verdict at each level of a linear response from its bodies'
+    rotations ``turns`` (levels, bodies; rad): beyond
+    :data:`~flexval.reducedmodels.core.validity.MAX_LINEAR_ROTATION` the linearised kinematics
+    no longer hold."""
     valid, validity = [], []
     for row, k in zip(turns.tolist(), np.argmax(turns, axis=1).tolist()):
         reason = None
