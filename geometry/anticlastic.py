@@ -3,75 +3,25 @@
 A flexure of depth b (out of plane), thickness h (in plane) and Young's
 modulus E bends in its plane with the stiffness E·I (I = b h³/12) when it is
 narrow: each fibre across the depth is free to contract or swell laterally,
-so the section curls the other way across the depth (anticlastic curvature,
--nu times the bending curvature). A wide one cannot curl and bends as a plate,
-with E·I/(1 - nu²). Which of the two holds is decided by Searle's parameter
-
-    beta = b² / (R h),
-
-R the radius of curvature of the centre line: the ratio of the depth to the
-width sqrt(R h) of the boundary layer at the free faces z = ±b/2 in which
-the section still curls. Units: mm (b, h, R); beta and the ratio are
-dimensionless.
-
-Derivation (linear theory of a curved strip: Searle 1908; Ashwell 1950;
-Conway and Nickola 1965; the equation is that of the axisymmetric cylindrical
-shell in Timoshenko and Woinowsky-Krieger 1959). The flexure is a strip of a
-cylindrical shell of radius R (axis out of plane), thickness h, depth b,
-given a small uniform change of curvature kappa along its centre line. Let
-u(z) be the normal displacement of the mid-surface across the depth,
-z in [-b/2, b/2], measured from its mean (the mean is a free membrane
-strain of the section). It stretches the fibres along the flexure by u/R; the
-membrane force across the depth vanishes (free faces, no load), so
-N_s = E h u / R, the transverse curvature is -u'', and with the plate modulus
-D = E h³ / (12 (1 - nu²)) the moments per unit depth are
-
-    M_s = D (kappa - nu u''),   M_z = D (nu kappa - u'').
-
-Equilibrium across the depth, M_z'' = N_s / R, is a beam on an elastic
-foundation of modulus E h / R²:
-
-    u'''' + 4 lambda⁴ u = 0,   lambda⁴ = 3 (1 - nu²) / (R h)²,
-
-with free faces M_z = 0 (u'' = nu kappa) and no shear (u''' = 0) at
-z = ±b/2. Its even solution is u = A cosh(lambda z) cos(lambda z)
-+ B sinh(lambda z) sin(lambda z) (the edge effect, decaying over
-1/lambda ~ sqrt(R h) from each face), and the moment of the whole section,
-M = ∫ M_s dz = D (b kappa - nu [u']), is
+so the section curls the other way across the depth (anticlastic curvature).
+A wide one cannot curl and bends as a plate, with E·I/(1 - nu²). Which of the
+two holds is decided by Searle's parameter beta = b² / (R h), R the radius of
+curvature of the centre line. Across the depth the mid-surface is a beam on
+an elastic foundation, free at z = ±b/2 (Searle 1908; Ashwell 1950; Conway
+and Nickola 1965), and the moment of the whole section gives
 
     M / (E I kappa) = (1 - nu² q(phi)) / (1 - nu²),
     q(phi) = (2 / phi) (cosh phi - cos phi) / (sinh phi + sin phi),
-    phi = lambda b = (3 (1 - nu²))^(1/4) sqrt(beta).
+    phi = (3 (1 - nu²))^(1/4) sqrt(beta),
 
-q falls from 1 (beta -> 0: the narrow beam, E·I) to 0 (beta -> inf: the plate,
-E·I/(1 - nu²)), so that only beta and nu matter. The ratio grows
-monotonically with beta. Fibre stretching u/R is linear in u, so the ratio
-does not depend on kappa: it is the stiffness of the pre-curved flexure for
-any small bending about its initial radius R. A straight flexure (R = inf,
-beta = 0) in that linear theory bends as a narrow beam whatever its depth:
-the ratio is exactly 1; its clamps, which hold the end faces flat, make a deep
-one stiffer all the same (:mod:`flexval.geometry.clampedleaf`, calibrated
-against the 3D solid).
+1 for a narrow flexure, 1/(1 - nu²) for a wide one. The theory is linear: a
+straight flexure has the ratio 1 exactly (its clamps stiffen a deep one all
+the same: :mod:`flexval.geometry.clampedleaf`). The derivation, a straight
+strip bent to a finite radius, what the formula does not cover and the
+references are in the documentation's models page, "Flexures of finite
+depth".
 
-A straight strip bent to a finite radius R (Ashwell's nonlinear problem)
-has the same foundation with 1/R the current curvature (a fibre at u from
-the mid-surface stretches by u / R), so the same quadratic energy at a given
-curvature: its strain energy is (1/2) E I r(beta) / R² with
-beta = b² / (R h) taken at the current radius. Its moment is then
-d/dkappa of that energy, E I kappa (r + (beta/2) dr/dbeta), larger than the
-secant E I r kappa, because the foundation stiffens as it bends. The formula
-does not apply to: curvature changes comparable with 1/R (where the current
-curvature, not the initial one, sets the foundation); flexures whose radius
-or thickness changes appreciably over a length b along them (the strip
-problem assumes they do not); and the axial and shear stiffness (a membrane
-strain along the flexure is resisted by E h b whatever the depth).
-
-References: G. F. C. Searle, *Experimental Elasticity*, Cambridge University
-Press, 1908; D. G. Ashwell, "The anticlastic curvature of rectangular beams
-and plates", J. Royal Aeronautical Society 54 (1950) 708-715; H. D. Conway and
-W. E. Nickola, "Anticlastic action of flat sheets in bending", Experimental
-Mechanics 5 (1965) 115-119; S. Timoshenko and S. Woinowsky-Krieger, *Theory of
-Plates and Shells*, 2nd ed., McGraw-Hill, 1959.
+Units: mm (b, h, R); beta and the ratio are dimensionless.
 """
 
 from __future__ import annotations

@@ -5,45 +5,23 @@ the arc's polar angles (start at ``axis - width/2``); a straight
 :class:`~flexval.geometry.shapes.Segment` is a rectangle of thickness h around it.
 The band is meshed with Gmsh's transfinite algorithm into biquadratic
 9-node quadrilaterals (quad9): ``n_t`` elements across the thickness and
-``n_l`` along the length.
+``n_l`` along the length. Level 0 has one element across the thickness and
+elements ``ASPECT_RATIO * h`` long on the centre line; each level halves the
+element size in both directions (``n_t = 2**level``, ``n_l = n_l(0) * 2**level``),
+so refinement is shape-regular.
 
-Mesh levels: level 0 has one element across the thickness and elements
-``ASPECT_RATIO * h`` long on the centre line; each level halves the element
-size in both directions (``n_t = 2**level``, ``n_l = n_l(0) * 2**level``).
+Why quad9 and square elements (ASPECT_RATIO = 1): a biquadratic element carries
+a strip's pure bending exactly, and the parasitic membrane strain of a curved
+element, whose relative error grows like A^4 (h/r)^2 with the aspect ratio A,
+is negligible from A = 1 on (measured in the documentation's models page,
+``continuum``). Every node is put exactly on the polar map of the band; the
+end faces are Gmsh physical groups ``start`` and ``end``, checked
+geometrically; meshes are cached on disk (:func:`flexval.geometry.files.cache_dir`)
+under a hash of the exact values that define them, and an entry that fails its
+checksum is discarded with a :class:`flexval.geometry.files.CacheWarning` and
+rebuilt (ARCHITECTURE.md, "Geometry"). Nothing here knows about a solver.
 
-Why quad9 and square elements (ASPECT_RATIO = 1): bilinear elements lock in
-bending of thin, and worse curved, strips; a biquadratic element reproduces
-the pure-bending field of a plane-stress strip exactly, so one element
-across the thickness already carries a linear bending strain. What is left
-of locking is the parasitic membrane strain of a curved element, whose
-relative error grows like A^4 (h/r)^2 with the aspect ratio A (element
-length / element thickness). Measured at level 0 on a 120 deg arc
-cantilever with r/h = 10 (tip compliance against the converged value):
-A = 8: 59 %, 4: 12 %, 2: 1.3 %, 1: 0.3 %, 0.5: 0.15 %. Below A = 1 the error
-left is that of the stress singularity at the clamped corners, which does
-not depend on A, so square elements reach the locking-free regime at half
-the cost of A = 0.5. Every level keeps A, so refinement is shape-regular.
-
-Node positions are put exactly on the polar map of the band (Gmsh places
-the mid-edge nodes of interior edges on straight chords; they are moved onto
-their circles), so the isoparametric geometry differs from the band only by
-the quadratic interpolation of its circles between nodes.
-
-End faces: the *start* face is the radial segment at the shape's start
-point, the *end* face the one at its end point. They are tagged as Gmsh
-physical groups ``start`` and ``end``, and the nodes on them are taken from
-those groups and checked geometrically (a node is on a face if it lies on
-the face's segment within a tolerance); conversion to any FE library is
-done from the plain arrays here, not through a mesh file's tags.
-
-Meshes are cached on disk (``$FLEXVAL_CACHE/meshes`` or
-``~/.cache/flexval/meshes``, see :func:`flexval.geometry.files.cache_dir`) under a
-hash of the exact values that define them (``float.hex``). Each entry is an
-``.npz`` written atomically under a unique temporary name, with a SHA-256
-checksum of its arrays and its key; an entry that is truncated, empty,
-foreign or inconsistent with its mesh level is discarded with a
-:class:`flexval.geometry.files.CacheWarning` and the mesh is rebuilt.
-Nothing here knows about a solver. Units: mm, rad.
+Units: mm, rad.
 """
 
 from __future__ import annotations

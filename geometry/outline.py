@@ -7,37 +7,20 @@ is the region
     X(s, eta) = c(s) + eta h(s) / 2 n(s),    0 <= s <= L,  -1 <= eta <= 1,
 
 with c(s) the centre line at arc length s, n(s) its unit normal (the
-tangent turned by +90 deg) and h(s) the thickness: the centre line offset by
-+-h(s)/2 along the normal. It is meshed by this map: ``2 n_l + 1`` stations
-s_k along the centre line (element vertices and mid-nodes), ``2 n_t + 1``
-positions eta_m uniform across, every node placed exactly on the map, so
-the outline and the end faces (the normals at s = 0 and L, of thickness
-h(0) and h(L)) are those of the flexure, and the isoparametric geometry
-differs from it only by the quadratic interpolation between nodes.
+tangent turned by +90 deg) and h(s) the thickness. It is meshed by this map:
+``2 n_l + 1`` stations s_k along the centre line, ``2 n_t + 1`` positions
+eta_m uniform across, every node placed exactly on the map, so the outline
+and the end faces (the normals at s = 0 and L) are those of the flexure.
 
 Grading: the elements along the flexure are as long as the local thickness
-(times :data:`flexval.geometry.mesh.ASPECT_RATIO`), so they are short where
-the section is thin, and short enough that the thickness changes by at
-most :data:`THICKNESS_CHANGE` of itself across one, so that a steep flank
-(a notch's ends, where a circular or elliptical cut meets the blank with a
-vertical tangent) is followed. With the density
-
-    g(s) = max(1, |h'(s)| / THICKNESS_CHANGE) / h(s),    tau(s) = int_0^s g ds,
-
-each stretch between the profile's breakpoints (where h is not smooth: a
-fillet's tangent points, a power contour's middle) gets
-n = ceil(tau / ASPECT_RATIO) elements at level 0, with equal steps of tau.
-Each level doubles the elements in both directions, splitting every element
-of the level below in two; across the thickness there are ``2**level``
-elements, twice as many on a notch hinge (:data:`NOTCH_ACROSS`). For a uniform thickness
-this is the division of :func:`flexval.geometry.mesh.divisions`. Measured
-on a circular notch (R = 2, t = 0.2 mm): the mesh's area misses int h ds
-by 3.8e-3, 6.7e-4, 1.0e-4, 1.4e-5 at levels 0 to 3 (by 6.9e-2, 4.0e-2,
-2.1e-2, 9.8e-3 with the thickness rule alone, which lets one element span
-the flank).
-
-A mid-node sits at the mid arc length of its element's vertices, so that
-the element's quadratic geometry interpolates the map at equal steps.
+(times :data:`flexval.geometry.mesh.ASPECT_RATIO`), and short enough that the
+thickness changes by at most :data:`THICKNESS_CHANGE` of itself across one,
+so that a steep flank (a notch's ends) is followed; each stretch between the
+profile's breakpoints is graded on its own, and across the thickness there
+are ``2**level`` elements, twice as many on a notch hinge (:data:`NOTCH_ACROSS`).
+For a uniform thickness this is the division of
+:func:`flexval.geometry.mesh.divisions`. The grading's density and its
+measured effect are in ARCHITECTURE.md, "Geometry".
 
 Meshes are cached like :mod:`flexval.geometry.mesh`'s (same folder, checksum
 and atomic writes) under a hash of the exact values of the shape and the

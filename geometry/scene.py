@@ -11,33 +11,13 @@ checked; a bad one raises :class:`SceneError` naming the file, the field and
 the value. Angles are degrees in the file and radians in memory; lengths mm,
 moduli MPa, forces N, moments N mm.
 
-Every table's fields are declared once in :mod:`flexval.geometry.scenefields`
-(kind, unit, default, allowed values); the parser takes its known fields,
-defaults and range checks from there, and the scene file reference is
-generated from the same declarations (:func:`field_reference`). In short::
-
-    name = "..."                      # optional, defaults to the file stem
-    [material]  youngs_modulus, poisson_ratio (optional: yield_strength, fatigue_strength)
-    [section]   depth (b), thickness (h)
-    [ground]    name, points = [[x, y], ...]
-    [target]    body, point = [x, y]
-    [[flexures]] name, bodies = [i, j], and either
-                 center, radius, axis_deg, width_deg         (arc)
-              or shape = "segment", start, end               (straight)
-              or shape = "notch", start, end, contour, thickness (t), height (H),
-                 fillet_radius (corner-filleted), exponent (power)
-              or shape = "spline", points = [[x, y], ...]   (free form, >= 3 points)
-                 optional: start_body, depth, thickness (h, or [h_start, h_end]: a taper)
-    [[bodies]]  name, points   (optional: known points of a link)
-    [[pins]]    name, bodies = [i, j], point = [x, y]
-                (optional revolute joints; either body may be the ground)
-    mass data (optional, see flexval.geometry.inertia): material.density,
-                [gravity] acceleration, and per [[bodies]] mass, inertia,
-                center_of_mass or outline (+ depth)
-    [[load_cases]] name, kind = "moment" | "force", value, body, point,
-                   angle_deg, levels; or loads = [{...}, ...] to combine
-    [request]   models = [...], outputs = [...]
-    [[measurements]] load_case, file   (optional: a rig's CSV, flexval.geometry.measured)
+Every table's fields (``[material]``, ``[section]``, ``[ground]``, ``[target]``,
+``[[flexures]]`` of every shape, ``[[bodies]]``, ``[[pins]]``, the mass data,
+``[[load_cases]]``, ``[request]``, ``[[measurements]]``) are declared once in
+:mod:`flexval.geometry.scenefields` (kind, unit, default, allowed values); the parser
+takes its known fields, defaults and range checks from there, and the scene file
+reference of the documentation is generated from the same declarations
+(:func:`field_reference`).
 """
 
 from __future__ import annotations

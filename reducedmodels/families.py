@@ -93,10 +93,11 @@ def _load_core() -> None:
     """Import the multibody core (scipy.linalg with it) and cap the BLAS threads.
 
     Both are per-process costs, like importing scipy, not a model's: left
-    inside the timed build, they made a process's first ``dcmm:1``, ``prbm``
-    or ``ee`` run print 22-27 ms for a path its second run does in 1-6 ms.
-    So is loading a family's compiled kernels (numba's import and their
-    machine code), which the loaders below do before their clock starts.
+    inside the timed build, they would make a process's first ``dcmm:1``,
+    ``prbm`` or ``ee`` run print several times the time of its second run of
+    the same path. So is loading a family's compiled kernels (numba's import
+    and their machine code), which the loaders below do before their clock
+    starts.
     """
     from . import models  # noqa: F401  (the core, imported ahead of the timed build)
     from .core.threads import limit_threads

@@ -126,7 +126,7 @@ def _factors(
     contour: str, t_over_l: float, h_over_t: float, exponent: float | None, poisson_ratio: float
 ) -> NotchFactors:
     """:func:`factors_of` by the hinge's shape ratios, remembered: a report or a study builds
-    the same hinges' models again and again (a power contour's spline costs 0.5 ms)."""
+    the same hinges' models again and again, and a power contour's spline is costly to build."""
     x, y = math.log(t_over_l), math.log(h_over_t)
     where = f"t/L {t_over_l:.4g}, H/t {h_over_t:.4g}"
     if contour == "power":

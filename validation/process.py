@@ -4,11 +4,8 @@ When a command is done, a normal exit tears the interpreter down: it clears
 every imported module (500-700 of them for a ``flexval run``: numpy, scipy,
 scikit-fem...), frees their objects one by one and runs a final garbage
 collection. Nothing of that is observable from outside, and it is not cheap:
-on the shared 2-core machine (load average 10, user + system CPU time,
-minimum of 5-7 runs) ending without it took a whole ``flexval run
-closed_chain --load-case f+`` from 435-455 to 344-379 ms with ``--model
-dcmm:1`` and from 851-864 to 783-814 ms with ``continuum:1``. (CPU time,
-not wall time, because the cores are shared.) :func:`end_process` does what a
+a sizeable share of a short command's CPU time (``benchmarks/bench_process.py``
+times whole commands). :func:`end_process` does what a
 normal exit does that can be observed -- the exit handlers run (coverage
 data, temporary folders' finalizers), Python's and the C library's output
 buffers are flushed -- and then ends the process at once with the status.

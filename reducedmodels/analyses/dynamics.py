@@ -8,38 +8,19 @@ with grad Pi the System's gradient (elastic forces, weights, load case at the
 load factor lambda(t) of the time law), M and c the mass matrix and
 convective forces of :class:`flexval.reducedmodels.core.inertia.MassModel`, and Rayleigh
 damping D = alpha M + beta K(q), K the tangent at the same state q as every
-other force (equilibrium at t_(n+1)). K frozen at the start of the step would
-make the damping force first-order in h: on the beams the error estimate sees
-that lag and rejects every other step, and the open chain's end-of-ramp dx is
-0.8 mm (5 %) from its converged value at ``error_tol`` 1e-5, against 0.02 mm
-with K at the step's end, in a third of the steps. Coordinates without mass
-(Lagrange multipliers, massless internal coordinates) keep static rows.
+other force (equilibrium at t_(n+1)): K frozen at the start of the step would
+make the damping force first-order in h. Coordinates without mass (Lagrange
+multipliers, massless internal coordinates) keep static rows.
 
 Integrator: generalised-alpha in the form of Arnold and Bruls (2007, Multibody
-Syst. Dyn. 18:185), equilibrium enforced at t_(n+1), with the algorithmic
-acceleration
-
-    (1 - am) A_(n+1) + am A_n = (1 - af) a_(n+1) + af a_n,
-    q_(n+1) = q_n + h v_n + h^2 (1/2 - b) A_n + h^2 b A_(n+1),
-    v_(n+1) = v_n + h (1 - g) A_n + h g A_(n+1),
-
-am = (2 rho - 1)/(rho + 1), af = rho/(rho + 1), g = 1/2 + af - am,
-b = (g + 1/2)^2 / 4 (Chung and Hulbert 1993): second order, unconditionally
-stable, spectral radius rho_inf at infinite frequency. rho_inf = 1 has no
-numerical dissipation (A = a, Newmark's trapezoidal rule: energy conserved
-exactly on a linear undamped system); rho_inf < 1 damps the high
-frequencies. Each step is one :func:`flexval.reducedmodels.core.newton.solve` on
-:class:`DynamicStep`, whose tangent is K + g/(b h) D + (1 - am)/((1 - af) b h^2) M
-+ beta dK(q)[v] (the last the damping force's derivative along the motion),
-summed in the System's tangent storage and factorised like the static tangent.
-
-Adaptive steps: the local error of the displacement is estimated as
-h^2 |b - 1/6| |A_(n+1) - A_n| (Zienkiewicz and Xie 1991), scaled like the
-core's corrections (lengths / mechanism size, angles as is) and taken over
-the rigid bodies' coordinates (the flexures' internal high modes are left
-to the numerical dissipation); a step above ``error_tol`` is repeated with
-a smaller h, and h grows or shrinks by 0.9 (tol / error)^(1/3) within
-[1/2, 2] after each accepted step (no growth right after a rejection).
+Syst. Dyn. 18:185), its parameters those of Chung and Hulbert (1993) for the
+spectral radius rho_inf at infinite frequency (second order, unconditionally
+stable; rho_inf = 1 has no numerical dissipation). Each step is one
+:func:`flexval.reducedmodels.core.newton.solve` on :class:`DynamicStep`, whose
+effective tangent is summed in the System's tangent storage and factorised like
+the static tangent; the steps adapt to the local error estimate of Zienkiewicz
+and Xie (1991) against ``error_tol``. The update, the effective tangent and the
+step control are in the documentation's models page, "Mass and dynamics".
 """
 
 from __future__ import annotations

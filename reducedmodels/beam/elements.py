@@ -9,46 +9,19 @@ from the initial configuration. The two end nodes are rigidly attached to
 the bodies the flexure joins; the N - 1 interior nodes are the connector's
 internal coordinates.
 
-Every element follows the corotational formulation for planar beams of
-Crisfield (1991, Non-linear finite element analysis of solids and
-structures, vol. 1) in the form of Battini (2002, PhD thesis, KTH): the
-rigid motion of the element is carried by its chord, and what is left is
-small and linear in a frame that rotates with the chord,
-
-    u  = l - l0                        (axial stretch, mm)
-    a1 = wrap(theta_1 - alpha)         (local end rotations, rad)
-    a2 = wrap(theta_2 - alpha)
-
-where l0 and l are the initial and current chord lengths and alpha is the
-chord's rotation from the initial configuration, taken with atan2 of the
-initial and current chords. Because theta_i and alpha are both increments,
-the initial local rotations of a curved centre line (tangent angle minus
-chord angle) cancel: the unloaded arc is stress free. Wrapping the local
-rotations to (-pi, pi] keeps them right when nodes and chords have turned by
-more than pi (the chord angle is only known modulo 2 pi).
-The local energy is
+Every element follows the corotational formulation of Crisfield (1991, Non-linear finite
+element analysis of solids and structures, vol. 1) in the form of Battini (2002, PhD
+thesis, KTH): the chord carries the element's rigid motion, and what is left, u = l - l0
+and the end rotations from the chord a = (a1, a2) wrapped to (-pi, pi], is small and linear:
 
     E = 1/2 [EA/l0 u^2 + a^T k_b a],   k_b = EI/l0 [[4, 2], [2, 4]],
 
-or, with ``shear=True``, the Timoshenko beam's condensed bending stiffness
-k_b = EI / (l0 (1 + phi)) [[4 + phi, 2 - phi], [2 - phi, 4 + phi]] with
-phi = 12 EI / (kappa G A l0^2), kappa = 5/6. A varying section (a taper,
-a notch) gives each element the inverse of its exact flexibility instead,
-integrated over its part of the flexure, k_b = [[k11, k12], [k12, k22]]
-and EA/l0 replaced by 1 / integral of ds / EA
-(:mod:`flexval.reducedmodels.beam.varying`). Gradient and tangent are
-exact (material plus geometric parts); the elements of all flexures are
-evaluated in one compiled call (:mod:`flexval.reducedmodels.kernels.beamkernel`), which adds
-them straight into the global gradient and tangent, and a connector's own
-Hessian is the values of a fixed sparse pattern.
-
-Accuracy: the elements bend over their chords, so an arc's bending length
-is the chord polygon's, shorter than the arc by ~(width/N)^2 / 24; end
-rotations and positions converge at O(1/N^2) (exact rotation under a pure
-end moment only for a straight flexure). A straight flexure of varying
-section has the exact linear compliance at any N (the element's
-flexibility is exact), and its large deflections converge at O(1/N^2)
-(observed orders 2.02-2.12 on four notch contours, tests/test_beam_varying.py).
+or with ``shear=True`` the Timoshenko beam's condensed k_b; a varying section takes the
+inverse of each element's exact flexibility (:mod:`flexval.reducedmodels.beam.varying`).
+Gradient and tangent are exact; the elements of all flexures are evaluated in one compiled
+call (:mod:`flexval.reducedmodels.kernels.beamkernel`), which adds them straight into the
+global gradient and tangent. End rotations and positions converge at O(1/N^2). The
+formulation and its accuracy are in the documentation's models page, ``beam:N``.
 
 Units: mm, N, MPa, N mm, rad.
 """

@@ -9,46 +9,21 @@ s_1 < ... < s_N = L (mm) that share the density
 
     rho(s) = ((kappa0(s) / kappa_max)^2 + (h_min / h(s))^6)^(1/3)
 
-equally: each element carries 1/N of its integral. Why: a straight
-two-node element over an arc of length l_e that turns by dtheta_e misplaces
-its end by about l_e dtheta_e^2 (a chord for an arc), with
-dtheta_e = kappa l_e; the sum of those errors, the integral of
-kappa^2 l(s)^2 ds, is least for a fixed N when the element density
-n(s) = 1 / l(s) follows kappa^(2/3) (a Lagrange multiplier on the integral of
-n(s) ds = N). The curvature to resolve is the centre line's own, kappa0(s)
-(:meth:`~flexval.geometry.shapes.Shape.curvature_at`), and the bending
-one, M / EI ~ h^-3 under a moment; the latter is scaled by the largest
-bending curvature the models are valid for, kappa_max = 2 MAX_STRAIN / h_min
-(the outer fibre of the thinnest section at the strain limit of
-:mod:`flexval.reducedmodels.core.validity`). On a straight flexure the density
-is (h_min / h)^2: equal shares of the bending compliance itself (h^-3) would
-make the elements in the thick blank of a deep notch a thousand times longer
-than at its waist; h^-2 makes them a hundred times longer, where they hardly
-bend. A thick curved flexure, whose own curvature dominates, gets nearly
-equal elements (equal shares of h^-2 on a 2:1 tapered 240 deg arc doubled
-the error of the linear compliance against equal elements). A uniform
-section's density is constant: equal elements (to round-off).
+equally, kappa_max = 2 MAX_STRAIN / h_min (:mod:`flexval.reducedmodels.core.validity`):
+the least chord error for N elements, short where the centre line or the bending curves.
 
-**Element stiffness.** Each element is a straight two-node beam over its
-chord l0 whose section law is the flexure's over the element's arc
-[s_a, s_b], stretched onto the chord (as a uniform element takes its chord as
-its bending length). With xi in [0, 1] along it, its end moments m1, m2
-(conjugate to the end rotations a1, a2 from the chord) give the linear
-bending moment -m1 (1 - xi) + m2 xi and the shear (m1 + m2) / l0, so the unit-load
-method gives its flexibility, a = F m,
+**Element stiffness.** Each element is a straight two-node beam over its chord l0 whose
+section law is the flexure's over the element's arc, stretched onto the chord; the
+unit-load method gives its flexibility (xi in [0, 1] along it)
 
     F = l0 * integral over xi of [[(1-xi)^2, -xi(1-xi)], [-xi(1-xi), xi^2]] / EI d xi
         + (l0 * integral of d xi / (kappa G A)) / l0^2 [[1, 1], [1, 1]]   (shear only),
 
-and k_b = F^-1 = [[k11, k12], [k12, k22]] (k22 != k11 when the section is
-not symmetric about the element's middle); the axial stiffness is
-1 / (l0 * integral of d xi / EA). This is exact for the linear statics of a
-straight non-uniform beam loaded at its nodes (any N), and for a uniform
-section it is EI/l0 [[4, 2], [2, 4]] (Timoshenko: the condensed k_b with
-phi = 12 EI / (kappa G A l0^2)). The integrals are Gauss rules over each element
-split at the profile's breakpoints, with nodes clustered at the pieces'
-ends (:func:`flexval.geometry.profiles.quadrature_panels`), where notch
-contours have their singular derivatives.
+k_b = F^-1 and the axial stiffness 1 / (l0 * integral of d xi / EA): exact for the linear
+statics of a straight non-uniform beam loaded at its nodes. The integrals are Gauss rules
+split at the profile's breakpoints (:func:`flexval.geometry.profiles.quadrature_panels`).
+Both derivations are in the documentation's models page, "Other shapes and varying
+sections".
 
 Units: mm, N, MPa, N mm.
 """

@@ -6,43 +6,21 @@ each path pays the per-call costs of the core (Python, LAPACK's checks,
 numpy's small-array overheads) at every Newton iteration; a 9-unknown
 ``dcmm:1`` path costs far more than its arithmetic.
 :class:`~flexval.reducedmodels.core.batchsystem.BatchSystem` puts N copies
-side by side in one :class:`~flexval.reducedmodels.core.system.System`:
-their connectors join the same groups (one compiled assembly for all), their
-tangent is block-diagonal (one banded factorisation, whose band is one
-copy's), and :func:`trace_batch` steps them together through the one tracer
+side by side in one :class:`~flexval.reducedmodels.core.system.System` (one
+compiled assembly per connector group, one block-diagonal factorisation), and
+:func:`trace_batch` steps them together through the one tracer
 (:func:`flexval.reducedmodels.core.tracer.trace`) with the one Newton iteration
 applied to every copy at once (:func:`flexval.reducedmodels.core.newton.solve`).
 
-How copies stay exactly what they are alone:
-
-* every test of a Newton iteration is made per copy (its own residual
-  relative to its own load scale, its own correction scaled by its own
-  size, its own body motions); a copy that converges stops there and its
-  tangent block keeps the values its own solve would return;
-* every decision of load control (halve a predicted sub-step, accept or
-  cut a step, grow the next) is made per copy as
-  :class:`~flexval.reducedmodels.core.tracer.LoadControl` makes it; where the
-  copies disagree, the minority leaves the batch
-  and goes on as a batch of its own from the last reported level the copies
-  shared, where each copy stands as its solo run stands, so the others are
-  not held back and no work before that level is done twice. A batch that
-  has lost a quarter of its copies goes on as a new batch without them
-  (:data:`DEAD_WEIGHT`). A batch that cannot go on (step cutting fails, the
-  sub-step budget) hands every copy left to a run alone from rest, which
-  then fails or succeeds as it would alone.
-* copies too large to gain from a batch (:data:`SOLO_UNKNOWNS`) are traced
-  one by one.
-
-A copy's path is its solo run's up to round-off: the batch factorises every
-block in the band (a small copy alone takes dense LAPACK) and combines the
-predictor's states elementwise, so the last digits of its iterates differ,
-and where a Newton test lands within round-off of its bound the copy stops
-an iteration or two earlier or later than alone. Over the 236
-reduced-model paths of the built-in scenes (three copies each) the batch
-and solo end values differ by at most 1.6e-11 of the mechanism's size
-(lengths) and in rad, most by less than 1e-13. Within a batch, the
-arithmetic of a copy does not depend on the other copies: its path is the
-same bit for bit in a batch of any size.
+Each copy stays what it is alone: every Newton test and every decision of load
+control is made per copy; where copies disagree, the minority goes on as a
+batch of its own from the last reported level they shared (:data:`DEAD_WEIGHT`
+sheds the copies that left); a batch that cannot go on hands its copies to runs
+alone from rest; copies of more than :data:`SOLO_UNKNOWNS` unknowns are traced
+one by one. A copy's path is its solo run's up to round-off (over the built-in
+scenes' reduced-model paths, end values within 1.6e-11 of the mechanism's size),
+and the same bit for bit in a batch of any size. The rules in full are in
+ARCHITECTURE.md, "The core".
 
 Units: mm, N, N mm, rad; times in s.
 """
@@ -70,20 +48,16 @@ from .tracer import Counters, LoadControl, PathPoint, TraceFailure, trace
 
 BATCH_UNKNOWNS = 40_000
 """Most unknowns of one batch (larger sets of copies are traced as several): the band of a
-batch this size, some 10 MB with the factor, stays in the processor's caches. Cost per path
-on the open chain f+ (2-core machine): beam:100 3.9, 3.7, 4.1 ms in batches of 25, 50, 100
-copies (23,000 to 91,000 unknowns), beam:20 0.84, 0.83, 1.02 ms in batches of 100, 250, 500
-(19,000 to 93,000), dcmm:1 0.19, 0.21, 0.22 ms in batches of 250, 1000, 4000 (2,000 to
-36,000)."""
+batch this size, some 10 MB with the factor, stays in the processor's caches; beyond it the
+cost per path grows (``benchmarks/bench_batch.py --n N`` measures it for N copies)."""
 
 
 SOLO_UNKNOWNS = 500
 """Most unknowns of a copy that :func:`run_batch` traces in a batch with others (copies with
 more are traced one by one, each by its family's own runner): a copy's own band is then wide
 enough that sharing the iteration saves little, and copies that part ways cost more than
-that. Open chain f+, 2-core machine: beam:100 (900 unknowns) runs 1.15x faster batched than
-alone with identical copies but 0.84x with sections drawn from N(1, 0.02)
-(``benchmarks/bench_batch.py --spread 0.02``); beam:20 (180 unknowns) 2.6x and 1.3x."""
+that: beam:100 (900 unknowns) runs slower batched than alone once its copies part ways,
+beam:20 (180 unknowns) still faster (``benchmarks/bench_batch.py --spread 0.02``)."""
 
 
 @contextmanager
@@ -159,9 +133,8 @@ batch costs its build once."""
 REBUILD_UNKNOWNS = 16
 """Fewest unknowns of a copy for which a batch sheds the copies that left it
 (:data:`DEAD_WEIGHT`): below, a dead copy's share of an iteration costs less than building
-the new batch. Open chain f+, 1000 copies with sections drawn from N(1, 0.02), CPU time per
-path with and without shedding: dcmm:1 (9 unknowns) 0.35 and 0.32 ms, dcmm:2 (18) 0.48 and
-0.47, prbm (21) 0.44 and 0.47, dcmm:3 (27) 0.61 and 0.63, beam:20 (180) 1.44 and 1.74."""
+the new batch: shedding cost dcmm:1 (9 unknowns) and dcmm:2 (18) time and saved prbm (21),
+dcmm:3 (27) and beam:20 (180) some (``benchmarks/bench_batch.py --spread 0.02``)."""
 
 
 def _dead_weight(active: np.ndarray, unknowns: int) -> bool:

@@ -86,9 +86,9 @@ STACK_SIZE = 64
 """Most flexures in one stack of :func:`path_peaks` and :func:`state_peaks` (a linear batch's
 flexures), so that a stack's forces, stresses and the temporaries between them stay in the
 processor's caches (64 flexures of 11 levels and 17 stations, ``dcmm:1``'s: 96 kB per array)
-instead of every pass going to memory. A ``dcmm:1`` batch of 1000 copies (open chain f+,
-3000 flexures) spent 19.6 us per path in :func:`path_peaks` as one stack, 15 in stacks of
-64 (32 to 128 alike within the machine's noise, 16 slower). A traced batch's stacks take
+instead of every pass going to memory: on a ``dcmm:1`` batch of 1000 copies (open chain f+,
+3000 flexures) :func:`path_peaks` costs less in stacks of 32 to 128 than in one stack or in
+stacks of 16. A traced batch's stacks take
 :func:`stack_peaks`' one compiled pass, without temporaries."""
 
 
@@ -259,6 +259,8 @@ def state_peaks(
         The factors of the levels.
     """
     factors = [abs(f) for f in np.asarray(scales, float).tolist()]
+    if len(entries) < STACK_FROM:  # a path's few flexures: each alone, as stacking them would
+        return [_state_peak(forces, section, factors) for forces, section in entries]
     out: list = [None] * len(entries)
     alone, stacks = _fibre_stresses(entries)
     for j in alone:

@@ -1,44 +1,26 @@
 """The one stability rule: Sylvester's inertia, each pivot judged against its own round-off.
 
-An equilibrium is stable when its tangent K has no negative eigenvalue
-beyond the one each Lagrange multiplier makes. By Sylvester's law of
-inertia K = L D L^T (any symmetric permutation, 1 x 1 and 2 x 2 blocks in
-D) has as many negative eigenvalues as D, so the count comes from the
-factorisation the solves need anyway, at no cost beyond it.
-
-Which pivots count is decided by round-off, not by a tolerance. In floating
-point a pivot d_k = K_kk - sum_j L_kj^2 d_j is computed with an error of at
-most gamma_w times the sum of the magnitudes it was formed from,
+An equilibrium is stable when its tangent K has no negative eigenvalue beyond the one
+each Lagrange multiplier makes. By Sylvester's law of inertia K = L D L^T (any symmetric
+permutation, 1 x 1 and 2 x 2 blocks in D) has as many negative eigenvalues as D, so the
+count comes from the factorisation the solves need anyway. Which pivots count is decided
+by round-off, not by a tolerance: a pivot d_k is computed to within gamma_w sigma_k,
 
     sigma_k = |K_kk| + sum_j L_kj^2 |d_j|      (the diagonal of |L| |D| |L^T|),
 
 gamma_w = w u / (1 - w u) for w terms and the unit round-off u (Higham,
 *Accuracy and Stability of Numerical Algorithms*, 2nd ed., Sect. 3.1 and
-Thm. 10.3: the computed factor is exact for K + dK with |dK| <= gamma
-|L| |D| |L^T|). A pivot below -gamma_w sigma_k is negative whatever that
-round-off did; one within +-gamma_w sigma_k has no sign the arithmetic can
-tell, and is not counted. The rule is scale-free: a change of units scales
-d_k and sigma_k alike (D S^2 for a diagonal S), and a finer resolution,
-whose short elements make |K| large, makes each column's own sigma_k large
-with it, never the bound of another column. (A bound against the largest
-entry of K, as a margin times |K|, grows with the axial stiffness of the
-shortest element while the buckling pivot does not, and hides buckling on
-fine meshes.) Where the critical pivot itself falls below its own round-off
-the resolution is beyond what double precision can judge.
+Thm. 10.3). A pivot below -gamma_w sigma_k is negative; one within
++-gamma_w sigma_k has no sign the arithmetic can tell and is not counted; a
+2 x 2 block is judged by its determinant. Why the rule holds whatever the
+units and the resolution is in the documentation's concepts page ("One
+stability rule"), the 2 x 2 blocks in ARCHITECTURE.md ("The core").
 
-A 2 x 2 pivot block [[p, q], [q, r]] (Bunch and Kaufman's, or a multiplier
-paired with the unknown it constrains) is judged by its determinant
-p r - q^2, whose round-off is at most 2 gamma (sigma_p sigma_r + q^2): a
-negative determinant is one negative eigenvalue, a positive one two of p's
-sign, and one within round-off has one eigenvalue without a sign (then
-counted by p and r alone).
-
-Every tangent storage (dense, banded, sparse; a batch's blocks) counts its
-negative eigenvalues by this rule in its own factorisation: the compiled
-kernels of :mod:`flexval.reducedmodels.kernels.stabilitykernel` (``one_negative``,
-``pair_negative``, ``band_negative``; loaded on first use, so a model that
-runs no compiled code does not load numba for a stable path) or
-:func:`count_pivots`, with the tolerance :func:`tolerance`.
+Every tangent storage (dense, banded, sparse; a batch's blocks) counts its negative
+eigenvalues by this rule in its own factorisation: the compiled kernels of
+:mod:`flexval.reducedmodels.kernels.stabilitykernel` (``one_negative``, ``pair_negative``,
+``band_negative``; loaded on first use, so a stable path of a model that runs no compiled
+code does not load numba) or :func:`count_pivots`, with the tolerance :func:`tolerance`.
 
 Units: pivots and scales in the units of K's diagonal (N/mm, N, N mm); the
 rule itself is dimensionless.

@@ -39,18 +39,17 @@ from scipy.linalg import lapack
 from . import stability
 from .threads import limit_threads
 
-DENSE_LIMIT = 96  # above ~100 unknowns, multithreaded LAPACK stalls on a loaded 2-core machine
+DENSE_LIMIT = 96  # above ~100 unknowns, multithreaded dense LAPACK stalls on shared cores
 BAND_LIMIT = 64  # band storage beats the sparse LDL^T up to at least this half-bandwidth:
 # per Newton iteration (assembly, factorisation, solve, inertia) of a plane-strain strip,
-# L/h = 78 (benchmarks/bench_sparse.py), banded 1.6x faster at b = 61 (level 2, 11,200
-# unknowns: 0.023 s against 0.037 s; 0.016 against 0.027 on a quieter machine), 1.2x slower
-# at b = 125 (level 3, 42,400: 0.29 s against 0.25 s; 0.22 against 0.18); the continuum's
-# level 2 is b = 61 on both scenes
+# L/h = 78, banded is faster at b = 61 (level 2, 11,200 unknowns) and slower at b = 125
+# (level 3, 42,400), measured by benchmarks/bench_sparse.py; the continuum's level 2 is
+# b = 61 on both scenes
 NARROW_BAND = 8  # compiled banded Cholesky up to this half-bandwidth, LAPACK's above: at b = 5
 # (beam chains) the loop takes half of dpbtrf's time, at b = 29 three times it
 NARROW_MIN = 48  # a system that already runs compiled kernels takes a narrow band instead of
-# dense storage from this many unknowns (factor + solve at b = 5, n = 57:
-# 5 us instead of 15 us, n = 90: 8 instead of 36 us; n = 33: 6 against 9)
+# dense storage from this many unknowns, where its factor and solve at b = 5 (beam chains)
+# take a fraction of dense LAPACK's time
 LDL_FILL_LIMIT = 200  # QDLDL's column-by-column LDL^T up to this many factor entries per
 # column, SuperLU's supernodes (dense blocks, BLAS 3) above. QDLDL's time over symmetric-mode
 # SuperLU's, scikit-fem elasticity matrices: 2D quad9, 28-44 per column at 6,000-23,000
@@ -632,7 +631,7 @@ class TangentLayout:
         narrow band may take the compiled Cholesky below ``DENSE_LIMIT``,
         and the ordering is computed by :mod:`flexval.reducedmodels.kernels.orderkernel`
         (scipy's reverse Cuthill-McKee, the same permutation, without the
-        sparse matrix scipy needs: 4-7 times faster on beam chains).
+        sparse matrix scipy needs, whose construction costs more than the ordering).
 
     Attributes
     ----------

@@ -7,43 +7,22 @@ flexure with its ends 694 mm apart. Each connector's
 the limits below and names what it finds; the recorder stores the verdict
 per load level (``LoadPath.valid``, ``LoadPath.validity``) without
 stopping the run. The limits follow from the models' shared assumptions
-(linear elastic material, small strain, large rotation), and each is
-derived from :data:`MAX_STRAIN` or a model's own calibration rather than
-typed in:
+(linear elastic material, small strain, large rotation), each derived from
+:data:`MAX_STRAIN` or a model's own calibration rather than typed in:
 
-* :data:`MAX_STRAIN` bounds material strain: a beam element's or a
-  continuum fibre's stretch, and how far a flexure (or a sub-arc of it)
-  would have to stretch for its ends to be as far apart as the model puts
-  them (its chord may not exceed its arc length by more).
-* :data:`MAX_CHORD_TURN` bounds a corotational beam element's end rotations
-  from its chord.
-* :data:`MAX_RELATIVE_ROTATION` bounds a DCMM sub-arc's relative rotation.
-* :data:`MIN_DET_F` marks continuum elements near inversion.
-* :data:`MAX_LINEAR_ROTATION` bounds the body rotations of a linear
-  response (``ee``), whose kinematics are linearised.
-* the PRBM is meaningful within the end rotations its table was fitted on
-  (:func:`flexval.reducedmodels.prbm.parameters.fitted_rotation`).
-* a flexure whose section varies (a notch hinge, a taper) reaches the
-  strain limit in bending at its thinnest section long before a uniform
-  one: :func:`bending_rotation_limit` turns :data:`MAX_STRAIN` into the
-  rotation of a notch's pivot or of a DCMM part of it.
+* :data:`MAX_STRAIN`: material strain, and a flexure's chord against its arc length;
+* :data:`MAX_CHORD_TURN`, :data:`MAX_RELATIVE_ROTATION`: a beam element's end rotations
+  from its chord, a DCMM sub-arc's relative rotation;
+* :data:`MIN_DET_F`, :data:`MAX_LINEAR_ROTATION`: continuum elements near inversion,
+  ``ee``'s body rotations; the PRBM's fitted end rotations
+  (:func:`flexval.reducedmodels.prbm.parameters.fitted_rotation`);
+* :func:`bending_rotation_limit`, :func:`sway_load`: a varying section's thinnest part,
+  a leaf's or a DCMM sub-arc's compression where the model has no geometric stiffness;
+* :func:`unresolved_levels`: a level whose motion is round-off (:data:`RESOLVED_MOTION`).
 
-* a straight or shallow flexure modelled without geometric stiffness for a
-  sway of its ends (``dcmm:1``'s one compliance, ``ee``'s linear response)
-  cannot buckle in the model: :func:`sway_load` bounds its compression by the
-  leaf's Euler load (guided, or a cantilever's), and :func:`sway_reasons`
-  names the levels beyond it. A DCMM_n sub-arc has no geometric stiffness
-  within itself either: its compression is bounded by the sub-arc's Euler
-  load, n^2 times the leaf's, which a flexure held at both ends passes only
-  beyond its own first buckling load (4 pi^2 EI / L^2 clamped at both ends).
-
-* a level whose motion is of the size of the solution's round-off (a load
-  so small that double precision does not resolve what it moves):
-  :func:`unresolved_levels` bounds it by :data:`RESOLVED_MOTION` times the
-  path's noise floor.
-
-``tests/test_validity.py`` checks that every model's states at the paper's
-loads are inside, and that DCMM_1 at 100 and 1000 times them is not.
+Each limit's value and why are in the documentation's concepts page, "Where each model is
+valid". ``tests/test_validity.py`` checks that every model's states at the paper's loads
+are inside, and that DCMM_1 at 100 and 1000 times them is not.
 
 Units: dimensionless strains, rad.
 """

@@ -9,8 +9,8 @@ Kaufman's partial pivoting, whose block-diagonal D (1 x 1 and 2 x 2
 blocks) has K's inertia (Sylvester's law), so that one factorisation
 serves the Newton solves and the stability check
 (:class:`flexval.reducedmodels.core.blocktangent.BlockTangent`). Through SciPy's
-LAPACK wrappers (``dsytrf``, ``dsytrs``) a block cost 17 us, almost all of it
-the call; here one compiled loop runs over every block of the batch.
+LAPACK wrappers (``dsytrf``, ``dsytrs``) a block's cost is almost all the
+call; here one compiled loop runs over every block of the batch.
 
 The factorisation and the solve are LAPACK's unblocked upper ones
 (``dsytf2``, which ``dsytrf`` runs on any matrix smaller than its block

@@ -5,10 +5,10 @@
 banded tangent by reverse Cuthill-McKee (RCM). For a system that already
 runs compiled kernels these loops do what scipy does there
 (``scipy.sparse.csgraph.reverse_cuthill_mckee`` of the CSR graph of the
-entries): on a beam:100 chain (900 unknowns, 11 673 entries) building the
-CSR matrix, ordering and placing the entries took 0.35 ms of a 1.2 ms System
-build, most of it the sparse matrix's construction (sorting and summing
-duplicate entries) and call overhead, for a few microseconds of graph work.
+entries): on a beam chain, building the CSR matrix, ordering and placing
+the entries took a large share of a System's build, most of it the sparse
+matrix's construction (sorting and summing duplicate entries) and call
+overhead, for little graph work.
 
 The ordering is scipy's exactly (``tests/test_orderkernel.py`` compares
 the permutations on chains, closed loops, disconnected and random graphs),

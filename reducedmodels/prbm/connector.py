@@ -1,103 +1,28 @@
 """3R pseudo-rigid-body model ``prbm`` of arcs and straight beams (paper Sect. 2.2).
 
 Which flexures it models (:func:`prbm_connector`): uniform arcs and
-segments as below; tapered ones by the same chain built on their own
-ellipse of elasticity (see "Tapered flexures"); a notch hinge by the
-classic one-pivot model (:mod:`flexval.reducedmodels.prbm.pivot`); a free-form
-(spline) centre line not at all: it is refused with a SceneError that
-names the flexure and points to ``beam``, ``dcmm`` and ``continuum``.
+segments; tapered ones by the same chain built on their own ellipse of
+elasticity (:func:`tapered_frame`); a notch hinge by the classic one-pivot
+model (:mod:`flexval.reducedmodels.prbm.pivot`); a free-form (spline) centre
+line not at all: it is refused with a SceneError that names the flexure and
+points to ``beam``, ``dcmm`` and ``continuum``.
 
 Each flexure joining bodies a and b becomes the serial chain
 
     a --R_a-- link h --R_2-- link l --R_b-- b
 
-of two rigid links and three revolute joints with torsion springs
-k_a = k_b = k1 and k2 (the paper's R1, R2, R3 with k1 = k3 != k2). The two
-end pieces (flexure end -> R_a, R_b -> flexure end) belong rigidly to the end
-bodies. The chain is symmetric about the arc's symmetry axis e2: in the
-frame {C, e1, e2} of the arc's ellipse of elasticity (centre C, e1 across
-the axis, pointing to the start end), in units of the arc length L,
-
-    R_start = (+x1, y1),   R_2 = (0, y2),   R_end = (-x1, y1),
-    k1 = kappa1 EI / L,    k2 = kappa2 EI / L.
-
-Parameters: one fitted number per arc angle
--------------------------------------------
-Three joints with rotational compliances c_i = 1/k_i are, in the linear
-limit, three concentrated elastic weights, so the chain's small-load
-compliance is that of the weights c_i at the points R_i (the ellipse of
-elasticity of a weight distribution, paper Eqs. 1-5). It equals the
-arc's *exactly* when total weight, centroid and second moments agree:
-2 c1 + c2 = w, centroid at C, 2 c1 x1^2 = w a^2, 2 c1 y1^2 + c2 y2^2 = w b^2
-(w = L/EI; a, b the semi-axes, Eqs. 3-4). These four conditions leave a
-one-parameter family, indexed by the share rho = 2 c1 / w in (0, 1) of
-the compliance lumped in the two outer joints:
-
-    x1 = a / sqrt(rho),  y1 = -b sqrt((1 - rho) / rho),  y2 = b sqrt(rho / (1 - rho)),
-    kappa1 = 2 / rho,    kappa2 = 1 / (1 - rho)
-
-(outer joints towards the chord, the middle one beyond the centre of
-elasticity towards the arc's apex). So the PRBM reproduces the linear (EE)
-compliance of every arc and straight beam by construction, and rho is
-fitted per arc angle to the large-deflection response of a nonlinear beam
-(offline, by ``benchmarks/calibrate_prbm.py``). The fitted rho(2 gamma) ships in
-``data/prbm_table.json`` (0 to 330 deg every 15 deg) and is interpolated
-by a cubic spline in the arc angle; since only rho is interpolated, the
-linear exactness holds at every angle, tabulated or not. For a straight
-segment (b = 0) all joints lie on the segment.
-
-Tapered flexures
-----------------
-The exactness conditions above hold for any ellipse of elasticity, so a
-tapered arc or segment gets the chain of its own ellipse, computed by
-quadrature (:func:`tapered_frame`: centre C, principal axes with e1 the one
-nearer the uniform arc's, semi-axes a, b, weight w = ∫ ds / EI), with the
-stiffnesses kappa_i / w in place of kappa_i EI / L (equal for a uniform
-section). It reproduces the tapered flexure's linear (EE) bending
-compliance exactly; rho is the fitted value at the arc's angle, which was
-calibrated on uniform arcs: the large-deflection accuracy of a strongly
-tapered flexure is not calibrated. The centre of elasticity moves towards
-the thin end, and with it the joints: on a segment tapered from 0.4 to
-0.15 mm over 12 mm the end-side joint lies 0.65 mm beyond the thin end (the
-end body's rigid piece then reaches back to it), which changes nothing in
-the linear limit.
-
-Formulation: link rotations and an exact closure multiplier
-------------------------------------------------------------
-The connector's internal coordinates are the rotations phi_h, phi_l of
-the two links from the initial configuration (rad) and a closure
-multiplier mu (2, mm). The joint rotations are then *linear*,
-
-    t_a = phi_h - theta_a,   t_2 = phi_l - phi_h,   t_b = theta_b - phi_l,
-
-so rotations of any size (several turns) need no angle wrapping, and
-the chain must close at R_b:
-
-    g = x_a + R(theta_a) r_a + R(phi_h) v_h + R(phi_l) v_l - x_b - R(theta_b) r_b = 0
-
-(r_a, r_b: joint offsets from the body reference points, v_h, v_l: the
-link vectors, all initial). The connector returns the Lagrangian
-
-    E = 1/2 (k1 t_a^2 + k2 t_2^2 + k1 t_b^2) + c mu . g,   c = EI / L^3 (N/mm),
-
-whose stationarity is equilibrium plus exact closure (no penalty). Its
-gradient and Hessian are exact; the tangent is symmetric but indefinite
-(a saddle point in mu), which the core's LU solves (dense or sparse, with
-pivoting) handle; c makes
-c mu a force (N) and mu a length comparable to the deflections, so the
-closure residual is measured as a force like every other residual. At
-convergence E is the spring energy and c mu the force that link l
-transmits to body b.
-
-Why not eliminate the closure by inverse kinematics (R_2 as the
-intersection of two circles, no internal coordinates)? Because the joint
-angles are then singular functions of the body poses where the chain is
-stretched straight (|R_a R_b| -> |v_h| + |v_l|): the straight-beam chain
-sits *exactly* at that toggle when unloaded, and a flat arc pulled by its
-ends approaches it. With the multiplier the chain simply becomes an
-inextensible tie there, the Newton iterates may violate closure on the way
-to a converged state, and there is no configuration in which the chain
-"cannot close": a pull beyond full stretch is carried by the multiplier.
+of two rigid links and three revolute joints with torsion springs k1, k2,
+k1, placed on the flexure's ellipse of elasticity so that the chain's linear
+compliance is the flexure's exactly; one share rho per arc angle, fitted
+offline to a nonlinear beam (``benchmarks/calibrate_prbm.py``, shipped in
+``data/prbm_table.json`` and interpolated in the arc angle), fixes the joints
+and springs. The internal coordinates are the two links' rotations (rad), in
+which the joint rotations are linear (no angle wrapping), and a closure
+multiplier mu (2, mm) that closes the chain exactly at R_b: inverse
+kinematics would make the joint angles singular where the chain is stretched
+straight, as a straight beam's chain is at rest. The derivation (exactness
+conditions, joints, Lagrangian) is in the documentation's models page,
+``prbm``, its tapered chain under "Other shapes and varying sections".
 
 Units: mm, N, N mm, rad.
 """

@@ -61,7 +61,8 @@ BYTES_PER_FILL = 161.0
 """Peak memory per unknown and node across the band (the tangent's factor)."""
 SECONDS_PER_UNIT = 1.18e-7
 """Seconds of one Newton iteration per unknown and per w^TIME_EXPONENT, fitted (log least
-squares) to the path times of the runs above at levels 1-4 on a loaded 2-core machine: with
+squares) to the path times of the runs above at levels 1-4 (a path's time as
+``benchmarks/bench_continuum.py --level N`` measures it): with
 :data:`ITERATIONS_PER_STEP` the estimate is 0.8-1.3 times the time on open_chain and
 closed_chain, 1.4-2.7 times on notch_fourbar (which takes 1.5 iterations a step)."""
 TIME_EXPONENT = 1.32
@@ -80,7 +81,7 @@ SECONDS_PER_ENTRY_3D = 1.0e-7
 """3D model: seconds per element-matrix entry and assembly (element kernels, scatter):
 open_chain 0.36 s at level 0 (4.4 million entries), 4.1 s at level 1 (35 million). With
 the constants below the estimate of an open_chain path is 34 s at level 0 and 420 s at
-level 1; measured on the 2-core machine under a load of 5-10: 24-74 s (m+, m-, f+) and
+level 1; measured (``benchmarks/bench_continuum3d.py table``): 24-74 s (m+, m-, f+) and
 246 s (f-, 155 Newton iterations) at level 0, 537-1021 s (m+, m-, f+; m+ 193 s of CPU) at
 level 1."""
 SETUP_SECONDS_PER_ENTRY_3D = 7.0e-7

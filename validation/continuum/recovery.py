@@ -1,53 +1,22 @@
 """Superconvergent patch recovery (Zienkiewicz-Zhu) of the fibre stress on a flexure mesh.
 
-The stresses of a quad9 solution are most accurate at the 2 x 2 Gauss
-points of each element (the Barlow points: one order above the stress
-elsewhere, O(h^3) against O(h^2) on a regular mesh; measured on a curved
-bar in pure bending, r/h = 10, mesh levels 0, 1, 2: largest error 4.2e-4,
-4.7e-5, 8.3e-6 of the beam stress at the Barlow points against 2.1e-2,
-5.4e-3, 1.4e-3 at the 3 x 3 quadrature points). At a free surface, where a
-flexure's peak stress lies, there are nodes but no such points, and a plain
-L2 projection of the 3 x 3 values onto the nodes keeps the lower order. The
-recovery here fits, per patch of 2 x 2 elements, a polynomial to the values
-at the patch's 16 Barlow points by least squares and evaluates it at the
-nodes: of the element's order (quadratic) along the flexure, one order
-higher (cubic, through the four Barlow points of each fibre-normal line)
-across it, where a flexure's stress varies most. The cubic term carries
-what is not linear across a section: at the root of a notch hinge the
-stress concentration sits in it, and with two elements across (one patch
-through the whole thickness) a quadratic fit sees only the linear part and
-returns about the beam formula's value. Measured on a circular notch
-(t/R = 0.2, two elements across at mesh level 0) under a pure moment, peak
-over the nominal 6 M/(b t^2) at levels 0 to 3: 1.0411, 1.0400, 1.0395,
-1.0392 with the cubic, 0.9816, 1.0320, 1.0382, 1.0391 with a quadratic; on
-the curved bar (r/h = 10) the cubic's level-1 error is 0.008 % of the exact
-inner-fibre stress, the quadratic's 0.022 %.
+The stresses of a quad9 solution are most accurate at the 2 x 2 Gauss points of each
+element (the Barlow points: O(h^3) against O(h^2) elsewhere on a regular mesh), but a
+flexure's peak stress lies at a free surface, where there are nodes and no such points. The
+recovery fits, per patch of 2 x 2 elements, a polynomial to the values at the patch's 16
+Barlow points by least squares and evaluates it at the nodes: quadratic along the flexure,
+cubic across it, where the stress varies most and where a notch root's concentration sits
+(a quadratic fit through the whole thickness would see only the linear part).
 
-The mesh is a structured stack of cross-sections (:func:`.polar.cross_sections`),
-so the fit is made in the mesh's logical coordinates: a node of section k
-(0 .. 2 n_l, along the flexure) at position m across it (0 .. 2 n_t) sits
-at (k, m), and an element's natural coordinates map affinely onto them.
-A smooth field stays smooth in these coordinates on any smoothly graded
-mesh (a tapered or notched flexure's), and every patch has the same
-design matrix. The patches are those of the interior vertices (K, M),
-1 <= K <= n_l - 1, 1 <= M <= n_t - 1, each the four elements around it;
-where the mesh has one element in a direction, the patch spans that
-element and the fit is linear in that direction (two Barlow points). A
-node takes the fit of the patch of its own vertex, the mean of the two
-or four patches around it when it is a mid-side or centre node, and the
-nearest interior patch's fit when it is on the mesh's boundary (an
-extrapolation by less than one element).
-
-Fibres are the mesh's lines along the flexure (constant m): concentric
-circles on an arc, parallels on a segment, lines following the outline on
-a tapered or notched flexure. What is fitted is the fibre stress times the
-fibres' length per logical unit, |dX/dk|, and the result is divided by the
-same fit of |dX/dk|: where plane sections stay plane, a fibre's strain is
-its elongation, linear across the section, over its length, so this
-product is linear across even on a curved flexure (Winkler-Bach), and a
-mesh with one element across (two Barlow points) still reproduces the
-inner fibre's excess stress. On a straight uniform flexure the length is
-the same on every fibre and cancels.
+The fit is made in the mesh's logical coordinates (a node of section k along the flexure at
+position m across it sits at (k, m): the mesh is a structured stack of cross-sections,
+:func:`.polar.cross_sections`), so every patch has the same design matrix. What is fitted is
+the fibre stress times the fibres' length per logical unit, |dX/dk|, and the result is
+divided by the same fit of |dX/dk|: that product is linear across a section even on a curved
+flexure (Winkler-Bach), so a mesh with one element across still reproduces the inner fibre's
+excess stress. The method and its accuracy are in the documentation's models page
+(``continuum``, "Stress recovery"); the patches and the fit each node takes are in
+ARCHITECTURE.md.
 
 Units: the recovered values carry the sampled field's unit (MPa for stresses).
 """

@@ -59,21 +59,18 @@ SPEED_REFERENCE = "beam:100"
 
 BATCH_COPIES = 100
 """Copies in a timed batch of a small model: where the per-path cost stops falling with the
-number of copies. Measured by ``python benchmarks/bench_batch_copies.py`` (open chain f+,
-median of 3, ms per path; alone, then N = 10, 30, 100, 300, 1000; the 2-core VM at a load
-average of 2.8): ``dcmm:1`` 1.01; 0.54, 0.27, 0.18, 0.17, 0.20; ``prbm`` 1.22; 0.81, 0.45,
-0.36, 0.33, 0.36; ``beam:20`` 2.03; 1.22, 0.95, 0.97, 0.92, 0.89. From 100 copies on the
-per-batch costs are spread thin; larger batches cost no less per path (their arrays leave
-the processor's caches) and take more of the report's time. A linear model's copies share
-their assembly and recording the same way (``ee`` on ``notch_fourbar`` f+: 1.71 ms alone;
-0.31, 0.17, 0.16 at N = 10, 30, 100; load average 1.4)."""
+number of copies, as ``python benchmarks/bench_batch_copies.py`` measures it (open chain
+f+; ``dcmm:1``, ``prbm``, ``beam:20``). From 100 copies on the per-batch costs are spread
+thin; larger batches cost no less per path (their arrays leave the processor's caches) and
+take more of the report's time. A linear model's copies share their assembly and recording
+the same way (``ee`` on ``notch_fourbar`` f+, ``--scene notch_fourbar``)."""
 
 BATCH_UNKNOWNS = 5_000
 """Most unknowns in a timed batch: a model of n unknowns is timed with
 min(:data:`BATCH_COPIES`, BATCH_UNKNOWNS // n) copies (at least one). A large model's
 arithmetic outweighs the per-batch costs with few copies: ``beam:20`` (180 unknowns) costs
-0.95 ms per path with 30 copies and 0.89 with 1000 (same benchmark), so that its 27 copies
-come within about 7 % of its least. The bound keeps a batch of a large model (2 copies of
+little more per path with 30 copies than with 1000 (same benchmark), so that its 27 copies
+come close to its least. The bound keeps a batch of a large model (2 copies of
 ``beam:200``, 1 of ``beam:400``, its path alone) to a fraction of a second, so that timing
 every model of the report adds seconds, not minutes."""
 
@@ -81,17 +78,16 @@ BATCH_SECONDS = 0.2
 """A model whose path alone costs more than :data:`BATCH_SECONDS` / :data:`BATCH_COPIES`
 (2 ms) gets fewer copies: at most BATCH_SECONDS / its time alone (s). Such a path spends its
 time in its own work, which a batch does not share (connectors evaluated one by one in
-Python, quadratures), and its cost per path is flat in the batch size: ``prbm``'s notch
-pivots on ``notch_fourbar`` cost 8.65 ms alone and 7.20, 6.82, 6.67 ms per path in batches of
-10, 30, 100 (``bench_batch_copies.py --scene notch_fourbar``), so that 23 copies time it
-as well as 100 at a quarter of the cost."""
+Python, quadratures), and its cost per path is flat in the batch size (``prbm``'s notch
+pivots on ``notch_fourbar``: ``benchmarks/bench_batch_copies.py --scene notch_fourbar``), so
+that 23 copies time it as well as 100 at a quarter of the cost."""
 
 REFERENCE_COPIES = 30
 """Copies in a timed batch of :data:`SPEED_REFERENCE`, whose batched cost divides every
 batched speed-up. ``beam:100`` (900 unknowns) is past
 :data:`~flexval.reducedmodels.core.batch.SOLO_UNKNOWNS`: a batch traces its copies one by one,
-so its batched cost is its cost alone, averaged over these copies (30 paths of about 4 ms:
-a median as steady as the small models' 100-copy batches)."""
+so its batched cost is its cost alone, averaged over these copies (30 paths: a median as
+steady as the small models' 100-copy batches)."""
 
 AGREEMENT_BAR = 1e-9
 """Largest difference allowed between a batched copy's end values and the same path run

@@ -18,24 +18,12 @@ differ):
     error), and likewise for the rotation. These catch a model that gets the
     end right but the soft stretch of a path wrong.
 
-A reference value near zero (a rotation that vanishes by symmetry, a target
-point on the centre of a rotation) would turn round-off into hundreds of
-percent. So each quantity has a stated
-scale taken from the other one along the reference path: for the rotation
-max_k |d_ref,k| / L (the rotation that moves a point at distance L by the
-target's largest displacement), for the displacement max_k |rot_ref,k| L. A
-reference value below :data:`NEAR_ZERO` times its scale is near zero, and the
-error is then reported in percent of the scale instead (:func:`scale_of`,
-:func:`denominator`). The size is a required argument of :func:`errors`, so
-that every caller (report, bench, sweep, stress, benchmarks) applies the one
-rule.
-The paper's scenes are far from it: their smallest end value is the closed
-chain's rotation, 0.5 of its scale (end displacements: 0.56 and above). A
-shallow arch pressed 10 deg off its axis of symmetry still turns its crown by
-0.42 of the scale, so a model that turns it 9 times as far is 785 % off; the
-same arch pressed on its axis turns it by round-off (1e-13 of the scale),
-where the relative errors of every model were tens to hundreds of percent of
-nothing.
+A reference value near zero would turn round-off into hundreds of percent, so each
+quantity has a scale taken from the other one along the reference path (for the rotation
+max_k |d_ref,k| / L, for the displacement max_k |rot_ref,k| L); below :data:`NEAR_ZERO`
+times its scale, the error is reported in percent of the scale instead (:func:`scale_of`,
+:func:`denominator`; why, with examples, in ARCHITECTURE.md, "Validation and outputs").
+The size L is a required argument of :func:`errors`, so that every caller applies the one rule.
 
 Displacements in mm, rotations in rad, lengths in mm, results in percent.
 """

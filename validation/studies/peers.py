@@ -26,9 +26,9 @@ not be of the same problem).
 Two orders are timed: interleaved (flexval, OpenSees, flexval, ...: every
 run starts with caches the other code just filled, as in a study that
 switches models) and back to back (all flexval runs, then all OpenSees runs,
-as in a sweep of one model). flexval's few-millisecond paths take up to
-1.5x longer interleaved on this project's 2-core VM; OpenSees' longer ones
-hardly change, so the interleaved ratio is the conservative one.
+as in a sweep of one model). flexval's few-millisecond paths take longer
+interleaved (``benchmarks/bench_peers.py`` times both orders); OpenSees'
+longer ones hardly change, so the interleaved ratio is the conservative one.
 
 OpenSeesPy is an optional extra: ``pip install -e ".[peers]"`` (on Debian it
 needs the system's ``libblas3`` and ``liblapack3``).

@@ -2,12 +2,13 @@
 study take over every row.
 
 A 100,000-point sweep has a few hundred thousand rows. Made into Python dicts (Arrow's
-``to_pylist``) and read back row by row for each table and figure, they cost the driver
-about 20 us a point after the workers are done: a serial tail a fast sweep on many workers
-waits for. :class:`Columns` holds the rows as an Arrow table (as the dataset is read) or as
-dicts (rows made in memory), gives each column once as a numpy array, and makes dicts only
-of the rows a consumer lists one by one (failures, limit points), or of all of them for a
-consumer that iterates (it is a sequence of dicts).
+``to_pylist``) and read back row by row for each table and figure, they cost the driver a
+serial tail after the workers are done, which a fast sweep on many workers waits for
+(``benchmarks/bench_sweep.py --tolerance`` times reading the rows back). :class:`Columns`
+holds the rows as an Arrow table (as the dataset is read) or as dicts (rows made in
+memory), gives each column once as a numpy array, and makes dicts only of the rows a
+consumer lists one by one (failures, limit points), or of all of them for a consumer that
+iterates (it is a sequence of dicts).
 
 Units: those of each column (see :mod:`flexval.validation.sweep.store`).
 """

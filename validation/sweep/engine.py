@@ -121,10 +121,10 @@ TASK_SECONDS = 1.0
 """Work per task, CPU s, that :func:`task_points` aims at once a model's cost is measured
 (the CPU time of the tasks' own thread: on cores shared with other jobs the wall time of the
 same work is longer, and tasks sized by it came out two to four times smaller, each paying
-again the batch's set-up, about 30 ms for dcmm:1, and its Parquet part). Dask costs about
-5 ms a task and the driver about 1 ms (publishing the part, the progress line): under 1 % of
-a second's work, so one driver keeps pace with a hundred workers; an interruption or the
-sweep's last task leaves a worker idle for about this long at most."""
+again the batch's set-up and its Parquet part). Dask's cost per task and the driver's
+(publishing the part, the progress line) are under 1 % of a second's work, so one driver
+keeps pace with a hundred workers (``benchmarks/bench_sweep.py`` measures both); an
+interruption or the sweep's last task leaves a worker idle for about this long at most."""
 MAX_TASK_POINTS = 5000
 """Most points per task, whatever their cost: bounds a task's rows (about 4 kB each in the
 worker's memory) and the reference paths one task hands to the model tasks."""
@@ -157,7 +157,7 @@ def task_points(
 class TaskCost:
     """The CPU seconds and points of a model's finished tasks, and the cost of one more
     point (:meth:`per_point`): a task costs a fixed part (the batch's set-up, its Parquet
-    part: about 30 ms for dcmm:1 on the open chain) and a part per point."""
+    part) and a part per point."""
 
     tasks: int = 0
     points: float = 0.0
@@ -250,8 +250,8 @@ START_METHOD = "forkserver"
 imported :data:`WORKER_MODULES` once (and holds no other thread, so the fork is safe). A
 worker then starts in milliseconds, with flexval's numerical stack loaded, and ends without
 tearing an interpreter down; started by ``spawn`` (Dask's default), each worker is a fresh
-interpreter that imports Dask and the modules its tasks need: 4.9 s to start two workers
-and 1.2 s to end them on the 2-core machine at load average 5.6, against 2.5 s and 0.06 s
+interpreter that imports Dask and the modules its tasks need, and workers take about twice
+as long to start and many times as long to end
 (``benchmarks/bench_sweep.py --cluster-start``). Where the platform has no forkserver
 (Windows), ``spawn``."""
 WORKER_MODULES = (
@@ -279,9 +279,8 @@ QUIET_DASK = {
 }
 """Dask's periodic work in a local cluster, made rarer: the workers' statistical profiler
 (every 10 ms, for a dashboard flexval does not serve), the event-loop ticks (20 ms), the
-system and memory monitors (0.5 s and 0.1 s: the nannies run in the driver). An idle
-cluster of two workers cost the driver 35 ms of CPU a second and each worker 25 ms; with
-these, 6 and 2."""
+system and memory monitors (0.5 s and 0.1 s: the nannies run in the driver). These settings
+cut an idle cluster's CPU use in the driver and in each worker several-fold."""
 
 
 def sweep_models(sweep: Sweep) -> list[str]:
@@ -295,8 +294,8 @@ def local_cluster(workers: int | None = None, models: Sequence[str] = ()):
     compiled kernels of ``models`` (ids) loaded (:mod:`flexval.validation.sweep.preload`).
 
     Dask keeps :data:`MESSAGE_LOG_LENGTH` recent messages per connection, not a thousand.
-    Dask's own log lines below ERROR are silenced: on a loaded machine every
-    close printed "Worker process still alive after 4.0 seconds, killing" for
+    Dask's own log lines below ERROR are silenced: when other jobs share the cores,
+    a close prints "Worker process still alive after 4.0 seconds, killing" for
     workers that had finished; a worker lost mid-task is a recorded failure row.
     """
     import logging

@@ -40,8 +40,8 @@ CHECK_BLOCK = 512
 """Points whose values the checking pass of :func:`parse_sweep` proves valid together
 (:meth:`PointBuilder.build_block`; it builds them one at a time)."""
 SECONDS_PER_POINT = 6e-3
-"""Time to build one point (parse and check its scene), s: 1.7 ms measured on open_chain,
-5.6 ms on notch_fourbar (2000 points, a loaded 2-core machine)."""
+"""Time to build one point (parse and check its scene), s, for the duration a long check
+announces: about what a point of the slowest built-in scene, notch_fourbar, takes."""
 
 SWEEP = Table(
     "",

@@ -2,7 +2,7 @@
 
 A sweep point's scene is, by definition, the base scene's data with the axis values
 written in and loaded by :func:`flexval.geometry.scene.parse_scene`, every check
-included: about 0.6 ms for the open chain, more than its reduced models cost. When every
+included, which on the open chain costs more than its reduced models. When every
 axis addresses one of the *value fields* below, a point differs from the base scene in
 those values only (the same shapes, bodies, attachments and load geometry), and
 :class:`IncrementalBuilder` builds its scene from the parsed base scene by replacing them
@@ -52,8 +52,7 @@ MIN_BOX_POINTS = 8
 """Fewest points whose box is proven (2^k full parses, k axes); fewer are parsed one by
 one, which costs no more."""
 MAX_BOX_AXES = 6
-"""Most axes of an incremental build: a box's proof parses its 2^k corners (64 at most,
-about 40 ms on the open chain)."""
+"""Most axes of an incremental build: a box's proof parses its 2^k corners (64 at most)."""
 MAX_BOXES = 64
 """Most proven boxes one builder keeps (a few per block at most: the values of a sweep
 fill a few boxes); past it the points outside them are parsed."""

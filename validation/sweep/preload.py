@@ -3,11 +3,10 @@
 A worker forked from a process that has loaded a model's code and compiled
 kernels (:attr:`flexval.reducedmodels.catalogue.Family.load`: numba's import
 and every kernel's machine code, read from the on-disk cache or compiled)
-starts its first task with them in memory, instead of loading them itself:
-0.35 s of CPU a worker on a 2-core machine, 1.3 s a worker with 16 workers
-loading at once on 16 cores, where a 100,000-point sweep's tasks take a few
-seconds a worker. The forkserver loads them once, while the driver starts the
-scheduler.
+starts its first task with them in memory, instead of loading them itself, a
+cost that grows when many workers load at once and that is comparable with a
+large sweep's whole work per worker (``benchmarks/bench_sweep.py --scaling``).
+The forkserver loads them once, while the driver starts the scheduler.
 
 The models are those :func:`flexval.validation.sweep.engine.local_cluster`
 names in the environment variable :data:`MODELS_ENV` when the forkserver

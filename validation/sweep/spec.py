@@ -1,34 +1,11 @@
 """Sweep files: a base scene, parameter axes and models, expanded into checked points.
 
-A sweep file (TOML) names a base scene and the parameters to vary::
+A sweep file (TOML) names a base scene, the models and the reference they are measured
+against, the load cases and the parameter axes to vary (values listed, spaced, or drawn at
+random). Its fields are declared in :mod:`flexval.validation.sweep.fields`, from which the
+documentation's sweep file reference, with a complete example, is generated.
 
-    name = "open_chain_arcs"
-    base = "open_chain"              # built-in scene, or a path relative to this file
-    models = ["ee", "dcmm:1", "prbm", "beam:20"]
-    reference = "beam:100"           # errors are measured against it
-    reference_sample = 5             # optional: the reference runs on 5 of the points only
-    load_cases = ["f+", "m+"]        # optional; default: all of the base scene's
-    combine = "grid"                 # "grid" (every combination) or "zip" (i-th with i-th)
-    metric = "worst"                 # summary metric: worst = max(end_disp_vec, end_rot)
-    linear_rotation = 0.3            # optional (rad): scale each load case so that the
-                                     # linear (ee) end rotation is this at every point
-    batch = 10                       # optional: points per task of a reduced model
-                                     # (default: from the measured cost, see
-                                     # engine.task_points)
-    outputs = ["peak_stress"]        # optional: besides errors and times (always there),
-                                     # "peak_stress" (default), "limit_load" (an
-                                     # arc-length search on each run that stops early)
-                                     # and "first_yield" (against material.yield_strength)
-
-    [[axes]]
-    path = "section.thickness"       # any numeric field of the scene, by path
-    linspace = [0.05, 0.2, 4]        # or values = [...], logspace = [lo, hi, n]
-                                     # (n values in geometric progression),
-                                     # or sample = "uniform" (low, high),
-                                     # "normal" (mean, std), "lognormal" (median, sigma)
-                                     # with count and seed
-
-A path walks the scene's TOML tables: ``material.youngs_modulus``,
+An axis's path walks the scene's TOML tables: ``material.youngs_modulus``,
 ``flexures.e12.thickness``, ``load_cases.f+.value`` (arrays of tables are
 addressed by their ``name``), ``ground.points.0.1`` (plain arrays by index).
 The last key may be absent from the base scene when the scene format allows
@@ -137,8 +114,8 @@ class PointBuilder:
 
     @functools.cached_property
     def _arrays(self) -> tuple[np.ndarray, ...]:
-        """Each axis's values as an array (made once: a tuple of 20,000 floats takes 0.7 ms
-        to convert)."""
+        """Each axis's values as an array (made once: converting a large axis's tuple
+        at every call would cost more than picking the values)."""
         return tuple(np.asarray(a.values, dtype=float) for a in self.axes)
 
     def light(self) -> PointBuilder:

@@ -374,8 +374,8 @@ _RAN: set[str] = set()
 
 def _first_task(spec: ModelSpec) -> bool:
     """Whether this is the first task of ``spec`` in this process: it pays the one-time
-    costs (imports, loading the compiled kernels; 0.3 s for ee on the open chain against
-    15 ms for its next 25 points), which the driver leaves out of the model's cost."""
+    costs (imports, loading the compiled kernels: more than many later points cost), which
+    the driver leaves out of the model's cost."""
     first = spec.id not in _RAN
     _RAN.add(spec.id)
     return first
