@@ -29,7 +29,7 @@ linear responses are computed together
 every copy's K0, one pass for the outputs and one for the stresses).
 
 Timings are median seconds of repeats, cached on disk as JSON records
-(:meth:`flexval.validation.cache.ResultCache.get_record`) beside the load
+(:meth:`flexval.validation.cache.ResultCache.record`) beside the load
 paths, and computed ahead on several processes (:meth:`BatchMemo.prefetch`)
 as the report's paths are.
 
@@ -251,15 +251,14 @@ def _time_task(
     scene: Scene, spec: ModelSpec, case: LoadCase, repeats: int, disk: ResultCache | None
 ) -> BatchTiming | None:
     """:func:`time_batch` through the disk cache (a worker's task, or the caller's)."""
-    key = batch_key(scene, spec, case, repeats)
-    if disk is not None:
-        hit = disk.get_record(key)
-        if hit is not None:
-            return BatchTiming.from_dict({**hit, "cached": True})
-    timing = time_batch(scene, spec, case, repeats)
-    if timing is not None and disk is not None:
-        disk.put_record(key, timing.to_dict())
-    return timing
+    if disk is None:
+        return time_batch(scene, spec, case, repeats)
+    return disk.record(
+        batch_key(scene, spec, case, repeats),
+        lambda: time_batch(scene, spec, case, repeats),
+        lambda hit: BatchTiming.from_dict({**hit, "cached": True}),
+        lambda timing: None if timing is None else timing.to_dict(),
+    )
 
 
 class BatchMemo:
