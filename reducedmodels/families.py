@@ -9,6 +9,7 @@ that only read the catalogue (``flexval --help``, ``flexval info``) start fast.
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -90,74 +91,96 @@ def _prbm(flexure: Flexure, mechanism: Mechanism, spec: ModelSpec, **options):
 
 
 def _load_core() -> None:
-    """Import the multibody core (scipy.linalg with it) and cap the BLAS threads.
+    """Import the multibody core (scipy.linalg with it) and the compiled kernels' modules
+    (numba with them), and cap the BLAS threads.
 
-    Both are per-process costs, like importing scipy, not a model's: left
+    All are per-process costs, like importing scipy, not a model's: left
     inside the timed build, they would make a process's first ``dcmm:1``,
     ``prbm`` or ``ee`` run print several times the time of its second run of
-    the same path. So is loading a family's compiled kernels (numba's import
-    and their machine code), which the loaders below do before their clock
-    starts.
+    the same path. The kernels' machine code is compiled, or loaded from the
+    on-disk cache, where a kernel is first called, on a clock that leaves it
+    out (:mod:`flexval.reducedmodels.kernels.clock`): a run compiles only the
+    kernels it uses.
     """
     from . import models  # noqa: F401  (the core, imported ahead of the timed build)
     from .core.threads import limit_threads
+    from .kernels import (  # noqa: F401  (numba and the kernels' dispatchers)
+        bandkernel,
+        beamkernel,
+        chainkernel,
+        dcmmkernel,
+        ldlkernel,
+        orderkernel,
+        prbmkernel,
+        stabilitykernel,
+        stresskernel,
+    )
+    from .kernels.jit import initialise
 
     limit_threads()
+    initialise()
 
 
-def _load_newton_kernels() -> None:
-    """The compiled kernels that order a System's tangent, factorise a batch's blocks and
-    stack its stresses (every family traced by Newton)."""
-    from .core.blocktangent import ldl_kernels
-    from .core.peaks import stress_kernels
-    from .core.tangent import order_kernels
+def _warm_newton_kernels() -> None:
+    """Every compiled kernel that orders a System's tangent, factorises a batch's blocks,
+    counts a band's negative pivots and stacks a batch's stresses (every family traced by
+    Newton), compiled or loaded now."""
+    from .kernels import ldlkernel, orderkernel, stabilitykernel, stresskernel
 
-    order_kernels()
-    ldl_kernels()
-    stress_kernels()
+    orderkernel.warm_up()
+    ldlkernel.warm_up()
+    stabilitykernel.warm_up()
+    stresskernel.warm_up()
 
 
 def _load_ee(spec: ModelSpec) -> None:
-    """``Family.load`` of ``ee``: the DCMM connectors' kernels and the core."""
-    from .dcmm.connector import dcmm_kernels
+    """``Family.load`` of ``ee``: the core and every kernel of the DCMM connectors."""
+    from .dcmm.connector import CHAIN_HALF_BANDWIDTH
+    from .kernels import bandkernel, chainkernel, dcmmkernel
 
-    dcmm_kernels()
     _load_core()
+    dcmmkernel.warm_up()
+    bandkernel.warm_up(CHAIN_HALF_BANDWIDTH)
+    chainkernel.warm_up()
 
 
 def _load_dcmm(spec: ModelSpec) -> None:
     """``Family.load`` of ``dcmm:N``: :func:`_load_ee` and the Newton kernels."""
     _load_ee(spec)
-    _load_newton_kernels()
+    _warm_newton_kernels()
 
 
 def _load_prbm(spec: ModelSpec) -> None:
-    """``Family.load`` of ``prbm``: its kernels, the core and the Newton kernels."""
-    from .prbm.connector import prbm_kernels
+    """``Family.load`` of ``prbm``: the core, its kernels and the Newton kernels."""
+    from .kernels import prbmkernel
+    from .prbm import connector  # noqa: F401  (its code)
 
-    prbm_kernels()
     _load_core()
-    _load_newton_kernels()
+    prbmkernel.warm_up()
+    _warm_newton_kernels()
 
 
 def _load_beams(spec: ModelSpec) -> None:
-    """``Family.load`` of ``beam:N``: the beam and band kernels, the core and the Newton
-    kernels."""
-    from .beam.elements import CHAIN_HALF_BANDWIDTH, beam_kernels
-    from .core.tangent import band_kernels
+    """``Family.load`` of ``beam:N``: the core, the beam, chain and band kernels and the
+    Newton kernels."""
+    from .beam.elements import CHAIN_HALF_BANDWIDTH
+    from .kernels import bandkernel, beamkernel, chainkernel
 
-    beam_kernels()
-    band_kernels(CHAIN_HALF_BANDWIDTH)
     _load_core()
-    _load_newton_kernels()
+    beamkernel.warm_up()
+    chainkernel.warm_up()
+    bandkernel.warm_up(CHAIN_HALF_BANDWIDTH)
+    _warm_newton_kernels()
 
 
-def _traced_by_newton(load: Callable[[ModelSpec], None]) -> Callable[..., Any]:
-    """``Family.run`` of a family traced by Newton: ``load`` (outside the path's time),
-    then :func:`flexval.reducedmodels.models.trace_nonlinear`."""
+def _traced_by_newton(code: str) -> Callable[..., Any]:
+    """``Family.run`` of a family traced by Newton whose connectors live in the module
+    ``code`` (relative to this package): that module and the core loaded (outside the
+    path's time), then :func:`flexval.reducedmodels.models.trace_nonlinear`."""
 
     def run(mechanism: Mechanism, spec: ModelSpec, *args, **kwargs):
-        load(spec)
+        importlib.import_module(code, __package__)
+        _load_core()
         from .models import trace_nonlinear
 
         return trace_nonlinear(mechanism, spec, *args, **kwargs)
@@ -185,12 +208,13 @@ def _trace_ee(
     the linearised poses and shapes; ``record_reactions`` is accepted for a
     uniform runner signature and ignored.
     """
-    import time
+    from .dcmm import connector  # noqa: F401  (its connectors' code, ahead of the clock)
 
-    _load_ee(spec)
+    _load_core()
+    from .kernels.clock import path_clock
     from .models import flexure_connectors, linear_response
 
-    t0 = time.perf_counter()
+    t0 = path_clock()
     connectors = flexure_connectors(mechanism, spec, _ee, {**spec.kwargs, **options})
     lp = linear_response(
         mechanism,
@@ -202,7 +226,7 @@ def _trace_ee(
         record_poses=record_poses,
         record_shapes=record_shapes,
     )
-    lp.seconds = time.perf_counter() - t0
+    lp.seconds = path_clock() - t0
     return lp
 
 
@@ -235,7 +259,7 @@ BEAM = register(
         "beam",
         "geometrically exact corotational beam elements (Euler-Bernoulli, or Timoshenko "
         "with the option shear); beam:100 and beam:20 are the paper's FEM100 and FEM20",
-        _traced_by_newton(_load_beams),
+        _traced_by_newton(".beam.elements"),
         Resolution("N", "beam elements per flexure", 20, 1, MAX_ELEMENTS, True, (5, 320)),
         (
             Option.flag("shear", "Timoshenko beams (shear deformation of the rectangular section)"),
@@ -255,7 +279,7 @@ PRBM = register(
     Family(
         "prbm",
         "symmetric 3R pseudo-rigid-body chain per flexure, exact in the linear limit",
-        _traced_by_newton(_load_prbm),
+        _traced_by_newton(".prbm.connector"),
         None,
         (PLATE, WIDTH, EB),
         frozenset({ARCLENGTH, DISPLACEMENT}),
@@ -271,7 +295,7 @@ DCMM = register(
         "dcmm",
         "Displaced Compliance Matrix Method: each arc cut into N sub-arcs, each a diagonal "
         "compliance at its centre of elasticity",
-        _traced_by_newton(_load_dcmm),
+        _traced_by_newton(".dcmm.connector"),
         Resolution("N", "sub-arcs per flexure", 1, 1, MAX_ELEMENTS, True, (1, 8)),
         (FRAME, PLATE, WIDTH, EB),
         frozenset({ARCLENGTH, DISPLACEMENT}),

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import types
 
 import numpy as np
 import pytest
@@ -209,8 +208,7 @@ def test_copies_that_part_ways_go_on_from_the_last_point_they_shared(model, monk
     # a clock that ticks once per reading: each batch lasts one tick from its start to its
     # end, and so does building the connectors
     ticks = itertools.count()
-    clock = types.SimpleNamespace(perf_counter=lambda: float(next(ticks)))
-    monkeypatch.setattr(batch_module, "time", clock)
+    monkeypatch.setattr(batch_module, "path_clock", lambda: float(next(ticks)))
     monkeypatch.setattr(LoadControl, "resume", counted)
     monkeypatch.setattr(LoadControl, "__init__", made)
     batched = run_batch(mechanisms, spec, cases)

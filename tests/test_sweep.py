@@ -531,10 +531,10 @@ from flexval.validation.sweep.preload import MODELS_ENV
 
 
 def probe(_):
-    from flexval.reducedmodels.dcmm.connector import dcmm_kernels
-    from flexval.reducedmodels.prbm.connector import prbm_kernels
+    from flexval.reducedmodels.kernels import dcmmkernel, prbmkernel
 
-    return prbm_kernels.cache_info().currsize, dcmm_kernels.cache_info().currsize
+    # the machine code each kernel holds in this worker (compiled or loaded from the cache)
+    return len(prbmkernel.assemble_chains.signatures), len(dcmmkernel.assemble_sub_arcs.signatures)
 
 
 if __name__ == "__main__":

@@ -26,7 +26,6 @@ step control are in the documentation's models page, "Mass and dynamics".
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,6 +43,7 @@ from ..core.recorder import notify
 from ..core.settings import SolverError
 from ..core.system import System
 from ..core.tangent import Tangent
+from ..kernels.clock import path_clock
 from .modes import refuse_massless_bodies
 
 
@@ -227,7 +227,7 @@ def solve_dynamic(
     SolverError
         If a step fails below ``min_step``; carries the path so far.
     """
-    t_start = time.perf_counter()
+    t_start = path_clock()
     s = settings or DynamicSettings()
     scheme = GeneralizedAlpha(s.rho_inf)
     mass = MassModel(system)
@@ -276,7 +276,7 @@ def solve_dynamic(
     def fail(message: str, t: float) -> SolverError:
         stats["failure"] = message
         path.converged, path.stats = False, stats
-        path.seconds = time.perf_counter() - t_start
+        path.seconds = path_clock() - t_start
         return SolverError(
             f"{model or 'model'} dynamic run on '{case.name}': {message}; "
             f"reached t = {t:.6g} s of {duration:.6g} s",
@@ -332,7 +332,7 @@ def solve_dynamic(
     stats["kinetic_energy"] = mass.kinetic_energy(q, v)
     stats["potential_change"] = system.assemble(q, loads, law(t))[0] - potential_start
     path.stats = stats
-    path.seconds = time.perf_counter() - t_start
+    path.seconds = path_clock() - t_start
     return path
 
 
@@ -362,8 +362,8 @@ def iteration_seconds(
     )
     best = math.inf
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0 = path_clock()
         r, K = step.assemble(q)
         step.correction(q, r, K)
-        best = min(best, time.perf_counter() - t0)
+        best = min(best, path_clock() - t0)
     return best

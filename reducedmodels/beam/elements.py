@@ -37,7 +37,7 @@ import numpy as np
 from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.kinematics import rotate_xy
 
-from ..core.chains import NodeChains, chain_kernels, local_coordinates
+from ..core.chains import NodeChains, local_coordinates
 from ..core.connector import Connector, ConnectorGroup, LocalState, Reasons
 from ..core.inertia import MassPoints, chain_mass_points
 from ..core.sections import SectionForces, statics_section_forces, unit_vectors
@@ -57,17 +57,11 @@ CHAIN_HALF_BANDWIDTH = 2 * NODE_COORDINATES - 1
 
 @functools.cache
 def beam_kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.kernels.beamkernel`, imported and loaded on first use
-    (see its ``warm_up``).
-
-    A System of beams asks for it when it is built (:meth:`BeamGroup.assembler`),
-    so numba's import and the kernels' machine code (~0.5 s) are paid before
-    a path's clock starts, once per process.
-    """
+    """:mod:`flexval.reducedmodels.kernels.beamkernel`; each kernel is compiled, or loaded
+    from the on-disk cache, where it is first called, off the path's clock
+    (:mod:`flexval.reducedmodels.kernels.clock`)."""
     from ..kernels import beamkernel
 
-    beamkernel.warm_up()
-    chain_kernels()  # its nodes' predictor and update
     return beamkernel
 
 

@@ -28,7 +28,6 @@ Units: mm, N, N mm, rad; times in s.
 from __future__ import annotations
 
 import gc
-import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import NamedTuple
@@ -37,6 +36,7 @@ import numpy as np
 
 from flexval.geometry import LoadCase, Mechanism, SceneError
 
+from ..kernels.clock import path_clock
 from .allocator import keep_freed_memory
 from .batchsystem import BatchSystem, Member, copy_parts, copy_unknowns
 from .linearbatch import linear_responses
@@ -209,7 +209,7 @@ def trace_batch(
     while groups:
         group = groups.pop(0)
         copies = group.copies
-        t0 = time.perf_counter()
+        t0 = path_clock()
         batch = BatchSystem([members[k] for k in copies])
         loads = batch.use_loads([cases[k] for k in copies])
         stepping = LoadControl(factors[0], batch)
@@ -243,12 +243,12 @@ def trace_batch(
         group_cases = [cases[k] for k in copies]
         if failure is not None and (len(copies) > 1 or group.start is not None):
             # each copy alone from rest: its own way to fail, as its solo run meets it
-            spent[copies] += (time.perf_counter() - t0) / len(copies)
+            spent[copies] += (path_clock() - t0) / len(copies)
             groups += [_Group([k]) for k in copies]
             continue
         kept = [0] if failure is not None else np.flatnonzero(stepping.active).tolist()
         paths = record_batch(batch, points, kept, group_cases, model, scene, settings, failure)
-        spent[copies] += (time.perf_counter() - t0) / len(copies)
+        spent[copies] += (path_clock() - t0) / len(copies)
         seconds = spent[copies].tolist()
         for j, path in zip(kept, paths):
             recorded = path.path if isinstance(path, SolverError) else path
@@ -339,7 +339,7 @@ def run_batch(
         for k in range(len(mechanisms)):
             alone(k)
         return results
-    t0 = time.perf_counter()
+    t0 = path_clock()
     options = dict(spec.kwargs)
     built: dict[int, System | Member | Exception] = {}  # copies of one mechanism share it
     for m in mechanisms:
@@ -365,7 +365,7 @@ def run_batch(
     for k, m in enumerate(mechanisms):
         if isinstance(built[id(m)], Exception):
             results[k] = built[id(m)]
-    build = (time.perf_counter() - t0) / max(len(mechanisms), 1)
+    build = (path_clock() - t0) / max(len(mechanisms), 1)
     groups: dict[tuple, list[int]] = {}  # copies that can share a batch, in order
     keys: dict[tuple[int, int], tuple] = {}
     for k in range(len(mechanisms)):

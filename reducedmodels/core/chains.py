@@ -31,11 +31,11 @@ from .connector import LocalState
 
 @functools.cache
 def chain_kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.kernels.chainkernel`, imported and loaded on first use (see its
-    ``warm_up``): once per process, before a path's clock starts."""
+    """:mod:`flexval.reducedmodels.kernels.chainkernel`; each kernel is compiled, or loaded from
+    the on-disk cache, where it is first called, off the path's clock
+    (:mod:`flexval.reducedmodels.kernels.clock`)."""
     from ..kernels import chainkernel
 
-    chainkernel.warm_up()
     return chainkernel
 
 

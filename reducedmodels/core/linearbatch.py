@@ -27,7 +27,6 @@ Units: mm, N, N mm, rad.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -35,6 +34,7 @@ import numpy as np
 
 from flexval.geometry import LoadCase, Mechanism
 
+from ..kernels.clock import path_clock
 from .connector import Connector
 from .loadpath import LoadPath
 from .loads import Loads
@@ -135,7 +135,7 @@ def linear_responses(
     ValueError
         If the copies are not of one topology or request different load factors.
     """
-    t0 = time.perf_counter()
+    t0 = path_clock()
     count = len(members)
     if count == 0:
         return []
@@ -172,7 +172,7 @@ def linear_responses(
     if solved:
         for k, path in zip(solved, _solve(numbering, members, cases, solved, rest_of, lam)):
             results[k] = path
-    seconds = (time.perf_counter() - t0) / count
+    seconds = (path_clock() - t0) / count
     for path in results:
         if isinstance(path, LoadPath):
             path.model, path.scene, path.seconds = model, scene, seconds

@@ -187,11 +187,11 @@ def path_peaks(entries: Sequence[tuple[SectionForces, Section]]) -> list[Peaks]:
 
 @cache
 def stress_kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.kernels.stresskernel`, imported and loaded on first use (numba is
-    imported only by the runs that stack stresses: a batch's)."""
+    """:mod:`flexval.reducedmodels.kernels.stresskernel`; its kernel is compiled, or loaded from
+    the on-disk cache, where it is first called, off the path's clock
+    (:mod:`flexval.reducedmodels.kernels.clock`)."""
     from ..kernels import stresskernel
 
-    stresskernel.warm_up()
     return stresskernel
 
 

@@ -16,7 +16,6 @@ Units: mm, N, N mm, MPa, rad.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, NamedTuple
@@ -25,6 +24,7 @@ import numpy as np
 
 from flexval.geometry import LoadCase, Mechanism, Section
 
+from ..kernels.clock import path_clock
 from .connector import Connector
 from .loadpath import LoadPath
 from .peaks import STACK_FROM, Peaks, append_stresses, path_peaks, stack_peaks
@@ -103,7 +103,7 @@ class PathRecorder:
         record_reactions: bool = False,
         limit_points: bool = False,
     ):
-        self.t0 = time.perf_counter()
+        self.t0 = path_clock()
         system.check_drive(case, model)
         self.system, self.case, self.model = system, case, model
         self.magnitude = case.magnitude  # the full load (N or N mm), read at every level
@@ -189,7 +189,7 @@ class PathRecorder:
         note_unstable_points(self.path, self.unstable)
         note_resolution(self.path, self.system.size, carries_weights(self.system.connectors))
         self.path.converged = True
-        self.path.seconds = time.perf_counter() - self.t0
+        self.path.seconds = path_clock() - self.t0
         return self.path
 
     def failure(self, exc: TraceFailure) -> SolverError:
@@ -198,7 +198,7 @@ class PathRecorder:
         note_stability(self.path, self.system)
         note_unstable_points(self.path, self.unstable)
         note_resolution(self.path, self.system.size, carries_weights(self.system.connectors))
-        return failed_path(self.path, self.case, self.model, exc, time.perf_counter() - self.t0)
+        return failed_path(self.path, self.case, self.model, exc, path_clock() - self.t0)
 
     def run(
         self, points: Iterator[PathPoint], stop: Callable[[LoadPath], bool] | None = None

@@ -38,11 +38,11 @@ from .roundoff import UNIT_ROUNDOFF, tolerance  # noqa: F401  (part of the rule'
 
 @functools.cache
 def kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.kernels.stabilitykernel`, compiled (or loaded from the on-disk
-    cache) on first use."""
+    """:mod:`flexval.reducedmodels.kernels.stabilitykernel`; each kernel is compiled, or loaded
+    from the on-disk cache, where it is first called, off the path's clock
+    (:mod:`flexval.reducedmodels.kernels.clock`)."""
     from ..kernels import stabilitykernel
 
-    stabilitykernel.warm_up()
     return stabilitykernel
 
 

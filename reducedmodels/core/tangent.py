@@ -73,40 +73,31 @@ def narrow_kernels(b: int) -> tuple[ModuleType, tuple[int, ...]]:
 
 @functools.cache
 def band_kernels(b: int) -> ModuleType:
-    """:mod:`flexval.reducedmodels.kernels.bandkernel`, its kernels of half-bandwidth b
-    loaded (see ``warm_up``).
-
-    A layout that will use them asks for them when it is built, so that
-    loading them is not charged to a path's time.
-    """
+    """:mod:`flexval.reducedmodels.kernels.bandkernel`, whose kernels of half-bandwidth b
+    are compiled, or loaded from the on-disk cache, where they are first called, off the
+    path's clock (:mod:`flexval.reducedmodels.kernels.clock`)."""
     from ..kernels import bandkernel
 
-    bandkernel.warm_up(b)
     return bandkernel
 
 
 @functools.cache
 def ldl_kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.kernels.ldlkernel`, its kernels loaded: the compiled
-    Bunch-Kaufman
-    LDL^T that counts a dense tangent's inertia (and a batch's blocks')."""
+    """:mod:`flexval.reducedmodels.kernels.ldlkernel`: the compiled Bunch-Kaufman LDL^T that
+    counts a dense tangent's inertia (and a batch's blocks'), each kernel compiled or loaded
+    where it is first called, off the path's clock (:mod:`flexval.reducedmodels.kernels.clock`)."""
     from ..kernels import ldlkernel
 
-    ldlkernel.warm_up()
     return ldlkernel
 
 
 @functools.cache
 def order_kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.kernels.orderkernel`, its kernels loaded (a compiled system's
-    ordering).
-
-    Loaded once per process, before a path's clock starts
-    (:func:`flexval.reducedmodels.families` loads it with a family's kernels).
-    """
+    """:mod:`flexval.reducedmodels.kernels.orderkernel` (a compiled system's ordering), each
+    kernel compiled or loaded where it is first called, off the path's clock
+    (:mod:`flexval.reducedmodels.kernels.clock`)."""
     from ..kernels import orderkernel
 
-    orderkernel.warm_up()
     return orderkernel
 
 

@@ -33,6 +33,8 @@ import math
 
 import numpy as np
 
+from .geometrycache import per_centre_line
+
 MAX_STRAIN = 0.02
 """Largest material strain (2 %) the models mean anything at.
 
@@ -177,8 +179,10 @@ chord, for the flexure to count as shallow: under compression it buckles like a 
 curve bends under its load instead."""
 
 
+@per_centre_line
 def is_shallow(shape) -> bool:
-    """Whether ``shape`` is straight or within :data:`SHALLOW_RISE` of its chord."""
+    """Whether ``shape`` is straight or within :data:`SHALLOW_RISE` of its chord (kept per
+    centre line: every copy of a study over sections asks it of the same shapes)."""
     if shape.kind in ("segment", "notch"):
         return True
     start, end = (np.asarray(p, float) for p in shape.end_points)

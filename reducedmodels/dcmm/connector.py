@@ -33,7 +33,7 @@ from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.compliance import curve_compliance
 from flexval.geometry.kinematics import rotate_xy
 
-from ..core.chains import NodeChains, chain_kernels
+from ..core.chains import NodeChains
 from ..core.connector import Connector, KernelEndPass, Reasons
 from ..core.inertia import MassPoints, line_density, rigid_pieces
 from ..core.sections import ForceStack, SectionForces, column_stacks
@@ -63,21 +63,11 @@ three coordinates (x, y, theta) of two neighbouring bodies."""
 
 @functools.cache
 def dcmm_kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.kernels.dcmmkernel`, imported and loaded on first use
-    (see its ``warm_up``).
-
-    The DCMM and EE families ask for it before a path's clock starts
-    (:mod:`flexval.reducedmodels.families`), so numba's import and the kernels'
-    machine code are paid once per process, not by a path; so are the
-    compiled banded factorisations a chain of many sub-arcs takes
-    (:class:`flexval.reducedmodels.core.tangent.TangentLayout`).
-    """
-    from ..core.tangent import band_kernels
+    """:mod:`flexval.reducedmodels.kernels.dcmmkernel`; each kernel is compiled, or loaded
+    from the on-disk cache, where it is first called, off the path's clock
+    (:mod:`flexval.reducedmodels.kernels.clock`)."""
     from ..kernels import dcmmkernel
 
-    dcmmkernel.warm_up()
-    band_kernels(CHAIN_HALF_BANDWIDTH)
-    chain_kernels()  # the cut bodies' predictor and update
     return dcmmkernel
 
 

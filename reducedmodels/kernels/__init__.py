@@ -10,6 +10,7 @@ __all__ = [
     "bandkernel",
     "beamkernel",
     "chainkernel",
+    "clock",
     "dcmmkernel",
     "jit",
     "ldlkernel",

@@ -289,7 +289,7 @@ def warm_up(b: int) -> None:
 
     A band as :class:`flexval.reducedmodels.core.tangent.BandedTangent` holds it (a
     Fortran-ordered (b + 1, n) array) and contiguous right-hand sides; see
-    :func:`flexval.reducedmodels.kernels.beamkernel.warm_up` for why.
+    :func:`flexval.reducedmodels.kernels.beamkernel.warm_up` for who calls it.
     """
     n = b + 2
     band = np.zeros((b + 1, n), order="F")

@@ -389,9 +389,9 @@ def path_element_ends(
 def warm_up() -> None:
     """Compile, or load from the on-disk cache, every kernel for the argument types flexval uses.
 
-    Loading the machine code takes a noticeable fraction of a second per
-    process (importing numba included); the beam family calls this before a
-    path's clock starts, so that path times measure the paths. Two elements
+    ``Family.load`` of the beams calls this, so that a sweep's workers are
+    forked with the machine code loaded (:mod:`flexval.validation.sweep.preload`);
+    a run alone loads each kernel where it first calls it. Two elements
     between two bodies (one attached node each, one free node), the arrays
     typed as :class:`flexval.reducedmodels.beam.elements.BeamGroup` and the core pass them.
     """

@@ -319,8 +319,9 @@ def chain_measures(
 def warm_up() -> None:
     """Compile, or load from the on-disk cache, the kernels for the argument types flexval uses.
 
-    The DCMM and EE families call this before a path's clock starts (numba's
-    import and the machine code are a per-process cost, like importing scipy).
+    ``Family.load`` of DCMM and EE calls this, so that a sweep's workers are forked
+    with the machine code loaded (:mod:`flexval.validation.sweep.preload`); a run
+    alone loads each kernel where it first calls it.
     """
     parameters = np.zeros((1, PARAMETERS))
     dofs = np.zeros(1, np.int64)

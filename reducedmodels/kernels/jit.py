@@ -14,10 +14,32 @@ beam, band, DCMM and PRBM kernels (:mod:`flexval.reducedmodels.kernels.beamkerne
 * no ``fastmath``: no reassociation, so the numbers are those of the
   formulas in the order written, the same in every run;
 * ``nogil=True``: a kernel releases the interpreter lock while it runs.
+
+A kernel is compiled, or loaded from the cache, where it is first called: a run
+gets only the kernels it uses, and the time this takes is left out of path times
+(:mod:`.clock`, which starts counting it here).
 """
 
 from __future__ import annotations
 
 import numba
+import numpy as np
+
+from .clock import count_kernel_time
+
+count_kernel_time()
 
 kernel = numba.njit(cache=True, error_model="numpy", nogil=True)
+
+
+@kernel
+def _first(values: np.ndarray) -> float:
+    """The first entry of ``values``: a kernel that does nothing, for :func:`initialise`."""
+    return values[0]
+
+
+def initialise() -> None:
+    """Set up numba's compiler in this process (its registries and type inference, some
+    0.3 s), by loading or compiling a trivial kernel: a process's runners call it before
+    their clock starts, so that the first real kernel costs only its own machine code."""
+    _first(np.zeros(1))

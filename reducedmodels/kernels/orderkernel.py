@@ -158,7 +158,7 @@ def ordering(n: int, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
 def warm_up() -> None:
     """Compile, or load from the on-disk cache, the kernels for the int64 arrays of a layout.
 
-    See :func:`flexval.reducedmodels.kernels.beamkernel.warm_up` for why.
+    See :func:`flexval.reducedmodels.kernels.beamkernel.warm_up` for who calls it.
     """
     rows = np.array([0, 1, 0, 1], np.int64)
     cols = np.array([0, 1, 1, 0], np.int64)

@@ -218,8 +218,9 @@ def line_statics(
 def warm_up() -> None:
     """Compile, or load from the on-disk cache, the kernels for the argument types flexval uses.
 
-    The PRBM family calls this before a path's clock starts (numba's import
-    and the machine code are a per-process cost, like importing scipy).
+    ``Family.load`` of the PRBM calls this, so that a sweep's workers are forked
+    with the machine code loaded (:mod:`flexval.validation.sweep.preload`); a run
+    alone loads each kernel where it first calls it.
     """
     parameters = np.zeros((1, PARAMETERS))
     slots = np.full((1, COORDINATES), -1, np.int64)

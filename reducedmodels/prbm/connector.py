@@ -89,16 +89,11 @@ def prbm_connector(flexure: Flexure, mechanism: Mechanism, **options) -> Connect
 
 @cache
 def prbm_kernels() -> ModuleType:
-    """:mod:`flexval.reducedmodels.kernels.prbmkernel`, imported and loaded on first use
-    (see its ``warm_up``).
-
-    The PRBM family asks for it before a path's clock starts
-    (:mod:`flexval.reducedmodels.families`), so numba's import and the kernel's
-    machine code are paid once per process, not by a path.
-    """
+    """:mod:`flexval.reducedmodels.kernels.prbmkernel`; each kernel is compiled, or loaded
+    from the on-disk cache, where it is first called, off the path's clock
+    (:mod:`flexval.reducedmodels.kernels.clock`)."""
     from ..kernels import prbmkernel
 
-    prbmkernel.warm_up()
     return prbmkernel
 
 
