@@ -26,6 +26,7 @@ import functools
 import math
 from collections.abc import Callable
 from types import ModuleType
+from typing import NamedTuple
 
 import numpy as np
 
@@ -35,6 +36,7 @@ from flexval.geometry.kinematics import rotate_xy
 
 from ..core.chains import NodeChains
 from ..core.connector import Connector, KernelEndPass, Reasons
+from ..core.geometrycache import per_centre_line
 from ..core.inertia import MassPoints, line_density, rigid_pieces
 from ..core.sections import ForceStack, SectionForces, column_stacks
 from ..core.validity import (
@@ -54,7 +56,7 @@ from .stacks import (
     samples_per_sub_arc,
     stack_tables,
 )
-from .subarcs import sub_arcs
+from .subarcs import split_parts, sub_arcs
 
 CHAIN_HALF_BANDWIDTH = 2 * 3 - 1
 """Half-bandwidth of a DCMM chain's tangent numbered body after body: a sub-arc couples the
@@ -69,6 +71,68 @@ def dcmm_kernels() -> ModuleType:
     from ..kernels import dcmmkernel
 
     return dcmmkernel
+
+
+class ChainGeometry(NamedTuple):
+    """What a DCMM chain takes from its centre line and its end bodies alone (mm, rad), the
+    same for every copy of a study over sections (arrays read-only, shared)."""
+
+    refs: tuple[tuple[float, float], ...]
+    """The chain's reference points: body a's, the cuts (chain order), body b's."""
+    refs_array: np.ndarray
+    cuts: np.ndarray
+    """The cut bodies' reference points at rest, (n - 1, 2)."""
+    arc_lengths: tuple[float, ...]
+    sub_lengths: np.ndarray
+    """The sub-arcs' lengths in chain order (a tuple and an array)."""
+    end_rel: tuple[tuple[float, float], tuple[float, float]]
+    """The flexure's ends' offsets from the end bodies' reference points, body a's first."""
+    sample_tangent: np.ndarray
+    """Each sample's section direction towards body b at rest, rad."""
+    sample_rel: np.ndarray
+    """Each sample's point at rest as offsets from its sub-arc's leading and following
+    bodies, (samples, 4)."""
+
+
+@per_centre_line
+def chain_geometry(
+    shape,
+    n: int,
+    forward: bool,
+    samples: int,
+    ref_a: tuple[float, float],
+    ref_b: tuple[float, float],
+) -> ChainGeometry:
+    """The :class:`ChainGeometry` of the centre line ``shape`` cut into n sub-arcs of
+    ``samples`` segments each, run from its start (``forward``) or its end, between bodies
+    whose reference points are ``ref_a`` and ``ref_b`` (mm); kept per centre line."""
+    parts = [part for part, _, _ in split_parts(shape, n)]
+    if not forward:
+        parts = parts[::-1]
+    cuts = [tuple(end_points(p)[1 if forward else 0]) for p in parts[:-1]]
+    refs = (ref_a, *cuts, ref_b)
+    ends = list(end_points(shape))
+    if not forward:
+        ends = ends[::-1]  # body a's first
+    end_rel = tuple((ex - rx, ey - ry) for (ex, ey), (rx, ry) in zip(ends, (ref_a, ref_b)))
+    refs_array = np.array(refs)
+    arc_lengths = tuple(p.length for p in parts)
+    points, tangent = sample_points(shape, n, forward, samples)
+    layout = chain_layout(n, forward, samples)
+    sample_rel = (points[:, None] - refs_array[layout.sample_ends]).reshape(-1, 4)
+    arrays = [refs_array, np.array(cuts).reshape(-1, 2), np.array(arc_lengths), sample_rel]
+    for array in arrays:
+        array.flags.writeable = False
+    return ChainGeometry(
+        refs,
+        arrays[0],
+        arrays[1],
+        arc_lengths,
+        arrays[2],
+        end_rel,
+        tangent,
+        arrays[3],
+    )
 
 
 class DcmmConnector(Connector):
@@ -104,18 +168,21 @@ class DcmmConnector(Connector):
         forward = flexure.start_body == self.bodies[0]  # chain runs start -> end
         if not forward:
             subs = subs[::-1]
-        parts = [sub.shape for sub in subs]
         self._samples = samples_per_sub_arc(n, not flexure.section.is_uniform)
-        self._layout = layout = chain_layout(n, forward, self._samples)
-        # chain of reference points: body a, cuts (in chain order), body b (float pairs, mm)
-        cuts = [list(end_points(p)[1 if forward else 0]) for p in parts[:-1]]
-        refs = [
-            mechanism.bodies[self.bodies[0]].reference.tolist(),
-            *cuts,
-            mechanism.bodies[self.bodies[1]].reference.tolist(),
-        ]
-        self._cuts = np.array(cuts).reshape(-1, 2)
-        self._arc_lengths = [p.length for p in parts]  # chain order, mm
+        self._layout = chain_layout(n, forward, self._samples)
+        geometry = chain_geometry(
+            shape,
+            n,
+            forward,
+            self._samples,
+            tuple(mechanism.bodies[self.bodies[0]].reference.tolist()),
+            tuple(mechanism.bodies[self.bodies[1]].reference.tolist()),
+        )
+        refs = geometry.refs
+        self._cuts, self._refs = geometry.cuts, geometry.refs_array
+        self._arc_lengths, self.sub_lengths = geometry.arc_lengths, geometry.sub_lengths
+        self.end_rel = geometry.end_rel
+        self.sample_tangent, self.sample_rel = geometry.sample_tangent, geometry.sample_rel
         # each sub-arc's parameters of flexval.reducedmodels.kernels.dcmmkernel.sub_arc:
         # offsets of its centre of elasticity from its two bodies (mm), ellipse
         # axes, inverse compliances
@@ -134,12 +201,7 @@ class DcmmConnector(Connector):
                 ]
             )
         self.parameters = np.array(parameters)
-        # flexure ends' offsets from the end bodies' reference points, float pairs (mm)
-        ends = list(end_points(shape))
-        if not forward:
-            ends = ends[::-1]  # body a's first
-        self.end_rel = [(ex - rx, ey - ry) for (ex, ey), (rx, ry) in zip(ends, (refs[0], refs[-1]))]
-        self._section, self.sub_lengths = flexure.section, np.array(self._arc_lengths)
+        self._section = flexure.section
         # each sub-arc's bending and axial flexibility (chain order): how the chain's closure
         # shares a gap between its chords (chains.NodeChains)
         self._chord_flexibility = (
@@ -151,12 +213,7 @@ class DcmmConnector(Connector):
         self._strain_limits = [sub.strain_limit for sub in subs]
         self._turn_limits = [sub.turn_limit for sub in subs]
         self._turn_limit = min(self._turn_limits)
-        self._centre_line, self._refs, self._forward = shape, np.array(refs), forward
-        # each sample's point at rest (all sub-arcs' at once: they are equal parts of the
-        # centre line) as offsets from its sub-arc's leading and following bodies (mm), and
-        # its section's direction towards body b (rad)
-        points, self.sample_tangent = sample_points(shape, n, forward, self._samples)
-        self.sample_rel = (points[:, None] - self._refs[layout.sample_ends]).reshape(-1, 4)
+        self._centre_line, self._forward = shape, forward
 
     def mass_points(self, density: float) -> MassPoints:
         """The flexure's mass (density in t/mm^3) on the chain's bodies, as rigid pieces.

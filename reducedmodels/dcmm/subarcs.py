@@ -81,7 +81,7 @@ def has_closed_form(flexure: Flexure) -> bool:
     return flexure.section.is_uniform and flexure.shape.kind in ("arc", "segment")
 
 
-def _split(shape: Shape, n: int) -> tuple[tuple[Shape, float, float], ...]:
+def split_parts(shape: Shape, n: int) -> tuple[tuple[Shape, float, float], ...]:
     """The n parts of ``shape`` and their windows [s0, s1] on it (mm)."""
     length = shape.length
     windows = [length * k / n for k in range(n)] + [length]
@@ -93,7 +93,7 @@ def _unit_parts(shape: Shape, n: int) -> tuple[tuple[Shape, float, float, Ellips
     """The parts of a closed-form centre line, their windows and their ellipses for EI = 1
     (whose weight is the part's length; the arrays read-only, shared by every caller)."""
     out = []
-    for part, s0, s1 in _split(shape, n):
+    for part, s0, s1 in split_parts(shape, n):
         unit = part.ellipse(1.0)
         unit.center.flags.writeable = False
         unit.axes.flags.writeable = False
@@ -117,7 +117,9 @@ def sub_arcs(flexure: Flexure, material: Material, n: int) -> list[SubArc]:
                 compliance[0] = part.length / EA
             out.append(SubArc(part, s0, s1, ell, tuple(compliance)))
         return out
-    return [_by_quadrature(flexure, material, part, s0, s1) for part, s0, s1 in _split(shape, n)]
+    return [
+        _by_quadrature(flexure, material, part, s0, s1) for part, s0, s1 in split_parts(shape, n)
+    ]
 
 
 def _by_quadrature(

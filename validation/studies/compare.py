@@ -54,7 +54,8 @@ def on_reference_levels(model: LoadPath, ref: LoadPath) -> tuple[np.ndarray, ...
     """``model``'s dx, dy (mm) and rotation (rad) at ``ref``'s loads (interpolated in load
     where the two paths' levels differ)."""
     lm, lr = np.asarray(model.load), np.asarray(ref.load)
-    if lm.shape == lr.shape and np.allclose(lm, lr, rtol=1e-12, atol=0.0):
+    # np.allclose's test (rtol 1e-12, no atol) written out: a fifth of its cost per point
+    if lm.shape == lr.shape and bool(np.all(np.abs(lm - lr) <= 1e-12 * np.abs(lr))):
         return np.asarray(model.dx), np.asarray(model.dy), np.asarray(model.rotation)
     order = np.argsort(lm)
     return tuple(
