@@ -206,12 +206,13 @@ def trace_batch(
     results: list[LoadPath | SolverError | None] = [None] * len(members)
     groups = [_Group(list(range(len(members))))]  # copies to trace as one batch, in turn
     spent = np.zeros(len(members))  # each copy's share of the batches it was traced in, s
+    known_loads: dict = {}  # each copy's loads in its own numbering, for all its batches
     while groups:
         group = groups.pop(0)
         copies = group.copies
         t0 = path_clock()
         batch = BatchSystem([members[k] for k in copies])
-        loads = batch.use_loads([cases[k] for k in copies])
+        loads = batch.use_loads([cases[k] for k in copies], known_loads)
         stepping = LoadControl(factors[0], batch)
         unknowns = batch.n_dofs // len(copies)
         points: list[PathPoint] = []

@@ -443,23 +443,32 @@ class BatchSystem(System):
         c, s = np.cos(theta), np.sin(theta)
         return (x + (c * rx - s * ry)) - tx, (y + (s * rx + c * ry)) - ty, theta
 
-    def batch_loads(self, cases: Sequence[LoadCase]) -> Loads:
+    def batch_loads(self, cases: Sequence[LoadCase], known: dict | None = None) -> Loads:
         """Every copy's dead loads of its case (one per copy), in the batch's numbering.
 
         The result's ``scale`` is an array: each copy's own load scale (N),
-        which its residual is relative to.
+        which its residual is relative to. ``known`` keeps each copy's loads in its own
+        numbering (copy 0's) across the batches of one set of copies, keyed by the ids
+        of its case, mechanism and connector objects (:func:`~.batch.trace_batch` passes
+        one).
         """
         template, rows, parts = self.template, {}, []  # the loads of a case on a copy
+        known = {} if known is None else known
         row = np.empty(self.n_copies, np.int64)  # each copy's among parts
         for k, ((mechanism, connectors), case) in enumerate(zip(self.members, cases)):
             key = (id(case), id(mechanism), id(connectors))  # copies of one mechanism and case
             r = rows.get(key)
             if r is None:
                 r = rows[key] = len(parts)
-                reference = {b: body.reference for b, body in mechanism.bodies.items()}
-                parts.append(
-                    case_loads(case, template.pose_dofs, reference, mechanism.size(), connectors)
-                )
+                # a batch holds its own lists of the copies' connectors: known by the objects
+                same = (id(case), id(mechanism), *map(id, connectors))
+                part = known.get(same)
+                if part is None:
+                    reference = {b: body.reference for b, body in mechanism.bodies.items()}
+                    part = known[same] = case_loads(
+                        case, template.pose_dofs, reference, mechanism.size(), connectors
+                    )
+                parts.append(part)
             row[k] = r
         # the copies' bodies' poses in the batch (each copy's own numbering is copy 0's)
         poses = (
@@ -629,10 +638,10 @@ class BatchSystem(System):
             negative[c] = count - multipliers if count is not None else 0
         return negative
 
-    def use_loads(self, cases: Sequence[LoadCase]) -> Loads:
+    def use_loads(self, cases: Sequence[LoadCase], known: dict | None = None) -> Loads:
         """:meth:`batch_loads` of ``cases`` (kept for per-copy checks); keeps the rest tangent."""
         self._cases = list(cases)
-        loads = self.batch_loads(cases)
+        loads = self.batch_loads(cases, known)
         self.kept = self.assemble_storage(self.initial_state(), loads, 0.0)[2]
         return loads
 

@@ -23,6 +23,7 @@ import numpy as np
 from flexval.geometry import Mechanism
 
 from .connector import Connector
+from .joints import PinConnector
 
 DEPENDENT_BELOW = 1e-6
 """A set of rigid directions is dependent where its smallest singular value, relative to its
@@ -73,6 +74,4 @@ def redundant_connectors(
 
 def _is_pin(connector: Connector) -> bool:
     """Whether ``connector`` is a pin (whose own rows a scene keeps independent)."""
-    from .joints import PinConnector
-
     return isinstance(connector, PinConnector)
