@@ -121,6 +121,8 @@ class RestNumbering:
                 m = 6 + c.n_internal
                 if rows.size != m * m:
                     return False
+            elif pattern[0] is rows and pattern[1] is cols:  # one layout's tables, shared
+                continue
             elif not (np.array_equal(pattern[0], rows) and np.array_equal(pattern[1], cols)):
                 return False
         return True
