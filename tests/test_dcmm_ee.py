@@ -392,6 +392,38 @@ def test_parts_of_a_kept_centre_line_are_those_computed_anew(n):
         second.sample_tangent[0] = 0.0
 
 
+@pytest.mark.parametrize("n", [1, 2, 3])
+@pytest.mark.parametrize("frame", ["leader", "follower"])
+def test_a_chains_kept_geometry_is_the_arcs_closed_form(n, frame):
+    """The cut bodies and the flexure's ends of a DCMM chain, which copies of a study over
+    sections share (read-only), against the arc's own parametrisation: the cuts at k L / n
+    from the end the chain starts at, the ends relative to their bodies' reference points."""
+    import dataclasses
+
+    mech = load_scene("open_chain").mechanism
+    for flexure in mech.flexures:
+        arc = flexure.shape
+        first = DcmmConnector(flexure, mech, n, frame=frame)
+        forward = flexure.start_body == first.bodies[0]
+        s = arc.length * np.arange(1, n) / n
+        if not forward:
+            s = arc.length - s
+        phi = arc.start_angle + s / arc.radius
+        cuts = np.column_stack([np.cos(phi), np.sin(phi)]) * arc.radius + np.array(arc.center)
+        assert np.allclose(first._cuts, cuts.reshape(-1, 2), rtol=0, atol=1e-12)
+        ends = [arc.point(0.0), arc.point(arc.length)]
+        if not forward:
+            ends = ends[::-1]
+        for end, body, rel in zip(ends, first.bodies, first.end_rel):
+            assert np.allclose(end - mech.bodies[body].reference, rel, rtol=0, atol=1e-12)
+        thinner = dataclasses.replace(flexure, section=flexure.section.scaled(0.9))
+        second = DcmmConnector(thinner, mech, n, frame=frame)
+        for name in ("_cuts", "sample_rel", "sample_tangent", "sub_lengths"):
+            assert getattr(second, name) is getattr(first, name), name
+            assert not getattr(first, name).flags.writeable, name
+        assert not np.array_equal(second.parameters, first.parameters)  # its own compliance
+
+
 def test_a_long_chain_is_predicted_and_updated_chordwise_to_the_same_equilibria(monkeypatch):
     """From CHAIN_PREDICTION_FROM sub-arcs the cut bodies are predicted and corrected as a chain
     of chords (the beam's way): the update equals the linear one to first order (so Newton
