@@ -370,3 +370,28 @@ def test_the_event_loops_report_of_an_unstarted_dask_call_is_dropped_after_an_in
     assert dropped.filter(unstarted) and dropped.filter(other)  # no signal: kept
     monkeypatch.setattr(interrupt._state, "signum", signal.SIGINT)
     assert not dropped.filter(unstarted) and dropped.filter(other)
+
+
+def test_the_handler_holds_a_signal_back_inside_numba(monkeypatch):
+    """Raised inside numba's own code (a kernel compiled, loaded, or building its results on
+    its first call), the exception could leave a result half-built: the handler records the
+    signal and raises nothing there; anywhere else it raises."""
+    import types
+
+    from flexval.validation import interrupt
+
+    def frame_of(path: str):
+        return types.SimpleNamespace(f_code=types.SimpleNamespace(co_filename=path))
+
+    numba_file = os.path.join(os.sep, "site-packages", "numba", "core", "serialize.py")
+    monkeypatch.setattr(interrupt, "_state", interrupt._State())
+    assert interrupt._on_signal(signal.SIGTERM, frame_of(numba_file)) is None
+    assert interrupt.received() == signal.SIGTERM
+    monkeypatch.setattr(interrupt, "_state", interrupt._State())
+    monkeypatch.setattr(interrupt, "kernels_busy", lambda: True)  # under numba's lock
+    assert interrupt._on_signal(signal.SIGINT, frame_of(__file__)) is None
+    assert interrupt.received() == signal.SIGINT
+    monkeypatch.setattr(interrupt, "_state", interrupt._State())
+    monkeypatch.setattr(interrupt, "kernels_busy", lambda: False)
+    with pytest.raises(interrupt.Interrupted):
+        interrupt._on_signal(signal.SIGINT, frame_of(__file__))

@@ -10,6 +10,7 @@ compilation, independently of flexval's kernels.
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -17,6 +18,7 @@ from pathlib import Path
 
 import numba
 import numpy as np
+import pytest
 
 from flexval.reducedmodels.kernels import clock
 
@@ -72,6 +74,37 @@ def test_the_count_is_per_thread():
     worker.join()
     assert seen["other"] > 0.0
     assert clock.kernel_seconds() == here
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_sigmask"), reason="no thread signal masks")
+def test_signals_wait_while_numba_compiles():
+    """SIGINT and SIGTERM are blocked in a thread while it compiles (the process gets them
+    elsewhere, or after), and unblocked again after."""
+    from numba.core import event
+
+    import flexval.reducedmodels.kernels.jit  # noqa: F401  (registers the count first)
+
+    def blocked() -> set:
+        return signal.pthread_sigmask(signal.SIG_BLOCK, [])
+
+    seen = []
+
+    class Probe(event.Listener):
+        def on_start(self, ev):
+            seen.append({signal.SIGINT, signal.SIGTERM} <= blocked())
+
+        def on_end(self, ev):
+            pass
+
+    before = blocked()
+    probe = Probe()
+    event.register("numba:compiler_lock", probe)
+    try:
+        _fresh_function()(np.ones(2))
+    finally:
+        event.unregister("numba:compiler_lock", probe)
+    assert seen and all(seen)
+    assert blocked() == before
 
 
 def test_a_first_run_compiles_only_the_kernels_it_calls(tmp_path):

@@ -15,7 +15,13 @@ receives every signal as well (Python's wakeup file descriptor, written by the
 C-level handler at once): when the orderly stop has not ended the process
 :data:`GRACE_S` seconds after the first signal, or on a second signal, it
 stops the process itself: it kills the child processes, removes this
-process's temporary files, prints the line and ends the process.
+process's temporary files, prints the line and ends the process. The handler
+raises nothing while numba compiles or loads a kernel
+(:mod:`flexval.reducedmodels.kernels.clock`) or runs its own code on a kernel's
+first call (it unpickles the constants that build the results): an exception
+there can leave a result tuple half-built, a segmentation fault when it is read.
+The watcher ends such a process after :data:`GRACE_S`, or the command line does
+at its end, whichever comes first, as if the signal had been raised.
 
 Worker processes (:func:`worker_signals`, the initializer of every process
 pool) end at once on either signal, after removing their own temporary files:
@@ -41,6 +47,7 @@ from collections.abc import Callable
 from typing import NoReturn
 
 from flexval.geometry.files import remove_temporaries
+from flexval.reducedmodels.kernels.clock import kernels_busy
 
 GRACE_S = 1.5
 """Seconds the orderly stop may take after the first signal before the watcher thread ends
@@ -106,7 +113,16 @@ def _on_signal(signum: int, frame) -> None:
     if _state.signum is not None:
         return  # already stopping; a second signal makes the watcher stop at once
     _state.signum = signum
+    if kernels_busy() or _inside_numba(frame):
+        return  # raised there, it could crash the process: the watcher ends it instead
     raise Interrupted(signum)
+
+
+def _inside_numba(frame) -> bool:
+    """Whether ``frame`` runs numba's or llvmlite's own code (a kernel compiled or loaded,
+    or its first call building its results)."""
+    name = frame.f_code.co_filename if frame is not None else ""
+    return any(f"{os.sep}{package}{os.sep}" in name for package in ("numba", "llvmlite"))
 
 
 class AbandonedDaskCall(logging.Filter):

@@ -152,9 +152,11 @@ def main(argv: list[str] | None = None) -> int:
             raise
         finish(received())  # ends the process: 128 + the signal number
     if argv is None:
-        from ..interrupt import uninstall
+        from ..interrupt import finish, received, uninstall
         from ..process import end_process
 
+        if received() is not None:  # a signal the handler held back (inside numba): it ends
+            finish(received())
         uninstall()
         end_process(status)
     return status

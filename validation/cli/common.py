@@ -85,10 +85,9 @@ def keep_on_interrupt(description) -> None:
 def keep_cached(enabled: bool, more: str = "") -> None:
     """An interruption keeps the load paths finished so far in the result cache, if it is
     used (the same command then reads them), and nothing otherwise."""
+    from ..cache import ResultCache  # here: the watcher thread may call description()
 
     def description() -> str:
-        from ..cache import ResultCache
-
         cache = ResultCache(enabled=enabled)
         if not cache.enabled:
             return "no load path (the result cache is not used)" + more
