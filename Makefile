@@ -11,8 +11,9 @@ STAMP  := $(VENV)/.installed
 
 .PHONY: report timings test lint venv bench docs clean
 
-# the install ends by compiling the reduced models' kernels once into numba's on-disk cache
-# (a two-level path of each family), so that no later command pays that first-run cost
+# the install ends by compiling, into numba's on-disk cache, the kernels a two-level path of
+# each reduced family calls, so that later commands load them; a kernel no such path calls
+# (a batch's, an indefinite tangent's) is compiled where a later command first calls it
 WARM = run open_chain --model beam:20 --model dcmm:2 --model prbm --model ee --load-case f+ --levels 2
 
 $(STAMP): pyproject.toml
