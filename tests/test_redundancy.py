@@ -30,6 +30,19 @@ from flexval.validation.cli import main
 ALUMINIUM = Material(70000.0, 0.33)
 
 
+def leaf(name, start, end, bodies, thickness, **extra) -> FlexureSpec:
+    """A straight leaf from ``start`` to ``end`` (mm) between ``bodies``, from the first, of
+    depth 10 mm and ``thickness`` (mm)."""
+    return FlexureSpec(
+        name,
+        Segment(tuple(start), tuple(end)),
+        tuple(bodies),
+        Section(10.0, thickness),
+        start_body=bodies[0],
+        **extra,
+    )
+
+
 def guide(count: int, tilt: float = 0.0, spacing: float = 20.0, length: float = 50.0):
     """A guide of ``count`` straight leaves from the ground to a shuttle, the last one turned
     by ``tilt`` (rad) about its foot."""
@@ -38,15 +51,7 @@ def guide(count: int, tilt: float = 0.0, spacing: float = 20.0, length: float = 
         foot = np.array([spacing * i, 0.0])
         angle = np.pi / 2 + (tilt if i == count - 1 else 0.0)
         head = foot + length * np.array([np.cos(angle), np.sin(angle)])
-        specs.append(
-            FlexureSpec(
-                f"leaf{i}",
-                Segment(tuple(foot), tuple(head)),
-                ("ground", "shuttle"),
-                Section(10.0, 0.625),
-                start_body="ground",
-            )
-        )
+        specs.append(leaf(f"leaf{i}", foot, head, ("ground", "shuttle"), 0.625))
         feet.append(foot)
     return assemble(specs, "ground", np.array(feet), ALUMINIUM, "shuttle", np.array([0.0, length]))
 
@@ -55,27 +60,9 @@ def on_one_line():
     """Two leaves on one line holding a block between them (the block's axial motion locked
     twice), and a third across (which keeps the block from turning)."""
     specs = [
-        FlexureSpec(
-            "below",
-            Segment((0.0, 0.0), (0.0, 20.0)),
-            ("ground", "block"),
-            Section(10.0, 0.5),
-            start_body="ground",
-        ),
-        FlexureSpec(
-            "above",
-            Segment((0.0, 40.0), (0.0, 60.0)),
-            ("block", "ground"),
-            Section(10.0, 0.5),
-            start_body="block",
-        ),
-        FlexureSpec(
-            "across",
-            Segment((20.0, 30.0), (40.0, 30.0)),
-            ("block", "ground"),
-            Section(10.0, 0.5),
-            start_body="block",
-        ),
+        leaf("below", (0.0, 0.0), (0.0, 20.0), ("ground", "block"), 0.5),
+        leaf("above", (0.0, 40.0), (0.0, 60.0), ("block", "ground"), 0.5),
+        leaf("across", (20.0, 30.0), (40.0, 30.0), ("block", "ground"), 0.5),
     ]
     ground = np.array([[0.0, 0.0], [0.0, 60.0], [40.0, 30.0]])
     points = {"block": np.array([[0.0, 20.0], [0.0, 40.0], [20.0, 30.0]])}
@@ -87,22 +74,8 @@ def on_one_line():
 def crossed():
     """Two leaves crossing at 90 degrees (a cross pivot): independent directions."""
     specs = [
-        FlexureSpec(
-            "a",
-            Segment((0.0, 0.0), (20.0, 20.0)),
-            ("ground", "top"),
-            Section(10.0, 0.3),
-            start_body="ground",
-            crosses=("b",),
-        ),
-        FlexureSpec(
-            "b",
-            Segment((20.0, 0.0), (0.0, 20.0)),
-            ("ground", "top"),
-            Section(10.0, 0.3),
-            start_body="ground",
-            crosses=("a",),
-        ),
+        leaf("a", (0.0, 0.0), (20.0, 20.0), ("ground", "top"), 0.3, crosses=("b",)),
+        leaf("b", (20.0, 0.0), (0.0, 20.0), ("ground", "top"), 0.3, crosses=("a",)),
     ]
     return assemble(
         specs,
@@ -117,15 +90,7 @@ def crossed():
 def pinned_leaf():
     """A straight leaf whose axis passes through a pin of the same body: the pin holds the
     leaf's axial motion already."""
-    specs = [
-        FlexureSpec(
-            "leaf",
-            Segment((0.0, 0.0), (0.0, 30.0)),
-            ("ground", "arm"),
-            Section(10.0, 0.4),
-            start_body="ground",
-        ),
-    ]
+    specs = [leaf("leaf", (0.0, 0.0), (0.0, 30.0), ("ground", "arm"), 0.4)]
     pins = [PinSpec("pin", ("ground", "arm"), (0.0, 50.0))]
     return assemble(
         specs,
