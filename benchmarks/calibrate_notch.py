@@ -30,9 +30,11 @@ and the stress concentration at the waist
     K = sigma_fibre / (6 M / (b t^2))     (the continuum's recovered surface fibre peak under
                                            the moment over the beam formula at the waist).
 
-The reduced models then take E / r_b for bending and G / r_s for shear on the hinge (and
-include the shear term), which reproduces both measurements, and report K times their beam
-formula as the hinge's peak fibre stress; the moment and the force also
+and, along the hinge, the same ratio K(s) over 6 M / (b h(s)^2) and the shear's shift delta(s)
+of the moment under the force (:func:`surface_profiles`). The reduced models then take
+E / r_b for bending and G / r_s for shear on the hinge (and include the shear term), which
+reproduces both measurements, and report the largest of K(s) times their beam formula, the
+moment taken at s - delta(s), as the hinge's surface fibre stress; the moment and the force also
 turn the hinge by r_b as well as each other (checked in the held-out table). r_b does not
 depend on Poisson's ratio (1.0699, 1.0696, 1.0691 at nu = 0.25, 0.33, 0.42 on a circular
 hinge of t/L 0.1, H/t 10); r_s (1 + nu) nearly does not (1.2945, 1.3046, 1.3142), so the
@@ -54,6 +56,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from flexval.reducedmodels.notchcorrection import STATIONS, station_fractions
 
 ROOT = Path(__file__).resolve().parent.parent
 TABLE = ROOT / "reducedmodels" / "data" / "notch_table.json"
@@ -170,7 +174,55 @@ def measure(contour: str, t_over_l: float, h_over_t: float, exponent=None, model
         "dy_per_force": deflection,
         "force_turn": (f.rotation[-1] / force) / (c_theta * 0.5 * LENGTH) / r_b,
         "stress": m.fibre_stress["hinge"]["stress"] / waist,
+        **surface_profiles(scene, moment, force),
     }
+
+
+def surface_profiles(scene, moment: float, force: float) -> dict[str, list[float]]:
+    """K(s) and the shear shift delta(s) of the hinge of ``scene`` at the table's stations
+    (:func:`flexval.reducedmodels.notchcorrection.station_fractions`, first half).
+
+    ``profile``: under the end ``moment`` (N mm), the continuum's surface fibre stress over
+    the beam formula 6 M / (b h(s)^2), the two halves of the symmetric hinge averaged.
+    ``shift``: under the end ``force`` (N) across the axis, the surface above station s
+    carries K(s) times the beam formula of the moment at s - delta(s), not at s (its
+    surface normal meets the axis nearer the thick end): delta / L = (K_F / K - 1)(1 - s/L),
+    K_F the force's ratio of surface stress over 6 F (L - s) / (b h(s)^2); on the second
+    half delta is the mirror's, of opposite sign. Inside an end face's boundary layer
+    (:func:`flexval.validation.continuum.fibre.boundary_layers`), where the rigid face
+    perturbs the field, both take the value at the layer's edge."""
+    from flexval.validation.continuum.fibre import boundary_layers
+
+    flexure = scene.mechanism.flexures[0]
+    first, end = boundary_layers(flexure)
+    x = station_fractions(flexure.section.profile)
+    lo, hi = first / LENGTH, 1.0 - end / LENGTH
+    fractions, sigma = surface_stress(scaled(scene, "moment", moment), "moment")
+    h = np.asarray(flexure.section.thickness_at(fractions * LENGTH), float)
+    concentration = sigma / (6.0 * moment / (DEPTH * h * h))
+    halves = [np.interp(np.clip(f, lo, hi), fractions, concentration) for f in (x, 1.0 - x)]
+    k_moment = 0.5 * (halves[0] + halves[1])
+    _, sigma = surface_stress(scaled(scene, "force", force), "force")
+    beam = 6.0 * force * (1.0 - fractions) * LENGTH / (DEPTH * h * h)
+    k_force = np.interp(np.clip(x, lo, 0.5), fractions, sigma / np.maximum(beam, 1e-300))
+    shift = (k_force / k_moment - 1.0) * (1.0 - np.clip(x, lo, 0.5))
+    return {
+        "profile": [round(float(v), 5) for v in k_moment],
+        "shift": [round(float(v), 6) for v in shift],
+    }
+
+
+def surface_stress(scene, case: str) -> tuple[np.ndarray, np.ndarray]:
+    """The continuum's largest surface |fibre stress| (MPa) over each mesh section of the
+    hinge of ``scene`` under its load case ``case``, and the sections' fractions."""
+    from flexval.reducedmodels import LoadControl, trace
+    from flexval.validation.continuum.fibre import surface_profile
+    from flexval.validation.continuum.run import build_system
+
+    system = build_system(scene.mechanism, LEVEL, "svk", "stress")
+    load_case = scene.load_case(case)
+    *_, last = trace(system, system.loads(load_case), LoadControl(load_case.factors(2)))
+    return surface_profile(system.connectors[0], *system.local_states(last.state)[0])
 
 
 def grid() -> list[tuple]:
@@ -203,8 +255,9 @@ def held_out(count: int, seed: int = 7) -> list[tuple]:
 
 
 KEY = ("contour", "t_over_l", "h_over_t", "exponent")
-FACTORS = ("bending", "shear", "stress")
-"""What the table holds per hinge: its shape, and r_b, r_s and the stress concentration K."""
+FACTORS = ("bending", "shear", "stress", "profile", "shift")
+"""What the table holds per hinge: its shape, r_b, r_s, the stress concentration K at the
+waist, K(s) along the hinge and the shear shift delta(s) / L (:func:`surface_profiles`)."""
 
 
 def write_table(rows: list[dict], path: Path) -> None:
@@ -216,10 +269,17 @@ def write_table(rows: list[dict], path: Path) -> None:
         "reference": f"continuum:{LEVEL}",
         "poisson_ratio": POISSON,
         "rotation": ROTATION,
-        "grid": {"t_over_l": T_OVER_L, "h_over_t": H_OVER_T, "exponents": EXPONENTS},
-        "rows": [{k: row[k] for k in (*KEY, *FACTORS)} for row in rows],
+        "grid": {
+            "t_over_l": T_OVER_L,
+            "h_over_t": H_OVER_T,
+            "exponents": EXPONENTS,
+            "stations": STATIONS.tolist(),
+        },
+        "rows": [],
     }
-    path.write_text(json.dumps(table, indent=1) + "\n")
+    head = json.dumps(table, indent=1)[: -len("[]\n}")]
+    lines = [json.dumps({k: row[k] for k in (*KEY, *FACTORS)}) for row in rows]
+    path.write_text(head + "[\n  " + ",\n  ".join(lines) + "\n ]\n}\n")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -29,8 +29,9 @@ from .core.restnumbering import RestNumbering
 from .core.sections import SectionForces
 from .core.settings import SolverSettings
 from .core.system import System, connector_groups
-from .core.validity import linear_sway_verdicts, merge_reasons
+from .core.validity import linear_sway_verdicts, merge_reasons, strain_reasons
 from .kernels.clock import path_clock
+from .notchcorrection import NotchFactors, corrected_material, factors_of
 
 #: ``make(flexure, mechanism, spec, **options) -> Connector`` of one flexure
 ConnectorFactory = Callable[..., Any]
@@ -75,9 +76,12 @@ def flexure_connectors(
     for f in mechanism.flexures:
         try:
             own = _of_its_depth(mechanism, f) if width else flexible
-            if not plain:
-                own = _calibrated_notch(own, f)
+            factors = None if plain else _notch_factors(mechanism, f)
+            if factors is not None:
+                own = dataclasses.replace(own, material=corrected_material(own.material, factors))
             conns.append(make(f, own, spec, **options))
+            if factors is not None:
+                conns[-1].surface_stress = factors.surface_stress
         except ValueError as exc:  # the model cannot represent this flexure
             raise SceneError(mechanism.source, f"flexures.{f.name}", spec.id, str(exc)) from None
     if mechanism.pins or mechanism.drive is not None:
@@ -100,15 +104,12 @@ def flexure_connectors(
     return with_weights(mechanism, conns)
 
 
-def _calibrated_notch(mechanism: Mechanism, flexure: Flexure) -> Mechanism:
-    """``mechanism`` with the calibrated material of ``flexure`` if it is a notch hinge
-    (:func:`flexval.reducedmodels.notchcorrection.corrected_material`), else itself."""
+def _notch_factors(mechanism: Mechanism, flexure: Flexure) -> NotchFactors | None:
+    """The calibrated factors of ``flexure`` if it is a notch hinge
+    (:func:`flexval.reducedmodels.notchcorrection.factors_of`), else None."""
     if flexure.section.profile is None or flexure.section.profile.kind != "notch":
-        return mechanism
-    from .notchcorrection import corrected_material, factors_of
-
-    found = factors_of(flexure, mechanism.material.poisson_ratio)
-    return dataclasses.replace(mechanism, material=corrected_material(mechanism.material, found))
+        return None
+    return factors_of(flexure, mechanism.material.poisson_ratio)
 
 
 def _of_its_depth(mechanism: Mechanism, flexure: Flexure) -> Mechanism:
@@ -407,6 +408,9 @@ def linear_response(
             )
     else:  # section forces proportional to the load
         record_stress(lp, connectors, unit, sections, lam)
+    lp.valid, lp.validity = merge_reasons(
+        lp.valid, lp.validity, strain_reasons(lp, mechanism.material.youngs_modulus)
+    )
     if record_poses or record_shapes:
         states = [q0 + dq_dead + factor * dq for factor in lam.tolist()]
         ground_q = np.asarray(ground_pose, float)

@@ -47,6 +47,44 @@ from flexval.geometry import Flexure, Material
 TABLE = "notch_table.json"
 """The calibration table in :mod:`flexval.reducedmodels`' data."""
 
+STATIONS = np.linspace(0.0, 1.0, 33)
+"""Where the table holds K(s) along a hinge: xi from an end (0) to the waist (1), xi = 1/2 at
+the contour's :func:`junction` (a fillet's tangent point), linear in arc length on either
+side, the same on both halves of the symmetric hinge. 32 intervals put 16 over a fillet, whose
+concentration peaks just inside its tangent point."""
+
+SMOOTH_JUNCTION = 0.25
+"""The junction (fraction of the length) of a contour without one: xi is then 2 s / L."""
+
+
+def junction(profile) -> float:
+    """The arc-length fraction of a notch ``profile``'s first fillet tangent point (a
+    corner-filleted contour's r / L, at most 1/2), :data:`SMOOTH_JUNCTION` for a contour
+    without one."""
+    if profile.contour != "corner-filleted":
+        return SMOOTH_JUNCTION
+    return min(float(profile.fillet_radius) / float(profile.length), 0.5)
+
+
+def station_fractions(profile) -> np.ndarray:
+    """The arc-length fractions (from the first end, on the first half) of :data:`STATIONS`
+    on a notch ``profile``."""
+    j = junction(profile)
+    xi = STATIONS
+    return np.where(xi <= 0.5, 2.0 * xi * j, j + (2.0 * xi - 1.0) * (0.5 - j))
+
+
+def _stations_at(fractions, junction_fraction: float) -> np.ndarray:
+    """xi (:data:`STATIONS`' coordinate) of arc-length ``fractions`` on a hinge whose junction
+    lies at ``junction_fraction``: :func:`station_fractions` inverted, the hinge folded about
+    its waist."""
+    f = np.asarray(fractions, float)
+    f = np.minimum(f, 1.0 - f)
+    j = junction_fraction
+    if j >= 0.5:  # fillets that meet: no flat part
+        return np.clip(f / (2.0 * j), 0.0, 1.0)
+    return np.clip(np.where(f <= j, f / (2.0 * j), 0.5 + (f - j) / (2.0 * (0.5 - j))), 0.0, 1.0)
+
 
 @dataclass(frozen=True)
 class NotchFactors:
@@ -65,6 +103,15 @@ class NotchFactors:
         Whether the hinge lies in the calibrated range (else: the nearest tabulated hinge's).
     where : str
         The hinge's shape ratios, for messages (``t/L 0.1, H/t 11``).
+    profile : tuple of float
+        K(s): the continuum's surface fibre stress under a moment over the beam formula
+        6 M / (b h(s)^2) at :data:`STATIONS` (:meth:`surface_stress` reads it).
+    shift : tuple of float
+        delta(s) / L at :data:`STATIONS` on the first half: the surface above station s
+        carries the moment at s - delta(s) (:meth:`surface_stress`); the second half's is
+        the mirror's, of opposite sign.
+    junction : float
+        The hinge's :func:`junction`, which places :data:`STATIONS` along it.
     """
 
     bending: float
@@ -72,6 +119,66 @@ class NotchFactors:
     stress: float
     inside: bool
     where: str
+    profile: tuple[float, ...] = ()
+    shift: tuple[float, ...] = ()
+    junction: float = SMOOTH_JUNCTION
+
+    def surface_stress(self, forces, section) -> tuple[np.ndarray, np.ndarray]:
+        """The hinge's surface fibre stress along it: K(s) (|N(s)|/A + |M(s - delta(s))|
+        h/(2 I)), MPa, at :data:`SURFACE_POINTS` and the forces' own stations.
+
+        N and M are linear between the forces' stations (exact between a beam's nodes, which
+        carry no distributed load), the table's profiles linear between theirs. Under a
+        moment the peak sits where K(s)/h(s)^2 is largest (a filleted hinge's just inside a
+        fillet, not on its flat); under a force across the hinge the beam formula's own peak
+        leaves the waist for sections where the contour curves more (a power contour of n 3,
+        a fillet's tangent point), where K is up to 7 % above the waist's, and the shift adds
+        the shear's share (up to 2 % on short hinges).
+
+        Parameters
+        ----------
+        forces : flexval.reducedmodels.core.sections.SectionForces
+            N (N) and M (N mm) at arc-length fractions ``forces.at`` from the first end, (m,)
+            or (k, m).
+        section : flexval.geometry.Section
+            The hinge's section.
+
+        Returns
+        -------
+        at : ndarray (p,)
+            Arc-length fractions of the points from the first end.
+        stress : ndarray (p,) or (k, p)
+            MPa.
+        """
+        from .core.sections import constants_at
+
+        stations = np.asarray(forces.at, float)
+        at = np.union1d(stations, SURFACE_POINTS)
+        xi = _stations_at(at, self.junction)
+        side = np.where(at <= 0.5, 1.0, -1.0)
+        source = np.clip(at - side * np.interp(xi, STATIONS, self.shift), stations[0], stations[-1])
+        moment = _linear(stations, np.asarray(forces.moment, float), source)
+        axial = _linear(stations, np.asarray(forces.axial, float), at)
+        h, area, inertia = constants_at(section, at)
+        beam = np.abs(axial) / area + np.abs(moment) * h / (2.0 * inertia)
+        return at, np.interp(xi, STATIONS, self.profile) * beam
+
+
+SURFACE_POINTS = np.linspace(0.0, 1.0, 513)
+"""Arc-length fractions at which :meth:`NotchFactors.surface_stress` evaluates a hinge's
+surface stress besides the model's own stations: 1/512 of the length apart, a tenth of the
+narrowest concentration peak of the table (a slender filleted hinge's, just inside its
+fillet), which ``beam:100``'s element ends alone sample at 2 % below its top."""
+
+
+def _linear(x: np.ndarray, values: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """``values`` (..., m), given at the non-decreasing ``x`` (m,), linear in between and
+    held beyond the ends, at ``at`` (p,): (..., p)."""
+    upper = np.clip(np.searchsorted(x, at, side="right"), 1, x.size - 1)
+    lower = upper - 1
+    span = x[upper] - x[lower]
+    w = np.clip(np.where(span > 0.0, (at - x[lower]) / np.where(span > 0.0, span, 1.0), 0.0), 0, 1)
+    return (1.0 - w) * values[..., lower] + w * values[..., upper]
 
 
 @cache
@@ -83,8 +190,8 @@ def calibration_table() -> dict:
 
 @cache
 def _slices() -> dict[tuple[str, float | None], tuple]:
-    """Per contour (and power exponent): the interpolants of (r_b, r_s, K) over
-    (log t/L, log H/t), Clough-Tocher and nearest-point."""
+    """Per contour (and power exponent): the interpolants of (r_b, r_s, K, K(s) and
+    delta(s) / L at the stations) over (log t/L, log H/t), Clough-Tocher and nearest-point."""
     from scipy.interpolate import CloughTocher2DInterpolator, NearestNDInterpolator
 
     groups: dict[tuple[str, float | None], list] = {}
@@ -93,13 +200,16 @@ def _slices() -> dict[tuple[str, float | None], tuple]:
     out = {}
     for key, rows in groups.items():
         xy = np.array([[math.log(r["t_over_l"]), math.log(r["h_over_t"])] for r in rows])
-        values = np.array([[r["bending"], r["shear"], r["stress"]] for r in rows])
+        values = np.array(
+            [[r["bending"], r["shear"], r["stress"], *r["profile"], *r["shift"]] for r in rows]
+        )
         out[key] = (CloughTocher2DInterpolator(xy, values), NearestNDInterpolator(xy, values))
     return out
 
 
 def _at(key: tuple[str, float | None], x: float, y: float) -> tuple[np.ndarray, bool]:
-    """(r_b, r_s, K) of one slice at (log t/L, log H/t), and whether it is inside it."""
+    """(r_b, r_s, K, K(s)..., delta(s)/L...) of one slice at (log t/L, log H/t), and whether
+    it is inside it."""
     smooth, nearest = _slices()[key]
     found = np.asarray(smooth(x, y), float).reshape(-1)
     if np.all(np.isfinite(found)):
@@ -112,13 +222,14 @@ def factors_of(flexure: Flexure, poisson_ratio: float) -> NotchFactors | None:
     profile = flexure.section.profile
     if profile is None or getattr(profile, "kind", None) != "notch":
         return None
-    return _factors(
+    found = _factors(
         profile.contour,
         profile.t / profile.length,
         profile.height / profile.t,
         None if profile.exponent is None else float(profile.exponent),
         float(poisson_ratio),
     )
+    return dataclasses.replace(found, junction=junction(profile))
 
 
 @functools.lru_cache(maxsize=4096)
@@ -145,7 +256,12 @@ def _factors(
         values, inside = _at((contour, None), x, y)
     calibrated = calibration_table()["poisson_ratio"]
     shear = float(values[1]) * (1.0 + calibrated) / (1.0 + poisson_ratio)
-    return NotchFactors(float(values[0]), shear, float(values[2]), bool(inside), where)
+    count = STATIONS.size
+    profile = tuple(float(v) for v in values[3 : 3 + count])
+    shift = tuple(float(v) for v in values[3 + count : 3 + 2 * count])
+    return NotchFactors(
+        float(values[0]), shear, float(values[2]), bool(inside), where, profile, shift
+    )
 
 
 def corrected_material(material: Material, factors: NotchFactors) -> Material:

@@ -448,6 +448,7 @@ def test_stresses_of_many_flexures_at_once_are_each_flexures_alone():
     (max, argmax and profile, bit for bit), stacked or not, in the first stack or a later one."""
     from flexval.reducedmodels.core.peaks import STACK_FROM, STACK_SIZE, path_peaks, state_peaks
     from flexval.reducedmodels.core.sections import SectionForces
+    from flexval.reducedmodels.notchcorrection import factors_of
 
     uniform = load_scene("open_chain").mechanism.flexures[0].section
     varying = load_scene("notch_fourbar").mechanism.flexures[0].section
@@ -463,6 +464,7 @@ def test_stresses_of_many_flexures_at_once_are_each_flexures_alone():
             at[unit.argmax(axis=1)].tolist(),
             at.tolist(),
             unit[-1].tolist(),
+            None,
         )
     scales = [0.0, -0.5, 1.0]
     states = [SectionForces(at, f.axial[0], f.moment[0]) for f in paths]
@@ -471,9 +473,24 @@ def test_stresses_of_many_flexures_at_once_are_each_flexures_alone():
     ):
         unit = forces.fibre_stress(section)
         top, place = float(unit.max()), float(at[unit.argmax()])
-        assert found == ([abs(s) * top for s in scales], [place] * 3, at.tolist(), unit.tolist())
+        expected = ([abs(s) * top for s in scales], [place] * 3, at.tolist(), unit.tolist(), None)
+        assert found == expected
     # a few alone give the same
     assert path_peaks(list(zip(paths, sections))[:3]) == path_peaks(list(zip(paths, sections)))[:3]
+    # a varying section's surface stress, where its connector has one: the largest of it
+    hinge = load_scene("notch_fourbar").mechanism.flexures[0]
+    surface = factors_of(hinge, 0.33).surface_stress
+    kinds = [None] * len(sections)
+    kinds[3] = surface
+    found = path_peaks(list(zip(paths, sections)), kinds)
+    where, true = surface(paths[3], varying)
+    assert found[3][:4] == path_peaks([(paths[3], varying)])[0][:4]
+    assert found[3][4] == (true.max(axis=1).tolist(), where[true.argmax(axis=1)].tolist())
+    assert all(f[4] is None for j, f in enumerate(found) if j != 3)
+    found = state_peaks(list(zip(states, sections)), scales, kinds)
+    where, true = surface(states[3], varying)
+    peak = int(np.argmax(true))
+    assert found[3][4] == ([abs(s) * float(true[peak]) for s in scales], [float(where[peak])] * 3)
 
 
 def test_stacks_of_section_forces_hold_each_connectors_columns():

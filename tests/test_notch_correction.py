@@ -15,6 +15,7 @@ import pytest
 from calibrate_notch import LENGTH, beam_theory, notch_scene, scaled
 
 import flexval
+from flexval.reducedmodels.core.validity import MAX_STRAIN
 from flexval.reducedmodels.notchcorrection import calibration_table, factors_of
 
 # hinges off the calibration grid (t/L, H/t and n between its nodes), every contour
@@ -104,12 +105,31 @@ def test_notch_fourbar_meets_the_continuum():
         assert plain.dx[-1] / ref.dx[-1] - 1.0 == pytest.approx(-0.066, abs=0.002), model
 
 
-LARGE = {"beam:100": 6e-3, "dcmm:1": 8e-3, "prbm": 1e-2}
-"""Largest share off the continuum at 0.2 rad, rotation and deflection, over the hinges below
-and three more (elliptical, power, slender circular): measured 0.51 %, 0.71 %, 0.89 % (the
-short circular hinge of t/L 0.25; the slender ones 0.01 %, 0.5 %, 0.8 %). Beyond the linear
-range the beam's nonlinearity is not the short hinge's (its stretch under rotation), and the
-one-sub-arc and one-pivot models add their own kinematic error under a force."""
+LARGE = {"beam:100": 2e-3, "dcmm:1": 6e-3, "prbm": 4e-3}
+"""Largest share off the continuum at the largest rotation up to 0.2 rad that keeps the
+hinge's surface strain within the 2 % limit, rotation and deflection, over the hinges below
+and the held-out ones: measured 0.15 %, 0.51 % and 0.26 %. ``beam:100`` is within 0.15 %
+everywhere; the pivot bends as the hinge does under a moment (its bending kinematics), and
+the one-sub-arc DCMM keeps the paper's kinematics, whose error under a force is largest on
+a filleted hinge with a long flat (t/L 0.029, H/t 5.5: a short leaf) at 0.2 rad, 0.1-0.4 %
+on the others (``dcmm:2`` 0.15 % there)."""
+
+LIMIT_SHARE = 0.975
+"""The share of the 2 % strain limit the large-rotation test loads a hinge to (a margin
+over the linear estimate of the rotation that reaches it)."""
+
+
+def _within_strain_limit(scene, case: str, rotation: float = 0.2):
+    """``scene`` loaded to turn its hinge by ``rotation`` rad, or less where the continuum's
+    surface strain would pass the 2 % limit on the way (the rotation scaled by the measured
+    strain's share of it), and the continuum's path there."""
+    loaded = _loaded(scene, case, rotation)
+    ref = flexval.run_model(loaded, "continuum:2", case)
+    strain = ref.fibre_stress["hinge"]["stress"] / scene.mechanism.material.youngs_modulus
+    if strain <= LIMIT_SHARE * MAX_STRAIN:
+        return loaded, ref
+    loaded = _loaded(scene, case, rotation * LIMIT_SHARE * MAX_STRAIN / strain)
+    return loaded, flexval.run_model(loaded, "continuum:2", case)
 
 
 @pytest.mark.parametrize(
@@ -118,19 +138,37 @@ one-sub-arc and one-pivot models add their own kinematic error under a force."""
         ("circular", 0.1, 10.0, None),
         ("circular", 0.25, 4.0, None),
         ("corner-filleted", 0.029, 5.5, None),
+        ("power", 0.159, 12.5, 2.98),
     ],
     ids=lambda h: f"{h[0]}-{h[1]}-{h[2]}",
 )
 def test_large_rotation(hinge):
-    """0.2 rad: the corrected models stay within :data:`LARGE` of the continuum."""
+    """Up to 0.2 rad within the strain limit: the corrected models stay within :data:`LARGE`
+    of the continuum, which is valid there (the short hinges reach the limit at 0.05-0.09
+    rad: beyond it the continuum's Saint Venant-Kirchhoff law, 7.6 % strained at 0.2 rad on
+    the circular hinge of t/L 0.25, is no longer the models' Hooke's law, and every model
+    flags those levels)."""
     scene = notch_scene(*hinge)
     for case in ("moment", "force"):
-        loaded = _loaded(scene, case, 0.2)
-        ref = flexval.run_model(loaded, "continuum:2", case)
+        loaded, ref = _within_strain_limit(scene, case)
+        assert all(ref.valid), ref.validity
         for model, tolerance in LARGE.items():
             lp = flexval.run_model(loaded, model, case)
+            assert all(lp.valid), (model, lp.validity)
             assert lp.rotation[-1] == pytest.approx(ref.rotation[-1], rel=tolerance), model
             assert lp.dy[-1] == pytest.approx(ref.dy[-1], rel=tolerance), model
+
+
+def test_every_model_flags_a_notch_strained_past_the_limit():
+    """At 0.2 rad the short circular hinge (t/L 0.25, H/t 4) is strained 7.6 % at its
+    surface: the continuum and every reduced model, the linear ee included, call the last
+    levels invalid, each naming the strain or the rotation that reaches it."""
+    scene = notch_scene("circular", 0.25, 4.0)
+    loaded = _loaded(scene, "moment", 0.2)
+    for model in ("continuum:2", *REDUCED):
+        lp = flexval.run_model(loaded, model, "moment")
+        assert not lp.valid[-1], model
+        assert "2 % " in lp.validity[-1], (model, lp.validity[-1])
 
 
 def test_grid_points_are_reproduced_and_outside_is_flagged():
@@ -229,36 +267,80 @@ def test_run_notes_a_hinge_outside_the_calibrated_range(tmp_path, capsys):
 
 @pytest.mark.parametrize("hinge", HELD_OUT, ids=lambda h: f"{h[0]}-{h[1]}-{h[2]}")
 def test_peak_fibre_stress_against_the_continuums(references, hinge):
-    """A reduced model's peak on a notch is its beam formula times the calibrated K.
+    """A reduced model's surface peak on a notch: its beam formula times the calibrated
+    K(s), the moment taken a calibrated shift off each station (the shear's share), the
+    largest over its stations.
 
-    Under a moment (K's own load) every model is within 1.5 % of the continuum's recovered
-    fibre peak (measured: 0.2 %, the short filleted hinge 0.92 %). Under a force across
-    the axis the peak leaves the waist, where the waist's K is not the local one: every
-    model (prbm's pivot and DCMM's sub-arcs sampled at 257 stations along the hinge) within
-    6 % (measured 0.05-2.4 %, the power hinge of n 2.98 5.2 %); every model's beam formula
-    within 0.4 % of beam:100's (measured at most 0.13 % for DCMM and ee and 0.25 % for
-    prbm, on the filleted hinge of t/L 0.029, where beam:100's element ends are coarser
-    stations than theirs); every model's peak is at least as close as its plain beam
-    formula (K >= 1 and the beam formula is low)."""
-    from flexval.validation.studies.yieldpoint import flexure_peaks, notch_concentrations
+    Against the continuum's recovered fibre peak, every model within 1.5 % under a
+    moment and 2 % under a force across the axis (measured on these hinges: 0.04-1.1 %
+    and 0.07-1.5 %; the waist's K alone missed the force's peak by up to 5.2 %, on the
+    power hinge of n 2.98, and a filleted hinge's under a moment by up to 13 %, the
+    beam formula being flat along its flat). Every model's surface peak is at least as
+    close as its plain beam formula (K >= 1 and the beam formula is low); every model's
+    beam formula within 0.4 % of beam:100's (measured at most 0.13 % for DCMM and ee and
+    0.25 % for prbm, on the filleted hinge of t/L 0.029, where beam:100's element ends
+    are coarser stations than theirs)."""
+    from flexval.validation.studies.yieldpoint import flexure_peaks
 
     for case in ("moment", "force"):
         loaded, ref = references[hinge, case]
         true = ref.fibre_stress["hinge"]["stress"]
         for model in REDUCED:
             lp = flexval.run_model(loaded, model, case, levels=2)
-            values, _, fibre = flexure_peaks(lp, notch_concentrations(loaded, lp))["hinge"]
+            values, _, fibre = flexure_peaks(lp)["hinge"]
             assert fibre
             plain = lp.peak_stress["hinge"][-1]
             assert abs(values[-1] - true) <= abs(plain - true) * (1 + 1e-9), (model, case)
-            if case == "moment":
-                assert values[-1] == pytest.approx(true, rel=1.5e-2), model
-            else:
-                assert values[-1] == pytest.approx(true, rel=6e-2), model
+            tolerance = 1.5e-2 if case == "moment" else 2e-2
+            assert values[-1] == pytest.approx(true, rel=tolerance), (model, case)
+            if case == "force":
                 beam = flexval.run_model(loaded, "beam:100", case, levels=2).peak_stress
                 assert plain == pytest.approx(beam["hinge"][-1], rel=4e-3), model
     plain = flexval.run_model(loaded, "beam:100[eb]", case, levels=2)
-    assert notch_concentrations(loaded, plain) == {}
+    assert plain.fibre_stress is None
+    assert not flexure_peaks(plain)["hinge"][2]
+
+
+def _uniform_leaf_ratio(strain: float) -> float:
+    """beam:100's peak stress over the continuum's fibre peak on a uniform cantilever (h/L
+    0.05) bent by an end moment to ``strain`` at its surface: what the continuum's
+    Saint Venant-Kirchhoff law and true (Cauchy) stress add over Hooke's law's nominal
+    stress at that strain on any flexure (3.4 % at 2 %), a notch's or not."""
+    from taper_slope import taper_scene
+
+    young, depth, h = 70000.0, 5.0, 1.0
+    moment = strain * young * depth * h * h / 6.0
+    scene = taper_scene(h, h, {"name": "m", "kind": "moment", "body": "tip", "value": moment})
+    ref = flexval.run_model(scene, "continuum:2", "m")
+    lp = flexval.run_model(scene, "beam:100", "m")
+    return lp.peak_stress["leaf"][-1] / ref.fibre_stress["leaf"]["stress"]
+
+
+@pytest.mark.parametrize(
+    "hinge",
+    [
+        ("circular", 0.157, 4.79, None),
+        ("corner-filleted", 0.106, 2.7, None),
+        ("power", 0.159, 12.5, 2.98),
+    ],
+    ids=lambda h: f"{h[0]}-{h[1]}-{h[2]}",
+)
+def test_peak_fibre_stress_at_the_strain_limit(hinge):
+    """Loaded to 0.2 rad or to the 2 % strain limit: each reduced model's surface peak over
+    the continuum's fibre peak is what a uniform leaf strained as much shows (the material
+    law's share, 2-4 % low at these strains), within 1.2 % (measured 0.02-0.75 %): the
+    calibrated K(s) and shift hold beyond the linear range."""
+    from flexval.validation.studies.yieldpoint import flexure_peaks
+
+    scene = notch_scene(*hinge)
+    for case in ("moment", "force"):
+        loaded, ref = _within_strain_limit(scene, case)
+        true = ref.fibre_stress["hinge"]["stress"]
+        law = _uniform_leaf_ratio(true / scene.mechanism.material.youngs_modulus)
+        for model in ("beam:100", "dcmm:1", "prbm"):
+            lp = flexval.run_model(loaded, model, case)
+            values, _, _ = flexure_peaks(lp)["hinge"]
+            assert values[-1] / true == pytest.approx(law, rel=1.2e-2), (model, case)
 
 
 def test_notch_fourbar_peak_stress_and_the_run_line(capsys):
@@ -266,14 +348,14 @@ def test_notch_fourbar_peak_stress_and_the_run_line(capsys):
     model's K times its beam formula, within 1 % (measured 0.4 %; the beam formula alone
     4.2 % low); the run line marks and names it."""
     from flexval.validation.cli import main
-    from flexval.validation.studies.yieldpoint import flexure_peaks, notch_concentrations
+    from flexval.validation.studies.yieldpoint import flexure_peaks
 
     scene = flexval.load_scene("notch_fourbar")
     ref = flexval.run_model(scene, "continuum:2", "f+")
     true = max(v["stress"] for v in ref.fibre_stress.values())
     for model in ("beam:100", "dcmm:1", "prbm"):
         lp = flexval.run_model(scene, model, "f+")
-        peaks = flexure_peaks(lp, notch_concentrations(scene, lp))
+        peaks = flexure_peaks(lp)
         assert max(v[0][-1] for v in peaks.values()) == pytest.approx(true, rel=1e-2), model
     assert main(["run", "notch_fourbar", "--model", "prbm", "--load-case", "f+"]) == 0
     out = capsys.readouterr().out

@@ -25,6 +25,8 @@ import numpy as np
 if TYPE_CHECKING:
     import scipy.sparse as sp
 
+    from flexval.geometry import Section
+
     from .inertia import MassPoints
     from .sections import ForceStack, SectionForces
 
@@ -65,6 +67,15 @@ class Connector(ABC):
         The largest dead load the connector carries itself (N; its weights,
         :class:`flexval.reducedmodels.core.inertia.Weighted`): it joins the force
         scale of the residual test (default 0).
+    surface_stress : callable or None
+        ``surface_stress(forces, section) -> (at, stress)``: the flexure's surface
+        fibre stress (MPa) along it, from its section forces
+        (:class:`~flexval.reducedmodels.core.sections.SectionForces`), and the
+        arc-length fractions where it is given, for a flexure whose
+        true peak is not the beam formula's |N|/A + |M| h/(2I) (a calibrated notch
+        hinge: :meth:`flexval.reducedmodels.notchcorrection.NotchFactors.surface_stress`);
+        the path then records that peak too (``LoadPath.fibre_stress``). None
+        (default): the beam formula is the surface stress.
     """
 
     name: str
@@ -74,6 +85,7 @@ class Connector(ABC):
     sway_load: float | None = None
     sway_span: str = "leaf"
     dead_load_scale: float = 0.0
+    surface_stress: Callable[[SectionForces, Section], tuple[np.ndarray, np.ndarray]] | None = None
 
     # --- required --------------------------------------------------------
     @abstractmethod

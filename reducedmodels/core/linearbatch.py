@@ -40,7 +40,7 @@ from .loadpath import LoadPath
 from .loads import Loads
 from .peaks import append_stresses, state_peaks
 from .restnumbering import RestNumbering
-from .validity import MAX_LINEAR_ROTATION, linear_sway_verdicts, merge_reasons
+from .validity import MAX_LINEAR_ROTATION, linear_sway_verdicts, merge_reasons, strain_reasons
 
 Member = tuple[Mechanism, Sequence[Connector]]
 """One copy: its mechanism and its connectors (``Family.connectors``)."""
@@ -279,6 +279,9 @@ def _solve(
             path.valid, path.validity = [True] * lam.size, [None] * lam.size
         path.valid, path.validity = merge_reasons(path.valid, path.validity, sway[i])
         append_stresses(path, stresses)
+        path.valid, path.validity = merge_reasons(
+            path.valid, path.validity, strain_reasons(path, members[k][0].material.youngs_modulus)
+        )
         paths.append(path)
     return paths
 
@@ -361,7 +364,7 @@ def _section_forces(
 
     sections = [{f.name: f.section for f in members[k][0].flexures} for k in copies]
     stressed = [
-        (i, j, c.name, sections[i][c.name])
+        (i, j, c.name, sections[i][c.name], c.surface_stress)
         for i, k in enumerate(copies)
         for j, c in enumerate(members[k][1])
         if sections[i].get(c.name) is not None
@@ -378,18 +381,23 @@ def _section_forces(
     if not any(gravity):  # section forces proportional to the load
         forces = forces_at(per_unit)
         chosen = [
-            (i, name, forces[i][j], s) for i, j, name, s in stressed if forces[i][j] is not None
+            (i, name, forces[i][j], s, k)
+            for i, j, name, s, k in stressed
+            if forces[i][j] is not None
         ]
-        peaks = state_peaks([(f, s) for *_, f, s in chosen], lam)
-        for (i, name, _, _), entry in zip(chosen, peaks):
+        peaks = state_peaks([(f, s) for *_, f, s, _ in chosen], lam, [k for *_, k in chosen])
+        for (i, name, *_), entry in zip(chosen, peaks):
             found[i].append((name, entry))
         return found, sway
     of_weights = gradients(dq_dead)
     for factor in lam:  # the weights' forces, then the load's at this level
         forces = forces_at(of_weights + factor * per_unit)
         chosen = [
-            (i, name, forces[i][j], s) for i, j, name, s in stressed if forces[i][j] is not None
+            (i, name, forces[i][j], s, k)
+            for i, j, name, s, k in stressed
+            if forces[i][j] is not None
         ]
-        for (i, name, _, _), entry in zip(chosen, state_peaks([(f, s) for *_, f, s in chosen])):
+        peaks = state_peaks([(f, s) for *_, f, s, _ in chosen], (1.0,), [k for *_, k in chosen])
+        for (i, name, *_), entry in zip(chosen, peaks):
             found[i].append((name, entry))
     return found, sway

@@ -92,7 +92,10 @@ class LoadPath:
         (fraction from the first end) and the boundary layer excluded at each
         end face (mm): see :mod:`flexval.validation.continuum.fibre`. A notch
         hinge's entry adds that peak at every level, ``path_stress`` (MPa) and
-        ``path_at`` (fraction), the stress its first yield is judged by.
+        ``path_at`` (fraction), the stress its first yield is judged by. A
+        reduced model records the same four for each calibrated notch hinge
+        (its connector's ``surface_stress``: K(s) times its beam formula,
+        :mod:`flexval.reducedmodels.notchcorrection`), without layers.
     limit_points : list of dict, optional
         Of an arc-length trace: where the load turns, each ``{"index",
         "load", "traced_load", "dx", "dy", "rotation"}`` (see

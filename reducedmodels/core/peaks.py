@@ -13,7 +13,7 @@ Units: mm, N, N mm, MPa.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from functools import cache
 from types import ModuleType
 from typing import NamedTuple
@@ -35,7 +35,9 @@ def record_stress(
     ``scales``, with the section forces times it (the load factors of a
     linear response, whose section forces are computed once). Connectors
     without section forces (None: pins) or without a section are skipped;
-    the stress profile is kept for the last level only (``path.stress_profile``).
+    the stress profile is kept for the last level only (``path.stress_profile``);
+    a connector with a ``surface_stress`` also gives its surface peak
+    (``path.fibre_stress``).
 
     Parameters
     ----------
@@ -51,16 +53,23 @@ def record_stress(
     for c, found in zip(connectors, forces):
         section = sections.get(c.name)
         if section is not None and found is not None:
-            named.append((c.name, found, section))
+            named.append((c.name, found, section, c.surface_stress))
     if len(named) < STACK_FROM:  # a path's few flexures: each alone
         factors = [abs(f) for f in np.asarray(scales, float).tolist()]
         append_stresses(
             path,
-            ((name, _state_peak(found, section, factors)) for name, found, section in named),
+            (
+                (name, _state_peak(found, section, factors, surface_stress))
+                for name, found, section, surface_stress in named
+            ),
         )
         return
-    peaks = state_peaks([(found, section) for _, found, section in named], scales)
-    append_stresses(path, ((name, found) for (name, _, _), found in zip(named, peaks)))
+    peaks = state_peaks(
+        [(found, section) for _, found, section, _ in named],
+        scales,
+        [surface_stress for *_, surface_stress in named],
+    )
+    append_stresses(path, ((entry[0], found) for entry, found in zip(named, peaks)))
 
 
 class _Sections(NamedTuple):
@@ -73,9 +82,17 @@ class _Sections(NamedTuple):
     profile: None = None
 
 
-Peaks = tuple[list[float], list[float], list[float], list[float]]
+Surface = tuple[list[float], list[float]] | None
+"""A flexure's surface fibre peak at each level (MPa) and its place, where its connector
+has a ``surface_stress`` (a calibrated notch hinge: K(s) times the beam formula), else None."""
+
+Peaks = tuple[list[float], list[float], list[float], list[float], Surface]
 """A flexure's peak stress at each level (MPa), its place (arc-length fraction from the first
-end), the stations' fractions and the stress at each station at the last level (MPa)."""
+end), the stations' fractions, the stress at each station at the last level (MPa) and its
+:data:`Surface` peaks."""
+
+SurfaceStress = Callable[[SectionForces, Section], tuple[np.ndarray, np.ndarray]] | None
+"""A connector's ``surface_stress`` (:class:`~flexval.reducedmodels.core.connector.Connector`)."""
 
 
 STACK_FROM = 8
@@ -156,10 +173,14 @@ def section_constants(
 def _unit_peaks(unit: np.ndarray, at: np.ndarray) -> list[Peaks]:
     """:data:`Peaks` of stacked stresses ``unit`` (c, k, m) (MPa) at stations ``at`` (c, m)."""
     places = np.take_along_axis(at, unit.argmax(axis=2), axis=1)
-    return list(zip(unit.max(axis=2).tolist(), places.tolist(), at.tolist(), unit[:, -1].tolist()))
+    peaks, stations, profiles = unit.max(axis=2).tolist(), at.tolist(), unit[:, -1].tolist()
+    return [(*found, None) for found in zip(peaks, places.tolist(), stations, profiles)]
 
 
-def path_peaks(entries: Sequence[tuple[SectionForces, Section]]) -> list[Peaks]:
+def path_peaks(
+    entries: Sequence[tuple[SectionForces, Section]],
+    surface_stresses: Sequence[SurfaceStress] | None = None,
+) -> list[Peaks]:
     """Each flexure's peak outer-fibre stress at every level, its place and its last profile.
 
     Many flexures at once (:func:`_fibre_stresses`: a batch's copies), each as alone.
@@ -169,6 +190,9 @@ def path_peaks(entries: Sequence[tuple[SectionForces, Section]]) -> list[Peaks]:
     entries : sequence of (SectionForces, Section)
         Section forces (N, N mm) stacked over k levels, (k, m) each, and the
         flexure's section.
+    surface_stresses : sequence of SurfaceStress, optional
+        Each entry's connector's ``surface_stress`` (default: none has one); only a
+        varying section has one, and such a section is computed alone.
 
     Returns
     -------
@@ -178,7 +202,7 @@ def path_peaks(entries: Sequence[tuple[SectionForces, Section]]) -> list[Peaks]:
     out: list = [None] * len(entries)
     alone, stacks = _fibre_stresses(entries)
     for j in alone:
-        out[j] = _path_peak(*entries[j])
+        out[j] = _path_peak(*entries[j], surface_stresses[j] if surface_stresses else None)
     for members, unit, at in stacks:  # unit (c, k, m)
         for j, peaks in zip(members, _unit_peaks(unit, at)):
             out[j] = peaks
@@ -214,35 +238,56 @@ def stack_peaks(stack: ForceStack, constants: np.ndarray) -> list[Peaks]:
         profile,
     )
     stations_of = np.broadcast_to(at, (count, stations)).tolist()
-    return list(zip(peaks.tolist(), places.tolist(), stations_of, profile.tolist()))
+    found = zip(peaks.tolist(), places.tolist(), stations_of, profile.tolist())
+    return [(*peak, None) for peak in found]
 
 
-def _path_peak(forces: SectionForces, section: Section) -> Peaks:
+def _path_peak(
+    forces: SectionForces, section: Section, surface_stress: SurfaceStress = None
+) -> Peaks:
     """:func:`path_peaks` of one flexure alone (forces (k, m))."""
     unit = forces.fibre_stress(section)
+    surface = None
+    if surface_stress is not None:
+        at, true = surface_stress(forces, section)
+        surface = (true.max(axis=1).tolist(), at[true.argmax(axis=1)].tolist())
     return (
         unit.max(axis=1).tolist(),
         forces.at[unit.argmax(axis=1)].tolist(),
         forces.at.tolist(),
         unit[-1].tolist(),
+        surface,
     )
 
 
-def _state_peak(forces: SectionForces, section: Section, factors: list[float]) -> Peaks:
+def _state_peak(
+    forces: SectionForces,
+    section: Section,
+    factors: list[float],
+    surface_stress: SurfaceStress = None,
+) -> Peaks:
     """:func:`state_peaks` of one flexure alone (forces (m,); ``factors`` the scales' sizes)."""
     unit = forces.fibre_stress(section)
     peak = int(np.argmax(unit))
     top = float(unit[peak])  # plain floats: one product per level
+    surface = None
+    if surface_stress is not None:
+        at, true = surface_stress(forces, section)
+        k = int(np.argmax(true))
+        surface = ([f * float(true[k]) for f in factors], [float(at[k])] * len(factors))
     return (
         [f * top for f in factors],
         [float(forces.at[peak])] * len(factors),
         forces.at.tolist(),
         (factors[-1] * unit).tolist(),
+        surface,
     )
 
 
 def state_peaks(
-    entries: Sequence[tuple[SectionForces, Section]], scales: Sequence[float] = (1.0,)
+    entries: Sequence[tuple[SectionForces, Section]],
+    scales: Sequence[float] = (1.0,),
+    surface_stresses: Sequence[SurfaceStress] | None = None,
 ) -> list[Peaks]:
     """Each flexure's peak outer-fibre stress at one state, scaled to several levels.
 
@@ -257,32 +302,39 @@ def state_peaks(
         Section forces (N, N mm) at the state, (m,) each, and the flexure's section.
     scales : sequence of float
         The factors of the levels.
+    surface_stresses : sequence of SurfaceStress, optional
+        Each entry's connector's ``surface_stress`` (:func:`path_peaks`).
     """
     factors = [abs(f) for f in np.asarray(scales, float).tolist()]
+    surface_stresses = surface_stresses or [None] * len(entries)
     if len(entries) < STACK_FROM:  # a path's few flexures: each alone, as stacking them would
-        return [_state_peak(forces, section, factors) for forces, section in entries]
+        return [
+            _state_peak(forces, section, factors, surface_stress)
+            for (forces, section), surface_stress in zip(entries, surface_stresses)
+        ]
     out: list = [None] * len(entries)
     alone, stacks = _fibre_stresses(entries)
     for j in alone:
-        out[j] = _state_peak(*entries[j], factors)
+        out[j] = _state_peak(*entries[j], factors, surface_stresses[j])
     for members, unit, at in stacks:  # unit (c, m)
         rows = np.arange(len(members))
         peak = unit.argmax(axis=1)
         tops, places = unit[rows, peak].tolist(), at[rows, peak].tolist()
         profiles = (factors[-1] * unit).tolist()
         for j, top, place, station, profile in zip(members, tops, places, at.tolist(), profiles):
-            out[j] = ([f * top for f in factors], [place] * len(factors), station, profile)
+            out[j] = ([f * top for f in factors], [place] * len(factors), station, profile, None)
     return out
 
 
 def append_stresses(path: LoadPath, found: Iterable[tuple[str, Peaks]]) -> None:
     """Append each named flexure's peak stresses (MPa) and their places (:data:`Peaks`, as
     :func:`path_peaks` gives them: lists of its own, which a flexure's first levels become);
-    its profile replaces the last one."""
+    its profile replaces the last one. A :data:`Surface` peak goes to ``path.fibre_stress``
+    (``path_stress`` and ``path_at`` at every level, ``stress`` and ``at`` at the last)."""
     if path.peak_stress is None:
         path.peak_stress, path.peak_stress_at, path.stress_profile = {}, {}, {}
     stresses, places_of, profiles = path.peak_stress, path.peak_stress_at, path.stress_profile
-    for name, (peaks, places, at, profile) in found:
+    for name, (peaks, places, at, profile, surface) in found:
         so_far = stresses.get(name)
         if so_far is None:  # the flexure's first levels
             stresses[name], places_of[name] = peaks, places
@@ -290,3 +342,33 @@ def append_stresses(path: LoadPath, found: Iterable[tuple[str, Peaks]]) -> None:
             so_far.extend(peaks)
             places_of[name].extend(places)
         profiles[name] = {"at": at, "stress": profile}
+        if surface is not None:
+            _append_surface(path, name, *surface)
+
+
+def _append_surface(path: LoadPath, name: str, peaks: list[float], places: list[float]) -> None:
+    """Append a flexure's surface fibre peaks (MPa) and places to ``path.fibre_stress``."""
+    if path.fibre_stress is None:
+        path.fibre_stress = {}
+    entry = path.fibre_stress.setdefault(name, {"path_stress": [], "path_at": []})
+    entry["path_stress"].extend(peaks)
+    entry["path_at"].extend(places)
+    entry["stress"], entry["at"] = entry["path_stress"][-1], entry["path_at"][-1]
+
+
+def flexure_peaks(lp: LoadPath) -> dict[str, tuple[list, list, bool]]:
+    """Each flexure's peak stress at every level (MPa), where (fraction of its length from
+    its first end) and whether it is a surface fibre peak (stress concentration included),
+    in the path's order: a flexure whose surface fibre peak the path records at every level
+    (``fibre_stress[name]["path_stress"]``: the continuum's notch hinges, and a reduced
+    model's calibrated ones) with that peak, every other one with its section resultants'
+    beam formula."""
+    fibre = lp.fibre_stress or {}
+    out = {}
+    for name, values in (lp.peak_stress or {}).items():
+        true = fibre.get(name, {})
+        if "path_stress" in true:
+            out[name] = (true["path_stress"], true["path_at"], True)
+        else:
+            out[name] = (values, lp.peak_stress_at[name], False)
+    return out

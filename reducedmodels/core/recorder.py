@@ -534,6 +534,7 @@ def end_pass(
     forces = [[None] * count for _ in kept] if with_forces else None
     stressed = []  # (copy's place in kept, connector's index in its copy, name) of entries
     entries = []  # their (forces, section), whose peaks path_peaks finds
+    surface_stresses = []  # their connectors' surface stress surface_stresses
     for (group, run), coordinates in zip(system.groups, system.group_coordinates(states)):
         if alone:
             verdicts, own = group.path_end_pass(coordinates)
@@ -561,6 +562,7 @@ def end_pass(
                 if section is not None:
                     stressed.append((0, i, c.name))
                     entries.append((found, section))
+                    surface_stresses.append(c.surface_stress)
             continue
         for stack in stacks:
             copy, index = origin_table[run.start + np.asarray(stack.members, np.int64)].T
@@ -585,7 +587,8 @@ def end_pass(
                 stressed.append((j, i, name))
                 section = flexures.sections[flexures.row[copy[r]]][i]
                 entries.append((SectionForces(stack.at, stack.axial[r], stack.moment[r]), section))
-    for (j, index, name), found in zip(stressed, path_peaks(entries)):
+                surface_stresses.append(connectors[stack.members[r]].surface_stress)
+    for (j, index, name), found in zip(stressed, path_peaks(entries, surface_stresses)):
         peaks[j][index] = (name, found)
     no_reasons = [[] for _ in states]
     return Judgement(

@@ -265,6 +265,56 @@ def linear_sway_verdicts(
     return found
 
 
+TAPER_STIFFENING = 1.14
+"""How much stiffer than 2D elasticity beam theory's section integrals make a linear taper
+under a moment, over its contour slope squared: the slope's share of the error is
+TAPER_STIFFENING slope^2, whatever h/L (0.51, 1.64 and 2.77 % at slopes 0.067, 0.12 and
+0.156 rad over h/L 0.01-0.2 and h_0/h_1 1-8, ``benchmarks/taper_slope.py``)."""
+
+TAPER_SLOPE = math.sqrt(0.005 / TAPER_STIFFENING)
+"""Steepest contour slope |h_0 - h_1| / (2 L) (rad) of a linear taper at which beam theory's
+section integrals stay within 0.5 % of 2D elasticity under a moment (0.066 rad, 3.8 deg);
+the reduced models take no correction for the slope."""
+
+
+def taper_slope(section) -> float | None:
+    """A linearly tapered ``section``'s contour slope |h_0 - h_1| / (2 L), rad (None for any
+    other section)."""
+    profile = section.profile
+    if profile is None or profile.kind != "taper":
+        return None
+    return abs(profile.end - profile.start) / (2.0 * profile.length)
+
+
+def strain_reasons(lp, youngs_modulus: float, flexures: set[str] | None = None) -> list[list[str]]:
+    """Per level of ``lp`` (a LoadPath with stresses), the reason where the surface strain of
+    a flexure (of ``flexures``, default every one) exceeds :data:`MAX_STRAIN`: its peak
+    stress (MPa) over E (MPa), the surface fibre peak where the path records one (a notch
+    hinge's, stress concentration included: the continuum's recovered stress, a reduced
+    model's K(s) times its beam formula), else the beam formula of its section forces
+    (:func:`~flexval.reducedmodels.core.peaks.flexure_peaks`). The judge of the models
+    whose own monitor does not see the strain: the continuum (its centre line's stretch
+    misses a notch bent beyond the material's range) and a linear response."""
+    from .peaks import flexure_peaks
+
+    reasons: list[list[str]] = [[] for _ in lp.load]
+    limit = MAX_STRAIN * youngs_modulus  # MPa
+    for name, (stresses, places, fibre) in flexure_peaks(lp).items():
+        if flexures is not None and name not in flexures:
+            continue
+        if max(stresses, default=0.0) <= limit and -min(stresses, default=0.0) <= limit:
+            continue  # the common case, at a glance
+        which = "surface fibre" if fibre else "outer fibre"
+        for k, (stress, at) in enumerate(zip(stresses, places)):
+            strain = abs(stress) / youngs_modulus
+            if strain > MAX_STRAIN:
+                reasons[k].append(
+                    f"{name}: {which} strain {100 * strain:.3g} % at {at:.2f} of its "
+                    f"length beyond the {100 * MAX_STRAIN:g} % limit"
+                )
+    return reasons
+
+
 def merge_reasons(
     valid: list[bool], validity: list[str | None], extra: list[list[str]]
 ) -> tuple[list[bool], list[str | None]]:

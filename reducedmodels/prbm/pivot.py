@@ -25,10 +25,21 @@ is concentrated at the thinnest section, so a is a small fraction of the
 hinge's length). A calibrated hinge (the default,
 :mod:`flexval.reducedmodels.notchcorrection`) takes it, c_2 = ∫ ds / (k_s G A) + w a^2
 with its corrected E and G, so that the pivot's linear compliance is the hinge's own
-(the ellipse of elasticity's, about its centre). The energy of the relative state is
+(the ellipse of elasticity's, about its centre), and its bending kinematics: a hinge
+bent by theta is an arc whose angle grows with the compliance, theta W(s),
+W(s) = ∫_0^s ds / EI over ∫_0^L ds / EI, not a joint at P, and its two bodies' points
+at P part along the axis (the mid frame's e_1) by
 
-    E = 1/2 k (theta_b - theta_a)^2 + 1/2 d^T S(phi) d,
-    d = p_b(P) - p_a(P),   S(phi) = R(phi) Q diag(1/c_1, 1/c_2) Q^T R(phi)^T,
+    delta(theta) = ∫_0^L cos(theta (W(s) - 1/2)) ds - L cos(theta / 2)
+
+(0 for the compliance gathered at P, L theta^2 / 12 for a uniform one; O(theta^2),
+so the linear compliance stays the same): a filleted hinge with a long flat bends like a
+short leaf, and a joint at P puts its end 0.3 % short across the axis under a moment at
+0.2 rad. The energy of the relative state is
+
+    E = 1/2 k (theta_b - theta_a)^2 + 1/2 e^T S(phi) e,
+    e = d - delta(theta_b - theta_a) u(phi),   d = p_b(P) - p_a(P),
+    S(phi) = R(phi) Q diag(1/c_1, 1/c_2) Q^T R(phi)^T,   u(phi) = R(phi) Q e_1,
     phi = (theta_a + theta_b) / 2,
 
 with p_x(P) the material point of body x at P (Q: the axis frame at rest).
@@ -39,6 +50,7 @@ Units: mm, N, N mm, rad.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -61,6 +73,14 @@ from ..dcmm.subarcs import thinnest
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])
 """The rotation by +90 deg: d R(theta) / d theta = J R(theta)."""
 
+
+KINEMATIC_TERMS = 8
+"""Terms of the even series of delta(theta) (:meth:`NotchPivotConnector.parting`): the
+first left out is below (theta/2)^18 / 18! of L, 4e-22 L at theta = 1 rad."""
+
+KINEMATIC_SAMPLES = 4096
+"""Intervals of the trapezoidal rule for W(s) and the moments of W - 1/2 (the breakpoints of
+the contour added): the moments' relative error is below 1e-6."""
 
 STATIONS = 257
 """Evenly spaced stations along a hinge where the pivot model reports its section forces:
@@ -114,6 +134,7 @@ class NotchPivotConnector(Connector):
         self.translation = (1.0 / axial, 1.0 / shear)  # N/mm along and across the axis
         frame = np.column_stack([axis, across])
         self._s0 = frame @ np.diag(self.translation) @ frame.T  # S at rest, N/mm
+        self._axis = axis  # Q e_1: the axis at rest, the direction the pivot points part along
         self.pivot = np.asarray(shape.point(0.5 * self.length), float)
         self._forward = flexure.start_body == self.bodies[0]
         ends = shape.end_points
@@ -124,6 +145,8 @@ class NotchPivotConnector(Connector):
         self._shape, self._section = shape, section
         #: the stations' arc-length fractions: an even grid and the contour's own corners
         self._fractions = station_fractions(section.profile)
+        # the series of delta(theta): (-1)^k theta^2k / (2k)! (mu_2k - L / 2^2k), k >= 1
+        self._parting = _parting_moments(shape.length, section) if material.shear_flexible else None
         self.rotation_limit = bending_rotation_limit(
             self.compliance,
             material.youngs_modulus,
@@ -145,6 +168,19 @@ class NotchPivotConnector(Connector):
         D[:, 5] = _J @ rb
         return d, D, ra, rb
 
+    def parting(self, turn: float) -> tuple[float, float, float]:
+        """delta (mm) at the relative rotation ``turn`` (rad) and its first and second
+        derivatives in it: the bending kinematics (module text); zero for the classic
+        pivot (``eb``)."""
+        if self._parting is None:
+            return 0.0, 0.0, 0.0
+        value = slope = curve = 0.0
+        for k, c in enumerate(self._parting, start=1):  # c = (-1)^k (mu_2k - L/2^2k) / (2k)!
+            value += c * turn ** (2 * k)
+            slope += 2 * k * c * turn ** (2 * k - 1)
+            curve += 2 * k * (2 * k - 1) * c * turn ** (2 * k - 2)
+        return value, slope, curve
+
     def _stiffness(self, phi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """S(phi) and its first and second derivatives in phi, N/mm."""
         c, s = math.cos(phi), math.sin(phi)
@@ -157,15 +193,19 @@ class NotchPivotConnector(Connector):
     def evaluate(self, pose_a, pose_b, internal):
         """Energy (N mm), gradient (6) and dense Hessian (6, 6) over [pose_a, pose_b].
 
-        With phi_q = (0, 0, 1/2, 0, 0, 1/2) and D = dd/dq:
+        With Δθ = θb - θa, spin = dΔθ/dq, phi_q = (0, 0, 1/2, 0, 0, 1/2),
+        f = delta(Δθ) u(phi) (u' = J u, u'' = -u), e = d - f and E = de/dq
+        = D - delta u' phi_q^T - delta' u spin^T:
 
-            g = k Δθ (e_θb - e_θa) + D^T S d + 1/2 (d^T S' d) phi_q,
-            H = k (e_θb - e_θa)(e_θb - e_θa)^T + D^T S D
-                + (D^T S' d) phi_q^T + phi_q (D^T S' d)^T + 1/2 (d^T S'' d) phi_q phi_q^T
-                + (S d) . d2d/dθ2 on the diagonal of the two angles,
+            g = k Δθ spin + E^T S e + 1/2 (e^T S' e) phi_q,
+            H = k spin spin^T + E^T S E
+                + (E^T S' e) phi_q^T + phi_q (E^T S' e)^T + 1/2 (e^T S'' e) phi_q phi_q^T
+                + (S e) . d2e/dq2,
 
-        d2d/dθa2 = R(θa) r_a and d2d/dθb2 = -R(θb) r_b (S' = J S - S J,
-        S'' = -2 S - 2 J S J: the derivatives of R S0 R^T).
+        d2e/dq2 = d2d/dq2 - d2f/dq2: d2d/dθa2 = R(θa) r_a and d2d/dθb2 = -R(θb) r_b, and
+        d2f = -delta u phi_q phi_q^T + delta' u' (phi_q spin^T + spin phi_q^T)
+        + delta'' u spin spin^T (S' = J S - S J, S'' = -2 S - 2 J S J: the derivatives of
+        R S0 R^T).
         """
         pose_a, pose_b = np.asarray(pose_a, float), np.asarray(pose_b, float)
         d, D, ra, rb = self._relative(pose_a, pose_b)
@@ -174,6 +214,12 @@ class NotchPivotConnector(Connector):
         turn = float(pose_b[2] - pose_a[2])
         spin = np.array([0.0, 0.0, -1.0, 0.0, 0.0, 1.0])
         half = np.array([0.0, 0.0, 0.5, 0.0, 0.0, 0.5])
+        delta, slope, curve = self.parting(turn)
+        if delta or slope or curve:
+            u = np.array(rotate_xy(phi, *self._axis))
+            du = _J @ u
+            d = d - delta * u
+            D = D - delta * np.outer(du, half) - slope * np.outer(u, spin)
         Sd = S @ d
         energy = 0.5 * self.stiffness * turn * turn + 0.5 * float(d @ Sd)
         twist = D.T @ (S1 @ d)
@@ -183,6 +229,11 @@ class NotchPivotConnector(Connector):
         hessian += 0.5 * float(d @ S2 @ d) * np.outer(half, half)
         hessian[2, 2] += float(Sd @ ra)
         hessian[5, 5] -= float(Sd @ rb)
+        if delta or slope or curve:  # - (S e) . d2f
+            hessian += delta * float(Sd @ u) * np.outer(half, half)
+            cross = slope * float(Sd @ du)
+            hessian -= cross * (np.outer(half, spin) + np.outer(spin, half))
+            hessian -= curve * float(Sd @ u) * np.outer(spin, spin)
         return energy, gradient, hessian
 
     def _polyline(self, pose_a, pose_b) -> np.ndarray:
@@ -203,14 +254,15 @@ class NotchPivotConnector(Connector):
 
         The rotation limit is :func:`~flexval.reducedmodels.core.validity.bending_rotation_limit`
         of the hinge's compliance at its thinnest section; the stretch is the
-        pivot points' separation along the axis over the hinge's length.
+        pivot points' separation along the axis, less the bending kinematics' delta, over
+        the hinge's length.
         """
         turn = float(pose_b[2] - pose_a[2])
         d, _, _, _ = self._relative(np.asarray(pose_a, float), np.asarray(pose_b, float))
         phi = 0.5 * float(pose_a[2] + pose_b[2])
         axis = self._ends[1] - self._ends[0]
         axis = np.array(rotate_xy(phi, *axis)) / self.length
-        stretch = float(axis @ d)  # lengthening positive
+        stretch = float(axis @ d) - self.parting(turn)[0]  # lengthening positive
         reasons = bending_strain_reasons("hinge", np.array([turn]), np.array([self.rotation_limit]))
         if abs(stretch) / self.length > MAX_STRAIN:
             reasons += stretch_reasons(
@@ -260,3 +312,23 @@ class NotchPivotConnector(Connector):
             self._shape, self._forward, bounds, self._ref, line_density(density, self._section)
         )
         return MassPoints(np.array([np.arange(3), np.arange(3, 6)]), rel, mass, rotary)
+
+
+@functools.lru_cache(maxsize=256)
+def _parting_moments(length: float, section) -> tuple[float, ...]:
+    """The coefficients (-1)^k (mu_2k - L / 2^2k) / (2k)!, k = 1..:data:`KINEMATIC_TERMS`, of
+    the series of delta(theta) (mm) for a hinge of ``length`` (mm) and varying ``section``:
+    mu_j = ∫_0^L (W(s) - 1/2)^j ds, W the normalised cumulative bending compliance, both by
+    the trapezoidal rule (:data:`KINEMATIC_SAMPLES`); cos(x) = sum (-1)^k x^2k / (2k)!.
+    Remembered per hinge: a study builds the same hinges again and again."""
+    s = np.union1d(np.linspace(0.0, length, KINEMATIC_SAMPLES + 1), section.profile.breakpoints)
+    w = 1.0 / np.asarray(section.inertia_at(s), float)  # EI(s) up to E, which cancels
+    steps = np.diff(s)
+    cumulative = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * steps)])
+    centred = cumulative / cumulative[-1] - 0.5
+    out = []
+    for k in range(1, KINEMATIC_TERMS + 1):
+        power = centred ** (2 * k)
+        mu = float(np.sum(0.5 * (power[1:] + power[:-1]) * steps))
+        out.append((-1) ** k * (mu - length / 4**k) / math.factorial(2 * k))
+    return tuple(out)

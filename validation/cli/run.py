@@ -182,13 +182,27 @@ def _yield_line(scene, lp) -> str | None:
 def _uncalibrated_notes(scene, specs) -> list[str]:
     """A note per notch hinge outside the calibrated range of the reduced models' correction
     (:mod:`flexval.reducedmodels.notchcorrection`), where a reduced model without ``eb``
-    runs: its factors are the nearest calibrated hinge's, not its own."""
+    runs: its factors are the nearest calibrated hinge's, not its own; and per taper
+    steeper than :data:`~flexval.reducedmodels.core.validity.TAPER_SLOPE`, where a
+    reduced model runs."""
+    from flexval.reducedmodels.core.validity import TAPER_SLOPE, TAPER_STIFFENING, taper_slope
     from flexval.reducedmodels.notchcorrection import factors_of, takes_correction
 
-    if not any(takes_correction(s) for s in specs):
-        return []
-
     notes = []
+    if any(s.family != "continuum" for s in specs):
+        for flexure in scene.mechanism.flexures:
+            slope = taper_slope(flexure.section)
+            if slope is not None and slope > TAPER_SLOPE:
+                notes.append(
+                    f"note: taper {flexure.name} has a contour slope of {slope:.3g} rad: "
+                    f"beyond {TAPER_SLOPE:.2g} rad beam theory's section integrals are more "
+                    "than 0.5 % stiffer than 2D elasticity (about "
+                    f"{100 * TAPER_STIFFENING * slope**2:.2g} % here under a moment), and the "
+                    "reduced models do not correct it (compare with the continuum)"
+                )
+    if not any(takes_correction(s) for s in specs):
+        return notes
+
     for flexure in scene.mechanism.flexures:
         found = factors_of(flexure, scene.mechanism.material.poisson_ratio)
         if found is not None and not found.inside:
@@ -514,7 +528,7 @@ def _validity_note(lp) -> str:
 
 FIBRE_MARK = "*"
 """Marks a run line's peak stress that is a notch's surface fibre stress (the continuum's,
-or a reduced model's beam formula times the calibrated stress concentration)."""
+or a reduced model's beam formula times the calibrated stress concentration K(s))."""
 
 
 def _fibre_note(lp) -> str:
@@ -525,8 +539,8 @@ def _fibre_note(lp) -> str:
             "included (elsewhere the beam formula of its section forces)"
         )
     return (
-        "the notch's surface fibre stress: the beam formula at its waist times the "
-        "notch's stress concentration, calibrated against the continuum"
+        "the notch's surface fibre stress: the largest of the beam formula times the "
+        "notch's stress concentration K(s) along it, calibrated against the continuum"
     )
 
 
@@ -535,9 +549,9 @@ def _peak_cells(lp, scene) -> tuple[str, str]:
     last level (:func:`flexval.validation.studies.yieldpoint.flexure_peaks`, marked with
     :data:`FIBRE_MARK` where it is a notch's surface fibre stress) and where
     (``flexure@fraction`` of its length from its first end)."""
-    from ..studies.yieldpoint import flexure_peaks, notch_concentrations
+    from ..studies.yieldpoint import flexure_peaks
 
-    peaks = flexure_peaks(lp, notch_concentrations(scene, lp))
+    peaks = flexure_peaks(lp)
     if not peaks:
         return "-", ""
     name = max(peaks, key=lambda f: peaks[f][0][-1])

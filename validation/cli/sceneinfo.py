@@ -181,7 +181,7 @@ def _section_line(f: dict) -> str:
         line += (
             f"\n      reduced models (unless [eb]): bending compliance x "
             f"{calibrated['bending_factor']:.4f}, shear x {calibrated['shear_factor']:.4f}, "
-            f"peak fibre stress x {calibrated['stress_concentration']:.4f} "
+            f"stress concentration K(s), {calibrated['stress_concentration']:.4f} at the waist "
             f"(calibrated against the continuum; {calibrated['ratios']}"
             + (
                 ")"

@@ -97,9 +97,7 @@ def fibre_stress_peak(
         If the layers cover the whole flexure.
     """
     first, last = (layer, layer) if np.isscalar(layer) else map(float, layer)
-    line = conn.mesh.nodes[conn.mesh.centre_line]
-    fractions = polyline_fractions(line)
-    length = float(np.sum(np.hypot(*np.diff(line, axis=0).T)))
+    fractions, length = _sections_along(conn)
     if first + last >= length:
         raise ValueError(
             f"boundary layers of {first:g} and {last:g} mm cover the whole flexure "
@@ -117,6 +115,24 @@ def fibre_stress_peak(
         k = inside[np.argmax(per_section[inside])]
         candidates.append((float(per_section[k]), float(fractions[k])))
     return max(candidates)
+
+
+def surface_profile(
+    conn: ContinuumConnector, pose_a: np.ndarray, pose_b: np.ndarray, internal: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The largest |fibre normal stress| over each section of the mesh (MPa), and the
+    sections' arc-length fractions from the flexure's first end: the surface fibre stress
+    along the flexure (end faces' boundary layers included), as a notch hinge's calibration
+    reads it (``benchmarks/calibrate_notch.py``)."""
+    fractions, _ = _sections_along(conn)
+    nodal = np.abs(fibre_stress_field(conn, pose_a, pose_b, internal))[conn.sections]
+    return fractions, nodal.max(axis=1)
+
+
+def _sections_along(conn: ContinuumConnector) -> tuple[np.ndarray, float]:
+    """The mesh sections' arc-length fractions along the centre line, and its length (mm)."""
+    line = conn.mesh.nodes[conn.mesh.centre_line]
+    return polyline_fractions(line), float(np.sum(np.hypot(*np.diff(line, axis=0).T)))
 
 
 def _interpolated(values: np.ndarray, s: np.ndarray, at: float) -> np.ndarray:

@@ -25,7 +25,7 @@ from flexval.geometry.mesh import ASPECT_RATIO, ELEMENT_ORDER, MESH_VERSION
 from flexval.reducedmodels import LoadControl, LoadPath, PathRecorder, SolverSettings, System, trace
 from flexval.reducedmodels.core.inertia import with_weights
 from flexval.reducedmodels.core.threads import limit_threads
-from flexval.reducedmodels.core.validity import MAX_STRAIN, merge_reasons
+from flexval.reducedmodels.core.validity import merge_reasons, strain_reasons
 
 from .connector import ContinuumConnector
 from .level import DEFAULT_LEVEL
@@ -175,7 +175,7 @@ def run_continuum(
     lp.valid, lp.validity = merge_reasons(
         lp.valid,
         lp.validity,
-        surface_strain_reasons(lp, mechanism.material.youngs_modulus, varying),
+        strain_reasons(lp, mechanism.material.youngs_modulus, varying),
     )
     if vtu_dir is not None:
         from ..outputs import output_path
@@ -193,29 +193,3 @@ def run_continuum(
 
         render_png(png, system, full_load.state, case, f"{scene} {case.name} {model}")
     return lp
-
-
-def surface_strain_reasons(
-    lp: LoadPath, youngs_modulus: float, flexures: set[str]
-) -> list[list[str]]:
-    """Per level, the reason where the surface fibre strain of one of ``flexures`` (those of
-    varying section, which ``beam:N`` judges the same way) exceeds
-    :data:`~flexval.reducedmodels.core.validity.MAX_STRAIN`: the strain of its peak fibre stress
-    (MPa) over E (MPa), the recovered surface stress at every level on a notch hinge
-    (``fibre_stress``' ``path_stress``, stress concentration included), else the beam
-    formula of its section forces (``peak_stress``). The centre line's stretch alone
-    misses a notch bent beyond the material's range."""
-    from ..studies.yieldpoint import flexure_peaks
-
-    reasons: list[list[str]] = [[] for _ in lp.load]
-    for name, (stresses, places, _) in flexure_peaks(lp).items():
-        if name not in flexures:
-            continue
-        for k, (stress, at) in enumerate(zip(stresses, places)):
-            strain = abs(stress) / youngs_modulus
-            if strain > MAX_STRAIN:
-                reasons[k].append(
-                    f"{name}: surface fibre strain {100 * strain:.3g} % at {at:.2f} of its "
-                    f"length beyond the {100 * MAX_STRAIN:g} % limit"
-                )
-    return reasons

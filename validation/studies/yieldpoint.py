@@ -11,8 +11,9 @@ section resultants, and at a notch hinge also its true peak: the Cauchy
 fibre stress recovered at the surface, outside the boundary layer at each
 clamped end face (:mod:`flexval.validation.continuum.fibre`); a notch hinge's
 stress at a level is that true peak (stress concentration included). A reduced
-model's notch hinge counts with its beam formula times the hinge's stress
-concentration K, calibrated against that peak
+model records the same for a calibrated notch hinge: the largest of its beam
+formula times the hinge's stress concentration K(s) over its stations, K(s)
+calibrated against the continuum's surface fibre stress along the hinge
 (:mod:`flexval.reducedmodels.notchcorrection`; not under the option ``eb``).
 
 * **first yield**: the first level k whose peak stress reaches sigma_y; the
@@ -43,6 +44,7 @@ import numpy as np
 
 from flexval.geometry import Material
 from flexval.reducedmodels import LoadPath
+from flexval.reducedmodels.core.peaks import flexure_peaks
 
 NO_STRESS = "the model records no stress along its flexures"
 """The reason of a None yield point of a model without stress recovery."""
@@ -121,71 +123,18 @@ def first_yield(
     return out
 
 
-def flexure_peaks(
-    lp: LoadPath, concentrations: Mapping[str, float] | None = None
-) -> dict[str, tuple[list, list, bool]]:
-    """Each flexure's peak stress at every level (MPa), where (fraction of its length from
-    its first end) and whether it is a surface fibre peak (stress concentration included),
-    in the path's order: a flexure whose true fibre peak the path records at every level
-    (the continuum's notch hinges: ``fibre_stress[name]["path_stress"]``) with that peak, a
-    flexure of ``concentrations`` (a reduced model's notch hinges:
-    :func:`notch_concentrations`) with its beam formula times its K, every other one with
-    its section resultants' beam formula."""
-    fibre = lp.fibre_stress or {}
-    concentrations = concentrations or {}
-    out = {}
-    for name, values in (lp.peak_stress or {}).items():
-        true = fibre.get(name, {})
-        if "path_stress" in true:
-            out[name] = (true["path_stress"], true["path_at"], True)
-        elif name in concentrations:
-            k = concentrations[name]
-            out[name] = ([k * v for v in values], lp.peak_stress_at[name], True)
-        else:
-            out[name] = (values, lp.peak_stress_at[name], False)
-    return out
-
-
-def notch_concentrations(scene, lp: LoadPath) -> dict[str, float]:
-    """The stress concentration K of each notch hinge of ``scene`` for a reduced model's
-    path (:mod:`flexval.reducedmodels.notchcorrection`: calibrated against the continuum's
-    fibre peak); {} for the continuum (which records its own fibre peak), for a model with
-    plain Euler-Bernoulli hinges (``eb``) and for a model id the catalogue does not know."""
-    from flexval.geometry import SceneError
-    from flexval.reducedmodels.catalogue import parse_model
-    from flexval.reducedmodels.notchcorrection import factors_of, takes_correction
-
-    try:
-        spec = parse_model(lp.model.split(":arclength")[0])
-    except SceneError:
-        return {}
-    if not takes_correction(spec):
-        return {}
-    nu = scene.mechanism.material.poisson_ratio
-    out = {}
-    for flexure in scene.mechanism.flexures:
-        found = factors_of(flexure, nu)
-        if found is not None:
-            out[flexure.name] = found.stress
-    return out
-
-
-def peak_series(
-    lp: LoadPath,
-    lengths: Mapping[str, float],
-    concentrations: Mapping[str, float] | None = None,
-) -> tuple[np.ndarray, list, np.ndarray]:
+def peak_series(lp: LoadPath, lengths: Mapping[str, float]) -> tuple[np.ndarray, list, np.ndarray]:
     """The path's peak stress per level (MPa), the flexure holding it and where (mm).
 
     The largest of each flexure's recorded peak (the first flexure in the
-    path's order on a tie). A flexure whose true fibre peak the path records
-    at every level (the continuum's notch hinges: ``fibre_stress[name]
+    path's order on a tie). A flexure whose surface fibre peak the path
+    records at every level (a notch hinge: ``fibre_stress[name]
     ["path_stress"]``) counts with that peak instead of its section
-    resultants' beam formula, a flexure of ``concentrations`` with its K times it
-    (:func:`flexure_peaks`). ``lengths`` gives each flexure's length (mm),
-    which turns the recorded fraction of length into arc length.
+    resultants' beam formula (:func:`flexure_peaks`). ``lengths`` gives each
+    flexure's length (mm), which turns the recorded fraction of length into
+    arc length.
     """
-    peaks = flexure_peaks(lp, concentrations)
+    peaks = flexure_peaks(lp)
     names = list(peaks)
     table = np.array([peaks[n][0] for n in names], float)
     where = [peaks[n][1] for n in names]
@@ -200,7 +149,6 @@ def path_yield(
     material: Material,
     lengths: Mapping[str, float],
     full_load: float,
-    concentrations: Mapping[str, float] | None = None,
 ) -> dict:
     """First yield and safety factors of one path against ``material``'s strengths.
 
@@ -213,8 +161,6 @@ def path_yield(
         Each flexure's length, mm.
     full_load : float
         The load case's full load (N or N mm).
-    concentrations : mapping of flexure -> float, optional
-        A reduced model's notch hinges' stress concentrations (:func:`flexure_peaks`).
 
     Returns
     -------
@@ -232,7 +178,7 @@ def path_yield(
     factors = {"yield": None, "fatigue": None}
     if not lp.peak_stress or not lp.load:
         return {"first_yield": None, "safety_factor": factors, "yield_note": NO_STRESS}
-    stress, flexures, places = peak_series(lp, lengths, concentrations)
+    stress, flexures, places = peak_series(lp, lengths)
     motion = {"dx": lp.dx, "dy": lp.dy, "rotation": lp.rotation}
     found = first_yield(lp.load, stress, flexures, places, strength, full_load, motion)
     note = None
@@ -251,14 +197,13 @@ def path_yield(
 
 def scene_yield(scene, lp: LoadPath) -> dict | None:
     """:func:`path_yield` of a path of ``scene`` (None when its material has no yield
-    strength), the full load, the flexures' lengths and a reduced model's notch hinges'
-    stress concentrations (:func:`notch_concentrations`) taken from the scene."""
+    strength), the full load and the flexures' lengths taken from the scene."""
     material = scene.mechanism.material
     if material.yield_strength is None:
         return None
     lengths = {f.name: f.shape.length for f in scene.mechanism.flexures}
     case = scene.load_case(lp.load_case)
-    return path_yield(lp, material, lengths, case.magnitude, notch_concentrations(scene, lp))
+    return path_yield(lp, material, lengths, case.magnitude)
 
 
 def yield_columns(scene, lp: LoadPath, outputs: Sequence[str]) -> dict:
