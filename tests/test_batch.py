@@ -119,6 +119,17 @@ def assert_same_path(
         profile, other = solo.stress_profile[name], batched.stress_profile[name]
         assert profile["at"] == other["at"]
         assert relative(profile["stress"], other["stress"]) <= stress_agreement, name
+    # a notch's surface peak (the continuum's recovered one, a reduced model's K(s) times its
+    # beam formula) at every level, where the path records one
+    assert (solo.fibre_stress or {}).keys() == (batched.fibre_stress or {}).keys()
+    for name, fibre in (solo.fibre_stress or {}).items():
+        other = batched.fibre_stress[name]
+        assert fibre.keys() == other.keys(), name
+        for key in ("stress", "path_stress"):
+            if key in fibre:
+                assert relative(np.atleast_1d(fibre[key]), np.atleast_1d(other[key])) <= (
+                    stress_agreement
+                ), (name, key)
 
 
 SCALES = [1.0, 1.004, 0.997, 1.002, 0.999]
