@@ -122,6 +122,9 @@ class NotchFactors:
     profile: tuple[float, ...] = ()
     shift: tuple[float, ...] = ()
     junction: float = SMOOTH_JUNCTION
+    plans: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
+    """:meth:`surface_stress`'s interpolation weights and factors per section and stations,
+    kept: a hinge's model gives its forces at the same stations path after path."""
 
     def surface_stress(self, forces, section) -> tuple[np.ndarray, np.ndarray]:
         """The hinge's surface fibre stress along it: K(s) (|N(s)|/A + |M(s - delta(s))|
@@ -150,18 +153,43 @@ class NotchFactors:
         stress : ndarray (p,) or (k, p)
             MPa.
         """
+        stations = np.ascontiguousarray(forces.at, float)
+        key = (section, stations.tobytes())
+        plan = self.plans.get(key)
+        if plan is None:
+            if len(self.plans) >= PLANS_KEPT:
+                self.plans.clear()
+            plan = self.plans[key] = self._surface_plan(stations, section)
+        at, (lower, upper, w), (lower_n, upper_n, w_n), per_axial, per_moment = plan
+        moment = np.asarray(forces.moment, float)
+        axial = np.asarray(forces.axial, float)
+        shifted = (1.0 - w) * moment[..., lower] + w * moment[..., upper]
+        along = (1.0 - w_n) * axial[..., lower_n] + w_n * axial[..., upper_n]
+        return at, np.abs(along) * per_axial + np.abs(shifted) * per_moment
+
+    def _surface_plan(self, stations: np.ndarray, section) -> tuple:
+        """What :meth:`surface_stress` needs of the stations and the section alone: the
+        points, the linear weights of the shifted moment's and of the normal force's sources
+        among the stations, and K/A (1/mm^2) and K h/(2 I) (1/mm^3) at the points."""
         from .core.sections import constants_at
 
-        stations = np.asarray(forces.at, float)
         at = np.union1d(stations, SURFACE_POINTS)
         xi = _stations_at(at, self.junction)
         side = np.where(at <= 0.5, 1.0, -1.0)
-        source = np.clip(at - side * np.interp(xi, STATIONS, self.shift), stations[0], stations[-1])
-        moment = _linear(stations, np.asarray(forces.moment, float), source)
-        axial = _linear(stations, np.asarray(forces.axial, float), at)
+        shift = side * np.interp(xi, STATIONS, self.shift)
+        source = np.clip(at - shift, stations[0], stations[-1])
         h, area, inertia = constants_at(section, at)
-        beam = np.abs(axial) / area + np.abs(moment) * h / (2.0 * inertia)
-        return at, np.interp(xi, STATIONS, self.profile) * beam
+        concentration = np.interp(xi, STATIONS, self.profile)
+        out = (
+            at,
+            _weights(stations, source),
+            _weights(stations, at),
+            concentration / area,
+            concentration * h / (2.0 * inertia),
+        )
+        for array in (out[0], *out[1], *out[2], out[3], out[4]):
+            array.flags.writeable = False
+        return out
 
 
 SURFACE_POINTS = np.linspace(0.0, 1.0, 513)
@@ -171,14 +199,20 @@ narrowest concentration peak of the table (a slender filleted hinge's, just insi
 fillet), which ``beam:100``'s element ends alone sample at 2 % below its top."""
 
 
-def _linear(x: np.ndarray, values: np.ndarray, at: np.ndarray) -> np.ndarray:
-    """``values`` (..., m), given at the non-decreasing ``x`` (m,), linear in between and
-    held beyond the ends, at ``at`` (p,): (..., p)."""
+PLANS_KEPT = 64
+"""Most :meth:`NotchFactors.surface_stress` plans a hinge's factors keep (sections and
+stations of the models that ran it)."""
+
+
+def _weights(x: np.ndarray, at: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The lower and upper neighbours among the non-decreasing ``x`` (m,) of each of ``at``
+    (p,) and the upper one's weight: values given at ``x``, linear in between and held
+    beyond the ends, are (1 - w) v[lower] + w v[upper] at ``at``."""
     upper = np.clip(np.searchsorted(x, at, side="right"), 1, x.size - 1)
     lower = upper - 1
     span = x[upper] - x[lower]
     w = np.clip(np.where(span > 0.0, (at - x[lower]) / np.where(span > 0.0, span, 1.0), 0.0), 0, 1)
-    return (1.0 - w) * values[..., lower] + w * values[..., upper]
+    return lower, upper, w
 
 
 @cache
@@ -222,14 +256,13 @@ def factors_of(flexure: Flexure, poisson_ratio: float) -> NotchFactors | None:
     profile = flexure.section.profile
     if profile is None or getattr(profile, "kind", None) != "notch":
         return None
-    found = _factors(
+    return _factors(
         profile.contour,
         profile.t / profile.length,
         profile.height / profile.t,
         None if profile.exponent is None else float(profile.exponent),
         float(poisson_ratio),
     )
-    return dataclasses.replace(found, junction=junction(profile))
 
 
 @functools.lru_cache(maxsize=4096)
@@ -259,8 +292,12 @@ def _factors(
     count = STATIONS.size
     profile = tuple(float(v) for v in values[3 : 3 + count])
     shift = tuple(float(v) for v in values[3 + count : 3 + 2 * count])
+    # a fillet's tangent point at r / L = (H - t) / (2 L) (H = t + 2 r)
+    joint = SMOOTH_JUNCTION
+    if contour == "corner-filleted":
+        joint = min(0.5 * (h_over_t - 1.0) * t_over_l, 0.5)
     return NotchFactors(
-        float(values[0]), shear, float(values[2]), bool(inside), where, profile, shift
+        float(values[0]), shear, float(values[2]), bool(inside), where, profile, shift, joint
     )
 
 

@@ -147,6 +147,8 @@ class NotchPivotConnector(Connector):
         self._fractions = station_fractions(section.profile)
         # the series of delta(theta): (-1)^k theta^2k / (2k)! (mu_2k - L / 2^2k), k >= 1
         self._parting = _parting_moments(shape.length, section) if material.shear_flexible else None
+        # (k, c_k) of the series, highest k first (Horner)
+        self._series = () if self._parting is None else tuple(enumerate(self._parting, 1))[::-1]
         self.rotation_limit = bending_rotation_limit(
             self.compliance,
             material.youngs_modulus,
@@ -174,12 +176,15 @@ class NotchPivotConnector(Connector):
         pivot (``eb``)."""
         if self._parting is None:
             return 0.0, 0.0, 0.0
+        # delta = sum c_k x^k with x = turn^2 (Horner), c_k = (-1)^k (mu_2k - L/2^2k)/(2k)!:
+        # delta' = 2 turn sum k c_k x^(k-1), delta'' = sum 2k (2k - 1) c_k x^(k-1)
+        x = turn * turn
         value = slope = curve = 0.0
-        for k, c in enumerate(self._parting, start=1):  # c = (-1)^k (mu_2k - L/2^2k) / (2k)!
-            value += c * turn ** (2 * k)
-            slope += 2 * k * c * turn ** (2 * k - 1)
-            curve += 2 * k * (2 * k - 1) * c * turn ** (2 * k - 2)
-        return value, slope, curve
+        for k, c in self._series:
+            value = value * x + c
+            slope = slope * x + k * c
+            curve = curve * x + k * (2 * k - 1) * c
+        return value * x, 2.0 * turn * slope, 2.0 * curve
 
     def _stiffness(self, phi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """S(phi) and its first and second derivatives in phi, N/mm."""
@@ -215,11 +220,15 @@ class NotchPivotConnector(Connector):
         spin = np.array([0.0, 0.0, -1.0, 0.0, 0.0, 1.0])
         half = np.array([0.0, 0.0, 0.5, 0.0, 0.0, 0.5])
         delta, slope, curve = self.parting(turn)
-        if delta or slope or curve:
-            u = np.array(rotate_xy(phi, *self._axis))
-            du = _J @ u
-            d = d - delta * u
-            D = D - delta * np.outer(du, half) - slope * np.outer(u, spin)
+        bent = self._parting is not None
+        if bent:  # e = d - delta u: its columns of the angles (phi_q, spin: 1/2 and -+1 there)
+            ux, uy = rotate_xy(phi, *self._axis)  # u; du = J u = (-uy, ux)
+            d[0] -= delta * ux
+            d[1] -= delta * uy
+            D[0, 2] += slope * ux + 0.5 * delta * uy
+            D[1, 2] += slope * uy - 0.5 * delta * ux
+            D[0, 5] -= slope * ux - 0.5 * delta * uy
+            D[1, 5] -= slope * uy + 0.5 * delta * ux
         Sd = S @ d
         energy = 0.5 * self.stiffness * turn * turn + 0.5 * float(d @ Sd)
         twist = D.T @ (S1 @ d)
@@ -229,11 +238,14 @@ class NotchPivotConnector(Connector):
         hessian += 0.5 * float(d @ S2 @ d) * np.outer(half, half)
         hessian[2, 2] += float(Sd @ ra)
         hessian[5, 5] -= float(Sd @ rb)
-        if delta or slope or curve:  # - (S e) . d2f
-            hessian += delta * float(Sd @ u) * np.outer(half, half)
-            cross = slope * float(Sd @ du)
-            hessian -= cross * (np.outer(half, spin) + np.outer(spin, half))
-            hessian -= curve * float(Sd @ u) * np.outer(spin, spin)
+        if bent:  # - (S e) . d2f, on the angles' 2 x 2 block: half = 1/2 (1, 1), spin = (-1, 1)
+            sx, sy = float(Sd[0]), float(Sd[1])
+            along, across = sx * ux + sy * uy, sy * ux - sx * uy
+            same = 0.25 * delta * along - curve * along  # (theta_a, theta_a), (theta_b, theta_b)
+            hessian[2, 2] += same + slope * across
+            hessian[5, 5] += same - slope * across
+            hessian[2, 5] += 0.25 * delta * along + curve * along
+            hessian[5, 2] = hessian[2, 5]
         return energy, gradient, hessian
 
     def _polyline(self, pose_a, pose_b) -> np.ndarray:
