@@ -84,8 +84,8 @@ value = 1.0
 
 
 def test_run_notes_a_taper_steeper_than_the_measured_range(tmp_path, capsys):
-    """A reduced model on a taper past :data:`TAPER_SLOPE` (here 0.125 rad) says so; the
-    continuum alone, or a gentle taper (0.0125 rad), does not."""
+    """A reduced model on a taper past :data:`TAPER_SLOPE` (here 0.125 rad) says so, and so
+    does ``flexval info``; the continuum alone, or a gentle taper (0.0125 rad), does not."""
     from flexval.validation.cli import main
 
     for h0, noted in ((6.0, True), (1.5, False)):
@@ -94,6 +94,9 @@ def test_run_notes_a_taper_steeper_than_the_measured_range(tmp_path, capsys):
         assert main(["run", str(path), "--model", "beam:20", "--levels", "2"]) == 0
         out = capsys.readouterr().out
         assert ("note: taper leaf has a contour slope of 0.125 rad" in out) == noted, out
+        assert main(["info", str(path)]) == 0
+        out = capsys.readouterr().out
+        assert "contour slope" in out and ("STEEPER than" in out) == noted, out
     path = tmp_path / "taper_6.toml"
     assert main(["run", str(path), "--model", "continuum:0", "--levels", "2"]) == 0
     assert "note: taper" not in capsys.readouterr().out

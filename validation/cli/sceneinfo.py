@@ -142,6 +142,10 @@ def varying_section(flexure, material) -> dict:
         "EA_N": length / axial,
         "ellipse": found.ellipse,
     }
+    if profile.kind == "taper":
+        from flexval.reducedmodels.core.validity import taper_slope
+
+        out["contour_slope_rad"] = taper_slope(flexure.section)
     if profile.kind == "notch":
         from flexval.reducedmodels.notchcorrection import factors_of
 
@@ -169,8 +173,16 @@ def _section_line(f: dict) -> str:
         if "exponent" in sec:
             law += f", exponent {sec['exponent']:g}"
     else:
+        from flexval.reducedmodels.core.validity import TAPER_SLOPE
+
         h0, h1 = sec["thickness"]
-        law = f"taper from h = {h0:g} mm to {h1:g} mm"
+        slope = sec["contour_slope_rad"]
+        law = f"taper from h = {h0:g} mm to {h1:g} mm, contour slope {slope:.3g} rad"
+        if slope > TAPER_SLOPE:
+            law += (
+                f" (STEEPER than the {TAPER_SLOPE:.2g} rad within which the reduced models' "
+                "section integrals hold to 0.5 %)"
+            )
     line = (
         f"  {f['name']}: {law}; stiffness 1/∫ds/EI = {sig(sec['rotational_stiffness_Nmm'])} "
         f"N mm/rad, 1/∫ds/EA = {sig(sec['axial_stiffness_N_per_mm'])} N/mm (EI, EA above: "
