@@ -31,6 +31,32 @@ def test_dcmm_tangent_matches_finite_differences(n):
 
 
 @pytest.mark.parametrize("n", [1, 3])
+def test_bending_kinematics_tangent_matches_finite_differences(n):
+    """A calibrated notch hinge's sub-arcs take their bending kinematics (the centre
+    separation g(phi) in the element's displacement): the same exact gradient and Hessian."""
+    import dataclasses
+
+    from test_varying_linear import MATERIAL, NOTCHES, clamped
+
+    from flexval.geometry import Section
+
+    profile = NOTCHES["corner-filleted"]
+    mech = clamped(
+        Segment((0.3, -0.2), (0.3 + profile.length, -0.2)), Section(5.0, profile.t, profile)
+    )
+    mech = dataclasses.replace(mech, material=dataclasses.replace(MATERIAL, shear_flexible=True))
+    conn = DcmmConnector(mech.flexures[0], mech, n)
+    assert np.any(conn.parameters[:, 11:13] != 0.0)
+    rng = np.random.default_rng(2)
+    ref_a, ref_b = mech.bodies["g"].reference, mech.bodies["t"].reference
+    pose_a = np.array([*ref_a + rng.normal(0, 0.01, 2), 0.3])
+    pose_b = np.array([*ref_b + rng.normal(0, 0.01, 2), 0.9])
+    internal = conn.initial_internal() + rng.normal(0, 0.01, conn.n_internal)
+    eg, eh, asym = fd_check(conn, pose_a, pose_b, internal)
+    assert eg < 1e-7 and eh < 1e-6 and asym < 1e-12
+
+
+@pytest.mark.parametrize("n", [1, 3])
 def test_compiled_energy_is_the_displaced_compliance_quadratic_form(n):
     """The kernel's energy is 1/2 u^T C^-1 u with u from the paper's matrix form (Eqs. 9-14).
 

@@ -105,14 +105,15 @@ def test_notch_fourbar_meets_the_continuum():
         assert plain.dx[-1] / ref.dx[-1] - 1.0 == pytest.approx(-0.066, abs=0.002), model
 
 
-LARGE = {"beam:100": 2e-3, "dcmm:1": 6e-3, "prbm": 4e-3}
+LARGE = {"beam:100": 2e-3, "dcmm:1": 8e-3, "prbm": 4e-3}
 """Largest share off the continuum at the largest rotation up to 0.2 rad that keeps the
 hinge's surface strain within the 2 % limit, rotation and deflection, over the hinges below
-and the held-out ones: measured 0.15 %, 0.51 % and 0.26 %. ``beam:100`` is within 0.15 %
-everywhere; the pivot bends as the hinge does under a moment (its bending kinematics), and
-the one-sub-arc DCMM keeps the paper's kinematics, whose error under a force is largest on
-a filleted hinge with a long flat (t/L 0.029, H/t 5.5: a short leaf) at 0.2 rad, 0.1-0.4 %
-on the others (``dcmm:2`` 0.15 % there)."""
+and the held-out ones: measured 0.15 %, 0.70 % and 0.26 %. ``beam:100`` is within 0.15 %
+everywhere; the pivot and the sub-arcs bend as the hinge does under a moment (their bending
+kinematics), and under a force the one sub-arc of ``dcmm:1``, whose compliance acts in its
+leading body's frame, is furthest off on a filleted hinge with a long flat (t/L 0.029,
+H/t 5.5: a short leaf) at 0.2 rad, within 0.05-0.4 % on the others (``dcmm:2`` 0.09 %
+there)."""
 
 LIMIT_SHARE = 0.975
 """The share of the 2 % strain limit the large-rotation test loads a hinge to (a margin

@@ -34,6 +34,8 @@ from flexval.geometry import Flexure, Mechanism
 from flexval.geometry.compliance import curve_compliance
 from flexval.geometry.kinematics import rotate_xy
 
+from ..core.bending import TERMS as BENDING_TERMS
+from ..core.bending import centre_separation
 from ..core.chains import NodeChains
 from ..core.connector import Connector, KernelEndPass, Reasons
 from ..core.geometrycache import per_centre_line
@@ -185,7 +187,8 @@ class DcmmConnector(Connector):
         self.sample_tangent, self.sample_rel = geometry.sample_tangent, geometry.sample_rel
         # each sub-arc's parameters of flexval.reducedmodels.kernels.dcmmkernel.sub_arc:
         # offsets of its centre of elasticity from its two bodies (mm), ellipse
-        # axes, inverse compliances
+        # axes, inverse compliances, and a calibrated notch hinge's bending kinematics
+        bends = _bends(flexure, mechanism.material)
         parameters = []
         for (lx, ly), (fx, fy), sub in zip(refs, refs[1:], subs):
             ell, compliance = sub.ellipse, sub.compliance
@@ -198,6 +201,7 @@ class DcmmConnector(Connector):
                     cy - fy,
                     *ell.axes.ravel().tolist(),
                     *(1.0 / c for c in compliance),
+                    *(_bending_parameters(flexure, sub, forward) if bends else _NO_BENDING),
                 ]
             )
         self.parameters = np.array(parameters)
@@ -630,6 +634,32 @@ def _node_chains(connectors) -> NodeChains:
         np.concatenate([c._chord_flexibility[0] for c in connectors]),
         np.concatenate([c._chord_flexibility[1] for c in connectors]),
     )
+
+
+_NO_BENDING = (0.0,) * (2 + 2 * BENDING_TERMS)
+"""A sub-arc's bending parameters where it has none (its axis t zero)."""
+
+
+def _bends(flexure: Flexure, material) -> bool:
+    """Whether ``flexure``'s sub-arcs take their bending kinematics
+    (:mod:`flexval.reducedmodels.core.bending`): a calibrated notch hinge's (the material
+    the correction gives it, :func:`flexval.reducedmodels.notchcorrection.corrected_material`,
+    is ``shear_flexible``); plain Euler-Bernoulli hinges (``eb``) and every other flexure
+    keep the paper's element."""
+    profile = flexure.section.profile
+    return profile is not None and profile.kind == "notch" and material.shear_flexible
+
+
+def _bending_parameters(flexure: Flexure, sub, forward: bool) -> tuple[float, ...]:
+    """A straight sub-arc's axis at rest from its leading to its following body and the
+    series of its centre separation (:func:`flexval.reducedmodels.core.bending.
+    centre_separation`), run from its leading end: the chain runs from the flexure's start
+    (``forward``) or from its end."""
+    s0, s1 = (sub.start, sub.end) if forward else (sub.end, sub.start)
+    start, end = (np.asarray(flexure.shape.point(s), float) for s in (s0, s1))
+    axis = (end - start) / np.linalg.norm(end - start)
+    a, b = centre_separation(flexure.section, float(s0), float(s1), BENDING_TERMS)
+    return (*axis.tolist(), *a, *b)
 
 
 def _axial_flexibility(flexure: Flexure, material, sub) -> float:

@@ -26,11 +26,13 @@ import math
 
 import numpy as np
 
+from ..core.bending import TERMS as BENDING_TERMS
 from .jit import kernel
 
-PARAMETERS = 11
-"""A sub-arc's parameters: r_L (2), r_F (2) in mm, the rows of Q (q11, q12, q21, q22) and the
-inverse compliances k1, k2 (N/mm), k3 (N mm)."""
+PARAMETERS = 13 + 2 * BENDING_TERMS
+"""A sub-arc's parameters: r_L (2), r_F (2) in mm, the rows of Q (q11, q12, q21, q22), the
+inverse compliances k1, k2 (N/mm), k3 (N mm), its axis t at rest (2; zero: no bending
+kinematics) and the coefficients a_1..a_K, b_1..b_K (mm) of its bending kinematics."""
 
 
 @kernel
@@ -56,7 +58,9 @@ def sub_arc(
         r_L, r_F: initial offsets of the centre of elasticity from each
         body's reference point (mm); q11, q12, q21, q22: the ellipse axes
         e1, e2 as the columns of Q; k1, k2, k3: the inverse of the diagonal
-        compliance (N/mm, N/mm, N mm).
+        compliance (N/mm, N/mm, N mm); t (2): the straight sub-arc's axis at
+        rest, from its leading to its following body (zero: none); a_k, b_k:
+        its bending kinematics' coefficients (mm).
     grad : array (6,)
         Receives the gradient over (x_L, y_L, theta_L, x_F, y_F, theta_F).
     hessian : array (36,)
@@ -66,7 +70,13 @@ def sub_arc(
     -----
     With A = R(-theta_L), phi = theta_F - theta_L and d = x_F - x_L, the
     relative displacement in the leader frame is v = A d + R(phi) r_F - r_L
-    and u = (Q^T v, phi); E = 1/2 u^T diag(k1, k2, k3) u. Each derivative
+    and u = (Q^T v, phi); E = 1/2 u^T diag(k1, k2, k3) u. A sub-arc with an axis t
+    (a calibrated notch hinge's) takes v - g(phi) instead of v: the separation of its
+    two centre points when it bends freely by phi, g = g_x t + g_y J t with
+    g_x = sum a_k phi^2k and g_y = sum b_k phi^(2k+1), k = 1..K
+    (:func:`flexval.reducedmodels.dcmm.bending.bending_coefficients`), which adds
+    g'(phi) to dv/dtheta_L, -g'(phi) to dv/dtheta_F and the second derivatives' terms
+    to the geometric part. Each derivative
     du_i/d(coordinates) is (a, b, c, -a, -b, d) -- the followers'
     translations enter with the opposite sign of the leader's -- so the
     gradient and the Hessian are expansions of a 4-vector and of the
@@ -83,13 +93,34 @@ def sub_arc(
     cp, sp = math.cos(phi), math.sin(phi)
     rrx, rry = cp * rfx - sp * rfy, sp * rfx + cp * rfy  # R(phi) r_F
     vx, vy = adx + rrx - rlx, ady + rry - rly
+    tx, ty = p[11], p[12]
+    bent = tx != 0.0 or ty != 0.0
+    g1x = g1y = g2x = g2y = 0.0  # g'(phi), g''(phi)
+    if bent:  # Horner in phi^2, highest term first
+        x = phi * phi
+        sx = sx1 = sx2 = sy = sy1 = sy2 = 0.0
+        for k in range(BENDING_TERMS, 0, -1):
+            a, b = p[12 + k], p[12 + BENDING_TERMS + k]
+            sx = sx * x + a  # g_x / phi^2
+            sx1 = sx1 * x + 2 * k * a  # g_x' / phi
+            sx2 = sx2 * x + 2 * k * (2 * k - 1) * a  # g_x''
+            sy = sy * x + b  # g_y / phi^3
+            sy1 = sy1 * x + (2 * k + 1) * b  # g_y' / phi^2
+            sy2 = sy2 * x + (2 * k + 1) * 2 * k * b  # g_y'' / phi
+        gx, gy = sx * x, sy * x * phi
+        d1x, d1y = sx1 * phi, sy1 * x
+        d2x, d2y = sx2, sy2 * phi
+        vx -= gx * tx - gy * ty
+        vy -= gx * ty + gy * tx
+        g1x, g1y = d1x * tx - d1y * ty, d1x * ty + d1y * tx
+        g2x, g2y = d2x * tx - d2y * ty, d2x * ty + d2y * tx
     u1, u2 = q11 * vx + q21 * vy, q12 * vx + q22 * vy  # Q^T v
     f1, f2, m = k1 * u1, k2 * u2, k3 * phi
     energy = 0.5 * (f1 * u1 + f2 * u2 + m * phi)
     # dv/d(x_L, y_L, theta_L, theta_F); dv/d(x_F, y_F) = -dv/d(x_L, y_L)
     # dv_x = (-ca, -sa, ady + rry, -rry), dv_y = (sa, -ca, -adx - rrx, rrx)
-    ex, ey, et, ef = -ca, -sa, ady + rry, -rry
-    nx, ny, nt, nf = sa, -ca, -adx - rrx, rrx
+    ex, ey, et, ef = -ca, -sa, ady + rry + g1x, -rry - g1x
+    nx, ny, nt, nf = sa, -ca, -adx - rrx + g1y, rrx - g1y
     a1, b1, c1, d1 = (
         q11 * ex + q21 * nx,
         q11 * ey + q21 * ny,
@@ -116,8 +147,10 @@ def sub_arc(
     m00, m01 = ka1 * a1 + ka2 * a2, ka1 * b1 + ka2 * b2
     m02, m03 = ka1 * c1 + ka2 * c2 + lam_x, ka1 * d1 + ka2 * d2
     m11, m12, m13 = kb1 * b1 + kb2 * b2, kb1 * c1 + kb2 * c2 + lam_y, kb1 * d1 + kb2 * d2
-    m22 = kc1 * c1 + kc2 * c2 + k3 - (lx * adx + ly * ady) - lam_rr
-    m23, m33 = kc1 * d1 + kc2 * d2 - k3 + lam_rr, kd1 * d1 + kd2 * d2 + k3 - lam_rr
+    lam_g = lx * g2x + ly * g2y  # lambda . g''(phi): -g'' in d2v/dtheta_L2 and dtheta_F2
+    m22 = kc1 * c1 + kc2 * c2 + k3 - (lx * adx + ly * ady) - lam_rr - lam_g
+    m23 = kc1 * d1 + kc2 * d2 - k3 + lam_rr + lam_g
+    m33 = kd1 * d1 + kd2 * d2 + k3 - lam_rr - lam_g
     # rows x_L, y_L, theta_L, x_F, y_F, theta_F; the 4x4 M expanded with the followers'
     # translations' signs
     rows = ((m00, m01, m02, m03), (m01, m11, m12, m13), (m02, m12, m22, m23))
