@@ -17,9 +17,12 @@ models add the shear term (the material's ``shear_flexible``): its end rotation 
 moment, and its rotation and deflection under a force, are the continuum's (to the table's
 interpolation error). r_b does not depend on Poisson's ratio (within 0.1 % over 0.25-0.42);
 r_s (1 + nu) nearly does not (within 0.8 %), so the table holds r_s at nu = 0.33. The
-table also holds the notch's stress concentration K at the waist (the continuum's recovered
-surface fibre peak under a moment over the beam formula there): a reduced model's peak
-fibre stress on a hinge is K times its beam formula (:mod:`flexval.validation.studies.yieldpoint`).
+table also holds the notch's stress concentration: K at the waist (the continuum's recovered
+surface fibre peak under a moment over the beam formula there), K(s) along the hinge and
+the shear's shift delta(s) of the moment under a force; a reduced model's surface fibre
+stress on a hinge is K(s) times its beam formula with the moment taken at s - delta(s)
+(:meth:`NotchFactors.surface_stress`, which its connector gives the recorder:
+:mod:`flexval.reducedmodels.core.peaks`).
 
 The table is interpolated in (log t/L, log H/t) by a C1 piecewise-cubic (Clough-Tocher)
 interpolant over its points; power contours by their exponent too (a cubic spline in log n
@@ -135,8 +138,8 @@ class NotchFactors:
         moment the peak sits where K(s)/h(s)^2 is largest (a filleted hinge's just inside a
         fillet, not on its flat); under a force across the hinge the beam formula's own peak
         leaves the waist for sections where the contour curves more (a power contour of n 3,
-        a fillet's tangent point), where K is up to 7 % above the waist's, and the shift adds
-        the shear's share (up to 2 % on short hinges).
+        a fillet's tangent point), where K is not the waist's (5 % above it on a power
+        contour of n 3), and the shift adds the shear's share (up to 2 % on short hinges).
 
         Parameters
         ----------

@@ -74,7 +74,7 @@ def sub_arc(
     (a calibrated notch hinge's) takes v - g(phi) instead of v: the separation of its
     two centre points when it bends freely by phi, g = g_x t + g_y J t with
     g_x = sum a_k phi^2k and g_y = sum b_k phi^(2k+1), k = 1..K
-    (:func:`flexval.reducedmodels.dcmm.bending.bending_coefficients`), which adds
+    (:func:`flexval.reducedmodels.core.bending.centre_separation`), which adds
     g'(phi) to dv/dtheta_L, -g'(phi) to dv/dtheta_F and the second derivatives' terms
     to the geometric part. Each derivative
     du_i/d(coordinates) is (a, b, c, -a, -b, d) -- the followers'
